@@ -1,0 +1,5 @@
+import sys
+
+from zoetic.cli import main
+
+sys.exit(main())

@@ -1,0 +1,65 @@
+"""The ``zoetic`` command line: thin wrappers that parse arguments and call the library."""
+
+from __future__ import annotations
+
+import sys
+
+import typer
+from rich.console import Console
+
+from zoetic.errors import ZoeticError
+
+app = typer.Typer(
+    name="zoetic",
+    help="Physics-based artificial animals that learn to move by themselves.",
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    add_completion=False,
+)
+err_console = Console(stderr=True)
+
+_DEBUG = {"on": False}
+
+
+@app.callback()
+def _root(debug: bool = typer.Option(False, "--debug", help="Show full tracebacks.")) -> None:
+    _DEBUG["on"] = debug
+
+
+def _register() -> None:
+    from zoetic.cli import bench, san, simulate  # noqa: F401  (commands register themselves)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the CLI; a ZoeticError prints its message and exits with code 2."""
+    _register()
+    args = sys.argv[1:] if argv is None else argv
+    try:
+        app(args=args, standalone_mode=False)
+    except ZoeticError as exc:
+        if _DEBUG["on"] or "--debug" in args:
+            raise
+        err_console.print(f"[bold red]error:[/] {exc}", highlight=False)
+        return 2
+    except KeyboardInterrupt:
+        err_console.print("[yellow]interrupted[/]")
+        return 130
+    except typer.Exit as exc:
+        return exc.exit_code
+    except SystemExit as exc:  # click usage errors arrive this way in non-standalone mode
+        return int(exc.code or 0)
+    except Exception as exc:  # click.ClickException and friends
+        import click
+
+        if isinstance(exc, click.exceptions.Abort):
+            err_console.print("[yellow]aborted[/]")
+            return 130
+        if isinstance(exc, click.ClickException):
+            exc.show()
+            return 2
+        raise
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

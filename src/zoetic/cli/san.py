@@ -1,0 +1,1 @@
+"""``zoetic san ...``: sensor-actuator networks for planar creatures."""

@@ -1,0 +1,1 @@
+"""``zoetic simulate`` and ``zoetic animals``."""
