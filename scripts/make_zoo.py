@@ -1,0 +1,420 @@
+"""Regenerate the built-in zoo's animal files (src/zoetic/bodies/zoo/*.toml).
+
+The files are the source of truth that zoetic reads; this script only saves typing the
+lattices by hand and records how they were built. Run: python scripts/make_zoo.py
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import tomli_w
+
+ZOO = Path(__file__).resolve().parents[1] / "src" / "zoetic" / "bodies" / "zoo"
+
+
+class Lattice:
+    """A growing spring-mass animal description."""
+
+    def __init__(self) -> None:
+        self.nodes: list[dict] = []
+        self.springs: list[dict] = []
+        self.faces: list[list[int]] = []
+        self._pairs: set[tuple[int, int]] = set()
+
+    def node(self, name: str, pos, mass: float) -> int:
+        self.nodes.append({"name": name, "pos": [round(float(p), 6) for p in pos], "mass": mass})
+        return len(self.nodes) - 1
+
+    def spring(self, a: int, b: int, stiffness: float, kind: str, **extra) -> None:
+        key = (min(a, b), max(a, b))
+        if key in self._pairs or a == b:
+            return
+        self._pairs.add(key)
+        entry = {"nodes": [self.nodes[a]["name"], self.nodes[b]["name"]]}
+        entry.update(stiffness=round(stiffness, 4), kind=kind, **extra)
+        self.springs.append(entry)
+
+    def face(self, ids, centre) -> None:
+        """Add a face, wound so that its normal points away from ``centre``."""
+        p = np.array([self.nodes[i]["pos"] for i in ids])
+        n = np.cross(p[1] - p[0], p[2] - p[0])
+        if np.dot(n, p.mean(axis=0) - np.asarray(centre)) < 0:
+            ids = list(reversed(ids))
+        self.faces.append([self.nodes[i]["name"] for i in ids])
+
+    def pos(self) -> np.ndarray:
+        return np.array([n["pos"] for n in self.nodes])
+
+    def omega_max(self) -> float:
+        """Highest natural frequency (rad/s) of the springs at rest, from M^-1 K."""
+        idx = {n["name"]: k for k, n in enumerate(self.nodes)}
+        x = self.pos()
+        n = len(x)
+        K = np.zeros((3 * n, 3 * n))
+        for s in self.springs:
+            a, b = (idx[v] for v in s["nodes"])
+            d = x[b] - x[a]
+            u = d / np.linalg.norm(d)
+            k = s["stiffness"] * np.outer(u, u)
+            for i, j, sgn in ((a, a, 1), (b, b, 1), (a, b, -1), (b, a, -1)):
+                K[3 * i : 3 * i + 3, 3 * j : 3 * j + 3] += sgn * k
+        m = np.repeat([nd["mass"] for nd in self.nodes], 3)
+        w2 = np.linalg.eigvals(K / np.sqrt(m)[:, None] / np.sqrt(m)[None, :]).real
+        return float(np.sqrt(max(w2.max(), 0.0)))
+
+    def damp_springs(self, zeta: float) -> None:
+        """Give each spring damping zeta * (lighter end's mass): explicit-step safe."""
+        mass = {n["name"]: n["mass"] for n in self.nodes}
+        for s in self.springs:
+            s["damping"] = round(zeta * min(mass[v] for v in s["nodes"]), 5)
+
+    def doc(self, **top) -> dict:
+        out = dict(top)
+        out["nodes"] = self.nodes
+        out["springs"] = self.springs
+        out["faces"] = [{"nodes": f} for f in self.faces]
+        return out
+
+
+# ----------------------------------------------------------------------------- fish lattice
+FISH_L = 0.04  # metres per MODEL-FACTS length unit: a 1.04 m shark
+FISH_M = 0.1  # kilograms per MODEL-FACTS mass unit: 10.7 kg in all
+FISH_RINGS = [(-5, 2.0, 6.6), (-10, 3.0, 11.0), (-15, 2.0, 6.6), (-20, 1.0, 1.1), (-22, 0.8, 1.1)]
+FISH_K = {"cross": 1300.0, "muscle": 1000.0, "structural": 1100.0, "fin": 250.0}
+
+
+def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
+    """The 23-node, 91-spring fish of MODEL-FACTS; returns the lattice and its 5 rings."""
+    lat = Lattice()
+
+    def place(x, y, z):
+        p = np.array([x, y, z]) * FISH_L
+        if rotate_on_side:  # left (z > 0) becomes up (y > 0): the tail flaps up and down
+            p = np.array([p[0], p[2], -p[1]])
+        return p
+
+    nose = lat.node("nose", place(0, 0, 0), 1.1 * FISH_M)
+    rings = []
+    pattern = [(1, 1), (1, -1), (-1, -1), (-1, 1)]  # (y, z) signs
+    for r, (x, h, m) in enumerate(FISH_RINGS):
+        rings.append(
+            [lat.node(f"r{r + 1}_{k}", place(x, h * sy, h * sz), m * FISH_M)
+             for k, (sy, sz) in enumerate(pattern)]
+        )
+    tips = [lat.node("tail_top", place(-26, 3, 0), 0.165 * FISH_M),
+            lat.node("tail_bottom", place(-26, -3, 0), 0.165 * FISH_M)]
+    for i in rings[0]:
+        lat.spring(nose, i, FISH_K["structural"], "structural")
+    for ring in rings:
+        for k in range(4):
+            lat.spring(ring[k], ring[(k + 1) % 4], FISH_K["structural"], "structural")
+        lat.spring(ring[0], ring[2], FISH_K["cross"], "cross")
+        lat.spring(ring[1], ring[3], FISH_K["cross"], "cross")
+    segments = {0: "front", 1: "middle", 2: "back"}
+    for r in range(4):
+        for k in range(4):
+            a, b = rings[r][k], rings[r + 1][k]
+            if r in segments:
+                left = pattern[k][1] > 0
+                side = "left" if left else "right"
+                act = f"{segments[r]}_{side}"
+                lat.spring(a, b, FISH_K["muscle"], "muscle", actuator=act,
+                           max_shortening=0.1 if r == 2 else 0.2)
+            else:
+                lat.spring(a, b, FISH_K["structural"], "structural")
+        for k in range(4):
+            for nb in ((k + 1) % 4, (k + 3) % 4):
+                lat.spring(rings[r][k], rings[r + 1][nb], FISH_K["cross"], "cross")
+    for t in tips:
+        for i in rings[4]:
+            lat.spring(i, t, FISH_K["fin"], "fin")
+    lat.spring(tips[0], tips[1], FISH_K["fin"], "fin")
+    assert len(lat.springs) == 91, len(lat.springs)
+    # faces: nose triangles, quads between rings, the caudal fin
+    x = lat.pos()
+    centre = lambda ids: np.array([x[ids].mean(axis=0)[0], 0, 0])  # noqa: E731
+    for k in range(4):
+        ids = [nose, rings[0][k], rings[0][(k + 1) % 4]]
+        lat.face(ids, centre(rings[0]) + np.array([FISH_L * 5, 0, 0]))
+    for r in range(4):
+        for k in range(4):
+            ids = [rings[r][k], rings[r][(k + 1) % 4], rings[r + 1][(k + 1) % 4],
+                   rings[r + 1][k]]
+            lat.face(ids, centre(ids))
+    last = rings[4]
+    tail_quads = [[last[0], last[3], tips[1], tips[0]], [last[1], last[2], tips[1], tips[0]]]
+    for q in tail_quads:
+        lat.face(q, centre(q) * np.array([1, 0, 0]) + x[last].mean(axis=0) * [0, 1, 1])
+    lat.face([last[0], last[1], tips[0]], x[last].mean(axis=0))
+    lat.face([last[2], last[3], tips[1]], x[last].mean(axis=0))
+    return lat, rings
+
+
+def fish_actuators(sides: dict[str, str] | None = None) -> list[dict]:
+    out = []
+    for seg in ("front", "middle", "back"):
+        for side, other in (("left", "right"), ("right", "left")):
+            out.append({"name": f"{seg}_{side}", "kind": "muscle",
+                        "side": (sides or {}).get(side, side), "mirror": f"{seg}_{other}"})
+    return out
+
+
+def shark() -> dict:
+    lat, _ = fish_lattice(rotate_on_side=False)
+    phases = {}
+    for i, seg in enumerate(("front", "middle", "back")):
+        phases[f"{seg}_left"] = round(0.2 * i, 3)
+        phases[f"{seg}_right"] = round(0.2 * i + 0.5, 3)
+    lat.damp_springs(10.0)
+    print(f"shark   omega_max = {lat.omega_max():7.1f} rad/s")
+    return lat.doc(
+        name="shark",
+        description="Leopard shark: the 23-node, 91-spring fish lattice; 12 muscles, 6 actuators.",
+        medium="water",
+        dt=0.005,
+        head="nose",
+        forward=[1.0, 0.0, 0.0],
+        defaults={"node_damping": 0.05, "spring_damping": 0.0},
+        actuators=fish_actuators(),
+        wave={"frequency": 1.5, "amplitude": 1.0, "offset": 0.0, "phases": phases},
+    )
+
+
+def dolphin() -> dict:
+    lat, rings = fish_lattice(rotate_on_side=True)
+    doc_acts = []
+    for seg in ("front", "middle", "back"):  # left muscles now lie on the back (dorsal)
+        doc_acts.append({"name": f"{seg}_dorsal", "kind": "muscle", "side": "center"})
+        doc_acts.append({"name": f"{seg}_ventral", "kind": "muscle", "side": "center"})
+    for s in lat.springs:
+        if "actuator" in s:
+            s["actuator"] = s["actuator"].replace("_left", "_dorsal").replace("_right", "_ventral")
+    x = lat.pos()
+    r1 = rings[0]
+    left = [i for i in r1 if x[i][2] > 0]
+    right = [i for i in r1 if x[i][2] < 0]
+    names = [n["name"] for n in lat.nodes]
+    tail_of = [rings[4][0], rings[4][2]]
+    fins = []
+    for side, ids, other in (("left", left, "right"), ("right", right, "left")):
+        doc_acts.append({"name": f"fin_{side}", "kind": "fin", "side": side,
+                         "mirror": f"fin_{other}"})
+        span = [ids[0], right[0]] if side == "left" else [ids[0], left[0]]
+        fins.append({
+            "name": f"pectoral_{side}", "actuator": f"fin_{side}",
+            "nodes": [names[i] for i in ids], "forward": ["nose", names[tail_of[0]]],
+            "span": [names[span[0]], names[span[1]]], "area": 0.02,
+            "angle_range": [-0.5, 0.5],
+        })
+    phases = {}
+    for i, seg in enumerate(("front", "middle", "back")):
+        phases[f"{seg}_dorsal"] = round(0.2 * i, 3)
+        phases[f"{seg}_ventral"] = round(0.2 * i + 0.5, 3)
+    lat.damp_springs(10.0)
+    print(f"dolphin omega_max = {lat.omega_max():7.1f} rad/s")
+    return lat.doc(
+        name="dolphin",
+        description=(
+            "Heaviside's dolphin: the shark lattice on its side (muscles flap the tail up and "
+            "down) with two pectoral fins; lives below a free surface and flies above it."
+        ),
+        medium="sea",
+        dt=0.005,
+        head="nose",
+        forward=[1.0, 0.0, 0.0],
+        defaults={"node_damping": 0.05, "spring_damping": 0.0},
+        actuators=doc_acts,
+        fins=fins,
+        wave={"frequency": 1.5, "amplitude": 1.0, "offset": 0.0, "phases": phases},
+    )
+
+
+# ----------------------------------------------------------------------------- snake
+def snake() -> dict:
+    seg_len, half_w, height, total_mass = 0.1, 0.02, 0.04, 0.5
+    n_rings = 11
+    n_nodes = 4 * n_rings + 1
+    m = total_mass / n_nodes
+    k_struct, k_cross, k_muscle = 120.0, 120.0, 100.0
+    lat = Lattice()
+    nose = lat.node("nose", [0.05, height / 2, 0.0], m)
+    rings = []
+    pattern = [(height, half_w), (height, -half_w), (0.0, -half_w), (0.0, half_w)]
+    for r in range(n_rings):
+        x = -r * seg_len
+        rings.append([lat.node(f"r{r}_{k}", [x, y, z], m) for k, (y, z) in enumerate(pattern)])
+    for i in rings[0]:
+        lat.spring(nose, i, k_struct, "structural")
+    for ring in rings:
+        for k in range(4):
+            lat.spring(ring[k], ring[(k + 1) % 4], k_struct, "structural")
+        lat.spring(ring[0], ring[2], k_cross, "cross")
+        lat.spring(ring[1], ring[3], k_cross, "cross")
+    acts = []
+    for r in range(n_rings - 1):
+        for side, ks, other in (("left", (0, 3), "right"), ("right", (1, 2), "left")):
+            acts.append({"name": f"seg{r}_{side}", "kind": "muscle", "side": side,
+                         "mirror": f"seg{r}_{other}"})
+        for k in range(4):
+            side = "left" if k in (0, 3) else "right"
+            lat.spring(rings[r][k], rings[r + 1][k], k_muscle, "muscle",
+                       actuator=f"seg{r}_{side}", max_shortening=0.3)
+        for k in range(4):
+            for nb in ((k + 1) % 4, (k + 3) % 4):
+                lat.spring(rings[r][k], rings[r + 1][nb], k_cross, "cross")
+    x = lat.pos()
+    for k in range(4):
+        lat.face([nose, rings[0][k], rings[0][(k + 1) % 4]],
+                 x[rings[0]].mean(axis=0) - [0.05, 0, 0])
+    for r in range(n_rings - 1):
+        for k in range(4):
+            ids = [rings[r][k], rings[r][(k + 1) % 4], rings[r + 1][(k + 1) % 4],
+                   rings[r + 1][k]]
+            lat.face(ids, x[rings[r] + rings[r + 1]].mean(axis=0))
+    lat.face(rings[-1], x[rings[-2]].mean(axis=0))
+    phases = {}
+    for r in range(n_rings - 1):
+        phases[f"seg{r}_left"] = round(r / (n_rings - 1), 4)
+        phases[f"seg{r}_right"] = round(r / (n_rings - 1) + 0.5, 4)
+    lat.damp_springs(10.0)
+    print(f"snake   omega_max = {lat.omega_max():7.1f} rad/s")
+    return lat.doc(
+        name="snake",
+        description=(
+            "Coral snake: 10 segments of 4 longitudinal muscles (a pair each side, one "
+            "actuator per pair): 40 muscles, 20 actuators; crawls by directional friction."
+        ),
+        medium="ground",
+        dt=0.005,
+        head="nose",
+        forward=[1.0, 0.0, 0.0],
+        defaults={"node_damping": 0.002, "spring_damping": 0.0},
+        actuators=acts,
+        wave={"frequency": 1.0, "amplitude": 1.0, "offset": 0.0, "phases": phases},
+    )
+
+
+# ----------------------------------------------------------------------------- ray
+def ray() -> dict:
+    xs = [-0.08, -0.16, -0.24, -0.32]
+    spans = [0.16, 0.26, 0.26, 0.16]
+    body_half, thick, mid_thick = 0.04, 0.025, 0.012
+    k_s, k_m = 250.0, 220.0
+    lat = Lattice()
+    names = ["tipR", "midTR", "TR", "TL", "midTL", "tipL"]
+    rows_top, rows_bot, stations = [], [], []
+    n_nodes = 2 + 10 * len(xs)
+    m = 1.5 / n_nodes
+    nose = lat.node("nose", [0.0, 0.0, 0.0], m)
+    for k, (x, s) in enumerate(zip(xs, spans, strict=True)):
+        st = {
+            "TL": lat.node(f"s{k}_TL", [x, thick, body_half], m),
+            "TR": lat.node(f"s{k}_TR", [x, thick, -body_half], m),
+            "BL": lat.node(f"s{k}_BL", [x, -thick, body_half], m),
+            "BR": lat.node(f"s{k}_BR", [x, -thick, -body_half], m),
+            "midTL": lat.node(f"s{k}_midTL", [x, mid_thick, s / 2], m),
+            "midTR": lat.node(f"s{k}_midTR", [x, mid_thick, -s / 2], m),
+            "midBL": lat.node(f"s{k}_midBL", [x, -mid_thick, s / 2], m),
+            "midBR": lat.node(f"s{k}_midBR", [x, -mid_thick, -s / 2], m),
+            "tipL": lat.node(f"s{k}_tipL", [x, 0.0, s], m),
+            "tipR": lat.node(f"s{k}_tipR", [x, 0.0, -s], m),
+        }
+        stations.append(st)
+        rows_top.append([st[n] for n in names])
+        rows_bot.append([st[n.replace("T", "B") if n.startswith(("T", "midT")) else n]
+                         for n in names])
+    tail = lat.node("tail", [-0.45, 0.0, 0.0], m)
+    acts = []
+    for side, other in (("left", "right"), ("right", "left")):
+        for role in ("elevator", "depressor"):
+            acts.append({"name": f"{role}_{side}", "kind": "muscle", "side": side,
+                         "mirror": f"{role}_{other}"})
+    for st in stations:
+        box = [st["TL"], st["TR"], st["BR"], st["BL"]]
+        for k in range(4):
+            lat.spring(box[k], box[(k + 1) % 4], k_s, "structural")
+        lat.spring(box[0], box[2], k_s, "cross")
+        lat.spring(box[1], box[3], k_s, "cross")
+        for S, side in (("L", "left"), ("R", "right")):
+            T, B, mT, mB, tip = st["T" + S], st["B" + S], st["midT" + S], st["midB" + S], \
+                st["tip" + S]
+            lat.spring(T, mT, k_m, "muscle", actuator=f"elevator_{side}", max_shortening=0.2)
+            lat.spring(B, mB, k_m, "muscle", actuator=f"depressor_{side}", max_shortening=0.2)
+            lat.spring(mT, mB, k_s, "structural")
+            lat.spring(T, mB, k_s, "cross")
+            lat.spring(B, mT, k_s, "cross")
+            lat.spring(mT, tip, k_s, "structural")
+            lat.spring(mB, tip, k_s, "structural")
+    for k in range(len(xs) - 1):
+        for row in (rows_top, rows_bot):
+            a, b = row[k], row[k + 1]
+            for p in range(6):
+                lat.spring(a[p], b[p], k_s, "structural")
+                for q in (p - 1, p + 1):
+                    if 0 <= q < 6:
+                        lat.spring(a[p], b[q], k_s, "cross")
+        for p in range(1, 5):
+            lat.spring(rows_top[k][p], rows_bot[k + 1][p], k_s, "cross")
+            lat.spring(rows_bot[k][p], rows_top[k + 1][p], k_s, "cross")
+    for p in range(6):
+        lat.spring(nose, rows_top[0][p], k_s, "structural")
+        lat.spring(nose, rows_bot[0][p], k_s, "structural")
+    for n in ("TL", "TR", "BL", "BR"):
+        lat.spring(tail, stations[-1][n], k_s, "structural")
+    # faces: top (normal up) and bottom (normal down) sheets, nose and tail fans
+    up, down = np.array([0, -1.0, 0]), np.array([0, 1.0, 0])
+    x = lat.pos()
+
+    def sheet_face(ids, top: bool):
+        c = x[ids].mean(axis=0) + (up if top else down)
+        lat.face(ids, c)
+
+    for k in range(len(xs) - 1):
+        for row, top in ((rows_top, True), (rows_bot, False)):
+            for p in range(5):
+                sheet_face([row[k][p], row[k][p + 1], row[k + 1][p + 1], row[k + 1][p]], top)
+    for row, top in ((rows_top, True), (rows_bot, False)):
+        for p in range(5):
+            sheet_face([nose, row[0][p], row[0][p + 1]], top)
+        for p in range(1, 4):
+            sheet_face([tail, row[-1][p], row[-1][p + 1]], top)
+    lat.damp_springs(10.0)
+    print(f"ray     omega_max = {lat.omega_max():7.1f} rad/s")
+    return lat.doc(
+        name="ray",
+        description=(
+            "Kuhl's stingray: a flat body with flexible wings; 4 elevator and 4 depressor "
+            "muscles per side, 4 actuators."
+        ),
+        medium="water",
+        dt=0.005,
+        head="nose",
+        forward=[1.0, 0.0, 0.0],
+        defaults={"node_damping": 0.02, "spring_damping": 0.0},
+        actuators=acts,
+        wave={"frequency": 1.0, "amplitude": 1.0, "offset": 0.0,
+              "phases": {"elevator_left": 0.0, "elevator_right": 0.0,
+                         "depressor_left": 0.5, "depressor_right": 0.5}},
+    )
+
+
+HEADER = (
+    "# Built-in zoetic animal (see docs/animals.md for the format).\n"
+    "# Generated by scripts/make_zoo.py; units are SI (m, kg, s, N).\n"
+)
+
+
+def main() -> None:
+    ZOO.mkdir(parents=True, exist_ok=True)
+    for make in (snake, shark, ray, dolphin):
+        doc = make()
+        order = ["name", "description", "medium", "dt", "head", "forward", "defaults",
+                 "wave", "actuators", "fins", "nodes", "springs", "faces"]
+        doc = {k: doc[k] for k in order if k in doc}
+        (ZOO / f"{doc['name']}.toml").write_text(HEADER + tomli_w.dumps(doc))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,52 @@
+"""What an animal IS: animal files, their validation, and the compiled Body arrays."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+from zoetic.bodies.body import Body, compile_body
+from zoetic.bodies.spec import AnimalSpec, parse_animal, read_animal_file
+from zoetic.errors import BodyError
+
+ZOO_DIR = Path(__file__).parent / "zoo"
+
+__all__ = [
+    "ZOO_DIR",
+    "AnimalSpec",
+    "Body",
+    "compile_body",
+    "list_animals",
+    "load_animal",
+    "parse_animal",
+    "read_animal_file",
+]
+
+
+def list_animals() -> list[str]:
+    """Return the names of the built-in animals, in zoo order."""
+    order = ["snake", "shark", "ray", "dolphin"]
+    names = sorted(p.stem for p in ZOO_DIR.glob("*.toml"))
+    return [n for n in order if n in names] + [n for n in names if n not in order]
+
+
+@lru_cache(maxsize=32)
+def _load_path(path: str, mtime: float) -> Body:
+    return compile_body(read_animal_file(path))
+
+
+def load_animal(name_or_path: str | Path) -> Body:
+    """Return the compiled Body of a zoo animal's name or of an animal TOML file's path."""
+    text = str(name_or_path)
+    candidate = Path(text)
+    if candidate.suffix == ".toml" or candidate.exists():
+        if not candidate.is_file():
+            raise BodyError(f"{candidate}: no such animal file")
+        return _load_path(str(candidate.resolve()), candidate.stat().st_mtime)
+    zoo_file = ZOO_DIR / f"{text}.toml"
+    if not zoo_file.is_file():
+        raise BodyError(
+            f"unknown animal {text!r}: choose one of {', '.join(list_animals())} "
+            "or give the path of an animal .toml file"
+        )
+    return _load_path(str(zoo_file), zoo_file.stat().st_mtime)

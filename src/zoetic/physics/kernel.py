@@ -1,0 +1,322 @@
+"""The fast CPU path: a Numba kernel that steps a batch of candidates, SIMD across the batch.
+
+Layout: every per-node quantity is an array (nodes, lanes) so that the innermost loop runs
+over candidates ("lanes") with unit stride and LLVM vectorises it; each thread owns a chunk
+of lanes and runs all its steps with that chunk in cache. Activations arrive as a table
+(steps, actuators, candidates); the kernel never knows which controller made it.
+
+One step is semi-implicit (symplectic) Euler: forces from the current state, velocity
+updated with nodal damping implicit, then positions from the new velocity. Ground friction is
+solved last, against the velocity the other forces would produce (implicit Coulomb), and
+water forces can at most stop a face's normal motion in one step, so stiff drag on light
+nodes cannot blow up. A candidate whose state is non-finite or faster than ``vmax`` is marked
+failed, reset to rest (so it cannot slow or poison the others) and reported.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+# fast math without "no NaNs/infs": the blow-up check must see NaN
+FM = {"nsz", "arcp", "contract", "afn", "reassoc"}
+
+# medium array layout (see media.Medium.as_array)
+G, LEVEL, BUOY, DRAG, FLOOR, FLOOR_K, FLOOR_C, MU_F, MU_B, MU_L = range(10)
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def _forces(
+    x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
+    mass, sa, sb, stiff, sdamp, relaxed, contracted, sact, med,
+):  # fmt: skip
+    n_nodes = mass.shape[0]
+    for i in range(n_nodes):
+        for b in range(nb):
+            fx[i, b] = 0.0
+            fy[i, b] = 0.0
+            fz[i, b] = 0.0
+    # springs and muscles: l = a*l_c + (1-a)*l_r
+    for s in range(sa.shape[0]):
+        i = sa[s]
+        j = sb[s]
+        k = stiff[s]
+        c = sdamp[s]
+        lr = relaxed[s]
+        dl = contracted[s] - lr
+        a_idx = sact[s]
+        for b in range(nb):
+            dx = x[j, b] - x[i, b]
+            dy = y[j, b] - y[i, b]
+            dz = z[j, b] - z[i, b]
+            length = math.sqrt(dx * dx + dy * dy + dz * dz) + 1e-12
+            inv = 1.0 / length
+            ux = dx * inv
+            uy = dy * inv
+            uz = dz * inv
+            rest = lr
+            if a_idx >= 0:
+                rest = lr + act[t, a_idx, b0 + b] * dl
+            edot = (vx[j, b] - vx[i, b]) * ux + (vy[j, b] - vy[i, b]) * uy + (
+                vz[j, b] - vz[i, b]
+            ) * uz
+            mag = k * (length - rest) + c * edot
+            fx[i, b] += mag * ux
+            fy[i, b] += mag * uy
+            fz[i, b] += mag * uz
+            fx[j, b] -= mag * ux
+            fy[j, b] -= mag * uy
+            fz[j, b] -= mag * uz
+    level = med[LEVEL]
+    # gravity and buoyancy on each node
+    g = med[G]
+    gb = g * med[BUOY]
+    if g != 0.0:
+        for i in range(n_nodes):
+            m = mass[i]
+            for b in range(nb):
+                sub = 1.0 if y[i, b] < level else 0.0
+                fy[i, b] += m * (gb * sub - g)
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, faces, level, drag, dt):
+    third = 1.0 / 3.0
+    for f in range(faces.shape[0]):
+        i0 = faces[f, 0]
+        i1 = faces[f, 1]
+        i2 = faces[f, 2]
+        mf = mass[i0] + mass[i1] + mass[i2]
+        for b in range(nb):
+            e1x = x[i1, b] - x[i0, b]
+            e1y = y[i1, b] - y[i0, b]
+            e1z = z[i1, b] - z[i0, b]
+            e2x = x[i2, b] - x[i0, b]
+            e2y = y[i2, b] - y[i0, b]
+            e2z = z[i2, b] - z[i0, b]
+            nx = e1y * e2z - e1z * e2y
+            ny = e1z * e2x - e1x * e2z
+            nz = e1x * e2y - e1y * e2x
+            twice_area = math.sqrt(nx * nx + ny * ny + nz * nz) + 1e-12
+            inv = 1.0 / twice_area
+            nx *= inv
+            ny *= inv
+            nz *= inv
+            mvx = (vx[i0, b] + vx[i1, b] + vx[i2, b]) * third
+            mvy = (vy[i0, b] + vy[i1, b] + vy[i2, b]) * third
+            mvz = (vz[i0, b] + vz[i1, b] + vz[i2, b]) * third
+            vn = max(nx * mvx + ny * mvy + nz * mvz, 0.0)
+            speed = math.sqrt(mvx * mvx + mvy * mvy + mvz * mvz)
+            cy = (y[i0, b] + y[i1, b] + y[i2, b]) * third
+            sub = 1.0 if cy < level else 0.0
+            mag = min(drag * 0.5 * twice_area * speed * vn, mf * vn / dt) * sub * third
+            fx[i0, b] -= mag * nx
+            fy[i0, b] -= mag * ny
+            fz[i0, b] -= mag * nz
+            fx[i1, b] -= mag * nx
+            fy[i1, b] -= mag * ny
+            fz[i1, b] -= mag * nz
+            fx[i2, b] -= mag * nx
+            fy[i2, b] -= mag * ny
+            fz[i2, b] -= mag * nz
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def _fins(x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
+          mass, fin_nodes, fin_fwd, fin_span, fin_area, fin_angle, fin_act, level, drag, dt):  # fmt: skip
+    """Pectoral fins: flat plates at a controlled angle to the body, pushed on by the water."""
+    for k in range(fin_nodes.shape[0]):
+        cnt = 0
+        mf = 0.0
+        for q in range(4):
+            if fin_nodes[k, q] >= 0:
+                cnt += 1
+                mf += mass[fin_nodes[k, q]]
+        share = 1.0 / cnt
+        fa, fb = fin_fwd[k, 0], fin_fwd[k, 1]
+        sa_, sb_ = fin_span[k, 0], fin_span[k, 1]
+        lo = fin_angle[k, 0]
+        hi = fin_angle[k, 1]
+        for b in range(nb):
+            ax = x[fa, b] - x[fb, b]
+            ay = y[fa, b] - y[fb, b]
+            az = z[fa, b] - z[fb, b]
+            inv = 1.0 / (math.sqrt(ax * ax + ay * ay + az * az) + 1e-12)
+            ax *= inv
+            ay *= inv
+            az *= inv
+            sx = x[sa_, b] - x[sb_, b]
+            sy = y[sa_, b] - y[sb_, b]
+            sz = z[sa_, b] - z[sb_, b]
+            d = sx * ax + sy * ay + sz * az
+            sx -= d * ax
+            sy -= d * ay
+            sz -= d * az
+            inv = 1.0 / (math.sqrt(sx * sx + sy * sy + sz * sz) + 1e-12)
+            sx *= inv
+            sy *= inv
+            sz *= inv
+            # up = forward x span; the plate normal tilts from up toward forward by the angle
+            ux = ay * sz - az * sy
+            uy = az * sx - ax * sz
+            uz = ax * sy - ay * sx
+            ang = lo + act[t, fin_act[k], b0 + b] * (hi - lo)
+            ca = math.cos(ang)
+            sn = math.sin(ang)
+            nx = ca * ux + sn * ax
+            ny = ca * uy + sn * ay
+            nz = ca * uz + sn * az
+            mvx = 0.0
+            mvy = 0.0
+            mvz = 0.0
+            cy = 0.0
+            for q in range(cnt):
+                i = fin_nodes[k, q]
+                mvx += vx[i, b] * share
+                mvy += vy[i, b] * share
+                mvz += vz[i, b] * share
+                cy += y[i, b] * share
+            vn = nx * mvx + ny * mvy + nz * mvz
+            speed = math.sqrt(mvx * mvx + mvy * mvy + mvz * mvz)
+            sub = 1.0 if cy < level else 0.0
+            mag = drag * fin_area[k] * speed * vn
+            cap = mf * abs(vn) / dt
+            mag = max(min(mag, cap), -cap) * sub * share
+            for q in range(cnt):
+                i = fin_nodes[k, q]
+                fx[i, b] -= mag * nx
+                fy[i, b] -= mag * ny
+                fz[i, b] -= mag * nz
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def _ground(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, front, back, med, dt):
+    """Penalty floor at y = 0 and directional Coulomb friction, solved implicitly."""
+    kc = med[FLOOR_K]
+    cc = med[FLOOR_C]
+    muf = med[MU_F]
+    mub = med[MU_B]
+    mul = med[MU_L]
+    for i in range(mass.shape[0]):
+        m = mass[i]
+        fi = front[i]
+        bi = back[i]
+        for b in range(nb):
+            pen = -y[i, b]
+            normal = max(kc * pen - cc * vy[i, b], 0.0) if pen > 0.0 else 0.0
+            fy[i, b] += normal
+            tx = x[fi, b] - x[bi, b]
+            tz = z[fi, b] - z[bi, b]
+            inv = 1.0 / (math.sqrt(tx * tx + tz * tz) + 1e-12)
+            tx *= inv
+            tz *= inv
+            # velocity the other forces would give: friction opposes it, at most stopping it
+            px = vx[i, b] + dt * fx[i, b] / m
+            pz = vz[i, b] + dt * fz[i, b] / m
+            vf = px * tx + pz * tz
+            vl = pz * tx - px * tz
+            mu = muf if vf > 0.0 else mub
+            ff = min(mu * normal, m * abs(vf) / dt)
+            fl = min(mul * normal, m * abs(vl) / dt)
+            ff = -ff if vf > 0.0 else ff
+            fl = -fl if vl > 0.0 else fl
+            fx[i, b] += ff * tx - fl * tz
+            fz[i, b] += ff * tz + fl * tx
+
+
+@njit(cache=True, fastmath=FM, parallel=True)
+def simulate_chunks(
+    pos0, vel0, act, dt, record_every, chunk, vmax,
+    mass, ndamp, sa, sb, stiff, sdamp, relaxed, contracted, sact, faces,
+    fin_nodes, fin_fwd, fin_span, fin_area, fin_angle, fin_act, front, back, rest_pos, med,
+    rec, final_pos, final_vel, failed_step,
+):  # fmt: skip
+    """Step every candidate through all activation rows; fills rec, final_* and failed_step."""
+    n_nodes = mass.shape[0]
+    n_lanes = pos0.shape[2]
+    n_steps = act.shape[0]
+    n_chunks = (n_lanes + chunk - 1) // chunk
+    floor_on = med[FLOOR] > 0.0
+    water_on = med[DRAG] > 0.0 and med[LEVEL] > -1e8
+    level = med[LEVEL]
+    drag = med[DRAG]
+    for c in prange(n_chunks):
+        b0 = c * chunk
+        nb = min(chunk, n_lanes - b0)
+        x = np.empty((n_nodes, nb))
+        y = np.empty((n_nodes, nb))
+        z = np.empty((n_nodes, nb))
+        vx = np.empty((n_nodes, nb))
+        vy = np.empty((n_nodes, nb))
+        vz = np.empty((n_nodes, nb))
+        fx = np.empty((n_nodes, nb))
+        fy = np.empty((n_nodes, nb))
+        fz = np.empty((n_nodes, nb))
+        for i in range(n_nodes):
+            for b in range(nb):
+                x[i, b] = pos0[i, 0, b0 + b]
+                y[i, b] = pos0[i, 1, b0 + b]
+                z[i, b] = pos0[i, 2, b0 + b]
+                vx[i, b] = vel0[i, 0, b0 + b]
+                vy[i, b] = vel0[i, 1, b0 + b]
+                vz[i, b] = vel0[i, 2, b0 + b]
+        r = 0
+        for t in range(n_steps + 1):
+            if t % record_every == 0:
+                for i in range(n_nodes):
+                    for b in range(nb):
+                        dead = failed_step[b0 + b] >= 0
+                        rec[r, i, 0, b0 + b] = np.nan if dead else x[i, b]
+                        rec[r, i, 1, b0 + b] = np.nan if dead else y[i, b]
+                        rec[r, i, 2, b0 + b] = np.nan if dead else z[i, b]
+                r += 1
+            if t == n_steps:
+                break
+            _forces(
+                x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
+                mass, sa, sb, stiff, sdamp, relaxed, contracted, sact, med,
+            )  # fmt: skip
+            if water_on:
+                _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, faces, level, drag, dt)
+                if fin_nodes.shape[0] > 0:
+                    _fins(x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb, mass, fin_nodes,
+                          fin_fwd, fin_span, fin_area, fin_angle, fin_act, level, drag, dt)  # fmt: skip
+            if floor_on:
+                _ground(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, front, back, med, dt)
+            for i in range(n_nodes):
+                hm = dt / mass[i]
+                damp = 1.0 / (1.0 + hm * ndamp[i])
+                for b in range(nb):
+                    vx[i, b] = (vx[i, b] + hm * fx[i, b]) * damp
+                    vy[i, b] = (vy[i, b] + hm * fy[i, b]) * damp
+                    vz[i, b] = (vz[i, b] + hm * fz[i, b]) * damp
+                    x[i, b] += dt * vx[i, b]
+                    y[i, b] += dt * vy[i, b]
+                    z[i, b] += dt * vz[i, b]
+            if t % 8 == 7 or t == n_steps - 1:
+                for b in range(nb):
+                    worst = 0.0
+                    for i in range(n_nodes):
+                        s2 = vx[i, b] * vx[i, b] + vy[i, b] * vy[i, b] + vz[i, b] * vz[i, b]
+                        worst = max(worst, s2)
+                    if not (worst < vmax * vmax) and failed_step[b0 + b] < 0:
+                        failed_step[b0 + b] = t + 1
+                    if failed_step[b0 + b] >= 0:
+                        for i in range(n_nodes):
+                            x[i, b] = rest_pos[i, 0]
+                            y[i, b] = rest_pos[i, 1]
+                            z[i, b] = rest_pos[i, 2]
+                            vx[i, b] = 0.0
+                            vy[i, b] = 0.0
+                            vz[i, b] = 0.0
+        for i in range(n_nodes):
+            for b in range(nb):
+                dead = failed_step[b0 + b] >= 0
+                final_pos[i, 0, b0 + b] = np.nan if dead else x[i, b]
+                final_pos[i, 1, b0 + b] = np.nan if dead else y[i, b]
+                final_pos[i, 2, b0 + b] = np.nan if dead else z[i, b]
+                final_vel[i, 0, b0 + b] = np.nan if dead else vx[i, b]
+                final_vel[i, 1, b0 + b] = np.nan if dead else vy[i, b]
+                final_vel[i, 2, b0 + b] = np.nan if dead else vz[i, b]

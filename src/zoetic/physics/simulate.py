@@ -1,0 +1,163 @@
+"""simulate(body, activations, medium, dt, state) -> Trajectory, for one candidate or many."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from zoetic.bodies import Body
+from zoetic.errors import SimulationError
+from zoetic.physics.media import Medium, get_medium
+
+VMAX = 200.0  # m/s: any node faster than this marks its candidate as blown up
+
+
+@dataclass(frozen=True)
+class State:
+    """Positions and velocities of a batch of candidates: arrays (B, N, 3) in m and m/s."""
+
+    positions: np.ndarray
+    velocities: np.ndarray
+
+    @property
+    def batch(self) -> int:
+        return int(self.positions.shape[0])
+
+    def take(self, index) -> State:
+        """Return the candidates at ``index`` (an int keeps a batch axis of one)."""
+        idx = np.atleast_1d(np.asarray(index))
+        return State(self.positions[idx], self.velocities[idx])
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """What a simulation produced: recorded positions, the final state and who blew up."""
+
+    times: np.ndarray  # (R,) s
+    positions: np.ndarray  # (B, R, N, 3) m; NaN after a candidate failed
+    final: State
+    failed_step: np.ndarray  # (B,) int: step at which it blew up, -1 if it did not
+    dt: float
+
+    @property
+    def failed(self) -> np.ndarray:
+        """Return a (B,) bool array: True where the candidate blew up."""
+        return self.failed_step >= 0
+
+    def com(self, body: Body) -> np.ndarray:
+        """Return the centre of mass over time, (B, R, 3)."""
+        w = body.mass / body.total_mass
+        return np.einsum("brnk,n->brk", self.positions, w)
+
+
+def rest_state(
+    body: Body,
+    batch: int = 1,
+    offset=(0.0, 0.0, 0.0),
+    velocity=(0.0, 0.0, 0.0),
+) -> State:
+    """Return ``batch`` copies of the rest pose, shifted by ``offset``, moving at ``velocity``."""
+    pos = np.broadcast_to(body.rest_pos + np.asarray(offset, float), (batch, body.n_nodes, 3))
+    vel = np.broadcast_to(np.asarray(velocity, float), (batch, body.n_nodes, 3))
+    return State(pos.copy(), vel.copy())
+
+
+def _threads() -> int:
+    from numba import get_num_threads
+
+    return max(1, get_num_threads())
+
+
+def chunk_size(batch: int, threads: int | None = None) -> int:
+    """Return the lanes per thread chunk: at least 8 (one SIMD vector), at most 64."""
+    threads = threads or _threads()
+    per = -(-batch // threads)
+    return int(min(64, max(8, -(-per // 8) * 8)))
+
+
+def _check(body: Body, act: np.ndarray, state: State) -> None:
+    if act.ndim != 3 or act.shape[2] != body.n_actuators:
+        raise SimulationError(
+            f"activations must be shaped (candidates, steps, {body.n_actuators}) for "
+            f"{body.name}, got {act.shape}"
+        )
+    if state.positions.shape != (act.shape[0], body.n_nodes, 3):
+        raise SimulationError(
+            f"start state holds {state.positions.shape} positions; expected "
+            f"({act.shape[0]}, {body.n_nodes}, 3)"
+        )
+    if not np.all(np.isfinite(act)):
+        raise SimulationError("activations contain non-finite values")
+
+
+def simulate(
+    body: Body,
+    activations: np.ndarray,
+    medium: str | Medium | None = None,
+    dt: float | None = None,
+    state: State | None = None,
+    record_every: int = 1,
+) -> Trajectory:
+    """Return the Trajectory of each candidate driven by its activation table.
+
+    Parameters
+    ----------
+    activations : (B, T, A) or (T, A) array in [0, 1] (values are clipped); one row a step.
+    medium : a Medium or the name of a built-in one; default the body's own.
+    dt : time step in s; default the body's own.
+    state : start State with batch B; default the rest pose.
+    record_every : record positions every this many steps (and at the last step's end).
+    """
+    act = np.asarray(activations, dtype=np.float64)
+    if act.ndim == 2:
+        act = act[None]
+    act = np.clip(act, 0.0, 1.0)
+    med = get_medium(medium or body.medium)
+    dt = float(dt or body.dt)
+    batch, steps = act.shape[0], act.shape[1]
+    state = state or rest_state(body, batch)
+    _check(body, act, state)
+    if record_every < 1:
+        raise SimulationError("record_every must be at least 1")
+
+    from zoetic.physics.kernel import simulate_chunks
+
+    n = body.n_nodes
+    act_t = np.ascontiguousarray(act.transpose(1, 2, 0))  # (T, A, B)
+    pos0 = np.ascontiguousarray(state.positions.transpose(1, 2, 0))
+    vel0 = np.ascontiguousarray(state.velocities.transpose(1, 2, 0))
+    n_rec = steps // record_every + 1
+    rec = np.empty((n_rec, n, 3, batch))
+    final_pos = np.empty((n, 3, batch))
+    final_vel = np.empty((n, 3, batch))
+    failed_step = -np.ones(batch, dtype=np.int64)
+    simulate_chunks(
+        pos0, vel0, act_t, dt, record_every, chunk_size(batch), VMAX,
+        body.mass, body.node_damping, body.spring_a, body.spring_b, body.stiffness,
+        body.spring_damping, body.relaxed, body.contracted, body.spring_actuator, body.faces,
+        body.fin_nodes, body.fin_forward, body.fin_span, body.fin_area, body.fin_angle,
+        body.fin_actuator, body.axis_front, body.axis_back, body.rest_pos, med.as_array(),
+        rec, final_pos, final_vel, failed_step,
+    )  # fmt: skip
+    times = np.arange(n_rec) * record_every * dt
+    return Trajectory(
+        times=times,
+        positions=rec.transpose(3, 0, 1, 2),
+        final=State(final_pos.transpose(2, 0, 1), final_vel.transpose(2, 0, 1)),
+        failed_step=failed_step,
+        dt=dt,
+    )
+
+
+def set_threads(n: int | None) -> None:
+    """Use ``n`` CPU threads for batched simulation (default: all cores)."""
+    from numba import config, set_num_threads
+
+    set_num_threads(n or config.NUMBA_NUM_THREADS)
+
+
+def cores() -> int:
+    """Return the number of CPU cores the batched kernel can use."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
