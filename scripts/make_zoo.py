@@ -165,8 +165,8 @@ def shark() -> dict:
     lat, _ = fish_lattice(rotate_on_side=False)
     phases = {}
     for i, seg in enumerate(("front", "middle", "back")):
-        phases[f"{seg}_left"] = round(0.2 * i, 3)
-        phases[f"{seg}_right"] = round(0.2 * i + 0.5, 3)
+        phases[f"{seg}_left"] = round(0.1 * i, 3)
+        phases[f"{seg}_right"] = round(0.1 * i + 0.5, 3)
     lat.damp_springs(10.0)
     print(f"shark   omega_max = {lat.omega_max():7.1f} rad/s")
     return lat.doc(
@@ -178,7 +178,7 @@ def shark() -> dict:
         forward=[1.0, 0.0, 0.0],
         defaults={"node_damping": 0.05, "spring_damping": 0.0},
         actuators=fish_actuators(),
-        wave={"frequency": 1.5, "amplitude": 1.0, "offset": 0.0, "phases": phases},
+        wave={"frequency": 2.0, "amplitude": 1.0, "offset": 0.0, "phases": phases},
     )
 
 
@@ -210,8 +210,8 @@ def dolphin() -> dict:
         })
     phases = {}
     for i, seg in enumerate(("front", "middle", "back")):
-        phases[f"{seg}_dorsal"] = round(0.2 * i, 3)
-        phases[f"{seg}_ventral"] = round(0.2 * i + 0.5, 3)
+        phases[f"{seg}_dorsal"] = round(0.1 * i, 3)
+        phases[f"{seg}_ventral"] = round(0.1 * i + 0.5, 3)
     lat.damp_springs(10.0)
     print(f"dolphin omega_max = {lat.omega_max():7.1f} rad/s")
     return lat.doc(
@@ -222,12 +222,13 @@ def dolphin() -> dict:
         ),
         medium="sea",
         dt=0.005,
+        start_offset=[0.0, -1.0, 0.0],
         head="nose",
         forward=[1.0, 0.0, 0.0],
         defaults={"node_damping": 0.05, "spring_damping": 0.0},
         actuators=doc_acts,
         fins=fins,
-        wave={"frequency": 1.5, "amplitude": 1.0, "offset": 0.0, "phases": phases},
+        wave={"frequency": 2.0, "amplitude": 1.0, "offset": 0.0, "phases": phases},
     )
 
 
@@ -237,7 +238,7 @@ def snake() -> dict:
     n_rings = 11
     n_nodes = 4 * n_rings + 1
     m = total_mass / n_nodes
-    k_struct, k_cross, k_muscle = 120.0, 120.0, 100.0
+    k_struct, k_cross, k_muscle = 130.0, 130.0, 75.0
     lat = Lattice()
     nose = lat.node("nose", [0.05, height / 2, 0.0], m)
     rings = []
@@ -276,8 +277,8 @@ def snake() -> dict:
     lat.face(rings[-1], x[rings[-2]].mean(axis=0))
     phases = {}
     for r in range(n_rings - 1):
-        phases[f"seg{r}_left"] = round(r / (n_rings - 1), 4)
-        phases[f"seg{r}_right"] = round(r / (n_rings - 1) + 0.5, 4)
+        phases[f"seg{r}_left"] = round(0.15 * r, 4)
+        phases[f"seg{r}_right"] = round(0.15 * r + 0.5, 4)
     lat.damp_springs(10.0)
     print(f"snake   omega_max = {lat.omega_max():7.1f} rad/s")
     return lat.doc(
@@ -292,7 +293,7 @@ def snake() -> dict:
         forward=[1.0, 0.0, 0.0],
         defaults={"node_damping": 0.002, "spring_damping": 0.0},
         actuators=acts,
-        wave={"frequency": 1.0, "amplitude": 1.0, "offset": 0.0, "phases": phases},
+        wave={"frequency": 3.0, "amplitude": 1.0, "offset": 0.0, "phases": phases},
     )
 
 
@@ -410,7 +411,8 @@ def main() -> None:
     ZOO.mkdir(parents=True, exist_ok=True)
     for make in (snake, shark, ray, dolphin):
         doc = make()
-        order = ["name", "description", "medium", "dt", "head", "forward", "defaults",
+        order = ["name", "description", "medium", "dt", "start_offset", "head", "forward",
+                 "defaults",
                  "wave", "actuators", "fins", "nodes", "springs", "faces"]
         doc = {k: doc[k] for k in order if k in doc}
         (ZOO / f"{doc['name']}.toml").write_text(HEADER + tomli_w.dumps(doc))

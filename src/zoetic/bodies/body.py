@@ -57,6 +57,7 @@ class Body:
     wave_amplitude: float
     wave_offset: float
     wave_phase: np.ndarray  # (A,) cycles
+    start_offset: np.ndarray  # (3,) m: where the rest pose is placed at the start of a run
 
     @property
     def n_nodes(self) -> int:
@@ -215,4 +216,5 @@ def compile_body(spec: AnimalSpec) -> Body:
         wave_amplitude=wave.amplitude if wave else 1.0,
         wave_offset=wave.offset if wave else 0.0,
         wave_phase=_frozen(phase, np.float64),
+        start_offset=_frozen(spec.start_offset, np.float64),
     )

@@ -76,6 +76,7 @@ class AnimalSpec:
     faces: tuple[tuple[int, ...], ...]
     fins: tuple[FinSpec, ...] = ()
     wave: WaveSpec | None = None
+    start_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
     source: str = "<memory>"
     extra: dict[str, Any] = field(default_factory=dict)
 
@@ -319,7 +320,9 @@ def parse_animal(doc: dict[str, Any], source: str = "<memory>") -> AnimalSpec:
     forward = r.vector(doc, "forward", "top level", 3) if "forward" in doc else (1.0, 0.0, 0.0)
     if math.hypot(*forward) < 1e-9:
         raise r.fail("top level", "'forward' must be a non-zero vector")
+    start = r.vector(doc, "start_offset", "top level", 3) if "start_offset" in doc else None
     return AnimalSpec(
+        start_offset=start or (0.0, 0.0, 0.0),
         name=name,
         description=str(doc.get("description", "")),
         medium=medium,

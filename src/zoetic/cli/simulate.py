@@ -1,1 +1,63 @@
 """``zoetic simulate`` and ``zoetic animals``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from zoetic.cli import app
+from zoetic.cli.bench import _emit, bench_app
+
+console = Console()
+
+
+@app.command()
+def animals() -> None:
+    """List the built-in animals, one line each."""
+    from zoetic.bodies import list_animals, load_animal
+
+    table = Table(box=None, header_style="bold")
+    for col in ("animal", "nodes", "springs", "muscles", "actuators", "medium", "mass kg"):
+        table.add_column(col, justify="left" if col in ("animal", "medium") else "right")
+    for name in list_animals():
+        b = load_animal(name)
+        table.add_row(
+            name, str(b.n_nodes), str(b.n_springs), str(b.n_muscles), str(b.n_actuators),
+            b.medium, f"{b.total_mass:.2f}",
+        )  # fmt: skip
+    console.print(table)
+
+
+@app.command()
+def simulate(
+    animal: str = typer.Argument(..., help="A zoo animal's name or an animal .toml file."),
+    controller: str = typer.Option("wave", help="wave, rest, or a controller .json file."),
+    seconds: float = typer.Option(10.0, min=0.01, help="Simulated time (s)."),
+    out: Path = typer.Option(Path("runs/simulate"), help="Output directory."),
+    medium: str = typer.Option(None, help="Override the animal's medium (ground, water, sea, vacuum)."),
+    dt: float = typer.Option(None, help="Time step (s); default the animal's own."),
+    video: bool = typer.Option(True, help="Write video.mp4."),
+    fps: int = typer.Option(30, min=1, help="Video frame rate."),
+) -> None:
+    """Simulate one animal under a controller; write trajectory.npz, video.mp4 and path.png."""
+    from zoetic.runs import simulate_run
+
+    result = simulate_run(animal, controller, seconds, out, medium, dt, video, fps)
+    for key, value in result.items():
+        console.print(f"{key:>12}: {value}")
+
+
+@bench_app.command("simulate")
+def bench_simulate_cmd(
+    animal: str = typer.Option("shark"),
+    seconds: float = typer.Option(10.0, min=0.1),
+    batch: int = typer.Option(256, min=1),
+    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Simulated seconds per second: one candidate, a batch on all cores, and NumPy."""
+    from zoetic.physics.bench import bench_simulate
+
+    _emit(bench_simulate(animal, seconds, batch), json)

@@ -17,11 +17,28 @@ from __future__ import annotations
 
 import math
 
+import llvmlite.binding as _llvm
 import numpy as np
 from numba import njit, prange
 
+# The inner loops read and write many node rows that LLVM cannot prove distinct; with the
+# default limit of 8 runtime alias checks it gives up on vectorising the water-face loop.
+# Raising the limits (process-wide, and only ever enabling more vectorisation) lets it check
+# at run time and take the SIMD path: about 1.4x on the shark in water.
+_llvm.set_option("", "-runtime-memory-check-threshold=128")
+_llvm.set_option("", "-vectorize-memory-check-threshold=512")
+
 # fast math without "no NaNs/infs": the blow-up check must see NaN
 FM = {"nsz", "arcp", "contract", "afn", "reassoc"}
+
+# The kernel works in single precision: twice the SIMD lanes of double, and the papers'
+# models need no more. Every literal goes through F so that nothing promotes to float64.
+F = np.float32
+ZERO = F(0.0)
+ONE = F(1.0)
+HALF = F(0.5)
+TINY = F(1e-12)
+TINY2 = F(1e-30)
 
 # medium array layout (see media.Medium.as_array)
 G, LEVEL, BUOY, DRAG, FLOOR, FLOOR_K, FLOOR_C, MU_F, MU_B, MU_L = range(10)
@@ -33,11 +50,18 @@ def _forces(
     mass, sa, sb, stiff, sdamp, relaxed, contracted, sact, med,
 ):  # fmt: skip
     n_nodes = mass.shape[0]
+    level = med[LEVEL]
+    g = med[G]
+    gb = g * med[BUOY]
+    # start from gravity and buoyancy (buoyancy only below the water level)
     for i in range(n_nodes):
+        m = mass[i]
+        wet = m * (gb - g)
+        dry = -m * g
         for b in range(nb):
-            fx[i, b] = 0.0
-            fy[i, b] = 0.0
-            fz[i, b] = 0.0
+            fx[i, b] = ZERO
+            fy[i, b] = wet if y[i, b] < level else dry
+            fz[i, b] = ZERO
     # springs and muscles: l = a*l_c + (1-a)*l_r
     for s in range(sa.shape[0]):
         i = sa[s]
@@ -51,8 +75,8 @@ def _forces(
             dx = x[j, b] - x[i, b]
             dy = y[j, b] - y[i, b]
             dz = z[j, b] - z[i, b]
-            length = math.sqrt(dx * dx + dy * dy + dz * dz) + 1e-12
-            inv = 1.0 / length
+            length = math.sqrt(dx * dx + dy * dy + dz * dz) + TINY
+            inv = ONE / length
             ux = dx * inv
             uy = dy * inv
             uz = dz * inv
@@ -69,26 +93,18 @@ def _forces(
             fx[j, b] -= mag * ux
             fy[j, b] -= mag * uy
             fz[j, b] -= mag * uz
-    level = med[LEVEL]
-    # gravity and buoyancy on each node
-    g = med[G]
-    gb = g * med[BUOY]
-    if g != 0.0:
-        for i in range(n_nodes):
-            m = mass[i]
-            for b in range(nb):
-                sub = 1.0 if y[i, b] < level else 0.0
-                fy[i, b] += m * (gb * sub - g)
 
 
 @njit(cache=True, fastmath=FM, inline="always")
 def _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, faces, level, drag, dt):
-    third = 1.0 / 3.0
+    third = ONE / F(3.0)
+    level3 = F(3.0) * level
+    half_drag = HALF * drag
     for f in range(faces.shape[0]):
         i0 = faces[f, 0]
         i1 = faces[f, 1]
         i2 = faces[f, 2]
-        mf = mass[i0] + mass[i1] + mass[i2]
+        mf_dt = (mass[i0] + mass[i1] + mass[i2]) / dt
         for b in range(nb):
             e1x = x[i1, b] - x[i0, b]
             e1y = y[i1, b] - y[i0, b]
@@ -99,19 +115,17 @@ def _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, faces, level, drag, dt):
             nx = e1y * e2z - e1z * e2y
             ny = e1z * e2x - e1x * e2z
             nz = e1x * e2y - e1y * e2x
-            twice_area = math.sqrt(nx * nx + ny * ny + nz * nz) + 1e-12
-            inv = 1.0 / twice_area
-            nx *= inv
-            ny *= inv
-            nz *= inv
+            # with N the unnormalised normal (|N| = 2 area), the face force is
+            # -(N.v)/|N|^2 * min(drag * |N|/2 * |v|, m_face/dt) * N, only while N.v > 0
+            nn = nx * nx + ny * ny + nz * nz + TINY2
             mvx = (vx[i0, b] + vx[i1, b] + vx[i2, b]) * third
             mvy = (vy[i0, b] + vy[i1, b] + vy[i2, b]) * third
             mvz = (vz[i0, b] + vz[i1, b] + vz[i2, b]) * third
-            vn = max(nx * mvx + ny * mvy + nz * mvz, 0.0)
-            speed = math.sqrt(mvx * mvx + mvy * mvy + mvz * mvz)
-            cy = (y[i0, b] + y[i1, b] + y[i2, b]) * third
-            sub = 1.0 if cy < level else 0.0
-            mag = min(drag * 0.5 * twice_area * speed * vn, mf * vn / dt) * sub * third
+            q = max(nx * mvx + ny * mvy + nz * mvz, ZERO)
+            vv = mvx * mvx + mvy * mvy + mvz * mvz
+            cy = y[i0, b] + y[i1, b] + y[i2, b]
+            sub = third if cy < level3 else ZERO
+            mag = q / nn * min(half_drag * math.sqrt(nn * vv), mf_dt) * sub
             fx[i0, b] -= mag * nx
             fy[i0, b] -= mag * ny
             fz[i0, b] -= mag * nz
@@ -129,12 +143,12 @@ def _fins(x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
     """Pectoral fins: flat plates at a controlled angle to the body, pushed on by the water."""
     for k in range(fin_nodes.shape[0]):
         cnt = 0
-        mf = 0.0
+        mf = ZERO
         for q in range(4):
             if fin_nodes[k, q] >= 0:
                 cnt += 1
                 mf += mass[fin_nodes[k, q]]
-        share = 1.0 / cnt
+        share = ONE / F(cnt)
         fa, fb = fin_fwd[k, 0], fin_fwd[k, 1]
         sa_, sb_ = fin_span[k, 0], fin_span[k, 1]
         lo = fin_angle[k, 0]
@@ -143,7 +157,7 @@ def _fins(x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
             ax = x[fa, b] - x[fb, b]
             ay = y[fa, b] - y[fb, b]
             az = z[fa, b] - z[fb, b]
-            inv = 1.0 / (math.sqrt(ax * ax + ay * ay + az * az) + 1e-12)
+            inv = ONE / (math.sqrt(ax * ax + ay * ay + az * az) + TINY)
             ax *= inv
             ay *= inv
             az *= inv
@@ -154,7 +168,7 @@ def _fins(x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
             sx -= d * ax
             sy -= d * ay
             sz -= d * az
-            inv = 1.0 / (math.sqrt(sx * sx + sy * sy + sz * sz) + 1e-12)
+            inv = ONE / (math.sqrt(sx * sx + sy * sy + sz * sz) + TINY)
             sx *= inv
             sy *= inv
             sz *= inv
@@ -168,10 +182,10 @@ def _fins(x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
             nx = ca * ux + sn * ax
             ny = ca * uy + sn * ay
             nz = ca * uz + sn * az
-            mvx = 0.0
-            mvy = 0.0
-            mvz = 0.0
-            cy = 0.0
+            mvx = ZERO
+            mvy = ZERO
+            mvz = ZERO
+            cy = ZERO
             for q in range(cnt):
                 i = fin_nodes[k, q]
                 mvx += vx[i, b] * share
@@ -180,7 +194,7 @@ def _fins(x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
                 cy += y[i, b] * share
             vn = nx * mvx + ny * mvy + nz * mvz
             speed = math.sqrt(mvx * mvx + mvy * mvy + mvz * mvz)
-            sub = 1.0 if cy < level else 0.0
+            sub = ONE if cy < level else ZERO
             mag = drag * fin_area[k] * speed * vn
             cap = mf * abs(vn) / dt
             mag = max(min(mag, cap), -cap) * sub * share
@@ -205,11 +219,11 @@ def _ground(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, front, back, med, dt):
         bi = back[i]
         for b in range(nb):
             pen = -y[i, b]
-            normal = max(kc * pen - cc * vy[i, b], 0.0) if pen > 0.0 else 0.0
+            normal = max(kc * pen - cc * vy[i, b], ZERO) if pen > ZERO else ZERO
             fy[i, b] += normal
             tx = x[fi, b] - x[bi, b]
             tz = z[fi, b] - z[bi, b]
-            inv = 1.0 / (math.sqrt(tx * tx + tz * tz) + 1e-12)
+            inv = ONE / (math.sqrt(tx * tx + tz * tz) + TINY)
             tx *= inv
             tz *= inv
             # velocity the other forces would give: friction opposes it, at most stopping it
@@ -217,11 +231,11 @@ def _ground(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, front, back, med, dt):
             pz = vz[i, b] + dt * fz[i, b] / m
             vf = px * tx + pz * tz
             vl = pz * tx - px * tz
-            mu = muf if vf > 0.0 else mub
+            mu = muf if vf > ZERO else mub
             ff = min(mu * normal, m * abs(vf) / dt)
             fl = min(mul * normal, m * abs(vl) / dt)
-            ff = -ff if vf > 0.0 else ff
-            fl = -fl if vl > 0.0 else fl
+            ff = -ff if vf > ZERO else ff
+            fl = -fl if vl > ZERO else fl
             fx[i, b] += ff * tx - fl * tz
             fz[i, b] += ff * tz + fl * tx
 
@@ -238,7 +252,7 @@ def simulate_chunks(
     n_lanes = pos0.shape[2]
     n_steps = act.shape[0]
     n_chunks = (n_lanes + chunk - 1) // chunk
-    floor_on = med[FLOOR] > 0.0
+    floor_on = med[FLOOR] > ZERO
     water_on = med[DRAG] > 0.0 and med[LEVEL] > -1e8
     level = med[LEVEL]
     drag = med[DRAG]
@@ -287,7 +301,7 @@ def simulate_chunks(
                 _ground(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, front, back, med, dt)
             for i in range(n_nodes):
                 hm = dt / mass[i]
-                damp = 1.0 / (1.0 + hm * ndamp[i])
+                damp = ONE / (ONE + hm * ndamp[i])
                 for b in range(nb):
                     vx[i, b] = (vx[i, b] + hm * fx[i, b]) * damp
                     vy[i, b] = (vy[i, b] + hm * fy[i, b]) * damp
@@ -297,7 +311,7 @@ def simulate_chunks(
                     z[i, b] += dt * vz[i, b]
             if t % 8 == 7 or t == n_steps - 1:
                 for b in range(nb):
-                    worst = 0.0
+                    worst = ZERO
                     for i in range(n_nodes):
                         s2 = vx[i, b] * vx[i, b] + vy[i, b] * vy[i, b] + vz[i, b] * vz[i, b]
                         worst = max(worst, s2)
@@ -308,9 +322,9 @@ def simulate_chunks(
                             x[i, b] = rest_pos[i, 0]
                             y[i, b] = rest_pos[i, 1]
                             z[i, b] = rest_pos[i, 2]
-                            vx[i, b] = 0.0
-                            vy[i, b] = 0.0
-                            vz[i, b] = 0.0
+                            vx[i, b] = ZERO
+                            vy[i, b] = ZERO
+                            vz[i, b] = ZERO
         for i in range(n_nodes):
             for b in range(nb):
                 dead = failed_step[b0 + b] >= 0

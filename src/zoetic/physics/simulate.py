@@ -55,11 +55,15 @@ class Trajectory:
 def rest_state(
     body: Body,
     batch: int = 1,
-    offset=(0.0, 0.0, 0.0),
+    offset=None,
     velocity=(0.0, 0.0, 0.0),
 ) -> State:
-    """Return ``batch`` copies of the rest pose, shifted by ``offset``, moving at ``velocity``."""
-    pos = np.broadcast_to(body.rest_pos + np.asarray(offset, float), (batch, body.n_nodes, 3))
+    """Return ``batch`` copies of the rest pose, shifted by ``offset``, moving at ``velocity``.
+
+    The default offset is the body's own start offset (a dolphin starts under water).
+    """
+    off = body.start_offset if offset is None else np.asarray(offset, float)
+    pos = np.broadcast_to(body.rest_pos + off, (batch, body.n_nodes, 3))
     vel = np.broadcast_to(np.asarray(velocity, float), (batch, body.n_nodes, 3))
     return State(pos.copy(), vel.copy())
 
@@ -90,6 +94,19 @@ def _check(body: Body, act: np.ndarray, state: State) -> None:
         )
     if not np.all(np.isfinite(act)):
         raise SimulationError("activations contain non-finite values")
+
+
+def _kernel_arrays(body: Body) -> tuple:
+    """Return the body's arrays in the order and precision the kernel takes them."""
+    f32 = np.float32
+    return (
+        body.mass.astype(f32), body.node_damping.astype(f32), body.spring_a, body.spring_b,
+        body.stiffness.astype(f32), body.spring_damping.astype(f32), body.relaxed.astype(f32),
+        body.contracted.astype(f32), body.spring_actuator, body.faces, body.fin_nodes,
+        body.fin_forward, body.fin_span, body.fin_area.astype(f32),
+        body.fin_angle.astype(f32), body.fin_actuator, body.axis_front, body.axis_back,
+        body.rest_pos.astype(f32),
+    )  # fmt: skip
 
 
 def simulate(
@@ -125,27 +142,28 @@ def simulate(
     from zoetic.physics.kernel import simulate_chunks
 
     n = body.n_nodes
-    act_t = np.ascontiguousarray(act.transpose(1, 2, 0))  # (T, A, B)
-    pos0 = np.ascontiguousarray(state.positions.transpose(1, 2, 0))
-    vel0 = np.ascontiguousarray(state.velocities.transpose(1, 2, 0))
+    f32 = np.float32
+    act_t = np.ascontiguousarray(act.transpose(1, 2, 0), dtype=f32)  # (T, A, B)
+    pos0 = np.ascontiguousarray(state.positions.transpose(1, 2, 0), dtype=f32)
+    vel0 = np.ascontiguousarray(state.velocities.transpose(1, 2, 0), dtype=f32)
     n_rec = steps // record_every + 1
-    rec = np.empty((n_rec, n, 3, batch))
-    final_pos = np.empty((n, 3, batch))
-    final_vel = np.empty((n, 3, batch))
+    rec = np.empty((n_rec, n, 3, batch), dtype=f32)
+    final_pos = np.empty((n, 3, batch), dtype=f32)
+    final_vel = np.empty((n, 3, batch), dtype=f32)
     failed_step = -np.ones(batch, dtype=np.int64)
+    k = _kernel_arrays(body)
     simulate_chunks(
-        pos0, vel0, act_t, dt, record_every, chunk_size(batch), VMAX,
-        body.mass, body.node_damping, body.spring_a, body.spring_b, body.stiffness,
-        body.spring_damping, body.relaxed, body.contracted, body.spring_actuator, body.faces,
-        body.fin_nodes, body.fin_forward, body.fin_span, body.fin_area, body.fin_angle,
-        body.fin_actuator, body.axis_front, body.axis_back, body.rest_pos, med.as_array(),
-        rec, final_pos, final_vel, failed_step,
+        pos0, vel0, act_t, f32(dt), record_every, chunk_size(batch), f32(VMAX), *k,
+        med.as_array().astype(f32), rec, final_pos, final_vel, failed_step,
     )  # fmt: skip
     times = np.arange(n_rec) * record_every * dt
     return Trajectory(
         times=times,
-        positions=rec.transpose(3, 0, 1, 2),
-        final=State(final_pos.transpose(2, 0, 1), final_vel.transpose(2, 0, 1)),
+        positions=rec.transpose(3, 0, 1, 2).astype(np.float64),
+        final=State(
+            final_pos.transpose(2, 0, 1).astype(np.float64),
+            final_vel.transpose(2, 0, 1).astype(np.float64),
+        ),
         failed_step=failed_step,
         dt=dt,
     )

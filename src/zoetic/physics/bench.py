@@ -1,0 +1,60 @@
+"""Simulation throughput, measured side by side: one candidate, a batch, the NumPy reference."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from zoetic.bodies import load_animal
+from zoetic.control import wave_controller
+from zoetic.physics.reference import simulate_reference
+from zoetic.physics.simulate import cores, simulate
+
+
+def _best_time(fn, repeats: int) -> float:
+    best = float("inf")
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def bench_simulate(
+    animal: str = "shark", seconds: float = 10.0, batch: int = 256, repeats: int = 3
+) -> dict:
+    """Return simulated seconds per wall second for one candidate, a batch and NumPy."""
+    body = load_animal(animal)
+    dt = body.dt
+    steps = int(round(seconds / dt))
+    rng = np.random.default_rng(0)
+    wave = wave_controller(body).table(steps, dt)
+    # a batch of different smooth candidates: the wave with random phase shifts and gains
+    gains = rng.uniform(0.5, 1.0, (batch, 1, body.n_actuators))
+    shifts = rng.integers(0, steps, batch)
+    acts = np.stack([np.roll(wave, s, axis=0) for s in shifts]) * gains
+    t0 = time.perf_counter()
+    simulate(body, acts[:2, :4], record_every=1000)
+    compile_s = time.perf_counter() - t0
+    single = _best_time(lambda: simulate(body, acts[:1], record_every=steps), repeats)
+    batched = _best_time(lambda: simulate(body, acts, record_every=steps), repeats)
+    ref_batch, ref_steps = min(batch, 64), max(20, steps // 20)
+    ref = _best_time(lambda: simulate_reference(body, acts[:ref_batch, :ref_steps]), 1)
+    out = {
+        "animal": animal,
+        "dt": dt,
+        "batch": batch,
+        "horizon_seconds": seconds,
+        "sim_seconds_per_second_single": round(seconds / single, 1),
+        "sim_seconds_per_second_batched": round(batch * seconds / batched, 1),
+        "numpy_reference_batch": ref_batch,
+        "numpy_reference_sim_seconds_per_second": round(ref_batch * ref_steps * dt / ref, 1),
+        "cores": cores(),
+        "compile_seconds": round(compile_s, 2),
+    }
+    out["speedup_vs_numpy"] = round(
+        out["sim_seconds_per_second_batched"] / out["numpy_reference_sim_seconds_per_second"], 1
+    )
+    out["realtime_factor_batched"] = out["sim_seconds_per_second_batched"]
+    return out

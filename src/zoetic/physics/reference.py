@@ -1,0 +1,133 @@
+"""A plain vectorised NumPy implementation of the same step: the yardstick for the kernel.
+
+It exists to be read and to be compared against: the conformance test checks the Numba kernel
+against it, and the benchmark reports the kernel's speed as a ratio to it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from zoetic.bodies import Body
+from zoetic.physics.media import Medium, get_medium
+from zoetic.physics.simulate import State, rest_state
+
+
+def _scatter(n: int, idx: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Sum values (B, K, 3) into (B, n, 3) at node indices idx (K,)."""
+    out = np.zeros((values.shape[0], n, 3))
+    np.add.at(out, (slice(None), idx), values)
+    return out
+
+
+def forces(body: Body, x: np.ndarray, v: np.ndarray, a: np.ndarray, med: Medium, dt: float):
+    """Return the total nodal forces (B, N, 3) for positions, velocities and activations (B, A)."""
+    n = body.n_nodes
+    sa, sb = body.spring_a, body.spring_b
+    d = x[:, sb] - x[:, sa]
+    length = np.linalg.norm(d, axis=-1) + 1e-12
+    u = d / length[..., None]
+    act = np.where(body.spring_actuator >= 0, a[:, body.spring_actuator], 0.0)
+    rest = body.relaxed + act * (body.contracted - body.relaxed)
+    edot = np.einsum("bsk,bsk->bs", v[:, sb] - v[:, sa], u)
+    mag = body.stiffness * (length - rest) + body.spring_damping * edot
+    fs = mag[..., None] * u
+    f = _scatter(n, sa, fs) - _scatter(n, sb, fs)
+    wet = x[..., 1] < med.water_level
+    f[..., 1] += body.mass * med.gravity * (med.buoyancy * wet - 1.0)
+    if med.water_drag > 0 and med.water_level > -1e8:
+        f += _water(body, x, v, med, dt)
+        if len(body.fin_area):
+            f += _fins(body, x, v, a, med, dt)
+    if med.floor:
+        f += _ground(body, x, v, f, med, dt)
+    return f
+
+
+def _water(body: Body, x, v, med: Medium, dt: float) -> np.ndarray:
+    tri = body.faces
+    p = x[:, tri]  # (B, F, 3, 3)
+    nrm = np.cross(p[:, :, 1] - p[:, :, 0], p[:, :, 2] - p[:, :, 0])
+    twice_area = np.linalg.norm(nrm, axis=-1) + 1e-12
+    nhat = nrm / twice_area[..., None]
+    vm = v[:, tri].mean(axis=2)
+    vn = np.maximum(np.einsum("bfk,bfk->bf", nhat, vm), 0.0)
+    speed = np.linalg.norm(vm, axis=-1)
+    wet = x[:, tri, 1].mean(axis=2) < med.water_level
+    mf = body.mass[tri].sum(axis=1)
+    mag = np.minimum(med.water_drag * 0.5 * twice_area * speed * vn, mf * vn / dt) * wet
+    ff = -(mag / 3.0)[..., None] * nhat
+    return sum(_scatter(body.n_nodes, tri[:, k], ff) for k in range(3))
+
+
+def _unit(a: np.ndarray) -> np.ndarray:
+    return a / (np.linalg.norm(a, axis=-1, keepdims=True) + 1e-12)
+
+
+def _fins(body: Body, x, v, a, med: Medium, dt: float) -> np.ndarray:
+    out = np.zeros_like(x)
+    for k in range(len(body.fin_area)):
+        nodes = body.fin_nodes[k][body.fin_nodes[k] >= 0]
+        fwd = _unit(x[:, body.fin_forward[k, 0]] - x[:, body.fin_forward[k, 1]])
+        span = x[:, body.fin_span[k, 0]] - x[:, body.fin_span[k, 1]]
+        span = _unit(span - np.sum(span * fwd, -1, keepdims=True) * fwd)
+        up = np.cross(fwd, span)
+        lo, hi = body.fin_angle[k]
+        ang = lo + a[:, body.fin_actuator[k]] * (hi - lo)
+        nrm = np.cos(ang)[:, None] * up + np.sin(ang)[:, None] * fwd
+        vm = v[:, nodes].mean(axis=1)
+        vn = np.sum(nrm * vm, -1)
+        wet = x[:, nodes, 1].mean(axis=1) < med.water_level
+        cap = body.mass[nodes].sum() * np.abs(vn) / dt
+        mag = np.clip(med.water_drag * body.fin_area[k] * np.linalg.norm(vm, axis=-1) * vn,
+                      -cap, cap) * wet / len(nodes)  # fmt: skip
+        out[:, nodes] -= (mag[:, None] * nrm)[:, None, :]
+    return out
+
+
+def _ground(body: Body, x, v, f_other, med: Medium, dt: float) -> np.ndarray:
+    m = body.mass[None, :]
+    pen = -x[..., 1]
+    normal = np.where(pen > 0, np.maximum(med.floor_stiffness * pen - med.floor_damping * v[..., 1],
+                                          0.0), 0.0)  # fmt: skip
+    t = x[:, body.axis_front][..., [0, 2]] - x[:, body.axis_back][..., [0, 2]]
+    t = _unit(t)
+    pred = v[..., [0, 2]] + dt * f_other[..., [0, 2]] / m[..., None]
+    vf = np.sum(pred * t, -1)
+    vl = pred[..., 1] * t[..., 0] - pred[..., 0] * t[..., 1]
+    mu = np.where(vf > 0, med.friction_forward, med.friction_backward)
+    ff = -np.sign(vf) * np.minimum(mu * normal, m * np.abs(vf) / dt)
+    fl = -np.sign(vl) * np.minimum(med.friction_lateral * normal, m * np.abs(vl) / dt)
+    out = np.zeros_like(x)
+    out[..., 0] = ff * t[..., 0] - fl * t[..., 1]
+    out[..., 2] = ff * t[..., 1] + fl * t[..., 0]
+    out[..., 1] = normal
+    return out
+
+
+def step(body: Body, x, v, a, med: Medium, dt: float):
+    """Return (x, v) after one semi-implicit Euler step of the same scheme as the kernel."""
+    f = forces(body, x, v, a, med, dt)
+    hm = dt / body.mass[None, :, None]
+    v = (v + hm * f) / (1.0 + hm * body.node_damping[None, :, None])
+    return x + dt * v, v
+
+
+def simulate_reference(
+    body: Body,
+    activations: np.ndarray,
+    medium: str | Medium | None = None,
+    dt: float | None = None,
+    state: State | None = None,
+) -> State:
+    """Return the final State after stepping every candidate through its activation table."""
+    act = np.clip(np.asarray(activations, dtype=np.float64), 0.0, 1.0)
+    if act.ndim == 2:
+        act = act[None]
+    med = get_medium(medium or body.medium)
+    dt = float(dt or body.dt)
+    state = state or rest_state(body, act.shape[0])
+    x, v = state.positions.astype(np.float64), state.velocities.astype(np.float64)
+    for t in range(act.shape[1]):
+        x, v = step(body, x, v, act[:, t], med, dt)
+    return State(x, v)

@@ -1,0 +1,89 @@
+"""Run directories for simulations: the files a user gets from ``zoetic simulate``."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+
+from zoetic.bodies import Body, load_animal
+from zoetic.control import Controller, controller_from_spec
+from zoetic.errors import SimulationError
+from zoetic.io import atomic_write_bytes
+from zoetic.physics import Medium, Trajectory, get_medium, simulate
+
+
+def record_stride(dt: float, rate_hz: float = 100.0) -> int:
+    """Return how many steps apart to record so that positions come at about ``rate_hz``."""
+    return max(1, int(round(1.0 / (rate_hz * dt))))
+
+
+def save_trajectory(path: Path, traj: Trajectory, index: int = 0) -> Path:
+    """Write times (T,) and positions (T, nodes, 3) of one candidate to an .npz file."""
+    buf = io.BytesIO()
+    np.savez_compressed(buf, times=traj.times, positions=traj.positions[index])
+    return atomic_write_bytes(path, buf.getvalue())
+
+
+def run_controller(
+    body: Body, ctrl: Controller, seconds: float, medium: Medium, dt: float
+) -> Trajectory:
+    """Return the trajectory of one body driven by one controller for ``seconds``."""
+    steps = int(round(seconds / dt))
+    traj = simulate(body, ctrl.table(steps, dt), medium, dt, record_every=record_stride(dt))
+    if traj.failed[0]:
+        raise SimulationError(
+            f"the simulation of the {body.name} blew up at t = {traj.failed_step[0] * dt:.3f} s "
+            f"(dt = {dt}); try a smaller --dt"
+        )
+    return traj
+
+
+def write_media(body: Body, traj: Trajectory, medium: Medium, out: Path, video: bool, fps: int):
+    """Write path.png (and video.mp4) for the first candidate of a trajectory."""
+    from zoetic.viz.plots import plot_path
+
+    files = {"path": plot_path(traj.com(body)[0], out / "path.png", title=body.name)}
+    if video:
+        from zoetic.viz.render3d import render_video
+
+        files["video"] = render_video(
+            body, traj.positions[0], traj.times, medium, out / "video.mp4", fps=fps
+        )
+    return files
+
+
+def simulate_run(
+    animal: str,
+    controller: str,
+    seconds: float,
+    out: Path,
+    medium: str | None = None,
+    dt: float | None = None,
+    video: bool = True,
+    fps: int = 30,
+) -> dict:
+    """Simulate, then write trajectory.npz, path.png and video.mp4 into ``out``; return a summary."""
+    body = load_animal(animal)
+    ctrl = controller_from_spec(controller, body)
+    med = get_medium(medium or body.medium)
+    dt = float(dt or body.dt)
+    if dt <= 0:
+        raise SimulationError(f"dt must be positive, got {dt}")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    traj = run_controller(body, ctrl, seconds, med, dt)
+    save_trajectory(out / "trajectory.npz", traj)
+    files = write_media(body, traj, med, out, video, fps)
+    com = traj.com(body)[0]
+    travelled = float(np.linalg.norm(com[-1, [0, 2]] - com[0, [0, 2]]))
+    return {
+        "animal": body.name,
+        "medium": med.name,
+        "seconds": seconds,
+        "distance_m": round(travelled, 3),
+        "speed_m_s": round(travelled / seconds, 3),
+        "trajectory": str(out / "trajectory.npz"),
+        **{k: str(v) for k, v in files.items()},
+    }
