@@ -201,7 +201,8 @@ def dolphin() -> dict:
     for side, ids, other in (("left", left, "right"), ("right", right, "left")):
         doc_acts.append({"name": f"fin_{side}", "kind": "fin", "side": side,
                          "mirror": f"fin_{other}"})
-        span = [ids[0], right[0]] if side == "left" else [ids[0], left[0]]
+        # the body's right-to-left axis (x[0] - x[1]), level, and the same for both fins
+        span = [max(left, key=lambda i: x[i][1]), max(right, key=lambda i: x[i][1])]
         fins.append({
             "name": f"pectoral_{side}", "actuator": f"fin_{side}",
             "nodes": [names[i] for i in ids], "forward": ["nose", names[tail_of[0]]],

@@ -40,7 +40,9 @@ class Body:
     actuator_kind: tuple[str, ...]
     actuator_side: tuple[str, ...]
     actuator_mirror: np.ndarray  # (A,) int: the actuator on the other side (itself if none)
-    faces: np.ndarray  # (F, 3) int, counter-clockwise seen from outside
+    faces: np.ndarray  # (F, 3) int triangles, counter-clockwise seen from outside (drawing)
+    panels: np.ndarray  # (P, 4) int: the file's faces for the water (a triangle repeats c)
+    panel_weights: np.ndarray  # (P, 4): each node's share of its panel (1/3 or 1/4, 0 pad)
     fin_nodes: np.ndarray  # (K, 4) int, padded with -1
     fin_forward: np.ndarray  # (K, 2) int: forward axis = x[0] - x[1]
     fin_span: np.ndarray  # (K, 2) int: span axis = x[0] - x[1]
@@ -111,6 +113,22 @@ def _triangulate(faces) -> np.ndarray:
             a, b, c, d = f
             tris.extend([(a, b, c), (a, c, d)])
     return np.array(tris, dtype=np.int64).reshape(-1, 3)
+
+
+def _panels(faces) -> tuple[np.ndarray, np.ndarray]:
+    """Faces as 4-node panels: the normal (c - a) x (d - b) is twice the area times the unit
+    normal for a triangle (d = c) and a quad alike, and does not depend on which diagonal a
+    triangulation would pick, so mirrored animals feel mirrored water forces."""
+    idx = np.zeros((len(faces), 4), dtype=np.int64)
+    w = np.zeros((len(faces), 4))
+    for k, f in enumerate(faces):
+        if len(f) == 3:
+            idx[k] = (f[0], f[1], f[2], f[2])
+            w[k, :3] = 1.0 / 3.0
+        else:
+            idx[k] = f
+            w[k] = 0.25
+    return idx, w
 
 
 def _local_axes(rest: np.ndarray, sa, sb, forward: np.ndarray):
@@ -200,6 +218,8 @@ def compile_body(spec: AnimalSpec) -> Body:
         actuator_side=tuple(a.side for a in spec.actuators),
         actuator_mirror=_frozen(mirror, np.int64),
         faces=_frozen(_triangulate(spec.faces), np.int64),
+        panels=_frozen(_panels(spec.faces)[0], np.int64),
+        panel_weights=_frozen(_panels(spec.faces)[1], np.float64),
         fin_nodes=_frozen(fin_nodes, np.int64),
         fin_forward=_frozen([f.forward for f in spec.fins], np.int64).reshape(kf, 2),
         fin_span=_frozen([f.span for f in spec.fins], np.int64).reshape(kf, 2),

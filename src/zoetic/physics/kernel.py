@@ -96,45 +96,54 @@ def _forces(
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, faces, level, drag, dt):
-    third = ONE / F(3.0)
-    level3 = F(3.0) * level
+def _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, panels, pw, level, drag, dt):
+    """Hydrodynamic reaction on each surface panel (Tu & Terzopoulos): it opposes the normal
+    velocity of a panel moving outward, -drag * A * |v| * (n.v) * n, shared by its nodes."""
     half_drag = HALF * drag
-    for f in range(faces.shape[0]):
-        i0 = faces[f, 0]
-        i1 = faces[f, 1]
-        i2 = faces[f, 2]
-        mf_dt = (mass[i0] + mass[i1] + mass[i2]) / dt
+    for f in range(panels.shape[0]):
+        i0 = panels[f, 0]
+        i1 = panels[f, 1]
+        i2 = panels[f, 2]
+        i3 = panels[f, 3]
+        w0 = pw[f, 0]
+        w1 = pw[f, 1]
+        w2 = pw[f, 2]
+        w3 = pw[f, 3]
+        # the panel's own mass (weights are 1/n for its n distinct nodes)
+        mf_dt = (w0 * mass[i0] + w1 * mass[i1] + w2 * mass[i2] + w3 * mass[i3]) / (w0 * dt)
         for b in range(nb):
-            e1x = x[i1, b] - x[i0, b]
-            e1y = y[i1, b] - y[i0, b]
-            e1z = z[i1, b] - z[i0, b]
-            e2x = x[i2, b] - x[i0, b]
-            e2y = y[i2, b] - y[i0, b]
-            e2z = z[i2, b] - z[i0, b]
-            nx = e1y * e2z - e1z * e2y
-            ny = e1z * e2x - e1x * e2z
-            nz = e1x * e2y - e1y * e2x
-            # with N the unnormalised normal (|N| = 2 area), the face force is
-            # -(N.v)/|N|^2 * min(drag * |N|/2 * |v|, m_face/dt) * N, only while N.v > 0
+            d1x = x[i2, b] - x[i0, b]
+            d1y = y[i2, b] - y[i0, b]
+            d1z = z[i2, b] - z[i0, b]
+            d2x = x[i3, b] - x[i1, b]
+            d2y = y[i3, b] - y[i1, b]
+            d2z = z[i3, b] - z[i1, b]
+            nx = d1y * d2z - d1z * d2y
+            ny = d1z * d2x - d1x * d2z
+            nz = d1x * d2y - d1y * d2x
+            # with N the unnormalised normal (|N| = 2 area), the panel force is
+            # -(N.v)/|N|^2 * min(drag * |N|/2 * |v|, m_panel/dt) * N, only while N.v > 0
             nn = nx * nx + ny * ny + nz * nz + TINY2
-            mvx = (vx[i0, b] + vx[i1, b] + vx[i2, b]) * third
-            mvy = (vy[i0, b] + vy[i1, b] + vy[i2, b]) * third
-            mvz = (vz[i0, b] + vz[i1, b] + vz[i2, b]) * third
+            mvx = w0 * vx[i0, b] + w1 * vx[i1, b] + w2 * vx[i2, b] + w3 * vx[i3, b]
+            mvy = w0 * vy[i0, b] + w1 * vy[i1, b] + w2 * vy[i2, b] + w3 * vy[i3, b]
+            mvz = w0 * vz[i0, b] + w1 * vz[i1, b] + w2 * vz[i2, b] + w3 * vz[i3, b]
             q = max(nx * mvx + ny * mvy + nz * mvz, ZERO)
             vv = mvx * mvx + mvy * mvy + mvz * mvz
-            cy = y[i0, b] + y[i1, b] + y[i2, b]
-            sub = third if cy < level3 else ZERO
-            mag = q / nn * min(half_drag * math.sqrt(nn * vv), mf_dt) * sub
-            fx[i0, b] -= mag * nx
-            fy[i0, b] -= mag * ny
-            fz[i0, b] -= mag * nz
-            fx[i1, b] -= mag * nx
-            fy[i1, b] -= mag * ny
-            fz[i1, b] -= mag * nz
-            fx[i2, b] -= mag * nx
-            fy[i2, b] -= mag * ny
-            fz[i2, b] -= mag * nz
+            cy = w0 * y[i0, b] + w1 * y[i1, b] + w2 * y[i2, b] + w3 * y[i3, b]
+            mag = q / nn * min(half_drag * math.sqrt(nn * vv), mf_dt)
+            mag = mag if cy < level else ZERO
+            fx[i0, b] -= w0 * mag * nx
+            fy[i0, b] -= w0 * mag * ny
+            fz[i0, b] -= w0 * mag * nz
+            fx[i1, b] -= w1 * mag * nx
+            fy[i1, b] -= w1 * mag * ny
+            fz[i1, b] -= w1 * mag * nz
+            fx[i2, b] -= w2 * mag * nx
+            fy[i2, b] -= w2 * mag * ny
+            fz[i2, b] -= w2 * mag * nz
+            fx[i3, b] -= w3 * mag * nx
+            fy[i3, b] -= w3 * mag * ny
+            fz[i3, b] -= w3 * mag * nz
 
 
 @njit(cache=True, fastmath=FM, inline="always")
@@ -243,7 +252,7 @@ def _ground(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, front, back, med, dt):
 @njit(cache=True, fastmath=FM, parallel=True)
 def simulate_chunks(
     pos0, vel0, act, dt, record_every, chunk, vmax,
-    mass, ndamp, sa, sb, stiff, sdamp, relaxed, contracted, sact, faces,
+    mass, ndamp, sa, sb, stiff, sdamp, relaxed, contracted, sact, panels, pw,
     fin_nodes, fin_fwd, fin_span, fin_area, fin_angle, fin_act, front, back, rest_pos, med,
     rec, final_pos, final_vel, failed_step,
 ):  # fmt: skip
@@ -293,7 +302,7 @@ def simulate_chunks(
                 mass, sa, sb, stiff, sdamp, relaxed, contracted, sact, med,
             )  # fmt: skip
             if water_on:
-                _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, faces, level, drag, dt)
+                _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, panels, pw, level, drag, dt)
                 if fin_nodes.shape[0] > 0:
                     _fins(x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb, mass, fin_nodes,
                           fin_fwd, fin_span, fin_area, fin_angle, fin_act, level, drag, dt)  # fmt: skip

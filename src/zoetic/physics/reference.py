@@ -45,19 +45,21 @@ def forces(body: Body, x: np.ndarray, v: np.ndarray, a: np.ndarray, med: Medium,
 
 
 def _water(body: Body, x, v, med: Medium, dt: float) -> np.ndarray:
-    tri = body.faces
-    p = x[:, tri]  # (B, F, 3, 3)
-    nrm = np.cross(p[:, :, 1] - p[:, :, 0], p[:, :, 2] - p[:, :, 0])
+    idx, w = body.panels, body.panel_weights
+    p = x[:, idx]  # (B, P, 4, 3)
+    nrm = np.cross(p[:, :, 2] - p[:, :, 0], p[:, :, 3] - p[:, :, 1])
     twice_area = np.linalg.norm(nrm, axis=-1) + 1e-12
     nhat = nrm / twice_area[..., None]
-    vm = v[:, tri].mean(axis=2)
-    vn = np.maximum(np.einsum("bfk,bfk->bf", nhat, vm), 0.0)
+    vm = np.einsum("bpkd,pk->bpd", v[:, idx], w)
+    vn = np.maximum(np.einsum("bpk,bpk->bp", nhat, vm), 0.0)
     speed = np.linalg.norm(vm, axis=-1)
-    wet = x[:, tri, 1].mean(axis=2) < med.water_level
-    mf = body.mass[tri].sum(axis=1)
+    wet = np.einsum("bpk,pk->bp", x[:, idx, 1], w) < med.water_level
+    mf = np.einsum("pk,pk->p", body.mass[idx], w) / w[:, 0]
     mag = np.minimum(med.water_drag * 0.5 * twice_area * speed * vn, mf * vn / dt) * wet
-    ff = -(mag / 3.0)[..., None] * nhat
-    return sum(_scatter(body.n_nodes, tri[:, k], ff) for k in range(3))
+    out = np.zeros_like(x)
+    for k in range(4):
+        out += _scatter(body.n_nodes, idx[:, k], -(mag * w[:, k])[..., None] * nhat)
+    return out
 
 
 def _unit(a: np.ndarray) -> np.ndarray:

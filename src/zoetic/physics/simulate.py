@@ -102,7 +102,8 @@ def _kernel_arrays(body: Body) -> tuple:
     return (
         body.mass.astype(f32), body.node_damping.astype(f32), body.spring_a, body.spring_b,
         body.stiffness.astype(f32), body.spring_damping.astype(f32), body.relaxed.astype(f32),
-        body.contracted.astype(f32), body.spring_actuator, body.faces, body.fin_nodes,
+        body.contracted.astype(f32), body.spring_actuator, body.panels,
+        body.panel_weights.astype(f32), body.fin_nodes,
         body.fin_forward, body.fin_span, body.fin_area.astype(f32),
         body.fin_angle.astype(f32), body.fin_actuator, body.axis_front, body.axis_back,
         body.rest_pos.astype(f32),

@@ -1,0 +1,207 @@
+"""Physics checks: conservation, symmetry, convergence, stability, and no free lunch."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from zoetic.bodies import list_animals, load_animal
+from zoetic.control import rest_controller, wave_controller
+from zoetic.physics import State, get_medium, rest_state, simulate
+from zoetic.physics.reference import simulate_reference
+
+
+def _undamped(body):
+    return body.with_(
+        node_damping=np.zeros(body.n_nodes), spring_damping=np.zeros(body.n_springs)
+    )
+
+
+def _random_smooth(rng, body, steps, hold=20, batch=1):
+    """Random activations held for ``hold`` steps: random but not white noise."""
+    n = -(-steps // hold)
+    a = rng.random((batch, n, body.n_actuators))
+    return np.repeat(a, hold, axis=1)[:, :steps]
+
+
+def _energy(body, x, v, a):
+    ke = 0.5 * np.sum(body.mass * np.sum(v * v, axis=-1), axis=-1)
+    length = np.linalg.norm(x[..., body.spring_b, :] - x[..., body.spring_a, :], axis=-1)
+    act = np.where(body.spring_actuator >= 0, a[body.spring_actuator], 0.0)
+    rest = body.relaxed + act * (body.contracted - body.relaxed)
+    pe = 0.5 * np.sum(body.stiffness * (length - rest) ** 2, axis=-1)
+    return ke + pe
+
+
+def test_momentum_is_conserved_with_internal_forces_only():
+    body = load_animal("shark").with_(node_damping=np.zeros(23))
+    rng = np.random.default_rng(0)
+    st = rest_state(body, 2, velocity=(0.3, -0.2, 0.1))
+    st.velocities[:] += rng.normal(0, 0.2, st.velocities.shape)
+    act = _random_smooth(rng, body, 2000, batch=2)
+    tr = simulate(body, act, medium="vacuum", state=st)
+    p0 = np.einsum("n,bnk->bk", body.mass, st.velocities)
+    p1 = np.einsum("n,bnk->bk", body.mass, tr.final.velocities)
+    assert np.abs(p1 - p0).max() < 1e-4 * np.abs(p0).max()
+    # and the centre of mass moves uniformly
+    com = tr.com(body)
+    expected = com[:, :1] + tr.times[None, :, None] * (p0 / body.total_mass)[:, None, :]
+    assert np.abs(com - expected).max() < 1e-4
+
+
+def test_energy_does_not_grow_without_damping():
+    body = _undamped(load_animal("shark"))
+    rng = np.random.default_rng(1)
+    st = rest_state(body, 1)
+    st.velocities[:] = rng.normal(0, 0.3, st.velocities.shape)
+    a = np.full(body.n_actuators, 0.3)
+    table = np.tile(a, (50, 1))
+    energies = []
+    for _ in range(160):  # 40 s in pieces of 0.25 s, sampling the energy between them
+        st = simulate(body, table, medium="vacuum", state=st, record_every=50).final
+        energies.append(_energy(body, st.positions[0], st.velocities[0], a))
+    e = np.array(energies)
+    # symplectic Euler: the energy oscillates about a constant, with no drift either way
+    assert e[-40:].mean() < e[:40].mean() * 1.01
+    assert e[-40:].mean() > e[:40].mean() * 0.99
+    assert e.max() < e.min() * 1.25  # bounded: O(omega dt) wobble of the stiffest modes
+
+
+@pytest.mark.parametrize("name", ["shark", "snake", "ray", "dolphin"])
+def test_mirrored_activation_gives_mirrored_trajectory(name):
+    body = load_animal(name)
+    steps = int(2.0 / body.dt)
+    act = wave_controller(body).table(steps, body.dt)
+    act[:, : body.n_actuators // 2] *= 0.6  # make it lopsided, so the mirror matters
+    tr = simulate(body, np.stack([act, body.mirror_actuators(act)]), record_every=20)
+    mirrored = tr.positions[1][:, body.node_mirror] * np.array([1.0, 1.0, -1.0])
+    assert np.abs(tr.positions[0] - mirrored).max() < 2e-3
+    assert np.abs(tr.positions[0, -1, :, 2] - tr.positions[0, 0, :, 2]).max() > 1e-3
+
+
+def test_results_converge_as_dt_halves():
+    body = load_animal("shark")
+    ctrl = wave_controller(body)
+    finals = []
+    for dt in (0.004, 0.002, 0.001, 0.0005):
+        steps = int(round(1.5 / dt))
+        tr = simulate(body, ctrl.table(steps, dt), dt=dt, record_every=steps)
+        finals.append(tr.final.positions[0])
+    errs = [np.abs(f - finals[-1]).max() for f in finals[:-1]]
+    assert errs[0] > errs[1] > errs[2]
+    assert errs[0] / errs[1] > 1.6 and errs[1] / errs[2] > 1.6  # first order, as Euler is
+
+
+@pytest.mark.parametrize("name", list_animals())
+def test_random_activations_for_30_seconds_stay_finite_and_sane(name):
+    body = load_animal(name)
+    rng = np.random.default_rng(2)
+    steps = int(30.0 / body.dt)
+    act = _random_smooth(rng, body, steps, hold=10, batch=4)
+    tr = simulate(body, act, record_every=50)
+    assert not tr.failed.any()
+    p = tr.positions
+    assert np.isfinite(p).all()
+    length = np.linalg.norm(p[..., body.spring_b, :] - p[..., body.spring_a, :], axis=-1)
+    ratio = length / body.relaxed
+    assert ratio.min() > 0.5 and ratio.max() < 1.5
+
+
+@pytest.mark.parametrize("name", list_animals())
+def test_each_animal_keeps_its_shape_under_its_strongest_muscle_action(name):
+    body = load_animal(name)
+    steps = int(3.0 / body.dt)
+    muscles = [k for k, kind in enumerate(body.actuator_kind) if kind == "muscle"]
+    acts = np.zeros((len(muscles), steps, body.n_actuators))
+    base = rest_controller(body).table(steps, body.dt)
+    for row, k in enumerate(muscles):
+        acts[row] = base
+        acts[row, :, k] = 1.0
+    tr = simulate(body, acts, record_every=10)
+    p = tr.positions
+    length = np.linalg.norm(p[..., body.spring_b, :] - p[..., body.spring_a, :], axis=-1)
+    passive = body.spring_actuator < 0
+    strain = np.abs(length[..., passive] / body.relaxed[passive] - 1.0)
+    assert strain.max() < 0.10
+
+
+def test_snake_crawls_forward_only_with_directional_friction():
+    body = load_animal("snake")
+    steps = int(6.0 / body.dt)
+    act = wave_controller(body).table(steps, body.dt)
+    ground = get_medium("ground")
+    slick = ground.with_(friction_forward=0.0, friction_backward=0.0, friction_lateral=0.0)
+    moved = []
+    for med in (ground, slick):
+        tr = simulate(body, act, medium=med, record_every=steps)
+        com = tr.com(body)[0]
+        moved.append(com[-1] - com[0])
+    assert moved[0][0] > 0.5  # metres along the heading
+    assert np.linalg.norm(moved[1][[0, 2]]) < 0.02
+
+
+def test_shark_swims_forward_in_water_and_not_in_vacuum():
+    body = load_animal("shark")
+    steps = int(6.0 / body.dt)
+    act = wave_controller(body).table(steps, body.dt)
+    moved = {}
+    for med in ("water", "vacuum"):
+        tr = simulate(body, act, medium=med, record_every=steps)
+        com = tr.com(body)[0]
+        moved[med] = com[-1] - com[0]
+    assert moved["water"][0] > 0.8
+    assert np.linalg.norm(moved["vacuum"]) < 0.01
+
+
+def test_dolphin_leaves_the_water_and_falls_back():
+    body = load_animal("dolphin")
+    steps = int(3.0 / body.dt)
+    # nose up at 60 degrees, half a metre deep, shooting along its axis at 10 m/s
+    c, s = np.cos(np.pi / 3), np.sin(np.pi / 3)
+    rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    pos = body.rest_pos @ rot.T + np.array([0.0, -0.5, 0.0])
+    vel = np.tile(10.0 * rot[:, 0], (body.n_nodes, 1))
+    st = State(pos[None], vel[None])
+    act = rest_controller(body).table(steps, body.dt)
+    tr = simulate(body, act, state=st, record_every=5)
+    lowest = tr.positions[0, :, :, 1].min(axis=1)
+    assert lowest.max() > 0.1  # the whole body was in the air
+    airborne = lowest > 0.05
+    com_y = tr.com(body)[0, :, 1]
+    # ballistic in the air: the centre of mass accelerates at -g
+    t, y = tr.times[airborne], com_y[airborne]
+    g = -2 * np.polyfit(t, y, 2)[0]
+    assert g == pytest.approx(9.81, rel=0.03)
+    assert com_y[-1] < 0.0  # and it came back down into the water
+
+
+def test_kernel_matches_numpy_reference():
+    rng = np.random.default_rng(3)
+    for name in list_animals():
+        body = load_animal(name)
+        steps = 200
+        act = _random_smooth(rng, body, steps, batch=2)
+        st = rest_state(body, 2, velocity=(0.2, 0.3 if name == "dolphin" else 0.0, 0.1))
+        tr = simulate(body, act, state=st, record_every=steps)
+        ref = simulate_reference(body, act, state=st)
+        assert np.abs(tr.final.positions - ref.positions).max() < 1e-4, name
+
+
+def test_blow_up_is_reported_not_passed_on():
+    body = load_animal("shark")
+    steps = 400
+    act = wave_controller(body).table(steps, body.dt)
+    tr = simulate(body, np.stack([act, act]), dt=0.05)  # ten times too large a step
+    assert tr.failed.all()
+    assert np.isnan(tr.final.positions).all()
+    ok = simulate(body, act[None], record_every=steps)
+    assert not ok.failed.any()
+
+
+def test_batch_results_do_not_depend_on_batch_size():
+    body = load_animal("shark")
+    rng = np.random.default_rng(4)
+    act = _random_smooth(rng, body, 300, batch=19)
+    many = simulate(body, act, record_every=300).final.positions
+    one = simulate(body, act[7:8], record_every=300).final.positions
+    assert np.array_equal(many[7], one[0])
