@@ -128,17 +128,21 @@ class TimeDomainController(Controller):
         """Return the M node times (s)."""
         return np.linspace(0.0, self.duration, self.nodes)
 
-    def raw(self, t):
-        tc = np.clip(t, 0.0, self.duration)
+    def design_matrix(self, t: np.ndarray) -> np.ndarray:
+        """Return B (T, M) with u(t) = B @ values.T: tent functions or cubic B-splines."""
+        tc = np.clip(np.asarray(t, dtype=np.float64), 0.0, self.duration)
+        m = self.nodes
         if self.interp == "linear":
-            knots = self.node_times()
-            return np.stack([np.interp(tc, knots, v) for v in self.values], axis=1)
+            return np.stack([np.interp(tc, self.node_times(), e) for e in np.eye(m)], axis=1)
         from scipy.interpolate import BSpline
 
-        m, k = self.nodes, min(3, self.nodes - 1)
+        k = min(3, m - 1)
         inner = np.linspace(0.0, self.duration, m - k + 1)
         knots = np.concatenate([np.zeros(k), inner, np.full(k, self.duration)])
-        return BSpline(knots, self.values.T, k, extrapolate=False)(tc)
+        return BSpline.design_matrix(tc, knots, k).toarray()
+
+    def raw(self, t):
+        return self.design_matrix(t) @ self.values.T
 
     def params(self):
         return self.values.ravel().copy()
@@ -199,9 +203,13 @@ class FrequencyDomainController(Controller):
     def nodes(self) -> int:
         return int(self.omega.size)
 
+    def design_matrix(self, t: np.ndarray) -> np.ndarray:
+        """Return B (T, M) with u(t) = B @ amplitudes.T: the cosine bases at times t."""
+        t = np.asarray(t, dtype=np.float64)
+        return np.cos(t[:, None] * self.omega[None, :] + self.phase[None, :])
+
     def raw(self, t):
-        basis = np.cos(t[:, None] * self.omega[None, :] + self.phase[None, :])  # (T, M)
-        return basis @ self.amplitudes.T
+        return self.design_matrix(t) @ self.amplitudes.T
 
     def params(self):
         return self.amplitudes.ravel().copy()

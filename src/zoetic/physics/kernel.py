@@ -127,10 +127,13 @@ def _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, panels, pw, level, drag, d
             mvx = w0 * vx[i0, b] + w1 * vx[i1, b] + w2 * vx[i2, b] + w3 * vx[i3, b]
             mvy = w0 * vy[i0, b] + w1 * vy[i1, b] + w2 * vy[i2, b] + w3 * vy[i3, b]
             mvz = w0 * vz[i0, b] + w1 * vz[i1, b] + w2 * vz[i2, b] + w3 * vz[i3, b]
-            q = max(nx * mvx + ny * mvy + nz * mvz, ZERO)
+            q = nx * mvx + ny * mvy + nz * mvz
+            q = q if q > ZERO else ZERO
             vv = mvx * mvx + mvy * mvy + mvz * mvz
             cy = w0 * y[i0, b] + w1 * y[i1, b] + w2 * y[i2, b] + w3 * y[i3, b]
-            mag = q / nn * min(half_drag * math.sqrt(nn * vv), mf_dt)
+            lim = half_drag * math.sqrt(nn * vv)
+            lim = lim if lim < mf_dt else mf_dt
+            mag = q / nn * lim
             mag = mag if cy < level else ZERO
             fx[i0, b] -= w0 * mag * nx
             fy[i0, b] -= w0 * mag * ny
@@ -228,7 +231,8 @@ def _ground(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, front, back, med, dt):
         bi = back[i]
         for b in range(nb):
             pen = -y[i, b]
-            normal = max(kc * pen - cc * vy[i, b], ZERO) if pen > ZERO else ZERO
+            normal = kc * pen - cc * vy[i, b]
+            normal = normal if (pen > ZERO and normal > ZERO) else ZERO
             fy[i, b] += normal
             tx = x[fi, b] - x[bi, b]
             tz = z[fi, b] - z[bi, b]
@@ -241,8 +245,12 @@ def _ground(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, front, back, med, dt):
             vf = px * tx + pz * tz
             vl = pz * tx - px * tz
             mu = muf if vf > ZERO else mub
-            ff = min(mu * normal, m * abs(vf) / dt)
-            fl = min(mul * normal, m * abs(vl) / dt)
+            ff = mu * normal
+            cap = m * abs(vf) / dt
+            ff = ff if ff < cap else cap
+            fl = mul * normal
+            cap = m * abs(vl) / dt
+            fl = fl if fl < cap else cap
             ff = -ff if vf > ZERO else ff
             fl = -fl if vl > ZERO else fl
             fx[i, b] += ff * tx - fl * tz
@@ -323,7 +331,7 @@ def simulate_chunks(
                     worst = ZERO
                     for i in range(n_nodes):
                         s2 = vx[i, b] * vx[i, b] + vy[i, b] * vy[i, b] + vz[i, b] * vz[i, b]
-                        worst = max(worst, s2)
+                        worst = s2 if s2 > worst else worst
                     if not (worst < vmax * vmax) and failed_step[b0 + b] < 0:
                         failed_step[b0 + b] = t + 1
                     if failed_step[b0 + b] >= 0:
