@@ -1,0 +1,173 @@
+"""Gradient descent on a differentiable loss: Adam (optax) inside box bounds.
+
+The parameters are optimised in bounds-normalised coordinates z = (x - lower) / (upper -
+lower), so a learning rate of 0.02 moves each parameter by about 2% of its range per step
+whatever its units. Each step clips the gradient's global norm (contact makes rare huge
+gradients), takes an Adam step and projects z back onto [0, 1]. A step whose loss or gradient
+is not finite changes nothing but z, which falls back halfway to the best point so far; a
+failed evaluation never becomes the best. The whole optimizer state is a pytree of arrays,
+so it saves to ``.npz`` and resumes exactly (``state_to_numpy`` / ``state_from_numpy``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+
+ValueAndGrad = Callable[[jax.Array], tuple[jax.Array, jax.Array]]
+
+
+class GradientState(NamedTuple):
+    """Everything a gradient run needs to resume: arrays only."""
+
+    z: jax.Array  # (n,) current point in [0, 1]^n
+    opt_state: optax.OptState  # Adam moments and the clip state
+    lower: jax.Array  # (n,)
+    scale: jax.Array  # (n,) upper - lower (1 where a bound is infinite)
+    best_z: jax.Array  # (n,)
+    best_f: jax.Array  # () inf until a finite loss is seen
+    value: jax.Array  # () the loss at the last evaluated point
+    grad_norm: jax.Array  # () its gradient's norm in z, before clipping
+    step: jax.Array  # () int32: evaluations so far
+    failures: jax.Array  # () int32: consecutive non-finite evaluations
+    seed: jax.Array  # () int32: kept for the shared interface (Adam itself is deterministic)
+
+
+class GradientDescent:
+    """Adam with gradient-norm clipping and projection onto box bounds (minimisation)."""
+
+    name = "gradient"
+
+    def __init__(self, learning_rate: float = 0.02, max_grad_norm: float = 1.0) -> None:
+        self.learning_rate = float(learning_rate)
+        self.max_grad_norm = float(max_grad_norm)
+        self.tx = optax.chain(
+            optax.clip_by_global_norm(self.max_grad_norm), optax.adam(self.learning_rate)
+        )
+        self._update = jax.jit(self._update_impl)
+
+    def init(self, x0, lower, upper, seed: int = 0) -> GradientState:
+        """Return the starting state at x0 (clipped into the bounds)."""
+        lo = np.asarray(lower, dtype=np.float64)
+        hi = np.asarray(upper, dtype=np.float64)
+        scale = np.where(np.isfinite(hi - lo) & (hi > lo), hi - lo, 1.0)
+        lo = np.where(np.isfinite(lo), lo, 0.0)
+        z0 = np.clip((np.asarray(x0, dtype=np.float64) - lo) / scale, 0.0, 1.0)
+        z = jnp.asarray(z0, jnp.float32)
+        return GradientState(
+            z=z,
+            opt_state=self.tx.init(z),
+            lower=jnp.asarray(lo, jnp.float32),
+            scale=jnp.asarray(scale, jnp.float32),
+            best_z=z,
+            best_f=jnp.asarray(jnp.inf, jnp.float32),
+            value=jnp.asarray(jnp.nan, jnp.float32),
+            grad_norm=jnp.asarray(jnp.nan, jnp.float32),
+            step=jnp.asarray(0, jnp.int32),
+            failures=jnp.asarray(0, jnp.int32),
+            seed=jnp.asarray(seed, jnp.int32),
+        )
+
+    @staticmethod
+    def x(state: GradientState) -> np.ndarray:
+        """Return the current parameters in their own units."""
+        return np.asarray(state.lower + state.scale * state.z, dtype=np.float64)
+
+    @staticmethod
+    def best_x(state: GradientState) -> np.ndarray:
+        """Return the best parameters seen so far in their own units."""
+        return np.asarray(state.lower + state.scale * state.best_z, dtype=np.float64)
+
+    def step(self, state: GradientState, value_and_grad_fn: ValueAndGrad) -> GradientState:
+        """Return the state after evaluating the loss and its gradient at x and one Adam step."""
+        x = state.lower + state.scale * state.z
+        f, g = value_and_grad_fn(x)
+        return self._update(state, jnp.asarray(f, jnp.float32), jnp.asarray(g, jnp.float32))
+
+    def _update_impl(self, state: GradientState, f: jax.Array, g: jax.Array) -> GradientState:
+        gz = g * state.scale
+        ok = jnp.isfinite(f) & jnp.all(jnp.isfinite(gz))
+        gz_safe = jnp.where(ok, gz, 0.0)
+        updates, opt_new = self.tx.update(gz_safe, state.opt_state, state.z)
+        z_new = jnp.clip(optax.apply_updates(state.z, updates), 0.0, 1.0)
+        z_back = 0.5 * (state.z + state.best_z)
+        better = ok & (f < state.best_f)
+
+        def keep(new: jax.Array, old: jax.Array) -> jax.Array:
+            return jnp.where(ok, new, old)
+
+        return state._replace(
+            z=jnp.where(ok, z_new, z_back),
+            opt_state=jax.tree_util.tree_map(keep, opt_new, state.opt_state),
+            best_z=jnp.where(better, state.z, state.best_z),
+            best_f=jnp.where(better, f, state.best_f),
+            value=f,
+            grad_norm=jnp.sqrt(jnp.sum(gz_safe * gz_safe)),
+            step=state.step + 1,
+            failures=jnp.where(ok, 0, state.failures + 1),
+        )
+
+    def state_to_numpy(self, state: GradientState) -> dict[str, np.ndarray]:
+        """Return the state as named NumPy arrays (for ``np.savez`` or pickle)."""
+        leaves = jax.tree_util.tree_leaves(state)
+        return {f"leaf_{k:03d}": np.asarray(leaf) for k, leaf in enumerate(leaves)}
+
+    def state_from_numpy(self, arrays: dict[str, np.ndarray]) -> GradientState:
+        """Return the state saved by ``state_to_numpy`` (same optimizer settings)."""
+        n = int(np.asarray(arrays["leaf_000"]).size)
+        template = self.init(np.zeros(n), np.zeros(n), np.ones(n))
+        treedef = jax.tree_util.tree_structure(template)
+        keys = sorted(k for k in arrays if k.startswith("leaf_"))
+        if len(keys) != treedef.num_leaves:
+            raise ValueError(
+                f"saved gradient state has {len(keys)} arrays, expected {treedef.num_leaves}"
+            )
+        return jax.tree_util.tree_unflatten(treedef, [jnp.asarray(arrays[k]) for k in keys])
+
+
+def optimize_gradient(
+    loss_fn: Callable[[jax.Array], jax.Array],
+    x0,
+    lower,
+    upper,
+    steps: int,
+    seed: int = 0,
+    callback: Callable[[int, GradientState], bool | None] | None = None,
+    learning_rate: float = 0.02,
+    max_grad_norm: float = 1.0,
+    max_failures: int = 3,
+) -> tuple[np.ndarray, float, list[dict]]:
+    """Return (best x, best loss, history) after ``steps`` Adam steps on a JAX loss of x.
+
+    ``loss_fn`` maps parameters (n,) to a scalar and must be differentiable by JAX; it is
+    jitted here once. ``callback(step, state)`` runs after each step; returning True stops.
+    The run also stops after ``max_failures`` consecutive non-finite evaluations.
+    """
+    opt = GradientDescent(learning_rate, max_grad_norm)
+    vg = jax.jit(jax.value_and_grad(loss_fn))
+    state = opt.init(x0, lower, upper, seed)
+    history: list[dict] = []
+    for k in range(int(steps)):
+        state = opt.step(state, vg)
+        history.append(
+            {
+                "step": k,
+                "value": float(state.value),
+                "best": float(state.best_f),
+                "grad_norm": float(state.grad_norm),
+            }
+        )
+        if callback is not None and callback(k, state):
+            break
+        if int(state.failures) >= max_failures:
+            break
+    # the last step's point has not been evaluated yet: score it too
+    f_last = float(vg(state.lower + state.scale * state.z)[0])
+    if np.isfinite(f_last) and f_last < float(state.best_f):
+        return opt.x(state), f_last, history
+    return opt.best_x(state), float(state.best_f), history
