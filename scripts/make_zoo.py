@@ -100,11 +100,15 @@ def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
     pattern = [(1, 1), (1, -1), (-1, -1), (-1, 1)]  # (y, z) signs
     for r, (x, h, m) in enumerate(FISH_RINGS):
         rings.append(
-            [lat.node(f"r{r + 1}_{k}", place(x, h * sy, h * sz), m * FISH_M)
-             for k, (sy, sz) in enumerate(pattern)]
+            [
+                lat.node(f"r{r + 1}_{k}", place(x, h * sy, h * sz), m * FISH_M)
+                for k, (sy, sz) in enumerate(pattern)
+            ]
         )
-    tips = [lat.node("tail_top", place(-26, 3, 0), 0.165 * FISH_M),
-            lat.node("tail_bottom", place(-26, -3, 0), 0.165 * FISH_M)]
+    tips = [
+        lat.node("tail_top", place(-26, 3, 0), 0.165 * FISH_M),
+        lat.node("tail_bottom", place(-26, -3, 0), 0.165 * FISH_M),
+    ]
     for i in rings[0]:
         lat.spring(nose, i, FISH_K["structural"], "structural")
     for ring in rings:
@@ -120,8 +124,14 @@ def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
                 left = pattern[k][1] > 0
                 side = "left" if left else "right"
                 act = f"{segments[r]}_{side}"
-                lat.spring(a, b, FISH_K["muscle"], "muscle", actuator=act,
-                           max_shortening=0.1 if r == 2 else 0.2)
+                lat.spring(
+                    a,
+                    b,
+                    FISH_K["muscle"],
+                    "muscle",
+                    actuator=act,
+                    max_shortening=0.1 if r == 2 else 0.2,
+                )
             else:
                 lat.spring(a, b, FISH_K["structural"], "structural")
         for k in range(4):
@@ -140,8 +150,7 @@ def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
         lat.face(ids, centre(rings[0]) + np.array([FISH_L * 5, 0, 0]))
     for r in range(4):
         for k in range(4):
-            ids = [rings[r][k], rings[r][(k + 1) % 4], rings[r + 1][(k + 1) % 4],
-                   rings[r + 1][k]]
+            ids = [rings[r][k], rings[r][(k + 1) % 4], rings[r + 1][(k + 1) % 4], rings[r + 1][k]]
             lat.face(ids, centre(ids))
     last = rings[4]
     tail_quads = [[last[0], last[3], tips[1], tips[0]], [last[1], last[2], tips[1], tips[0]]]
@@ -156,8 +165,14 @@ def fish_actuators(sides: dict[str, str] | None = None) -> list[dict]:
     out = []
     for seg in ("front", "middle", "back"):
         for side, other in (("left", "right"), ("right", "left")):
-            out.append({"name": f"{seg}_{side}", "kind": "muscle",
-                        "side": (sides or {}).get(side, side), "mirror": f"{seg}_{other}"})
+            out.append(
+                {
+                    "name": f"{seg}_{side}",
+                    "kind": "muscle",
+                    "side": (sides or {}).get(side, side),
+                    "mirror": f"{seg}_{other}",
+                }
+            )
     return out
 
 
@@ -199,16 +214,22 @@ def dolphin() -> dict:
     tail_of = [rings[4][0], rings[4][2]]
     fins = []
     for side, ids, other in (("left", left, "right"), ("right", right, "left")):
-        doc_acts.append({"name": f"fin_{side}", "kind": "fin", "side": side,
-                         "mirror": f"fin_{other}"})
+        doc_acts.append(
+            {"name": f"fin_{side}", "kind": "fin", "side": side, "mirror": f"fin_{other}"}
+        )
         # the body's right-to-left axis (x[0] - x[1]), level, and the same for both fins
         span = [max(left, key=lambda i: x[i][1]), max(right, key=lambda i: x[i][1])]
-        fins.append({
-            "name": f"pectoral_{side}", "actuator": f"fin_{side}",
-            "nodes": [names[i] for i in ids], "forward": ["nose", names[tail_of[0]]],
-            "span": [names[span[0]], names[span[1]]], "area": 0.02,
-            "angle_range": [-0.5, 0.5],
-        })
+        fins.append(
+            {
+                "name": f"pectoral_{side}",
+                "actuator": f"fin_{side}",
+                "nodes": [names[i] for i in ids],
+                "forward": ["nose", names[tail_of[0]]],
+                "span": [names[span[0]], names[span[1]]],
+                "area": 0.02,
+                "angle_range": [-0.5, 0.5],
+            }
+        )
     phases = {}
     for i, seg in enumerate(("front", "middle", "back")):
         phases[f"{seg}_dorsal"] = round(0.1 * i, 3)
@@ -256,24 +277,36 @@ def snake() -> dict:
         lat.spring(ring[1], ring[3], k_cross, "cross")
     acts = []
     for r in range(n_rings - 1):
-        for side, ks, other in (("left", (0, 3), "right"), ("right", (1, 2), "left")):
-            acts.append({"name": f"seg{r}_{side}", "kind": "muscle", "side": side,
-                         "mirror": f"seg{r}_{other}"})
+        for side, other in (("left", "right"), ("right", "left")):
+            acts.append(
+                {
+                    "name": f"seg{r}_{side}",
+                    "kind": "muscle",
+                    "side": side,
+                    "mirror": f"seg{r}_{other}",
+                }
+            )
         for k in range(4):
             side = "left" if k in (0, 3) else "right"
-            lat.spring(rings[r][k], rings[r + 1][k], k_muscle, "muscle",
-                       actuator=f"seg{r}_{side}", max_shortening=0.3)
+            lat.spring(
+                rings[r][k],
+                rings[r + 1][k],
+                k_muscle,
+                "muscle",
+                actuator=f"seg{r}_{side}",
+                max_shortening=0.3,
+            )
         for k in range(4):
             for nb in ((k + 1) % 4, (k + 3) % 4):
                 lat.spring(rings[r][k], rings[r + 1][nb], k_cross, "cross")
     x = lat.pos()
     for k in range(4):
-        lat.face([nose, rings[0][k], rings[0][(k + 1) % 4]],
-                 x[rings[0]].mean(axis=0) - [0.05, 0, 0])
+        lat.face(
+            [nose, rings[0][k], rings[0][(k + 1) % 4]], x[rings[0]].mean(axis=0) - [0.05, 0, 0]
+        )
     for r in range(n_rings - 1):
         for k in range(4):
-            ids = [rings[r][k], rings[r][(k + 1) % 4], rings[r + 1][(k + 1) % 4],
-                   rings[r + 1][k]]
+            ids = [rings[r][k], rings[r][(k + 1) % 4], rings[r + 1][(k + 1) % 4], rings[r + 1][k]]
             lat.face(ids, x[rings[r] + rings[r + 1]].mean(axis=0))
     lat.face(rings[-1], x[rings[-2]].mean(axis=0))
     phases = {}
@@ -325,14 +358,21 @@ def ray() -> dict:
         }
         stations.append(st)
         rows_top.append([st[n] for n in names])
-        rows_bot.append([st[n.replace("T", "B") if n.startswith(("T", "midT")) else n]
-                         for n in names])
+        rows_bot.append(
+            [st[n.replace("T", "B") if n.startswith(("T", "midT")) else n] for n in names]
+        )
     tail = lat.node("tail", [-0.45, 0.0, 0.0], m)
     acts = []
     for side, other in (("left", "right"), ("right", "left")):
         for role in ("elevator", "depressor"):
-            acts.append({"name": f"{role}_{side}", "kind": "muscle", "side": side,
-                         "mirror": f"{role}_{other}"})
+            acts.append(
+                {
+                    "name": f"{role}_{side}",
+                    "kind": "muscle",
+                    "side": side,
+                    "mirror": f"{role}_{other}",
+                }
+            )
     for st in stations:
         box = [st["TL"], st["TR"], st["BR"], st["BL"]]
         for k in range(4):
@@ -340,8 +380,13 @@ def ray() -> dict:
         lat.spring(box[0], box[2], k_s, "cross")
         lat.spring(box[1], box[3], k_s, "cross")
         for S, side in (("L", "left"), ("R", "right")):
-            T, B, mT, mB, tip = st["T" + S], st["B" + S], st["midT" + S], st["midB" + S], \
-                st["tip" + S]
+            T, B, mT, mB, tip = (
+                st["T" + S],
+                st["B" + S],
+                st["midT" + S],
+                st["midB" + S],
+                st["tip" + S],
+            )
             lat.spring(T, mT, k_m, "muscle", actuator=f"elevator_{side}", max_shortening=0.2)
             lat.spring(B, mB, k_m, "muscle", actuator=f"depressor_{side}", max_shortening=0.2)
             lat.spring(mT, mB, k_s, "structural")
@@ -396,9 +441,17 @@ def ray() -> dict:
         forward=[1.0, 0.0, 0.0],
         defaults={"node_damping": 0.02, "spring_damping": 0.0},
         actuators=acts,
-        wave={"frequency": 1.0, "amplitude": 1.0, "offset": 0.0,
-              "phases": {"elevator_left": 0.0, "elevator_right": 0.0,
-                         "depressor_left": 0.5, "depressor_right": 0.5}},
+        wave={
+            "frequency": 1.0,
+            "amplitude": 1.0,
+            "offset": 0.0,
+            "phases": {
+                "elevator_left": 0.0,
+                "elevator_right": 0.0,
+                "depressor_left": 0.5,
+                "depressor_right": 0.5,
+            },
+        },
     )
 
 
@@ -412,9 +465,22 @@ def main() -> None:
     ZOO.mkdir(parents=True, exist_ok=True)
     for make in (snake, shark, ray, dolphin):
         doc = make()
-        order = ["name", "description", "medium", "dt", "start_offset", "head", "forward",
-                 "defaults",
-                 "wave", "actuators", "fins", "nodes", "springs", "faces"]
+        order = [
+            "name",
+            "description",
+            "medium",
+            "dt",
+            "start_offset",
+            "head",
+            "forward",
+            "defaults",
+            "wave",
+            "actuators",
+            "fins",
+            "nodes",
+            "springs",
+            "faces",
+        ]
         doc = {k: doc[k] for k in order if k in doc}
         (ZOO / f"{doc['name']}.toml").write_text(HEADER + tomli_w.dumps(doc))
 

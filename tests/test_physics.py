@@ -12,9 +12,7 @@ from zoetic.physics.reference import simulate_reference
 
 
 def _undamped(body):
-    return body.with_(
-        node_damping=np.zeros(body.n_nodes), spring_damping=np.zeros(body.n_springs)
-    )
+    return body.with_(node_damping=np.zeros(body.n_nodes), spring_damping=np.zeros(body.n_springs))
 
 
 def _random_smooth(rng, body, steps, hold=20, batch=1):

@@ -64,7 +64,7 @@ def simulate_run(
     video: bool = True,
     fps: int = 30,
 ) -> dict:
-    """Simulate, then write trajectory.npz, path.png and video.mp4 into ``out``; return a summary."""
+    """Simulate, write trajectory.npz, path.png and video.mp4 into ``out``; return a summary."""
     body = load_animal(animal)
     ctrl = controller_from_spec(controller, body)
     med = get_medium(medium or body.medium)
@@ -85,5 +85,42 @@ def simulate_run(
         "distance_m": round(travelled, 3),
         "speed_m_s": round(travelled / seconds, 3),
         "trajectory": str(out / "trajectory.npz"),
+        **{k: str(v) for k, v in files.items()},
+    }
+
+
+def finish_run(run, video: bool = True, fps: int = 30) -> dict:
+    """Write learning.png, controller.png and video.mp4 of a finished learning run."""
+    from zoetic.viz.learning import plot_controller, plot_learning
+
+    setup = run.setup
+    body, task, obj = setup.objective.body, setup.task, setup.objective
+    out = Path(run.out)
+    ctrl = run.best_controller()
+    files = {
+        "learning": plot_learning(
+            {setup.config.optimizer: np.array(run.log.E)}, out / "learning.png",
+            title=f"{body.name} {task.name}: E against evaluations",
+        ),
+    }  # fmt: skip
+    t = np.linspace(0.0, task.horizon, 400)
+    files["controller"] = plot_controller(
+        t, ctrl.sample(t), body.actuator_names, body.actuator_side, out / "controller.png",
+        title=f"learned {setup.config.controller}-domain controller",
+    )  # fmt: skip
+    ev = obj.evaluate(setup.optimizer.best_x[None])
+    traj = obj.simulate(setup.optimizer.best_x[None])
+    com = traj.com(body)[0]
+    if video:
+        from zoetic.viz.render3d import render_video
+
+        files["video"] = render_video(body, traj.positions[0], traj.times, obj.medium,
+                                      out / "video.mp4", fps=fps)  # fmt: skip
+    travelled = float(np.linalg.norm(com[-1, [0, 2]] - com[0, [0, 2]]))
+    return {
+        "evaluations": run.evaluations,
+        "best_E": round(float(ev.E[0]), 4),
+        "distance_m": round(travelled, 3),
+        "run": str(out),
         **{k: str(v) for k, v in files.items()},
     }

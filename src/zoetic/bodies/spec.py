@@ -305,7 +305,7 @@ def parse_animal(doc: dict[str, Any], source: str = "<memory>") -> AnimalSpec:
         phases = w.get("phases", {})
         if not isinstance(phases, dict):
             raise r.fail("wave", "'phases' must be a table of actuator = phase")
-        for key, value in phases.items():
+        for key in phases:
             if key not in act_names:
                 raise r.fail("wave", f"phase for unknown actuator {key!r}")
             r.number(phases, key, "wave.phases")

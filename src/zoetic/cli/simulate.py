@@ -37,7 +37,7 @@ def simulate(
     controller: str = typer.Option("wave", help="wave, rest, or a controller .json file."),
     seconds: float = typer.Option(10.0, min=0.01, help="Simulated time (s)."),
     out: Path = typer.Option(Path("runs/simulate"), help="Output directory."),
-    medium: str = typer.Option(None, help="Override the animal's medium (ground, water, sea, vacuum)."),
+    medium: str = typer.Option(None, help="Override the medium: ground, water, sea, vacuum."),
     dt: float = typer.Option(None, help="Time step (s); default the animal's own."),
     video: bool = typer.Option(True, help="Write video.mp4."),
     fps: int = typer.Option(30, min=1, help="Video frame rate."),

@@ -107,7 +107,9 @@ def from_dict(d: dict, where: str = "controller") -> Controller:
     except ControllerError as exc:
         raise ControllerError(f"{where}: {exc}") from None
     except (KeyError, TypeError, ValueError) as exc:
-        raise ControllerError(f"{where}: malformed controller ({type(exc).__name__}: {exc})")
+        raise ControllerError(
+            f"{where}: malformed controller ({type(exc).__name__}: {exc})"
+        ) from None
 
 
 def check_fits(ctrl: Controller, body: Body, where: str = "controller") -> Controller:
@@ -155,7 +157,5 @@ def controller_from_spec(spec: str, body: Body) -> Controller:
         return rest_controller(body)
     path = Path(spec)
     if not path.exists():
-        raise ControllerError(
-            f"{spec}: not a controller file (and not 'wave' or 'rest')"
-        )
+        raise ControllerError(f"{spec}: not a controller file (and not 'wave' or 'rest')")
     return load_controller(path, body)

@@ -1,7 +1,8 @@
 """The objective E = mu1 * E_u + mu2 * E_v of section 2.2, evaluated for a batch of candidates.
 
 E_u is discretised on the controller's M nodes exactly as section 4.2 writes it:
-    E_u = sum_i sum_j  nu1 / (2 h^2) (u_i^{j+1} - u_i^j)^2 + nu2 / (2 h^4) (u_i^{j+1} - 2 u_i^j + u_i^{j-1})^2
+    E_u = sum_i sum_j  nu1 / (2 h^2) (u_i^{j+1} - u_i^j)^2
+                     + nu2 / (2 h^4) (u_i^{j+1} - 2 u_i^j + u_i^{j-1})^2
 with h the time between nodal parameters (a frequency-domain controller is sampled at the same
 M node times). E_v is a weighted sum of named motion terms (``zoetic.tasks.TERM_KINDS``).
 A candidate whose simulation blew up scores +inf and is counted, never raised.

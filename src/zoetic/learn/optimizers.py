@@ -131,9 +131,7 @@ class Simplex(Optimizer):
         for i in range(n):
             up = self.x0[i] + span[i] <= self.upper[i]
             simplex[i + 1, i] += span[i] if up else -span[i]
-        self._thread = threading.Thread(
-            target=self._run, args=(simplex, int(budget)), daemon=True
-        )
+        self._thread = threading.Thread(target=self._run, args=(simplex, int(budget)), daemon=True)
         self._thread.start()
         self._pending = self._asks.get()
 

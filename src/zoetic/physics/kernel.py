@@ -83,9 +83,9 @@ def _forces(
             rest = lr
             if a_idx >= 0:
                 rest = lr + act[t, a_idx, b0 + b] * dl
-            edot = (vx[j, b] - vx[i, b]) * ux + (vy[j, b] - vy[i, b]) * uy + (
-                vz[j, b] - vz[i, b]
-            ) * uz
+            edot = (
+                (vx[j, b] - vx[i, b]) * ux + (vy[j, b] - vy[i, b]) * uy + (vz[j, b] - vz[i, b]) * uz
+            )
             mag = k * (length - rest) + c * edot
             fx[i, b] += mag * ux
             fy[i, b] += mag * uy
@@ -150,8 +150,10 @@ def _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, panels, pw, level, drag, d
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def _fins(x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
-          mass, fin_nodes, fin_fwd, fin_span, fin_area, fin_angle, fin_act, level, drag, dt):  # fmt: skip
+def _fins(
+    x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
+    mass, fin_nodes, fin_fwd, fin_span, fin_area, fin_angle, fin_act, level, drag, dt,
+):  # fmt: skip
     """Pectoral fins: flat plates at a controlled angle to the body, pushed on by the water."""
     for k in range(fin_nodes.shape[0]):
         cnt = 0
@@ -312,8 +314,10 @@ def simulate_chunks(
             if water_on:
                 _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, panels, pw, level, drag, dt)
                 if fin_nodes.shape[0] > 0:
-                    _fins(x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb, mass, fin_nodes,
-                          fin_fwd, fin_span, fin_area, fin_angle, fin_act, level, drag, dt)  # fmt: skip
+                    _fins(
+                        x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb, mass, fin_nodes,
+                        fin_fwd, fin_span, fin_area, fin_angle, fin_act, level, drag, dt,
+                    )  # fmt: skip
             if floor_on:
                 _ground(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, front, back, med, dt)
             for i in range(n_nodes):

@@ -89,8 +89,12 @@ def parse_task(doc: dict, source: str = "<memory>") -> Task:
         if not (isinstance(goal, list) and len(goal) == 3):
             raise TaskError(f"{w}: 'goal' must be [x, y, z]")
         terms.append(
-            Term(kind, _num(t, "weight", w, 1.0), _num(t, "target", w, 0.0),
-                 tuple(float(g) for g in goal))  # fmt: skip
+            Term(
+                kind,
+                _num(t, "weight", w, 1.0),
+                _num(t, "target", w, 0.0),
+                tuple(float(g) for g in goal),
+            )  # fmt: skip
         )
     return Task(
         name=name,

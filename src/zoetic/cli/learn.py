@@ -1,0 +1,154 @@
+"""``zoetic learn``, ``zoetic tasks``, ``zoetic demo`` and ``zoetic bench learn``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+from zoetic.cli import app
+from zoetic.cli.bench import _emit, bench_app
+
+console = Console()
+
+
+@app.command()
+def tasks() -> None:
+    """List the built-in tasks, one line each."""
+    from zoetic.tasks import list_tasks, load_task
+
+    for name in list_tasks():
+        t = load_task(name)
+        console.print(
+            f"[bold]{name:16s}[/] {', '.join(t.animals):28s} {t.horizon:4.1f} s  {t.description}"
+        )
+
+
+def _progress_bar() -> Progress:
+    return Progress(
+        TextColumn("[bold]{task.description}"),
+        BarColumn(bar_width=16),
+        TextColumn("{task.completed:>5.0f}/{task.total:.0f}"),
+        TextColumn("E {task.fields[best]}"),
+        TextColumn("{task.fields[status]}"),
+        TextColumn("{task.fields[rate]}/s"),
+        TimeElapsedColumn(),
+        console=console,
+        transient=False,
+    )
+
+
+def run_with_progress(run, label: str) -> None:
+    """Learn to the run's budget with a Rich progress bar; Ctrl-C leaves a resumable run."""
+    budget = run.setup.config.budget
+    with _progress_bar() as bar:
+        tid = bar.add_task(label, total=budget, completed=run.evaluations, best="-", status="",
+                           rate="-")  # fmt: skip
+        start_evals = run.evaluations
+
+        def update(r) -> None:
+            opt = r.setup.optimizer
+            status = " ".join(f"{k} {v:.2g}" for k, v in opt.status().items())
+            elapsed = max(bar.tasks[0].elapsed or 1e-9, 1e-9)
+            bar.update(
+                tid, completed=min(r.evaluations, budget), best=f"{opt.best_f:.4g}",
+                status=status, rate=f"{(r.evaluations - start_evals) / elapsed:.0f}",
+            )  # fmt: skip
+
+        try:
+            run.learn(progress=update)
+        except KeyboardInterrupt:
+            console.print(
+                f"[yellow]interrupted at {run.evaluations} evaluations; nothing is lost: "
+                f"zoetic learn --resume {run.out}[/]"
+            )
+            raise typer.Exit(130) from None
+
+
+@app.command()
+def learn(
+    animal: str = typer.Argument(None, help="Zoo animal name or animal .toml file."),
+    task: str = typer.Option("swim-straight", help="Task name (see `zoetic tasks`) or .toml file."),
+    optimizer: str = typer.Option("anneal", help="anneal, simplex, cmaes or gradient."),
+    budget: int = typer.Option(3500, min=1, help="Evaluations (simulations) to spend."),
+    seed: int = typer.Option(0, help="Random seed: same seed, same result."),
+    controller: str = typer.Option("time", help="Representation: time or frequency."),
+    nodes: int = typer.Option(None, min=2, help="M, parameters per actuator (default: task's)."),
+    interp: str = typer.Option("linear", help="Time-domain interpolation: linear or bspline."),
+    popsize: int = typer.Option(None, min=2, help="CMA-ES population size."),
+    chains: int = typer.Option(1, min=1, help="Parallel annealing chains."),
+    evaluator: str = typer.Option("batch", help="batch (Numba threads) or process (pool)."),
+    out: Path = typer.Option(None, help="Run directory (default runs/<animal>-<task>)."),
+    resume: Path = typer.Option(None, help="Continue the run in this directory."),
+    video: bool = typer.Option(True, help="Write video.mp4 of the best controller."),
+) -> None:
+    """Learn a controller for an animal and a task; writes a resumable run directory."""
+    from zoetic.learn.run import LearnConfig, Run
+    from zoetic.runs import finish_run
+
+    if resume is not None:
+        run = Run.resume(resume)
+        console.print(f"resuming {resume} at {run.evaluations} evaluations")
+    else:
+        if animal is None:
+            raise typer.BadParameter("give an ANIMAL (or --resume RUN_DIR)")
+        config = LearnConfig(
+            animal=animal, task=task, optimizer=optimizer, budget=budget, seed=seed,
+            controller=controller, nodes=nodes, interp=interp, popsize=popsize, chains=chains,
+            evaluator=evaluator,
+        )  # fmt: skip
+        out = out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}"
+        if config.optimizer == "gradient":
+            from zoetic.learn.gradient_run import GradientRun
+
+            run = GradientRun.create(out, config)
+        else:
+            run = Run.create(out, config)
+    cfg = run.setup.config
+    run_with_progress(run, f"{cfg.animal} {cfg.optimizer}")
+    summary = finish_run(run, video=video)
+    for key, value in summary.items():
+        console.print(f"{key:>14}: {value}")
+
+
+@app.command()
+def demo(
+    out: Path = typer.Option(Path("runs/demo"), help="Where to write the demo run."),
+    budget: int = typer.Option(2400, min=16, help="Evaluations to spend."),
+    seed: int = typer.Option(0),
+    video: bool = typer.Option(True),
+) -> None:
+    """A shark learns to swim from scratch (CMA-ES, about half a minute on 2 cores)."""
+    import shutil
+
+    from zoetic.learn.run import LearnConfig, Run
+    from zoetic.runs import finish_run
+
+    if (out / "checkpoint.npz").exists():
+        shutil.rmtree(out)
+    config = LearnConfig(
+        animal="shark", task="swim-straight", optimizer="cmaes", budget=budget, seed=seed,
+        popsize=24,
+    )  # fmt: skip
+    console.print(
+        "[bold]zoetic demo[/]: a shark with random muscle signals learns to swim straight "
+        f"({budget} simulations of {4.0:g} s each)."
+    )
+    run = Run.create(out, config)
+    run_with_progress(run, "shark learns to swim")
+    summary = finish_run(run, video=video)
+    for key, value in summary.items():
+        console.print(f"{key:>14}: {value}")
+
+
+@bench_app.command("learn")
+def bench_learn_cmd(
+    budget: int = typer.Option(3500, min=10),
+    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Annealing's wall time for the paper's budget, and how fast CMA-ES/gradient match it."""
+    from zoetic.learn.bench import bench_learn
+
+    _emit(bench_learn(budget), json)

@@ -1,0 +1,70 @@
+"""Learning speed, side by side: the paper's annealing budget, and how fast others match it."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from zoetic.learn.run import LearnConfig, build
+
+
+def _learn_until(config: LearnConfig, target: float | None, max_seconds: float) -> dict:
+    setup = build(config)
+    opt, obj = setup.optimizer, setup.objective
+    obj.evaluate(opt.x0[None])  # compile and warm the kernel outside the clock
+    t0 = time.perf_counter()
+    reached = None
+    while opt.evaluations < config.budget and not opt.done():
+        X = opt.ask()
+        if len(X) == 0:
+            break
+        opt.tell(X, obj(X))
+        elapsed = time.perf_counter() - t0
+        if target is not None and opt.best_f <= target:
+            reached = elapsed
+            break
+        if elapsed > max_seconds:
+            break
+    close = getattr(opt, "close", None)
+    if close:
+        close()
+    return {
+        "seconds": round(time.perf_counter() - t0, 3),
+        "final_E": round(float(opt.best_f), 4),
+        "evaluations": opt.evaluations,
+        "seconds_to_match": None if reached is None else round(reached, 3),
+    }
+
+
+def bench_learn(budget: int = 3500, seed: int = 0, max_seconds: float = 60.0) -> dict:
+    """Return annealing's wall time and final E, and the others' time to reach that E."""
+    base = dict(animal="shark", task="swim-straight", controller="time", nodes=15, seed=seed)
+    anneal = _learn_until(LearnConfig(optimizer="anneal", budget=budget, **base), None, 1e9)
+    target = anneal["final_E"]
+    out = {
+        "task": "shark swim-straight, M = 15, 6 actuators (NM = 90), 4 s horizon",
+        "anneal_evaluations": anneal["evaluations"],
+        "anneal_seconds": anneal["seconds"],
+        "anneal_final_E": target,
+        "paper_anneal_seconds": 3600,
+    }
+    out["speedup_vs_paper"] = round(3600 / max(anneal["seconds"], 1e-9), 1)
+    cm = _learn_until(
+        LearnConfig(optimizer="cmaes", budget=100 * budget, popsize=24, **base), target,
+        max_seconds,
+    )  # fmt: skip
+    out["cmaes_seconds_to_match_anneal"] = cm["seconds_to_match"]
+    out["cmaes_evaluations_to_match"] = cm["evaluations"]
+    try:
+        from zoetic.learn.gradient_run import bench_gradient
+
+        out.update(bench_gradient(base, target, max_seconds))
+    except ImportError as exc:  # JAX missing: say so rather than invent a number
+        out["gradient_seconds_to_match_anneal"] = None
+        out["gradient_note"] = f"unavailable: {exc}"
+    out["seconds_to_match_anneal"] = {
+        "cmaes": out["cmaes_seconds_to_match_anneal"],
+        "gradient": out.get("gradient_seconds_to_match_anneal"),
+    }
+    return {k: (v if not isinstance(v, np.floating) else float(v)) for k, v in out.items()}

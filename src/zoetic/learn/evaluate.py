@@ -1,0 +1,93 @@
+"""Where a population is simulated: in-process batches (default) or a pool of processes.
+
+An Evaluator maps an Objective and a batch of parameter vectors to an Evaluation. Optimizers
+never see it, so a cluster backend (Ray) plugs in by implementing ``__call__`` and ``close``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from zoetic.learn.objective import Evaluation, Objective
+
+
+class BatchEvaluator:
+    """Simulate the whole batch at once on all cores with the Numba kernel."""
+
+    name = "batch"
+
+    def __call__(self, objective: Objective, params: np.ndarray) -> Evaluation:
+        return objective.evaluate(params)
+
+    def close(self) -> None:
+        """Nothing to release."""
+
+
+_WORKER: dict = {}
+
+
+def _init_worker(objective: Objective) -> None:
+    from zoetic.physics.simulate import set_threads
+
+    set_threads(1)
+    _WORKER["objective"] = objective
+
+
+def _evaluate_chunk(params: np.ndarray) -> Evaluation:
+    return _WORKER["objective"].evaluate(params)
+
+
+def merge(parts: list[Evaluation]) -> Evaluation:
+    """Return one Evaluation from the Evaluations of consecutive chunks of a batch."""
+    cat = np.concatenate
+    return Evaluation(
+        cat([p.E for p in parts]),
+        cat([p.E_u for p in parts]),
+        cat([p.E_v for p in parts]),
+        {k: cat([p.terms[k] for p in parts]) for k in parts[0].terms},
+        cat([p.failed for p in parts]),
+    )
+
+
+class ProcessPoolEvaluator:
+    """Split each batch over worker processes, one single-threaded simulator each."""
+
+    name = "process"
+
+    def __init__(self, workers: int | None = None):
+        from zoetic.physics.simulate import cores
+
+        self.workers = workers or cores()
+        self._pool = None
+        self._objective_id = None
+
+    def __call__(self, objective: Objective, params: np.ndarray) -> Evaluation:
+        import multiprocessing as mp
+        from concurrent.futures import ProcessPoolExecutor
+
+        if self._pool is None or self._objective_id != id(objective):
+            self.close()
+            ctx = mp.get_context("spawn")
+            self._pool = ProcessPoolExecutor(
+                self.workers, mp_context=ctx, initializer=_init_worker, initargs=(objective,)
+            )
+            self._objective_id = id(objective)
+        chunks = [c for c in np.array_split(np.atleast_2d(params), self.workers) if len(c)]
+        return merge(list(self._pool.map(_evaluate_chunk, chunks)))
+
+    def close(self) -> None:
+        """Shut the worker processes down."""
+        if self._pool is not None:
+            self._pool.shutdown(cancel_futures=True)
+            self._pool = None
+
+
+def make_evaluator(name: str, workers: int | None = None):
+    """Return an evaluator by name: 'batch' (default) or 'process'."""
+    from zoetic.errors import ZoeticError
+
+    if name == "batch":
+        return BatchEvaluator()
+    if name == "process":
+        return ProcessPoolEvaluator(workers)
+    raise ZoeticError(f"unknown evaluator {name!r} (choose from batch, process)")

@@ -1,0 +1,85 @@
+"""Plots of a learning run: the learning curve and the learned controller (Fig. 9 style)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+
+def _save(fig, path: Path) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.stem + ".part.png")
+    fig.savefig(tmp, dpi=110)
+    os.replace(tmp, path)
+    return path
+
+
+def plot_learning(curves: dict[str, np.ndarray], path: Path, title: str = "") -> Path:
+    """Plot E against evaluations (dots) and the best so far (line) for one or more runs."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    for label, e in curves.items():
+        e = np.asarray(e, float)
+        n = np.arange(1, len(e) + 1)
+        finite = np.isfinite(e)
+        line = ax.plot(n, np.minimum.accumulate(np.where(finite, e, np.inf)), label=label)[0]
+        if len(curves) == 1:
+            ax.plot(n[finite], e[finite], ".", ms=2, alpha=0.25, color=line.get_color())
+    finite_values = [np.asarray(e, float) for e in curves.values()]
+    finite_values = np.concatenate([e[np.isfinite(e)] for e in finite_values] + [np.zeros(0)])
+    lo, hi = 0.0, 0.0
+    if finite_values.size:
+        lo, hi = np.min(finite_values), np.percentile(finite_values, 90)
+    if np.isfinite(lo) and np.isfinite(hi) and hi > lo:
+        ax.set_ylim(lo - 0.05 * (hi - lo), hi + 0.05 * (hi - lo))
+    ax.set_xlabel("evaluations")
+    ax.set_ylabel("E")
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend(loc="upper right", fontsize=8)
+    fig.tight_layout()
+    out = _save(fig, path)
+    plt.close(fig)
+    return out
+
+
+def plot_controller(
+    times: np.ndarray,
+    u: np.ndarray,
+    names: tuple[str, ...],
+    sides: tuple[str, ...],
+    path: Path,
+    title: str = "",
+) -> Path:
+    """Plot u(t) per actuator: left side dotted, right side solid, paired by segment (Fig. 9)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    groups: dict[str, list[int]] = {}
+    for k, name in enumerate(names):
+        key = name.rsplit("_", 1)[0] if sides[k] in ("left", "right") else name
+        groups.setdefault(key, []).append(k)
+    rows = len(groups)
+    fig, axes = plt.subplots(rows, 1, figsize=(6.4, 0.9 * rows + 1.0), sharex=True, squeeze=False)
+    for ax, (key, ids) in zip(axes[:, 0], groups.items(), strict=True):
+        for k in ids:
+            style = ":" if sides[k] == "left" else "-"
+            ax.plot(times, u[:, k], style, color="k", lw=1.2, label=names[k])
+        ax.set_ylim(-0.05, 1.05)
+        ax.set_ylabel(key, rotation=0, ha="right", va="center", fontsize=8)
+        ax.set_yticks([0, 1])
+    axes[-1, 0].set_xlabel("t (s)")
+    axes[0, 0].set_title(title + "  (left dotted, right solid)")
+    fig.tight_layout()
+    out = _save(fig, path)
+    plt.close(fig)
+    return out

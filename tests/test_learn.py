@@ -1,0 +1,171 @@
+"""Learning: the objective, the optimizers, checkpoints that resume to the same result."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from zoetic.bodies import load_animal
+from zoetic.control import rest_controller, time_domain, wave_controller
+from zoetic.errors import RunDirError, TaskError, ZoeticError
+from zoetic.learn.objective import Objective, control_energy
+from zoetic.learn.optimizers import make_optimizer
+from zoetic.learn.run import LearnConfig, Run
+from zoetic.tasks import list_tasks, load_task, parse_task
+
+SHORT = """
+name = "short-swim"
+animals = ["shark"]
+horizon = 1.0
+nodes = 5
+[[terms]]
+kind = "distance_along_heading"
+weight = -1.0
+"""
+
+
+@pytest.fixture
+def short_task(tmp_path):
+    path = tmp_path / "short-swim.toml"
+    path.write_text(SHORT)
+    return path
+
+
+def test_control_energy_matches_section_4_2():
+    u = np.array([[[0.0, 1.0, 0.0, 1.0]]])  # one candidate, one actuator, M = 4
+    h = 0.5
+    e1 = control_energy(u, h, nu1=0.1, nu2=0.0)
+    assert e1[0] == pytest.approx(0.1 / (2 * h**2) * 3.0)
+    e2 = control_energy(u, h, nu1=0.0, nu2=0.002)
+    assert e2[0] == pytest.approx(0.002 / (2 * h**4) * (4.0 + 4.0))
+
+
+def test_builtin_tasks_load_and_bad_tasks_are_named(tmp_path):
+    assert {"swim-straight", "crawl-straight", "turn-left", "reach-goal"} <= set(list_tasks())
+    for name in list_tasks():
+        assert load_task(name).terms
+    with pytest.raises(TaskError, match="unknown kind 'fly'"):
+        parse_task({"name": "x", "horizon": 1.0, "terms": [{"kind": "fly"}]}, "x.toml")
+    with pytest.raises(TaskError, match="unknown task 'nope'"):
+        load_task("nope")
+
+
+def test_objective_prefers_swimming_to_resting():
+    body = load_animal("shark")
+    task = load_task("swim-straight")
+    wave = wave_controller(body)
+    tmpl = time_domain(body, 40, task.horizon)
+    # fit the time-domain template to the wave and to rest by sampling at its nodes
+    swim = wave.sample(tmpl.node_times()).T.ravel()
+    rest = rest_controller(body).sample(tmpl.node_times()).T.ravel()
+    ev = Objective(task, body, tmpl).evaluate(np.stack([swim, rest]))
+    assert ev.E[0] < ev.E[1] - 0.3
+    assert not ev.failed.any()
+
+
+def test_turn_objective_rewards_turning_left_over_right():
+    body = load_animal("shark")
+    task = load_task("turn-left")
+    tmpl = time_domain(body, 40, task.horizon)
+    t = tmpl.node_times()
+    left = wave_controller(body).sample(t)
+    left[:, [k for k, s in enumerate(body.actuator_side) if s == "right"]] *= 0.2
+    right = body.mirror_actuators(left)
+    ev = Objective(task, body, tmpl).evaluate(np.stack([left.T.ravel(), right.T.ravel()]))
+    assert ev.terms["heading_change"][0] < ev.terms["heading_change"][1]
+
+
+@pytest.mark.parametrize("name", ["anneal", "simplex", "cmaes"])
+def test_optimizers_improve_respect_bounds_and_never_keep_failures(name):
+    rng = np.random.default_rng(0)
+    lo, hi = np.zeros(6), np.ones(6)
+    target = rng.uniform(0.2, 0.8, 6)
+
+    def f(X):
+        v = np.sum((X - target) ** 2, axis=1)
+        return np.where(X[:, 0] > 0.95, np.inf, v)  # a "blown-up" corner
+
+    opt = make_optimizer(name, np.full(6, 0.9), lo, hi, seed=1, budget=600)
+    first = None
+    while opt.evaluations < 600 and not opt.done():
+        X = opt.ask()
+        if len(X) == 0:
+            break
+        assert np.all(X >= lo) and np.all(X <= hi)
+        v = f(X)
+        first = v.min() if first is None else first
+        opt.tell(X, v)
+    assert np.isfinite(opt.best_f)
+    assert opt.best_f < 0.5 * first
+    assert opt.best_f == pytest.approx(np.sum((opt.best_x - target) ** 2))
+    if hasattr(opt, "close"):
+        opt.close()
+
+
+def test_annealing_follows_the_papers_schedule():
+    opt = make_optimizer("anneal", np.full(4, 0.5), np.zeros(4), np.ones(4), seed=0, budget=100)
+    assert opt.T == 0.5 and opt.max_steps == 40 and opt.min_accepts == 4
+    X = opt.ask()
+    opt.tell(X, np.zeros(1))
+    X = opt.ask()
+    assert np.all(np.abs(X - 0.5) <= 0.1 + 1e-12)  # every parameter moved by <= 10% of range
+    assert np.all(np.abs(X - 0.5) > 0)
+    for _ in range(4):  # four accepted (downhill) moves drop the temperature
+        opt.tell(X, np.array([-1.0]))
+        X = opt.ask()
+    assert opt.T == pytest.approx(0.45)
+
+
+def _learn(out, task, optimizer, budget=60, stop_at=None):
+    config = LearnConfig(animal="shark", task=str(task), optimizer=optimizer, budget=budget,
+                         seed=3, popsize=8)  # fmt: skip
+    run = Run.create(out, config)
+
+    def interrupt(r):
+        if stop_at is not None and r.evaluations >= stop_at:
+            raise KeyboardInterrupt
+
+    try:
+        run.learn(progress=interrupt)
+    except KeyboardInterrupt:
+        return None
+    return run
+
+
+@pytest.mark.parametrize("optimizer", ["anneal", "cmaes", "simplex"])
+def test_interrupted_run_resumes_to_the_same_result(tmp_path, short_task, optimizer):
+    whole = _learn(tmp_path / "whole", short_task, optimizer)
+    assert _learn(tmp_path / "cut", short_task, optimizer, stop_at=25) is None
+    assert (tmp_path / "cut" / "checkpoint.npz").exists()
+    resumed = Run.resume(tmp_path / "cut")
+    assert 25 <= resumed.evaluations < 60
+    resumed.learn()
+    assert resumed.evaluations == whole.evaluations
+    assert resumed.setup.optimizer.best_f == whole.setup.optimizer.best_f
+    assert np.array_equal(resumed.setup.optimizer.best_x, whole.setup.optimizer.best_x)
+    for name in ("config.toml", "checkpoint.npz", "history.csv", "controller.json"):
+        assert (tmp_path / "cut" / name).exists()
+
+
+def test_learning_improves_and_writes_a_loadable_controller(tmp_path, short_task):
+    from zoetic.control import load_controller
+
+    run = _learn(tmp_path / "r", short_task, "cmaes", budget=120)
+    e = np.array(run.log.E)
+    assert run.setup.optimizer.best_f < e[:8].min()
+    ctrl = load_controller(tmp_path / "r" / "controller.json", load_animal("shark"))
+    assert ctrl.kind == "time"
+    lines = (tmp_path / "r" / "history.csv").read_text().splitlines()
+    assert lines[0] == "evaluation,E,E_u,E_v,best_E,wall_time" and len(lines) == len(e) + 1
+
+
+def test_same_seed_same_result_and_refusals(tmp_path, short_task):
+    a = _learn(tmp_path / "a", short_task, "anneal", budget=30)
+    b = _learn(tmp_path / "b", short_task, "anneal", budget=30)
+    assert a.log.E == b.log.E
+    with pytest.raises(RunDirError, match="already holds a run"):
+        _learn(tmp_path / "a", short_task, "anneal", budget=30)
+    with pytest.raises(RunDirError, match="not a zoetic run"):
+        Run.resume(tmp_path / "nothing")
+    with pytest.raises(ZoeticError, match="not the snake"):
+        Run.create(tmp_path / "c", LearnConfig(animal="snake", task=str(short_task)))
