@@ -80,6 +80,7 @@ def learn(
     popsize: int = typer.Option(None, min=2, help="CMA-ES population size."),
     chains: int = typer.Option(1, min=1, help="Parallel annealing chains."),
     evaluator: str = typer.Option("batch", help="batch (Numba threads) or process (pool)."),
+    coupling: str = typer.Option("none", help="none, or antiphase: right side = 1 - left."),
     out: Path = typer.Option(None, help="Run directory (default runs/<animal>-<task>)."),
     resume: Path = typer.Option(None, help="Continue the run in this directory."),
     video: bool = typer.Option(True, help="Write video.mp4 of the best controller."),
@@ -97,7 +98,7 @@ def learn(
         config = LearnConfig(
             animal=animal, task=task, optimizer=optimizer, budget=budget, seed=seed,
             controller=controller, nodes=nodes, interp=interp, popsize=popsize, chains=chains,
-            evaluator=evaluator,
+            evaluator=evaluator, coupling=coupling,
         )  # fmt: skip
         out = out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}"
         if config.optimizer == "gradient":

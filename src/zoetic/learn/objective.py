@@ -16,6 +16,7 @@ import numpy as np
 
 from zoetic.bodies import Body
 from zoetic.control import Controller
+from zoetic.errors import ZoeticError
 from zoetic.physics import Medium, State, get_medium, rest_state, simulate
 from zoetic.tasks import Task
 
@@ -97,6 +98,7 @@ class Objective:
         medium: Medium | str | None = None,
         dt: float | None = None,
         start: State | None = None,
+        coupling: str = "none",
     ):
         self.task = task
         self.body = body
@@ -111,20 +113,60 @@ class Objective:
         self.node_times = np.linspace(0.0, task.horizon, task.nodes)
         self._node_basis = template.design_matrix(self.node_times)  # (M, M')
         self.h = task.horizon / (task.nodes - 1)
-        self.shape = (body.n_actuators, self._basis.shape[1])
+        m = self._basis.shape[1]
+        self.full_shape = (body.n_actuators, m)
+        self.coupling = coupling
+        if coupling == "none":
+            self.free = np.arange(body.n_actuators)
+        elif coupling == "antiphase":
+            # the paper's Fig. 6 set-up: one signal per segment, the right side 1 - left
+            if not body.is_mirror_symmetric:
+                raise ZoeticError(f"the {body.name} has no mirror pairs to couple")
+            self.free = np.array([k for k, s in enumerate(body.actuator_side) if s != "right"])
+            # o with B o = 1: the coefficients of the constant signal 1 in this basis
+            self._one = np.linalg.lstsq(self._basis, np.ones(self.steps), rcond=None)[0]
+        else:
+            raise ZoeticError(f"unknown coupling {coupling!r} (none or antiphase)")
+        self.shape = (len(self.free), m)
 
     @property
     def dimension(self) -> int:
         return int(np.prod(self.shape))
 
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Return the (lower, upper) bounds of the free parameters."""
+        lo, hi = (b.reshape(self.full_shape)[self.free].ravel() for b in self.template.bounds())
+        return lo, hi
+
+    def free_params(self, full: np.ndarray) -> np.ndarray:
+        """Return the free parameters (dim,) of a full controller parameter vector."""
+        return np.asarray(full, float).reshape(self.full_shape)[self.free].ravel()
+
+    def full_coefficients(self, params: np.ndarray) -> np.ndarray:
+        """Return the coefficients (K, A, M) of every actuator for free parameters (K, dim)."""
+        free = np.asarray(params, dtype=np.float64).reshape(-1, *self.shape)
+        if self.coupling == "none":
+            return free
+        coef = np.empty((free.shape[0], *self.full_shape))
+        coef[:, self.free] = free
+        mirror = self.body.actuator_mirror
+        for k in self.free:
+            if mirror[k] != k:
+                coef[:, mirror[k]] = self._one - free[:, list(self.free).index(k)]
+        return coef
+
+    def controller(self, params: np.ndarray) -> Controller:
+        """Return the full controller for one free parameter vector."""
+        return self.template.with_params(self.full_coefficients(params)[0].ravel())
+
     def tables(self, params: np.ndarray) -> np.ndarray:
         """Return activation tables (K, T, A) for parameter vectors (K, dim)."""
-        coef = np.asarray(params, dtype=np.float64).reshape(-1, *self.shape)
+        coef = self.full_coefficients(params)
         return np.clip(np.einsum("tm,kam->kta", self._basis, coef), 0.0, 1.0)
 
     def control_cost(self, params: np.ndarray) -> np.ndarray:
         """Return E_u (K,) of parameter vectors, on the M node times."""
-        coef = np.asarray(params, dtype=np.float64).reshape(-1, *self.shape)
+        coef = self.full_coefficients(params)
         u = np.einsum("jm,kam->kaj", self._node_basis, coef)
         return control_energy(u, self.h, self.task.nu1, self.task.nu2)
 

@@ -41,6 +41,7 @@ class LearnConfig:
     popsize: int | None = None
     chains: int = 1
     evaluator: str = "batch"
+    coupling: str = "none"
     medium: str | None = None
     extra: dict = field(default_factory=dict)
 
@@ -77,12 +78,12 @@ def build(config: LearnConfig, task: Task | None = None) -> Setup:
         raise ZoeticError(f"unknown controller {config.controller!r} (time or frequency)")
     if m != task.nodes:
         task = parse_task({**task.to_dict(), "nodes": m}, task.source)
-    objective = Objective(task, body, template, config.medium)
-    lo, hi = template.bounds()
+    objective = Objective(task, body, template, config.medium, coupling=config.coupling)
+    lo, hi = objective.bounds()
     rng = np.random.default_rng(config.seed)
-    x0 = rng.uniform(lo, hi) if config.controller == "time" else template.params()
+    x0 = rng.uniform(lo, hi)
     if config.controller == "frequency":  # random small amplitudes about a mid-level constant
-        x0 = np.clip(rng.uniform(lo, hi) * 0.5 + np.where(hi == 1.0, 0.25, 0.0), lo, hi)
+        x0 = np.clip(x0 * 0.5 + np.where(hi == 1.0, 0.25, 0.0), lo, hi)
     options = {}
     if config.optimizer == "cmaes" and config.popsize:
         options["popsize"] = config.popsize
@@ -199,7 +200,7 @@ class Run:
 
     def best_controller(self) -> Controller:
         """Return the best controller found so far."""
-        return self.setup.template.with_params(self.setup.optimizer.best_x)
+        return self.setup.objective.controller(self.setup.optimizer.best_x)
 
     def checkpoint(self) -> None:
         """Write checkpoint.npz, history.csv and controller.json (each atomically)."""
