@@ -119,7 +119,12 @@ def test_annealing_follows_the_papers_schedule():
 def _learn(out, task, optimizer, budget=60, stop_at=None):
     config = LearnConfig(animal="shark", task=str(task), optimizer=optimizer, budget=budget,
                          seed=3, popsize=8)  # fmt: skip
-    run = Run.create(out, config)
+    if optimizer == "gradient":
+        from zoetic.learn.gradient_run import GradientRun
+
+        run = GradientRun.create(out, config)
+    else:
+        run = Run.create(out, config)
 
     def interrupt(r):
         if stop_at is not None and r.evaluations >= stop_at:
@@ -169,3 +174,14 @@ def test_same_seed_same_result_and_refusals(tmp_path, short_task):
         Run.resume(tmp_path / "nothing")
     with pytest.raises(ZoeticError, match="not the snake"):
         Run.create(tmp_path / "c", LearnConfig(animal="snake", task=str(short_task)))
+
+
+def test_gradient_run_learns_and_resumes_to_the_same_result(tmp_path, short_task):
+    whole = _learn(tmp_path / "whole", short_task, "gradient", budget=8)
+    e = np.array(whole.log.E)
+    assert whole.setup.optimizer.best_f < e[0] - 0.005  # it swims further than at the start
+    assert _learn(tmp_path / "cut", short_task, "gradient", budget=8, stop_at=4) is None
+    resumed = Run.resume(tmp_path / "cut")
+    assert resumed.evaluations == 4
+    resumed.learn()
+    assert resumed.setup.optimizer.best_f == pytest.approx(whole.setup.optimizer.best_f, abs=1e-6)

@@ -189,6 +189,10 @@ class Run:
             task = parse_task(doc["task"], str(out / "config.toml"))
         except (KeyError, TypeError) as exc:
             raise RunDirError(f"{out / 'config.toml'}: malformed ({exc})") from None
+        if config.optimizer == "gradient" and cls is Run:
+            from zoetic.learn.gradient_run import GradientRun
+
+            return GradientRun.resume_gradient(out)
         setup = build(config, task)
         log = Log.load(out / "checkpoint.npz") if (out / "checkpoint.npz").exists() else Log()
         _replay(setup.optimizer, log)
