@@ -54,7 +54,7 @@ def simulate(
 def bench_simulate_cmd(
     animal: str = typer.Option("shark"),
     seconds: float = typer.Option(10.0, min=0.1),
-    batch: int = typer.Option(256, min=1),
+    batch: int = typer.Option(512, min=1),
     json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
     """Simulated seconds per second: one candidate, a batch on all cores, and NumPy."""

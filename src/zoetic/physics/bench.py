@@ -22,7 +22,7 @@ def _best_time(fn, repeats: int) -> float:
 
 
 def bench_simulate(
-    animal: str = "shark", seconds: float = 10.0, batch: int = 256, repeats: int = 3
+    animal: str = "shark", seconds: float = 10.0, batch: int = 512, repeats: int = 3
 ) -> dict:
     """Return simulated seconds per wall second for one candidate, a batch and NumPy."""
     body = load_animal(animal)
