@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from zoetic.bodies import Body
+from zoetic.control import abstract as _abstract  # noqa: E402,F401  (registers abstract, sequence)
 from zoetic.control.controllers import (
     ConstantController,
     Controller,
@@ -25,6 +26,7 @@ __all__ = [
     "MirroredController",
     "TimeDomainController",
     "WaveController",
+    "check_fits",
     "controller_from_spec",
     "frequency_domain",
     "from_dict",

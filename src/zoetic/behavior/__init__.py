@@ -1,0 +1,1 @@
+"""What an animal does with what it learned: repertoires, tracking, macro controllers."""

@@ -1,0 +1,146 @@
+"""Abstracted controllers (a few sinusoids per actuator) and sequences of blended controllers.
+
+An abstracted controller is periodic, so it can be played for any duration:
+    u_a(t) = offset_a + sum_k amp_ak cos(2 pi freq_ak t + phase_ak).
+A sequence plays controllers one after another; each overlaps the next by a fraction of its
+length (5% by default) and the two are cross-faded linearly over the overlap (section 3.1).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from zoetic.control.controllers import Controller
+from zoetic.control.registry import register_kind
+from zoetic.errors import ControllerError
+
+
+@dataclass(frozen=True)
+class AbstractController(Controller):
+    """Per actuator: an offset and K modes (frequency Hz, amplitude, phase rad)."""
+
+    offset: np.ndarray = None  # (A,)
+    freq: np.ndarray = None  # (A, K) Hz
+    amp: np.ndarray = None  # (A, K)
+    phase: np.ndarray = None  # (A, K) rad
+    period: float = 1.0  # s, the period all modes share (for display)
+    kind = "abstract"
+
+    def __post_init__(self):
+        a = len(self.actuators)
+        off = np.asarray(self.offset, float).reshape(a)
+        f, am, ph = (np.asarray(v, float) for v in (self.freq, self.amp, self.phase))
+        if f.ndim != 2 or f.shape[0] != a or am.shape != f.shape or ph.shape != f.shape:
+            raise ControllerError(
+                f"abstract controller: freq, amp, phase must be (actuators={a}, K), got "
+                f"{f.shape}, {am.shape}, {ph.shape}"
+            )
+        for name, v in (("offset", off), ("freq", f), ("amp", am), ("phase", ph)):
+            object.__setattr__(self, name, v)
+
+    @property
+    def modes(self) -> int:
+        """Return the number of non-zero modes."""
+        return int(np.count_nonzero(self.amp))
+
+    def raw(self, t):
+        t = np.asarray(t, float)[:, None, None]
+        waves = self.amp * np.cos(2 * np.pi * self.freq * t + self.phase)  # (T, A, K)
+        return self.offset[None, :] + waves.sum(axis=2)
+
+    def to_dict(self):
+        return super().to_dict() | {
+            "period": self.period,
+            "offset": self.offset.round(6).tolist(),
+            "freq": self.freq.round(6).tolist(),
+            "amp": self.amp.round(6).tolist(),
+            "phase": self.phase.round(6).tolist(),
+        }
+
+
+@dataclass(frozen=True)
+class SequenceController(Controller):
+    """Controllers played in turn, each for its duration, cross-faded over the overlaps."""
+
+    items: tuple = ()  # ((Controller, duration s), ...)
+    overlap: float = 0.05  # fraction of each controller's length shared with the next
+    kind = "sequence"
+
+    def __post_init__(self):
+        if not self.items:
+            raise ControllerError("a sequence needs at least one controller")
+        for ctrl, duration in self.items:
+            if tuple(ctrl.actuators) != tuple(self.actuators):
+                raise ControllerError(
+                    "every controller in a sequence must drive the same actuators"
+                )
+            if not duration > 0:
+                raise ControllerError(f"sequence durations must be positive, got {duration}")
+        if not 0.0 <= self.overlap < 0.5:
+            raise ControllerError(f"overlap must be in [0, 0.5), got {self.overlap}")
+
+    def starts(self) -> np.ndarray:
+        """Return the time (s) at which each controller starts."""
+        d = np.array([dur for _, dur in self.items])
+        return np.concatenate([[0.0], np.cumsum(d[:-1] * (1.0 - self.overlap))])
+
+    @property
+    def duration(self) -> float:
+        return float(self.starts()[-1] + self.items[-1][1])
+
+    def weights(self, t: np.ndarray) -> np.ndarray:
+        """Return each controller's blend weight (T, n) at times t; rows sum to 1.
+
+        Controller i fades in linearly over its overlap with i-1 and out over its overlap
+        with i+1; the first holds before time 0 and the last holds after its end.
+        """
+        t = np.asarray(t, float)[:, None]
+        s = self.starts()[None, :]
+        e = s + np.array([dur for _, dur in self.items])[None, :]
+        n = s.shape[1]
+        fade_in = np.ones((t.shape[0], n))
+        fade_out = np.ones((t.shape[0], n))
+        if n > 1:
+            width = np.maximum(e[:, :-1] - s[:, 1:], 1e-12)  # overlap of i and i+1
+            fade_in[:, 1:] = np.clip((t - s[:, 1:]) / width, 0.0, 1.0)
+            fade_out[:, :-1] = np.clip((e[:, :-1] - t) / width, 0.0, 1.0)
+        return fade_in * fade_out
+
+    def raw(self, t):
+        t = np.asarray(t, float)
+        w = self.weights(t)
+        out = np.zeros((t.size, self.n_actuators))
+        for i, ((ctrl, _), start) in enumerate(zip(self.items, self.starts(), strict=True)):
+            on = w[:, i] > 0
+            if on.any():
+                out[on] += w[on, i : i + 1] * ctrl.raw(t[on] - start)
+        return out
+
+    def to_dict(self):
+        return super().to_dict() | {
+            "overlap": self.overlap,
+            "items": [{"duration": dur, "controller": c.to_dict()} for c, dur in self.items],
+        }
+
+
+def _abstract_from_dict(d: dict) -> AbstractController:
+    return AbstractController(
+        str(d["animal"]), tuple(d["actuators"]), np.array(d["offset"], float),
+        np.array(d["freq"], float), np.array(d["amp"], float), np.array(d["phase"], float),
+        float(d.get("period", 1.0)),
+    )  # fmt: skip
+
+
+def _sequence_from_dict(d: dict) -> SequenceController:
+    from zoetic.control import from_dict
+
+    items = tuple((from_dict(it["controller"]), float(it["duration"])) for it in d["items"])
+    return SequenceController(
+        str(d["animal"]), tuple(d["actuators"]), items, float(d.get("overlap", 0.05))
+    )
+
+
+register_kind("abstract", _abstract_from_dict)
+register_kind("sequence", _sequence_from_dict)
