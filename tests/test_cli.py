@@ -1,0 +1,111 @@
+"""The command line through its real entry point: outputs, exit codes, clear errors."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from zoetic.cli import main
+from zoetic.control import save_controller, time_domain
+from zoetic.bodies import load_animal
+
+
+def test_animals_lists_the_zoo(capsys):
+    assert main(["animals"]) == 0
+    out = capsys.readouterr().out
+    for name in ("snake", "shark", "ray", "dolphin"):
+        assert name in out
+    assert "91" in out and "190" in out  # springs of the shark and the snake
+
+
+def test_simulate_writes_trajectory_video_and_path(tmp_path):
+    out = tmp_path / "first"
+    code = main(["simulate", "shark", "--controller", "wave", "--seconds", "2", "--out", str(out)])
+    assert code == 0
+    with np.load(out / "trajectory.npz") as z:
+        times, pos = z["times"], z["positions"]
+    assert pos.shape == (len(times), 23, 3)
+    assert times[0] == 0.0 and times[-1] == pytest.approx(2.0)
+    assert pos[-1, :, 0].mean() > pos[0, :, 0].mean() + 0.2  # it swam forward
+    assert (out / "path.png").stat().st_size > 1000
+    import imageio.v3 as iio
+
+    frames = iio.imread(out / "video.mp4")
+    assert frames.shape[0] >= 55 and frames.shape[-1] == 3
+
+
+def test_simulate_rest_and_controller_file(tmp_path):
+    body = load_animal("snake")
+    ctrl = time_domain(body, 5, 1.0, np.full((body.n_actuators, 5), 0.3))
+    save_controller(ctrl, tmp_path / "c.json")
+    for spec in ("rest", str(tmp_path / "c.json")):
+        out = tmp_path / spec.replace("/", "_")
+        args = ["simulate", "snake", "--controller", spec, "--seconds", "1", "--out", str(out)]
+        assert main([*args, "--no-video"]) == 0
+        assert (out / "trajectory.npz").exists()
+
+
+def test_controller_for_another_animal_is_refused(tmp_path, capsys):
+    shark = load_animal("shark")
+    save_controller(time_domain(shark, 5, 1.0), tmp_path / "shark.json")
+    code = main(["simulate", "snake", "--controller", str(tmp_path / "shark.json"),
+                 "--out", str(tmp_path / "x"), "--no-video"])  # fmt: skip
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "shark.json" in err and "for the 'shark', not the 'snake'" in err
+
+
+def test_bad_animal_file_exits_2_and_names_the_problem(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(
+        'name = "blob"\nmedium = "water"\n[[nodes]]\npos = [0, 0, 0]\nmass = 1.0\n'
+        '[[nodes]]\npos = [1, 0, 0]\nmass = -2.0\n'
+    )
+    assert main(["simulate", str(bad), "--out", str(tmp_path / "x"), "--no-video"]) == 2
+    err = capsys.readouterr().err
+    assert "bad.toml" in err and "mass must be positive" in err
+    assert "Traceback" not in err
+
+
+def test_unknown_animal_and_bad_controller_spec(tmp_path, capsys):
+    assert main(["simulate", "unicorn", "--out", str(tmp_path / "x")]) == 2
+    assert "unknown animal 'unicorn'" in capsys.readouterr().err
+    assert main(["simulate", "shark", "--controller", "wiggle", "--out", str(tmp_path)]) == 2
+    assert "not a controller file" in capsys.readouterr().err
+
+
+def test_console_script_runs_and_bench_prints_json(tmp_path):
+    proc = subprocess.run(
+        [sys.executable, "-m", "zoetic", "bench", "simulate", "--json", "--seconds", "0.5",
+         "--batch", "16"],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    result = json.loads(proc.stdout)
+    for key in ("animal", "dt", "sim_seconds_per_second_single",
+                "sim_seconds_per_second_batched", "numpy_reference_sim_seconds_per_second",
+                "speedup_vs_numpy", "cores"):  # fmt: skip
+        assert key in result
+    assert result["speedup_vs_numpy"] > 1
+
+
+def test_learn_cli_and_tasks(tmp_path, capsys):
+    assert main(["tasks"]) == 0
+    assert "swim-straight" in capsys.readouterr().out
+    out = tmp_path / "run"
+    code = main(["learn", "shark", "--optimizer", "cmaes", "--budget", "40", "--popsize", "8",
+                 "--out", str(out), "--no-video"])  # fmt: skip
+    assert code == 0
+    for name in ("config.toml", "controller.json", "history.csv", "learning.png",
+                 "controller.png", "checkpoint.npz"):  # fmt: skip
+        assert (out / name).exists(), name
+    # the learned controller plays back through simulate
+    assert main(["simulate", "shark", "--controller", str(out / "controller.json"),
+                 "--seconds", "1", "--out", str(tmp_path / "play"), "--no-video"]) == 0  # fmt: skip
+    # a finished run refuses to be overwritten, and resumes as a no-op
+    assert main(["learn", "shark", "--out", str(out), "--budget", "40"]) == 2
+    assert main(["learn", "--resume", str(out), "--no-video"]) == 0
