@@ -1,0 +1,458 @@
+"""A small, fast software renderer: look-at camera, painter's algorithm, Pillow polygons.
+
+Screen conventions follow the project's axes (x forward, y up, z LEFT): seen from behind, +z is
+on the left of the picture. The environment (ground checkerboard, sea floor, water surface, sky)
+is computed per pixel with NumPy; the animals' triangles are depth-sorted and filled by Pillow.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+from PIL import Image, ImageColor, ImageDraw, ImageFont
+
+from zoetic.bodies import Body
+from zoetic.errors import ZoeticError
+from zoetic.physics.media import Medium, get_medium
+
+ANIMAL_COLORS = {
+    "shark": (122, 136, 152),
+    "dolphin": (150, 160, 178),
+    "snake": (104, 150, 60),
+    "ray": (184, 146, 96),
+}
+_PALETTE = [(200, 120, 80), (110, 160, 200), (150, 110, 180), (90, 160, 120), (200, 170, 80)]
+_LIGHT = np.array([-0.35, 1.0, -0.45]) / np.linalg.norm([-0.35, 1.0, -0.45])
+_SKY_TOP, _SKY_LOW = np.array([96.0, 150, 214]), np.array([214.0, 228, 240])
+_GROUND = (np.array([186.0, 176, 150]), np.array([150.0, 140, 116]))
+_WATER_UP, _WATER_DOWN = np.array([64.0, 136, 178]), np.array([14.0, 46, 82])
+_SEABED = (np.array([92.0, 120, 118]), np.array([66.0, 96, 102]))
+_SURFACE = np.array([34.0, 104, 146])
+_SPACE_UP, _SPACE_DOWN = np.array([40.0, 44, 60]), np.array([12.0, 12, 20])
+_TEXT = {"fill": (255, 255, 255), "stroke_width": 2, "stroke_fill": (0, 0, 0)}
+_TILE, _SURFACE_TILE, _SEABED_DEPTH, _WATER_FOG, _AIR_FOG = 0.5, 2.0, 3.0, 4.0, 25.0
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A look-at camera that follows the animals' mean centre of mass from a fixed direction.
+
+    azimuth: degrees around the vertical from straight behind (-x) toward the animal's right
+    (-z); elevation: degrees above the horizontal; distance: metres to the target (None fits
+    the animals in view); fov: vertical field of view in degrees; smoothing: time scale in
+    seconds of the (lag-free, Gaussian) smoothing of the followed point; target: a fixed point
+    to look at instead of following. Over a sea the eye stays in the air; the default elevation
+    is 12 degrees there (the horizon and the sky in view), else 25.
+    """
+
+    azimuth: float = 40.0
+    elevation: float | None = None
+    distance: float | None = None
+    fov: float = 45.0
+    smoothing: float = 0.5
+    target: tuple[float, float, float] | None = None
+
+    def direction(self, medium: Medium) -> np.ndarray:
+        """Return the unit vector from the target to the eye (lower over a sea, to see the sky)."""
+        el = self.elevation
+        if el is None:
+            el = 12.0 if abs(medium.water_level) < 1e8 else 25.0
+        az, el = np.radians(self.azimuth), np.radians(np.clip(el, -89.0, 89.0))
+        return np.array([-np.cos(el) * np.cos(az), np.sin(el), -np.cos(el) * np.sin(az)])
+
+
+def body_color(body: Body) -> tuple[int, int, int]:
+    """Return the display colour (RGB 0-255) of an animal, by name."""
+    if body.name in ANIMAL_COLORS:
+        return ANIMAL_COLORS[body.name]
+    return _PALETTE[sum(map(ord, body.name)) % len(_PALETTE)]
+
+
+def look_at(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """Return the (3, 3) camera rotation whose rows are the right, up and forward unit axes."""
+    f = np.asarray(target, float) - np.asarray(eye, float)
+    f /= max(np.linalg.norm(f), 1e-12)
+    r = np.cross([0.0, 1.0, 0.0], f)  # y x f: +z is on the left when looking along +x
+    r = r / np.linalg.norm(r) if np.linalg.norm(r) > 1e-9 else np.array([0.0, 0.0, -1.0])
+    return np.stack([r, np.cross(f, r), f])
+
+
+def camera_path(
+    coms: np.ndarray, times: np.ndarray, camera: Camera, medium: Medium, extent: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return the (R, 3) eye and target positions of a camera following ``coms`` (R, 3)."""
+    if camera.target is not None:
+        target = np.tile(np.asarray(camera.target, float), (len(times), 1))
+    else:
+        target = _fill_nan(coms)
+        dt = float(np.median(np.diff(times))) if len(times) > 1 else 1.0
+        if camera.smoothing > 0 and len(times) > 1 and dt > 0:
+            from scipy.ndimage import gaussian_filter1d
+
+            target = gaussian_filter1d(target, camera.smoothing / dt, axis=0, mode="nearest")
+    dist = camera.distance or 1.3 * extent / np.tan(np.radians(camera.fov) / 2)
+    eye = target + dist * camera.direction(medium)
+    level = medium.water_level
+    if abs(level) < 1e8:  # keep the eye in the air, well above a finite water surface
+        eye[:, 1] = np.maximum(eye[:, 1], level + 0.2 * dist)
+    return eye, target
+
+
+def _fill_nan(x: np.ndarray) -> np.ndarray:
+    """Return ``x`` (R, 3) with non-finite rows replaced by the last finite one (or zeros)."""
+    good = np.isfinite(x).all(axis=1)
+    if not good.any():
+        return np.zeros_like(x)
+    idx = np.maximum.accumulate(np.where(good, np.arange(len(x)), np.argmax(good)))
+    return x[idx]
+
+
+# ---------------------------------------------------------------- environment (per pixel)
+
+
+def _lerp(a: np.ndarray, b: np.ndarray, t) -> np.ndarray:
+    t = np.asarray(t, np.float64)[..., None]
+    return a * (1 - t) + b * t
+
+
+def _u8(c: np.ndarray) -> np.ndarray:
+    return np.clip(c, 0, 255).astype(np.uint8)
+
+
+def _parity(eye, rot, xs, ys, t, tile: float) -> np.ndarray:
+    """Return the (h, W) checker parity where rows' rays (ray parameter ``t``) meet a plane."""
+    ti = (np.minimum(t, 500.0) / tile).astype(np.float32)
+    cells = []
+    for k in (0, 2):  # world x and z of the hit points, in tiles, offset to stay positive
+        along = np.multiply.outer(ti, (xs * rot[0, k]).astype(np.float32))
+        along += (ti * (ys * rot[1, k] + rot[2, k]) + (eye[k] / tile + 2e4)).astype(np.float32)[
+            :, None
+        ]
+        cells.append(along.astype(np.int32))
+    return ((cells[0] + cells[1]) & 1).astype(bool)
+
+
+def _fill_checker(out, eye, rot, xs, ys, t, ca, cb, tile: float = _TILE) -> None:
+    """Fill ``out`` (h, W, 3) with row colours ``ca``/``cb`` (h, 3) by checker parity."""
+    par = _parity(eye, rot, xs, ys, t, tile)
+    palette = np.stack([_u8(cb), _u8(ca)], axis=1).reshape(-1, 3)  # (2h, 3): row-wise pairs
+    index = np.arange(0, 2 * len(ys), 2, dtype=np.int32)[:, None] + par
+    out[:] = np.take(palette, index, axis=0)
+
+
+def fresnel(sin_elevation: np.ndarray) -> np.ndarray:
+    """Return the opacity of the water surface seen along a ray of that elevation sine."""
+    return 0.45 + 0.45 * (1 - np.abs(sin_elevation)) ** 3
+
+
+def background(medium: Medium, eye: np.ndarray, rot: np.ndarray, xs, ys) -> np.ndarray:
+    """Return the (H, W, 3) uint8 environment seen by a camera at ``eye`` with rotation ``rot``.
+
+    ``xs`` (W,) and ``ys`` (H,) are the pixel centres on the image plane at unit depth.
+    """
+    h, w = len(ys), len(xs)
+    out = np.empty((h, w, 3), np.uint8)
+    dy = ys * rot[1, 1] + rot[2, 1]  # rows only: the camera never rolls; decreasing down
+    norm = np.sqrt(1 + ys * ys)
+    sin_el = dy / norm  # elevation of each row's ray (centre column)
+    level = medium.water_level
+    n_up = int(np.count_nonzero(dy >= -1e-6))
+    up, down = slice(0, n_up), slice(n_up, h)
+    dd, nd, yd = dy[down], norm[down], ys[down]
+    sky = _lerp(_SKY_LOW, _SKY_TOP, np.clip(sin_el, 0, 1) ** 0.7)
+    if medium.floor and eye[1] > 0:
+        out[up] = _u8(sky[up])[:, None]
+        t = -eye[1] / dd
+        fog = 1 - np.exp(-t * nd / _AIR_FOG)
+        ca, cb = (_lerp(c, _SKY_LOW, fog) for c in _GROUND)
+        _fill_checker(out[down], eye, rot, xs, yd, t, ca, cb)
+    elif abs(level) > 1e8:  # open water, or empty space
+        hi, lo = (_WATER_UP, _WATER_DOWN) if level > 1e8 else (_SPACE_UP, _SPACE_DOWN)
+        bg = _lerp(lo, hi, np.clip(0.5 + 0.8 * sin_el, 0, 1))
+        if eye[1] <= -_SEABED_DEPTH:
+            up = slice(0, h)
+        out[up] = _u8(bg[up])[:, None]
+        if eye[1] > -_SEABED_DEPTH:
+            t = (-_SEABED_DEPTH - eye[1]) / dd
+            fog = 1 - np.exp(-t * nd / _WATER_FOG)
+            pair = _SEABED if level > 1e8 else (lo + 30, lo + 14)
+            ca, cb = (_lerp(c, bg[down], fog) for c in pair)
+            _fill_checker(out[down], eye, rot, xs, yd, t, ca, cb)
+    else:  # the sea seen from the air (the camera never goes under a finite surface)
+        out[up] = _u8(sky[up])[:, None]
+        t_s = (level - eye[1]) / dd
+        t_f = (level - _SEABED_DEPTH - eye[1]) / dd
+        fog = 1 - np.exp(-(t_f - t_s) * nd / _WATER_FOG)
+        grazing = 1 - np.abs(sin_el[down])
+        surf = _lerp(_SURFACE, _SKY_LOW, 0.8 * grazing**8)
+        ca, cb = (_lerp(_lerp(c, _WATER_DOWN, fog), surf, fresnel(sin_el[down])) for c in _SEABED)
+        _fill_checker(out[down], eye, rot, xs, yd, t_f, ca, cb)
+        ripple = _parity(eye, rot, xs, yd, t_s, _SURFACE_TILE)
+        out[down] += ripple[..., None].astype(np.uint8) * np.uint8(7)
+    return out
+
+
+# ---------------------------------------------------------------- animals and buoys
+
+
+def _project(pts: np.ndarray, eye, rot, focal: float, size) -> tuple[np.ndarray, np.ndarray]:
+    """Return screen coordinates (..., 2) and camera depths (...) of world points."""
+    cam = (pts - eye) @ rot.T
+    z = cam[..., 2]
+    zs = np.where(z > 1e-3, z, 1e-3)
+    lim = 4.0 * max(size)
+    sx = np.clip(size[0] / 2 + focal * cam[..., 0] / zs, -lim, lim)
+    sy = np.clip(size[1] / 2 - focal * cam[..., 1] / zs, -lim, lim)
+    return np.stack([sx, sy], axis=-1), z
+
+
+def _water_tint(col: np.ndarray, pts: np.ndarray, eye: np.ndarray, medium: Medium) -> np.ndarray:
+    """Return colours (K, 3) of points (K, 3) seen through water: fog and the surface."""
+    level = medium.water_level
+    if level < -1e8:
+        return col
+    d = pts - eye
+    dist = np.linalg.norm(d, axis=1) + 1e-9
+    if level > 1e8:
+        return _lerp(col, 0.5 * (_WATER_UP + _WATER_DOWN), 1 - np.exp(-dist / (2 * _WATER_FOG)))
+    below = pts[:, 1] < level  # the eye is always above a finite surface
+    wet = np.clip((level - pts[:, 1]) / np.maximum(eye[1] - pts[:, 1], 1e-9), 0, 1)
+    col = _lerp(col, _WATER_DOWN, 1 - np.exp(-dist * wet / _WATER_FOG))
+    return np.where(below[:, None], _lerp(col, _SURFACE, fresnel(d[:, 1] / dist)), col)
+
+
+def _split(poly: np.ndarray, level: float) -> tuple[np.ndarray, np.ndarray]:
+    """Return the parts of a planar polygon (k, 3) above and below the plane y = level."""
+    above, below = [], []
+    for i in range(len(poly)):
+        a, b = poly[i], poly[(i + 1) % len(poly)]
+        sa, sb = a[1] - level, b[1] - level
+        (above if sa >= 0 else below).append(a)
+        if (sa < 0) != (sb < 0):
+            p = a + (b - a) * (sa / (sa - sb))
+            above.append(p)
+            below.append(p)
+    return np.array(above), np.array(below)
+
+
+@dataclass(frozen=True)
+class _Mesh:
+    """All animals' triangles in one index space, with colours and closedness."""
+
+    faces: np.ndarray  # (F, 3) into the concatenated nodes
+    color: np.ndarray  # (F, 3) float RGB
+    closed: np.ndarray  # (F,) bool: the animal's surface is closed (back faces can be culled)
+
+
+def _closed(faces: np.ndarray) -> bool:
+    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), 1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return bool(np.all(counts == 2))
+
+
+def _mesh(bodies: Sequence[Body], colors) -> _Mesh:
+    faces, color, closed, base = [], [], [], 0
+    for i, body in enumerate(bodies):
+        c = colors[i] if colors is not None else body_color(body)
+        c = ImageColor.getrgb(c) if isinstance(c, str) else c
+        faces.append(np.asarray(body.faces) + base)
+        color.append(np.tile(np.asarray(c, float)[:3], (len(body.faces), 1)))
+        closed.append(np.full(len(body.faces), _closed(np.asarray(body.faces))))
+        base += body.n_nodes
+    return _Mesh(np.concatenate(faces), np.concatenate(color), np.concatenate(closed))
+
+
+def _face_items(pos, mesh: _Mesh, eye, rot, focal, size, medium) -> list[tuple]:
+    """Return (depth, kind 0, flat screen coords, RGB) items for the visible triangles."""
+    scr, z = _project(pos, eye, rot, focal, size)
+    tri = pos[mesh.faces]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    n /= np.linalg.norm(n, axis=1, keepdims=True) + 1e-12
+    cen = tri.mean(axis=1)
+    front = np.einsum("fk,fk->f", n, cen - eye) < 0
+    keep = np.isfinite(tri).all(axis=(1, 2)) & (z[mesh.faces] > 0.05).all(axis=1)
+    keep &= front | ~mesh.closed
+    n = np.where(front[:, None], n, -n)
+    shade = 0.36 + 0.14 * n[:, 1] + 0.62 * np.maximum(n @ _LIGHT, 0.0)
+    col = mesh.color * shade[:, None]
+    depth = z[mesh.faces].mean(axis=1)
+    level = medium.water_level
+    straddle = np.zeros(len(tri), bool)
+    if abs(level) < 1e8:
+        ty = tri[:, :, 1] - level
+        straddle = keep & (ty.min(axis=1) < 0) & (ty.max(axis=1) > 0)
+    tinted = _water_tint(col, cen, eye, medium)
+    idx = np.flatnonzero(keep & ~straddle)
+    coords = scr[mesh.faces[idx]].reshape(len(idx), 6).tolist()
+    rgb = np.clip(tinted[idx], 0, 255).astype(int).tolist()
+    items = [(d, 0, c, tuple(k)) for d, c, k in zip(depth[idx].tolist(), coords, rgb, strict=True)]
+    for f in np.flatnonzero(straddle):
+        for part in _split(tri[f], level):
+            if len(part) < 3:
+                continue
+            pc = _water_tint(col[f][None], part.mean(axis=0)[None], eye, medium)[0]
+            flat = _project(part, eye, rot, focal, size)[0].ravel().tolist()
+            items.append((depth[f], 0, flat, tuple(np.clip(pc, 0, 255).astype(int).tolist())))
+    return items
+
+
+def _marker_items(markers, colors, radius, eye, rot, focal, size, medium) -> list[tuple]:
+    """Return (depth, kind 1, (x, y, r), RGB) items for buoys in front of the camera."""
+    scr, z = _project(markers, eye, rot, focal, size)
+    col = _water_tint(colors, markers, eye, medium)
+    return [
+        (z[i], 1, (scr[i, 0], scr[i, 1], focal * radius / z[i]), col[i])
+        for i in range(len(markers))
+        if z[i] > 0.05 + radius
+    ]
+
+
+def _draw_buoy(draw: ImageDraw.ImageDraw, x: float, y: float, r: float, col: np.ndarray) -> None:
+    r = max(r, 1.5)
+    for k, (scale, off) in enumerate(((1.0, 0.0), (0.75, 0.15), (0.4, 0.35), (0.15, 0.45))):
+        c = tuple(np.clip(col * (0.55 + 0.3 * k) + 40 * (k == 3), 0, 255).astype(int).tolist())
+        cx, cy, rr = x - off * r, y - off * r, scale * r
+        draw.ellipse((cx - rr, cy - rr, cx + rr, cy + rr), fill=c)
+
+
+@lru_cache(maxsize=8)
+def _font(px: int) -> ImageFont.ImageFont | ImageFont.FreeTypeFont:
+    return ImageFont.load_default(size=px)
+
+
+# ---------------------------------------------------------------- public API
+
+
+def _as_lists(bodies, positions, n_times: int) -> tuple[list[Body], list[np.ndarray]]:
+    """Return one Body and one (R, N, 3) position array per animal, checked."""
+    if isinstance(positions, np.ndarray):
+        positions = [positions] if positions.ndim == 3 else list(positions)
+    positions = [np.asarray(p, float) for p in positions]
+    bodies = [bodies] * len(positions) if isinstance(bodies, Body) else list(bodies)
+    if len(bodies) != len(positions) or not bodies:
+        raise ZoeticError(f"{len(bodies)} bodies but {len(positions)} position arrays")
+    for b, p in zip(bodies, positions, strict=True):
+        if p.shape != (n_times, b.n_nodes, 3):
+            raise ZoeticError(
+                f"positions of {b.name} are {p.shape}, expected ({n_times}, {b.n_nodes}, 3)"
+            )
+    return bodies, positions
+
+
+def _group(bodies: list[Body], positions: list[np.ndarray]) -> tuple[np.ndarray, float]:
+    """Return the animals' mean centre of mass (R, 3) and the group's radius at the start."""
+    w = [b.mass / b.total_mass for b in bodies]
+    coms = np.stack([np.einsum("rnk,n->rk", p, m) for m, p in zip(w, positions, strict=True)])
+    ok = np.isfinite(coms).all(axis=2)
+    com = np.where(ok[..., None], coms, 0).sum(0) / np.maximum(ok.sum(0), 1)[:, None]
+    com[~ok.any(0)] = np.nan
+    first = np.concatenate([p[int(np.argmax(np.isfinite(p).all(axis=(1, 2))))] for p in positions])
+    first = first[np.isfinite(first).all(axis=1)]
+    extent = float(np.linalg.norm(first - first.mean(0), axis=1).max()) if len(first) else 1.0
+    return com, max(extent, 0.05)
+
+
+def _marker_colors(marker_colors, m: int) -> np.ndarray:
+    if marker_colors is None:
+        marker_colors = (250, 130, 20)
+    if isinstance(marker_colors, str) or all(np.isscalar(c) for c in marker_colors):
+        marker_colors = [marker_colors] * m
+    rgb = [ImageColor.getrgb(c) if isinstance(c, str) else c for c in marker_colors]
+    return np.array([c[:3] for c in rgb], float).reshape(m, 3)
+
+
+def render_frames(
+    bodies: Sequence[Body] | Body,
+    positions: np.ndarray | Sequence[np.ndarray],
+    times: np.ndarray,
+    medium: Medium | str,
+    size: tuple[int, int] = (640, 360),
+    camera: Camera | None = None,
+    markers: np.ndarray | None = None,
+    marker_colors=None,
+    labels: Sequence[str] | None = None,
+    colors: Sequence | None = None,
+    marker_radius: float | None = None,
+) -> Iterator[np.ndarray]:
+    """Yield one (H, W, 3) uint8 picture per recorded time of the animals in their medium.
+
+    positions: per animal (R, N, 3) m, or one (B, R, N, 3) array of B animals of one body;
+    markers: (M, 3) fixed world points drawn as buoys; labels: one text per animal;
+    colors: one RGB tuple or colour name per animal (default by animal name).
+    """
+    times = np.asarray(times, float).reshape(-1)
+    bodies, positions = _as_lists(bodies, positions, len(times))
+    medium = get_medium(medium)
+    camera = camera or Camera()
+    size = (int(size[0]), int(size[1]))
+    w, h = size
+    focal = 0.5 * h / np.tan(np.radians(camera.fov) / 2)
+    xs = ((np.arange(w) + 0.5 - w / 2) / focal).astype(np.float32)
+    ys = ((h / 2 - np.arange(h) - 0.5) / focal).astype(np.float32)
+    com, extent = _group(bodies, positions)
+    eyes, targets = camera_path(com, times, camera, medium, extent)
+    mesh = _mesh(bodies, colors)
+    mk = None if markers is None else np.asarray(markers, float).reshape(-1, 3)
+    mk_col = None if mk is None else _marker_colors(marker_colors, len(mk))
+    radius = marker_radius or 0.12 * extent
+    font, small = _font(max(10, h // 22)), _font(max(9, h // 28))
+    for r in range(len(times)):
+        eye, rot = eyes[r], look_at(eyes[r], targets[r])
+        img = Image.fromarray(background(medium, eye, rot, xs, ys))
+        draw = ImageDraw.Draw(img)
+        pos = np.concatenate([p[r] for p in positions])
+        items = _face_items(pos, mesh, eye, rot, focal, size, medium)
+        if mk is not None and len(mk):
+            items += _marker_items(mk, mk_col, radius, eye, rot, focal, size, medium)
+        items.sort(key=lambda it: -it[0])
+        for _, kind, geom, col in items:
+            if kind == 0:
+                draw.polygon(geom, fill=col, outline=col)
+            else:
+                _draw_buoy(draw, *geom, col)
+        for i, label in enumerate(labels or ()):
+            scr, z = _project(positions[i][r], eye, rot, focal, size)
+            good = (z > 0.05) & np.isfinite(scr).all(axis=1)
+            if good.any():
+                x, y = scr[good, 0].mean(), scr[good, 1].min() - 4
+                draw.text((x, y), str(label), font=small, anchor="md", **_TEXT)
+        draw.text((8, 6), f"t = {times[r]:.2f} s", font=font, **_TEXT)
+        yield np.asarray(img)
+
+
+def resample(
+    positions: Sequence[np.ndarray], times: np.ndarray, fps: float
+) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Return frame times at ``fps`` over ``times`` and positions linearly interpolated there."""
+    times = np.asarray(times, float)
+    n = int(np.floor((times[-1] - times[0]) * fps + 1e-6)) + 1
+    t_new = times[0] + np.arange(n) / fps
+    if len(times) == 1:
+        return t_new, [np.repeat(p, n, axis=0) for p in positions]
+    i = np.clip(np.searchsorted(times, t_new, side="right") - 1, 0, len(times) - 2)
+    frac = np.clip((t_new - times[i]) / np.maximum(times[i + 1] - times[i], 1e-12), 0, 1)
+    frac = frac[:, None, None]
+    return t_new, [p[i] * (1 - frac) + p[i + 1] * frac for p in positions]
+
+
+def render_video(
+    bodies: Sequence[Body] | Body,
+    positions: np.ndarray | Sequence[np.ndarray],
+    times: np.ndarray,
+    medium: Medium | str,
+    path: str | os.PathLike,
+    fps: float = 30,
+    **kw,
+) -> Path:
+    """Render the animals at ``fps`` frames per second to an MP4 at ``path``; returns the path."""
+    from zoetic.viz.video import write_mp4
+
+    times = np.asarray(times, float).reshape(-1)
+    bodies, positions = _as_lists(bodies, positions, len(times))
+    t_new, pos_new = resample(positions, times, fps)
+    return write_mp4(render_frames(bodies, pos_new, t_new, medium, **kw), path, fps)

@@ -1,0 +1,109 @@
+"""The software renderer and the path plot: sizes, motion, the sea surface, files written."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from zoetic.bodies import load_animal
+from zoetic.errors import ZoeticError
+from zoetic.physics import get_medium
+from zoetic.viz.plots import plot_path
+from zoetic.viz.render3d import Camera, render_frames, render_video, resample
+
+SIZE = (160, 96)
+
+
+def _track(body, shifts) -> np.ndarray:
+    """Return (R, N, 3) positions: the rest pose moved by each (3,) shift."""
+    rest = body.rest_pos - body.rest_pos.mean(axis=0)
+    return rest[None] + np.asarray(shifts, float)[:, None, :]
+
+
+def _frames(body, pos, medium, **kw) -> list[np.ndarray]:
+    times = np.arange(len(pos) if isinstance(pos, np.ndarray) else len(pos[0])) * 0.1
+    return list(render_frames(body, pos, times, get_medium(medium), size=SIZE, **kw))
+
+
+def _mask(frame: np.ndarray, empty: np.ndarray) -> np.ndarray:
+    """Return where a frame differs from the empty scene (the animal's pixels, not the clock)."""
+    mask = np.abs(frame.astype(int) - empty.astype(int)).max(axis=2) > 12
+    mask[:24] = False  # the time stamp differs from frame to frame
+    return mask
+
+
+@pytest.mark.parametrize("name", ["snake", "shark", "ray", "dolphin"])
+def test_frames_have_the_requested_size_and_are_not_blank(name):
+    body = load_animal(name)
+    pos = _track(body, [[0, 0, 0], [0.1, 0, 0]]) + body.start_offset
+    frames = _frames(body, pos, body.medium)
+    assert len(frames) == 2
+    for f in frames:
+        assert f.shape == (SIZE[1], SIZE[0], 3) and f.dtype == np.uint8
+        assert f.std() > 5 and len(np.unique(f.reshape(-1, 3), axis=0)) > 50
+
+
+def test_animal_pixels_follow_the_animal_under_a_fixed_camera():
+    body = load_animal("shark")
+    cam = Camera(target=(0.0, 0.0, 0.0), azimuth=90.0, elevation=10.0, distance=3.0)
+    pos = _track(body, [[-0.6, 0, 0], [0.6, 0, 0], [0.0, 0, 0]])
+    pos[2] = np.nan  # a failed candidate draws nothing: the empty scene
+    left, right, empty = _frames(body, pos, "water", camera=cam)
+    xs = [np.nonzero(_mask(f, empty))[1] for f in (left, right)]
+    assert min(map(len, xs)) > 50
+    assert xs[1].mean() - xs[0].mean() > 20  # +x is to the right in a view from the right side
+
+
+def test_several_animals_with_labels_and_buoys():
+    body = load_animal("shark")
+    pos = [_track(body, [[0, 0, 0.5 * k]] * 2) for k in range(3)]
+    frames = _frames([body] * 3, pos, "water", labels=["a", "b", "c"], markers=[[1, 0, 0]])
+    one = _frames(body, pos[0], "water")
+    assert frames[0].shape == one[0].shape and not np.array_equal(frames[0], one[0])
+
+
+def test_the_sea_surface_tints_what_lies_beneath():
+    body = load_animal("dolphin")
+    cam = Camera(target=(0.0, 0.0, 0.0), elevation=20.0, distance=3.0)
+    pos = _track(body, [[0, 0.4, 0], [0, -0.4, 0], [0, 0, 0]])
+    pos[2] = np.nan
+    above, below, empty = _frames(body, pos, "sea", camera=cam, colors=["white"])
+    col = [f[_mask(f, empty)].mean(axis=0) for f in (above, below)]
+    assert col[0].sum() - col[1].sum() > 60  # darker under the water
+    assert (col[1][2] - col[1][0]) - (col[0][2] - col[0][0]) > 20  # and bluer
+    assert empty[: SIZE[1] // 10].mean() > empty[-SIZE[1] // 3 :].mean() + 30  # sky over sea
+
+
+def test_render_video_writes_a_readable_mp4(tmp_path):
+    import imageio.v2 as imageio
+
+    body = load_animal("snake")
+    times = np.linspace(0.0, 1.0, 6)
+    pos = _track(body, np.outer(times, [0.3, 0, 0]))
+    out = render_video(body, pos, times, "ground", tmp_path / "v.mp4", fps=12, size=SIZE)
+    frames = imageio.mimread(out, memtest=False)
+    assert len(frames) == 13 and frames[0].shape == (SIZE[1], SIZE[0], 3)
+
+
+def test_resample_interpolates_linearly():
+    times = np.array([0.0, 1.0])
+    pos = np.zeros((2, 1, 3))
+    pos[1] = 1.0
+    t, (p,) = resample([pos], times, fps=4)
+    assert np.allclose(t, [0, 0.25, 0.5, 0.75, 1.0])
+    assert np.allclose(p[:, 0, 0], t)
+
+
+def test_mismatched_positions_are_an_error():
+    body = load_animal("shark")
+    with pytest.raises(ZoeticError, match="positions"):
+        next(render_frames(body, np.zeros((3, 5, 3)), np.arange(3.0), "water"))
+
+
+def test_plot_path_writes_a_png(tmp_path):
+    t = np.linspace(0, 4, 50)
+    com = np.stack([t, 0 * t, np.sin(t)], axis=1)
+    out = plot_path(com, tmp_path / "p" / "path.png", targets=[[1, 1]], starts=[0, 25], title="x")
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 5000
+    two = plot_path([com, com + 1], tmp_path / "two.png")
+    assert two.exists() and not list(tmp_path.glob("*.tmp"))
