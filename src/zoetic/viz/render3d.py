@@ -11,6 +11,7 @@ import os
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
+from numbers import Real
 from pathlib import Path
 
 import numpy as np
@@ -20,14 +21,10 @@ from zoetic.bodies import Body
 from zoetic.errors import ZoeticError
 from zoetic.physics.media import Medium, get_medium
 
-ANIMAL_COLORS = {
-    "shark": (122, 136, 152),
-    "dolphin": (150, 160, 178),
-    "snake": (104, 150, 60),
-    "ray": (184, 146, 96),
-}
+ANIMAL_COLORS = {"shark": (122, 136, 152), "dolphin": (150, 160, 178), "snake": (104, 150, 60)}
+ANIMAL_COLORS["ray"] = (184, 146, 96)
 _PALETTE = [(200, 120, 80), (110, 160, 200), (150, 110, 180), (90, 160, 120), (200, 170, 80)]
-_LIGHT = np.array([-0.35, 1.0, -0.45]) / np.linalg.norm([-0.35, 1.0, -0.45])
+_LIGHT = np.array([-0.2, 1.0, -0.7]) / np.linalg.norm([-0.2, 1.0, -0.7])
 _SKY_TOP, _SKY_LOW = np.array([96.0, 150, 214]), np.array([214.0, 228, 240])
 _GROUND = (np.array([186.0, 176, 150]), np.array([150.0, 140, 116]))
 _WATER_UP, _WATER_DOWN = np.array([64.0, 136, 178]), np.array([14.0, 46, 82])
@@ -54,7 +51,7 @@ class Camera:
     elevation: float | None = None
     distance: float | None = None
     fov: float = 45.0
-    smoothing: float = 0.5
+    smoothing: float = 0.25
     target: tuple[float, float, float] | None = None
 
     def direction(self, medium: Medium) -> np.ndarray:
@@ -150,10 +147,13 @@ def fresnel(sin_elevation: np.ndarray) -> np.ndarray:
     return 0.45 + 0.45 * (1 - np.abs(sin_elevation)) ** 3
 
 
-def background(medium: Medium, eye: np.ndarray, rot: np.ndarray, xs, ys) -> np.ndarray:
+def background(
+    medium: Medium, eye: np.ndarray, rot: np.ndarray, xs, ys, seabed: float | None = None
+) -> np.ndarray:
     """Return the (H, W, 3) uint8 environment seen by a camera at ``eye`` with rotation ``rot``.
 
-    ``xs`` (W,) and ``ys`` (H,) are the pixel centres on the image plane at unit depth.
+    ``xs`` (W,) and ``ys`` (H,) are the pixel centres on the image plane at unit depth;
+    ``seabed`` is the height of the sea floor drawn under water (default 3 m down).
     """
     h, w = len(ys), len(xs)
     out = np.empty((h, w, 3), np.uint8)
@@ -174,11 +174,12 @@ def background(medium: Medium, eye: np.ndarray, rot: np.ndarray, xs, ys) -> np.n
     elif abs(level) > 1e8:  # open water, or empty space
         hi, lo = (_WATER_UP, _WATER_DOWN) if level > 1e8 else (_SPACE_UP, _SPACE_DOWN)
         bg = _lerp(lo, hi, np.clip(0.5 + 0.8 * sin_el, 0, 1))
-        if eye[1] <= -_SEABED_DEPTH:
+        seabed = -_SEABED_DEPTH if seabed is None else seabed
+        if eye[1] <= seabed:
             up = slice(0, h)
         out[up] = _u8(bg[up])[:, None]
-        if eye[1] > -_SEABED_DEPTH:
-            t = (-_SEABED_DEPTH - eye[1]) / dd
+        if eye[1] > seabed:
+            t = (seabed - eye[1]) / dd
             fog = 1 - np.exp(-t * nd / _WATER_FOG)
             pair = _SEABED if level > 1e8 else (lo + 30, lo + 14)
             ca, cb = (_lerp(c, bg[down], fog) for c in pair)
@@ -186,7 +187,7 @@ def background(medium: Medium, eye: np.ndarray, rot: np.ndarray, xs, ys) -> np.n
     else:  # the sea seen from the air (the camera never goes under a finite surface)
         out[up] = _u8(sky[up])[:, None]
         t_s = (level - eye[1]) / dd
-        t_f = (level - _SEABED_DEPTH - eye[1]) / dd
+        t_f = ((level - _SEABED_DEPTH if seabed is None else seabed) - eye[1]) / dd
         fog = 1 - np.exp(-(t_f - t_s) * nd / _WATER_FOG)
         grazing = 1 - np.abs(sin_el[down])
         surf = _lerp(_SURFACE, _SKY_LOW, 0.8 * grazing**8)
@@ -278,7 +279,7 @@ def _face_items(pos, mesh: _Mesh, eye, rot, focal, size, medium) -> list[tuple]:
     keep = np.isfinite(tri).all(axis=(1, 2)) & (z[mesh.faces] > 0.05).all(axis=1)
     keep &= front | ~mesh.closed
     n = np.where(front[:, None], n, -n)
-    shade = 0.36 + 0.14 * n[:, 1] + 0.62 * np.maximum(n @ _LIGHT, 0.0)
+    shade = 0.3 + 0.12 * n[:, 1] + 0.7 * np.maximum(n @ _LIGHT, 0.0)
     col = mesh.color * shade[:, None]
     depth = z[mesh.faces].mean(axis=1)
     level = medium.water_level
@@ -360,7 +361,7 @@ def _group(bodies: list[Body], positions: list[np.ndarray]) -> tuple[np.ndarray,
 def _marker_colors(marker_colors, m: int) -> np.ndarray:
     if marker_colors is None:
         marker_colors = (250, 130, 20)
-    if isinstance(marker_colors, str) or all(np.isscalar(c) for c in marker_colors):
+    if isinstance(marker_colors, str) or all(isinstance(c, Real) for c in marker_colors):
         marker_colors = [marker_colors] * m
     rgb = [ImageColor.getrgb(c) if isinstance(c, str) else c for c in marker_colors]
     return np.array([c[:3] for c in rgb], float).reshape(m, 3)
@@ -396,6 +397,8 @@ def render_frames(
     ys = ((h / 2 - np.arange(h) - 0.5) / focal).astype(np.float32)
     com, extent = _group(bodies, positions)
     eyes, targets = camera_path(com, times, camera, medium, extent)
+    base = medium.water_level if abs(medium.water_level) < 1e8 else 0.0
+    seabed = min(base - _SEABED_DEPTH, targets[:, 1].min() - 2 * extent - 1.0)  # under them all
     mesh = _mesh(bodies, colors)
     mk = None if markers is None else np.asarray(markers, float).reshape(-1, 3)
     mk_col = None if mk is None else _marker_colors(marker_colors, len(mk))
@@ -403,7 +406,7 @@ def render_frames(
     font, small = _font(max(10, h // 22)), _font(max(9, h // 28))
     for r in range(len(times)):
         eye, rot = eyes[r], look_at(eyes[r], targets[r])
-        img = Image.fromarray(background(medium, eye, rot, xs, ys))
+        img = Image.fromarray(background(medium, eye, rot, xs, ys, seabed))
         draw = ImageDraw.Draw(img)
         pos = np.concatenate([p[r] for p in positions])
         items = _face_items(pos, mesh, eye, rot, focal, size, medium)
@@ -422,7 +425,7 @@ def render_frames(
                 x, y = scr[good, 0].mean(), scr[good, 1].min() - 4
                 draw.text((x, y), str(label), font=small, anchor="md", **_TEXT)
         draw.text((8, 6), f"t = {times[r]:.2f} s", font=font, **_TEXT)
-        yield np.asarray(img)
+        yield np.array(img)
 
 
 def resample(
