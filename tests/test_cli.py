@@ -9,9 +9,9 @@ import sys
 import numpy as np
 import pytest
 
+from zoetic.bodies import load_animal
 from zoetic.cli import main
 from zoetic.control import save_controller, time_domain
-from zoetic.bodies import load_animal
 
 
 def test_animals_lists_the_zoo(capsys):
@@ -63,7 +63,7 @@ def test_bad_animal_file_exits_2_and_names_the_problem(tmp_path, capsys):
     bad = tmp_path / "bad.toml"
     bad.write_text(
         'name = "blob"\nmedium = "water"\n[[nodes]]\npos = [0, 0, 0]\nmass = 1.0\n'
-        '[[nodes]]\npos = [1, 0, 0]\nmass = -2.0\n'
+        "[[nodes]]\npos = [1, 0, 0]\nmass = -2.0\n"
     )
     assert main(["simulate", str(bad), "--out", str(tmp_path / "x"), "--no-video"]) == 2
     err = capsys.readouterr().err
