@@ -21,7 +21,12 @@ def write_mp4(frames: Iterable[np.ndarray], path: str | os.PathLike, fps: float 
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.stem + ".part" + path.suffix)
     writer = imageio.get_writer(
-        tmp, fps=fps, codec="libx264", quality=7, macro_block_size=8, ffmpeg_log_level="error",
+        tmp,
+        fps=fps,
+        codec="libx264",
+        quality=7,
+        macro_block_size=8,
+        ffmpeg_log_level="error",
         output_params=["-preset", "veryfast"],
     )
     try:
