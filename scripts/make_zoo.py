@@ -410,6 +410,13 @@ def ray() -> dict:
         lat.spring(nose, rows_bot[0][p], k_s, "structural")
     for n in ("TL", "TR", "BL", "BR"):
         lat.spring(tail, stations[-1][n], k_s, "structural")
+    # the rear half of each wing is softer, so a flapping wing twists and pushes water back
+    wing_rear = {lat.nodes[i]["name"] for st in stations[2:]
+                 for key, i in st.items() if key.startswith(("mid", "tip"))}  # fmt: skip
+    for s in lat.springs:
+        if "actuator" not in s and any(v in wing_rear for v in s["nodes"]):
+            if all(v in wing_rear or v.startswith(("s2_", "s3_")) for v in s["nodes"]):
+                s["stiffness"] = round(s["stiffness"] * 0.5, 4)
     # faces: top (normal up) and bottom (normal down) sheets, nose and tail fans
     up, down = np.array([0, -1.0, 0]), np.array([0, 1.0, 0])
     x = lat.pos()
@@ -442,7 +449,7 @@ def ray() -> dict:
         defaults={"node_damping": 0.02, "spring_damping": 0.0},
         actuators=acts,
         wave={
-            "frequency": 1.0,
+            "frequency": 2.0,
             "amplitude": 1.0,
             "offset": 0.0,
             "phases": {
