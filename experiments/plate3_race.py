@@ -1,9 +1,10 @@
 """Plate 3 of Grzeszczuk & Terzopoulos 95: the shark race.
 
 Four sharks learn to swim straight for increasing budgets (CMA-ES by default; the paper's
-simulated annealing with --optimizer anneal --budgets 25,400,1500,3500); they then race side by side, each playing its learned controller from the same
-start line, in one video. Writes docs/figures/plate3_race.mp4, plate3_race.png (the paths)
-and plate3_race.json (distance swum by each).
+simulated annealing with --optimizer anneal --budgets 25,400,1500,3500); they then race side
+by side, each playing its learned controller from the same start line, in one video.
+Writes docs/figures/plate3_race.mp4, plate3_race.png (the paths) and plate3_race.json
+(distance swum by each).
 
 Run: python experiments/plate3_race.py [--budgets 16,400,1500,6000] [--optimizer cmaes]
 """
