@@ -185,3 +185,29 @@ def test_gradient_run_learns_and_resumes_to_the_same_result(tmp_path, short_task
     assert resumed.evaluations == 4
     resumed.learn()
     assert resumed.setup.optimizer.best_f == pytest.approx(whole.setup.optimizer.best_f, abs=1e-6)
+
+
+def test_process_pool_evaluator_matches_the_in_process_batch(short_task):
+    from zoetic.learn.evaluate import BatchEvaluator, ProcessPoolEvaluator
+    from zoetic.learn.run import build
+
+    setup = build(LearnConfig(animal="shark", task=str(short_task), seed=2))
+    rng = np.random.default_rng(0)
+    X = rng.uniform(*setup.objective.bounds(), size=(6, setup.objective.dimension))
+    pool = ProcessPoolEvaluator(workers=2)
+    try:
+        a = pool(setup.objective, X)
+    finally:
+        pool.close()
+    b = BatchEvaluator()(setup.objective, X)
+    assert np.allclose(a.E, b.E, atol=1e-9)
+
+
+def test_parallel_annealing_chains_and_frequency_controllers(tmp_path, short_task):
+    config = LearnConfig(animal="shark", task=str(short_task), optimizer="anneal", budget=64,
+                         chains=8, controller="frequency", seed=1)  # fmt: skip
+    run = Run.create(tmp_path / "f", config)
+    run.learn()
+    assert run.log.batches[1:] == [8] * (len(run.log.batches) - 1)
+    assert run.setup.optimizer.best_f < run.log.E[0]
+    assert run.best_controller().kind == "frequency"
