@@ -1,0 +1,333 @@
+"""Greedy target tracking with a repertoire of abstracted controllers (section 3.1, Fig. 5).
+
+At each re-evaluation point the animal simulates every repertoire entry forward from its
+current state over the next interval, all entries as one batch, and keeps the one with the
+greatest immediate gain: the drop in the distance from its centre of mass to the current
+target (less a penalty for time spent inside obstacle discs). When the centre of mass comes
+within the reaching radius it moves on to the next target.
+
+Targets live in the horizontal plane as (x, z): x forward, z to the animal's left.
+The chosen entries are recorded as a SequenceController: a newly chosen entry starts at its
+own t = 0 and is cross-faded with the previous one over 5% of the previous one's length, so
+the recorded controller, played from rest, reproduces the tracked motion.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from zoetic.behavior.repertoire import Repertoire
+from zoetic.bodies import Body
+from zoetic.control import Controller
+from zoetic.control.abstract import AbstractController, SequenceController
+from zoetic.errors import SimulationError, ZoeticError
+from zoetic.physics import State, Trajectory, rest_state, simulate
+
+OVERLAP = 0.05  # cross-fade: fraction of each controller's length shared with the next
+
+
+class TrackingError(ZoeticError):
+    """A tracking or planning problem is ill-posed (no targets, bad radius, empty repertoire)."""
+
+
+def body_length(body: Body) -> float:
+    """Return the animal's length (m) along its forward axis in the rest pose."""
+    along = body.rest_pos @ np.asarray(body.forward, float)
+    return float(np.ptp(along))
+
+
+def parse_points(text: str, per: int, what: str) -> np.ndarray:
+    """Return the points of ``"a,b;c,d;..."`` as an (M, per) array; a TrackingError if malformed."""
+    try:
+        rows = [[float(v) for v in chunk.split(",")] for chunk in text.split(";") if chunk.strip()]
+    except ValueError:
+        raise TrackingError(f"{what} {text!r}: numbers expected, like '2,0;4,1.5'") from None
+    if not rows or any(len(r) != per for r in rows):
+        raise TrackingError(f"{what} {text!r}: each item needs {per} comma-separated numbers")
+    pts = np.array(rows, float)
+    if not np.all(np.isfinite(pts)):
+        raise TrackingError(f"{what} {text!r}: values must be finite")
+    return pts
+
+
+def wave_abstraction(body: Body, right_scale: float = 1.0, left_bias: float = 0.0):
+    """Return the animal's travelling wave as an AbstractController, right side scaled.
+
+    The wave offset + a (1 + sin(2 pi (f t - p))) / 2 is one cosine mode per actuator; scaling
+    the right actuators' signal down and adding a bias to the left ones bends and turns the
+    animal to the left (+z).
+    """
+    a = body.wave_amplitude
+    right = np.array([s == "right" for s in body.actuator_side])
+    left = np.array([s == "left" for s in body.actuator_side])
+    scale = np.where(right, right_scale, 1.0)
+    offset = (body.wave_offset + 0.5 * a) * scale + np.where(left, left_bias, 0.0)
+    amp = (0.5 * a * scale)[:, None]
+    phase = (-2 * np.pi * np.asarray(body.wave_phase, float) - np.pi / 2)[:, None]
+    freq = np.full_like(amp, body.wave_frequency)
+    return AbstractController(
+        body.name, body.actuator_names, offset, freq, amp, phase, 1.0 / body.wave_frequency
+    )
+
+
+def _mirror(ctrl: AbstractController, mirror: np.ndarray) -> AbstractController:
+    m = np.asarray(mirror, int)
+    return AbstractController(
+        ctrl.animal, ctrl.actuators, ctrl.offset[m], ctrl.freq[m], ctrl.amp[m], ctrl.phase[m],
+        ctrl.period,
+    )  # fmt: skip
+
+
+def handmade_repertoire(body: Body) -> Repertoire:
+    """Return six hand-made entries (not learned): do-nothing, go-straight and four turns.
+
+    Turns weaken one side's wave and bias the other (sharp: right x0.2, left +0.3; wide:
+    right x0.5, left +0.1); right turns mirror left ones. For the shark: straight about
+    0.37 m/s, sharp turns about 6 deg/s (radius ~1.6 m), wide turns about 4 deg/s.
+    """
+    rep = Repertoire(body.name, tuple(body.actuator_names))
+    period = 1.0 / body.wave_frequency
+    straight = wave_abstraction(body)
+    sharp = wave_abstraction(body, 0.2, 0.3)
+    wide = wave_abstraction(body, 0.5, 0.1)
+    rest = AbstractController(
+        body.name, body.actuator_names, np.zeros(body.n_actuators),
+        np.zeros((body.n_actuators, 1)), np.zeros((body.n_actuators, 1)),
+        np.zeros((body.n_actuators, 1)), period,
+    )  # fmt: skip
+    mirror = body.actuator_mirror
+    for name, ctrl in (
+        ("do-nothing", rest),
+        ("go-straight", straight),
+        ("sharp-turn-left", sharp),
+        ("sharp-turn-right", _mirror(sharp, mirror)),
+        ("wide-turn-left", wide),
+        ("wide-turn-right", _mirror(wide, mirror)),
+    ):
+        rep.add(name, ctrl, 4 * period, source="hand-made")
+    return rep
+
+
+def obstacle_seconds(com_xz: np.ndarray, obstacles: np.ndarray, dt: float) -> np.ndarray:
+    """Return the time (s) each path (..., R, 2) spends inside any obstacle disc (x, z, r)."""
+    if obstacles is None or len(obstacles) == 0:
+        return np.zeros(com_xz.shape[:-2])
+    obs = np.asarray(obstacles, float).reshape(-1, 3)
+    d = np.linalg.norm(com_xz[..., None, :] - obs[:, :2], axis=-1)  # (..., R, O)
+    inside = np.any(d < obs[:, 2], axis=-1)
+    return inside[..., 1:].sum(axis=-1) * dt
+
+
+def cost_to_go(
+    body: Body, positions: np.ndarray, target: np.ndarray, turn_radius: float, record_dt: float
+) -> np.ndarray:
+    """Return the distance (m) still to swim at the end of each path (B, R, N, 3) to target.
+
+    That is the centre of mass's distance to the target plus ``turn_radius`` times the bearing
+    (rad) of the target off the heading; the heading (nose minus centre of mass) is averaged
+    over the last half second, so one gait cycle's head swing cancels out.
+    """
+    w = body.mass / body.total_mass
+    tail = positions[:, -max(1, int(round(0.5 / record_dt))) :]
+    com = np.einsum("brnk,n->brk", tail, w)[..., [0, 2]]
+    d = np.linalg.norm(com[:, -1] - target, axis=-1)
+    if turn_radius <= 0:
+        return d
+    h = tail[:, :, body.head, :][..., [0, 2]] - com
+    h = (h / (np.linalg.norm(h, axis=-1, keepdims=True) + 1e-12)).mean(axis=1)
+    g = target - com[:, -1]
+    cos = np.sum(h * g, axis=-1) / (np.linalg.norm(h, axis=-1) * d + 1e-12)
+    return d + turn_radius * np.arccos(np.clip(cos, -1.0, 1.0))
+
+
+@dataclass(frozen=True)
+class TrackConfig:
+    """Knobs of greedy tracking: re-evaluation interval (s), reaching radius (m), time limit."""
+
+    interval: float = 1.0
+    radius: float | None = None  # default: half the body length
+    time_limit: float = 120.0
+    record_every: int = 4
+    turn_radius: float | None = None  # m per rad of bearing in the cost-to-go; None: 1.5 lengths
+    obstacles: np.ndarray | None = None  # (O, 3) discs x, z, r that the gain penalises
+    obstacle_weight: float = 1.0  # m of gain lost per second inside an obstacle
+    allowed: tuple[str, ...] | None = None  # entries it may use (default: all)
+
+
+@dataclass
+class TrackResult:
+    """What tracking produced: the path, the recorded controller and how fast it ran."""
+
+    times: np.ndarray  # (R,) s
+    positions: np.ndarray  # (R, N, 3) m
+    com: np.ndarray  # (R, 3) m
+    targets: np.ndarray  # (M, 2) x, z
+    radius: float
+    sequence: SequenceController
+    names: list[str]  # the entry name of each sequence item
+    starts: np.ndarray  # (n,) s: when each item started
+    reached: np.ndarray  # (M,) s: when each target was reached, NaN if never
+    evaluations: list[str] = field(default_factory=list)  # entry chosen at each re-evaluation
+    wall: float = 0.0  # s spent tracking (simulation and choice; no compile, no video)
+    compile_wall: float = 0.0
+    record_every: int = 1  # simulation steps between recorded positions
+
+    @property
+    def sim_time(self) -> float:
+        return float(self.times[-1])
+
+    @property
+    def realtime_factor(self) -> float:
+        """Return simulated seconds per wall-clock second."""
+        return self.sim_time / max(self.wall, 1e-9)
+
+    @property
+    def start_indices(self) -> np.ndarray:
+        """Return the indices into the recorded path where each controller started."""
+        return np.searchsorted(self.times, self.starts - 1e-9)
+
+    def summary(self) -> dict:
+        """Return the numbers worth printing and saving."""
+        done = np.isfinite(self.reached)
+        return {
+            "targets": len(self.targets),
+            "reached": int(done.sum()),
+            "reach_times_s": [round(float(t), 2) if np.isfinite(t) else None for t in self.reached],
+            "simulated_s": round(self.sim_time, 2),
+            "wall_s": round(self.wall, 3),
+            "realtime_factor": round(self.realtime_factor, 1),
+            "compile_s": round(self.compile_wall, 2),
+            "controllers": len(self.names),
+            "re_evaluations": len(self.evaluations),
+            "radius_m": round(self.radius, 3),
+        }
+
+
+def _candidate_tables(ctrls, current, t, steps, dt) -> np.ndarray:
+    """Return (K, steps, A): each entry started at time t, cross-faded from the current one."""
+    tables = []
+    for k, ctrl in enumerate(ctrls):
+        if current is None:
+            tables.append(ctrl.table(steps, dt))
+            continue
+        ci, start = current
+        held = t - start
+        if k == ci:
+            tables.append(ctrls[ci].table(steps, dt, t0=held))
+            continue
+        window = steps * dt
+        seq = SequenceController(
+            ctrl.animal, ctrl.actuators,
+            ((ctrls[ci], held / (1 - OVERLAP)), (ctrl, window / (1 - OVERLAP) + 1.0)), OVERLAP,
+        )  # fmt: skip
+        tables.append(seq.table(steps, dt, t0=held))
+    return np.stack(tables)
+
+
+def _entries(repertoire: Repertoire, allowed) -> tuple[list[str], list[Controller]]:
+    names = list(repertoire.names if allowed is None else allowed)
+    missing = [n for n in names if n not in repertoire.controllers]
+    if missing or not names:
+        raise TrackingError(
+            f"the repertoire has no entries {missing or names}; it holds {repertoire.names}"
+        )
+    return names, [repertoire.controllers[n] for n in names]
+
+
+def track(
+    body: Body,
+    repertoire: Repertoire,
+    targets: np.ndarray,
+    config: TrackConfig = TrackConfig(),
+    progress: Callable[[float, int], None] | None = None,
+) -> TrackResult:
+    """Return the path of the animal greedily tracking ``targets`` (M, 2) in turn.
+
+    progress(t, reached) is called after every re-evaluation.
+    """
+    targets = np.asarray(targets, float).reshape(-1, 2)
+    if len(targets) == 0:
+        raise TrackingError("give at least one target")
+    names, ctrls = _entries(repertoire, config.allowed)
+    radius = config.radius if config.radius is not None else 0.5 * body_length(body)
+    if not radius > 0 or not config.interval > 0 or not config.time_limit > 0:
+        raise TrackingError("radius, interval and time limit must be positive")
+    dt, rec = body.dt, int(config.record_every)
+    lam = 1.5 * body_length(body) if config.turn_radius is None else float(config.turn_radius)
+    w = body.mass / body.total_mass
+    state = rest_state(body, 1)
+    t0 = time.perf_counter()
+    simulate(body, np.zeros((len(ctrls), rec, body.n_actuators)), state=_repeat(state, len(ctrls)))
+    compile_wall = time.perf_counter() - t0
+
+    times, frames = [0.0], [state.positions[0]]
+    items: list[list] = []  # [entry index, start time]
+    reached = np.full(len(targets), np.nan)
+    chosen: list[str] = []
+    goal, t, fade_end = 0, 0.0, 0.0
+    start = time.perf_counter()
+    while goal < len(targets) and t < config.time_limit - 1e-9:
+        window = max(config.interval, fade_end - t, rec * dt)
+        steps = int(np.ceil(window / dt / rec)) * rec
+        current = None if not items else (items[-1][0], items[-1][1])
+        tables = _candidate_tables(ctrls, current, t, steps, dt)
+        traj = simulate(body, tables, state=_repeat(state, len(ctrls)), record_every=rec)
+        com = np.einsum("brnk,n->brk", traj.positions, w)[..., [0, 2]]
+        # the cost-to-go at the start is the same for every entry, so the gain ranks as its drop
+        gain = -cost_to_go(body, traj.positions, targets[goal], lam, rec * dt)
+        gain -= config.obstacle_weight * obstacle_seconds(com, config.obstacles, rec * dt)
+        gain[traj.failed] = -np.inf
+        if not np.isfinite(gain).any():
+            raise SimulationError(f"every repertoire entry blew up at t = {t:.2f} s")
+        best = int(np.argmax(gain))
+        chosen.append(names[best])
+        if current is None or best != current[0]:
+            if current is not None:
+                fade_end = t + (t - current[1]) * OVERLAP / (1 - OVERLAP)
+            items.append([best, t])
+        for r in range(1, traj.positions.shape[1]):
+            while goal < len(targets) and np.linalg.norm(com[best, r] - targets[goal]) < radius:
+                reached[goal] = t + r * rec * dt
+                goal += 1
+        times.extend(t + np.arange(1, traj.positions.shape[1]) * rec * dt)
+        frames.extend(traj.positions[best, 1:])
+        state = traj.final.take(best)
+        t += steps * dt
+        if progress is not None:
+            progress(t, goal)
+    wall = time.perf_counter() - start
+    seq, starts = _sequence(ctrls, items, t)
+    positions = np.array(frames)
+    return TrackResult(
+        times=np.array(times), positions=positions, com=np.einsum("rnk,n->rk", positions, w),
+        targets=targets, radius=float(radius), sequence=seq,
+        names=[names[i] for i, _ in items], starts=starts, reached=reached,
+        evaluations=chosen, wall=wall, compile_wall=compile_wall, record_every=rec,
+    )  # fmt: skip
+
+
+def _repeat(state: State, k: int) -> State:
+    return State(np.repeat(state.positions, k, axis=0), np.repeat(state.velocities, k, axis=0))
+
+
+def _sequence(ctrls, items, t_end) -> tuple[SequenceController, np.ndarray]:
+    """Return the chosen items as one SequenceController and their start times."""
+    starts = np.array([s for _, s in items], float)
+    ends = np.append(starts[1:], t_end)
+    seq_items = []
+    for i, (k, s) in enumerate(items):
+        last = i == len(items) - 1
+        seq_items.append((ctrls[k], (ends[i] - s) if last else (ends[i] - s) / (1 - OVERLAP)))
+    ctrl = ctrls[0]
+    return SequenceController(ctrl.animal, ctrl.actuators, tuple(seq_items), OVERLAP), starts
+
+
+def replay(body: Body, result: TrackResult) -> Trajectory:
+    """Return the trajectory of the recorded sequence played from rest (for checks, video)."""
+    dt = body.dt
+    steps = int(round(result.sim_time / dt))
+    return simulate(body, result.sequence.table(steps, dt), record_every=result.record_every)
