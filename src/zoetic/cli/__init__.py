@@ -27,7 +27,7 @@ def _root(debug: bool = typer.Option(False, "--debug", help="Show full traceback
 
 
 def _register() -> None:
-    from zoetic.cli import bench, learn, san, simulate  # noqa: F401  (commands register)
+    from zoetic.cli import bench, learn, san, simulate, track  # noqa: F401  (commands register)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,0 +1,347 @@
+"""Macro controllers: sequences of repertoire entries optimised as a whole (section 3.2).
+
+A plan is a fixed number L of segments, each an entry of the repertoire and how long it plays
+(s); played in order as a SequenceController (5% linear cross-fades), its last entry holding
+if the plan is shorter than the horizon. The objective of a reach-a-goal task is
+    E = distance (m) of the centre of mass from the goal at the end of the horizon
+        + obstacle_weight (m/s) * seconds spent inside any obstacle disc
+        + time_weight (m/s) * time to reach the goal (the horizon when never reached).
+Two searches share an ask/tell interface and evaluate whole batches in one simulation:
+simulated annealing (the paper's schedule, adapted to entries and durations) and a genetic
+algorithm (tournaments, crossover of segment blocks, mutation of entries and durations),
+which the paper suggests may suit this combinatorial problem better.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from zoetic.behavior.repertoire import Repertoire
+from zoetic.behavior.tracking import OVERLAP, TrackingError, body_length, obstacle_seconds
+from zoetic.bodies import Body
+from zoetic.control.abstract import SequenceController
+from zoetic.physics import Trajectory, simulate
+
+
+@dataclass(frozen=True)
+class ReachTask:
+    """Reach ``goal`` (x, z) within ``horizon`` s, keeping out of obstacle discs (x, z, r)."""
+
+    goal: tuple[float, float]
+    obstacles: tuple[tuple[float, float, float], ...] = ()
+    horizon: float = 40.0
+    radius: float | None = None  # reaching radius (m); default half a body length
+    obstacle_weight: float = 1.0
+    time_weight: float = 0.01
+
+
+def path_scores(com_xz: np.ndarray, record_dt: float, task: ReachTask, radius: float) -> dict:
+    """Return closest/final distance (m), time in obstacles (s), reach time (s, NaN) and cost.
+
+    com_xz: (B, R, 2) centre-of-mass paths in the horizontal plane, recorded record_dt apart.
+    """
+    d = np.linalg.norm(com_xz - np.asarray(task.goal, float), axis=-1)
+    inside = obstacle_seconds(com_xz, np.asarray(task.obstacles, float), record_dt)
+    hit = d < radius
+    reach = np.where(hit.any(axis=1), hit.argmax(axis=1) * record_dt, np.nan)
+    t_cost = np.where(np.isfinite(reach), reach, task.horizon)
+    cost = d[:, -1] + task.obstacle_weight * inside + task.time_weight * t_cost
+    return {"cost": cost, "closest": d.min(axis=1), "final": d[:, -1], "inside": inside,
+            "reach": reach}  # fmt: skip
+
+
+class MacroProblem:
+    """A reach task over a repertoire: plans of L (entry, duration) segments, scored in batches."""
+
+    def __init__(
+        self,
+        body: Body,
+        repertoire: Repertoire,
+        task: ReachTask,
+        segments: int = 6,
+        durations: tuple[float, float] | None = None,
+        record_every: int = 10,
+        allowed: tuple[str, ...] | None = None,
+    ):
+        self.body, self.task = body, task
+        self.names = list(repertoire.names if allowed is None else allowed)
+        missing = [n for n in self.names if n not in repertoire.controllers]
+        if missing or not self.names:
+            raise TrackingError(f"the repertoire has no entries {missing or self.names}")
+        self.ctrls = [repertoire.controllers[n] for n in self.names]
+        if segments < 1 or not task.horizon > 0:
+            raise TrackingError("a plan needs at least one segment and a positive horizon")
+        self.segments = int(segments)
+        lo, hi = durations or (0.5, max(1.0, task.horizon / 2))
+        if not 0 < lo < hi:
+            raise TrackingError(f"durations must satisfy 0 < min < max, got {lo}, {hi}")
+        self.lower, self.upper = float(lo), float(hi)
+        self.radius = task.radius if task.radius is not None else 0.5 * body_length(body)
+        self.record_every = int(record_every)
+        self.steps = int(round(task.horizon / body.dt / self.record_every)) * self.record_every
+
+    @property
+    def entries(self) -> int:
+        return len(self.names)
+
+    def sequence(self, entries: np.ndarray, durations: np.ndarray) -> SequenceController:
+        """Return the plan as one controller: the entries in order, cross-faded."""
+        items = tuple(
+            (self.ctrls[int(e)], float(d)) for e, d in zip(entries, durations, strict=True)
+        )
+        c = self.ctrls[0]
+        return SequenceController(c.animal, c.actuators, items, OVERLAP)
+
+    def random(self, rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """Return n random plans: entries (n, L) and durations (n, L)."""
+        e = rng.integers(0, self.entries, (n, self.segments))
+        return e, rng.uniform(self.lower, self.upper, (n, self.segments))
+
+    def rollout(self, entries, durations, record_every: int | None = None) -> Trajectory:
+        """Return the trajectories of plans (B, L) played from rest over the horizon."""
+        e, d = np.atleast_2d(entries), np.atleast_2d(durations)
+        dt = self.body.dt
+        tables = np.stack(
+            [self.sequence(a, b).table(self.steps, dt) for a, b in zip(e, d, strict=True)]
+        )
+        return simulate(self.body, tables, record_every=record_every or self.record_every)
+
+    def evaluate(self, entries: np.ndarray, durations: np.ndarray) -> dict:
+        """Return the scores (path_scores) of plans (B, L), all simulated as one batch."""
+        traj = self.rollout(entries, durations)
+        scores = self.scores(traj)
+        scores["cost"] = np.where(traj.failed, np.inf, scores["cost"])
+        return scores
+
+    def scores(self, traj: Trajectory) -> dict:
+        """Return path_scores of a trajectory of this problem's animal."""
+        com = traj.com(self.body)[..., [0, 2]]
+        return path_scores(com, float(traj.times[1] - traj.times[0]), self.task, self.radius)
+
+
+def _move(e, d, rng, k, lo, hi, step, swap):
+    """Return perturbed plans: every duration by up to step of its range, entries by chance."""
+    d = np.clip(d + rng.uniform(-1, 1, d.shape) * step * (hi - lo), lo, hi)
+    e = e.copy()
+    if k > 1:
+        change = rng.random(e.shape) < step
+        e[change] = (e[change] + rng.integers(1, k, change.sum())) % k  # a different entry
+    n, length = e.shape
+    if length > 1:
+        for i in np.flatnonzero(rng.random(n) < swap):  # reorder: swap two neighbours
+            j = rng.integers(0, length - 1)
+            e[i, [j, j + 1]], d[i, [j, j + 1]] = e[i, [j + 1, j]], d[i, [j + 1, j]]
+    return e, d
+
+
+class _Search:
+    """Shared bookkeeping of the plan searches: best plan, evaluation count."""
+
+    name = "base"
+
+    def __init__(self, problem: MacroProblem, seed: int):
+        self.k, self.length = problem.entries, problem.segments
+        self.lo, self.hi = problem.lower, problem.upper
+        self.rng = np.random.default_rng(seed)
+        self.random = lambda n: problem.random(self.rng, n)
+        self.evaluations = 0
+        self.best_f = np.inf
+        self.best = (np.zeros(self.length, int), np.full(self.length, self.lo))
+
+    def _record(self, e, d, f) -> np.ndarray:
+        f = np.where(np.isfinite(f), f, np.inf)
+        self.evaluations += len(f)
+        i = int(np.argmin(f))
+        if f[i] < self.best_f:
+            self.best_f, self.best = float(f[i]), (e[i].copy(), d[i].copy())
+        return f
+
+    def status(self) -> dict:
+        """Return a few numbers worth showing in a progress bar."""
+        return {}
+
+
+class PlanAnnealing(_Search):
+    """Simulated annealing over plans with the paper's schedule, ``chains`` at a time.
+
+    T0 = 0.5, T <- 0.9 T after at most 10 n steps or n accepted moves (n = 2L variables).
+    Each step moves every duration uniformly by up to 10% of its range, replaces each entry
+    by another with probability 10%, and swaps two neighbouring segments with probability
+    10%. Temperatures are in units of the chains' mean starting cost.
+    """
+
+    name = "anneal"
+
+    def __init__(self, problem, seed, chains=16, t0=0.5, alpha=0.9, step=0.1, swap=0.1):
+        super().__init__(problem, seed)
+        self.T, self.alpha, self.step, self.swap = float(t0), float(alpha), float(step), swap
+        self.e, self.d = self.random(int(chains))
+        self.f: np.ndarray | None = None
+        self.scale = 1.0
+        self.max_steps, self.min_accepts = 20 * self.length, 2 * self.length
+        self.steps_at_T = self.accepts_at_T = 0
+        self.acceptance = 1.0
+
+    def ask(self) -> tuple[np.ndarray, np.ndarray]:
+        """Return the next batch of plans to evaluate: (entries, durations)."""
+        if self.f is None:
+            return self.e.copy(), self.d.copy()
+        return _move(self.e, self.d, self.rng, self.k, self.lo, self.hi, self.step, self.swap)
+
+    def tell(self, e, d, f) -> None:
+        """Accept or reject each chain's move by the Metropolis rule at the current T."""
+        f = self._record(e, d, f)
+        if self.f is None:
+            self.f = f.copy()
+            good = f[np.isfinite(f)]
+            self.scale = float(np.mean(np.abs(good))) if len(good) else 1.0
+            return
+        u = self.rng.random(len(f))
+        with np.errstate(over="ignore", invalid="ignore"):
+            accept = np.isfinite(f) & (
+                (f <= self.f) | (u < np.exp(-(f - self.f) / (self.T * self.scale)))
+            )
+        self.e[accept], self.d[accept], self.f[accept] = e[accept], d[accept], f[accept]
+        self.steps_at_T += len(f)
+        self.accepts_at_T += int(accept.sum())
+        self.acceptance = 0.9 * self.acceptance + 0.1 * float(accept.mean())
+        if self.steps_at_T >= self.max_steps or self.accepts_at_T >= self.min_accepts:
+            self.T *= self.alpha
+            self.steps_at_T = self.accepts_at_T = 0
+
+    def status(self):
+        return {"T": self.T, "accept": self.acceptance}
+
+
+class PlanGenetic(_Search):
+    """A generational genetic algorithm over plans, keeping the ``elite`` best unchanged.
+
+    Parents are picked by tournaments of ``tournament``; a child takes one parent's segments
+    with a block of the other's (probability ``crossover``), then each entry is replaced and
+    each duration moved (Gaussian, 10% of the range) with probability 1/L, and two
+    neighbouring segments swap with probability 10%.
+    """
+
+    name = "ga"
+
+    def __init__(self, problem, seed, popsize=32, elite=2, tournament=3, crossover=0.9):
+        super().__init__(problem, seed)
+        self.popsize, self.elite = int(popsize), int(elite)
+        self.tournament, self.crossover = int(tournament), float(crossover)
+        self.pop: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self.generation = 0
+
+    def _pick(self, f: np.ndarray) -> int:
+        contenders = self.rng.integers(0, len(f), self.tournament)
+        return int(contenders[np.argmin(f[contenders])])
+
+    def ask(self) -> tuple[np.ndarray, np.ndarray]:
+        """Return the next batch of plans to evaluate: the first population, then children."""
+        if self.pop is None:
+            return self.random(self.popsize)
+        pe, pd, pf = self.pop
+        n = self.popsize - self.elite
+        ce, cd = np.empty((n, self.length), int), np.empty((n, self.length))
+        for c in range(n):
+            a, b = self._pick(pf), self._pick(pf)
+            ce[c], cd[c] = pe[a], pd[a]
+            if self.rng.random() < self.crossover and self.length > 1:
+                i, j = np.sort(self.rng.choice(self.length + 1, 2, replace=False))
+                ce[c, i:j], cd[c, i:j] = pe[b, i:j], pd[b, i:j]
+        p = 1.0 / self.length
+        if self.k > 1:
+            change = self.rng.random(ce.shape) < p
+            ce[change] = (ce[change] + self.rng.integers(1, self.k, change.sum())) % self.k
+        nudge = self.rng.random(cd.shape) < p
+        sigma = 0.1 * (self.hi - self.lo)
+        cd = np.clip(cd + nudge * self.rng.normal(0, sigma, cd.shape), self.lo, self.hi)
+        return _move(ce, cd, self.rng, self.k, self.lo, self.hi, 0.0, 0.1)
+
+    def tell(self, e, d, f) -> None:
+        """Form the next population from the elite and the evaluated children."""
+        f = self._record(e, d, f)
+        if self.pop is not None:
+            pe, pd, pf = self.pop
+            keep = np.argsort(pf, kind="stable")[: self.elite]
+            e, d, f = (np.concatenate([x[keep], y]) for x, y in ((pe, e), (pd, d), (pf, f)))
+        self.pop = (e.copy(), d.copy(), f.copy())
+        self.generation += 1
+
+    def status(self):
+        return {"gen": float(self.generation)}
+
+
+SEARCHES = {"anneal": PlanAnnealing, "ga": PlanGenetic}
+
+
+@dataclass
+class MacroResult:
+    """The best plan a search found, its scores, and the best cost after each batch."""
+
+    method: str
+    names: list[str]  # entry name of each segment
+    entries: np.ndarray  # (L,)
+    durations: np.ndarray  # (L,) s
+    sequence: SequenceController
+    scores: dict  # path_scores of the best plan (floats)
+    evaluations: int
+    wall: float
+    horizon: float
+    history: list[tuple[int, float]] = field(default_factory=list)
+
+    def summary(self) -> dict:
+        """Return the numbers worth printing and saving."""
+        s = self.scores
+        return {
+            "method": self.method,
+            "cost": round(float(s["cost"]), 4),
+            "closest_m": round(float(s["closest"]), 3),
+            "final_m": round(float(s["final"]), 3),
+            "inside_obstacle_s": round(float(s["inside"]), 2),
+            "reached_s": None if not np.isfinite(s["reach"]) else round(float(s["reach"]), 2),
+            "evaluations": self.evaluations,
+            "wall_s": round(self.wall, 2),
+            "plan": [
+                {
+                    "entry": n,
+                    "start_s": round(float(t), 3),
+                    "duration_s": round(float(d), 3),
+                    "played": bool(t < self.horizon),
+                }
+                for n, t, d in zip(self.names, self.sequence.starts(), self.durations, strict=True)
+            ],  # fmt: skip
+        }
+
+
+def search(
+    problem: MacroProblem,
+    method: str = "ga",
+    budget: int = 2000,
+    seed: int = 0,
+    progress: Callable[[_Search], None] | None = None,
+    **options,
+) -> MacroResult:
+    """Return the best plan ``method`` (anneal or ga) finds within ``budget`` evaluations."""
+    if method not in SEARCHES:
+        raise TrackingError(f"unknown search method {method!r}: choose anneal or ga")
+    opt = SEARCHES[method](problem, seed, **options)
+    history = []
+    start = time.perf_counter()
+    while opt.evaluations < budget:
+        e, d = opt.ask()
+        opt.tell(e, d, problem.evaluate(e, d)["cost"])
+        history.append((opt.evaluations, opt.best_f))
+        if progress is not None:
+            progress(opt)
+    wall = time.perf_counter() - start
+    e, d = opt.best
+    scores = {k: float(v[0]) for k, v in problem.evaluate(e[None], d[None]).items()}
+    return MacroResult(
+        method=method, names=[problem.names[i] for i in e], entries=e, durations=d,
+        sequence=problem.sequence(e, d), scores=scores, evaluations=opt.evaluations,
+        wall=wall, horizon=problem.task.horizon, history=history,
+    )  # fmt: skip

@@ -1,0 +1,239 @@
+"""``zoetic track`` (greedy target tracking) and ``zoetic macro`` (planned macro controllers)."""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+from zoetic.cli import app
+
+console = Console()
+
+PLANE = (
+    "Points are x,z (m) in the horizontal plane: the animal starts at the origin facing +x "
+    "and +z is its left."
+)
+
+
+def _setup(animal: str, memory: Path):
+    """Return the body and its repertoire (clear errors for a missing or mismatched one)."""
+    from zoetic.behavior.repertoire import Repertoire
+    from zoetic.bodies import load_animal
+
+    body = load_animal(animal)
+    return body, Repertoire.load(memory, body)
+
+
+def _progress(total: float, unit: str) -> Progress:
+    return Progress(
+        TextColumn("[bold]{task.description}"),
+        BarColumn(bar_width=20),
+        TextColumn("{task.completed:>6.0f}/{task.total:.0f} " + unit),
+        TextColumn("{task.fields[info]}"),
+        TimeElapsedColumn(),
+        console=console,
+    )
+
+
+def _buoys(points_xz: np.ndarray, depth: float) -> np.ndarray:
+    """Return (M, 3) world points at the animal's depth for (M, 2) plane points."""
+    pts = np.asarray(points_xz, float).reshape(-1, 2)
+    return np.column_stack([pts[:, 0], np.full(len(pts), depth), pts[:, 1]])
+
+
+def _rings(obstacles: np.ndarray, depth: float, per: int = 16) -> np.ndarray:
+    """Return buoys spaced around each obstacle disc's rim, (O * per, 3)."""
+    a = np.linspace(0, 2 * np.pi, per, endpoint=False)
+    rims = [np.column_stack([x + r * np.cos(a), z + r * np.sin(a)]) for x, z, r in obstacles]
+    return _buoys(np.concatenate(rims), depth) if rims else np.zeros((0, 3))
+
+
+def plot_plan(
+    paths: Sequence[np.ndarray],
+    labels: Sequence[str],
+    path: Path,
+    goal: Sequence[float],
+    obstacles: np.ndarray,
+    starts: Sequence[np.ndarray] | None = None,
+    title: str = "",
+) -> Path:
+    """Write a top view of (R, 3) paths with the goal and the obstacle discs; returns the path."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Circle
+
+    from zoetic.io import atomic_write_bytes
+
+    fig = Figure(figsize=(6.4, 4.8), dpi=120)
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    for k, (x, z, r) in enumerate(np.asarray(obstacles, float).reshape(-1, 3)):
+        ax.add_patch(Circle((x, z), r, fc="0.75", ec="0.35", hatch="//", lw=1,
+                            label="obstacle" if k == 0 else None))  # fmt: skip
+    for i, (p, label) in enumerate(zip(paths, labels, strict=True)):
+        (line,) = ax.plot(p[:, 0], p[:, 2], lw=1.8, label=label)
+        if starts is not None and len(starts[i]):
+            idx = np.clip(np.asarray(starts[i], int), 0, len(p) - 1)
+            ax.plot(p[idx, 0], p[idx, 2], "o", mfc="white", mec=line.get_color(), ms=6,
+                    mew=1.3, ls="none", zorder=4)  # fmt: skip
+    ax.plot(*paths[0][0, [0, 2]], "s", color="0.2", ms=7, label="start", zorder=5)
+    ax.plot(*goal, "o", color="black", ms=8, label="goal", zorder=5)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x (m, forward)")
+    ax.set_ylabel("z (m, left)")
+    ax.grid(True, lw=0.4, alpha=0.5)
+    ax.legend(loc="best", fontsize=8, framealpha=0.85)
+    if title:
+        ax.set_title(title, fontsize=10)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    return atomic_write_bytes(path, buf.getvalue())
+
+
+@app.command()
+def track(
+    animal: str = typer.Argument(..., help="Zoo animal name or animal .toml file."),
+    memory: Path = typer.Option(..., help="Repertoire directory (zoetic repertoire train)."),
+    targets: str = typer.Option(..., help=f"Targets 'x,z;x,z;...' visited in order. {PLANE}"),
+    out: Path = typer.Option(Path("runs/track"), help="Run directory to write."),
+    interval: float = typer.Option(1.0, min=0.05, help="Re-evaluation interval (s)."),
+    radius: float = typer.Option(None, help="Reaching radius (m); default half a body length."),
+    time_limit: float = typer.Option(120.0, min=0.1, help="Give up after this many seconds."),
+    turn_radius: float = typer.Option(
+        None, help="Metres per radian of bearing in the gain; 0 for pure distance."
+    ),
+    video: bool = typer.Option(True, help="Write video.mp4 with the targets as buoys."),
+    fps: int = typer.Option(30, min=1),
+) -> None:
+    """Track targets greedily with a repertoire (Fig. 5, Plate 4); writes path.png and video."""
+    from zoetic.behavior.tracking import TrackConfig, parse_points, replay
+    from zoetic.behavior.tracking import track as run_track
+    from zoetic.control import save_controller
+    from zoetic.io import write_json
+
+    body, rep = _setup(animal, memory)
+    pts = parse_points(targets, 2, "--targets")
+    config = TrackConfig(interval=interval, radius=radius, time_limit=time_limit,
+                         turn_radius=turn_radius)  # fmt: skip
+    with _progress(time_limit, "s") as bar:
+        tid = bar.add_task(f"{body.name} tracks", total=time_limit, info="")
+
+        def update(t: float, reached: int) -> None:
+            bar.update(tid, completed=min(t, time_limit), info=f"targets {reached}/{len(pts)}")
+
+        result = run_track(body, rep, pts, config, progress=update)
+        bar.update(tid, total=result.sim_time, completed=result.sim_time)
+    out.mkdir(parents=True, exist_ok=True)
+    check = replay(body, result)
+    drift = float(np.nanmax(np.abs(check.positions[0] - result.positions)))
+    summary = result.summary() | {
+        "animal": body.name, "memory": str(memory), "targets_xz": pts.tolist(),
+        "plan": [{"entry": n, "start_s": round(float(s), 3)}
+                 for n, s in zip(result.names, result.starts, strict=True)],
+        "replay_drift_m": drift,
+    }  # fmt: skip
+    save_controller(result.sequence, out / "controller.json")
+    write_json(out / "summary.json", summary)
+    from zoetic.viz.plots import plot_path
+
+    reached = int(np.isfinite(result.reached).sum())
+    plot_path(result.com, out / "path.png", targets=pts, starts=result.start_indices,
+              title=f"{body.name} tracking {reached}/{len(pts)} targets "
+                    f"(white: a new controller starts)")  # fmt: skip
+    if video:
+        from zoetic.viz.render3d import render_video
+
+        render_video(body, result.positions, result.times, body.medium, out / "video.mp4",
+                     fps=fps, markers=_buoys(pts, float(result.com[0, 1])),
+                     marker_colors=(220, 40, 30))  # fmt: skip
+    console.print(
+        f"reached {reached}/{len(pts)} targets in {result.sim_time:.1f} s simulated, "
+        f"{result.wall:.2f} s wall: [bold]{result.realtime_factor:.0f}x real time[/] "
+        f"({len(result.names)} controllers, {len(result.evaluations)} re-evaluations of "
+        f"{len(rep.names)} entries in one batch each)"
+    )
+    console.print(f"wrote {out}/ (controller.json, summary.json, path.png"
+                  f"{', video.mp4' if video else ''})")  # fmt: skip
+
+
+@app.command()
+def macro(
+    animal: str = typer.Argument(..., help="Zoo animal name or animal .toml file."),
+    memory: Path = typer.Option(..., help="Repertoire directory (zoetic repertoire train)."),
+    goal: str = typer.Option(..., help=f"Goal 'x,z'. {PLANE}"),
+    obstacle: list[str] = typer.Option(
+        [], help="Obstacle disc 'x,z,r' to keep out of (repeat for more)."
+    ),
+    method: str = typer.Option("ga", help="anneal (simulated annealing) or ga (genetic)."),
+    budget: int = typer.Option(2000, min=1, help="Plans (simulations) to evaluate."),
+    seed: int = typer.Option(0, help="Random seed: same seed, same result."),
+    segments: int = typer.Option(6, min=1, help="Repertoire entries in a plan."),
+    horizon: float = typer.Option(60.0, min=0.1, help="Seconds the plan is judged over."),
+    out: Path = typer.Option(Path("runs/macro"), help="Run directory to write."),
+    video: bool = typer.Option(True, help="Write video.mp4 (goal and obstacle rims as buoys)."),
+    fps: int = typer.Option(30, min=1),
+) -> None:
+    """Search for a macro controller (selection, order, durations of entries) to reach a goal."""
+    from zoetic.behavior.macro import MacroProblem, ReachTask, search
+    from zoetic.behavior.tracking import parse_points
+    from zoetic.control import save_controller
+    from zoetic.io import write_json
+
+    body, rep = _setup(animal, memory)
+    g = parse_points(goal, 2, "--goal")[0]
+    obs = np.concatenate([parse_points(o, 3, "--obstacle") for o in obstacle] or
+                         [np.zeros((0, 3))])  # fmt: skip
+    task = ReachTask(tuple(g), tuple(map(tuple, obs)), horizon)
+    problem = MacroProblem(body, rep, task, segments=segments)
+    with _progress(budget, "plans") as bar:
+        tid = bar.add_task(f"{body.name} {method}", total=budget, info="")
+
+        def update(opt) -> None:
+            st = " ".join(f"{k} {v:.2g}" for k, v in opt.status().items())
+            bar.update(tid, completed=min(opt.evaluations, budget),
+                       info=f"E {opt.best_f:.3f} {st}")  # fmt: skip
+
+        result = search(problem, method, budget, seed, progress=update)
+    out.mkdir(parents=True, exist_ok=True)
+    save_controller(result.sequence, out / "controller.json")
+    summary = result.summary() | {
+        "animal": body.name, "memory": str(memory), "goal_xz": g.tolist(),
+        "obstacles_xzr": obs.tolist(), "horizon_s": horizon, "seed": seed,
+        "history": [[n, round(f, 5)] for n, f in result.history],
+    }  # fmt: skip
+    write_json(out / "summary.json", summary)
+    traj = problem.rollout(result.entries, result.durations, record_every=4)
+    com = traj.com(body)[0]
+    starts = result.sequence.starts()
+    idx = np.searchsorted(traj.times, starts[starts < horizon] - 1e-9)
+    s = result.summary()
+    title = (
+        f"{body.name} macro controller ({method}): final distance {s['final_m']:.2f} m, "
+        f"{s['inside_obstacle_s']:.1f} s in obstacles"
+    )
+    plot_plan([com], [f"{method} plan"], out / "path.png", g, obs, [idx], title=title)
+    if video:
+        from zoetic.viz.render3d import render_video
+
+        depth = float(com[0, 1])
+        rims = _rings(obs, depth)
+        colors = [(220, 40, 30)] + [(240, 200, 40)] * len(rims)
+        render_video(body, traj.positions[0], traj.times, body.medium, out / "video.mp4",
+                     fps=fps, markers=np.vstack([_buoys(g, depth), rims]),
+                     marker_colors=colors)  # fmt: skip
+    console.print(
+        f"{method}: E = {s['cost']:.3f}, final distance {s['final_m']:.2f} m, closest "
+        f"{s['closest_m']:.2f} m, {s['inside_obstacle_s']:.1f} s in obstacles, reached "
+        f"{'at ' + str(s['reached_s']) + ' s' if s['reached_s'] is not None else 'never'}"
+    )
+    played = [f"{p['entry']} {p['duration_s']:.1f} s" for p in s["plan"] if p["played"]]
+    console.print("plan: " + ", ".join(played))
+    console.print(f"wrote {out}/ (controller.json, summary.json, path.png"
+                  f"{', video.mp4' if video else ''})")  # fmt: skip
