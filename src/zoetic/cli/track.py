@@ -118,8 +118,8 @@ def track(
     from zoetic.control import save_controller
     from zoetic.io import write_json
 
-    body, rep = _setup(animal, memory)
     pts = parse_points(targets, 2, "--targets")
+    body, rep = _setup(animal, memory)
     config = TrackConfig(interval=interval, radius=radius, time_limit=time_limit,
                          turn_radius=turn_radius)  # fmt: skip
     with _progress(time_limit, "s") as bar:
@@ -182,14 +182,16 @@ def macro(
 ) -> None:
     """Search for a macro controller (selection, order, durations of entries) to reach a goal."""
     from zoetic.behavior.macro import MacroProblem, ReachTask, search
-    from zoetic.behavior.tracking import parse_points
+    from zoetic.behavior.tracking import TrackingError, parse_points
     from zoetic.control import save_controller
     from zoetic.io import write_json
 
-    body, rep = _setup(animal, memory)
     g = parse_points(goal, 2, "--goal")[0]
     obs = np.concatenate([parse_points(o, 3, "--obstacle") for o in obstacle] or
                          [np.zeros((0, 3))])  # fmt: skip
+    if np.any(obs[:, 2] <= 0):
+        raise TrackingError(f"--obstacle: radii must be positive, got {obs[:, 2].tolist()}")
+    body, rep = _setup(animal, memory)
     task = ReachTask(tuple(g), tuple(map(tuple, obs)), horizon)
     problem = MacroProblem(body, rep, task, segments=segments)
     with _progress(budget, "plans") as bar:

@@ -1,0 +1,124 @@
+"""Macro controllers: plans become cross-faded sequences, scores are right on known paths, both
+searches are reproducible, stay in bounds and improve, and the command writes its run."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from zoetic.behavior.macro import (
+    MacroProblem,
+    PlanAnnealing,
+    PlanGenetic,
+    ReachTask,
+    path_scores,
+    search,
+)
+from zoetic.behavior.tracking import TrackingError, handmade_repertoire
+from zoetic.bodies import load_animal
+from zoetic.cli import main
+from zoetic.control import load_controller
+from zoetic.control.abstract import SequenceController
+
+# a short task: a goal ahead and to the left, past a small disc on the straight line to it
+TASK = ReachTask(goal=(1.8, 0.8), obstacles=((0.9, 0.3, 0.3),), horizon=6.0)
+
+
+@pytest.fixture(scope="module")
+def problem():
+    shark = load_animal("shark")
+    return MacroProblem(shark, handmade_repertoire(shark), TASK, segments=3)
+
+
+def test_plan_is_a_cross_faded_sequence(problem):
+    e, d = np.array([1, 2, 0]), np.array([2.0, 1.0, 4.0])
+    seq = problem.sequence(e, d)
+    assert isinstance(seq, SequenceController) and seq.overlap == 0.05
+    assert np.allclose(seq.starts(), [0.0, 1.9, 2.85])
+    assert [c for c, _ in seq.items] == [problem.ctrls[i] for i in e]
+
+
+def test_path_scores_on_known_paths():
+    t = np.linspace(0.0, 4.0, 41)  # 0.1 s apart, along x at 1 m/s
+    com = np.stack([np.column_stack([t, 0 * t]), np.column_stack([0 * t, t])])
+    task = ReachTask(goal=(3.0, 0.0), obstacles=((1.0, 0.0, 0.5),), horizon=4.0, time_weight=0.0)
+    s = path_scores(com, 0.1, task, radius=0.5)
+    assert s["closest"] == pytest.approx([0.0, 3.0])
+    assert s["final"] == pytest.approx([1.0, 5.0])
+    assert s["inside"] == pytest.approx([1.0, 0.0], abs=0.11)  # x in (0.5, 1.5)
+    assert s["reach"][0] == pytest.approx(2.6) and np.isnan(s["reach"][1])
+    assert s["cost"] == pytest.approx(s["final"] + s["inside"])
+
+
+def test_batch_evaluation_matches_one_at_a_time(problem):
+    e, d = problem.random(np.random.default_rng(1), 4)
+    batch = problem.evaluate(e, d)["cost"]
+    single = [problem.evaluate(e[i : i + 1], d[i : i + 1])["cost"][0] for i in range(4)]
+    assert np.allclose(batch, single, atol=1e-4)
+
+
+@pytest.mark.parametrize("method", ["anneal", "ga"])
+def test_search_improves_is_reproducible_and_stays_in_bounds(problem, method):
+    options = {"chains": 8} if method == "anneal" else {"popsize": 12}
+    a = search(problem, method, budget=96, seed=3, **options)
+    b = search(problem, method, budget=96, seed=3, **options)
+    assert a.entries.tolist() == b.entries.tolist() and np.allclose(a.durations, b.durations)
+    best = [f for _, f in a.history]
+    assert all(x >= y for x, y in zip(best, best[1:], strict=False))  # best never gets worse
+    assert best[-1] < best[0]
+    assert a.scores["cost"] == pytest.approx(best[-1], abs=1e-6)
+    assert a.evaluations >= 96
+    assert ((problem.lower <= a.durations) & (a.durations <= problem.upper)).all()
+    assert set(a.names) <= set(problem.names)
+
+
+def test_failed_plans_never_become_best(problem):
+    opt = PlanGenetic(problem, seed=0, popsize=6)
+    e, d = opt.ask()
+    opt.tell(e, d, np.array([np.nan, np.inf, 5.0, 4.0, np.nan, 6.0]))
+    assert opt.best_f == 4.0 and opt.best[0].tolist() == e[3].tolist()
+    sa = PlanAnnealing(problem, seed=0, chains=4)
+    e, d = sa.ask()
+    sa.tell(e, d, np.array([1.0, 2.0, 3.0, 4.0]))
+    e2, d2 = sa.ask()
+    sa.tell(e2, d2, np.full(4, np.nan))
+    assert np.array_equal(sa.e, e) and sa.best_f == 1.0  # no failed move was accepted
+    for _ in range(3):
+        e3, d3 = opt.ask()
+        assert e3.min() >= 0 and e3.max() < problem.entries
+        assert ((problem.lower <= d3) & (d3 <= problem.upper)).all()
+        opt.tell(e3, d3, np.arange(len(e3), dtype=float))
+
+
+def test_problem_rejects_bad_set_ups(problem):
+    shark, rep = problem.body, handmade_repertoire(problem.body)
+    with pytest.raises(TrackingError, match="no entries"):
+        MacroProblem(shark, rep, TASK, allowed=("jump",))
+    with pytest.raises(TrackingError, match="durations"):
+        MacroProblem(shark, rep, TASK, durations=(2.0, 1.0))
+    with pytest.raises(TrackingError, match="unknown search method"):
+        search(problem, "tabu", budget=1)
+
+
+def test_macro_command_writes_its_run(tmp_path, capsys):
+    shark = load_animal("shark")
+    memory = tmp_path / "memory"
+    handmade_repertoire(shark).save(memory)
+    out = tmp_path / "m1"
+    args = ["macro", "shark", "--memory", str(memory), "--goal", "1.8,0.8", "--obstacle",
+            "0.9,0.3,0.3", "--horizon", "5", "--segments", "3", "--budget", "48",
+            "--out", str(out), "--fps", "10"]  # fmt: skip
+    assert main([*args, "--method", "anneal"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["method"] == "anneal" and len(summary["plan"]) == 3
+    assert summary["obstacles_xzr"] == [[0.9, 0.3, 0.3]]
+    assert {"cost", "final_m", "closest_m", "inside_obstacle_s", "history"} <= set(summary)
+    assert isinstance(load_controller(out / "controller.json", shark), SequenceController)
+    assert (out / "path.png").stat().st_size > 5000 and (out / "video.mp4").exists()
+    assert "final distance" in capsys.readouterr().out
+    assert main([*args, "--method", "simplex", "--no-video"]) == 2
+    assert "unknown search method" in capsys.readouterr().err
+    assert main([*args[:8], "--obstacle", "1,1,-1", "--no-video"]) == 2
+    assert "radii must be positive" in capsys.readouterr().err

@@ -1,0 +1,154 @@
+"""Greedy target tracking: the hand-made repertoire turns, tracking reaches a short course, the
+recorded sequence replays the path, and the command gives clear errors for bad repertoires."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from zoetic.behavior.tracking import (
+    TrackConfig,
+    TrackingError,
+    handmade_repertoire,
+    parse_points,
+    replay,
+    track,
+)
+from zoetic.bodies import load_animal
+from zoetic.cli import main
+from zoetic.control import load_controller
+from zoetic.control.abstract import SequenceController
+from zoetic.learn.objective import heading_angles
+from zoetic.physics import simulate
+
+COURSE = np.array([[1.5, 0.3], [2.8, 1.2]])
+
+
+@pytest.fixture(scope="module")
+def shark():
+    return load_animal("shark")
+
+
+@pytest.fixture(scope="module")
+def memory(tmp_path_factory, shark):
+    """A repertoire directory of the six hand-made entries."""
+    directory = tmp_path_factory.mktemp("memory") / "shark"
+    handmade_repertoire(shark).save(directory)
+    return directory
+
+
+def test_handmade_entries_turn_the_way_their_names_say(shark):
+    rep = handmade_repertoire(shark)
+    steps = int(8.0 / shark.dt)
+    tables = np.stack([rep.controllers[n].table(steps, shark.dt) for n in rep.names])
+    traj = simulate(shark, tables, record_every=10)
+    turn = dict(
+        zip(rep.names, np.degrees(heading_angles(shark, traj.positions)[:, -1]), strict=True)
+    )
+    moved = dict(
+        zip(rep.names, np.linalg.norm(np.ptp(traj.com(shark), axis=1), axis=-1), strict=True)
+    )
+    assert moved["do-nothing"] < 1e-6 and abs(turn["go-straight"]) < 8
+    assert moved["go-straight"] > 1.5  # m in 8 s
+    for side, sign in (("left", 1), ("right", -1)):
+        assert sign * turn[f"sharp-turn-{side}"] > 25
+        assert sign * turn[f"wide-turn-{side}"] > 12
+        assert turn[f"sharp-turn-{side}"] * sign > turn[f"wide-turn-{side}"] * sign
+
+
+def test_tracking_reaches_every_target_and_replays(shark):
+    rep = handmade_repertoire(shark)
+    result = track(shark, rep, COURSE, TrackConfig(time_limit=30.0))
+    assert np.isfinite(result.reached).all(), result.summary()
+    assert np.all(np.diff(result.reached) > 0)
+    assert result.realtime_factor > 1.0  # faster than real time, even on a slow test machine
+    assert len(result.evaluations) == pytest.approx(result.sim_time, abs=1)  # every ~1 s
+    # the recorded cross-faded sequence, played from rest, gives the same continuous path
+    again = replay(shark, result)
+    assert np.abs(again.positions[0] - result.positions).max() < 1e-3
+    jumps = np.linalg.norm(np.diff(result.com, axis=0), axis=-1)
+    assert jumps.max() < 0.05  # m between records 20 ms apart: no teleporting at switches
+    idx = result.start_indices
+    assert idx[0] == 0 and np.all(np.diff(idx) > 0)
+    assert isinstance(result.sequence, SequenceController)
+    assert all(a != b for a, b in zip(result.names, result.names[1:], strict=False))
+
+
+def test_tracking_is_deterministic_and_pure_distance_gain_stalls_behind(shark):
+    rep = handmade_repertoire(shark)
+    a = track(shark, rep, COURSE, TrackConfig(time_limit=12.0))
+    b = track(shark, rep, COURSE, TrackConfig(time_limit=12.0))
+    assert np.array_equal(a.positions, b.positions) and a.names == b.names
+    # the literal reading (gain = distance drop only) keeps still when the target is behind
+    behind = track(shark, rep, [[-3.0, 0.0]], TrackConfig(time_limit=5.0, turn_radius=0.0))
+    assert set(behind.evaluations) == {"do-nothing"}
+
+
+def test_bad_inputs_raise_tracking_errors(shark):
+    rep = handmade_repertoire(shark)
+    with pytest.raises(TrackingError, match="no entries"):
+        track(shark, rep, COURSE, TrackConfig(allowed=("fly",)))
+    with pytest.raises(TrackingError, match="at least one target"):
+        track(shark, rep, np.zeros((0, 2)))
+    with pytest.raises(TrackingError, match="2 comma-separated"):
+        parse_points("1,2;3", 2, "--targets")
+    with pytest.raises(TrackingError, match="numbers expected"):
+        parse_points("1,a", 2, "--targets")
+    assert parse_points("1,2; 3,-4.5;", 2, "x").tolist() == [[1, 2], [3, -4.5]]
+
+
+def test_track_command_writes_its_run(tmp_path, memory, capsys, shark):
+    out = tmp_path / "t1"
+    targets = ";".join(f"{x},{z}" for x, z in COURSE)
+    code = main(["track", "shark", "--memory", str(memory), "--targets", targets,
+                 "--out", str(out), "--time-limit", "30", "--fps", "10"])  # fmt: skip
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "reached 2/2" in text and "real time" in text
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["reached"] == 2 and summary["realtime_factor"] > 1
+    assert summary["replay_drift_m"] < 1e-3
+    assert isinstance(load_controller(out / "controller.json", shark), SequenceController)
+    assert (out / "path.png").stat().st_size > 5000
+    import imageio.v3 as iio
+
+    frames = iio.imread(out / "video.mp4")
+    assert frames.shape[0] >= 10 * summary["simulated_s"] - 1
+
+
+def _run_expect_error(capsys, memory, animal="shark", targets="1,0") -> str:
+    code = main(["track", animal, "--memory", str(memory), "--targets", targets, "--no-video",
+                 "--time-limit", "1", "--out", str(memory.parent / "out")])  # fmt: skip
+    assert code == 2
+    return capsys.readouterr().err.replace("\n", "")
+
+
+def test_broken_or_mismatched_repertoires_get_clear_errors(tmp_path, shark, capsys):
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert "no repertoire.json" in _run_expect_error(capsys, empty)
+
+    broken = tmp_path / "broken"
+    handmade_repertoire(shark).save(broken)
+    (broken / "go-straight.json").write_text("{not json")
+    err = _run_expect_error(capsys, broken)
+    assert "go-straight.json" in err and "JSON" in err
+
+    missing = tmp_path / "missing"
+    handmade_repertoire(shark).save(missing)
+    (missing / "wide-turn-left.json").unlink()
+    assert "wide-turn-left.json" in _run_expect_error(capsys, missing)
+
+    index = tmp_path / "index"
+    handmade_repertoire(shark).save(index)
+    (index / "repertoire.json").write_text(json.dumps({"animal": "shark", "entries": []}))
+    assert "malformed repertoire" in _run_expect_error(capsys, index)
+
+    other = tmp_path / "snake"
+    handmade_repertoire(load_animal("snake")).save(other)
+    err = _run_expect_error(capsys, other)
+    assert "snake" in err and "shark" in err
+
+    assert "numbers expected" in _run_expect_error(capsys, other, targets="a,b")
