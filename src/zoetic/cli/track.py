@@ -107,7 +107,9 @@ def track(
     radius: float = typer.Option(None, help="Reaching radius (m); default half a body length."),
     time_limit: float = typer.Option(120.0, min=0.1, help="Give up after this many seconds."),
     turn_radius: float = typer.Option(
-        None, help="Metres per radian of bearing in the gain; 0 for pure distance."
+        None,
+        help="Metres per radian of bearing added to the distance in the gain (default 1.5 "
+        "body lengths); 0 for the distance alone.",
     ),
     video: bool = typer.Option(True, help="Write video.mp4 with the targets as buoys."),
     fps: int = typer.Option(30, min=1),
