@@ -86,6 +86,7 @@ class MacroProblem:
 
     @property
     def entries(self) -> int:
+        """Return the number of repertoire entries a segment can pick."""
         return len(self.names)
 
     def sequence(self, entries: np.ndarray, durations: np.ndarray) -> SequenceController:

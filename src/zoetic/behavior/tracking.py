@@ -178,6 +178,7 @@ class TrackResult:
 
     @property
     def sim_time(self) -> float:
+        """Return the simulated time (s)."""
         return float(self.times[-1])
 
     @property
