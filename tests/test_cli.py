@@ -78,6 +78,14 @@ def test_unknown_animal_and_bad_controller_spec(tmp_path, capsys):
     assert "not a controller file" in capsys.readouterr().err
 
 
+def test_usage_errors_exit_2_without_a_traceback(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "zoetic", "simulate", "shark", "--bogus"],
+                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert proc.returncode == 2
+    assert "No such option: --bogus" in proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
 def test_console_script_runs_and_bench_prints_json(tmp_path):
     proc = subprocess.run(
         [sys.executable, "-m", "zoetic", "bench", "simulate", "--json", "--seconds", "0.5",

@@ -27,7 +27,14 @@ def _root(debug: bool = typer.Option(False, "--debug", help="Show full traceback
 
 
 def _register() -> None:
-    from zoetic.cli import bench, learn, san, simulate, track  # noqa: F401  (commands register)
+    from zoetic.cli import (  # noqa: F401  (commands register)
+        bench,
+        learn,
+        repertoire,
+        san,
+        simulate,
+        track,
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -48,13 +55,11 @@ def main(argv: list[str] | None = None) -> int:
         return exc.exit_code
     except SystemExit as exc:  # click usage errors arrive this way in non-standalone mode
         return int(exc.code or 0)
-    except Exception as exc:  # click.ClickException and friends
-        import click
-
-        if isinstance(exc, click.exceptions.Abort):
-            err_console.print("[yellow]aborted[/]")
-            return 130
-        if isinstance(exc, click.ClickException):
+    except typer.Abort:
+        err_console.print("[yellow]aborted[/]")
+        return 130
+    except Exception as exc:  # usage errors (click's, or the copy vendored in newer Typer)
+        if callable(getattr(exc, "show", None)) and isinstance(getattr(exc, "exit_code", None), int):
             exc.show()
             return 2
         raise
