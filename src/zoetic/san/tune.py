@@ -1,0 +1,227 @@
+"""Phase 2 of SAN synthesis: fine-tune the Fig. 8 parameters, keeping the weights.
+
+The parameters (van de Panne & Fiume 93, Fig. 8) are the delays of the hidden nodes (k1, k2),
+each actuator's range and strength (Amin, Amax, ks, kd) and the sensing range of every sensor
+that has one (Smin, Smax; touch sensors have none) - 44 for the boulder, as in the paper.
+Each trial perturbs one randomly chosen parameter by +delta or -delta: rates and gains are
+scaled by (1 + delta) or 1 / (1 + delta), ranges are shifted by delta/2 of their initial span.
+
+- ``sga``: stochastic gradient ascent, Fig. 9: keep a change only if the metric improved.
+- ``anneal``: simulated annealing: 65 evaluations per temperature, then T <- 0.75 T; a worse
+  change is kept with probability exp(df / T). The best network ever seen is returned.
+
+Both never return a network worse (on the same evaluation) than the one they started with,
+and the same seed gives the same result.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from zoetic.errors import ZoeticError
+from zoetic.san.network import TUNING_KEYS, Network, SanPolicy, check_fits
+
+__all__ = ["METHODS", "Param", "TuneResult", "WorldEvaluator", "tunable_parameters", "tune"]
+
+METHODS = ("sga", "anneal")
+Evaluate = Callable[[Network, object], float]  # (network, tuned creature) -> metric
+Progress = Callable[[int, int, float], None]  # (done, total, best metric so far)
+
+
+class TuneError(ZoeticError):
+    """Fine-tuning was asked for something it cannot do."""
+
+
+@dataclass(frozen=True)
+class Param:
+    """One tunable parameter: which array (``key``), which entry, and how it is perturbed."""
+
+    key: str  # "k1", "k2" or one of TUNING_KEYS
+    index: int
+    mode: str  # "scale" or "shift"
+    step: float  # scale factor - 1, or shift in the parameter's unit
+
+    @property
+    def name(self) -> str:
+        """Return a readable name such as ``ks[0]``."""
+        return f"{self.key}[{self.index}]"
+
+
+def _start_values(network: Network, creature) -> dict[str, np.ndarray]:
+    tuning = network.tuning if network.tuning is not None else creature.tuning()
+    values = {k: np.asarray(tuning[k], dtype=float).copy() for k in TUNING_KEYS}
+    values["k1"] = network.k1.copy()
+    values["k2"] = network.k2.copy()
+    return values
+
+
+def tunable_parameters(network: Network, creature, delta: float = 0.1) -> list[Param]:
+    """Return the Fig. 8 parameters of this network and creature, with their step sizes."""
+    values = _start_values(network, creature)
+    params: list[Param] = []
+    for i in range(network.n_hidden):
+        params += [Param("k1", i, "scale", delta), Param("k2", i, "scale", delta)]
+    for i in range(network.n_actuators):
+        span = abs(values["actuator_hi"][i] - values["actuator_lo"][i]) or 1.0
+        params += [
+            Param("actuator_lo", i, "shift", 0.5 * delta * span),
+            Param("actuator_hi", i, "shift", 0.5 * delta * span),
+            Param("ks", i, "scale", delta),
+            Param("kd", i, "scale", delta),
+        ]
+    kinds = [getattr(s, "kind", "angle") for s in getattr(creature, "sensors", ())]
+    for i in range(network.n_sensors):
+        lo, hi = values["sensor_lo"][i], values["sensor_hi"][i]
+        if (kinds and kinds[i] == "touch") or not (np.isfinite(lo) and np.isfinite(hi)):
+            continue
+        span = abs(hi - lo) or 1.0
+        params += [
+            Param("sensor_lo", i, "shift", 0.5 * delta * span),
+            Param("sensor_hi", i, "shift", 0.5 * delta * span),
+        ]
+    return params
+
+
+def _perturbed(values: dict[str, np.ndarray], p: Param, sign: int) -> dict[str, np.ndarray] | None:
+    """Return new values with ``p`` moved one step in direction ``sign``; None if invalid."""
+    arr = values[p.key].copy()
+    if p.mode == "scale":
+        factor = 1.0 + p.step
+        arr[p.index] *= factor if sign > 0 else 1.0 / factor
+    else:
+        arr[p.index] += sign * p.step
+    out = dict(values)
+    out[p.key] = arr
+    for lo, hi in (("actuator_lo", "actuator_hi"), ("sensor_lo", "sensor_hi")):
+        if p.key in (lo, hi) and not out[lo][p.index] < out[hi][p.index]:
+            return None
+    return out
+
+
+def _network(network: Network, values: dict[str, np.ndarray]) -> Network:
+    return network.with_params(
+        k1=values["k1"], k2=values["k2"], tuning={k: values[k] for k in TUNING_KEYS}
+    )
+
+
+class WorldEvaluator:
+    """Evaluate a network in a World, rebuilding the World only when the creature changes."""
+
+    def __init__(self, terrain: str = "flat", seed: int = 0, seconds: float | None = None):
+        self.terrain, self.seed, self.seconds = terrain, seed, seconds
+        self._key: bytes | None = None
+        self._world = None
+
+    def __call__(self, network: Network, creature) -> float:
+        """Return the world's metric for the network on the (tuned) creature."""
+        from zoetic.san.world import World
+
+        tuning = creature.tuning()
+        key = b"".join(np.asarray(tuning[k], dtype=float).tobytes() for k in TUNING_KEYS)
+        if key != self._key or self._world is None:
+            self._world = World(creature, terrain=self.terrain, seed=self.seed)
+            self._key = key
+        rollout = self._world.run(SanPolicy(network, creature), seconds=self.seconds)
+        metric = float(rollout.metric)
+        return metric if np.isfinite(metric) else -math.inf
+
+
+@dataclass(frozen=True, eq=False)
+class TuneResult:
+    """A fine-tuning run: the best network, its metric before and after, and the history."""
+
+    network: Network  # the best network found (weights unchanged)
+    start: Network
+    before: float
+    after: float
+    method: str
+    trials: int
+    seed: int
+    current: np.ndarray  # (trials,) metric of the current network after each trial
+    best: np.ndarray  # (trials,) best metric so far after each trial
+    tried: np.ndarray  # (trials,) metric of each trial's candidate (nan: invalid step)
+    accepted: int
+    elapsed: float
+
+
+def tune(
+    network: Network,
+    creature,
+    method: str = "sga",
+    trials: int = 1000,
+    seed: int = 0,
+    terrain: str = "flat",
+    seconds: float | None = None,
+    delta: float = 0.1,
+    progress: Progress | None = None,
+    evaluate: Evaluate | None = None,
+    per_temperature: int = 65,
+    cooling: float = 0.75,
+    temperature: float | None = None,
+) -> TuneResult:
+    """Return the network with its Fig. 8 parameters tuned by ``method`` (weights kept).
+
+    ``evaluate(network, tuned_creature) -> metric`` defaults to a World on ``terrain``.
+    ``temperature`` (annealing's first T) defaults to 0.1 x the starting metric.
+    """
+    if method not in METHODS:
+        raise TuneError(f"unknown tuning method {method!r}; use one of {', '.join(METHODS)}")
+    if trials < 0:
+        raise TuneError("trials must be >= 0")
+    check_fits(network, creature)
+    evaluate = evaluate or WorldEvaluator(terrain, seed, seconds)
+    rng = np.random.default_rng(seed)
+    params = tunable_parameters(network, creature, delta)
+    if not params:
+        raise TuneError(f"creature {creature.name!r} has no tunable parameters")
+    t0 = time.perf_counter()
+
+    def score(values: dict[str, np.ndarray]) -> tuple[Network, float]:
+        net = _network(network, values)
+        tuned = creature.with_tuning(**{k: values[k] for k in TUNING_KEYS})
+        f = float(evaluate(net, tuned))
+        return net, (f if np.isfinite(f) else -math.inf)
+
+    values = _start_values(network, creature)
+    start_net, f_cur = score(values)
+    best_net, f_best, f_start = start_net, f_cur, f_cur
+    temp = float(temperature) if temperature is not None else 0.1 * max(abs(f_cur), 1e-3)
+    current = np.empty(trials)
+    best = np.empty(trials)
+    tried = np.full(trials, np.nan)
+    accepted = 0
+    for t in range(trials):
+        if method == "anneal" and t > 0 and t % per_temperature == 0:
+            temp *= cooling
+        p = params[int(rng.integers(len(params)))]
+        sign = 1 if rng.random() < 0.5 else -1
+        cand = _perturbed(values, p, sign)
+        u = rng.random()  # drawn every trial so the stream does not depend on outcomes
+        if cand is not None:
+            net, f = score(cand)
+            tried[t] = f
+            if method == "sga":
+                keep = f > f_cur
+            else:
+                keep = f >= f_cur or (np.isfinite(f) and u < math.exp((f - f_cur) / temp))
+            if keep:
+                values, f_cur = cand, f
+                accepted += 1
+                if f > f_best:
+                    best_net, f_best = net, f
+        current[t], best[t] = f_cur, f_best
+        if progress is not None:
+            progress(t + 1, trials, f_best)
+    info = dict(network.info)
+    info.update(tuned=method, trials=trials, seed=seed, before=f_start, after=f_best)
+    best_net = best_net.with_params(info=info)
+    return TuneResult(
+        network=best_net, start=network, before=f_start, after=f_best, method=method,
+        trials=trials, seed=seed, current=current, best=best, tried=tried, accepted=accepted,
+        elapsed=time.perf_counter() - t0,
+    )  # fmt: skip
