@@ -25,6 +25,7 @@ from zoetic.bodies import Body
 from zoetic.control import Controller
 from zoetic.control.abstract import AbstractController, SequenceController
 from zoetic.errors import SimulationError, ZoeticError
+from zoetic.learn.abstraction import mirror_abstract
 from zoetic.physics import State, Trajectory, rest_state, simulate
 
 OVERLAP = 0.05  # cross-fade: fraction of each controller's length shared with the next
@@ -74,14 +75,6 @@ def wave_abstraction(body: Body, right_scale: float = 1.0, left_bias: float = 0.
     )
 
 
-def _mirror(ctrl: AbstractController, mirror: np.ndarray) -> AbstractController:
-    m = np.asarray(mirror, int)
-    return AbstractController(
-        ctrl.animal, ctrl.actuators, ctrl.offset[m], ctrl.freq[m], ctrl.amp[m], ctrl.phase[m],
-        ctrl.period,
-    )  # fmt: skip
-
-
 def handmade_repertoire(body: Body) -> Repertoire:
     """Return six hand-made entries (not learned): do-nothing, go-straight and four turns.
 
@@ -104,9 +97,9 @@ def handmade_repertoire(body: Body) -> Repertoire:
         ("do-nothing", rest),
         ("go-straight", straight),
         ("sharp-turn-left", sharp),
-        ("sharp-turn-right", _mirror(sharp, mirror)),
+        ("sharp-turn-right", mirror_abstract(sharp, mirror)),
         ("wide-turn-left", wide),
-        ("wide-turn-right", _mirror(wide, mirror)),
+        ("wide-turn-right", mirror_abstract(wide, mirror)),
     ):
         rep.add(name, ctrl, 4 * period, source="hand-made")
     return rep

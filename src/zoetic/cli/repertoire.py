@@ -1,0 +1,139 @@
+"""``zoetic abstract``, ``zoetic repertoire train|show`` and ``zoetic sequence``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from zoetic.cli import app
+from zoetic.cli.learn import _progress_bar
+
+console = Console()
+repertoire_app = typer.Typer(help="Basic training: learn, abstract and keep a repertoire.",
+                             no_args_is_help=True)  # fmt: skip
+app.add_typer(repertoire_app, name="repertoire")
+
+
+@app.command("abstract")
+def abstract_cmd(
+    source: Path = typer.Argument(..., help="Learning run directory or controller .json file."),
+    modes: str = typer.Option("auto", help="auto (threshold) or K, the strongest modes kept."),
+    threshold: float = typer.Option(0.3, help="auto keeps modes >= threshold x the strongest."),
+    task: str = typer.Option(None, help="Task to compare on (default: the run's own task)."),
+    out: Path = typer.Option(None, help="Where abstract.json/.png go (default: SOURCE's dir)."),
+) -> None:
+    """Abstract a learned controller into its primary modes (FFT) and say what it keeps."""
+    from zoetic.behavior.training import abstract_files
+    from zoetic.learn.abstraction import parse_modes
+
+    out = out or (source if source.is_dir() else source.parent)
+    info = abstract_files(source, out, parse_modes(modes), threshold, task)
+    o, a = info["original"], info["abstract"]
+    m = info["measure"]
+    console.print(f"modes per actuator: {info['modes_per_actuator']} ({info['rule']}), "
+                  f"frequencies {info['frequencies_hz']} Hz")  # fmt: skip
+    console.print(f"{m}: original {o[m]:.4g}, abstracted {a[m]:.4g} -> kept {info['kept']:.1%}")
+    if "E" in o:
+        console.print(f"E: original {o['E']:.4g}, abstracted {a['E']:.4g}")
+    console.print(f"wrote {info['file']} and {info['figure']}")
+
+
+@repertoire_app.command("train")
+def train_cmd(
+    animal: str = typer.Argument(..., help="Zoo animal name or animal .toml file."),
+    out: Path = typer.Option(None, help="Repertoire directory (default memory/<animal>)."),
+    budget: int = typer.Option(3000, min=10, help="Evaluations per learned entry."),
+    optimizer: str = typer.Option("cmaes", help="anneal, simplex or cmaes."),
+    modes: str = typer.Option("auto", help="Modes kept by the abstraction: auto or K."),
+    threshold: float = typer.Option(0.3, help="auto keeps modes >= threshold x the strongest."),
+    seed: int = typer.Option(0, help="Random seed: same seed, same repertoire."),
+) -> None:
+    """Learn the basic repertoire (straight, sharp and wide turns, mirrored); resumable."""
+    from zoetic.behavior.training import show_repertoire, train_repertoire
+    from zoetic.learn.abstraction import parse_modes
+
+    out = out or Path("memory") / Path(animal).stem
+    with _progress_bar() as bar:
+        state: dict = {}
+
+        def on_entry(name: str, run) -> None:
+            state["tid"] = bar.add_task(name, total=run.setup.config.budget,
+                                        completed=run.evaluations, best="-", status="",
+                                        rate="-")  # fmt: skip
+
+        def progress(run) -> None:
+            bar.update(state["tid"], completed=run.evaluations,
+                       best=f"{run.setup.optimizer.best_f:.4g}")  # fmt: skip
+
+        try:
+            train_repertoire(animal, out, budget, seed, optimizer, parse_modes(modes), threshold,
+                             on_entry, progress)  # fmt: skip
+        except KeyboardInterrupt:
+            console.print(f"[yellow]interrupted; run the same command again to continue "
+                          f"({out} keeps what was learned)[/]")  # fmt: skip
+            raise typer.Exit(130) from None
+    _print_rows(show_repertoire(out), f"{out}")
+
+
+def _print_rows(rows: list[dict], title: str) -> None:
+    table = Table(title=title)
+    for col in ("entry", "seconds", "modes", "Hz", "forward m", "turn deg", "source"):
+        table.add_column(col)
+    for r in rows:
+        table.add_row(r["entry"], f"{r['seconds']:g}", str(r["modes"]),
+                      ", ".join(f"{f:g}" for f in r["frequencies_hz"]), f"{r['forward_m']:.3f}",
+                      f"{r['turn_deg']:.1f}", str(r["source"]))  # fmt: skip
+    console.print(table)
+
+
+@repertoire_app.command("show")
+def show_cmd(
+    memory: Path = typer.Argument(..., help="Repertoire directory."),
+    json_out: bool = typer.Option(False, "--json", help="Print the rows as JSON."),
+) -> None:
+    """Print a repertoire's entries and what each does; writes repertoire.png beside them."""
+    from zoetic.behavior.training import show_repertoire
+
+    rows = show_repertoire(memory)
+    if json_out:
+        print(json.dumps(rows, indent=1))
+        return
+    _print_rows(rows, str(memory))
+    console.print(f"plot: {memory / 'repertoire.png'}")
+
+
+@app.command("sequence")
+def sequence_cmd(
+    animal: str = typer.Argument(..., help="Zoo animal name or animal .toml file."),
+    memory: Path = typer.Option(..., help="Repertoire directory."),
+    entries: str = typer.Option(..., help='Entries in order, "name:seconds,name,...".'),
+    overlap: float = typer.Option(0.05, help="Fraction of each entry shared with the next."),
+    out: Path = typer.Option(Path("runs/sequence"), help="Output directory."),
+    video: bool = typer.Option(True, help="Write video.mp4."),
+) -> None:
+    """Concatenate repertoire entries, cross-faded, into one controller; simulate it."""
+    from zoetic.behavior.repertoire import Repertoire
+    from zoetic.behavior.training import build_sequence, parse_sequence
+    from zoetic.bodies import load_animal
+    from zoetic.control import save_controller
+    from zoetic.runs import simulate_run
+    from zoetic.viz.learning import plot_controller
+
+    body = load_animal(animal)
+    rep = Repertoire.load(memory, body)
+    seq = build_sequence(rep, parse_sequence(entries, rep), overlap)
+    out.mkdir(parents=True, exist_ok=True)
+    path = save_controller(seq, out / "sequence.json")
+    import numpy as np
+
+    t = np.linspace(0.0, seq.duration, 600)
+    plot_controller(t, seq.sample(t), body.actuator_names, body.actuator_side,
+                    out / "controller.png", title=f"sequence: {entries}")  # fmt: skip
+    summary = simulate_run(animal, str(path), seq.duration, out, video=video)
+    for key, value in summary.items():
+        console.print(f"{key:>12}: {value}")
+    console.print(f"{'sequence':>12}: {path}")

@@ -1,0 +1,120 @@
+"""Fig. 9 of the muscle paper: a learned controller, its primary modes, and its abstraction."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from zoetic.viz.learning import _save
+
+
+def plot_abstraction(
+    original_t: np.ndarray,
+    original_u: np.ndarray,
+    abstract_u: np.ndarray,
+    names: tuple[str, ...],
+    freq: np.ndarray,
+    amp: np.ndarray,
+    phase: np.ndarray,
+    kept: np.ndarray,
+    path: Path,
+    title: str = "",
+) -> Path:
+    """Write the three panels of Fig. 9 to ``path``; returns it.
+
+    original_t (T,) s; original_u, abstract_u (T, A) activations; freq, amp, phase (A, K):
+    every mode of the spectrum, drawn on the polar chart as a circle at distance = frequency
+    (Hz) from the centre and angle = phase, of radius proportional to its amplitude; kept
+    (A, K) bool marks the primary modes (filled) apart from the dropped ones (faint).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig = plt.figure(figsize=(12.0, 4.0))
+    ax_t = fig.add_subplot(1, 3, 1)
+    ax_p = fig.add_subplot(1, 3, 2, projection="polar")
+    ax_a = fig.add_subplot(1, 3, 3, sharey=ax_t)
+    colors = plt.get_cmap("tab10")(np.arange(len(names)) % 10)
+    for a, name in enumerate(names):
+        ax_t.plot(original_t, original_u[:, a], color=colors[a], lw=1.2, label=name)
+        ax_a.plot(original_t, abstract_u[:, a], color=colors[a], lw=1.2)
+    for ax, what in ((ax_t, "learned controller"), (ax_a, "abstracted controller")):
+        ax.set_xlabel("time (s)")
+        ax.set_title(what, fontsize=10)
+        ax.grid(alpha=0.3)
+    ax_t.set_ylabel("activation")
+    ax_t.legend(fontsize=7, loc="upper right", ncols=2)
+
+    scale = 350.0 / max(float(np.max(amp, initial=0.0)), 1e-9)
+    for a in range(len(names)):
+        for keep, alpha in ((False, 0.12), (True, 0.75)):
+            m = kept[a] == keep
+            if m.any():
+                ax_p.scatter(phase[a, m], freq[a, m], s=scale * amp[a, m], color=colors[a],
+                             alpha=alpha, edgecolors="k" if keep else "none", lw=0.5)  # fmt: skip
+    fmax = float(np.max(np.where(kept, freq, 0.0), initial=0.0))
+    ax_p.set_rmax(max(1.5 * fmax, float(np.min(freq, initial=1.0)) * 2, 0.5))
+    ax_p.set_title("primary modes (r = Hz, angle = phase, size = amplitude)", fontsize=9)
+    ax_p.tick_params(labelsize=7)
+    if title:
+        fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    out = _save(fig, path)
+    plt.close(fig)
+    return out
+
+
+def plot_repertoire(
+    signals: dict[str, tuple[np.ndarray, np.ndarray]],
+    paths: dict[str, np.ndarray],
+    names: tuple[str, ...],
+    path: Path,
+    title: str = "",
+) -> Path:
+    """Write a repertoire's entries to ``path``: each one's activations and all their paths.
+
+    signals: entry -> (t (T,) s, u (T, A)); paths: entry -> centre-of-mass path (R, 3) m from
+    rest, drawn from above (x right, z up, the animal starting at the origin facing +x).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = max(len(signals), 1)
+    fig = plt.figure(figsize=(11.0, 1.7 * n + 1.0))
+    grid = fig.add_gridspec(n, 2, width_ratios=(1.3, 1.0))
+    colors = plt.get_cmap("tab10")(np.arange(len(names)) % 10)
+    for i, (entry, (t, u)) in enumerate(signals.items()):
+        ax = fig.add_subplot(grid[i, 0])
+        for a in range(u.shape[1]):
+            ax.plot(t, u[:, a], color=colors[a], lw=1.0, label=names[a] if i == 0 else None)
+        ax.set_ylabel(entry, fontsize=8)
+        ax.set_ylim(-0.05, 1.05)
+        ax.tick_params(labelsize=7)
+        ax.grid(alpha=0.3)
+        if i == 0:
+            ax.legend(fontsize=6, ncols=3, loc="upper right")
+        if i == n - 1:
+            ax.set_xlabel("time (s)")
+    ax_p = fig.add_subplot(grid[:, 1])
+    for entry, com in paths.items():
+        xz = np.asarray(com, float)[:, [0, 2]] - np.asarray(com, float)[0, [0, 2]]
+        ax_p.plot(xz[:, 0], xz[:, 1], lw=1.5, label=entry)
+        ax_p.plot(xz[-1, 0], xz[-1, 1], "o", ms=3, color=ax_p.lines[-1].get_color())
+    ax_p.plot(0, 0, "k^", ms=7)
+    ax_p.set_aspect("equal", adjustable="datalim")
+    ax_p.set_xlabel("x (m)")
+    ax_p.set_ylabel("z (m), left")
+    ax_p.set_title("paths from rest (top view)", fontsize=9)
+    ax_p.legend(fontsize=7)
+    ax_p.grid(alpha=0.3)
+    if title:
+        fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    out = _save(fig, path)
+    plt.close(fig)
+    return out
