@@ -1,1 +1,160 @@
 """``zoetic san ...``: sensor-actuator networks for planar creatures."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+from zoetic.cli import app
+from zoetic.cli.bench import _emit, bench_app
+
+console = Console()
+san_app = typer.Typer(
+    help="Sensor-actuator networks (van de Panne & Fiume 93): search, tune, show.",
+    no_args_is_help=True,
+)
+app.add_typer(san_app, name="san")
+
+
+def _bar(label: str, total: int) -> tuple[Progress, object]:
+    bar = Progress(
+        TextColumn("[bold]{task.description}"),
+        BarColumn(bar_width=20),
+        TextColumn("{task.completed:>5.0f}/{task.total:.0f}"),
+        TextColumn("best {task.fields[best]}"),
+        TimeElapsedColumn(),
+        console=console,
+        transient=False,
+    )
+    tid = bar.add_task(label, total=total, best="-")
+    return bar, tid
+
+
+def _progress(bar: Progress, tid, unit: str = ""):
+    def update(done: int, total: int, best: float) -> None:
+        bar.update(tid, completed=done, best=f"{best:.3f}{unit}")
+
+    return update
+
+
+@san_app.command("creatures")
+def creatures_cmd() -> None:
+    """List the built-in creatures with their sensors, actuators and the paper's speed."""
+    from rich.table import Table
+
+    from zoetic.san import list_creatures, load_creature
+    from zoetic.san.network import default_hidden
+
+    table = Table(box=None, header_style="bold")
+    for col in ("creature", "links", "sensors", "actuators", "hidden", "metric", "seconds",
+                "paper cm/s"):  # fmt: skip
+        table.add_column(col, justify="left" if col in ("creature", "metric") else "right")
+    for name in list_creatures():
+        c = load_creature(name)
+        table.add_row(
+            name, str(len(c.links)), str(c.n_sensors), str(c.n_actuators),
+            str(default_hidden(c)), c.metric, f"{c.seconds:g}",
+            "-" if c.paper_speed is None else f"{c.paper_speed:g}",
+        )  # fmt: skip
+    console.print(table)
+
+
+@san_app.command("search")
+def search_cmd(
+    creature: str = typer.Argument(..., help="Built-in creature name or creature .toml file."),
+    trials: int = typer.Option(200, min=1, help="Random networks to generate and evaluate."),
+    top: int = typer.Option(10, min=1, help="How many of the best to keep (videos and files)."),
+    seed: int = typer.Option(0, help="Random seed: same seed, same networks and metrics."),
+    terrain: str = typer.Option("flat", help="flat, or rough (uneven ground)."),
+    seconds: float = typer.Option(None, min=0.1, help="Evaluation time (default: creature's)."),
+    workers: int = typer.Option(None, min=1, help="Worker processes (default: all cores)."),
+    out: Path = typer.Option(None, help="Output directory (default runs/<creature>)."),
+    video: bool = typer.Option(True, help="Write a video of each kept gait."),
+) -> None:
+    """Phase 1: random SANs, evaluated in parallel; keeps the best (sans/*.json, videos)."""
+    from zoetic.san import load_creature
+    from zoetic.san.search import search, write_search
+
+    c = load_creature(creature)
+    out = out or Path("runs") / c.name
+    bar, tid = _bar(f"{c.name} {terrain}", trials)
+    with bar:
+        result = search(c, trials=trials, top=top, seed=seed, terrain=terrain, workers=workers,
+                        progress=_progress(bar, tid), seconds=seconds)  # fmt: skip
+    with console.status(f"writing {out}" + (" (videos)" if video else "")):
+        summary = write_search(result, out, top=top, video=video)
+    for key, value in summary.items():
+        console.print(f"{key:>18}: {value}")
+
+
+@san_app.command("tune")
+def tune_cmd(
+    network: Path = typer.Argument(..., help="A network .json (e.g. runs/cart/sans/01.json)."),
+    method: str = typer.Option("sga", help="sga (stochastic gradient ascent) or anneal."),
+    trials: int = typer.Option(1000, min=1, help="Evaluations to spend."),
+    seed: int = typer.Option(0, help="Random seed: same seed, same result."),
+    terrain: str = typer.Option("flat", help="flat, or rough (uneven ground)."),
+    creature: str = typer.Option(None, help="Creature (default: the one the file names)."),
+    out: Path = typer.Option(None, help="Output directory (default: <file>-<method>)."),
+    video: bool = typer.Option(True, help="Write video.mp4 of the tuned gait."),
+) -> None:
+    """Phase 2: fine-tune the Fig. 8 parameters (delays, actuators, sensors), weights kept."""
+    from zoetic.san.network import load_with_creature
+    from zoetic.san.tune import tune, write_tune
+
+    net, c = load_with_creature(network, creature)
+    out = out or network.with_name(f"{network.stem}-{method}")
+    bar, tid = _bar(f"{c.name} {method}", trials)
+    with bar:
+        result = tune(net, c, method=method, trials=trials, seed=seed, terrain=terrain,
+                      progress=_progress(bar, tid))  # fmt: skip
+    with console.status(f"writing {out}" + (" (video)" if video else "")):
+        summary = write_tune(result, c, out, terrain=terrain, video=video)
+    for key, value in summary.items():
+        console.print(f"{key:>18}: {value}")
+
+
+@san_app.command("show")
+def show_cmd(
+    path: Path = typer.Argument(..., help="A run directory (search or tune) or a network .json."),
+    rank: int = typer.Option(1, min=1, help="For a search directory: which kept network."),
+    seconds: float = typer.Option(None, min=0.1, help="Replay time (default: creature's)."),
+    terrain: str = typer.Option(None, help="flat or rough (default: the run's)."),
+    out: Path = typer.Option(None, help="Video file (default <run>/show.mp4)."),
+    fps: int = typer.Option(30, min=1, help="Video frame rate."),
+) -> None:
+    """Replay a network with its sensor and node states drawn beside the creature (video)."""
+    from zoetic.san.network import load_with_creature
+    from zoetic.san.search import speed_cm_s
+    from zoetic.san.show import resolve_network, show_video
+
+    file = resolve_network(path, rank)
+    net, c = load_with_creature(file)
+    terrain = terrain or str(net.info.get("terrain", "flat"))
+    default = (path if path.is_dir() else file.parent) / (
+        "show.mp4" if file.stem in ("san", f"{rank:02d}") else f"show-{file.stem}.mp4"
+    )
+    target = out or default
+    with console.status(f"rendering {target}"):
+        written, rollout = show_video(net, c, target, seconds=seconds, terrain=terrain, fps=fps)
+    speed = speed_cm_s(c, rollout.metric, rollout.distance, rollout.seconds)
+    console.print(f"{'network':>10}: {file}")
+    console.print(f"{'metric':>10}: {rollout.metric:.4f}  ({speed:.1f} cm/s"
+                  f"{', fell' if rollout.fell else ''})")  # fmt: skip
+    console.print(f"{'video':>10}: {written}")
+
+
+@bench_app.command("san")
+def bench_san_cmd(
+    creature: str = typer.Option("walker", help="Creature to time."),
+    trials: int = typer.Option(200, min=1, help="Random networks."),
+    workers: int = typer.Option(None, min=1, help="Worker processes (default: all cores)."),
+    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Wall time of a phase-1 search (random SANs x the creature's seconds, all cores)."""
+    from zoetic.san.search import bench_search
+
+    _emit(bench_search(creature, trials, workers), json)

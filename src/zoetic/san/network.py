@@ -36,6 +36,7 @@ __all__ = [
     "check_fits",
     "default_delays",
     "load_network",
+    "load_with_creature",
     "network_from_dict",
     "random_network",
     "save_network",
@@ -266,6 +267,18 @@ def load_network(path: str | os.PathLike, creature=None) -> Network:
     if creature is not None:
         check_fits(net, creature, path)
     return net
+
+
+def load_with_creature(path: str | os.PathLike, creature=None):
+    """Return (network, creature) from a network file; the creature defaults to the file's."""
+    from zoetic.san import load_creature
+
+    net = load_network(path)
+    c = load_creature(creature if creature is not None else net.creature)
+    if creature is not None and c.name != net.creature:
+        net = net.with_params(creature=c.name)  # a creature file given by path may rename it
+    check_fits(net, c, path)
+    return net, c
 
 
 def default_delays(creature) -> float:

@@ -204,3 +204,159 @@ def search(
         elapsed=elapsed,
         workers=max(1, min(int(workers or os.cpu_count() or 1), trials)),
     )
+
+
+# --- usefulness, files and benchmark ---------------------------------------------------------
+
+USEFUL_FRACTION_OF_PAPER = 0.25
+
+
+def useful_threshold_cm_s(creature) -> float:
+    """Return the speed (cm/s) from which a random network counts as useful.
+
+    A quarter of the paper's best speed for the creature (Table 1); for a creature the paper
+    gives no speed for, 2 cm/s.
+    """
+    paper = getattr(creature, "paper_speed", None)
+    return USEFUL_FRACTION_OF_PAPER * float(paper) if paper else 2.0
+
+
+def useful_mask(result: SearchResult, threshold_cm_s: float | None = None) -> np.ndarray:
+    """Return which trials are useful: not fallen and at least ``threshold_cm_s`` fast."""
+    thr = useful_threshold_cm_s(result.creature) if threshold_cm_s is None else threshold_cm_s
+    return (~result.fell) & (result.speeds >= thr) & np.isfinite(result.metrics)
+
+
+def plot_ranking(result: SearchResult, path, top: int = 10):
+    """Write ranking.png: every trial's metric from best to worst (the long-tailed curve)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from zoetic.io import atomic_write_bytes
+
+    order = result.order
+    m = result.metrics[order]
+    m = np.where(np.isfinite(m), m, np.nan)
+    ranks = np.arange(1, len(m) + 1)
+    c = result.creature
+    fig, ax = plt.subplots(figsize=(7, 4), dpi=110)
+    ax.plot(ranks, m, color="0.3", lw=1.2)
+    ax.scatter(ranks[:top], m[:top], color="tab:red", s=14, zorder=3, label=f"kept ({top})")
+    use = useful_mask(result)[order]
+    if use.any():
+        ax.scatter(ranks[use], m[use], facecolor="none", edgecolor="tab:green", s=40,
+                   label=f"useful ({use.sum()}/{len(m)})")  # fmt: skip
+    ax.set_xlabel("rank of the random network")
+    unit = {"distance": "|x| (m), 0 if fallen", "follow": "∫ v·F dt (m)", "hop": "∫ ẋ + k y² dt"}
+    ax.set_ylabel(f"metric: {unit.get(c.metric, c.metric)}")
+    ax.set_title(f"{c.name}: {len(m)} random SANs, {result.seconds:g} s each, "
+                 f"{result.terrain} terrain (seed {result.seed})", fontsize=10)  # fmt: skip
+    ax.grid(alpha=0.3)
+    ax.legend(loc="upper right", fontsize=8)
+    sec = ax.secondary_yaxis(
+        "right",
+        functions=(lambda v: 100 * v / result.seconds, lambda s: s * result.seconds / 100),
+    )
+    if c.metric in ("distance", "follow"):
+        sec.set_ylabel("speed (cm/s)")
+    else:
+        sec.remove()
+    fig.tight_layout()
+    import io
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    plt.close(fig)
+    return atomic_write_bytes(path, buf.getvalue())
+
+
+def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -> dict:
+    """Write a search run directory (sans/NN.json, videos/NN.mp4, ranking.png, trials.csv)."""
+    from pathlib import Path
+
+    from zoetic.io import atomic_write_bytes, write_json, write_toml
+    from zoetic.san.network import save_network
+
+    out = Path(out)
+    c = result.creature
+    speeds = result.speeds
+    kept = result.top(top)
+    write_toml(out / "config.toml", {
+        "creature": c.name, "trials": len(result.networks), "top": top, "seed": result.seed,
+        "terrain": result.terrain, "seconds": result.seconds, "workers": result.workers,
+    })  # fmt: skip
+    lines = ["trial,metric,speed_cm_s,fell,distance_m"]
+    for i, (m, s, f, d) in enumerate(
+        zip(result.metrics, speeds, result.fell, result.distances, strict=True)
+    ):
+        lines.append(f"{i},{m:.6g},{s:.4g},{int(f)},{d:.6g}")
+    atomic_write_bytes(out / "trials.csv", ("\n".join(lines) + "\n").encode())
+    sans = []
+    for rank, i in enumerate(kept, start=1):
+        net = result.networks[i].with_params(info={
+            "rank": rank, "trial": i, "metric": float(result.metrics[i]),
+            "speed_cm_s": round(float(speeds[i]), 3), "fell": bool(result.fell[i]),
+            "terrain": result.terrain, "seed": result.seed, "seconds": result.seconds,
+        })  # fmt: skip
+        sans.append(save_network(net, out / "sans" / f"{rank:02d}.json"))
+    plot_ranking(result, out / "ranking.png", top=min(top, len(kept)))
+    videos = []
+    if video:
+        from zoetic.san.draw import render_frames
+        from zoetic.san.show import replay
+        from zoetic.viz.video import write_mp4
+
+        for rank, i in enumerate(kept, start=1):
+            net = result.networks[i]
+            rollout = replay(net, c, result.seconds, result.terrain, result.seed, fps=30)
+            videos.append(write_mp4(render_frames(c, rollout), out / "videos" / f"{rank:02d}.mp4"))
+    use = useful_mask(result)
+    summary = {
+        "creature": c.name,
+        "trials": len(result.networks),
+        "best_metric": round(float(result.metrics[kept[0]]), 4),
+        "best_speed_cm_s": round(float(speeds[kept[0]]), 2),
+        "paper_speed_cm_s": getattr(c, "paper_speed", None),
+        "useful": f"{int(use.sum())}/{len(use)} ({100 * use.mean():.1f}%, "
+        f">= {useful_threshold_cm_s(c):.3g} cm/s without falling)",
+        "fell": int(result.fell.sum()),
+        "evaluation_s": round(result.elapsed, 2),
+        "sans": str(out / "sans"),
+        "ranking": str(out / "ranking.png"),
+    }
+    if videos:
+        summary["videos"] = str(out / "videos")
+    write_json(out / "summary.json", summary)
+    return summary
+
+
+def bench_search(creature: str = "walker", trials: int = 200, workers: int | None = None) -> dict:
+    """Time a phase-1 search of ``trials`` random SANs on all cores; returns the figures."""
+    from zoetic.san import load_creature
+
+    c = load_creature(creature)
+    t0 = time.perf_counter()
+    _init_worker(c, "flat", 0, c.seconds)  # one compile, timed apart
+    compile_s = time.perf_counter() - t0
+    net = random_network(c, np.random.default_rng(0))
+    t0 = time.perf_counter()
+    _evaluate_one(net)
+    one = time.perf_counter() - t0
+    _WORKER.clear()
+    result = search(c, trials=trials, seed=0, workers=workers)
+    steps = trials * round(c.seconds / c.dt)
+    return {
+        f"{c.name}_{trials}_trials_seconds": round(result.elapsed, 3),
+        "steps_per_second": round(steps / result.elapsed),
+        "simulated_seconds_per_second": round(trials * c.seconds / result.elapsed, 1),
+        "workers": result.workers,
+        "trials": trials,
+        "seconds_per_trial": c.seconds,
+        "physics_dt": c.dt,
+        "control_dt": c.control_dt,
+        "compile_seconds": round(compile_s, 4),
+        "one_trial_seconds_in_process": round(one, 4),
+        "best_metric": round(float(np.max(result.metrics)), 4),
+    }

@@ -225,3 +225,91 @@ def tune(
         trials=trials, seed=seed, current=current, best=best, tried=tried, accepted=accepted,
         elapsed=time.perf_counter() - t0,
     )  # fmt: skip
+
+
+def plot_tuning(result: TuneResult, path, title: str = ""):
+    """Write tuning.png: each candidate's metric, the accepted and the best against trials."""
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from zoetic.io import atomic_write_bytes
+
+    t = np.arange(1, result.trials + 1)
+    fig, ax = plt.subplots(figsize=(7, 4), dpi=110)
+    tried = np.where(np.isfinite(result.tried), result.tried, np.nan)
+    ax.scatter(t, tried, s=4, color="0.7", label="candidate")
+    ax.plot(t, result.current, color="tab:blue", lw=1, label="current")
+    ax.plot(t, result.best, color="tab:red", lw=1.5, label="best")
+    ax.axhline(result.before, color="0.3", ls=":", lw=1, label="start")
+    ax.set_xlabel("trial")
+    ax.set_ylabel("metric")
+    ax.set_title(title or f"{result.method}: {result.before:.4g} -> {result.after:.4g}")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    plt.close(fig)
+    return atomic_write_bytes(path, buf.getvalue())
+
+
+def write_tune(result: TuneResult, creature, out, terrain: str = "flat", video: bool = True):
+    """Write a tune run directory (san.json, start.json, history.csv, tuning.png, video.mp4)."""
+    from pathlib import Path
+
+    from zoetic.io import atomic_write_bytes, write_json, write_toml
+    from zoetic.san.network import save_network
+    from zoetic.san.search import speed_cm_s
+
+    out = Path(out)
+    seconds = float(creature.seconds)
+    info = dict(result.network.info)
+    info["terrain"] = terrain
+    net = result.network.with_params(info=info)
+    save_network(net, out / "san.json")
+    save_network(result.start, out / "start.json")
+    write_toml(out / "config.toml", {
+        "creature": creature.name, "method": result.method, "trials": result.trials,
+        "seed": result.seed, "terrain": terrain,
+    })  # fmt: skip
+    lines = ["trial,candidate,current,best"] + [
+        f"{i + 1},{a:.6g},{b:.6g},{c:.6g}"
+        for i, (a, b, c) in enumerate(zip(result.tried, result.current, result.best, strict=True))
+    ]
+    atomic_write_bytes(out / "history.csv", ("\n".join(lines) + "\n").encode())
+    plot_tuning(result, out / "tuning.png", f"{creature.name} {result.method}")
+
+    def speed(metric: float) -> float:
+        # tuning never changes the metric's kind; hop speed needs the distance, so replay
+        if creature.metric in ("distance", "follow"):
+            return speed_cm_s(creature, metric, 0.0, seconds)
+        return float("nan")
+
+    summary = {
+        "creature": creature.name,
+        "method": result.method,
+        "trials": result.trials,
+        "metric_before": round(result.before, 4),
+        "metric_after": round(result.after, 4),
+        "speed_before_cm_s": round(speed(result.before), 2),
+        "speed_after_cm_s": round(speed(result.after), 2),
+        "accepted": result.accepted,
+        "seconds": round(result.elapsed, 1),
+        "network": str(out / "san.json"),
+        "tuning_plot": str(out / "tuning.png"),
+    }
+    if video:
+        from zoetic.san.show import show_video
+
+        path, rollout = show_video(net, creature, out / "video.mp4", terrain=terrain)
+        if creature.metric not in ("distance", "follow"):
+            summary["speed_after_cm_s"] = round(
+                speed_cm_s(creature, rollout.metric, rollout.distance, rollout.seconds), 2
+            )
+        summary["video"] = str(path)
+    write_json(out / "summary.json", summary)
+    return summary
