@@ -1,0 +1,138 @@
+"""Basic training into a repertoire, its files, and the commands that use it."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from zoetic.behavior.repertoire import Repertoire
+from zoetic.behavior.tracking import handmade_repertoire
+from zoetic.behavior.training import build_sequence, parse_sequence, plan_for
+from zoetic.bodies import load_animal
+from zoetic.cli import main
+from zoetic.control import load_controller
+from zoetic.control.abstract import AbstractController, SequenceController
+from zoetic.errors import ZoeticError
+
+
+@pytest.fixture(scope="module")
+def shark():
+    return load_animal("shark")
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    out = tmp_path_factory.mktemp("memory") / "shark"
+    code = main(["repertoire", "train", "shark", "--out", str(out), "--budget", "30"])
+    assert code == 0
+    return out
+
+
+def test_plans_follow_the_medium():
+    assert [e.name for e in plan_for(load_animal("shark"))] == [
+        "go-straight", "sharp-turn-left", "wide-turn-left"]  # fmt: skip
+    snake = plan_for(load_animal("snake"))
+    assert snake[0].task.name == "crawl-straight"
+    assert [e.name for e in plan_for(load_animal("dolphin"))] == ["go-straight"]
+
+
+def test_training_writes_a_reloadable_mirrored_repertoire(trained, shark):
+    rep = Repertoire.load(trained, shark)
+    assert rep.names == ["do-nothing", "go-straight", "sharp-turn-left", "sharp-turn-right",
+                         "wide-turn-left", "wide-turn-right"]  # fmt: skip
+    assert all(isinstance(c, AbstractController) for c in rep.controllers.values())
+    t = np.linspace(0, 3, 50)
+    left, right = rep.controllers["sharp-turn-left"], rep.controllers["sharp-turn-right"]
+    np.testing.assert_allclose(right.raw(t), left.raw(t)[:, shark.actuator_mirror])
+    info = rep.info["go-straight"]
+    assert info["task"] == "swim-straight" and 0 < max(info["modes_per_actuator"])
+    assert (trained / "runs" / "go-straight" / "controller.json").exists()
+    assert np.all(rep.controllers["do-nothing"].raw(t) == 0)
+
+
+def test_training_again_resumes_without_learning_more(trained):
+    before = (trained / "runs" / "go-straight" / "history.csv").read_text()
+    assert main(["repertoire", "train", "shark", "--out", str(trained), "--budget", "30"]) == 0
+    assert (trained / "runs" / "go-straight" / "history.csv").read_text() == before
+
+
+def test_repertoire_round_trip(tmp_path, shark):
+    rep = handmade_repertoire(shark)
+    rep.add("extra", rep.controllers["go-straight"], 2.5, note="kept", kept=0.9)
+    rep.save(tmp_path / "m")
+    again = Repertoire.load(tmp_path / "m", shark)
+    assert again.names == rep.names and again.durations == rep.durations
+    assert again.info["extra"] == {"note": "kept", "kept": 0.9}
+    t = np.linspace(0, 4, 40)
+    for name in rep.names:
+        np.testing.assert_allclose(again.controllers[name].raw(t), rep.controllers[name].raw(t),
+                                   atol=1e-5)  # fmt: skip
+
+
+def test_show_prints_and_plots(trained, capsys):
+    assert main(["repertoire", "show", str(trained), "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    by = {r["entry"]: r for r in rows}
+    assert by["do-nothing"]["modes"] == 0 and by["do-nothing"]["forward_m"] == pytest.approx(0)
+    assert by["sharp-turn-right"]["turn_deg"] == pytest.approx(-by["sharp-turn-left"]["turn_deg"],
+                                                               abs=0.2)  # fmt: skip
+    assert (trained / "repertoire.png").stat().st_size > 10_000
+
+
+def test_broken_repertoire_is_refused_with_its_file_named(tmp_path, shark, capsys):
+    handmade_repertoire(shark).save(tmp_path / "m")
+    (tmp_path / "m" / "go-straight.json").write_text('{"type": "abstract", "animal": "shark"')
+    assert main(["repertoire", "show", str(tmp_path / "m")]) == 2
+    err = capsys.readouterr().err
+    assert "go-straight" in err and "repertoire.json" in err
+    assert main(["repertoire", "show", str(tmp_path / "nothing")]) == 2
+    assert "not a zoetic repertoire" in capsys.readouterr().err
+
+
+def test_abstract_command_on_a_learned_run(trained, tmp_path, capsys):
+    run = trained / "runs" / "wide-turn-left"
+    assert main(["abstract", str(run), "--modes", "1", "--out", str(tmp_path)]) == 0
+    printed = capsys.readouterr().out
+    assert "kept" in printed and "heading_change" in printed
+    ctrl = load_controller(tmp_path / "abstract.json", load_animal("shark"))
+    assert isinstance(ctrl, AbstractController)
+    assert np.count_nonzero(ctrl.amp, axis=1).max() == 1
+    assert (tmp_path / "abstract.png").stat().st_size > 10_000
+    assert main(["abstract", str(tmp_path / "none"), "--out", str(tmp_path)]) == 2
+    assert main(["abstract", str(run), "--modes", "zero", "--out", str(tmp_path)]) == 2
+
+
+def test_sequence_command_simulates_a_cross_faded_controller(tmp_path, capsys):
+    shark = load_animal("shark")
+    handmade_repertoire(shark).save(tmp_path / "m")
+    args = [
+        "sequence",
+        "shark",
+        "--memory",
+        str(tmp_path / "m"),
+        "--entries",
+        "go-straight:2,sharp-turn-left:2",
+        "--out",
+        str(tmp_path / "s"),
+        "--no-video",
+    ]
+    assert main(args) == 0  # fmt: skip
+    seq = load_controller(tmp_path / "s" / "sequence.json", shark)
+    assert isinstance(seq, SequenceController)
+    assert seq.duration == pytest.approx(2 + 2 * 0.95)
+    assert (tmp_path / "s" / "path.png").exists() and (tmp_path / "s" / "trajectory.npz").exists()
+    args[5] = "go-straight:2,backflip"
+    assert main(args) == 2
+    assert "no entry 'backflip'" in capsys.readouterr().err
+
+
+def test_parse_sequence_defaults_and_errors(shark):
+    rep = handmade_repertoire(shark)
+    items = parse_sequence("go-straight, wide-turn-left:1.5", rep)
+    assert items == [("go-straight", rep.durations["go-straight"]), ("wide-turn-left", 1.5)]
+    assert build_sequence(rep, items).duration > 1.5
+    for bad in ("", "go-straight:-1", "go-straight:abc"):
+        with pytest.raises(ZoeticError):
+            parse_sequence(bad, rep)
