@@ -88,6 +88,9 @@ class FakeWorld:
         FakeWorld.builds += 1
         self.creature = creature
 
+    def set_tuning(self, creature):
+        self.creature = creature
+
     def run(self, policy, seconds=None, record_every=0):
         c = self.creature
         dt = c.control_dt

@@ -275,8 +275,6 @@ def load_with_creature(path: str | os.PathLike, creature=None):
 
     net = load_network(path)
     c = load_creature(creature if creature is not None else net.creature)
-    if creature is not None and c.name != net.creature:
-        net = net.with_params(creature=c.name)  # a creature file given by path may rename it
     check_fits(net, c, path)
     return net, c
 

@@ -110,7 +110,7 @@ def _network(network: Network, values: dict[str, np.ndarray]) -> Network:
 
 
 class WorldEvaluator:
-    """Evaluate a network in a World, rebuilding the World only when the creature changes."""
+    """Evaluate a network in one World, re-applying the Fig. 8 parameters when they change."""
 
     def __init__(self, terrain: str = "flat", seed: int = 0, seconds: float | None = None):
         self.terrain, self.seed, self.seconds = terrain, seed, seconds
@@ -123,9 +123,11 @@ class WorldEvaluator:
 
         tuning = creature.tuning()
         key = b"".join(np.asarray(tuning[k], dtype=float).tobytes() for k in TUNING_KEYS)
-        if key != self._key or self._world is None:
+        if self._world is None:
             self._world = World(creature, terrain=self.terrain, seed=self.seed)
-            self._key = key
+        elif key != self._key:
+            self._world.set_tuning(creature)  # no recompile: same structure, new parameters
+        self._key = key
         rollout = self._world.run(SanPolicy(network, creature), seconds=self.seconds)
         metric = float(rollout.metric)
         return metric if np.isfinite(metric) else -math.inf

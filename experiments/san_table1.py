@@ -1,0 +1,189 @@
+"""Table 1 of van de Panne & Fiume 93 (Sensor-actuator networks), reproduced.
+
+For each creature: 200 random SANs (phase 1), each evaluated for the creature's time (6 s; 30 s
+for the crawler and the fish) on flat ground; the best gait's speed next to the paper's, and the
+fraction of random networks that are useful (see ``zoetic.san.search.useful_mask``). Then the
+cart: its best kept gaits sorted into distinct modes by what the body does (rolls over,
+hops, direction, which link carries it).
+
+Writes docs/figures/san_table1.json, san_table1_ranking.png (every creature's ranking curve),
+and san_cart_gaits.json (+ san_cart_gaits.png, one still per distinct mode).
+
+Run: python experiments/san_table1.py [--trials 200] [--seed 0] [--creatures cart,walker]
+     [--cart-trials 1000] [--no-gaits]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from zoetic.san import list_creatures, load_creature
+from zoetic.san.search import search, speed_cm_s, useful_mask, useful_threshold_cm_s
+from zoetic.san.show import replay
+
+OUT = Path(__file__).resolve().parents[1] / "docs" / "figures"
+
+
+def table(names: list[str], trials: int, seed: int) -> tuple[dict, dict]:
+    """Return Table 1 rows per creature and the search results."""
+    rows, results = {}, {}
+    for name in names:
+        c = load_creature(name)
+        t0 = time.perf_counter()
+        res = search(c, trials=trials, seed=seed)
+        best = res.top(1)[0]
+        use = useful_mask(res)
+        rows[name] = {
+            "links": len(c.links), "sensors": c.n_sensors, "actuators": c.n_actuators,
+            "hidden": res.networks[0].n_hidden, "metric": c.metric, "seconds": c.seconds,
+            "best_speed_cm_s": round(float(res.speeds[best]), 1),
+            "paper_speed_cm_s": c.paper_speed,
+            "useful": int(use.sum()), "useful_fraction": round(float(use.mean()), 3),
+            "useful_threshold_cm_s": round(useful_threshold_cm_s(c), 2),
+            "fell": int(res.fell.sum()),
+            "median_speed_cm_s": round(float(np.median(res.speeds)), 2),
+            "wall_s": round(time.perf_counter() - t0, 1),
+        }  # fmt: skip
+        results[name] = res
+        print(name, rows[name], flush=True)
+    return rows, results
+
+
+def plot_rankings(results: dict, path: Path) -> None:
+    """One panel per creature: speed (cm/s) of every random SAN from best to worst."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = len(results)
+    cols = min(5, n)
+    rows = math.ceil(n / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.0 * cols, 2.4 * rows), dpi=100, squeeze=False)
+    for ax, (name, res) in zip(axes.flat, results.items(), strict=False):
+        s = res.speeds[res.order]
+        ax.plot(np.arange(1, len(s) + 1), s, color="0.25", lw=1.2)
+        thr = useful_threshold_cm_s(res.creature)
+        ax.axhline(thr, color="tab:green", ls=":", lw=1)
+        if res.creature.paper_speed:
+            ax.axhline(res.creature.paper_speed, color="tab:red", ls="--", lw=1)
+        ax.set_title(f"{name} ({useful_mask(res).mean() * 100:.1f}% useful)", fontsize=9)
+        ax.tick_params(labelsize=7)
+        ax.grid(alpha=0.3)
+    for ax in list(axes.flat)[n:]:
+        ax.axis("off")
+    fig.supxlabel("rank of the random network", fontsize=9)
+    fig.supylabel("speed (cm/s); red: paper's best, green: useful", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def gait_features(creature, rollout) -> dict:
+    """Return what the body does over a replay: turns, height, contacts, direction."""
+    poses = np.asarray(rollout.poses)  # (R, L, 3): x, height, angle
+    ang = np.unwrap(poses[:, 0, 2])
+    turns = (ang[-1] - ang[0]) / (2 * np.pi)
+    heights = poses[:, :, 1]
+    lowest = heights.min(axis=1)
+    touch = [i for i, s in enumerate(creature.sensors) if s.kind == "touch"]
+    contact = np.asarray(rollout.sensors)[:, touch].mean(axis=0) if touch else np.zeros(0)
+    return {
+        "turns": round(float(turns), 2),
+        "airborne": round(float(np.mean(lowest > 0.02)), 2),
+        "direction": "+x" if rollout.distance >= 0 else "-x",
+        "contact": [round(float(v), 2) for v in contact],
+        "speed_cm_s": round(speed_cm_s(creature, rollout.metric, rollout.distance), 1),
+    }
+
+
+def gait_mode(f: dict, creature) -> str:
+    """Name a gait's mode from its features (coarse, by what one sees in the video)."""
+    if abs(f["turns"]) >= 1.0:
+        return "cartwheel (rolls over)"
+    if f["airborne"] >= 0.15:
+        return "hops"
+    touch = [s.target for s in creature.sensors if s.kind == "touch"]
+    if len(f["contact"]) and len(touch):
+        per_link: dict[str, float] = {}
+        for t, v in zip(touch, f["contact"], strict=True):
+            per_link[t] = max(per_link.get(t, 0.0), v)
+        mostly = sorted(per_link, key=per_link.get, reverse=True)
+        if len(mostly) > 1 and per_link[mostly[1]] < 0.3:
+            return f"drags on {mostly[0]}"
+        if len(mostly) > 1 and per_link[mostly[1]] >= 0.3 and per_link[mostly[0]] >= 0.3:
+            return "walks on both links"
+    return "shuffles"
+
+
+def cart_gaits(trials: int, seed: int, keep: int = 20) -> dict:
+    """Search the cart with ``trials`` networks and sort its best ``keep`` into modes."""
+    c = load_creature("cart")
+    res = search(c, trials=trials, seed=seed)
+    modes: dict[str, list] = {}
+    stills = []
+    for rank, i in enumerate(res.top(keep), start=1):
+        if res.fell[i] or res.speeds[i] < useful_threshold_cm_s(c):
+            continue
+        ro = replay(res.networks[i], c, fps=20)
+        f = gait_features(c, ro)
+        mode = f"{gait_mode(f, c)}, {f['direction']}"
+        f.update(rank=rank, trial=int(i))
+        if mode not in modes:
+            stills.append((mode, res.networks[i], ro))
+        modes.setdefault(mode, []).append(f)
+    return {"trials": trials, "kept": keep, "modes": modes, "_stills": stills}
+
+
+def plot_stills(c, stills, path: Path) -> None:
+    """One row per distinct mode: the body drawn at a few instants, shifted along x."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from zoetic.san.draw import render_frames
+
+    n = len(stills)
+    fig, axes = plt.subplots(n, 1, figsize=(8, 2.0 * n), dpi=100, squeeze=False)
+    for ax, (mode, _net, ro) in zip(axes[:, 0], stills, strict=True):
+        frames = list(render_frames(c, ro, size=(480, 200)))
+        picks = np.linspace(len(frames) // 4, len(frames) - 1, 4).astype(int)
+        ax.imshow(np.concatenate([frames[k] for k in picks], axis=1))
+        ax.set_title(mode, fontsize=9)
+        ax.axis("off")
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--trials", type=int, default=200)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--creatures", default="")
+    ap.add_argument("--cart-trials", type=int, default=1000)
+    ap.add_argument("--no-gaits", action="store_true")
+    args = ap.parse_args()
+    OUT.mkdir(parents=True, exist_ok=True)
+    names = [n for n in args.creatures.split(",") if n] or list_creatures()
+    rows, results = table(names, args.trials, args.seed)
+    (OUT / "san_table1.json").write_text(json.dumps(rows, indent=2) + "\n")
+    plot_rankings(results, OUT / "san_table1_ranking.png")
+    if not args.no_gaits:
+        gaits = cart_gaits(args.cart_trials, args.seed)
+        stills = gaits.pop("_stills")
+        (OUT / "san_cart_gaits.json").write_text(json.dumps(gaits, indent=2) + "\n")
+        if stills:
+            plot_stills(load_creature("cart"), stills, OUT / "san_cart_gaits.png")
+        print(json.dumps({k: len(v) for k, v in gaits["modes"].items()}, indent=2))
+
+
+if __name__ == "__main__":
+    main()
