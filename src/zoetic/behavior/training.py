@@ -91,12 +91,14 @@ def train_repertoire(
     optimizer: str = "cmaes",
     modes: str | int = "auto",
     threshold: float = 0.3,
+    nodes: int | None = None,
     on_entry: Callable[[str, object], None] | None = None,
     progress: Callable[[object], None] | None = None,
 ) -> Repertoire:
     """Learn, abstract and save the basic repertoire of ``animal`` into ``out``; return it.
 
-    on_entry(name, run) is called before each entry is learned; progress(run) during learning.
+    nodes: controller nodes per actuator (default: each task's). on_entry(name, run) is called
+    before each entry is learned; progress(run) during learning.
     """
     from zoetic.learn.run import LearnConfig, Run
 
@@ -111,7 +113,7 @@ def train_repertoire(
             run = Run.resume(run_dir)
         else:
             config = LearnConfig(animal=str(animal), task=entry.task.name, optimizer=optimizer,
-                                 budget=budget, seed=seed + k)  # fmt: skip
+                                 budget=budget, seed=seed + k, nodes=nodes)  # fmt: skip
             run = Run.create(run_dir, config)
         if on_entry:
             on_entry(entry.name, run)

@@ -50,6 +50,7 @@ def train_cmd(
     optimizer: str = typer.Option("cmaes", help="anneal, simplex or cmaes."),
     modes: str = typer.Option("auto", help="Modes kept by the abstraction: auto or K."),
     threshold: float = typer.Option(0.3, help="auto keeps modes >= threshold x the strongest."),
+    nodes: int = typer.Option(None, min=2, help="Controller nodes per actuator (task's)."),
     seed: int = typer.Option(0, help="Random seed: same seed, same repertoire."),
 ) -> None:
     """Learn the basic repertoire (straight, sharp and wide turns, mirrored); resumable."""
@@ -71,7 +72,7 @@ def train_cmd(
 
         try:
             train_repertoire(animal, out, budget, seed, optimizer, parse_modes(modes), threshold,
-                             on_entry, progress)  # fmt: skip
+                             nodes, on_entry, progress)  # fmt: skip
         except KeyboardInterrupt:
             console.print(f"[yellow]interrupted; run the same command again to continue "
                           f"({out} keeps what was learned)[/]")  # fmt: skip
