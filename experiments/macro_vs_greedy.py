@@ -31,13 +31,13 @@ GOAL, OBSTACLE, HORIZON = (-4.0, 1.0), (0.5, 2.5, 1.0), 60.0
 COLORS = {"greedy": "C0", "SA": "C1", "GA": "C2"}
 
 
-def fig5(body, rep) -> dict:
+def fig5(body, rep, tag: str = "") -> dict:
     """Track the five-target course; return its numbers and write its path figure."""
     from zoetic.viz.plots import plot_path
 
     res = track(body, rep, COURSE, TrackConfig(time_limit=120.0))
     s = res.summary()
-    plot_path(res.com, OUT / "fig5_tracking.png", targets=COURSE, starts=res.start_indices,
+    plot_path(res.com, OUT / f"fig5_tracking{tag}.png", targets=COURSE, starts=res.start_indices,
               title=f"Fig. 5: greedy tracking, {s['reached']}/{len(COURSE)} targets, "
                     f"{s['realtime_factor']:.0f}x real time")  # fmt: skip
     return s
@@ -97,12 +97,14 @@ def main() -> None:
     ap.add_argument("--memory", default=None, help="repertoire dir (default: the hand-made one)")
     ap.add_argument("--budget", type=int, default=2000)
     ap.add_argument("--seeds", default="0,1,2")
+    ap.add_argument("--tag", default="", help="suffix of the output files, e.g. _learned")
     args = ap.parse_args()
+    tag = args.tag
     body = load_animal("shark")
     rep = Repertoire.load(args.memory, body) if args.memory else handmade_repertoire(body)
     OUT.mkdir(parents=True, exist_ok=True)
     report = {"repertoire": args.memory or "hand-made (zoetic.behavior.tracking)",
-              "fig5": fig5(body, rep)}  # fmt: skip
+              "fig5": fig5(body, rep, tag)}  # fmt: skip
     print(f"Fig. 5 course: {report['fig5']}")
 
     task = ReachTask(GOAL, (OBSTACLE,), HORIZON)
@@ -135,14 +137,14 @@ def main() -> None:
         print(f"{label}: E mean {np.mean(costs):.3f}, best {np.min(costs):.3f}, "
               f"worst {np.max(costs):.3f} over {len(costs)} seeds; mean best E after "
               f"{progress[label]} evaluations")  # fmt: skip
-    figure(paths, curves, OUT / "macro_vs_greedy.png")
+    figure(paths, curves, OUT / f"macro_vs_greedy{tag}.png")
     clean = {k: {kk: (None if isinstance(v, float) and not np.isfinite(v) else v)
                  for kk, v in r.items()} for k, r in rows.items()}  # fmt: skip
     report |= {"task": {"goal": GOAL, "obstacle": OBSTACLE, "horizon_s": HORIZON,
                         "budget": args.budget}, "results": clean,
                "mean_best_E_after": progress}  # fmt: skip
-    write_json(OUT / "macro_vs_greedy.json", report)
-    print(f"wrote {OUT / 'fig5_tracking.png'}, {OUT / 'macro_vs_greedy.png'} and .json")
+    write_json(OUT / f"macro_vs_greedy{tag}.json", report)
+    print(f"wrote {OUT}/fig5_tracking{tag}.png, macro_vs_greedy{tag}.png and .json")
 
 
 if __name__ == "__main__":

@@ -218,11 +218,21 @@ def build_sequence(rep: Repertoire, items: list[tuple[str, float]], overlap: flo
     return SequenceController(rep.animal, tuple(rep.actuators), parts, overlap)
 
 
+def _by_strength(freq: np.ndarray, amp: np.ndarray) -> list[float]:
+    """Return the frequencies (Hz) present, strongest first (amplitude summed over actuators)."""
+    total: dict[float, float] = {}
+    for f, a in zip(np.ravel(freq), np.ravel(np.abs(amp)), strict=True):
+        if a > 0:
+            total[round(float(f), 3)] = total.get(round(float(f), 3), 0.0) + float(a)
+    return sorted(total, key=lambda f: -total[f])
+
+
 def show_repertoire(directory: str | Path, plot: bool = True) -> list[dict[str, object]]:
     """Return one row per entry (modes, frequencies, what it does from rest); plot it too.
 
     Each entry is played from rest for its duration; forward (m along the start heading) and
-    turn (degrees, left positive) say what it does. Writes repertoire.png into the directory.
+    turn (degrees, left positive) say what it does; frequencies_hz come strongest first.
+    Writes repertoire.png into the directory (paths: each entry played three times over).
     """
     from zoetic.learn.abstraction import measure
 
@@ -239,14 +249,14 @@ def show_repertoire(directory: str | Path, plot: bool = True) -> list[dict[str, 
         rows.append({
             "entry": name, "kind": ctrl.kind, "seconds": round(seconds, 3),
             "modes": int(np.count_nonzero(amp)),
-            "frequencies_hz": sorted({round(float(f), 3) for f in freq[amp > 0]}),
+            "frequencies_hz": _by_strength(freq, amp),
             "forward_m": round(m["forward"], 3),
             "turn_deg": round(float(np.degrees(m["heading_change"])), 1),
             "source": rep.info.get(name, {}).get("source", ""),
         })  # fmt: skip
         t = np.linspace(0.0, seconds, 300)
         signals[name] = (t, ctrl.sample(t))
-        paths[name] = m["com"]
+        paths[name] = measure(body, ctrl, 3 * seconds)["com"]  # played three times over
     if plot:
         from zoetic.viz.abstraction import plot_repertoire
 

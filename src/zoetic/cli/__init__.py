@@ -59,7 +59,8 @@ def main(argv: list[str] | None = None) -> int:
         err_console.print("[yellow]aborted[/]")
         return 130
     except Exception as exc:  # usage errors (click's, or the copy vendored in newer Typer)
-        if callable(getattr(exc, "show", None)) and isinstance(getattr(exc, "exit_code", None), int):
+        shows = callable(getattr(exc, "show", None))
+        if shows and isinstance(getattr(exc, "exit_code", None), int):
             exc.show()
             return 2
         raise

@@ -80,13 +80,18 @@ def train_cmd(
     _print_rows(show_repertoire(out), f"{out}")
 
 
+def _hz(freqs: list[float], most: int = 3) -> str:
+    text = ", ".join(f"{f:g}" for f in freqs[:most])
+    return text + (f" (+{len(freqs) - most})" if len(freqs) > most else "")
+
+
 def _print_rows(rows: list[dict], title: str) -> None:
     table = Table(title=title)
-    for col in ("entry", "seconds", "modes", "Hz", "forward m", "turn deg", "source"):
-        table.add_column(col)
+    for col in ("entry", "seconds", "modes", "Hz (strongest)", "forward m", "turn deg", "source"):
+        table.add_column(col, no_wrap=col == "entry")
     for r in rows:
         table.add_row(r["entry"], f"{r['seconds']:g}", str(r["modes"]),
-                      ", ".join(f"{f:g}" for f in r["frequencies_hz"]), f"{r['forward_m']:.3f}",
+                      _hz(r["frequencies_hz"]), f"{r['forward_m']:.3f}",
                       f"{r['turn_deg']:.1f}", str(r["source"]))  # fmt: skip
     console.print(table)
 

@@ -109,7 +109,7 @@ def plot_repertoire(
     ax_p.set_aspect("equal", adjustable="datalim")
     ax_p.set_xlabel("x (m)")
     ax_p.set_ylabel("z (m), left")
-    ax_p.set_title("paths from rest (top view)", fontsize=9)
+    ax_p.set_title("paths from rest, each entry played 3 times (top view)", fontsize=9)
     ax_p.legend(fontsize=7)
     ax_p.grid(alpha=0.3)
     if title:
