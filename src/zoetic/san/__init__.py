@@ -1,0 +1,47 @@
+"""Sensor-actuator networks (van de Panne & Fiume 93): planar creatures, their MuJoCo world.
+
+Creatures (``creature``): :class:`Creature` with :class:`Link`, :class:`Joint`,
+:class:`Sensor`, :class:`Actuator`; :func:`load_creature` (zoo name or .toml path),
+:func:`list_creatures`, :func:`creature_to_toml`, :func:`save_creature`; errors are
+:class:`CreatureError`. The format is documented in ``docs/creatures.md``.
+
+Simulation (``world``): ``World(creature, terrain="flat" | "rough", seed=0, follow=None)``
+compiles the MuJoCo model once; ``World.run(policy, seconds=None, record_every=0)`` returns a
+:class:`Rollout`; :func:`evaluate` is the one-call metric. A :class:`Policy` has ``reset()`` and
+``step(sensors (S,) bool, dt) -> (A,) commands in [-2, 2]``.
+
+Drawing (``zoetic.san.draw``, imported on demand): ``draw_frame`` and ``render_frames``.
+"""
+
+from zoetic.san.creature import (
+    TUNING_KEYS,
+    Actuator,
+    Creature,
+    CreatureError,
+    Joint,
+    Link,
+    Sensor,
+    creature_to_toml,
+    list_creatures,
+    load_creature,
+    save_creature,
+)
+from zoetic.san.world import Policy, Rollout, World, evaluate
+
+__all__ = [
+    "TUNING_KEYS",
+    "Actuator",
+    "Creature",
+    "CreatureError",
+    "Joint",
+    "Link",
+    "Policy",
+    "Rollout",
+    "Sensor",
+    "World",
+    "creature_to_toml",
+    "evaluate",
+    "list_creatures",
+    "load_creature",
+    "save_creature",
+]
