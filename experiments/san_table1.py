@@ -45,7 +45,9 @@ def table(names: list[str], trials: int, seed: int) -> tuple[dict, dict]:
             "best_speed_cm_s": round(float(res.speeds[best]), 1),
             "paper_speed_cm_s": c.paper_speed,
             "useful": int(use.sum()), "useful_fraction": round(float(use.mean()), 3),
-            "useful_threshold_cm_s": round(useful_threshold_cm_s(c), 2),
+            "useful_threshold_cm_s": round(useful_threshold_cm_s(res), 2),
+            "useful_quarter_paper": None if not c.paper_speed else round(float(useful_mask(
+                res, 0.25 * c.paper_speed).mean()), 3),
             "fell": int(res.fell.sum()),
             "median_speed_cm_s": round(float(np.median(res.speeds)), 2),
             "wall_s": round(time.perf_counter() - t0, 1),
@@ -69,7 +71,7 @@ def plot_rankings(results: dict, path: Path) -> None:
     for ax, (name, res) in zip(axes.flat, results.items(), strict=False):
         s = res.speeds[res.order]
         ax.plot(np.arange(1, len(s) + 1), s, color="0.25", lw=1.2)
-        thr = useful_threshold_cm_s(res.creature)
+        thr = useful_threshold_cm_s(res)
         ax.axhline(thr, color="tab:green", ls=":", lw=1)
         if res.creature.paper_speed:
             ax.axhline(res.creature.paper_speed, color="tab:red", ls="--", lw=1)
@@ -129,7 +131,7 @@ def cart_gaits(trials: int, seed: int, keep: int = 20) -> dict:
     modes: dict[str, list] = {}
     stills = []
     for rank, i in enumerate(res.top(keep), start=1):
-        if res.fell[i] or res.speeds[i] < useful_threshold_cm_s(c):
+        if res.fell[i] or res.speeds[i] < 0.25 * res.speeds[res.top(1)[0]]:
             continue
         ro = replay(res.networks[i], c, fps=20)
         f = gait_features(c, ro)
@@ -147,7 +149,6 @@ def plot_stills(c, stills, path: Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
     from zoetic.san.draw import render_frames
 
     n = len(stills)

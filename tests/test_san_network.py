@@ -24,7 +24,7 @@ from zoetic.san.network import (
     random_network,
     save_network,
 )
-from zoetic.san.search import search
+from zoetic.san.search import SearchResult, search, useful_mask, useful_threshold_cm_s
 from zoetic.san.tune import tunable_parameters, tune
 
 # --- a fake creature and world ------------------------------------------------------------
@@ -271,6 +271,15 @@ def test_search_is_reproducible_whatever_the_worker_count(fake_world):
     assert not np.array_equal(one.metrics, other.metrics)
     assert one.metrics[one.top(3)[0]] == one.metrics.max()
     assert list(np.sort(one.metrics)[::-1]) == list(one.metrics[one.order])
+
+
+def test_useful_means_within_a_factor_two_of_the_best_without_falling():
+    creature = FakeCreature(seconds=5.0)
+    metrics = np.array([0.5, 0.2, 0.26, 0.0, 0.9, 0.01])  # m in 5 s: 10, 4, 5.2, 0, 18, 0.2 cm/s
+    fell = np.array([False, False, False, True, True, False])
+    res = SearchResult(creature, [], metrics, fell, metrics, 5.0, "flat", 0, 0.0, 1)
+    assert useful_threshold_cm_s(res) == pytest.approx(5.0)  # the fallen 18 cm/s does not count
+    assert useful_mask(res).tolist() == [True, False, True, False, False, False]
 
 
 # --- phase 2 tuning ------------------------------------------------------------------------

@@ -208,22 +208,24 @@ def search(
 
 # --- usefulness, files and benchmark ---------------------------------------------------------
 
-USEFUL_FRACTION_OF_PAPER = 0.25
+USEFUL_FRACTION = 0.5  # of the best gait's speed
+USEFUL_FLOOR_CM_S = 1.0
 
 
-def useful_threshold_cm_s(creature) -> float:
-    """Return the speed (cm/s) from which a random network counts as useful.
+def useful_threshold_cm_s(result: SearchResult) -> float:
+    """Return the speed (cm/s) from which a trial counts as useful in this search.
 
-    A quarter of the paper's best speed for the creature (Table 1); for a creature the paper
-    gives no speed for, 2 cm/s.
+    Half the speed of the best gait the search found (without falling), and at least 1 cm/s:
+    a useful network is one whose gait is within a factor of two of the best.
     """
-    paper = getattr(creature, "paper_speed", None)
-    return USEFUL_FRACTION_OF_PAPER * float(paper) if paper else 2.0
+    ok = (~result.fell) & np.isfinite(result.metrics)
+    best = float(result.speeds[ok].max()) if ok.any() else 0.0
+    return max(USEFUL_FRACTION * best, USEFUL_FLOOR_CM_S)
 
 
 def useful_mask(result: SearchResult, threshold_cm_s: float | None = None) -> np.ndarray:
     """Return which trials are useful: not fallen and at least ``threshold_cm_s`` fast."""
-    thr = useful_threshold_cm_s(result.creature) if threshold_cm_s is None else threshold_cm_s
+    thr = useful_threshold_cm_s(result) if threshold_cm_s is None else threshold_cm_s
     return (~result.fell) & (result.speeds >= thr) & np.isfinite(result.metrics)
 
 
@@ -320,7 +322,7 @@ def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -
         "best_speed_cm_s": round(float(speeds[kept[0]]), 2),
         "paper_speed_cm_s": getattr(c, "paper_speed", None),
         "useful": f"{int(use.sum())}/{len(use)} ({100 * use.mean():.1f}%, "
-        f">= {useful_threshold_cm_s(c):.3g} cm/s without falling)",
+        f">= {useful_threshold_cm_s(result):.3g} cm/s, half the best, without falling)",
         "fell": int(result.fell.sum()),
         "evaluation_s": round(result.elapsed, 2),
         "sans": str(out / "sans"),
