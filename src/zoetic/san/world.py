@@ -335,13 +335,20 @@ class World:
         self._wn, self._wt, self._wrot = k * w * ll, k * w * th, k * w * (ll**3 + th**3) / 12.0
 
     def set_tuning(self, creature: Creature) -> None:
-        """Use ``creature``'s Fig. 8 parameters (same links, joints, sensor and actuator names)."""
+        """Use ``creature``'s Fig. 8 parameters (same creature otherwise: links, joints, names)."""
         old = self.creature
-        same = [(s.name, s.kind, s.target) for s in creature.sensors] == [
-            (s.name, s.kind, s.target) for s in old.sensors
-        ] and [(a.name, a.kind, a.joint) for a in creature.actuators] == [
-            (a.name, a.kind, a.joint) for a in old.actuators
-        ]
+        same = (
+            (creature.name, creature.links, creature.joints)
+            == (
+                old.name,
+                old.links,
+                old.joints,
+            )
+            and [(s.name, s.kind, s.target) for s in creature.sensors]
+            == [(s.name, s.kind, s.target) for s in old.sensors]
+            and [(a.name, a.kind, a.joint) for a in creature.actuators]
+            == [(a.name, a.kind, a.joint) for a in old.actuators]
+        )
         if not same:
             raise CreatureError(
                 f"set_tuning: creature {creature.name!r} has other sensors or actuators than "
