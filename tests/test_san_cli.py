@@ -116,3 +116,12 @@ def test_bench_san_prints_json(capsys):
     assert code == 0
     out = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert out["cart_4_trials_seconds"] > 0 and out["steps_per_second"] > 0
+
+
+def test_unknown_method_terrain_or_creature_exit_2(capsys):
+    assert main(["san", "tune", "x.json", "--method", "newton"]) == 2
+    assert "unknown tuning method 'newton'" in capsys.readouterr().err
+    assert main(["san", "search", "cart", "--terrain", "bumpy", "--trials", "1"]) == 2
+    assert "unknown terrain 'bumpy'" in capsys.readouterr().err
+    assert main(["san", "search", "unicorn", "--trials", "1"]) == 2
+    assert "unicorn" in capsys.readouterr().err

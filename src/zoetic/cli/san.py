@@ -103,8 +103,10 @@ def tune_cmd(
 ) -> None:
     """Phase 2: fine-tune the Fig. 8 parameters (delays, actuators, sensors), weights kept."""
     from zoetic.san.network import load_with_creature
-    from zoetic.san.tune import tune, write_tune
+    from zoetic.san.tune import METHODS, TuneError, tune, write_tune
 
+    if method not in METHODS:
+        raise TuneError(f"unknown tuning method {method!r}; use one of {', '.join(METHODS)}")
     net, c = load_with_creature(network, creature)
     out = out or network.with_name(f"{network.stem}-{method}")
     bar, tid = _bar(f"{c.name} {method}", trials)

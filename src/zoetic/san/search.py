@@ -22,6 +22,7 @@ from zoetic.san.network import Network, SanPolicy, random_network
 __all__ = ["Outcome", "SearchResult", "evaluate_networks", "search", "speed_cm_s"]
 
 Progress = Callable[[int, int, float], None]  # (done, total, best metric so far)
+TERRAINS = ("flat", "rough")
 
 
 @dataclass(frozen=True)
@@ -186,6 +187,10 @@ def search(
     """
     if trials < 1:
         raise ValueError("trials must be at least 1")
+    if terrain not in TERRAINS:
+        from zoetic.san.creature import CreatureError
+
+        raise CreatureError(f"unknown terrain {terrain!r} (expected 'flat' or 'rough')")
     rng = np.random.default_rng(seed)
     networks = [random_network(creature, rng, n_hidden=n_hidden) for _ in range(trials)]
     seconds = float(creature.seconds if seconds is None else seconds)
