@@ -149,12 +149,13 @@ def plot_stills(c, stills, path: Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from zoetic.san.draw import render_frames
+
+    from zoetic.san import draw
 
     n = len(stills)
     fig, axes = plt.subplots(n, 1, figsize=(8, 2.0 * n), dpi=100, squeeze=False)
     for ax, (mode, _net, ro) in zip(axes[:, 0], stills, strict=True):
-        frames = list(render_frames(c, ro, size=(480, 200)))
+        frames = list(draw.render_frames(c, ro, size=(480, 200)))
         picks = np.linspace(len(frames) // 4, len(frames) - 1, 4).astype(int)
         ax.imshow(np.concatenate([frames[k] for k in picks], axis=1))
         ax.set_title(mode, fontsize=9)

@@ -311,14 +311,15 @@ def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -
     plot_ranking(result, out / "ranking.png", top=min(top, len(kept)))
     videos = []
     if video:
-        from zoetic.san.draw import render_frames
+        from zoetic.san import draw
         from zoetic.san.show import replay
         from zoetic.viz.video import write_mp4
 
         for rank, i in enumerate(kept, start=1):
             net = result.networks[i]
             rollout = replay(net, c, result.seconds, result.terrain, result.seed, fps=30)
-            videos.append(write_mp4(render_frames(c, rollout), out / "videos" / f"{rank:02d}.mp4"))
+            path = out / "videos" / f"{rank:02d}.mp4"
+            videos.append(write_mp4(draw.render_frames(c, rollout), path))
     use = useful_mask(result)
     summary = {
         "creature": c.name,

@@ -113,7 +113,7 @@ def show_video(
 
     Returns the video's path and the replayed Rollout.
     """
-    from zoetic.san.draw import render_frames
+    from zoetic.san import draw
     from zoetic.viz.video import write_mp4
 
     tuned = network.tuned_creature(creature)
@@ -148,5 +148,5 @@ def show_video(
             ax.axhline(y - 0.5, color="0.5", lw=0.6)
         ax.set_title(f"SAN  t = {times[i]:.2f} s", fontsize=8)
 
-    frames = render_frames(tuned, rollout, side_panel=panel, size=size)
+    frames = draw.render_frames(tuned, rollout, side_panel=panel, size=size)
     return write_mp4(frames, path, fps=fps), rollout
