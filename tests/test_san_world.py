@@ -206,9 +206,9 @@ def test_no_actuation_at_rest_has_no_drift(name):
     assert not r.fell
 
 
-def test_mirror_symmetric_cart_moves_mirrored():
-    """Flipping the sign of every command of the cart (crossed at 0.12 m of 0.3) is not a
-    mirror image, but a cart built symmetric (crossing at the middle) cannot move at all."""
+def test_a_mirror_symmetric_cart_cannot_move():
+    """Crossed at the middle, the cart is mirror-symmetric: whatever it does, its centre of
+    mass stays put (the zoo's cart crosses off-centre for that reason)."""
     sym = CART.replace("start = -0.12", "start = -0.15").replace("at = -0.12", "at = -0.15")
     sym = sym.replace("at = 0.18", "at = 0.15")
     import tomllib
@@ -257,11 +257,10 @@ def test_commands_map_linearly_onto_the_actuator_range():
     for u, want in ((-2.0, lo), (2.0, hi), (0.0, (lo + hi) / 2), (5.0, hi)):
         r = World(c).run(Const(np.full(2, u)), seconds=0.05, record_every=1)
         assert np.allclose(r.targets[-1], want)
-    r = World(c).run(Const(np.full(2, 2.0)), seconds=2.0, record_every=100)
     w = World(c)
+    w.run(Const(np.full(2, 2.0)), seconds=2.0)
     q = w.data.qpos[w.model.jnt_qposadr[w.model.joint("J1").id]]
-    assert q == q  # finite
-    assert np.allclose(r.targets[-1], hi)
+    assert q == pytest.approx(hi[0], abs=0.1)  # the servo got there (gravity bends it a bit)
 
 
 def test_crawler_moves_forward_under_a_symmetric_oscillation():
@@ -347,3 +346,23 @@ def test_follow_metric_rewards_approach():
     away = w.run(Square(1.0, [0.0, 0.0], amp=1.0), seconds=3.0)
     assert away.metric == r.metric
     assert np.all(np.diff(r.follow[:, 0]) > 0)
+
+
+def test_eyes_see_the_follow_point_ahead_at_the_start():
+    c = load_creature("fish")
+    r = World(c).run(Const(np.zeros(2)), seconds=0.1, record_every=1)
+    eyes = r.sensors[0, :4]  # right-far, right-near, left-near, left-far
+    assert eyes[1] or eyes[2]
+    assert not eyes[0] and not eyes[3]
+    assert not World(c, follow=False).run(Const(np.zeros(2)), 0.1, 1).sensors[:, :4].any()
+
+
+def test_one_sided_stroke_turns_the_crawler():
+    c = load_creature("crawler")
+
+    class Left(Square):
+        def step(self, sensors, dt):
+            return np.array([super().step(sensors, dt)[0], -2.0])
+
+    r = World(c).run(Left(0.4, [0.0, 0.0]), seconds=5.0, record_every=100)
+    assert r.distance > 0.2 and r.poses[-1, 0, 2] < -0.3  # forward, turning right
