@@ -319,7 +319,8 @@ def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -
             net = result.networks[i]
             rollout = replay(net, c, result.seconds, result.terrain, result.seed, fps=30)
             path = out / "videos" / f"{rank:02d}.mp4"
-            videos.append(write_mp4(draw.render_frames(c, rollout), path))
+            step = float(rollout.times[1] - rollout.times[0]) if len(rollout.times) > 1 else 1 / 30
+            videos.append(write_mp4(draw.render_frames(c, rollout), path, fps=1.0 / step))
     use = useful_mask(result)
     summary = {
         "creature": c.name,

@@ -106,7 +106,7 @@ def show_video(
     seed: int = 0,
     fps: float = 30.0,
     window: float = 2.0,
-    size: tuple[int, int] = (1120, 420),
+    size: tuple[int, int] = (1120, 416),
     rollout=None,
 ) -> tuple[Path, object]:
     """Write a video of the creature with its network's activity beside it.
@@ -149,4 +149,4 @@ def show_video(
         ax.set_title(f"SAN  t = {times[i]:.2f} s", fontsize=8)
 
     frames = draw.render_frames(tuned, rollout, side_panel=panel, size=size)
-    return write_mp4(frames, path, fps=fps), rollout
+    return write_mp4(frames, path, fps=1.0 / step), rollout  # real time
