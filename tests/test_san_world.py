@@ -366,3 +366,12 @@ def test_one_sided_stroke_turns_the_crawler():
 
     r = World(c).run(Left(0.4, [0.0, 0.0]), seconds=5.0, record_every=100)
     assert r.distance > 0.2 and r.poses[-1, 0, 2] < -0.3  # forward, turning right
+
+
+def test_hop_metric_adds_height_to_progress():
+    import dataclasses
+
+    c = dataclasses.replace(load_creature("bouncer"), metric="hop", hop_k=10.0)
+    r = World(c).run(Const(np.zeros(4)), seconds=2.0)
+    # standing still: ~ k * y^2 * T with the centre of mass about 0.45 m up
+    assert not r.fell and 10.0 * 0.3**2 * 2.0 < r.metric < 10.0 * 0.6**2 * 2.0
