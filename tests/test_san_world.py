@@ -375,3 +375,10 @@ def test_hop_metric_adds_height_to_progress():
     r = World(c).run(Const(np.zeros(4)), seconds=2.0)
     # standing still: ~ k * y^2 * T with the centre of mass about 0.45 m up
     assert not r.fell and 10.0 * 0.3**2 * 2.0 < r.metric < 10.0 * 0.6**2 * 2.0
+
+
+def test_commands_of_the_wrong_shape_are_a_clear_error():
+    from zoetic.errors import SimulationError
+
+    with pytest.raises(SimulationError, match="3 actuators"):
+        World(load_creature("fourlink")).run(Const(np.zeros(2)), seconds=0.1)

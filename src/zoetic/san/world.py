@@ -54,6 +54,7 @@ import mujoco
 import numpy as np
 from numba import njit
 
+from zoetic.errors import SimulationError
 from zoetic.san.creature import Creature, CreatureError
 from zoetic.san.mjcf import GRAVITY, build_mjcf, rough_profile
 
@@ -153,9 +154,10 @@ def _fallen(xpos, xmat, fbody, fpts, gx, gz, clear, root, angle0, tilt):  # prag
 
 @njit(cache=True)
 def _command(u, lo, span, off, target, ctrl):  # pragma: no cover
-    """Map commands u (clipped to [-2, 2]) onto targets in [lo, hi]; servo ctrl = target - off."""
-    for a in range(u.size):
-        v = min(max(u[a], -2.0), 2.0)
+    """Map commands u (clipped to [-2, 2], NaN as 0) onto [lo, hi]; servo ctrl = target - off."""
+    for a in range(target.size):
+        v = u[a]
+        v = 0.0 if v != v else min(max(v, -2.0), 2.0)  # NaN -> the middle of the range
         target[a] = lo[a] + (v + 2.0) * 0.25 * span[a]
         ctrl[a] = target[a] - off[a]
 
@@ -486,6 +488,11 @@ class World:
             _sense(qpos, xpos, xmat, itab, ftab, gx, gz, fp, slo, shi, raw, s)
             if tick < n_ticks:
                 u = np.asarray(policy.step(s, cdt), dtype=float)
+                if u.shape != target.shape:
+                    raise SimulationError(
+                        f"policy.step returned commands of shape {u.shape}; creature "
+                        f"{c.name!r} has {c.n_actuators} actuators"
+                    )
                 _command(u, alo, aspan, off, target, ctrl)
             if rec and tick % record_every == 0:
                 buf["t"].append(tick * cdt)
