@@ -382,3 +382,11 @@ def test_commands_of_the_wrong_shape_are_a_clear_error():
 
     with pytest.raises(SimulationError, match="3 actuators"):
         World(load_creature("fourlink")).run(Const(np.zeros(2)), seconds=0.1)
+
+
+@pytest.mark.parametrize("name", sorted(TABLE1))
+def test_every_zoo_creature_round_trips(tmp_path, name):
+    c = load_creature(name)
+    text = creature_to_toml(c)
+    assert text.startswith("# creature") and "[[link]]" in text
+    assert load_creature(save_creature(c, tmp_path / f"{name}.toml")) == c

@@ -25,6 +25,7 @@ Public interface::
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import tomllib
@@ -633,11 +634,30 @@ def creature_to_dict(c: Creature) -> dict:
     return out
 
 
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        return repr(v) if math.isfinite(v) else ("nan" if v != v else ("inf" if v > 0 else "-inf"))
+    if isinstance(v, str):
+        return json.dumps(v)  # a JSON string is a TOML basic string
+    if isinstance(v, list | tuple):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise TypeError(f"cannot write {v!r} to TOML")
+
+
 def creature_to_toml(c: Creature) -> str:
     """Return the creature as TOML text (SI keys), which :func:`load_creature` reads back."""
-    import tomli_w
-
-    return tomli_w.dumps(creature_to_dict(c))
+    data = creature_to_dict(c)
+    lines = [f"# creature {c.name!r}, written by zoetic (SI units: m, kg, s, rad)", "[creature]"]
+    lines += [f"{k} = {_toml_value(v)}" for k, v in data["creature"].items()]
+    for section in ("link", "joint", "sensor", "actuator"):
+        for entry in data[section]:
+            lines += ["", f"[[{section}]]"]
+            lines += [f"{k} = {_toml_value(v)}" for k, v in entry.items()]
+    return "\n".join(lines) + "\n"
 
 
 def save_creature(c: Creature, path: str | os.PathLike) -> Path:
