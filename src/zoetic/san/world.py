@@ -13,6 +13,9 @@ Public interface::
     World(creature, terrain="flat" | "rough", seed=0, follow=None)
         .run(policy, seconds=None, record_every=0) -> Rollout
         .set_tuning(creature)                  same structure, new Fig. 8 parameters
+        .read_sensors(follow_point=None), .poses(), .com(), .ground(x)   for the current state
+        (``follow`` defaults to creature.metric == "follow"; without a follow point eyes see
+        nothing and a "follow" creature is scored by its distance)
     evaluate(creature, policy, seconds=None, terrain="flat", seed=0) -> float
 
 How a rollout runs. Every ``control_dt`` the world reads the binary sensors, calls
@@ -60,7 +63,6 @@ from zoetic.san.mjcf import GRAVITY, build_mjcf, rough_profile
 
 __all__ = ["Policy", "Rollout", "World", "evaluate"]
 
-_TWO_PI = 2.0 * math.pi
 _CRAWL_V0 = 0.02  # m/s, smoothing speed of the crawler's friction
 _TOUCH_CLEAR = 0.002  # m, clearance below which a fall link counts as touching
 
