@@ -390,3 +390,20 @@ def test_every_zoo_creature_round_trips(tmp_path, name):
     text = creature_to_toml(c)
     assert text.startswith("# creature") and "[[link]]" in text
     assert load_creature(save_creature(c, tmp_path / f"{name}.toml")) == c
+
+
+def test_render_frames_yields_rgb_frames_with_a_side_panel():
+    from zoetic.san.draw import render_frames
+
+    c = load_creature("bouncer")
+    r = World(c, terrain="rough").run(Square(0.2, [0, 0.1, 0.2, 0.3]), 0.2, record_every=20)
+    calls = []
+    frames = list(render_frames(c, r, side_panel=lambda ax, i: calls.append(i), size=(320, 180)))
+    assert len(frames) == len(r.times) == 3 and calls == [0, 1, 2]
+    assert frames[0].shape == (180, 320, 3) and frames[0].dtype == np.uint8
+    assert frames[0].std() > 10  # something was drawn
+    fish = load_creature("fish")
+    rf = World(fish).run(Const(np.zeros(2)), 0.1, record_every=10)
+    assert next(iter(render_frames(fish, rf))).shape == (360, 640, 3)
+    with pytest.raises(ValueError, match="record_every"):
+        next(iter(render_frames(c, World(c).run(Const(np.zeros(4)), 0.1))))
