@@ -213,7 +213,7 @@ def test_a_mirror_symmetric_cart_cannot_move():
     sym = sym.replace("at = 0.18", "at = 0.15")
     import tomllib
 
-    from zoetic.san.creature import creature_from_dict
+    from zoetic.san.creature_file import creature_from_dict
 
     c = creature_from_dict(tomllib.loads(sym), "sym.toml")
     r = World(c).run(Square(0.4, [0.0]), seconds=2.0)

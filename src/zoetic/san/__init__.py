@@ -1,7 +1,7 @@
 """Sensor-actuator networks (van de Panne & Fiume 93): planar creatures, their MuJoCo world.
 
-Creatures (``creature``): :class:`Creature` with :class:`Link`, :class:`Joint`,
-:class:`Sensor`, :class:`Actuator`; :func:`load_creature` (zoo name or .toml path),
+Creatures (``creature``; files in ``creature_file``): :class:`Creature` with :class:`Link`,
+:class:`Joint`, :class:`Sensor`, :class:`Actuator`; :func:`load_creature` (zoo name or path),
 :func:`list_creatures`, :func:`creature_to_toml`, :func:`save_creature`; errors are
 :class:`CreatureError`. The format is documented in ``docs/creatures.md``.
 
@@ -21,6 +21,8 @@ from zoetic.san.creature import (
     Joint,
     Link,
     Sensor,
+)
+from zoetic.san.creature_file import (
     creature_to_toml,
     list_creatures,
     load_creature,
