@@ -14,6 +14,7 @@ import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -279,9 +280,20 @@ def plot_ranking(result: SearchResult, path, top: int = 10):
     return atomic_write_bytes(path, buf.getvalue())
 
 
+def _video_job(job: tuple) -> Path:
+    """Replay one kept network and write its video; returns the video's path."""
+    from zoetic.san import draw
+    from zoetic.san.show import replay
+    from zoetic.viz.video import write_mp4
+
+    net, creature, seconds, terrain, seed, path = job
+    rollout = replay(net, creature, seconds, terrain, seed, fps=30)
+    step = float(rollout.times[1] - rollout.times[0]) if len(rollout.times) > 1 else 1 / 30
+    return write_mp4(draw.render_frames(creature, rollout), path, fps=1.0 / step)
+
+
 def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -> dict:
     """Write a search run directory (sans/NN.json, videos/NN.mp4, ranking.png, trials.csv)."""
-    from pathlib import Path
 
     from zoetic.io import atomic_write_bytes, write_json, write_toml
     from zoetic.san.network import save_network
@@ -310,17 +322,18 @@ def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -
         sans.append(save_network(net, out / "sans" / f"{rank:02d}.json"))
     plot_ranking(result, out / "ranking.png", top=min(top, len(kept)))
     videos = []
-    if video:
-        from zoetic.san import draw
-        from zoetic.san.show import replay
-        from zoetic.viz.video import write_mp4
-
-        for rank, i in enumerate(kept, start=1):
-            net = result.networks[i]
-            rollout = replay(net, c, result.seconds, result.terrain, result.seed, fps=30)
-            path = out / "videos" / f"{rank:02d}.mp4"
-            step = float(rollout.times[1] - rollout.times[0]) if len(rollout.times) > 1 else 1 / 30
-            videos.append(write_mp4(draw.render_frames(c, rollout), path, fps=1.0 / step))
+    if video:  # one video per kept gait, rendered on all cores
+        jobs = [
+            (result.networks[i], c, result.seconds, result.terrain, result.seed,
+             out / "videos" / f"{rank:02d}.mp4")
+            for rank, i in enumerate(kept, start=1)
+        ]  # fmt: skip
+        workers = max(1, min(os.cpu_count() or 1, len(jobs)))
+        if workers == 1:
+            videos = [_video_job(job) for job in jobs]
+        else:
+            with ProcessPoolExecutor(max_workers=workers, mp_context=_pool_context()) as pool:
+                videos = list(pool.map(_video_job, jobs))
     use = useful_mask(result)
     summary = {
         "creature": c.name,
