@@ -22,7 +22,7 @@ def main() -> None:
         from zoetic.physics.bench import bench_simulate
 
         out["numba"] = bench_simulate(args.animal, args.seconds, args.batch, args.repeats)
-    print(json.dumps(out, indent=2))
+    print(json.dumps(out))
 
 
 if __name__ == "__main__":

@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Every benchmark, one JSON object per line: ./bench/run.sh  (after ./run.sh has made .venv)
+# Figures are ratios measured side by side in the same run; absolute numbers depend on the
+# host (the simulate line names its CPU and SIMD width), so compare only like with like.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+Z=".venv/bin/zoetic"
+PY=".venv/bin/python"
+[ -x "$Z" ] || { echo "no .venv: run ./run.sh test (or ./run.sh demo) first" >&2; exit 2; }
+"$Z" bench simulate --json | tail -n 1
+"$Z" bench learn --json | tail -n 1
+"$Z" bench san --json | tail -n 1
+"$PY" bench/jax_sim.py
