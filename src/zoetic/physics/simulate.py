@@ -97,17 +97,20 @@ def _check(body: Body, act: np.ndarray, state: State) -> None:
             f"start state holds {state.positions.shape} positions; expected "
             f"({act.shape[0]}, {body.n_nodes}, 3)"
         )
-    if not np.all(np.isfinite(act)):
-        raise SimulationError("activations contain non-finite values")
 
 
 def _kernel_arrays(body: Body) -> tuple:
     """Return the body's arrays in the order and precision the kernel takes them."""
     f32 = np.float32
+    muscle = body.spring_actuator >= 0
+    # the kernel's rest length is l_r + a * shorten with a read from column scol: passive
+    # springs shorten by nothing and read column 0, so the spring loop has no branch
+    shorten = np.where(muscle, body.contracted - body.relaxed, 0.0).astype(f32)
+    scol = np.where(muscle, body.spring_actuator, 0).astype(np.int64)
     return (
         body.mass.astype(f32), body.node_damping.astype(f32), body.spring_a, body.spring_b,
         body.stiffness.astype(f32), body.spring_damping.astype(f32), body.relaxed.astype(f32),
-        body.contracted.astype(f32), body.spring_actuator, body.panels,
+        shorten, scol, body.panels,
         body.panel_weights.astype(f32), body.fin_nodes,
         body.fin_forward, body.fin_span, body.fin_area.astype(f32),
         body.fin_angle.astype(f32), body.fin_actuator, body.axis_front, body.axis_back,
@@ -133,10 +136,9 @@ def simulate(
     state : start State with batch B; default the rest pose.
     record_every : record positions every this many steps (and at the last step's end).
     """
-    act = np.asarray(activations, dtype=np.float64)
+    act = np.asarray(activations)
     if act.ndim == 2:
         act = act[None]
-    act = np.clip(act, 0.0, 1.0)
     med = get_medium(medium or body.medium)
     dt = float(dt or body.dt)
     batch, steps = act.shape[0], act.shape[1]
@@ -149,7 +151,15 @@ def simulate(
 
     n = body.n_nodes
     f32 = np.float32
-    act_t = np.ascontiguousarray(act.transpose(1, 2, 0), dtype=f32)  # (T, A, B)
+    # (T, A, B) float32, then checked and clipped to [0, 1] in place: on a big batch this copy
+    # costs as much as the simulation, so no float64 intermediates. A body without actuators
+    # gets one zero column for its passive springs to read.
+    act_t = np.zeros((steps, max(1, act.shape[2]), batch), dtype=f32)
+    if act.shape[2]:
+        act_t[...] = act.transpose(1, 2, 0)
+    if not np.isfinite(act_t).all():
+        raise SimulationError("activations contain non-finite values")
+    np.clip(act_t, 0.0, 1.0, out=act_t)
     pos0 = np.ascontiguousarray(state.positions.transpose(1, 2, 0), dtype=f32)
     vel0 = np.ascontiguousarray(state.velocities.transpose(1, 2, 0), dtype=f32)
     n_rec = steps // record_every + 1
