@@ -55,15 +55,15 @@ from typing import Protocol, runtime_checkable
 
 import mujoco
 import numpy as np
-from numba import njit
 
 from zoetic.errors import SimulationError
 from zoetic.san.creature import Creature, CreatureError
+from zoetic.san.follow import FollowPath
+from zoetic.san.kernels import ANGLE, EYE, LENGTH, TOUCH, command, fallen, medium_forces, sense
 from zoetic.san.mjcf import GRAVITY, build_mjcf, rough_profile
 
 __all__ = ["Policy", "Rollout", "World", "evaluate"]
 
-_CRAWL_V0 = 0.02  # m/s, smoothing speed of the crawler's friction
 _TOUCH_CLEAR = 0.002  # m, clearance below which a fall link counts as touching
 
 
@@ -100,135 +100,6 @@ class Rollout:
     follow: np.ndarray | None = None
     terrain: np.ndarray | None = None
     unstable: bool = False
-
-
-# ----------------------------------------------------------------------------- kernels
-# Per control tick the world does little Python work: one call reads all sensors, one checks
-# for a fall, one maps commands to servo targets (and, for media, one call per physics step).
-_ANGLE, _LENGTH, _TOUCH, _EYE = 0, 1, 2, 3
-
-
-@njit(cache=True)
-def _sense(qpos, xpos, xmat, itab, ftab, gx, gz, fp, lo, hi, raw, out):  # pragma: no cover
-    """Fill ``out`` (S,) with the binary sensors; ``raw`` gets the readings."""
-    for s in range(raw.size):
-        raw[s] = np.inf
-    for k in range(itab.shape[0]):
-        kind, i, s = itab[k, 0], itab[k, 1], itab[k, 2]
-        if kind == _ANGLE:
-            raw[s] = (qpos[i] + np.pi) % (2 * np.pi) - np.pi
-        elif kind == _LENGTH:
-            raw[s] = qpos[i] + ftab[k, 3]
-        elif kind == _TOUCH:
-            px, pz = ftab[k, 0], ftab[k, 1]
-            z = xpos[i, 2] + xmat[i, 6] * px + xmat[i, 8] * pz - ftab[k, 2]
-            if gx.size > 0:
-                z -= np.interp(xpos[i, 0] + xmat[i, 0] * px + xmat[i, 2] * pz, gx, gz)
-            if z < raw[s]:
-                raw[s] = z
-        elif fp.size == 2:  # eye; without a follow point it sees nothing
-            at = ftab[k, 0]
-            ex = xpos[i, 0] + xmat[i, 0] * at
-            ez = xpos[i, 2] + xmat[i, 6] * at
-            a = np.arctan2(fp[1] - ez, fp[0] - ex) - np.arctan2(xmat[i, 6], xmat[i, 0])
-            raw[s] = (a + np.pi) % (2 * np.pi) - np.pi
-    for s in range(raw.size):
-        out[s] = lo[s] <= raw[s] and raw[s] <= hi[s]
-
-
-@njit(cache=True)
-def _fallen(xpos, xmat, fbody, fpts, gx, gz, clear, root, angle0, tilt):  # pragma: no cover
-    """Return True when a fall probe touches the ground or the root tilts past ``tilt``."""
-    for k in range(fbody.size):
-        i = fbody[k]
-        px, pz = fpts[k, 0], fpts[k, 1]
-        z = xpos[i, 2] + xmat[i, 6] * px + xmat[i, 8] * pz - fpts[k, 2]
-        if gx.size > 0:
-            z -= np.interp(xpos[i, 0] + xmat[i, 0] * px + xmat[i, 2] * pz, gx, gz)
-        if z <= clear:
-            return True
-    if tilt > 0:
-        a = np.arctan2(xmat[root, 6], xmat[root, 0]) - angle0
-        if abs((a + np.pi) % (2 * np.pi) - np.pi) > tilt:
-            return True
-    return False
-
-
-@njit(cache=True)
-def _command(u, lo, span, off, target, ctrl):  # pragma: no cover
-    """Map commands u (clipped to [-2, 2], NaN as 0) onto [lo, hi]; servo ctrl = target - off."""
-    for a in range(target.size):
-        v = u[a]
-        v = 0.0 if v != v else min(max(v, -2.0), 2.0)  # NaN -> the middle of the range
-        target[a] = lo[a] + (v + 2.0) * 0.25 * span[a]
-        ctrl[a] = target[a] - off[a]
-
-
-@njit(cache=True)
-def _medium(
-    body, cvel, xipos, xmat, com, xfrc, water, wn, wt, wrot, root, load, mu
-):  # pragma: no cover
-    """Apply the water drag or the crawler's anisotropic floor friction to each link."""
-    hx, hz = xmat[root, 0], xmat[root, 6]
-    for k in range(body.size):
-        b = body[k]
-        w = cvel[b, 1]
-        vx = cvel[b, 3] + w * (xipos[b, 2] - com[2])
-        vz = cvel[b, 5] - w * (xipos[b, 0] - com[0])
-        if water:
-            tx, tz, nx, nz = xmat[b, 0], xmat[b, 6], xmat[b, 2], xmat[b, 8]
-            vt = vx * tx + vz * tz
-            vn = vx * nx + vz * nz
-            xfrc[b, 0] = -wt[k] * vt * tx - wn[k] * vn * nx
-            xfrc[b, 2] = -wt[k] * vt * tz - wn[k] * vn * nz
-            xfrc[b, 4] = -wrot[k] * w
-        else:
-            va = vx * hx + vz * hz
-            vl = -vx * hz + vz * hx
-            fa = -(mu[0] if va > 0 else mu[1]) * load[k] * np.tanh(va / _CRAWL_V0)
-            fl = -mu[2] * load[k] * np.tanh(vl / _CRAWL_V0)
-            xfrc[b, 0] = fa * hx - fl * hz
-            xfrc[b, 2] = fa * hz + fl * hx
-
-
-class _FollowPath:
-    """A follow point dragged at constant speed along a seeded spline."""
-
-    def __init__(
-        self, start: np.ndarray, lead: float, speed: float, length: float, seed: int, lateral: bool
-    ):
-        rng = np.random.default_rng([seed, 7919])
-        step = max(4.0 * lead, 0.2)
-        n = int(length / step) + 4
-        wx = start[0] + lead + step * np.arange(-1, n)
-        wz = np.full(wx.shape, start[1])
-        if lateral:
-            wz = wz + np.concatenate([[0.0, 0.0], rng.normal(0.0, 0.6 * step, n - 1)])
-        pts = np.stack([wx, wz], axis=1)
-        dense = []
-        for i in range(1, len(pts) - 2):  # Catmull-Rom between pts[i] and pts[i+1]
-            p0, p1, p2, p3 = pts[i - 1], pts[i], pts[i + 1], pts[i + 2]
-            t = np.linspace(0.0, 1.0, 50, endpoint=False)[:, None]
-            dense.append(
-                0.5
-                * (
-                    2 * p1
-                    + (p2 - p0) * t
-                    + (2 * p0 - 5 * p1 + 4 * p2 - p3) * t**2
-                    + (3 * p1 - p0 - 3 * p2 + p3) * t**3
-                )
-            )
-        self.points = np.concatenate(dense)
-        seg = np.linalg.norm(np.diff(self.points, axis=0), axis=1)
-        self.arc = np.concatenate([[0.0], np.cumsum(seg)])
-        self.speed = speed
-
-    def at(self, t: float) -> np.ndarray:
-        """Return the follow point [x, z] at time ``t`` (s)."""
-        s = self.speed * t
-        return np.array(
-            [np.interp(s, self.arc, self.points[:, 0]), np.interp(s, self.arc, self.points[:, 1])]
-        )
 
 
 def _probes(link, at: float | None) -> list[tuple[float, float, float]]:
@@ -293,20 +164,20 @@ class World:
             if s.kind in ("angle", "length"):
                 jn = act_by[s.target].joint if s.target in act_by else s.target
                 if s.kind == "angle":
-                    itab.append((_ANGLE, jq[jn], i))
+                    itab.append((ANGLE, jq[jn], i))
                     ftab.append((0.0, 0.0, 0.0, 0.0))
                 else:
-                    itab.append((_LENGTH, jq[jn], i))
+                    itab.append((LENGTH, jq[jn], i))
                     ftab.append((0.0, 0.0, 0.0, joint_by[jn].offset))
             elif s.kind == "touch":
                 li = links[s.target]
                 for px, pz, r in _probes(c.links[li], s.at):
-                    itab.append((_TOUCH, self.body[li], i))
+                    itab.append((TOUCH, self.body[li], i))
                     ftab.append((px, pz, r, 0.0))
             else:
                 ln = c.links[links[s.target]]
                 at = ln.start + ln.length if s.at is None else s.at
-                itab.append((_EYE, self.body[links[s.target]], i))
+                itab.append((EYE, self.body[links[s.target]], i))
                 ftab.append((at, 0.0, 0.0, 0.0))
         self._itab = np.array(itab, dtype=np.int64).reshape(-1, 3)
         self._ftab = np.array(ftab, dtype=float).reshape(-1, 4)
@@ -398,7 +269,7 @@ class World:
         """Return the (S,) binary sensor values for the current state (a fresh array)."""
         out = np.empty(self.creature.n_sensors, dtype=np.bool_)
         fp = np.zeros(0) if follow_point is None else np.asarray(follow_point, dtype=float)
-        _sense(
+        sense(
             self._qpos,
             self._xpos,
             self._xmat,
@@ -442,7 +313,7 @@ class World:
         path = None
         if self.follow_on:
             length = c.follow_speed * max(seconds, 1.0) * 1.5 + 2.0
-            path = _FollowPath(
+            path = FollowPath(
                 com0, c.follow_lead, c.follow_speed, length, self.seed, lateral=not self.vertical
             )
         kind = c.metric if (c.metric != "follow" or path is not None) else "distance"
@@ -487,7 +358,7 @@ class World:
         fp = path.at(0.0) if path is not None else np.zeros(0)
         for tick in range(n_ticks + 1):
             s = np.empty(c.n_sensors, dtype=np.bool_)
-            _sense(qpos, xpos, xmat, itab, ftab, gx, gz, fp, slo, shi, raw, s)
+            sense(qpos, xpos, xmat, itab, ftab, gx, gz, fp, slo, shi, raw, s)
             if tick < n_ticks:
                 u = np.asarray(policy.step(s, cdt), dtype=float)
                 if u.shape != target.shape:
@@ -495,7 +366,7 @@ class World:
                         f"policy.step returned commands of shape {u.shape}; creature "
                         f"{c.name!r} has {c.n_actuators} actuators"
                     )
-                _command(u, alo, aspan, off, target, ctrl)
+                command(u, alo, aspan, off, target, ctrl)
             if rec and tick % record_every == 0:
                 buf["t"].append(tick * cdt)
                 buf["p"].append(self.poses())
@@ -509,12 +380,12 @@ class World:
                 break
             if medium:
                 for _ in range(k):
-                    _medium(*margs)
+                    medium_forces(*margs)
                     mujoco.mj_step(m, d)
             else:
                 mujoco.mj_step(m, d, k)
             if check_fall and not fell:
-                fell = _fallen(xpos, xmat, fbody, fpts, gx, gz, _TOUCH_CLEAR, root, angle0, tilt)
+                fell = fallen(xpos, xmat, fbody, fpts, gx, gz, _TOUCH_CLEAR, root, angle0, tilt)
             if kind != "distance":
                 new = self.com()
                 if kind == "hop":
