@@ -242,7 +242,7 @@ def plot_ranking(result: SearchResult, path, top: int = 10):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from zoetic.io import atomic_write_bytes
+    from zoetic.viz.plots import save_figure
 
     order = result.order
     m = result.metrics[order]
@@ -271,13 +271,7 @@ def plot_ranking(result: SearchResult, path, top: int = 10):
         sec.set_ylabel("speed (cm/s)")
     else:
         sec.remove()
-    fig.tight_layout()
-    import io
-
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png")
-    plt.close(fig)
-    return atomic_write_bytes(path, buf.getvalue())
+    return save_figure(fig, path)
 
 
 def _video_job(job: tuple) -> Path:

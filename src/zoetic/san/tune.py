@@ -231,14 +231,12 @@ def tune(
 
 def plot_tuning(result: TuneResult, path, title: str = ""):
     """Write tuning.png: each candidate's metric, the accepted and the best against trials."""
-    import io
-
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from zoetic.io import atomic_write_bytes
+    from zoetic.viz.plots import save_figure
 
     t = np.arange(1, result.trials + 1)
     fig, ax = plt.subplots(figsize=(7, 4), dpi=110)
@@ -252,11 +250,7 @@ def plot_tuning(result: TuneResult, path, title: str = ""):
     ax.set_title(title or f"{result.method}: {result.before:.4g} -> {result.after:.4g}")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png")
-    plt.close(fig)
-    return atomic_write_bytes(path, buf.getvalue())
+    return save_figure(fig, path)
 
 
 def write_tune(result: TuneResult, creature, out, terrain: str = "flat", video: bool = True):

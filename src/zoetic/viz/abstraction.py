@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from zoetic.viz.learning import _save
+from zoetic.viz.plots import save_figure
 
 
 def plot_abstraction(
@@ -61,10 +61,7 @@ def plot_abstraction(
     ax_p.tick_params(labelsize=7)
     if title:
         fig.suptitle(title, fontsize=11)
-    fig.tight_layout()
-    out = _save(fig, path)
-    plt.close(fig)
-    return out
+    return save_figure(fig, path, dpi=110)
 
 
 def plot_repertoire(
@@ -114,7 +111,4 @@ def plot_repertoire(
     ax_p.grid(alpha=0.3)
     if title:
         fig.suptitle(title, fontsize=11)
-    fig.tight_layout()
-    out = _save(fig, path)
-    plt.close(fig)
-    return out
+    return save_figure(fig, path, dpi=110)

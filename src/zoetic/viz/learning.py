@@ -2,19 +2,11 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
 
-
-def _save(fig, path: Path) -> Path:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.stem + ".part.png")
-    fig.savefig(tmp, dpi=110)
-    os.replace(tmp, path)
-    return path
+from zoetic.viz.plots import save_figure
 
 
 def plot_learning(curves: dict[str, np.ndarray], path: Path, title: str = "") -> Path:
@@ -44,10 +36,7 @@ def plot_learning(curves: dict[str, np.ndarray], path: Path, title: str = "") ->
     ax.set_title(title)
     ax.grid(alpha=0.3)
     ax.legend(loc="upper right", fontsize=8)
-    fig.tight_layout()
-    out = _save(fig, path)
-    plt.close(fig)
-    return out
+    return save_figure(fig, path, dpi=110)
 
 
 def plot_controller(
@@ -79,7 +68,4 @@ def plot_controller(
         ax.set_yticks([0, 1])
     axes[-1, 0].set_xlabel("t (s)")
     axes[0, 0].set_title(title + "  (left dotted, right solid)")
-    fig.tight_layout()
-    out = _save(fig, path)
-    plt.close(fig)
-    return out
+    return save_figure(fig, path, dpi=110)

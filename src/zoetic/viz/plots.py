@@ -4,12 +4,28 @@ from __future__ import annotations
 
 import io
 import os
+import sys
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 from zoetic.io import atomic_write_bytes
+
+
+def save_figure(fig, path: str | os.PathLike, dpi: float | None = None) -> Path:
+    """Lay ``fig`` out tightly and write it atomically to ``path`` (format from the suffix).
+
+    ``dpi`` defaults to the figure's own. A figure made through pyplot is closed afterwards,
+    so that long runs writing many plots do not keep them all alive.
+    """
+    fig.tight_layout()
+    path = Path(path)
+    buf = io.BytesIO()
+    fig.savefig(buf, format=(path.suffix.lstrip(".") or "png").lower(), dpi=dpi or "figure")
+    if "matplotlib.pyplot" in sys.modules:
+        sys.modules["matplotlib.pyplot"].close(fig)
+    return atomic_write_bytes(path, buf.getvalue())
 
 
 def _paths(com: np.ndarray | Sequence[np.ndarray]) -> list[np.ndarray]:
@@ -85,8 +101,4 @@ def plot_path(
     ax.legend(loc="best", fontsize=8, framealpha=0.8)
     if title:
         ax.set_title(title)
-    fig.tight_layout()
-    path = Path(path)
-    buf = io.BytesIO()
-    fig.savefig(buf, format=(path.suffix.lstrip(".") or "png").lower())
-    return atomic_write_bytes(path, buf.getvalue())
+    return save_figure(fig, path)
