@@ -25,6 +25,16 @@ if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
   echo "$want" > "$stamp"
 fi
 
+# The web viewer's script (three.js + web/viewer.js, bundled by esbuild) is built, not kept in git.
+bundle=src/zoetic/web/static/viewer.js
+if [ ! -f "$bundle" ] || [ web/viewer.js -nt "$bundle" ] || [ web/package-lock.json -nt "$bundle" ]; then
+  if command -v npm >/dev/null 2>&1; then
+    (cd web && npm ci --no-audit --no-fund --loglevel=error && npm run --silent build) >&2
+  else
+    echo "note: npm not found, so the web viewer (zoetic view) is not built" >&2
+  fi
+fi
+
 cmd="${1:-demo}"
 [ $# -gt 0 ] && shift
 case "$cmd" in

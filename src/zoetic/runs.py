@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import json
 from pathlib import Path
 
 import numpy as np
@@ -19,10 +20,14 @@ def record_stride(dt: float, rate_hz: float = 100.0) -> int:
     return max(1, int(round(1.0 / (rate_hz * dt))))
 
 
-def save_trajectory(path: Path, traj: Trajectory, index: int = 0) -> Path:
-    """Write times (T,) and positions (T, nodes, 3) of one candidate to an .npz file."""
+def save_trajectory(path: Path, traj: Trajectory, index: int = 0, **meta: str) -> Path:
+    """Write times (T,) and positions (T, nodes, 3) of one candidate to an .npz file.
+
+    ``meta`` strings (animal, medium, controller JSON) let viewers rebuild the scene.
+    """
     buf = io.BytesIO()
-    np.savez_compressed(buf, times=traj.times, positions=traj.positions[index])
+    extra = {k: np.array(str(v)) for k, v in meta.items()}
+    np.savez_compressed(buf, times=traj.times, positions=traj.positions[index], **extra)
     return atomic_write_bytes(path, buf.getvalue())
 
 
@@ -74,7 +79,9 @@ def simulate_run(
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     traj = run_controller(body, ctrl, seconds, med, dt)
-    save_trajectory(out / "trajectory.npz", traj)
+    where = str(Path(animal).resolve()) if Path(animal).is_file() else animal
+    meta = {"animal": where, "medium": med.name, "controller": json.dumps(ctrl.to_dict())}
+    save_trajectory(out / "trajectory.npz", traj, **meta)
     files = write_media(body, traj, med, out, video, fps)
     com = traj.com(body)[0]
     travelled = float(np.linalg.norm(com[-1, [0, 2]] - com[0, [0, 2]]))

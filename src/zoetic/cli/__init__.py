@@ -29,11 +29,13 @@ def _root(debug: bool = typer.Option(False, "--debug", help="Show full traceback
 def _register() -> None:
     from zoetic.cli import (  # noqa: F401  (commands register)
         bench,
+        export,
         learn,
         repertoire,
         san,
         simulate,
         track,
+        view,
     )
 
 

@@ -1,0 +1,34 @@
+"""``zoetic view RUN_DIR``: the run in the browser (served locally, or one offline HTML file)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+from rich.console import Console
+
+from zoetic.cli import app
+
+console = Console()
+
+
+@app.command()
+def view(
+    run_dir: Path = typer.Argument(..., help="A run directory (simulate, learn, track, ...)."),
+    html: Path = typer.Option(None, "--html", help="Write one self-contained HTML file instead."),
+    port: int = typer.Option(8000, min=0, max=65535, help="Port on 127.0.0.1 (0: any free)."),
+    fps: float = typer.Option(30.0, min=1.0, help="Frames per second kept of the run."),
+    open_browser: bool = typer.Option(True, "--open/--no-open", help="Open a browser if any."),
+) -> None:
+    """Look at a run in 3D in the browser: scrub, play, orbit, follow the animal."""
+    from zoetic.viz.scene import load_scene
+    from zoetic.web.page import scene_html, write_html
+
+    scene = load_scene(run_dir, fps)
+    if html is not None:
+        path = write_html(scene, html)
+        console.print(f"wrote {path} ({path.stat().st_size / 1024:.0f} KiB); open it in a browser")
+        return
+    from zoetic.web.server import serve
+
+    serve(scene_html(scene), port, open_browser, console.print)

@@ -1,0 +1,361 @@
+"""A Scene as an animated glTF 2.0 binary (.glb) that Blender, three.js and other tools load.
+
+Each animal is a skinned mesh with one joint per node: a joint's translation is its node's
+position, keyframed at the scene's frame rate (LINEAR), and each vertex follows its own joint
+with weight 1. The file grows as frames x nodes x 12 bytes, like morph targets would, without
+the frames^2 weights table and the per-shader limits on morph target counts. Ground, sea floor
+and sea surface are static quads (checkered by a 2 x 2 texture), targets small octahedra.
+
+zoetic's axes are x forward, y up, z LEFT; glTF's are right-handed, so z is mirrored (and
+triangles reversed to stay counter-clockwise from outside): left stays on the animal's left.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import struct
+from pathlib import Path
+
+import numpy as np
+
+from zoetic.io import atomic_write_bytes
+from zoetic.viz.scene import Scene
+
+MIRROR = np.array([1.0, 1.0, -1.0], np.float32)  # zoetic (x, y, z left) -> glTF (z right)
+_FLOAT, _UINT, _USHORT, _UBYTE = 5126, 5125, 5123, 5121
+_ARRAY, _ELEMENTS = 34962, 34963
+_TILE = 0.5  # m, side of a checker square (as in the videos)
+
+
+def to_gltf_axes(points: np.ndarray) -> np.ndarray:
+    """Return points (..., 3) in glTF axes as float32 (z mirrored)."""
+    return (np.asarray(points, np.float32) * MIRROR).astype(np.float32)
+
+
+def _fill_frames(pos: np.ndarray) -> np.ndarray:
+    """Return positions (R, N, 3) with non-finite frames replaced by the last finite one."""
+    good = np.isfinite(pos).all(axis=(1, 2))
+    if good.all():
+        return pos
+    if not good.any():
+        return np.zeros_like(pos)
+    idx = np.maximum.accumulate(np.where(good, np.arange(len(pos)), np.argmax(good)))
+    return pos[idx]
+
+
+def _linear(rgb) -> list[float]:
+    """Return an sRGB 0-255 colour as glTF's linear RGBA factors."""
+    c = (np.asarray(rgb[:3], float) / 255.0) ** 2.2
+    return [round(float(v), 5) for v in c] + [1.0]
+
+
+def _checker_png(a, b) -> bytes:
+    from PIL import Image
+
+    img = Image.new("RGB", (2, 2))
+    img.putdata([tuple(map(int, a)), tuple(map(int, b)), tuple(map(int, b)), tuple(map(int, a))])
+    buf = io.BytesIO()
+    img.save(buf, format="PNG")
+    return buf.getvalue()
+
+
+class _Builder:
+    """Accumulates the JSON document and the binary chunk of a GLB."""
+
+    def __init__(self) -> None:
+        self.doc: dict = {
+            "asset": {"version": "2.0", "generator": "zoetic"},
+            "scene": 0,
+            "scenes": [{"nodes": []}],
+            "nodes": [],
+            "meshes": [],
+            "materials": [],
+            "accessors": [],
+            "bufferViews": [],
+            "buffers": [],
+        }
+        self.blob = bytearray()
+
+    def view(self, data: bytes, target: int | None = None) -> int:
+        while len(self.blob) % 4:
+            self.blob.append(0)
+        v = {"buffer": 0, "byteOffset": len(self.blob), "byteLength": len(data)}
+        if target is not None:
+            v["target"] = target
+        self.blob.extend(data)
+        self.doc["bufferViews"].append(v)
+        return len(self.doc["bufferViews"]) - 1
+
+    def accessor(
+        self,
+        arr: np.ndarray,
+        kind: str,
+        target: int | None = None,
+        view: int | None = None,
+        offset: int = 0,
+        bounds: bool = False,
+    ) -> int:
+        comp = {
+            np.dtype(np.float32): _FLOAT,
+            np.dtype(np.uint32): _UINT,
+            np.dtype(np.uint16): _USHORT,
+            np.dtype(np.uint8): _UBYTE,
+        }[arr.dtype]
+        if view is None:
+            view = self.view(np.ascontiguousarray(arr).tobytes(), target)
+        width = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}[kind]
+        flat = arr.reshape(-1, width)
+        acc = {
+            "bufferView": view,
+            "byteOffset": offset,
+            "componentType": comp,
+            "count": len(flat),
+            "type": kind,
+        }
+        if bounds:
+            acc["min"] = [float(v) for v in flat.min(axis=0)]
+            acc["max"] = [float(v) for v in flat.max(axis=0)]
+        self.doc["accessors"].append(acc)
+        return len(self.doc["accessors"]) - 1
+
+    def add(self, key: str, item: dict) -> int:
+        self.doc.setdefault(key, []).append(item)
+        return len(self.doc[key]) - 1
+
+    def node(self, item: dict, root: bool = True) -> int:
+        k = self.add("nodes", item)
+        if root:
+            self.doc["scenes"][0]["nodes"].append(k)
+        return k
+
+    def glb(self) -> bytes:
+        while len(self.blob) % 4:
+            self.blob.append(0)
+        self.doc["buffers"] = [{"byteLength": len(self.blob)}]
+        doc = {k: v for k, v in self.doc.items() if v != []}
+        js = json.dumps(doc, separators=(",", ":")).encode()
+        js += b" " * (-len(js) % 4)
+        total = 12 + 8 + len(js) + 8 + len(self.blob)
+        return b"".join(
+            [
+                struct.pack("<III", 0x46546C67, 2, total),
+                struct.pack("<II", len(js), 0x4E4F534A),
+                js,
+                struct.pack("<II", len(self.blob), 0x004E4942),
+                bytes(self.blob),
+            ]
+        )
+
+
+def _material(
+    b: _Builder,
+    name: str,
+    rgba: list[float],
+    texture: bytes | None = None,
+    blend: bool = False,
+    roughness: float = 0.8,
+) -> int:
+    pbr: dict = {"baseColorFactor": rgba, "metallicFactor": 0.0, "roughnessFactor": roughness}
+    if texture is not None:
+        image = b.add("images", {"bufferView": b.view(texture), "mimeType": "image/png"})
+        sampler = b.add(
+            "samplers", {"magFilter": 9728, "minFilter": 9984, "wrapS": 10497, "wrapT": 10497}
+        )
+        pbr["baseColorTexture"] = {
+            "index": b.add("textures", {"source": image, "sampler": sampler})
+        }
+    mat = {"name": name, "pbrMetallicRoughness": pbr, "doubleSided": True}
+    if blend:
+        mat["alphaMode"] = "BLEND"
+    return b.add("materials", mat)
+
+
+def _quad(b: _Builder, name: str, y: float, lo, hi, material: int, textured: bool) -> None:
+    """Add a horizontal rectangle at height ``y`` over x in [lo0, hi0], z in [lo1, hi1]."""
+    (x0, z0), (x1, z1) = lo, hi
+    pos = np.array([[x0, y, z0], [x1, y, z0], [x1, y, z1], [x0, y, z1]], np.float32)
+    attrs = {
+        "POSITION": b.accessor(pos, "VEC3", _ARRAY, bounds=True),
+        "NORMAL": b.accessor(np.tile(np.float32([0, 1, 0]), (4, 1)), "VEC3", _ARRAY),
+    }
+    if textured:
+        uv = np.ascontiguousarray(pos[:, [0, 2]] / np.float32(2 * _TILE))
+        attrs["TEXCOORD_0"] = b.accessor(uv, "VEC2", _ARRAY)
+    idx = b.accessor(np.array([0, 2, 1, 0, 3, 2], np.uint16), "SCALAR", _ELEMENTS)
+    mesh = b.add(
+        "meshes",
+        {"name": name, "primitives": [{"attributes": attrs, "indices": idx, "material": material}]},
+    )
+    b.node({"name": name, "mesh": mesh})
+
+
+def _octahedron(b: _Builder, name: str, centre, radius: float, material: int) -> None:
+    v = np.array(
+        [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], np.float32
+    ) * np.float32(radius)
+    f = np.array(
+        [[0, 2, 4], [4, 2, 1], [1, 2, 5], [5, 2, 0], [4, 3, 0], [1, 3, 4], [5, 3, 1], [0, 3, 5]],
+        np.uint16,
+    )
+    attrs = {"POSITION": b.accessor(v, "VEC3", _ARRAY, bounds=True)}
+    mesh = b.add(
+        "meshes",
+        {
+            "name": name,
+            "primitives": [
+                {
+                    "attributes": attrs,
+                    "indices": b.accessor(f.ravel(), "SCALAR", _ELEMENTS),
+                    "material": material,
+                }
+            ],
+        },
+    )
+    b.node({"name": name, "mesh": mesh, "translation": [float(c) for c in centre]})
+
+
+def environment_levels(scene: Scene) -> dict:
+    """Return the heights (glTF y) of the ground, sea floor and sea surface a scene shows.
+
+    Keys present: ``ground`` (a floor at y = 0), ``seabed`` (under water), ``surface`` (a sea's
+    water level). The sea floor lies 3 m under the surface, or under the animals' lowest point.
+    """
+    med = scene.medium
+    if med.floor:
+        return {"ground": 0.0}
+    if med.water_level < -1e8:  # vacuum: nothing to stand on
+        return {}
+    low = min(float(np.nanmin(a.positions[..., 1])) for a in scene.animals)
+    base = med.water_level if abs(med.water_level) < 1e8 else 0.0
+    levels = {"seabed": round(min(base - 3.0, low - 1.0), 3)}
+    if abs(med.water_level) < 1e8:
+        levels["surface"] = float(med.water_level)
+    return levels
+
+
+def scene_bounds(scene: Scene, margin: float = 8.0) -> tuple[np.ndarray, np.ndarray]:
+    """Return the (x, z) rectangle in glTF axes that the ground covers: the paths + margin."""
+    pts = [to_gltf_axes(a.com)[:, [0, 2]] for a in scene.animals]
+    if len(scene.markers):
+        pts.append(to_gltf_axes(scene.markers)[:, [0, 2]])
+    allp = np.concatenate(pts)
+    allp = allp[np.isfinite(allp).all(axis=1)]
+    if not len(allp):
+        allp = np.zeros((1, 2), np.float32)
+    lo = np.floor((allp.min(axis=0) - margin) / (2 * _TILE)) * 2 * _TILE
+    hi = np.ceil((allp.max(axis=0) + margin) / (2 * _TILE)) * 2 * _TILE
+    return lo, hi
+
+
+def scene_glb(scene: Scene) -> bytes:
+    """Return the scene as GLB bytes: skinned animals animated at the scene's frame rate."""
+    from zoetic.viz import render3d as r3
+
+    b = _Builder()
+    times = np.asarray(scene.times - scene.times[0], np.float32)
+    t_acc = b.accessor(times, "SCALAR", bounds=True)
+    channels, samplers = [], []
+    for k, animal in enumerate(scene.animals):
+        pos = to_gltf_axes(_fill_frames(animal.positions))  # (R, N, 3)
+        n = pos.shape[1]
+        rest = pos[0]
+        faces = np.asarray(animal.faces)[:, ::-1]
+        itype = np.uint16 if n < 65535 else np.uint32
+        joint_ids = np.zeros((n, 4), np.uint8 if n <= 256 else np.uint16)  # JOINTS_0: 8/16 bit
+        joint_ids[:, 0] = np.arange(n)
+        mat = _material(b, animal.name, _linear(animal.color), roughness=0.6)
+        attrs = {
+            "POSITION": b.accessor(rest, "VEC3", _ARRAY, bounds=True),
+            "JOINTS_0": b.accessor(joint_ids, "VEC4", _ARRAY),
+            "WEIGHTS_0": b.accessor(np.tile(np.float32([1, 0, 0, 0]), (n, 1)), "VEC4", _ARRAY),
+        }
+        mesh = b.add(
+            "meshes",
+            {
+                "name": f"{animal.name}-surface",
+                "primitives": [
+                    {
+                        "attributes": attrs,
+                        "material": mat,
+                        "indices": b.accessor(faces.astype(itype).ravel(), "SCALAR", _ELEMENTS),
+                    }
+                ],
+            },
+        )
+        joints = [
+            b.node(
+                {"name": f"{animal.name}-{k}-node-{i}", "translation": [float(c) for c in rest[i]]},
+                root=False,
+            )
+            for i in range(n)
+        ]
+        ibm = np.tile(np.eye(4, dtype=np.float32), (n, 1, 1))
+        ibm[:, 3, :3] = -rest  # column-major: the translation is the last column
+        skin = b.add(
+            "skins",
+            {"name": animal.name, "joints": joints, "inverseBindMatrices": b.accessor(ibm, "MAT4")},
+        )
+        b.node({"name": f"{animal.name}-{k}", "children": joints})
+        b.node({"name": f"{animal.name}-{k}-surface", "mesh": mesh, "skin": skin})
+        track = np.ascontiguousarray(pos.transpose(1, 0, 2))  # (N, R, 3): node-major
+        view = b.view(track.tobytes())
+        for i, joint in enumerate(joints):
+            out = b.accessor(track[i], "VEC3", view=view, offset=i * track[i].nbytes)
+            samplers.append({"input": t_acc, "output": out, "interpolation": "LINEAR"})
+            channels.append(
+                {"sampler": len(samplers) - 1, "target": {"node": joint, "path": "translation"}}
+            )
+    if len(times) > 1:
+        b.add("animations", {"name": "run", "channels": channels, "samplers": samplers})
+    levels = environment_levels(scene)
+    lo, hi = scene_bounds(scene)
+    if "ground" in levels:
+        tex = _checker_png(*r3._GROUND)
+        _quad(
+            b, "ground", levels["ground"], lo, hi, _material(b, "ground", [1, 1, 1, 1], tex), True
+        )
+    if "seabed" in levels:
+        tex = _checker_png(*r3._SEABED)
+        _quad(
+            b,
+            "sea floor",
+            levels["seabed"],
+            lo,
+            hi,
+            _material(b, "sea floor", [1, 1, 1, 1], tex),
+            True,
+        )
+    if "surface" in levels:
+        rgba = _linear(r3._SURFACE)[:3] + [0.35]
+        _quad(
+            b,
+            "sea surface",
+            levels["surface"],
+            lo,
+            hi,
+            _material(b, "sea surface", rgba, blend=True, roughness=0.2),
+            False,
+        )
+    if len(scene.markers):
+        extent = max(
+            float(np.ptp(a.positions[0][np.isfinite(a.positions[0]).all(1)], axis=0).max())
+            for a in scene.animals
+        )
+        mat = _material(b, "target", _linear((220, 40, 30)))
+        for i, m in enumerate(to_gltf_axes(scene.markers)):
+            _octahedron(b, f"target-{i + 1}", m, 0.08 * max(extent, 0.1), mat)
+    b.doc["scenes"][0]["name"] = scene.title
+    b.doc["scenes"][0]["extras"] = {
+        "fps": scene.fps,
+        "duration_s": scene.duration,
+        "medium": scene.medium.name,
+        "kind": scene.kind,
+    }
+    return b.glb()
+
+
+def write_glb(scene: Scene, path: str | os.PathLike) -> Path:
+    """Write the scene to ``path`` as a .glb (atomically); returns the path."""
+    return atomic_write_bytes(path, scene_glb(scene))

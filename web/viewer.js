@@ -1,0 +1,174 @@
+// The zoetic run viewer: plays the run's glTF (written by zoetic.viz.gltf) with three.js.
+// The page holds <script id="zoetic-data" type="application/json"> with the .glb in base64
+// and the run's figures (centre-of-mass paths, activations, numbers). esbuild bundles this file
+// with three.js into src/zoetic/web/static/viewer.js (see web/package.json).
+import * as THREE from "three";
+import { OrbitControls } from "three/addons/controls/OrbitControls.js";
+import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
+
+const SKY = 0x9ec2e6;
+const BACKGROUNDS = { ground: SKY, sea: SKY, water: 0x1f4f74, vacuum: 0x14151f };
+
+function decodeBase64(text) {
+  const bin = atob(text);
+  const bytes = new Uint8Array(bin.length);
+  for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
+  return bytes.buffer;
+}
+
+function parseGlb(buffer) {
+  return new Promise((resolve, reject) => new GLTFLoader().parse(buffer, "", resolve, reject));
+}
+
+function el(tag, attrs = {}, parent = null) {
+  const e = document.createElement(tag);
+  Object.assign(e, attrs);
+  if (parent) parent.appendChild(e);
+  return e;
+}
+
+function fmt(v) {
+  return typeof v === "number" ? (Math.abs(v) >= 100 ? v.toFixed(1) : v.toPrecision(4)) : String(v);
+}
+
+async function main() {
+  const data = JSON.parse(document.getElementById("zoetic-data").textContent);
+  const api = { ready: false, error: null, frames: data.frames, duration: data.duration };
+  window.zoetic = api;
+  const root = document.getElementById("zoetic");
+  const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  renderer.setPixelRatio(window.devicePixelRatio || 1);
+  root.appendChild(renderer.domElement);
+  const scene = new THREE.Scene();
+  const medium = data.medium;
+  scene.background = new THREE.Color(BACKGROUNDS[medium] ?? SKY);
+  if (medium === "water") scene.fog = new THREE.Fog(scene.background, 2, 14);
+  else if (medium !== "vacuum") scene.fog = new THREE.Fog(scene.background, 20, 60);
+  scene.add(new THREE.HemisphereLight(0xffffff, 0x445566, 1.6));
+  const sun = new THREE.DirectionalLight(0xffffff, 2.2);
+  sun.position.set(-2, 10, 7);
+  scene.add(sun);
+  const camera = new THREE.PerspectiveCamera(45, 1, 0.02, 500);
+  const controls = new OrbitControls(camera, renderer.domElement);
+  controls.enableDamping = false;
+
+  const gltf = await parseGlb(decodeBase64(data.glb));
+  scene.add(gltf.scene);
+  gltf.scene.traverse((o) => {
+    if (o.isSkinnedMesh || o.isMesh) o.frustumCulled = false; // skinned bounds are the rest pose
+  });
+  const mixer = new THREE.AnimationMixer(gltf.scene);
+  if (gltf.animations.length) mixer.clipAction(gltf.animations[0]).play();
+
+  // centre-of-mass paths, in glTF axes, flat [x, y, z, ...] per frame
+  const coms = data.animals.map((a) => a.com);
+  for (const com of coms) {
+    const geo = new THREE.BufferGeometry();
+    geo.setAttribute("position", new THREE.Float32BufferAttribute(com, 3));
+    const line = new THREE.Line(geo, new THREE.LineBasicMaterial({ color: 0xffd040 }));
+    line.frustumCulled = false;
+    scene.add(line);
+  }
+  const comAt = (k, i) => new THREE.Vector3(coms[k][3 * i], coms[k][3 * i + 1], coms[k][3 * i + 2]);
+
+  // the camera starts behind and to the right of the animal, as in the videos
+  const az = THREE.MathUtils.degToRad(40), elev = THREE.MathUtils.degToRad(data.elevation);
+  const dist = (2.0 * data.extent) / Math.tan(THREE.MathUtils.degToRad(22.5));
+  const dir = new THREE.Vector3(-Math.cos(elev) * Math.cos(az), Math.sin(elev),
+    Math.cos(elev) * Math.sin(az));
+  controls.target.copy(comAt(0, 0));
+  camera.position.copy(controls.target).addScaledVector(dir, dist);
+  controls.update();
+
+  // ---- the panel and the controls
+  const panel = el("div", { id: "panel" }, root);
+  el("div", { className: "title", textContent: data.title }, panel);
+  const timeText = el("div", { className: "time" }, panel);
+  const rows = el("table", {}, panel);
+  const dynamic = {};
+  const addRow = (key, value) => {
+    const tr = el("tr", {}, rows);
+    el("td", { textContent: key }, tr);
+    return el("td", { textContent: value }, tr);
+  };
+  dynamic.distance = addRow("distance (m)", "");
+  for (const [key, value] of Object.entries(data.numbers)) addRow(key.replaceAll("_", " "), fmt(value));
+  const bars = [];
+  data.animals.forEach((a) => {
+    if (!a.activations) return;
+    el("div", { className: "sub", textContent: `${a.name}: activations` }, panel);
+    a.actuators.forEach((name, j) => {
+      const row = el("div", { className: "bar" }, panel);
+      el("span", { textContent: name }, row);
+      const track = el("div", { className: "track" }, row);
+      bars.push({ fill: el("div", { className: "fill" }, track), values: a.activations, j,
+        n: a.actuators.length });
+    });
+  });
+  const bar = el("div", { id: "controls" }, root);
+  const play = el("button", { id: "play", textContent: "pause" }, bar);
+  const slider = el("input", { id: "timeline", type: "range", min: 0, max: data.duration,
+    step: 1 / data.fps, value: 0 }, bar);
+  const speed = el("select", { id: "speed" }, bar);
+  for (const s of [0.25, 0.5, 1, 2, 4]) el("option", { value: s, textContent: `${s}x`, selected: s === 1 }, speed);
+  const followLabel = el("label", { textContent: " follow" }, bar);
+  const follow = el("input", { id: "follow", type: "checkbox", checked: true });
+  followLabel.prepend(follow);
+
+  let t = 0, playing = true, last = performance.now();
+  const setTime = (time) => {
+    t = Math.min(Math.max(time, 0), data.duration);
+    mixer.setTime(t);
+    const i = Math.min(Math.round(t * data.fps), data.frames - 1);
+    if (follow.checked) {
+      const delta = comAt(0, i).sub(controls.target);
+      controls.target.add(delta);
+      camera.position.add(delta);
+    }
+    const start = comAt(0, 0), now = comAt(0, i);
+    dynamic.distance.textContent = Math.hypot(now.x - start.x, now.z - start.z).toFixed(3);
+    timeText.textContent = `t = ${t.toFixed(2)} s / ${data.duration.toFixed(2)} s`;
+    slider.value = t;
+    for (const b of bars) b.fill.style.width = `${(100 * b.values[i * b.n + b.j]).toFixed(1)}%`;
+  };
+  play.onclick = () => { playing = !playing; play.textContent = playing ? "pause" : "play"; };
+  slider.oninput = () => setTime(parseFloat(slider.value));
+  const resize = () => {
+    const w = root.clientWidth, h = root.clientHeight;
+    renderer.setSize(w, h);
+    camera.aspect = w / Math.max(h, 1);
+    camera.updateProjectionMatrix();
+  };
+  window.addEventListener("resize", resize);
+  resize();
+  const render = () => { controls.update(); renderer.render(scene, camera); };
+  renderer.setAnimationLoop((now) => {
+    const step = (now - last) / 1000;
+    last = now;
+    if (playing && data.duration > 0) setTime((t + step * parseFloat(speed.value)) % data.duration);
+    render();
+  });
+
+  Object.assign(api, {
+    time: () => t,
+    setTime: (time) => { setTime(time); render(); },
+    pause: () => { playing = false; play.textContent = "play"; },
+    // for tests and tools: parse any .glb (base64) with three.js's GLTFLoader and count its parts
+    inspectGlb: async (b64) => {
+      const g = await parseGlb(decodeBase64(b64));
+      let meshes = 0, skinned = 0;
+      g.scene.traverse((o) => { if (o.isMesh) meshes++; if (o.isSkinnedMesh) skinned++; });
+      return { meshes, skinned, animations: g.animations.length,
+        tracks: g.animations.reduce((s, a) => s + a.tracks.length, 0),
+        duration: g.animations.length ? g.animations[0].duration : 0 };
+    },
+  });
+  setTime(0);
+  render();
+  api.ready = true;
+}
+
+main().catch((err) => {
+  window.zoetic = Object.assign(window.zoetic || {}, { ready: false, error: String(err) });
+  document.body.appendChild(el("pre", { id: "error", textContent: String(err && err.stack || err) }));
+});
