@@ -1,0 +1,121 @@
+"""The web viewer: one offline HTML page, the local server, and a real (headless) Chromium."""
+
+from __future__ import annotations
+
+import base64
+import json
+import re
+import shutil
+import threading
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from zoetic.cli import main
+from zoetic.runs import simulate_run
+from zoetic.viz.gltf import scene_glb, write_glb
+from zoetic.viz.scene import load_scene
+from zoetic.web.page import scene_html
+from zoetic.web.server import make_server
+
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+# WebGL without a GPU: ANGLE on SwiftShader, Chromium's software rasteriser
+WEBGL_FLAGS = ["--use-gl=angle", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+               "--ignore-gpu-blocklist"]  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def shark_run(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("shark")
+    simulate_run("shark", "wave", 2.0, out, video=False)
+    return out
+
+
+def test_the_page_is_self_contained_and_carries_the_run(shark_run, tmp_path):
+    html = tmp_path / "view.html"
+    assert main(["view", str(shark_run), "--html", str(html), "--fps", "15"]) == 0
+    text = html.read_text()
+    assert not re.search(r"<(script|link|img)[^>]+(src|href)=", text)  # nothing fetched
+    data = json.loads(re.search(r"id='zoetic-data'[^>]*>(.*?)</script>", text, re.S).group(1))
+    scene = load_scene(shark_run, fps=15)
+    assert base64.b64decode(data["glb"]) == scene_glb(scene)
+    assert data["frames"] == 31 and data["duration"] == pytest.approx(2.0)
+    acts = np.array(data["animals"][0]["activations"]).reshape(31, -1)
+    np.testing.assert_allclose(acts, scene.animals[0].activations, atol=5e-4)
+
+
+def test_the_server_answers_the_page_and_nothing_else(shark_run):
+    page = "<html>zoetic</html>"
+    server = make_server(page, 0)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        url = f"http://127.0.0.1:{server.server_address[1]}/"
+        with urllib.request.urlopen(url, timeout=5) as r:
+            assert r.status == 200 and r.read().decode() == page
+        with pytest.raises(urllib.error.HTTPError, match="404"):
+            urllib.request.urlopen(url + "other", timeout=5)
+    finally:
+        server.shutdown()
+        server.server_close()
+
+
+def _canvas(page) -> np.ndarray:
+    from io import BytesIO
+
+    from PIL import Image
+
+    png = page.locator("canvas").screenshot()
+    return np.asarray(Image.open(BytesIO(png)).convert("RGB"), float)
+
+
+def test_the_viewer_draws_and_scrubs_in_chromium(shark_run, tmp_path):
+    from playwright.sync_api import sync_playwright
+
+    assert Path(CHROMIUM).exists(), (
+        f"{CHROMIUM} not found: the browser test needs Chromium "
+        "(Debian: apt-get install -y chromium)"
+    )
+    html = tmp_path / "view.html"
+    html.write_text(scene_html(load_scene(shark_run, fps=30)))
+    glb = write_glb(load_scene(shark_run, fps=30), tmp_path / "s.glb")
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=WEBGL_FLAGS, headless=True)
+        try:
+            page = browser.new_page(viewport={"width": 800, "height": 500})
+            errors: list[str] = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(html.as_uri())
+            page.wait_for_function("window.zoetic && (window.zoetic.ready || window.zoetic.error)",
+                                   timeout=30_000)  # fmt: skip
+            assert page.evaluate("window.zoetic.error") is None and not errors, errors
+            page.click("#play")  # pause, then move the timeline as a user would
+            assert page.inner_text("#play") == "play"
+            page.eval_on_selector(
+                "#timeline", "s => { s.value = 0; s.dispatchEvent(new Event('input')); }"
+            )
+            page.wait_for_timeout(100)
+            start = _canvas(page)
+            assert start.std() > 10, "the canvas is blank"
+            page.screenshot(path=str(tmp_path / "viewer-start.png"))
+            page.eval_on_selector(
+                "#timeline", "s => { s.value = 1.5; s.dispatchEvent(new Event('input')); }"
+            )
+            page.wait_for_timeout(100)
+            later = _canvas(page)
+            page.screenshot(path=str(tmp_path / "viewer-1.5s.png"))
+            assert "t = 1.50 s" in page.inner_text("#panel")
+            changed = np.abs(later - start).max(axis=2) > 20
+            assert changed.mean() > 0.002, "moving the timeline did not change the picture"
+            # the exported .glb, read by three.js's own GLTFLoader
+            b64 = base64.b64encode(glb.read_bytes()).decode()
+            info = page.evaluate("b => window.zoetic.inspectGlb(b)", b64)
+        finally:
+            browser.close()
+    n = load_scene(shark_run).animals[0].positions.shape[1]
+    assert info["skinned"] == 1 and info["meshes"] >= 2  # the shark and the sea floor
+    assert info["animations"] == 1 and info["tracks"] == n
+    assert info["duration"] == pytest.approx(2.0, abs=1e-3)
+    assert (tmp_path / "viewer-1.5s.png").stat().st_size > 1000
