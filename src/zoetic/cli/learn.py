@@ -79,7 +79,13 @@ def learn(
     interp: str = typer.Option("linear", help="Time-domain interpolation: linear or bspline."),
     popsize: int = typer.Option(None, min=2, help="CMA-ES population size."),
     chains: int = typer.Option(1, min=1, help="Parallel annealing chains."),
-    evaluator: str = typer.Option("batch", help="batch (Numba threads) or process (pool)."),
+    evaluator: str = typer.Option(
+        "batch", help="batch (Numba threads), process (pool) or ray (actors on a Ray cluster)."
+    ),
+    ray_address: str = typer.Option(
+        None, help="Ray cluster for --evaluator ray, e.g. 10.0.0.1:6379 (default: RAY_ADDRESS, "
+        "else a local Ray)."
+    ),
     coupling: str = typer.Option("none", help="none, or antiphase: right side = 1 - left."),
     out: Path = typer.Option(None, help="Run directory (default runs/<animal>-<task>)."),
     resume: Path = typer.Option(None, help="Continue the run in this directory."),
@@ -89,6 +95,10 @@ def learn(
     from zoetic.learn.run import LearnConfig, Run
     from zoetic.runs import finish_run
 
+    if ray_address:  # ray.init() reads it; the run's config keeps only the evaluator's name
+        import os
+
+        os.environ["RAY_ADDRESS"] = ray_address
     if resume is not None:
         run = Run.resume(resume)
         console.print(f"resuming {resume} at {run.evaluations} evaluations")

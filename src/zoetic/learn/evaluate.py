@@ -83,11 +83,15 @@ class ProcessPoolEvaluator:
 
 
 def make_evaluator(name: str, workers: int | None = None):
-    """Return an evaluator by name: 'batch' (default) or 'process'."""
+    """Return an evaluator by name: 'batch' (default), 'process' or 'ray' (learn.ray_eval)."""
     from zoetic.errors import ZoeticError
 
     if name == "batch":
         return BatchEvaluator()
     if name == "process":
         return ProcessPoolEvaluator(workers)
-    raise ZoeticError(f"unknown evaluator {name!r} (choose from batch, process)")
+    if name == "ray":  # connects to RAY_ADDRESS (zoetic learn --ray-address), else a local Ray
+        from zoetic.learn.ray_eval import RayEvaluator
+
+        return RayEvaluator(actors=workers)
+    raise ZoeticError(f"unknown evaluator {name!r} (choose from batch, process, ray)")

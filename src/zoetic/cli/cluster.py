@@ -1,0 +1,21 @@
+"""``zoetic bench ray``: the Ray evaluator's overhead per generation against in-process."""
+
+from __future__ import annotations
+
+import typer
+
+from zoetic.cli.bench import _emit, bench_app
+
+
+@bench_app.command("ray")
+def bench_ray_cmd(
+    animal: str = typer.Option("shark"),
+    population: int = typer.Option(64, min=1, help="Candidates per generation."),
+    generations: int = typer.Option(5, min=1),
+    actors: int = typer.Option(None, min=1, help="Ray actors (default: one per core)."),
+    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Seconds per generation on a local Ray against in-process batches, side by side."""
+    from zoetic.learn.ray_eval import bench_ray
+
+    _emit(bench_ray(animal, "swim-straight", population, generations, actors), json)

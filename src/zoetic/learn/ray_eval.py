@@ -1,0 +1,211 @@
+"""The Ray evaluator: a population split into sub-batches over long-lived actors on a cluster.
+
+Each actor is a Python process with the compiled Numba kernel kept warm between generations; it
+simulates its sub-batch single-threaded (one actor per CPU). The objective (body arrays, task,
+controller template) is put in the object store once per objective and fetched once per actor.
+A candidate's evaluation depends only on its parameters (the kernel's result does not depend on
+a candidate's place in a batch), so a sub-batch lost with a dying worker is simply evaluated
+again: the actor is restarted by Ray and the sub-batch re-submitted, by candidate index; the
+generation's result is the same, bit for bit, as the in-process evaluator's.
+
+``ray.init`` connects to ``address`` (or ``RAY_ADDRESS``, or starts a local Ray when neither is
+set). Install with ``pip install 'zoetic[ray]'``.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from zoetic.errors import ZoeticError
+from zoetic.learn.evaluate import BatchEvaluator, merge
+from zoetic.learn.objective import Evaluation, Objective
+
+
+def _ray():
+    try:
+        import ray
+    except ImportError:
+        raise ZoeticError(
+            "the ray evaluator needs Ray: pip install 'zoetic[ray]' (or pip install ray)"
+        ) from None
+    return ray
+
+
+class _Worker:
+    """A Ray actor: caches objectives by key and evaluates sub-batches of candidates."""
+
+    def __init__(self) -> None:
+        from zoetic.physics.simulate import set_threads
+
+        set_threads(1)
+        self._objectives: dict[int, Objective] = {}
+
+    def pid(self) -> int:
+        return os.getpid()
+
+    def evaluate(self, key: int, boxed_ref: list, start: int, params: np.ndarray):
+        """Return (start, Evaluation) of candidates ``start .. start + len(params)``."""
+        if key not in self._objectives:
+            import ray
+
+            self._objectives = {key: ray.get(boxed_ref[0])}  # one objective at a time
+        return start, self._objectives[key].evaluate(params)
+
+
+class RayEvaluator:
+    """Evaluate batches on Ray actors; same seed, same result as ``BatchEvaluator``."""
+
+    name = "ray"
+
+    def __init__(
+        self,
+        address: str | None = None,
+        actors: int | None = None,
+        chunks_per_actor: int = 2,
+        retries: int = 3,
+        on_submit: Callable[[RayEvaluator], None] | None = None,
+    ):
+        self.address = address or os.environ.get("RAY_ADDRESS") or None
+        self.n_actors = actors
+        self.chunks_per_actor = max(1, chunks_per_actor)
+        self.retries = retries
+        self.on_submit = on_submit  # called once tasks are in flight (tests kill a worker there)
+        self.resubmitted = 0  # sub-batches evaluated again after a worker was lost
+        self._actors: list = []
+        self._key: int | None = None
+        self._ref = None
+        self._objective = None
+        self._started_ray = False
+
+    def _start(self) -> None:
+        ray = _ray()
+        if not ray.is_initialized():
+            try:
+                ray.init(address=self.address, log_to_driver=False, include_dashboard=False,
+                         configure_logging=False)  # fmt: skip
+            except ConnectionError as exc:
+                raise ZoeticError(
+                    f"cannot reach the Ray cluster at {self.address} ({exc})"
+                ) from None
+            self._started_ray = True
+        n = self.n_actors or max(1, int(ray.cluster_resources().get("CPU", 1)))
+        remote = ray.remote(num_cpus=1, max_restarts=-1, max_task_retries=self.retries)(_Worker)
+        self._actors = [remote.remote() for _ in range(n)]
+
+    def pids(self) -> list[int]:
+        """Return the process ids of the actors (a test kills one)."""
+        return _ray().get([a.pid.remote() for a in self._actors])
+
+    def __call__(self, objective: Objective, params: np.ndarray) -> Evaluation:
+        ray = _ray()
+        if not self._actors:
+            self._start()
+        if self._objective is not objective:
+            self._objective, self._ref = objective, ray.put(objective)
+            self._key = (self._key or 0) + 1
+        params = np.atleast_2d(np.asarray(params, np.float64))
+        n = min(len(params), len(self._actors) * self.chunks_per_actor)
+        bounds = np.linspace(0, len(params), n + 1).astype(int)
+        chunks = {int(a): (int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)}
+        pending, attempts, done = {}, dict.fromkeys(chunks, 0), {}
+
+        def submit(start: int, k: int) -> None:
+            a, b = chunks[start]
+            actor = self._actors[k % len(self._actors)]
+            pending[actor.evaluate.remote(self._key, [self._ref], a, params[a:b])] = start
+
+        for k, start in enumerate(chunks):
+            submit(start, k)
+        if self.on_submit is not None:
+            self.on_submit(self)
+        while pending:
+            ready, _ = ray.wait(list(pending), num_returns=1)
+            start = pending.pop(ready[0])
+            try:
+                _, ev = ray.get(ready[0])
+            except (ray.exceptions.RayActorError, ray.exceptions.WorkerCrashedError,
+                    ray.exceptions.ObjectLostError) as exc:  # fmt: skip
+                attempts[start] += 1
+                if attempts[start] > self.retries:
+                    raise ZoeticError(
+                        f"candidates {chunks[start][0]}..{chunks[start][1] - 1}: "
+                        f"lost {attempts[start]} times on Ray workers ({exc})"
+                    ) from None
+                self.resubmitted += 1
+                submit(start, start + attempts[start])
+                continue
+            done[start] = ev
+        return merge([done[s] for s in sorted(done)])
+
+    def close(self) -> None:
+        """Stop the actors (and the local Ray this evaluator started)."""
+        if not self._actors:
+            return
+        ray = _ray()
+        for a in self._actors:
+            ray.kill(a)
+        self._actors, self._objective, self._ref = [], None, None
+        if self._started_ray:
+            ray.shutdown()
+            self._started_ray = False
+
+
+def bench_ray(
+    animal: str = "shark",
+    task: str = "swim-straight",
+    population: int = 64,
+    generations: int = 5,
+    actors: int | None = None,
+) -> dict:
+    """Seconds per generation in process and on a local Ray, measured side by side."""
+    from zoetic.learn.run import LearnConfig, build
+    from zoetic.physics.simulate import cores
+
+    setup = build(LearnConfig(animal=animal, task=task, seed=0))
+    obj = setup.objective
+    lo, hi = obj.bounds()
+    rng = np.random.default_rng(0)
+    gens = [rng.uniform(lo, hi, (population, len(lo))) for _ in range(generations)]
+    ray = _ray()
+    started = not ray.is_initialized()
+    if started:
+        ray.init(num_cpus=actors or cores(), log_to_driver=False, include_dashboard=False,
+                 configure_logging=False)  # fmt: skip
+    evaluators = {"in_process": BatchEvaluator(), "ray": RayEvaluator(actors=actors)}
+    times: dict[str, float] = {}
+    try:
+        t0 = time.perf_counter()
+        evaluators["ray"](obj, gens[0])  # actors start, kernels compile
+        startup = time.perf_counter() - t0
+        evaluators["in_process"](obj, gens[0])
+        same = True
+        for name, ev in evaluators.items():
+            t0 = time.perf_counter()
+            results = [ev(obj, x).E for x in gens]
+            times[name] = (time.perf_counter() - t0) / generations
+            if name == "in_process":
+                ref = results
+            else:
+                same = all(np.array_equal(a, b) for a, b in zip(ref, results, strict=True))
+        n_actors = len(evaluators["ray"]._actors)
+    finally:
+        evaluators["ray"].close()
+        if started:
+            ray.shutdown()
+    return {
+        "benchmark": "ray",
+        "animal": animal,
+        "candidates_per_generation": population,
+        "horizon_s": setup.task.horizon,
+        "actors": n_actors,
+        "in_process_s_per_generation": round(times["in_process"], 4),
+        "ray_s_per_generation": round(times["ray"], 4),
+        "ray_overhead_s_per_generation": round(times["ray"] - times["in_process"], 4),
+        "ray_over_in_process": round(times["ray"] / times["in_process"], 3),
+        "ray_startup_s": round(startup, 2),
+        "same_E_bit_for_bit": bool(same),
+    }
