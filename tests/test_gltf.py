@@ -135,3 +135,27 @@ def test_export_cli(shark_run, tmp_path, capsys):
     assert out.read_bytes() == scene_glb(load_scene(shark_run, fps=10))
     assert main(["export", str(tmp_path), "--gltf", str(tmp_path / "x.glb")]) == 2
     assert "no trajectory.npz" in capsys.readouterr().err
+
+
+def test_a_san_creature_is_rigid_links_posed_frame_by_frame(tmp_path):
+    from zoetic.san import load_creature
+    from zoetic.san.network import random_network, save_network
+
+    creature = load_creature("walker")
+    net = random_network(creature, np.random.default_rng(1))
+    save_network(net.with_params(info={"seconds": 0.5, "seed": 0}), tmp_path / "san.json")
+    scene = load_scene(tmp_path, fps=20)
+    (c,) = scene.creatures
+    assert scene.kind == "san" and len(scene.times) == 11 and len(c.links) == 6
+    g, blob = _load(write_glb(scene, tmp_path / "san.glb"))
+    (anim,) = g.animations
+    link = c.links[2]
+    node = next(i for i, nd in enumerate(g.nodes) if nd.name.endswith(f"-{link.name}"))
+    paths = {ch.target.path: anim.samplers[ch.sampler].output for ch in anim.channels
+             if ch.target.node == node}  # fmt: skip
+    np.testing.assert_allclose(_read(g, blob, paths["translation"]),
+                               link.translations * MIRROR, atol=1e-6)  # fmt: skip
+    q = _read(g, blob, paths["rotation"])  # about z for a walker in the vertical plane
+    np.testing.assert_allclose(2 * np.arctan2(q[:, 2], q[:, 3]), link.angles, atol=1e-5)
+    assert np.ptp(link.angles) > 0  # the links move
+    assert "ground" in {nd.name for nd in g.nodes}

@@ -72,7 +72,7 @@ async function main() {
   const comAt = (k, i) => new THREE.Vector3(coms[k][3 * i], coms[k][3 * i + 1], coms[k][3 * i + 2]);
 
   // the camera starts behind and to the right of the animal, as in the videos
-  const az = THREE.MathUtils.degToRad(40), elev = THREE.MathUtils.degToRad(data.elevation);
+  const az = THREE.MathUtils.degToRad(data.azimuth), elev = THREE.MathUtils.degToRad(data.elevation);
   const dist = (2.0 * data.extent) / Math.tan(THREE.MathUtils.degToRad(22.5));
   const dir = new THREE.Vector3(-Math.cos(elev) * Math.cos(az), Math.sin(elev),
     Math.cos(elev) * Math.sin(az));

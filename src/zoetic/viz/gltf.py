@@ -216,6 +216,19 @@ def _octahedron(b: _Builder, name: str, centre, radius: float, material: int) ->
     b.node({"name": name, "mesh": mesh, "translation": [float(c) for c in centre]})
 
 
+def _quaternions(angles: np.ndarray, axis: str) -> np.ndarray:
+    """Return glTF rotations (R, 4) xyzw of planar angles (R,) in zoetic axes.
+
+    About z (a vertical plane) mirroring z leaves the rotation as it is; about y (a top view,
+    the angle turning x toward zoetic's +z, which is glTF's -z) it is a rotation by +angle.
+    """
+    half = np.asarray(angles, np.float64) / 2
+    q = np.zeros((len(half), 4), np.float32)
+    q[:, 2 if axis == "z" else 1] = np.sin(half)
+    q[:, 3] = np.cos(half)
+    return q
+
+
 def environment_levels(scene: Scene) -> dict:
     """Return the heights (glTF y) of the ground, sea floor and sea surface a scene shows.
 
@@ -227,7 +240,9 @@ def environment_levels(scene: Scene) -> dict:
         return {"ground": 0.0}
     if med.water_level < -1e8:  # vacuum: nothing to stand on
         return {}
-    low = min(float(np.nanmin(a.positions[..., 1])) for a in scene.animals)
+    low = min(float(np.nanmin(m.com[:, 1])) - 0.5 for m in scene.movers)
+    for a in scene.animals:
+        low = min(low, float(np.nanmin(a.positions[..., 1])))
     base = med.water_level if abs(med.water_level) < 1e8 else 0.0
     levels = {"seabed": round(min(base - 3.0, low - 1.0), 3)}
     if abs(med.water_level) < 1e8:
@@ -237,7 +252,7 @@ def environment_levels(scene: Scene) -> dict:
 
 def scene_bounds(scene: Scene, margin: float = 8.0) -> tuple[np.ndarray, np.ndarray]:
     """Return the (x, z) rectangle in glTF axes that the ground covers: the paths + margin."""
-    pts = [to_gltf_axes(a.com)[:, [0, 2]] for a in scene.animals]
+    pts = [to_gltf_axes(m.com)[:, [0, 2]] for m in scene.movers]
     if len(scene.markers):
         pts.append(to_gltf_axes(scene.markers)[:, [0, 2]])
     allp = np.concatenate(pts)
@@ -307,6 +322,29 @@ def scene_glb(scene: Scene) -> bytes:
             channels.append(
                 {"sampler": len(samplers) - 1, "target": {"node": joint, "path": "translation"}}
             )
+    for k, creature in enumerate(scene.creatures):
+        parent = b.node({"name": f"{creature.name}-{k}"})
+        kids = []
+        for link in creature.links:
+            mat = _material(b, link.name, _linear(link.color), roughness=0.6)
+            verts = to_gltf_axes(link.vertices)
+            prim = {"attributes": {"POSITION": b.accessor(verts, "VEC3", _ARRAY, bounds=True)},
+                    "indices": b.accessor(np.asarray(link.faces)[:, ::-1].astype(np.uint16)
+                                          .ravel(), "SCALAR", _ELEMENTS),
+                    "material": mat}  # fmt: skip
+            mesh = b.add("meshes", {"name": link.name, "primitives": [prim]})
+            tr = to_gltf_axes(np.nan_to_num(link.translations))
+            rot = _quaternions(np.nan_to_num(link.angles), link.axis)
+            node = b.node({"name": f"{creature.name}-{k}-{link.name}", "mesh": mesh,
+                           "translation": tr[0].tolist(), "rotation": rot[0].tolist()},
+                          root=False)  # fmt: skip
+            kids.append(node)
+            for path, values, kind in (("translation", tr, "VEC3"), ("rotation", rot, "VEC4")):
+                out = b.accessor(np.ascontiguousarray(values), kind)
+                samplers.append({"input": t_acc, "output": out, "interpolation": "LINEAR"})
+                channels.append({"sampler": len(samplers) - 1,
+                                 "target": {"node": node, "path": path}})  # fmt: skip
+        b.doc["nodes"][parent]["children"] = kids
     if len(times) > 1:
         b.add("animations", {"name": "run", "channels": channels, "samplers": samplers})
     levels = environment_levels(scene)
@@ -340,8 +378,11 @@ def scene_glb(scene: Scene) -> bytes:
         )
     if len(scene.markers):
         extent = max(
-            float(np.ptp(a.positions[0][np.isfinite(a.positions[0]).all(1)], axis=0).max())
-            for a in scene.animals
+            [
+                float(np.ptp(a.positions[0][np.isfinite(a.positions[0]).all(1)], axis=0).max())
+                for a in scene.animals
+            ]
+            + [0.5]
         )
         mat = _material(b, "target", _linear((220, 40, 30)))
         for i, m in enumerate(to_gltf_axes(scene.markers)):

@@ -37,6 +37,30 @@ class Animal:
 
 
 @dataclass(frozen=True)
+class Rigid:
+    """One rigid link: a prism mesh in its own frame, moved by a pose per frame."""
+
+    name: str
+    color: tuple[int, int, int]
+    vertices: np.ndarray  # (V, 3) float32 m, in the link's frame (zoetic axes)
+    faces: np.ndarray  # (F, 3) int, counter-clockwise seen from outside
+    translations: np.ndarray  # (R, 3) float32 m, the frame's origin (zoetic axes)
+    angles: np.ndarray  # (R,) rad, about ``axis``, from +x toward the plane's second axis
+    axis: str  # "z": a vertical plane (x forward, y up); "y": a top view (x forward, z left)
+
+
+@dataclass(frozen=True)
+class Creature:
+    """A rigid-link creature (a sensor-actuator network's): its links and what drives them."""
+
+    name: str
+    links: tuple[Rigid, ...]
+    com: np.ndarray  # (R, 3) float32 m
+    actuators: tuple[str, ...] = ()
+    activations: np.ndarray | None = None  # (R, A) commands mapped to [0, 1]
+
+
+@dataclass(frozen=True)
 class Scene:
     """What a viewer shows: animals at frame times ``times`` (R,), in a medium, with markers."""
 
@@ -48,6 +72,12 @@ class Scene:
     animals: tuple[Animal, ...]
     markers: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (M, 3) targets
     numbers: dict = field(default_factory=dict)  # run figures shown beside the view
+    creatures: tuple[Creature, ...] = ()
+
+    @property
+    def movers(self) -> tuple:
+        """Return the animals and the creatures: each has a name, com, actuators, activations."""
+        return tuple(self.animals) + tuple(self.creatures)
 
     @property
     def duration(self) -> float:
@@ -159,6 +189,78 @@ def _from_controller(run: Path, fps: float) -> Scene:
     return Scene(f"{body.name} {kind} ({run.name})", kind, t, fps, medium, (anim,), mk, numbers)
 
 
+def _prism(outline: np.ndarray, depth: float, axis: str) -> tuple[np.ndarray, np.ndarray]:
+    """Return vertices (2K, 3) and faces of a convex planar outline (K, 2) extruded by depth."""
+    k = len(outline)
+    h = np.full(k, depth / 2)
+    if axis == "z":  # the outline lies in x-y, extruded along z
+        top = np.column_stack([outline[:, 0], outline[:, 1], h])
+        bottom = np.column_stack([outline[:, 0], outline[:, 1], -h])
+    else:  # the outline lies in x-z, extruded along y
+        top = np.column_stack([outline[:, 0], h, outline[:, 1]])
+        bottom = np.column_stack([outline[:, 0], -h, outline[:, 1]])
+    i = np.arange(k)
+    j = (i + 1) % k
+    fan = np.column_stack([np.zeros(k - 2, int), np.arange(1, k - 1), np.arange(2, k)])
+    faces = np.concatenate([
+        fan, fan[:, ::-1] + k,
+        np.column_stack([i, i + k, j]), np.column_stack([j, i + k, j + k]),
+    ])  # fmt: skip
+    return np.concatenate([top, bottom]).astype(np.float32), faces
+
+
+def _from_san(run: Path, fps: float) -> Scene:
+    from PIL import ImageColor
+
+    from zoetic.san.draw import _LINK_COLOURS, link_outline
+    from zoetic.san.network import load_with_creature
+    from zoetic.san.search import speed_cm_s
+    from zoetic.san.show import replay, resolve_network
+
+    file = resolve_network(run)
+    net, c = load_with_creature(file)
+    tuned = net.tuned_creature(c)
+    terrain, seed = str(net.info.get("terrain", "flat")), int(net.info.get("seed", 0))
+    seconds = net.info.get("seconds")
+    rollout = replay(net, c, float(seconds) if seconds else None, terrain, seed, fps)
+    from zoetic.viz.render3d import resample
+
+    poses = np.asarray(rollout.poses, float).copy()  # (R, L, 3): [x, z, angle]
+    poses[..., 2] = np.unwrap(poses[..., 2], axis=0)
+    recorded = np.asarray(rollout.times, float)
+    times, (poses,) = resample([poses], recorded, fps)  # recorded every few control ticks
+    near = np.clip(np.searchsorted(recorded, times + 1e-9) - 1, 0, len(recorded) - 1)
+    vertical = getattr(tuned, "plane", "vertical") != "horizontal"
+    axis = "z" if vertical else "y"
+    links, centres = [], []
+    for li, link in enumerate(tuned.links):
+        outline = link_outline(link, np.zeros(3))
+        verts, faces = _prism(outline, link.out_of_plane, axis)
+        x, p, ang = poses[:, li, 0], poses[:, li, 1], poses[:, li, 2]
+        height = np.full_like(x, link.out_of_plane / 2 if not vertical else 0.0)
+        tr = np.column_stack([x, p, np.zeros_like(x)] if vertical else [x, height, p])
+        colour = ImageColor.getrgb(_LINK_COLOURS[li % len(_LINK_COLOURS)])[:3]
+        links.append(Rigid(link.name, colour, verts, faces,
+                           tr.astype(np.float32), ang.astype(np.float32), axis))  # fmt: skip
+        cx = x + np.cos(ang) * link.centre
+        cp = p + np.sin(ang) * link.centre
+        centres.append((link.mass, np.column_stack([cx, cp, np.zeros_like(cx)] if vertical
+                                                   else [cx, height, cp])))  # fmt: skip
+    total = sum(m for m, _ in centres)
+    com = sum(m * c_ for m, c_ in centres) / total
+    cmds = np.asarray(rollout.commands, float)
+    cmds = cmds[near] if cmds.ndim == 2 and len(cmds) == len(recorded) else np.zeros((0, 0))
+    acts = np.clip((cmds + 2.0) / 4.0, 0.0, 1.0).astype(np.float32) if cmds.size else None
+    names = tuple(a.name for a in tuned.actuators)
+    creature = Creature(tuned.name, tuple(links), com.astype(np.float32), names, acts)
+    medium = get_medium("ground" if tuned.medium == "ground" else "water")
+    speed = speed_cm_s(tuned, rollout.metric, rollout.distance, rollout.seconds)
+    numbers = {"metric": round(float(rollout.metric), 4), "speed_cm_s": round(speed, 2),
+               "fell": bool(rollout.fell), "distance_m": round(_travelled(com), 3)}  # fmt: skip
+    return Scene(f"{tuned.name} SAN ({run.name})", "san", times - times[0], fps, medium, (),
+                 numbers=numbers, creatures=(creature,))  # fmt: skip
+
+
 def load_scene(run_dir: str | Path, fps: float = 30.0) -> Scene:
     """Return the Scene of a run directory, its motion resampled at ``fps`` frames per second."""
     run, fps = Path(run_dir), float(fps)
@@ -172,7 +274,10 @@ def load_scene(run_dir: str | Path, fps: float = 30.0) -> Scene:
         (run / "config.toml").exists() or (run / "summary.json").exists()
     ):
         return _from_controller(run, fps)
+    if (run / "san.json").exists() or (run / "sans" / "01.json").exists():
+        return _from_san(run, fps)
     raise RunDirError(
-        f"{run}: no trajectory.npz, nor controller.json with config.toml or summary.json; "
-        "views come from simulate, learn, track, macro and sequence runs"
+        f"{run}: no trajectory.npz, nor controller.json with config.toml or summary.json, nor "
+        "san.json or sans/01.json; views come from simulate, learn, track, macro, sequence and "
+        "san search/tune runs"
     )
