@@ -93,6 +93,7 @@ def test_the_viewer_draws_and_scrubs_in_chromium(shark_run, tmp_path):
             assert page.evaluate("window.zoetic.error") is None and not errors, errors
             page.click("#play")  # pause, then move the timeline as a user would
             assert page.inner_text("#play") == "play"
+            page.uncheck("#follow")  # a still camera: the shark swims across the picture
             page.eval_on_selector(
                 "#timeline", "s => { s.value = 0; s.dispatchEvent(new Event('input')); }"
             )
@@ -108,7 +109,8 @@ def test_the_viewer_draws_and_scrubs_in_chromium(shark_run, tmp_path):
             page.screenshot(path=str(tmp_path / "viewer-1.5s.png"))
             assert "t = 1.50 s" in page.inner_text("#panel")
             changed = np.abs(later - start).max(axis=2) > 20
-            assert changed.mean() > 0.002, "moving the timeline did not change the picture"
+            print(f"{100 * changed.mean():.2f}% of the pixels changed")
+            assert changed.mean() > 0.005, "moving the timeline did not change the picture"
             # the exported .glb, read by three.js's own GLTFLoader
             b64 = base64.b64encode(glb.read_bytes()).decode()
             info = page.evaluate("b => window.zoetic.inspectGlb(b)", b64)
