@@ -83,3 +83,24 @@ def test_learn_cli_with_a_ray_address(local_ray, reference, tmp_path):
     with (tmp_path / "history.csv").open() as fh:
         assert [row["E"] for row in csv.DictReader(fh)] == [f"{e:.6g}" for e in reference[1]]
     assert 'evaluator = "ray"' in (tmp_path / "config.toml").read_text()
+
+
+def test_repertoire_training_learns_on_ray(local_ray, tmp_path):
+    from zoetic.behavior.training import train_repertoire
+
+    class Stop(Exception):
+        pass
+
+    entries: list[str] = []
+
+    def on_entry(name: str, run) -> None:
+        if entries:
+            raise Stop  # one entry is enough to see where it was evaluated
+        entries.append(name)
+
+    with pytest.raises(Stop):
+        train_repertoire("snake", tmp_path, budget=10, nodes=4, on_entry=on_entry,
+                         evaluator="ray")  # fmt: skip
+    run_dir = tmp_path / "runs" / entries[0]
+    assert 'evaluator = "ray"' in (run_dir / "config.toml").read_text()
+    assert len((run_dir / "history.csv").read_text().splitlines()) > 10  # one CMA-ES generation

@@ -94,6 +94,7 @@ def train_repertoire(
     nodes: int | None = None,
     on_entry: Callable[[str, object], None] | None = None,
     progress: Callable[[object], None] | None = None,
+    evaluator: str = "batch",
 ) -> Repertoire:
     """Learn, abstract and save the basic repertoire of ``animal`` into ``out``; return it.
 
@@ -113,7 +114,8 @@ def train_repertoire(
             run = Run.resume(run_dir)
         else:
             config = LearnConfig(animal=str(animal), task=entry.task.name, optimizer=optimizer,
-                                 budget=budget, seed=seed + k, nodes=nodes)  # fmt: skip
+                                 budget=budget, seed=seed + k, nodes=nodes,
+                                 evaluator=evaluator)  # fmt: skip
             run = Run.create(run_dir, config)
         if on_entry:
             on_entry(entry.name, run)

@@ -52,8 +52,14 @@ def train_cmd(
     threshold: float = typer.Option(0.3, help="auto keeps modes >= threshold x the strongest."),
     nodes: int = typer.Option(None, min=2, help="Controller nodes per actuator (task's)."),
     seed: int = typer.Option(0, help="Random seed: same seed, same repertoire."),
+    evaluator: str = typer.Option("batch", help="batch, process or ray (see zoetic learn)."),
+    ray_address: str = typer.Option(None, help="Ray cluster for --evaluator ray."),
 ) -> None:
     """Learn the basic repertoire (straight, sharp and wide turns, mirrored); resumable."""
+    if ray_address:  # ray.init() reads it
+        import os
+
+        os.environ["RAY_ADDRESS"] = ray_address
     from zoetic.behavior.training import show_repertoire, train_repertoire
     from zoetic.learn.abstraction import parse_modes
 
@@ -72,7 +78,7 @@ def train_cmd(
 
         try:
             train_repertoire(animal, out, budget, seed, optimizer, parse_modes(modes), threshold,
-                             nodes, on_entry, progress)  # fmt: skip
+                             nodes, on_entry, progress, evaluator)  # fmt: skip
         except KeyboardInterrupt:
             console.print(f"[yellow]interrupted; run the same command again to continue "
                           f"({out} keeps what was learned)[/]")  # fmt: skip
