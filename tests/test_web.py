@@ -111,6 +111,13 @@ def test_the_viewer_draws_and_scrubs_in_chromium(shark_run, tmp_path):
             changed = np.abs(later - start).max(axis=2) > 20
             print(f"{100 * changed.mean():.2f}% of the pixels changed")
             assert changed.mean() > 0.005, "moving the timeline did not change the picture"
+            page.eval_on_selector(
+                "#timeline", "s => { s.value = s.max; s.dispatchEvent(new Event('input')); }"
+            )
+            page.wait_for_timeout(100)
+            end = _canvas(page)  # the last frame, not the first again (a looping clip wraps)
+            assert (np.abs(end - start).max(axis=2) > 20).mean() > 0.005
+            assert (np.abs(end - later).max(axis=2) > 20).mean() > 0.001
             # the exported .glb, read by three.js's own GLTFLoader
             b64 = base64.b64encode(glb.read_bytes()).decode()
             info = page.evaluate("b => window.zoetic.inspectGlb(b)", b64)

@@ -59,6 +59,7 @@ async function main() {
   });
   const mixer = new THREE.AnimationMixer(gltf.scene);
   if (gltf.animations.length) mixer.clipAction(gltf.animations[0]).play();
+  const clipEnd = gltf.animations.length ? gltf.animations[0].duration * (1 - 1e-6) : 0;
 
   // centre-of-mass paths, in glTF axes, flat [x, y, z, ...] per frame
   const coms = data.animals.map((a) => a.com);
@@ -118,7 +119,7 @@ async function main() {
   let t = 0, playing = true, last = performance.now();
   const setTime = (time) => {
     t = Math.min(Math.max(time, 0), data.duration);
-    mixer.setTime(t);
+    mixer.setTime(Math.min(t, clipEnd)); // a repeating clip wraps to its start at its end
     const i = Math.min(Math.round(t * data.fps), data.frames - 1);
     if (follow.checked) {
       const delta = comAt(0, i).sub(controls.target);
@@ -150,6 +151,7 @@ async function main() {
   });
 
   Object.assign(api, {
+    scene, camera, controls,
     time: () => t,
     setTime: (time) => { setTime(time); render(); },
     pause: () => { playing = false; play.textContent = "play"; },

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import sys
 import webbrowser
 from collections.abc import Callable
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
@@ -34,12 +36,19 @@ def make_server(page: str, port: int = 0) -> ThreadingHTTPServer:
         raise ZoeticError(f"cannot serve on 127.0.0.1:{port} ({exc}); try --port 0") from None
 
 
+def _has_display() -> bool:
+    """Return whether a graphical browser can open here (not a text browser on a server)."""
+    if sys.platform in ("darwin", "win32"):
+        return True
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
 def serve(page: str, port: int, open_browser: bool, say: Callable[[str], None] = print) -> None:
     """Serve ``page`` until Ctrl-C; print the URL and open a browser when one is available."""
     server = make_server(page, port)
     url = f"http://127.0.0.1:{server.server_address[1]}/"
     say(f"serving the view at {url} (Ctrl-C to stop)")
-    if open_browser:
+    if open_browser and _has_display():
         try:
             webbrowser.open(url)
         except webbrowser.Error:
