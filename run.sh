@@ -26,13 +26,15 @@ if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
 fi
 
 # The web viewer's script (three.js + web/viewer.js, bundled by esbuild) is built, not kept in git.
+# web/node_modules also holds the Khronos glTF validator that the tests run.
 bundle=src/zoetic/web/static/viewer.js
-if [ ! -f "$bundle" ] || [ web/viewer.js -nt "$bundle" ] || [ web/package-lock.json -nt "$bundle" ]; then
-  if command -v npm >/dev/null 2>&1; then
+if command -v npm >/dev/null 2>&1; then
+  if [ ! -f "$bundle" ] || [ ! -d web/node_modules/gltf-validator ] \
+     || [ web/viewer.js -nt "$bundle" ] || [ web/package-lock.json -nt "$bundle" ]; then
     (cd web && npm ci --no-audit --no-fund --loglevel=error && npm run --silent build) >&2
-  else
-    echo "note: npm not found, so the web viewer (zoetic view) is not built" >&2
   fi
+elif [ ! -f "$bundle" ]; then
+  echo "note: npm not found, so the web viewer (zoetic view) is not built" >&2
 fi
 
 cmd="${1:-demo}"
