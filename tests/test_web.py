@@ -47,6 +47,16 @@ def test_the_page_is_self_contained_and_carries_the_run(shark_run, tmp_path):
     np.testing.assert_allclose(acts, scene.animals[0].activations, atol=5e-4)
 
 
+def test_without_the_built_script_the_cli_says_how_to_build_it(shark_run, tmp_path, monkeypatch,
+                                                              capsys):  # fmt: skip
+    import zoetic.web.page as page
+
+    monkeypatch.setattr(page, "_STATIC", tmp_path / "nowhere")
+    assert main(["view", str(shark_run), "--html", str(tmp_path / "v.html")]) == 2
+    assert "npm run build" in capsys.readouterr().err
+    assert not (tmp_path / "v.html").exists()
+
+
 def test_the_server_answers_the_page_and_nothing_else(shark_run):
     page = "<html>zoetic</html>"
     server = make_server(page, 0)
@@ -91,8 +101,11 @@ def test_the_viewer_draws_and_scrubs_in_chromium(shark_run, tmp_path):
             page.wait_for_function("window.zoetic && (window.zoetic.ready || window.zoetic.error)",
                                    timeout=30_000)  # fmt: skip
             assert page.evaluate("window.zoetic.error") is None and not errors, errors
-            page.click("#play")  # pause, then move the timeline as a user would
+            page.keyboard.press(" ")  # pause, then move the timeline as a user would
             assert page.inner_text("#play") == "play"
+            t0 = page.evaluate("window.zoetic.time()")
+            page.keyboard.press("ArrowRight")  # one frame on
+            assert page.evaluate("window.zoetic.time()") == pytest.approx(min(t0 + 1 / 30, 2))
             page.uncheck("#follow")  # a still camera: the shark swims across the picture
             page.eval_on_selector(
                 "#timeline", "s => { s.value = 0; s.dispatchEvent(new Event('input')); }"

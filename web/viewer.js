@@ -134,6 +134,15 @@ async function main() {
   };
   play.onclick = () => { playing = !playing; play.textContent = playing ? "pause" : "play"; };
   slider.oninput = () => setTime(parseFloat(slider.value));
+  window.addEventListener("keydown", (e) => { // space: play/pause; arrows: one frame
+    if (e.target.tagName === "SELECT" || e.target.tagName === "INPUT" && e.target !== slider) return;
+    if (e.key === " ") { play.onclick(); e.preventDefault(); }
+    if (e.key === "ArrowRight" || e.key === "ArrowLeft") {
+      if (playing) play.onclick();
+      setTime(t + (e.key === "ArrowRight" ? 1 : -1) / data.fps);
+      e.preventDefault();
+    }
+  });
   const resize = () => {
     const w = root.clientWidth, h = root.clientHeight;
     renderer.setSize(w, h);
