@@ -104,3 +104,14 @@ def test_repertoire_training_learns_on_ray(local_ray, tmp_path):
     run_dir = tmp_path / "runs" / entries[0]
     assert 'evaluator = "ray"' in (run_dir / "config.toml").read_text()
     assert len((run_dir / "history.csv").read_text().splitlines()) > 10  # one CMA-ES generation
+
+
+def test_san_search_on_ray_matches_the_process_pool(local_ray):
+    from zoetic.san import load_creature
+    from zoetic.san.search import search
+
+    cart = load_creature("cart")
+    here = search(cart, trials=6, seed=3, seconds=0.5, workers=1)
+    on_ray = search(cart, trials=6, seed=3, seconds=0.5, workers=2, evaluator="ray")
+    assert np.array_equal(here.metrics, on_ray.metrics)
+    assert np.array_equal(here.distances, on_ray.distances) and np.ptp(here.distances) > 0

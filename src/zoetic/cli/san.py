@@ -73,8 +73,14 @@ def search_cmd(
     workers: int = typer.Option(None, min=1, help="Worker processes (default: all cores)."),
     out: Path = typer.Option(None, help="Output directory (default runs/<creature>)."),
     video: bool = typer.Option(True, help="Write a video of each kept gait."),
+    evaluator: str = typer.Option("process", help="process (this machine) or ray (a cluster)."),
+    ray_address: str = typer.Option(None, help="Ray cluster for --evaluator ray."),
 ) -> None:
     """Phase 1: random SANs, evaluated in parallel; keeps the best (sans/*.json, videos)."""
+    if ray_address:  # ray.init() reads it
+        import os
+
+        os.environ["RAY_ADDRESS"] = ray_address
     from zoetic.san import load_creature
     from zoetic.san.search import search, write_search
 
@@ -83,7 +89,8 @@ def search_cmd(
     bar, tid = _bar(f"{c.name} {terrain}", trials)
     with bar:
         result = search(c, trials=trials, top=top, seed=seed, terrain=terrain, workers=workers,
-                        progress=_progress(bar, tid), seconds=seconds)  # fmt: skip
+                        progress=_progress(bar, tid), seconds=seconds,
+                        evaluator=evaluator)  # fmt: skip
     with console.status(f"writing {out}" + (" (videos)" if video else "")):
         summary = write_search(result, out, top=top, video=video)
     for key, value in summary.items():

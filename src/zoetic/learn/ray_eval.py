@@ -36,30 +36,32 @@ def _ray():
 
 
 class _Worker:
-    """A Ray actor: caches objectives by key and evaluates sub-batches of candidates."""
+    """A Ray actor: caches one job (an objective, ...) by key and runs sub-batches through it."""
 
     def __init__(self) -> None:
         from zoetic.physics.simulate import set_threads
 
         set_threads(1)
-        self._objectives: dict[int, Objective] = {}
+        self._jobs: dict = {}
 
     def pid(self) -> int:
         return os.getpid()
 
-    def evaluate(self, key: int, boxed_ref: list, start: int, params: np.ndarray):
-        """Return (start, Evaluation) of candidates ``start .. start + len(params)``."""
-        if key not in self._objectives:
+    def evaluate(self, key: int, boxed_ref: list, start: int, items):
+        """Return (start, job.evaluate(items)) for the items ``start .. start + len(items)``."""
+        if key not in self._jobs:
             import ray
 
-            self._objectives = {key: ray.get(boxed_ref[0])}  # one objective at a time
-        return start, self._objectives[key].evaluate(params)
+            self._jobs = {key: ray.get(boxed_ref[0])}  # one job at a time
+        return start, self._jobs[key].evaluate(items)
 
 
-class RayEvaluator:
-    """Evaluate batches on Ray actors; same seed, same result as ``BatchEvaluator``."""
+class RayPool:
+    """Long-lived Ray actors that run a job's ``evaluate`` over sub-batches, in index order.
 
-    name = "ray"
+    A job is any picklable object with ``evaluate(items)`` (an Objective, a SAN search's
+    trials); it is put in the object store once and cached by each actor.
+    """
 
     def __init__(
         self,
@@ -67,7 +69,7 @@ class RayEvaluator:
         actors: int | None = None,
         chunks_per_actor: int = 2,
         retries: int = 3,
-        on_submit: Callable[[RayEvaluator], None] | None = None,
+        on_submit: Callable[[RayPool], None] | None = None,
     ):
         self.address = address or os.environ.get("RAY_ADDRESS") or None
         self.n_actors = actors
@@ -78,7 +80,7 @@ class RayEvaluator:
         self._actors: list = []
         self._key: int | None = None
         self._ref = None
-        self._objective = None
+        self._job = None
         self._started_ray = False
 
     def _start(self) -> None:
@@ -100,46 +102,52 @@ class RayEvaluator:
         """Return the process ids of the actors (a test kills one)."""
         return _ray().get([a.pid.remote() for a in self._actors])
 
-    def __call__(self, objective: Objective, params: np.ndarray) -> Evaluation:
+    def map(self, job, items, on_part: Callable[[int, object], None] | None = None) -> list:
+        """Return ``job.evaluate`` of consecutive sub-batches of ``items``, in their order.
+
+        ``on_part(start, result)`` is called as each sub-batch comes back (any order).
+        """
         ray = _ray()
         if not self._actors:
             self._start()
-        if self._objective is not objective:
-            self._objective, self._ref = objective, ray.put(objective)
+        if self._job is not job:
+            self._job, self._ref = job, ray.put(job)
             self._key = (self._key or 0) + 1
-        params = np.atleast_2d(np.asarray(params, np.float64))
-        n = min(len(params), len(self._actors) * self.chunks_per_actor)
-        bounds = np.linspace(0, len(params), n + 1).astype(int)
+        n = min(len(items), len(self._actors) * self.chunks_per_actor)
+        bounds = np.linspace(0, len(items), n + 1).astype(int)
         chunks = {int(a): (int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)}
         pending, attempts, done = {}, dict.fromkeys(chunks, 0), {}
 
         def submit(start: int, k: int) -> None:
             a, b = chunks[start]
             actor = self._actors[k % len(self._actors)]
-            pending[actor.evaluate.remote(self._key, [self._ref], a, params[a:b])] = start
+            pending[actor.evaluate.remote(self._key, [self._ref], a, items[a:b])] = start
 
         for k, start in enumerate(chunks):
             submit(start, k)
         if self.on_submit is not None:
             self.on_submit(self)
+        lost = (ray.exceptions.RayActorError, ray.exceptions.WorkerCrashedError,
+                ray.exceptions.ObjectLostError)  # fmt: skip
         while pending:
             ready, _ = ray.wait(list(pending), num_returns=1)
             start = pending.pop(ready[0])
             try:
-                _, ev = ray.get(ready[0])
-            except (ray.exceptions.RayActorError, ray.exceptions.WorkerCrashedError,
-                    ray.exceptions.ObjectLostError) as exc:  # fmt: skip
+                _, part = ray.get(ready[0])
+            except lost as exc:
                 attempts[start] += 1
                 if attempts[start] > self.retries:
                     raise ZoeticError(
-                        f"candidates {chunks[start][0]}..{chunks[start][1] - 1}: "
+                        f"items {chunks[start][0]}..{chunks[start][1] - 1}: "
                         f"lost {attempts[start]} times on Ray workers ({exc})"
                     ) from None
                 self.resubmitted += 1
                 submit(start, start + attempts[start])
                 continue
-            done[start] = ev
-        return merge([done[s] for s in sorted(done)])
+            done[start] = part
+            if on_part is not None:
+                on_part(start, part)
+        return [done[s] for s in sorted(done)]
 
     def close(self) -> None:
         """Stop the actors (and the local Ray this evaluator started)."""
@@ -148,10 +156,20 @@ class RayEvaluator:
         ray = _ray()
         for a in self._actors:
             ray.kill(a)
-        self._actors, self._objective, self._ref = [], None, None
+        self._actors, self._job, self._ref = [], None, None
         if self._started_ray:
             ray.shutdown()
             self._started_ray = False
+
+
+class RayEvaluator(RayPool):
+    """Evaluate batches on Ray actors; same seed, same result as ``BatchEvaluator``."""
+
+    name = "ray"
+
+    def __call__(self, objective: Objective, params: np.ndarray) -> Evaluation:
+        params = np.atleast_2d(np.asarray(params, np.float64))
+        return merge(self.map(objective, params))
 
 
 def bench_ray(

@@ -105,6 +105,22 @@ def _evaluate_chunk(start: int, networks: Sequence[Network]) -> tuple[int, list[
     return start, [_evaluate_one(net) for net in networks]
 
 
+@dataclass(frozen=True)
+class _Trials:
+    """One creature, terrain, seed and horizon: the job a Ray actor keeps (learn.ray_eval)."""
+
+    creature: object
+    terrain: str
+    seed: int
+    seconds: float
+
+    def evaluate(self, networks: Sequence[Network]) -> list[Outcome]:
+        if _WORKER.get("trials") is not self:
+            _init_worker(self.creature, self.terrain, self.seed, self.seconds)
+            _WORKER["trials"] = self
+        return [_evaluate_one(net) for net in networks]
+
+
 # --- driver -------------------------------------------------------------------------------
 
 
@@ -122,8 +138,10 @@ def evaluate_networks(
     workers: int | None = None,
     progress: Progress | None = None,
     chunk: int | None = None,
+    evaluator: str = "process",
 ) -> list[Outcome]:
-    """Return one Outcome per network (same order), evaluated on ``workers`` processes."""
+    """Return one Outcome per network (same order), evaluated on ``workers`` processes, or on
+    Ray actors with ``evaluator="ray"`` (``RAY_ADDRESS``, else a local Ray; ``workers`` actors)."""
     seconds = float(creature.seconds if seconds is None else seconds)
     total = len(networks)
     workers = max(1, min(int(workers or os.cpu_count() or 1), max(total, 1)))
@@ -137,6 +155,26 @@ def evaluate_networks(
         if progress is not None:
             progress(done, total, float(best))
 
+    if evaluator == "ray":
+        from zoetic.learn.ray_eval import RayPool
+
+        pool = RayPool(actors=workers if workers and workers > 1 else None)
+        done = 0
+
+        def part(start: int, outs: list[Outcome]) -> None:
+            nonlocal done
+            done += len(outs)
+            note(start, outs, done)
+
+        try:
+            pool.map(_Trials(creature, terrain, seed, seconds), list(networks), on_part=part)
+        finally:
+            pool.close()
+        return outcomes  # type: ignore[return-value]
+    if evaluator != "process":
+        from zoetic.errors import ZoeticError
+
+        raise ZoeticError(f"unknown evaluator {evaluator!r} (process or ray)")
     if workers == 1:
         _init_worker(creature, terrain, seed, seconds)
         try:
@@ -180,6 +218,7 @@ def search(
     progress: Progress | None = None,
     seconds: float | None = None,
     n_hidden: int | None = None,
+    evaluator: str = "process",
 ) -> SearchResult:
     """Return all ``trials`` random SANs for ``creature`` with their metrics (phase 1).
 
@@ -196,7 +235,8 @@ def search(
     networks = [random_network(creature, rng, n_hidden=n_hidden) for _ in range(trials)]
     seconds = float(creature.seconds if seconds is None else seconds)
     t0 = time.perf_counter()
-    outs = evaluate_networks(creature, networks, terrain, seed, seconds, workers, progress)
+    outs = evaluate_networks(creature, networks, terrain, seed, seconds, workers, progress,
+                             evaluator=evaluator)  # fmt: skip
     elapsed = time.perf_counter() - t0
     return SearchResult(
         creature=creature,
