@@ -47,6 +47,17 @@ def test_the_page_is_self_contained_and_carries_the_run(shark_run, tmp_path):
     np.testing.assert_allclose(acts, scene.animals[0].activations, atol=5e-4)
 
 
+def test_no_text_of_the_run_can_close_the_data_element(shark_run):
+    import dataclasses
+
+    title = "a </script><!-- <script> b"
+    scene = dataclasses.replace(load_scene(shark_run, fps=5), title=title)
+    text = scene_html(scene)
+    data = re.search(r"id='zoetic-data'[^>]*>(.*?)</script>", text, re.S).group(1)
+    assert json.loads(data)["title"] == title
+    assert "&lt;/script>" in text.split("</title>")[0]
+
+
 def test_without_the_built_script_the_cli_says_how_to_build_it(shark_run, tmp_path, monkeypatch,
                                                               capsys):  # fmt: skip
     import zoetic.web.page as page

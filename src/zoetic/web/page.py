@@ -96,14 +96,14 @@ def _inline(text: str) -> str:
 def scene_html(scene: Scene) -> str:
     """Return the self-contained HTML page that plays the scene."""
     script = bundle_path().read_text(encoding="utf-8")
-    data = json.dumps(scene_data(scene), separators=(",", ":"))
+    data = json.dumps(scene_data(scene), separators=(",", ":")).replace("<", "\\u003c")
     title = scene.title.replace("&", "&amp;").replace("<", "&lt;")
     return (
         "<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'>"
         "<meta name='viewport' content='width=device-width, initial-scale=1'>"
         f"<title>{title} · zoetic</title><style>{_STYLE}</style></head><body>"
         "<div id='zoetic'></div>"
-        f"<script id='zoetic-data' type='application/json'>{_inline(data)}</script>"
+        f"<script id='zoetic-data' type='application/json'>{data}</script>"
         f"<script>{_inline(script)}</script></body></html>\n"
     )
 
