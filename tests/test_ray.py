@@ -115,3 +115,17 @@ def test_san_search_on_ray_matches_the_process_pool(local_ray):
     on_ray = search(cart, trials=6, seed=3, seconds=0.5, workers=2, evaluator="ray")
     assert np.array_equal(here.metrics, on_ray.metrics)
     assert np.array_equal(here.distances, on_ray.distances) and np.ptp(here.distances) > 0
+
+
+def test_macro_search_on_ray_matches_in_process(local_ray):
+    from zoetic.behavior.macro import MacroProblem, ReachTask, search
+    from zoetic.behavior.tracking import handmade_repertoire
+    from zoetic.bodies import load_animal
+
+    shark = load_animal("shark")
+    task = ReachTask(goal=(1.8, 0.8), obstacles=((0.9, 0.3, 0.3),), horizon=2.0)
+    problem = MacroProblem(shark, handmade_repertoire(shark), task, segments=3)
+    here = search(problem, "ga", budget=16, seed=1, popsize=8)
+    on_ray = search(problem, "ga", budget=16, seed=1, popsize=8, evaluator="ray")
+    assert here.history == on_ray.history and np.array_equal(here.entries, on_ray.entries)
+    assert np.array_equal(here.durations, on_ray.durations)

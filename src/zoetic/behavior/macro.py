@@ -318,26 +318,59 @@ class MacroResult:
         }
 
 
+@dataclass(frozen=True)
+class _Plans:
+    """Plans as one array (B, 2L), entries then durations: the job a Ray actor keeps."""
+
+    problem: MacroProblem
+
+    def evaluate(self, plans: np.ndarray) -> dict:
+        k = plans.shape[1] // 2
+        return self.problem.evaluate(plans[:, :k].astype(np.int64), plans[:, k:])
+
+
 def search(
     problem: MacroProblem,
     method: str = "ga",
     budget: int = 2000,
     seed: int = 0,
     progress: Callable[[_Search], None] | None = None,
+    evaluator: str = "batch",
     **options,
 ) -> MacroResult:
-    """Return the best plan ``method`` (anneal or ga) finds within ``budget`` evaluations."""
+    """Return the best plan ``method`` (anneal or ga) finds within ``budget`` evaluations.
+
+    ``evaluator``: batch (this process) or ray (learn.ray_eval: RAY_ADDRESS, else a local Ray).
+    """
     if method not in SEARCHES:
         raise TrackingError(f"unknown search method {method!r}: choose anneal or ga")
+    if evaluator not in ("batch", "ray"):
+        raise TrackingError(f"unknown evaluator {evaluator!r}: choose batch or ray")
     opt = SEARCHES[method](problem, seed, **options)
+    pool = None
+    if evaluator == "ray":
+        from zoetic.learn.ray_eval import RayPool
+
+        pool, job = RayPool(), _Plans(problem)
+
+    def cost(e: np.ndarray, d: np.ndarray) -> np.ndarray:
+        if pool is None:
+            return problem.evaluate(e, d)["cost"]
+        parts = pool.map(job, np.concatenate([e, d], axis=1).astype(np.float64))
+        return np.concatenate([p["cost"] for p in parts])
+
     history = []
     start = time.perf_counter()
-    while opt.evaluations < budget:
-        e, d = opt.ask()
-        opt.tell(e, d, problem.evaluate(e, d)["cost"])
-        history.append((opt.evaluations, opt.best_f))
-        if progress is not None:
-            progress(opt)
+    try:
+        while opt.evaluations < budget:
+            e, d = opt.ask()
+            opt.tell(e, d, cost(e, d))
+            history.append((opt.evaluations, opt.best_f))
+            if progress is not None:
+                progress(opt)
+    finally:
+        if pool is not None:
+            pool.close()
     wall = time.perf_counter() - start
     e, d = opt.best
     scores = {k: float(v[0]) for k, v in problem.evaluate(e[None], d[None]).items()}

@@ -181,8 +181,14 @@ def macro(
     out: Path = typer.Option(Path("runs/macro"), help="Run directory to write."),
     video: bool = typer.Option(True, help="Write video.mp4 (goal and obstacle rims as buoys)."),
     fps: int = typer.Option(30, min=1),
+    evaluator: str = typer.Option("batch", help="batch (this machine) or ray (a cluster)."),
+    ray_address: str = typer.Option(None, help="Ray cluster for --evaluator ray."),
 ) -> None:
     """Search for a macro controller (selection, order, durations of entries) to reach a goal."""
+    if ray_address:  # ray.init() reads it
+        import os
+
+        os.environ["RAY_ADDRESS"] = ray_address
     from zoetic.behavior.macro import MacroProblem, ReachTask, search
     from zoetic.behavior.tracking import TrackingError, parse_points
     from zoetic.control import save_controller
@@ -204,7 +210,7 @@ def macro(
             bar.update(tid, completed=min(opt.evaluations, budget),
                        info=f"E {opt.best_f:.3f} {st}")  # fmt: skip
 
-        result = search(problem, method, budget, seed, progress=update)
+        result = search(problem, method, budget, seed, progress=update, evaluator=evaluator)
     out.mkdir(parents=True, exist_ok=True)
     save_controller(result.sequence, out / "controller.json")
     summary = result.summary() | {
