@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import os
 import tempfile
-import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -38,15 +37,11 @@ def write_json(path: str | os.PathLike, obj: Any) -> Path:
     return atomic_write_bytes(path, (json.dumps(obj, indent=2) + "\n").encode())
 
 
-def read_json(path: str | os.PathLike, what: str = "file") -> Any:
-    """Return the parsed JSON in ``path``; a missing or malformed file is a ZoeticError."""
-    path = Path(path)
-    try:
-        return json.loads(path.read_text())
-    except FileNotFoundError:
-        raise ZoeticError(f"{path}: no such {what}") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ZoeticError(f"{path}: not valid JSON ({exc})") from None
+def read_json(path: str | os.PathLike, what: str = "file", error=ZoeticError) -> Any:
+    """Return the parsed JSON in ``path``, read safely (zoetic.reader); errors are ``error``."""
+    from zoetic.reader import load_json
+
+    return load_json(path, what, error)
 
 
 def write_toml(path: str | os.PathLike, obj: dict[str, Any]) -> Path:
@@ -54,13 +49,8 @@ def write_toml(path: str | os.PathLike, obj: dict[str, Any]) -> Path:
     return atomic_write_bytes(path, tomli_w.dumps(obj).encode())
 
 
-def read_toml(path: str | os.PathLike, what: str = "file") -> dict[str, Any]:
-    """Return the parsed TOML in ``path``; a missing or malformed file is a ZoeticError."""
-    path = Path(path)
-    try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
-    except FileNotFoundError:
-        raise ZoeticError(f"{path}: no such {what}") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ZoeticError(f"{path}: not valid TOML ({exc})") from None
+def read_toml(path: str | os.PathLike, what: str = "file", error=ZoeticError) -> dict[str, Any]:
+    """Return the parsed TOML in ``path``, read safely (zoetic.reader); errors are ``error``."""
+    from zoetic.reader import load_toml
+
+    return load_toml(path, what, error)

@@ -9,9 +9,11 @@ import numpy as np
 
 from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller, controller_from_spec
-from zoetic.errors import SimulationError
+from zoetic.errors import BlowUpError, SimulationError
 from zoetic.io import atomic_write_bytes
 from zoetic.physics import Medium, Trajectory, get_medium, simulate
+from zoetic.physics.simulate import check_dt, good_dt
+from zoetic.reader import check_memory, check_steps
 
 
 def record_stride(dt: float, rate_hz: float = 100.0) -> int:
@@ -29,15 +31,33 @@ def save_trajectory(path: Path, traj: Trajectory, index: int = 0) -> Path:
 def run_controller(
     body: Body, ctrl: Controller, seconds: float, medium: Medium, dt: float
 ) -> Trajectory:
-    """Return the trajectory of one body driven by one controller for ``seconds``."""
+    """Return the trajectory of one body driven by one controller for ``seconds``.
+
+    A blow-up (which the step check should have prevented) is a BlowUpError (exit code 3)
+    naming the step, the animal and a time step that works.
+    """
     steps = int(round(seconds / dt))
     traj = simulate(body, ctrl.table(steps, dt), medium, dt, record_every=record_stride(dt))
-    if traj.failed[0]:
-        raise SimulationError(
-            f"the simulation of the {body.name} blew up at t = {traj.failed_step[0] * dt:.3f} s "
-            f"(dt = {dt}); try a smaller --dt"
+    if traj.failed[0] or not np.isfinite(traj.positions[0]).all():
+        step = int(traj.failed_step[0]) if traj.failed[0] else steps
+        raise BlowUpError(
+            f"the simulation of the {body.name} ({body.source}) blew up at step {step} "
+            f"(t = {step * dt:.3f} s) with dt = {dt:g} s in {medium.name}; "
+            f"try --dt {good_dt(body, medium) / 2:.3g}"
         )
     return traj
+
+
+def check_simulation(body: Body, ctrl: Controller, seconds: float, dt: float,
+                     where_dt: str) -> int:  # fmt: skip
+    """Return the number of steps, refusing a run too long or too big for memory."""
+    steps = check_steps(seconds, dt, where_dt, SimulationError)
+    n_rec = steps // record_stride(dt) + 1
+    per_step = body.n_actuators * 24 + 8 * int(getattr(ctrl, "nodes", 8) or 8)
+    check_memory(steps * per_step + n_rec * body.n_nodes * 3 * 12,
+                 f"simulating {seconds:g} s of the {body.name} at dt = {dt:g} s",
+                 SimulationError)  # fmt: skip
+    return steps
 
 
 def write_media(body: Body, traj: Trajectory, medium: Medium, out: Path, video: bool, fps: int):
@@ -68,9 +88,9 @@ def simulate_run(
     body = load_animal(animal)
     ctrl = controller_from_spec(controller, body)
     med = get_medium(medium or body.medium)
-    dt = float(dt or body.dt)
-    if dt <= 0:
-        raise SimulationError(f"dt must be positive, got {dt}")
+    where_dt = body.source if dt is None else "--dt"
+    dt = check_dt(body, float(body.dt if dt is None else dt), med, where_dt)
+    check_simulation(body, ctrl, seconds, dt, "--seconds")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     traj = run_controller(body, ctrl, seconds, med, dt)
@@ -78,6 +98,8 @@ def simulate_run(
     files = write_media(body, traj, med, out, video, fps)
     com = traj.com(body)[0]
     travelled = float(np.linalg.norm(com[-1, [0, 2]] - com[0, [0, 2]]))
+    if not np.isfinite(travelled):  # never report nan as a result
+        raise BlowUpError(f"the simulation of the {body.name} ({body.source}) produced NaN")
     return {
         "animal": body.name,
         "medium": med.name,
