@@ -67,6 +67,15 @@ def suggest(key: str, allowed: Iterable[str]) -> str:
 # ----------------------------------------------------------------------------- files
 
 
+def is_path(text: str) -> bool:
+    """True if ``text`` is written as a path (a slash, a suffix, or ``.``), not a zoo name.
+
+    A bare name like ``shark`` always means the zoo entry, even when the working directory
+    holds a folder or file of that name; ``./shark`` or ``shark.toml`` means the file.
+    """
+    return "/" in text or os.sep in text or Path(text).suffix != "" or text.startswith(".")
+
+
 def read_text(path: str | os.PathLike, what: str = "file", error=ZoeticError) -> str:
     """Return the UTF-8 text of ``path``; missing, huge, binary or UTF-16 files are ``error``."""
     path = Path(path)
