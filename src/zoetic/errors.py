@@ -35,8 +35,8 @@ class RunDirError(ZoeticError):
 
 def naming(source: object, exc: ZoeticError) -> ZoeticError:
     """Return ``exc`` with its message prefixed by ``source`` (a file or directory) if needed."""
-    text = str(exc)
-    if str(source) in text:
+    text, src = str(exc), str(source)
+    if text.startswith(src) or f"{src}/" in text or f"{src}:" in text or f" {src} " in text:
         return exc
     new = type(exc)(f"{source}: {text}")
     return new

@@ -146,3 +146,104 @@ def finish_run(run, video: bool = True, fps: int = 30) -> dict:
         "run": str(out),
         **{k: str(v) for k, v in files.items()},
     }
+
+
+# ----------------------------------------------------------------------------- run configs
+
+MAX_BUDGET = 10_000_000  # evaluations of one learning run
+CHOICES = {
+    "optimizer": ("anneal", "simplex", "cmaes", "gradient"),
+    "controller": ("time", "frequency"),
+    "interp": ("linear", "bspline"),
+    "evaluator": ("batch", "process"),
+    "coupling": ("none", "antiphase"),
+    "medium": ("ground", "water", "sea", "vacuum"),
+}
+BOUNDS = {"budget": (1, MAX_BUDGET), "nodes": (2, 100_000), "popsize": (2, 100_000),
+          "chains": (1, 10_000), "seed": (0, 2**63 - 1)}  # fmt: skip
+
+
+def check_learn_config(d: dict, where: str) -> dict:
+    """Check a learning run's settings (config.toml's [run], or the CLI's) strictly.
+
+    The keys are LearnConfig's fields (so new fields are known at once); each value's type
+    follows the field's annotation, choices and bounds are checked; returns ``d``.
+    """
+    from dataclasses import fields
+
+    from zoetic import reader as rd
+    from zoetic.errors import RunDirError
+    from zoetic.learn.run import LearnConfig
+
+    E = RunDirError
+    if not isinstance(d, dict):
+        raise E(f"{where}: must be a table, got {rd.abbrev(d)}")
+    kinds = {f.name: str(f.type) for f in fields(LearnConfig)}
+    rd.check_keys(d, kinds, where, E)
+    for key, value in d.items():
+        at, kind = f"{where}: {key}", kinds[key]
+        if value is None and "None" in kind:
+            continue
+        if kind.startswith("int"):
+            lo, hi = BOUNDS.get(key, (None, None))
+            rd.integer(value, at, E, lo, hi)
+        elif kind.startswith("float"):
+            rd.number(value, at, E)
+        elif kind.startswith("str"):
+            rd.string(value, at, E, CHOICES.get(key))
+        elif kind.startswith("bool") and not isinstance(value, bool):
+            raise E(f"{at} must be true or false, got {rd.abbrev(value)}")
+        elif kind.startswith("dict") and not isinstance(value, dict):
+            raise E(f"{at} must be a table, got {rd.abbrev(value)}")
+    return d
+
+
+def check_run_dir(out: Path) -> None:
+    """Refuse a run directory whose config.toml is missing, unreadable or malformed."""
+    from zoetic.errors import RunDirError
+    from zoetic.io import read_toml
+
+    out = Path(out)
+    if not out.is_dir():
+        raise RunDirError(f"{out}: no such run directory")
+    cfg = out / "config.toml"
+    if not cfg.is_file():
+        raise RunDirError(f"{out}: no config.toml, so not a zoetic run directory")
+    doc = read_toml(cfg, what="run configuration", error=RunDirError)
+    if "run" not in doc or "task" not in doc:
+        raise RunDirError(f"{cfg}: needs a [run] and a [task] table; was it edited?")
+    check_learn_config(doc["run"], f"{cfg}: [run]")
+    if not isinstance(doc["task"], dict):
+        raise RunDirError(f"{cfg}: [task] must be a table")
+
+
+MARKER = ".zoetic-demo"
+
+
+def clear_demo(out: Path) -> None:
+    """Remove what an earlier ``zoetic demo`` wrote into ``out``, and nothing else.
+
+    The demo lists the files it created in ``out/.zoetic-demo``; only those are removed. A
+    directory that holds a run but no such list (a run made another way) is refused.
+    """
+    from zoetic.errors import RunDirError
+
+    out = Path(out)
+    marker = out / MARKER
+    if marker.is_file():
+        for name in marker.read_text().split("\n"):
+            if name and "/" not in name and name not in (".", ".."):
+                (out / name).unlink(missing_ok=True)
+        marker.unlink()
+    elif (out / "checkpoint.npz").exists() or (out / "config.toml").exists():
+        raise RunDirError(
+            f"{out} holds a run that zoetic demo did not make; choose another --out, or "
+            f"continue it with zoetic learn --resume {out}"
+        )
+
+
+def mark_demo(out: Path, before: set[str]) -> None:
+    """Record in ``out/.zoetic-demo`` the files the demo created (not those in ``before``)."""
+    made = sorted(p.name for p in Path(out).iterdir() if p.is_file() and p.name not in before)
+    text = "\n".join(n for n in made if n != MARKER) + "\n"
+    atomic_write_bytes(Path(out) / MARKER, text.encode())

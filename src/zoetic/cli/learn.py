@@ -90,7 +90,14 @@ def learn(
     from zoetic.runs import finish_run
 
     if resume is not None:
-        run = Run.resume(resume)
+        from zoetic.errors import ZoeticError, naming
+        from zoetic.runs import check_run_dir
+
+        check_run_dir(resume)
+        try:
+            run = Run.resume(resume)
+        except ZoeticError as exc:
+            raise naming(resume, exc) from None
         console.print(f"resuming {resume} at {run.evaluations} evaluations")
     else:
         if animal is None:
@@ -100,6 +107,9 @@ def learn(
             controller=controller, nodes=nodes, interp=interp, popsize=popsize, chains=chains,
             evaluator=evaluator, coupling=coupling,
         )  # fmt: skip
+        from zoetic.runs import check_learn_config
+
+        check_learn_config(config.to_dict(), "options")
         out = out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}"
         if config.optimizer == "gradient":
             from zoetic.learn.gradient_run import GradientRun
@@ -122,13 +132,11 @@ def demo(
     video: bool = typer.Option(True),
 ) -> None:
     """A shark learns to swim from scratch (CMA-ES, 40 nodes per muscle, ~15 s on 2 cores)."""
-    import shutil
-
     from zoetic.learn.run import LearnConfig, Run
-    from zoetic.runs import finish_run
+    from zoetic.runs import clear_demo, finish_run, mark_demo
 
-    if (out / "checkpoint.npz").exists():
-        shutil.rmtree(out)
+    clear_demo(out)  # only what an earlier demo made; anything else stays
+    before = {p.name for p in out.iterdir()} if out.is_dir() else set()
     config = LearnConfig(
         animal="shark", task="swim-straight", optimizer="cmaes", budget=budget, seed=seed,
         popsize=24, nodes=40,
@@ -138,8 +146,11 @@ def demo(
         f"({budget} simulations of {4.0:g} s each)."
     )
     run = Run.create(out, config)
-    run_with_progress(run, "shark learns to swim")
-    summary = finish_run(run, video=video)
+    try:
+        run_with_progress(run, "shark learns to swim")
+        summary = finish_run(run, video=video)
+    finally:  # also when interrupted: the next demo may then clear what this one made
+        mark_demo(out, before)
     for key, value in summary.items():
         console.print(f"{key:>14}: {value}")
 
