@@ -178,7 +178,9 @@ class Table:
         self.used.add(key)
         if key not in self.data:
             if default is ...:
-                raise self.fail(f"missing {key!r}; add it")
+                near = suggest(key, [k for k in self.data if k not in self.used])
+                found = f" (found {near[15:-2]}: misspelled?)" if near else ""
+                raise self.fail(f"missing {key!r}{found}; add it")
             return default
         return self.data[key]
 

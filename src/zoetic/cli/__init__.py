@@ -47,7 +47,9 @@ def main(argv: list[str] | None = None) -> int:
     except ZoeticError as exc:
         if _DEBUG["on"] or "--debug" in args:
             raise
-        err_console.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False)
+        # soft wrap: the terminal wraps long lines itself, so paths stay whole (and greppable)
+        err_console.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False,
+                          soft_wrap=True)  # fmt: skip
         err_console.print("(run with --debug for the traceback)", style="dim", highlight=False)
         return int(getattr(exc, "exit_code", 2))
     except KeyboardInterrupt:

@@ -95,7 +95,7 @@ class _Table:
         self.used.add(key)
         if key not in self.data:
             if default is ...:
-                raise self.err(f"missing required key {key!r}")
+                raise self.missing(key)
             return default
         val = self.data[key]
         if not isinstance(val, str) or not val:
@@ -107,9 +107,15 @@ class _Table:
             )
         return val
 
+    def missing(self, key: str) -> CreatureError:
+        """The error for a missing required key, pointing at a misspelling of it if any."""
+        near = suggest(key, [k for k in self.data if k not in self.used])
+        found = f"; found {near[15:-2]} (misspelled?)" if near else ""
+        return self.err(f"missing required key {key!r}{found}")
+
     def num(self, key: str, default: Any = ..., angle: bool = False, per_deg: bool = False):
         """A finite float; ``key_deg`` accepted in degrees when ``angle`` (or per degree)."""
-        self.used.update((key, key + "_deg"))
+        self.used.update((key, key + "_deg") if angle or per_deg else (key,))
         scale = 1.0
         if (angle or per_deg) and key + "_deg" in self.data:
             if key in self.data:
@@ -117,12 +123,12 @@ class _Table:
             key, scale = key + "_deg", (1.0 / _DEG if per_deg else _DEG)
         if key not in self.data:
             if default is ...:
-                raise self.err(f"missing required key {key!r}")
+                raise self.missing(key)
             return default
         return _finite(self.data[key], f"{self.where}: {key}") * scale
 
     def pair(self, key: str, default: Any = ..., angle: bool = False):
-        self.used.update((key, key + "_deg"))
+        self.used.update((key, key + "_deg") if angle else (key,))
         scale = 1.0
         if angle and key + "_deg" in self.data:
             if key in self.data:
@@ -130,7 +136,7 @@ class _Table:
             key, scale = key + "_deg", _DEG
         if key not in self.data:
             if default is ...:
-                raise self.err(f"missing required key {key!r}")
+                raise self.missing(key)
             return default
         val = self.data[key]
         if not isinstance(val, list) or len(val) != 2:
