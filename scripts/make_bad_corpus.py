@@ -232,6 +232,7 @@ def controllers() -> dict[str, bytes | str]:
                                           "amplitude": 1.0, "offset": 0.0,
                                           "phases": [0.0, 0.5]},  # fmt: skip
         "unknown-type.json": _constant(type="sine"),
+        "type-is-a-list.json": _constant(type=["constant"]),
         "ragged-values.json": {"type": "time", "animal": "shark", "actuators": SHARK_ACTS,
                                "duration": 2.0, "values": [[0.1, 0.2]] * 5 + [[0.1]]},
         "negative-duration.json": {"type": "time", "animal": "shark", "actuators": SHARK_ACTS,

@@ -102,8 +102,14 @@ def _node_refs(r: Table, key: str, index, n: int, count=None) -> tuple[int, ...]
     return tuple(_node_ref(r, ref, index, n, repr(key)) for ref in refs)
 
 
+MAX_COORD = 1e4  # m: no animal is larger; bigger numbers would overflow in the physics
+
+
 def _vector(r: Table, key: str, n: int) -> tuple[float, ...]:
-    return tuple(r.numbers(key, size=n))
+    out = tuple(r.numbers(key, size=n))
+    if any(abs(v) > MAX_COORD for v in out):
+        raise r.fail(f"{key} = {abbrev(list(out))} is out of range (at most {MAX_COORD:g} m)")
+    return out
 
 
 TOP_KEYS = ("name", "description", "medium", "dt", "defaults", "nodes", "springs", "actuators",

@@ -100,7 +100,7 @@ def _check_controller(d: dict, where: str, depth: int = 0) -> None:
     if depth > 8:
         raise E(f"{where}: controllers nested more than 8 deep; is the file damaged?")
     kind = d.get("type")
-    if kind not in CONTROLLER_KEYS:
+    if not isinstance(kind, str) or kind not in CONTROLLER_KEYS:
         raise E(
             f"{where}: unknown controller type {rd.abbrev(kind, 40)}"
             f"{rd.suggest(str(kind), CONTROLLER_KEYS)} (one of {', '.join(CONTROLLER_KEYS)})"
