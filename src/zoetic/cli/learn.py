@@ -72,7 +72,7 @@ def learn(
     animal: str = typer.Argument(None, help="Zoo animal name or animal .toml file."),
     task: str = typer.Option("swim-straight", help="Task name (see `zoetic tasks`) or .toml file."),
     optimizer: str = typer.Option("anneal", help="anneal, simplex, cmaes or gradient."),
-    budget: int = typer.Option(3500, min=1, help="Evaluations (simulations) to spend."),
+    budget: int = typer.Option(3500, min=1, max=10_000_000, help="Evaluations to spend."),
     seed: int = typer.Option(0, help="Random seed: same seed, same result."),
     controller: str = typer.Option("time", help="Representation: time or frequency."),
     nodes: int = typer.Option(None, min=2, help="M, parameters per actuator (default: task's)."),
@@ -127,7 +127,7 @@ def learn(
 @app.command()
 def demo(
     out: Path = typer.Option(Path("runs/demo"), help="Where to write the demo run."),
-    budget: int = typer.Option(8000, min=16, help="Evaluations to spend."),
+    budget: int = typer.Option(8000, min=16, max=10_000_000, help="Evaluations to spend."),
     seed: int = typer.Option(0),
     video: bool = typer.Option(True),
 ) -> None:

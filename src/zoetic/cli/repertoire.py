@@ -46,7 +46,8 @@ def abstract_cmd(
 def train_cmd(
     animal: str = typer.Argument(..., help="Zoo animal name or animal .toml file."),
     out: Path = typer.Option(None, help="Repertoire directory (default memory/<animal>)."),
-    budget: int = typer.Option(3000, min=10, help="Evaluations per learned entry."),
+    budget: int = typer.Option(3000, min=10, max=10_000_000,
+                              help="Evaluations per learned entry."),  # fmt: skip
     optimizer: str = typer.Option("cmaes", help="anneal, simplex or cmaes."),
     modes: str = typer.Option("auto", help="Modes kept by the abstraction: auto or K."),
     threshold: float = typer.Option(0.3, help="auto keeps modes >= threshold x the strongest."),
@@ -103,8 +104,12 @@ def show_cmd(
 ) -> None:
     """Print a repertoire's entries and what each does; writes repertoire.png beside them."""
     from zoetic.behavior.training import show_repertoire
+    from zoetic.errors import ZoeticError, naming
 
-    rows = show_repertoire(memory)
+    try:
+        rows = show_repertoire(memory)
+    except ZoeticError as exc:  # e.g. the index names an unknown animal
+        raise naming(memory, exc) from None
     if json_out:
         print(json.dumps(rows, indent=1))
         return

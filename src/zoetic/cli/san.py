@@ -65,11 +65,13 @@ def creatures_cmd() -> None:
 @san_app.command("search")
 def search_cmd(
     creature: str = typer.Argument(..., help="Built-in creature name or creature .toml file."),
-    trials: int = typer.Option(200, min=1, help="Random networks to generate and evaluate."),
+    trials: int = typer.Option(200, min=1, max=10_000_000,
+                              help="Random networks to generate and evaluate."),  # fmt: skip
     top: int = typer.Option(10, min=1, help="How many of the best to keep (videos and files)."),
     seed: int = typer.Option(0, help="Random seed: same seed, same networks and metrics."),
     terrain: str = typer.Option("flat", help="flat, or rough (uneven ground)."),
-    seconds: float = typer.Option(None, min=0.1, help="Evaluation time (default: creature's)."),
+    seconds: float = typer.Option(None, min=0.1, max=1000.0,
+                                  help="Evaluation time (default: creature's)."),  # fmt: skip
     workers: int = typer.Option(None, min=1, help="Worker processes (default: all cores)."),
     out: Path = typer.Option(None, help="Output directory (default runs/<creature>)."),
     video: bool = typer.Option(True, help="Write a video of each kept gait."),
@@ -94,7 +96,7 @@ def search_cmd(
 def tune_cmd(
     network: Path = typer.Argument(..., help="A network .json (e.g. runs/cart/sans/01.json)."),
     method: str = typer.Option("sga", help="sga (stochastic gradient ascent) or anneal."),
-    trials: int = typer.Option(1000, min=1, help="Evaluations to spend."),
+    trials: int = typer.Option(1000, min=1, max=10_000_000, help="Evaluations to spend."),
     seed: int = typer.Option(0, help="Random seed: same seed, same result."),
     terrain: str = typer.Option("flat", help="flat, or rough (uneven ground)."),
     creature: str = typer.Option(None, help="Creature (default: the one the file names)."),
@@ -123,7 +125,8 @@ def tune_cmd(
 def show_cmd(
     path: Path = typer.Argument(..., help="A run directory (search or tune) or a network .json."),
     rank: int = typer.Option(1, min=1, help="For a search directory: which kept network."),
-    seconds: float = typer.Option(None, min=0.1, help="Replay time (default: creature's)."),
+    seconds: float = typer.Option(None, min=0.1, max=1000.0,
+                                  help="Replay time (default: creature's)."),  # fmt: skip
     terrain: str = typer.Option(None, help="flat or rough (default: the run's)."),
     out: Path = typer.Option(None, help="Video file (default <run>/show.mp4)."),
     fps: int = typer.Option(30, min=1, help="Video frame rate."),
