@@ -142,6 +142,15 @@ coupling = "none"
 
 [task]
 name = "swim-straight"
+animals = ["shark", "ray", "dolphin"]
+horizon = 4.0
+nodes = 8
+mu1 = 0.0
+mu2 = 1.0
+
+[[task.terms]]
+kind = "distance_along_heading"
+weight = -1.0
 """
 
 
@@ -212,6 +221,7 @@ def creatures() -> dict[str, bytes | str]:
         "negative-hidden.toml": _sub(c, "seconds = 6.0", "seconds = 6.0\nhidden = -1"),
         "duplicate-link.toml": _sub(c, 'name = "L2"', 'name = "L1"'),
         "deep-nesting.toml": c + "\n[[link]]\nname = " + "[" * 300 + "]" * 300 + "\n",
+        "no-actuators.toml": c.split("[[actuator]]")[0],
     }  # fmt: skip
 
 
@@ -328,6 +338,9 @@ def rundirs() -> dict[str, dict[str, bytes | str]]:
         "binary-config": {"config.toml": bytes(range(256))},
         "no-config": {"notes.txt": "not a run directory\n"},
         "float-seed": {"config.toml": _sub(c, "seed = 0", "seed = 0.5")},
+        "huge-budget": {"config.toml": _sub(c, "budget = 48", "budget = 9000000")},
+        "huge-popsize": {"config.toml": _sub(c, "seed = 0", "seed = 0\npopsize = 90000")},
+        "huge-horizon": {"config.toml": _sub(c, "horizon = 4.0", "horizon = 1e9")},
     }  # fmt: skip
 
 

@@ -95,6 +95,11 @@ def test_the_good_files_the_corpus_is_made_from_are_accepted(tmp_path, capsys):
     from zoetic.san.network import check_fits, network_from_dict
 
     assert creature_from_dict(tomllib.loads(corpus.CREATURE)).n_actuators == 1
+    from zoetic.runs import check_run_dir
+
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "config.toml").write_text(corpus.CONFIG)
+    check_run_dir(tmp_path / "run")  # the run configurations break only where they differ
     check_fits(network_from_dict(corpus._network()), load_creature("twolink"))
 
 

@@ -191,3 +191,20 @@ def test_nan_never_reaches_a_summary(tmp_path, capsys, monkeypatch):
     code = main(["simulate", "shark", "--seconds", "1", "--no-video", "--out", str(tmp_path)])
     captured = capsys.readouterr()
     assert code == 3 and "distance_m" not in captured.out and "blew up" in captured.err
+
+
+def test_an_animal_without_actuators_is_refused_before_learning(tmp_path, capsys):
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parents[1] / "scripts"))
+    import make_bad_corpus as corpus
+
+    text = corpus.ANIMAL.replace('actuators = [{ name = "m", side = "center" }]\n', "")
+    text = text.replace('actuator = "m"\nmax_shortening = 0.2\n', "").split("[wave]")[0]
+    path = tmp_path / "lump.toml"
+    path.write_text(text.replace('name = "tri"', 'name = "shark"'))
+    assert load_animal(str(path)).n_actuators == 0  # a passive body is a valid animal
+    code = main(["learn", str(path), "--out", str(tmp_path / "r"), "--no-video"])
+    err = capsys.readouterr().err
+    assert code == 2 and "no actuators" in err and str(path) in err

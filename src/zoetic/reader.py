@@ -343,11 +343,11 @@ def check_steps(seconds: float, dt: float, where: str, error=ZoeticError) -> int
     return steps
 
 
-def check_memory(nbytes: float, what: str, error=ZoeticError) -> None:
+def check_memory(nbytes: float, what: str, error=ZoeticError,
+                 fix: str = "use a shorter time, a larger dt or fewer nodes") -> None:  # fmt: skip
     """Refuse work whose arrays would take more than ``LIMITS.memory_bytes``."""
     if nbytes > LIMITS.memory_bytes:
         raise error(
             f"{what} would need {nbytes / 2**30:.1f} GB of memory (at most "
-            f"{LIMITS.memory_bytes / 2**30:.0f} GB); use a shorter time, a larger dt or "
-            "fewer nodes"
+            f"{LIMITS.memory_bytes / 2**30:.0f} GB); {fix}"
         )

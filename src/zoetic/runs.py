@@ -198,6 +198,46 @@ def check_learn_config(d: dict, where: str) -> dict:
     return d
 
 
+def check_learnable(animal: str) -> Body:
+    """Return the animal's body, refusing one with nothing to learn (no actuators)."""
+    from zoetic.errors import BodyError
+
+    body = load_animal(animal)
+    if body.n_actuators == 0:
+        raise BodyError(
+            f"{animal}: the {body.name} has no actuators, so there is nothing to learn; give "
+            "it [[actuators]] and muscles (springs with an 'actuator')"
+        )
+    return body
+
+
+def check_learn_size(run: dict, task=None, where: str = "options") -> None:
+    """Refuse a learning run that would take more than the memory limit or too many steps.
+
+    Counted before anything is built: the log of every evaluation (budget x parameters) and
+    one batch of simulations (candidates x steps x actuators); the task's horizon at the
+    animal's dt is bounded in steps. ``task`` defaults to the named one.
+    """
+    from zoetic.errors import RunDirError
+    from zoetic.reader import check_memory, check_steps
+    from zoetic.tasks import load_task
+
+    body = load_animal(run.get("animal", "shark"))
+    task = task or load_task(run.get("task", "swim-straight"))
+    horizon = float(getattr(task, "horizon", 0.0) or 0.0)
+    steps = check_steps(horizon, body.dt, f"{where}: the task's horizon", RunDirError)
+    nodes = int(run.get("nodes") or getattr(task, "nodes", 15) or 15)
+    params = body.n_actuators * nodes
+    budget = int(run.get("budget", 3500))
+    batch = int(run.get("popsize") or 0) or max(64, int(run.get("chains") or 1))
+    check_memory(budget * (params + 6) * 8 * 2, f"{where}: a log of {budget:,} evaluations of "
+                 f"{params:,} parameters", RunDirError,
+                 "use a smaller --budget or fewer --nodes")  # fmt: skip
+    what = f"{where}: simulating {batch} candidates for {horizon:g} s"
+    check_memory(batch * steps * (body.n_actuators * 12 + 8 * nodes), what, RunDirError,
+                 "use a smaller --popsize, fewer --nodes or a shorter task")  # fmt: skip
+
+
 def check_run_dir(out: Path) -> None:
     """Refuse a run directory whose config.toml is missing, unreadable or malformed."""
     from zoetic.errors import RunDirError
@@ -215,6 +255,9 @@ def check_run_dir(out: Path) -> None:
     check_learn_config(doc["run"], f"{cfg}: [run]")
     if not isinstance(doc["task"], dict):
         raise RunDirError(f"{cfg}: [task] must be a table")
+    from zoetic.tasks import parse_task
+
+    check_learn_size(doc["run"], parse_task(doc["task"], str(cfg)), f"{cfg}: [run]")
 
 
 MARKER = ".zoetic-demo"

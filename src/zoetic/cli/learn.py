@@ -107,9 +107,11 @@ def learn(
             controller=controller, nodes=nodes, interp=interp, popsize=popsize, chains=chains,
             evaluator=evaluator, coupling=coupling,
         )  # fmt: skip
-        from zoetic.runs import check_learn_config
+        from zoetic.runs import check_learn_config, check_learn_size, check_learnable
 
         check_learn_config(config.to_dict(), "options")
+        check_learnable(animal)
+        check_learn_size(config.to_dict())
         out = out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}"
         if config.optimizer == "gradient":
             from zoetic.learn.gradient_run import GradientRun

@@ -57,7 +57,9 @@ def train_cmd(
     """Learn the basic repertoire (straight, sharp and wide turns, mirrored); resumable."""
     from zoetic.behavior.training import show_repertoire, train_repertoire
     from zoetic.learn.abstraction import parse_modes
+    from zoetic.runs import check_learnable
 
+    check_learnable(animal)
     out = out or Path("memory") / Path(animal).stem
     with _progress_bar() as bar:
         state: dict = {}

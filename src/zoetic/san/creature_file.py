@@ -323,6 +323,10 @@ def creature_from_dict(data: dict, path: str | os.PathLike | None = None) -> Cre
         a = Actuator(name, kind, jn, lo, hi, ks, kd)
         _check_actuator_values(a, t.where)
         acts.append(a)
+    if not acts:
+        raise CreatureError(
+            f"{src}: a creature needs at least one [[actuator]] (a network has nothing to drive)"
+        )
     act_by = {a.name: a for a in acts}
 
     sens, sseen = [], set()
