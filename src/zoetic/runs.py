@@ -199,10 +199,12 @@ def check_learn_config(d: dict, where: str) -> dict:
 
 
 def check_learnable(animal: str) -> Body:
-    """Return the animal's body, refusing one with nothing to learn (no actuators)."""
+    """Return the animal's body, refusing one with nothing to learn (no actuators) or whose
+    own time step is beyond what its springs and masses allow."""
     from zoetic.errors import BodyError
 
     body = load_animal(animal)
+    check_dt(body, body.dt, None, body.source)  # the file's own step, before anything is written
     if body.n_actuators == 0:
         raise BodyError(
             f"{animal}: the {body.name} has no actuators, so there is nothing to learn; give "

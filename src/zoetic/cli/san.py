@@ -40,6 +40,18 @@ def _progress(bar: Progress, tid, unit: str = ""):
     return update
 
 
+def _check_seconds(creature, seconds: float | None) -> None:
+    """Refuse --seconds that would take the creature's world past its step limit."""
+    from zoetic.san.creature import CreatureError
+    from zoetic.san.creature_file import MAX_CREATURE_STEPS
+
+    if seconds is not None and seconds / creature.dt > MAX_CREATURE_STEPS:
+        raise CreatureError(
+            f"--seconds {seconds:g} at the {creature.name}'s dt = {creature.dt:g} s is "
+            f"{seconds / creature.dt:,.0f} steps (at most {MAX_CREATURE_STEPS:,}); use less"
+        )
+
+
 @san_app.command("creatures")
 def creatures_cmd() -> None:
     """List the built-in creatures with their sensors, actuators and the paper's speed."""
@@ -81,6 +93,7 @@ def search_cmd(
     from zoetic.san.search import search, write_search
 
     c = load_creature(creature)
+    _check_seconds(c, seconds)
     out = out or Path("runs") / c.name
     bar, tid = _bar(f"{c.name} {terrain}", trials)
     with bar:
@@ -138,6 +151,7 @@ def show_cmd(
 
     file = resolve_network(path, rank)
     net, c = load_with_creature(file)
+    _check_seconds(c, seconds)
     terrain = terrain or str(net.info.get("terrain", "flat"))
     default = (path if path.is_dir() else file.parent) / (
         "show.mp4" if file.stem in ("san", f"{rank:02d}") else f"show-{file.stem}.mp4"
