@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 from zoetic.bodies import ZOO_DIR, compile_body, load_animal, parse_animal
 from zoetic.control import from_dict, time_domain
 from zoetic.errors import ZoeticError
-from zoetic.reader import load_json, load_toml
+from zoetic.io import load_json, load_toml
 
 SETTINGS = settings(max_examples=60, deadline=None, derandomize=True,
                     suppress_health_check=[HealthCheck.too_slow])  # fmt: skip

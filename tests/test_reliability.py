@@ -153,7 +153,7 @@ def test_an_edited_run_config_names_the_run_directory(tmp_path, capsys):
 
 
 def test_messages_abbreviate_long_values():
-    from zoetic.reader import abbrev, numbers
+    from zoetic.io import abbrev, numbers
 
     assert len(abbrev(list(range(2_000_000)))) < 80
     with pytest.raises(Exception) as info:
@@ -163,7 +163,7 @@ def test_messages_abbreviate_long_values():
 
 def test_reader_refuses_deep_nesting_and_oversized_files(tmp_path):
     from zoetic.errors import ZoeticError
-    from zoetic.reader import LIMITS, load_json
+    from zoetic.io import LIMITS, load_json
 
     deep = tmp_path / "deep.json"
     deep.write_text("[" * 100_000 + "]" * 100_000)  # deeper than Python's recursion limit

@@ -10,10 +10,9 @@ import numpy as np
 from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller, controller_from_spec
 from zoetic.errors import BlowUpError, SimulationError
-from zoetic.io import atomic_write_bytes
+from zoetic.io import atomic_write_bytes, check_memory, check_steps
 from zoetic.physics import Medium, Trajectory, get_medium, simulate
 from zoetic.physics.simulate import check_dt, good_dt
-from zoetic.reader import check_memory, check_steps
 
 
 def record_stride(dt: float, rate_hz: float = 100.0) -> int:
@@ -151,9 +150,7 @@ def finish_run(run, video: bool = True, fps: int = 30) -> dict:
 # ----------------------------------------------------------------------------- run configs
 
 MAX_BUDGET = 10_000_000  # evaluations of one learning run
-CHOICES = {
-    "optimizer": ("anneal", "simplex", "cmaes", "gradient"),
-    "controller": ("time", "frequency"),
+CHOICES = {  # the controller kinds are left to learn.run.build, which names its own
     "interp": ("linear", "bspline"),
     "evaluator": ("batch", "process"),
     "coupling": ("none", "antiphase"),
@@ -171,11 +168,14 @@ def check_learn_config(d: dict, where: str) -> dict:
     """
     from dataclasses import fields
 
-    from zoetic import reader as rd
+    from zoetic import io as rd
     from zoetic.errors import RunDirError
+    from zoetic.learn import optimizers
     from zoetic.learn.run import LearnConfig
 
     E = RunDirError
+    names = tuple(getattr(optimizers, "OPTIMIZERS", ("anneal", "simplex", "cmaes")))
+    choices = CHOICES | {"optimizer": (*names, *(() if "gradient" in names else ("gradient",)))}
     if not isinstance(d, dict):
         raise E(f"{where}: must be a table, got {rd.abbrev(d)}")
     kinds = {f.name: str(f.type) for f in fields(LearnConfig)}
@@ -190,7 +190,7 @@ def check_learn_config(d: dict, where: str) -> dict:
         elif kind.startswith("float"):
             rd.number(value, at, E)
         elif kind.startswith("str"):
-            rd.string(value, at, E, CHOICES.get(key))
+            rd.string(value, at, E, choices.get(key))
         elif kind.startswith("bool") and not isinstance(value, bool):
             raise E(f"{at} must be true or false, got {rd.abbrev(value)}")
         elif kind.startswith("dict") and not isinstance(value, dict):
@@ -221,7 +221,7 @@ def check_learn_size(run: dict, task=None, where: str = "options") -> None:
     animal's dt is bounded in steps. ``task`` defaults to the named one.
     """
     from zoetic.errors import RunDirError
-    from zoetic.reader import check_memory, check_steps
+    from zoetic.io import check_memory, check_steps
     from zoetic.tasks import load_task
 
     body = load_animal(run.get("animal", "shark"))

@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from zoetic import reader as rd
+from zoetic import io as rd
 from zoetic.bodies import Body
 from zoetic.control import Controller, check_fits, from_dict, save_controller
 from zoetic.errors import ControllerError, RunDirError, ZoeticError

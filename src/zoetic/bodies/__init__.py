@@ -8,7 +8,7 @@ from pathlib import Path
 from zoetic.bodies.body import Body, compile_body
 from zoetic.bodies.spec import AnimalSpec, parse_animal, read_animal_file
 from zoetic.errors import BodyError
-from zoetic.reader import is_path, suggest
+from zoetic.io import is_path, suggest
 
 ZOO_DIR = Path(__file__).parent / "zoo"
 

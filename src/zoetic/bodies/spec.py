@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from zoetic.errors import BodyError
-from zoetic.reader import LIMITS, Table, abbrev, check_keys, load_toml, suggest
+from zoetic.io import LIMITS, Table, abbrev, check_keys, load_toml, suggest
 
 MEDIA = ("ground", "water", "sea", "vacuum")
 SIDES = ("left", "right", "center")

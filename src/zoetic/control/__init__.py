@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from zoetic import reader as rd
+from zoetic import io as rd
 from zoetic.bodies import Body
 from zoetic.control import abstract as _abstract  # noqa: E402,F401  (registers abstract, sequence)
 from zoetic.control.controllers import (

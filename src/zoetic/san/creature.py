@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from zoetic.errors import ZoeticError
-from zoetic.reader import abbrev
+from zoetic.io import abbrev
 
 __all__ = [
     "Actuator",

@@ -19,7 +19,7 @@ from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
-from zoetic.reader import LIMITS, abbrev, check_keys, is_path, load_toml, suggest
+from zoetic.io import LIMITS, abbrev, check_keys, is_path, load_toml, suggest
 from zoetic.san.creature import (
     _DEG,
     ACTUATOR_KINDS,

@@ -23,10 +23,9 @@ from typing import Any
 
 import numpy as np
 
-from zoetic import reader as rd
+from zoetic import io as rd
 from zoetic.errors import ZoeticError
-from zoetic.io import read_json, write_json
-from zoetic.reader import LIMITS, abbrev, check_keys
+from zoetic.io import LIMITS, abbrev, check_keys, read_json, write_json
 
 __all__ = [
     "FORMAT",
