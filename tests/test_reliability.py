@@ -208,3 +208,13 @@ def test_an_animal_without_actuators_is_refused_before_learning(tmp_path, capsys
     code = main(["learn", str(path), "--out", str(tmp_path / "r"), "--no-video"])
     err = capsys.readouterr().err
     assert code == 2 and "no actuators" in err and str(path) in err
+
+
+def test_an_output_path_that_is_a_file_is_an_error_not_a_traceback(tmp_path, capsys):
+    afile = tmp_path / "afile"
+    afile.write_text("keep me")
+    for out in (afile, afile / "sub"):
+        code = main(["simulate", "shark", "--seconds", "0.1", "--no-video", "--out", str(out)])
+        err = capsys.readouterr().err
+        assert code == 2 and str(out) in err and "Traceback" not in err
+    assert afile.read_text() == "keep me"

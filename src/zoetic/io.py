@@ -30,11 +30,30 @@ import tomli_w
 from zoetic.errors import ZoeticError
 
 
+def make_dir(path: str | os.PathLike) -> Path:
+    """Create the directory ``path`` (and its parents); a ZoeticError if it cannot be made."""
+    path = Path(path)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise ZoeticError(f"{path}: exists and is not a directory; choose another --out") from None
+    except OSError as exc:
+        raise ZoeticError(
+            f"{path}: cannot create the directory ({exc.strerror or exc}); choose another --out"
+        ) from None
+    return path
+
+
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
     """Write ``data`` to ``path`` through a temporary file and a rename; returns the path."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name + ".", suffix=".tmp")
+    make_dir(path.parent)
+    if path.is_dir():
+        raise ZoeticError(f"{path}: is a directory, so it cannot be written as a file")
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name + ".", suffix=".tmp")
+    except OSError as exc:
+        raise ZoeticError(f"{path}: cannot write ({exc.strerror or exc})") from None
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)

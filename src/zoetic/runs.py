@@ -10,7 +10,7 @@ import numpy as np
 from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller, controller_from_spec
 from zoetic.errors import BlowUpError, SimulationError
-from zoetic.io import atomic_write_bytes, check_memory, check_steps
+from zoetic.io import atomic_write_bytes, check_memory, check_steps, make_dir
 from zoetic.physics import Medium, Trajectory, get_medium, simulate
 from zoetic.physics.simulate import check_dt, good_dt
 
@@ -91,7 +91,7 @@ def simulate_run(
     dt = check_dt(body, float(body.dt if dt is None else dt), med, where_dt)
     check_simulation(body, ctrl, seconds, dt, "--seconds")
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    make_dir(out)
     traj = run_controller(body, ctrl, seconds, med, dt)
     save_trajectory(out / "trajectory.npz", traj)
     files = write_media(body, traj, med, out, video, fps)

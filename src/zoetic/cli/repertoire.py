@@ -133,13 +133,14 @@ def sequence_cmd(
     from zoetic.behavior.training import build_sequence, parse_sequence
     from zoetic.bodies import load_animal
     from zoetic.control import save_controller
+    from zoetic.io import make_dir
     from zoetic.runs import simulate_run
     from zoetic.viz.learning import plot_controller
 
     body = load_animal(animal)
     rep = Repertoire.load(memory, body)
     seq = build_sequence(rep, parse_sequence(entries, rep), overlap)
-    out.mkdir(parents=True, exist_ok=True)
+    make_dir(out)
     path = save_controller(seq, out / "sequence.json")
     import numpy as np
 

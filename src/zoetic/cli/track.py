@@ -12,6 +12,7 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from zoetic.cli import app
+from zoetic.io import make_dir
 
 console = Console()
 
@@ -133,7 +134,7 @@ def track(
 
         result = run_track(body, rep, pts, config, progress=update)
         bar.update(tid, total=result.sim_time, completed=result.sim_time)
-    out.mkdir(parents=True, exist_ok=True)
+    make_dir(out)
     check = replay(body, result)
     drift = float(np.nanmax(np.abs(check.positions[0] - result.positions)))
     summary = result.summary() | {
@@ -208,7 +209,7 @@ def macro(
                        info=f"E {opt.best_f:.3f} {st}")  # fmt: skip
 
         result = search(problem, method, budget, seed, progress=update)
-    out.mkdir(parents=True, exist_ok=True)
+    make_dir(out)
     save_controller(result.sequence, out / "controller.json")
     summary = result.summary() | {
         "animal": body.name, "memory": str(memory), "goal_xz": g.tolist(),
