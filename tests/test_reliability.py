@@ -217,4 +217,7 @@ def test_an_output_path_that_is_a_file_is_an_error_not_a_traceback(tmp_path, cap
         code = main(["simulate", "shark", "--seconds", "0.1", "--no-video", "--out", str(out)])
         err = capsys.readouterr().err
         assert code == 2 and str(out) in err and "Traceback" not in err
+        code = main(["learn", "shark", "--budget", "20", "--no-video", "--out", str(out)])
+        err = capsys.readouterr().err
+        assert code == 2 and str(afile) in err and "Traceback" not in err
     assert afile.read_text() == "keep me"

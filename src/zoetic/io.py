@@ -44,6 +44,17 @@ def make_dir(path: str | os.PathLike) -> Path:
     return path
 
 
+def check_out_dir(path: str | os.PathLike) -> Path:
+    """Refuse an output directory that cannot be one (a file is in the way); creates nothing."""
+    path = Path(path)
+    for p in (path, *path.parents):
+        if p.exists():
+            if not p.is_dir():
+                raise ZoeticError(f"{p}: exists and is not a directory; choose another --out")
+            break
+    return path
+
+
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
     """Write ``data`` to ``path`` through a temporary file and a rename; returns the path."""
     path = Path(path)

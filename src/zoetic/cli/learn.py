@@ -10,6 +10,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from zoetic.cli import app
 from zoetic.cli.bench import _emit, bench_app
+from zoetic.io import check_out_dir
 
 console = Console()
 
@@ -112,7 +113,7 @@ def learn(
         check_learn_config(config.to_dict(), "options")
         check_learnable(animal)
         check_learn_size(config.to_dict())
-        out = out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}"
+        out = check_out_dir(out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}")
         if config.optimizer == "gradient":
             from zoetic.learn.gradient_run import GradientRun
 
@@ -137,6 +138,7 @@ def demo(
     from zoetic.learn.run import LearnConfig, Run
     from zoetic.runs import clear_demo, finish_run, mark_demo
 
+    check_out_dir(out)
     clear_demo(out)  # only what an earlier demo made; anything else stays
     before = {p.name for p in out.iterdir()} if out.is_dir() else set()
     config = LearnConfig(

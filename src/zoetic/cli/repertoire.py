@@ -30,6 +30,10 @@ def abstract_cmd(
     from zoetic.behavior.training import abstract_files
     from zoetic.learn.abstraction import parse_modes
 
+    if source.is_dir():
+        from zoetic.runs import check_run_dir
+
+        check_run_dir(source)
     out = out or (source if source.is_dir() else source.parent)
     info = abstract_files(source, out, parse_modes(modes), threshold, task)
     o, a = info["original"], info["abstract"]
@@ -56,11 +60,12 @@ def train_cmd(
 ) -> None:
     """Learn the basic repertoire (straight, sharp and wide turns, mirrored); resumable."""
     from zoetic.behavior.training import show_repertoire, train_repertoire
+    from zoetic.io import check_out_dir
     from zoetic.learn.abstraction import parse_modes
     from zoetic.runs import check_learnable
 
     check_learnable(animal)
-    out = out or Path("memory") / Path(animal).stem
+    out = check_out_dir(out or Path("memory") / Path(animal).stem)
     with _progress_bar() as bar:
         state: dict = {}
 
