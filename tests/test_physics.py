@@ -189,7 +189,7 @@ def test_blow_up_is_reported_not_passed_on():
     body = load_animal("shark")
     steps = 400
     act = wave_controller(body).table(steps, body.dt)
-    tr = simulate(body, np.stack([act, act]), dt=0.05)  # ten times too large a step
+    tr = simulate(body, np.stack([act, act]), dt=0.05, check_step=False)  # ten times too large
     assert tr.failed.all()
     assert np.isnan(tr.final.positions).all()
     ok = simulate(body, act[None], record_every=steps)

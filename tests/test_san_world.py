@@ -158,7 +158,7 @@ def test_joint_to_a_missing_link_is_refused_naming_file_and_link(tmp_path):
         ('joint = "J1"', 'joint = "J7"', ["A1", "'J7'"]),
         ('shape = "capsule"', "", ["L1", "missing required key 'shape'"]),
         ('medium = "ground"', 'medium = "lava"', ["[creature]", "unknown medium 'lava'"]),
-        ("radius = 0.01", "radius = 0.01\ncolour = 3", ["L1", "unknown key(s) 'colour'"]),
+        ("radius = 0.01", "radius = 0.01\ncolour = 3", ["L1", "unknown key 'colour'"]),
         ("[[link]]", "[[link]\n", ["not valid TOML"]),
     ],
 )

@@ -144,7 +144,7 @@ def test_broken_or_mismatched_repertoires_get_clear_errors(tmp_path, shark, caps
     index = tmp_path / "index"
     handmade_repertoire(shark).save(index)
     (index / "repertoire.json").write_text(json.dumps({"animal": "shark", "entries": []}))
-    assert "malformed repertoire" in _run_expect_error(capsys, index)
+    assert "repertoire.json: missing 'actuators'" in _run_expect_error(capsys, index)
 
     other = tmp_path / "snake"
     handmade_repertoire(load_animal("snake")).save(other)

@@ -2,7 +2,9 @@
 
 
 class ZoeticError(Exception):
-    """Base of all zoetic errors; the CLI prints the message and exits with code 2."""
+    """Base of all zoetic errors; the CLI prints the message and exits with ``exit_code``."""
+
+    exit_code = 2
 
 
 class BodyError(ZoeticError):
@@ -14,7 +16,13 @@ class ControllerError(ZoeticError):
 
 
 class SimulationError(ZoeticError):
-    """A simulation blew up or was given inconsistent inputs."""
+    """A simulation was given inconsistent inputs (a time step too large for the body, ...)."""
+
+
+class BlowUpError(SimulationError):
+    """A simulation blew up (non-finite or runaway state) although its inputs were accepted."""
+
+    exit_code = 3
 
 
 class TaskError(ZoeticError):
@@ -23,3 +31,12 @@ class TaskError(ZoeticError):
 
 class RunDirError(ZoeticError):
     """A run directory is missing, incomplete or inconsistent."""
+
+
+def naming(source: object, exc: ZoeticError) -> ZoeticError:
+    """Return ``exc`` with its message prefixed by ``source`` (a file or directory) if needed."""
+    text, src = str(exc), str(source)
+    if text.startswith(src) or f"{src}/" in text or f"{src}:" in text or f" {src} " in text:
+        return exc
+    new = type(exc)(f"{source}: {text}")
+    return new

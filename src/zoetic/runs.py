@@ -10,9 +10,10 @@ import numpy as np
 
 from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller, controller_from_spec
-from zoetic.errors import SimulationError
-from zoetic.io import atomic_write_bytes
+from zoetic.errors import BlowUpError, SimulationError
+from zoetic.io import atomic_write_bytes, check_memory, check_steps, make_dir
 from zoetic.physics import Medium, Trajectory, get_medium, simulate
+from zoetic.physics.simulate import check_dt, good_dt
 
 
 def record_stride(dt: float, rate_hz: float = 100.0) -> int:
@@ -34,15 +35,33 @@ def save_trajectory(path: Path, traj: Trajectory, index: int = 0, **meta: str) -
 def run_controller(
     body: Body, ctrl: Controller, seconds: float, medium: Medium, dt: float
 ) -> Trajectory:
-    """Return the trajectory of one body driven by one controller for ``seconds``."""
+    """Return the trajectory of one body driven by one controller for ``seconds``.
+
+    A blow-up (which the step check should have prevented) is a BlowUpError (exit code 3)
+    naming the step, the animal and a time step that works.
+    """
     steps = int(round(seconds / dt))
     traj = simulate(body, ctrl.table(steps, dt), medium, dt, record_every=record_stride(dt))
-    if traj.failed[0]:
-        raise SimulationError(
-            f"the simulation of the {body.name} blew up at t = {traj.failed_step[0] * dt:.3f} s "
-            f"(dt = {dt}); try a smaller --dt"
+    if traj.failed[0] or not np.isfinite(traj.positions[0]).all():
+        step = int(traj.failed_step[0]) if traj.failed[0] else steps
+        raise BlowUpError(
+            f"the simulation of the {body.name} ({body.source}) blew up at step {step} "
+            f"(t = {step * dt:.3f} s) with dt = {dt:g} s in {medium.name}; "
+            f"try --dt {good_dt(body, medium) / 2:.3g}"
         )
     return traj
+
+
+def check_simulation(body: Body, ctrl: Controller, seconds: float, dt: float,
+                     where_dt: str) -> int:  # fmt: skip
+    """Return the number of steps, refusing a run too long or too big for memory."""
+    steps = check_steps(seconds, dt, where_dt, SimulationError)
+    n_rec = steps // record_stride(dt) + 1
+    per_step = body.n_actuators * 24 + 8 * int(getattr(ctrl, "nodes", 8) or 8)
+    check_memory(steps * per_step + n_rec * body.n_nodes * 3 * 12,
+                 f"simulating {seconds:g} s of the {body.name} at dt = {dt:g} s",
+                 SimulationError)  # fmt: skip
+    return steps
 
 
 def write_media(body: Body, traj: Trajectory, medium: Medium, out: Path, video: bool, fps: int):
@@ -73,11 +92,11 @@ def simulate_run(
     body = load_animal(animal)
     ctrl = controller_from_spec(controller, body)
     med = get_medium(medium or body.medium)
-    dt = float(dt or body.dt)
-    if dt <= 0:
-        raise SimulationError(f"dt must be positive, got {dt}")
+    where_dt = body.source if dt is None else "--dt"
+    dt = check_dt(body, float(body.dt if dt is None else dt), med, where_dt)
+    check_simulation(body, ctrl, seconds, dt, "--seconds")
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    make_dir(out)
     traj = run_controller(body, ctrl, seconds, med, dt)
     where = str(Path(animal).resolve()) if Path(animal).is_file() else animal
     meta = {"animal": where, "medium": med.name, "controller": json.dumps(ctrl.to_dict())}
@@ -85,6 +104,8 @@ def simulate_run(
     files = write_media(body, traj, med, out, video, fps)
     com = traj.com(body)[0]
     travelled = float(np.linalg.norm(com[-1, [0, 2]] - com[0, [0, 2]]))
+    if not np.isfinite(travelled):  # never report nan as a result
+        raise BlowUpError(f"the simulation of the {body.name} ({body.source}) produced NaN")
     return {
         "animal": body.name,
         "medium": med.name,
@@ -131,3 +152,150 @@ def finish_run(run, video: bool = True, fps: int = 30) -> dict:
         "run": str(out),
         **{k: str(v) for k, v in files.items()},
     }
+
+
+# ----------------------------------------------------------------------------- run configs
+
+MAX_BUDGET = 10_000_000  # evaluations of one learning run
+CHOICES = {  # the controller kinds are left to learn.run.build, which names its own
+    "interp": ("linear", "bspline"),
+    "evaluator": ("batch", "process"),
+    "coupling": ("none", "antiphase"),
+    "medium": ("ground", "water", "sea", "vacuum"),
+}
+BOUNDS = {"budget": (1, MAX_BUDGET), "nodes": (2, 100_000), "popsize": (2, 100_000),
+          "chains": (1, 10_000), "seed": (0, 2**63 - 1)}  # fmt: skip
+
+
+def check_learn_config(d: dict, where: str) -> dict:
+    """Check a learning run's settings (config.toml's [run], or the CLI's) strictly.
+
+    The keys are LearnConfig's fields (so new fields are known at once); each value's type
+    follows the field's annotation, choices and bounds are checked; returns ``d``.
+    """
+    from dataclasses import fields
+
+    from zoetic import io as rd
+    from zoetic.errors import RunDirError
+    from zoetic.learn import optimizers
+    from zoetic.learn.run import LearnConfig
+
+    E = RunDirError
+    names = tuple(getattr(optimizers, "OPTIMIZERS", ("anneal", "simplex", "cmaes")))
+    choices = CHOICES | {"optimizer": (*names, *(() if "gradient" in names else ("gradient",)))}
+    if not isinstance(d, dict):
+        raise E(f"{where}: must be a table, got {rd.abbrev(d)}")
+    kinds = {f.name: str(f.type) for f in fields(LearnConfig)}
+    rd.check_keys(d, kinds, where, E)
+    for key, value in d.items():
+        at, kind = f"{where}: {key}", kinds[key]
+        if value is None and "None" in kind:
+            continue
+        if kind.startswith("int"):
+            lo, hi = BOUNDS.get(key, (None, None))
+            rd.integer(value, at, E, lo, hi)
+        elif kind.startswith("float"):
+            rd.number(value, at, E)
+        elif kind.startswith("str"):
+            rd.string(value, at, E, choices.get(key))
+        elif kind.startswith("bool") and not isinstance(value, bool):
+            raise E(f"{at} must be true or false, got {rd.abbrev(value)}")
+        elif kind.startswith("dict") and not isinstance(value, dict):
+            raise E(f"{at} must be a table, got {rd.abbrev(value)}")
+    return d
+
+
+def check_learnable(animal: str) -> Body:
+    """Return the animal's body, refusing one with nothing to learn (no actuators) or whose
+    own time step is beyond what its springs and masses allow."""
+    from zoetic.errors import BodyError
+
+    body = load_animal(animal)
+    check_dt(body, body.dt, None, body.source)  # the file's own step, before anything is written
+    if body.n_actuators == 0:
+        raise BodyError(
+            f"{animal}: the {body.name} has no actuators, so there is nothing to learn; give "
+            "it [[actuators]] and muscles (springs with an 'actuator')"
+        )
+    return body
+
+
+def check_learn_size(run: dict, task=None, where: str = "options") -> None:
+    """Refuse a learning run that would take more than the memory limit or too many steps.
+
+    Counted before anything is built: the log of every evaluation (budget x parameters) and
+    one batch of simulations (candidates x steps x actuators); the task's horizon at the
+    animal's dt is bounded in steps. ``task`` defaults to the named one.
+    """
+    from zoetic.errors import RunDirError
+    from zoetic.io import check_memory, check_steps
+    from zoetic.tasks import load_task
+
+    body = load_animal(run.get("animal", "shark"))
+    task = task or load_task(run.get("task", "swim-straight"))
+    horizon = float(getattr(task, "horizon", 0.0) or 0.0)
+    steps = check_steps(horizon, body.dt, f"{where}: the task's horizon", RunDirError)
+    nodes = int(run.get("nodes") or getattr(task, "nodes", 15) or 15)
+    params = body.n_actuators * nodes
+    budget = int(run.get("budget", 3500))
+    batch = int(run.get("popsize") or 0) or max(64, int(run.get("chains") or 1))
+    check_memory(budget * (params + 6) * 8 * 2, f"{where}: a log of {budget:,} evaluations of "
+                 f"{params:,} parameters", RunDirError,
+                 "use a smaller --budget or fewer --nodes")  # fmt: skip
+    what = f"{where}: simulating {batch} candidates for {horizon:g} s"
+    check_memory(batch * steps * (body.n_actuators * 12 + 8 * nodes), what, RunDirError,
+                 "use a smaller --popsize, fewer --nodes or a shorter task")  # fmt: skip
+
+
+def check_run_dir(out: Path) -> None:
+    """Refuse a run directory whose config.toml is missing, unreadable or malformed."""
+    from zoetic.errors import RunDirError
+    from zoetic.io import read_toml
+
+    out = Path(out)
+    if not out.is_dir():
+        raise RunDirError(f"{out}: no such run directory")
+    cfg = out / "config.toml"
+    if not cfg.is_file():
+        raise RunDirError(f"{out}: no config.toml, so not a zoetic run directory")
+    doc = read_toml(cfg, what="run configuration", error=RunDirError)
+    if "run" not in doc or "task" not in doc:
+        raise RunDirError(f"{cfg}: needs a [run] and a [task] table; was it edited?")
+    check_learn_config(doc["run"], f"{cfg}: [run]")
+    if not isinstance(doc["task"], dict):
+        raise RunDirError(f"{cfg}: [task] must be a table")
+    from zoetic.tasks import parse_task
+
+    check_learn_size(doc["run"], parse_task(doc["task"], str(cfg)), f"{cfg}: [run]")
+
+
+MARKER = ".zoetic-demo"
+
+
+def clear_demo(out: Path) -> None:
+    """Remove what an earlier ``zoetic demo`` wrote into ``out``, and nothing else.
+
+    The demo lists the files it created in ``out/.zoetic-demo``; only those are removed. A
+    directory that holds a run but no such list (a run made another way) is refused.
+    """
+    from zoetic.errors import RunDirError
+
+    out = Path(out)
+    marker = out / MARKER
+    if marker.is_file():
+        for name in marker.read_text().split("\n"):
+            if name and "/" not in name and name not in (".", ".."):
+                (out / name).unlink(missing_ok=True)
+        marker.unlink()
+    elif (out / "checkpoint.npz").exists() or (out / "config.toml").exists():
+        raise RunDirError(
+            f"{out} holds a run that zoetic demo did not make; choose another --out, or "
+            f"continue it with zoetic learn --resume {out}"
+        )
+
+
+def mark_demo(out: Path, before: set[str]) -> None:
+    """Record in ``out/.zoetic-demo`` the files the demo created (not those in ``before``)."""
+    made = sorted(p.name for p in Path(out).iterdir() if p.is_file() and p.name not in before)
+    text = "\n".join(n for n in made if n != MARKER) + "\n"
+    atomic_write_bytes(Path(out) / MARKER, text.encode())

@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from zoetic import io as rd
 from zoetic.bodies import Body
 from zoetic.control import Controller, check_fits, from_dict, save_controller
 from zoetic.errors import ControllerError, RunDirError, ZoeticError
@@ -54,26 +55,57 @@ class Repertoire:
 
     @classmethod
     def load(cls, directory: str | Path, body: Body | None = None) -> Repertoire:
-        """Return the repertoire in ``directory``, checked against ``body`` if given."""
+        """Return the repertoire in ``directory``, checked against ``body`` if given.
+
+        Strict: the index's keys, each entry's name (unique), file (a controller file in the
+        directory) and duration (positive, finite, bounded) are checked, and every
+        controller must be for the repertoire's animal and actuators; errors name the index
+        file and the entry.
+        """
         directory = Path(directory)
         index_path = directory / INDEX
-        if not index_path.exists():
+        if not directory.is_dir():
+            raise RunDirError(f"{directory}: no such directory, so not a zoetic repertoire")
+        if not index_path.is_file():
             raise RunDirError(f"{directory}: no {INDEX}, so not a zoetic repertoire")
-        try:
-            index = read_json(index_path, what="repertoire index")
-            rep = cls(str(index["animal"]), tuple(index["actuators"]))
-            for k, entry in enumerate(index["entries"]):
-                name, file = str(entry["name"]), str(entry["file"])
-                path = directory / file
-                try:
-                    ctrl = from_dict(read_json(path, what="controller file"), where=str(path))
-                except ZoeticError as exc:
-                    raise ControllerError(f"{index_path}: entries[{k}] ({name}): {exc}") from None
-                info = {k2: v for k2, v in entry.items() if k2 not in ("name", "file", "duration")}
-                rep.add(name, ctrl, float(entry["duration"]), **info)
-        except (KeyError, TypeError, ValueError) as exc:
-            raise RunDirError(f"{index_path}: malformed repertoire ({exc})") from None
+        index = read_json(index_path, what="repertoire index", error=RunDirError)
+        top = rd.Table(index, str(index_path), RunDirError)
+        animal = top.string("animal")
+        acts = top.raw("actuators")
+        if not isinstance(acts, list) or not all(isinstance(a, str) for a in acts):
+            raise top.fail(f"actuators must be a list of names, got {rd.abbrev(acts)}")
+        entries = top.tables("entries", rd.LIMITS.links)
+        top.finish()
+        rep = cls(animal, tuple(acts))
+        for k, entry in enumerate(entries):
+            t = rd.Table(entry, f"{index_path}: entries[{k}]", RunDirError)
+            name = t.string("name")
+            t.where = f"{index_path}: entries[{k}] ({name})"
+            if name in rep.controllers:
+                raise t.fail(f"duplicate entry {name!r}; remove or rename one")
+            file = t.string("file")
+            if Path(file).is_absolute() or ".." in Path(file).parts:
+                raise t.fail(f"file {file!r} must be a file name inside {directory}")
+            duration = t.number("duration", positive=True, hi=rd.LIMITS.seconds)
+            path = directory / file
+            try:
+                d = read_json(path, what="controller file", error=ControllerError)
+                ctrl = from_dict(d, where=str(path))
+            except ZoeticError as exc:
+                raise ControllerError(f"{t.where}: {exc}") from None
+            if ctrl.animal != animal or tuple(ctrl.actuators) != tuple(acts):
+                raise t.fail(
+                    f"{file} is a controller for the {ctrl.animal} "
+                    f"({len(ctrl.actuators)} actuators), not for this repertoire's {animal}; "
+                    "remove the entry or train it again"
+                )
+            info = {k2: v for k2, v in entry.items() if k2 not in ("name", "file", "duration")}
+            rep.add(name, ctrl, duration, **info)
         if body is not None:
+            if animal != body.name:
+                raise RunDirError(
+                    f"{index_path}: this repertoire is for the {animal}, not the {body.name}"
+                )
             for name, ctrl in rep.controllers.items():
-                check_fits(ctrl, body, f"{directory / (name + '.json')}")
+                check_fits(ctrl, body, f"{index_path}: entry {name!r}")
         return rep

@@ -8,6 +8,7 @@ from pathlib import Path
 from zoetic.bodies.body import Body, compile_body
 from zoetic.bodies.spec import AnimalSpec, parse_animal, read_animal_file
 from zoetic.errors import BodyError
+from zoetic.io import is_path, suggest
 
 ZOO_DIR = Path(__file__).parent / "zoo"
 
@@ -36,17 +37,24 @@ def _load_path(path: str, mtime: float) -> Body:
 
 
 def load_animal(name_or_path: str | Path) -> Body:
-    """Return the compiled Body of a zoo animal's name or of an animal TOML file's path."""
+    """Return the compiled Body of a zoo animal's name or of an animal TOML file's path.
+
+    A bare name (``shark``) always means the zoo entry; a file is written as a path
+    (``./shark.toml``, ``animals/shark.toml``), so a folder named ``shark`` cannot hide it.
+    """
     text = str(name_or_path)
-    candidate = Path(text)
-    if candidate.suffix == ".toml" or candidate.exists():
+    if is_path(text):
+        candidate = Path(text)
+        if candidate.is_dir():
+            raise BodyError(f"{text}: is a directory, not an animal file")
         if not candidate.is_file():
-            raise BodyError(f"{candidate}: no such animal file")
+            raise BodyError(f"{text}: no such animal file")
         return _load_path(str(candidate.resolve()), candidate.stat().st_mtime)
     zoo_file = ZOO_DIR / f"{text}.toml"
     if not zoo_file.is_file():
+        hint = f" (to use the file {text!r} here, write ./{text})" if Path(text).exists() else ""
         raise BodyError(
-            f"unknown animal {text!r}: choose one of {', '.join(list_animals())} "
-            "or give the path of an animal .toml file"
+            f"unknown animal {text!r}{suggest(text, list_animals())}: choose one of "
+            f"{', '.join(list_animals())} or give the path of an animal .toml file{hint}"
         )
     return _load_path(str(zoo_file), zoo_file.stat().st_mtime)

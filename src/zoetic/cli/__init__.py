@@ -6,6 +6,7 @@ import sys
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from zoetic.errors import ZoeticError
 
@@ -41,7 +42,7 @@ def _register() -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the CLI; a ZoeticError prints its message and exits with code 2."""
+    """Run the CLI; a ZoeticError prints its message and exits with its code (2; 3 blow-up)."""
     _register()
     args = sys.argv[1:] if argv is None else argv
     try:
@@ -49,8 +50,11 @@ def main(argv: list[str] | None = None) -> int:
     except ZoeticError as exc:
         if _DEBUG["on"] or "--debug" in args:
             raise
-        err_console.print(f"[bold red]error:[/] {exc}", highlight=False)
-        return 2
+        # soft wrap: the terminal wraps long lines itself, so paths stay whole (and greppable)
+        err_console.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False,
+                          soft_wrap=True)  # fmt: skip
+        err_console.print("(run with --debug for the traceback)", style="dim", highlight=False)
+        return int(getattr(exc, "exit_code", 2))
     except KeyboardInterrupt:
         err_console.print("[yellow]interrupted[/]")
         return 130

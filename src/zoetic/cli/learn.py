@@ -10,6 +10,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from zoetic.cli import app
 from zoetic.cli.bench import _emit, bench_app
+from zoetic.io import check_out_dir
 
 console = Console()
 
@@ -72,7 +73,7 @@ def learn(
     animal: str = typer.Argument(None, help="Zoo animal name or animal .toml file."),
     task: str = typer.Option("swim-straight", help="Task name (see `zoetic tasks`) or .toml file."),
     optimizer: str = typer.Option("anneal", help="anneal, simplex, cmaes or gradient."),
-    budget: int = typer.Option(3500, min=1, help="Evaluations (simulations) to spend."),
+    budget: int = typer.Option(3500, min=1, max=10_000_000, help="Evaluations to spend."),
     seed: int = typer.Option(0, help="Random seed: same seed, same result."),
     controller: str = typer.Option("time", help="Representation: time or frequency."),
     nodes: int = typer.Option(None, min=2, help="M, parameters per actuator (default: task's)."),
@@ -100,7 +101,14 @@ def learn(
 
         os.environ["RAY_ADDRESS"] = ray_address
     if resume is not None:
-        run = Run.resume(resume)
+        from zoetic.errors import ZoeticError, naming
+        from zoetic.runs import check_run_dir
+
+        check_run_dir(resume)
+        try:
+            run = Run.resume(resume)
+        except ZoeticError as exc:
+            raise naming(resume, exc) from None
         console.print(f"resuming {resume} at {run.evaluations} evaluations")
     else:
         if animal is None:
@@ -110,7 +118,12 @@ def learn(
             controller=controller, nodes=nodes, interp=interp, popsize=popsize, chains=chains,
             evaluator=evaluator, coupling=coupling,
         )  # fmt: skip
-        out = out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}"
+        from zoetic.runs import check_learn_config, check_learn_size, check_learnable
+
+        check_learn_config(config.to_dict(), "options")
+        check_learnable(animal)
+        check_learn_size(config.to_dict())
+        out = check_out_dir(out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}")
         if config.optimizer == "gradient":
             from zoetic.learn.gradient_run import GradientRun
 
@@ -127,18 +140,17 @@ def learn(
 @app.command()
 def demo(
     out: Path = typer.Option(Path("runs/demo"), help="Where to write the demo run."),
-    budget: int = typer.Option(8000, min=16, help="Evaluations to spend."),
+    budget: int = typer.Option(8000, min=16, max=10_000_000, help="Evaluations to spend."),
     seed: int = typer.Option(0),
     video: bool = typer.Option(True),
 ) -> None:
     """A shark learns to swim from scratch (CMA-ES, 40 nodes per muscle, ~15 s on 2 cores)."""
-    import shutil
-
     from zoetic.learn.run import LearnConfig, Run
-    from zoetic.runs import finish_run
+    from zoetic.runs import clear_demo, finish_run, mark_demo
 
-    if (out / "checkpoint.npz").exists():
-        shutil.rmtree(out)
+    check_out_dir(out)
+    clear_demo(out)  # only what an earlier demo made; anything else stays
+    before = {p.name for p in out.iterdir()} if out.is_dir() else set()
     config = LearnConfig(
         animal="shark", task="swim-straight", optimizer="cmaes", budget=budget, seed=seed,
         popsize=24, nodes=40,
@@ -148,8 +160,11 @@ def demo(
         f"({budget} simulations of {4.0:g} s each)."
     )
     run = Run.create(out, config)
-    run_with_progress(run, "shark learns to swim")
-    summary = finish_run(run, video=video)
+    try:
+        run_with_progress(run, "shark learns to swim")
+        summary = finish_run(run, video=video)
+    finally:  # also when interrupted: the next demo may then clear what this one made
+        mark_demo(out, before)
     for key, value in summary.items():
         console.print(f"{key:>14}: {value}")
 

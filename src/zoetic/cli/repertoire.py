@@ -30,6 +30,10 @@ def abstract_cmd(
     from zoetic.behavior.training import abstract_files
     from zoetic.learn.abstraction import parse_modes
 
+    if source.is_dir():
+        from zoetic.runs import check_run_dir
+
+        check_run_dir(source)
     out = out or (source if source.is_dir() else source.parent)
     info = abstract_files(source, out, parse_modes(modes), threshold, task)
     o, a = info["original"], info["abstract"]
@@ -46,7 +50,8 @@ def abstract_cmd(
 def train_cmd(
     animal: str = typer.Argument(..., help="Zoo animal name or animal .toml file."),
     out: Path = typer.Option(None, help="Repertoire directory (default memory/<animal>)."),
-    budget: int = typer.Option(3000, min=10, help="Evaluations per learned entry."),
+    budget: int = typer.Option(3000, min=10, max=10_000_000,
+                              help="Evaluations per learned entry."),  # fmt: skip
     optimizer: str = typer.Option("cmaes", help="anneal, simplex or cmaes."),
     modes: str = typer.Option("auto", help="Modes kept by the abstraction: auto or K."),
     threshold: float = typer.Option(0.3, help="auto keeps modes >= threshold x the strongest."),
@@ -61,9 +66,12 @@ def train_cmd(
 
         os.environ["RAY_ADDRESS"] = ray_address
     from zoetic.behavior.training import show_repertoire, train_repertoire
+    from zoetic.io import check_out_dir
     from zoetic.learn.abstraction import parse_modes
+    from zoetic.runs import check_learnable
 
-    out = out or Path("memory") / Path(animal).stem
+    check_learnable(animal)
+    out = check_out_dir(out or Path("memory") / Path(animal).stem)
     with _progress_bar() as bar:
         state: dict = {}
 
@@ -109,8 +117,12 @@ def show_cmd(
 ) -> None:
     """Print a repertoire's entries and what each does; writes repertoire.png beside them."""
     from zoetic.behavior.training import show_repertoire
+    from zoetic.errors import ZoeticError, naming
 
-    rows = show_repertoire(memory)
+    try:
+        rows = show_repertoire(memory)
+    except ZoeticError as exc:  # e.g. the index names an unknown animal
+        raise naming(memory, exc) from None
     if json_out:
         print(json.dumps(rows, indent=1))
         return
@@ -132,13 +144,14 @@ def sequence_cmd(
     from zoetic.behavior.training import build_sequence, parse_sequence
     from zoetic.bodies import load_animal
     from zoetic.control import save_controller
+    from zoetic.io import make_dir
     from zoetic.runs import simulate_run
     from zoetic.viz.learning import plot_controller
 
     body = load_animal(animal)
     rep = Repertoire.load(memory, body)
     seq = build_sequence(rep, parse_sequence(entries, rep), overlap)
-    out.mkdir(parents=True, exist_ok=True)
+    make_dir(out)
     path = save_controller(seq, out / "sequence.json")
     import numpy as np
 

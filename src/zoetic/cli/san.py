@@ -40,6 +40,18 @@ def _progress(bar: Progress, tid, unit: str = ""):
     return update
 
 
+def _check_seconds(creature, seconds: float | None) -> None:
+    """Refuse --seconds that would take the creature's world past its step limit."""
+    from zoetic.san.creature import CreatureError
+    from zoetic.san.creature_file import MAX_CREATURE_STEPS
+
+    if seconds is not None and seconds / creature.dt > MAX_CREATURE_STEPS:
+        raise CreatureError(
+            f"--seconds {seconds:g} at the {creature.name}'s dt = {creature.dt:g} s is "
+            f"{seconds / creature.dt:,.0f} steps (at most {MAX_CREATURE_STEPS:,}); use less"
+        )
+
+
 @san_app.command("creatures")
 def creatures_cmd() -> None:
     """List the built-in creatures with their sensors, actuators and the paper's speed."""
@@ -65,11 +77,13 @@ def creatures_cmd() -> None:
 @san_app.command("search")
 def search_cmd(
     creature: str = typer.Argument(..., help="Built-in creature name or creature .toml file."),
-    trials: int = typer.Option(200, min=1, help="Random networks to generate and evaluate."),
+    trials: int = typer.Option(200, min=1, max=10_000_000,
+                              help="Random networks to generate and evaluate."),  # fmt: skip
     top: int = typer.Option(10, min=1, help="How many of the best to keep (videos and files)."),
     seed: int = typer.Option(0, help="Random seed: same seed, same networks and metrics."),
     terrain: str = typer.Option("flat", help="flat, or rough (uneven ground)."),
-    seconds: float = typer.Option(None, min=0.1, help="Evaluation time (default: creature's)."),
+    seconds: float = typer.Option(None, min=0.1, max=1000.0,
+                                  help="Evaluation time (default: creature's)."),  # fmt: skip
     workers: int = typer.Option(None, min=1, help="Worker processes (default: all cores)."),
     out: Path = typer.Option(None, help="Output directory (default runs/<creature>)."),
     video: bool = typer.Option(True, help="Write a video of each kept gait."),
@@ -85,6 +99,7 @@ def search_cmd(
     from zoetic.san.search import search, write_search
 
     c = load_creature(creature)
+    _check_seconds(c, seconds)
     out = out or Path("runs") / c.name
     bar, tid = _bar(f"{c.name} {terrain}", trials)
     with bar:
@@ -101,7 +116,7 @@ def search_cmd(
 def tune_cmd(
     network: Path = typer.Argument(..., help="A network .json (e.g. runs/cart/sans/01.json)."),
     method: str = typer.Option("sga", help="sga (stochastic gradient ascent) or anneal."),
-    trials: int = typer.Option(1000, min=1, help="Evaluations to spend."),
+    trials: int = typer.Option(1000, min=1, max=10_000_000, help="Evaluations to spend."),
     seed: int = typer.Option(0, help="Random seed: same seed, same result."),
     terrain: str = typer.Option("flat", help="flat, or rough (uneven ground)."),
     creature: str = typer.Option(None, help="Creature (default: the one the file names)."),
@@ -130,7 +145,8 @@ def tune_cmd(
 def show_cmd(
     path: Path = typer.Argument(..., help="A run directory (search or tune) or a network .json."),
     rank: int = typer.Option(1, min=1, help="For a search directory: which kept network."),
-    seconds: float = typer.Option(None, min=0.1, help="Replay time (default: creature's)."),
+    seconds: float = typer.Option(None, min=0.1, max=1000.0,
+                                  help="Replay time (default: creature's)."),  # fmt: skip
     terrain: str = typer.Option(None, help="flat or rough (default: the run's)."),
     out: Path = typer.Option(None, help="Video file (default <run>/show.mp4)."),
     fps: int = typer.Option(30, min=1, help="Video frame rate."),
@@ -142,6 +158,7 @@ def show_cmd(
 
     file = resolve_network(path, rank)
     net, c = load_with_creature(file)
+    _check_seconds(c, seconds)
     terrain = terrain or str(net.info.get("terrain", "flat"))
     default = (path if path.is_dir() else file.parent) / (
         "show.mp4" if file.stem in ("san", f"{rank:02d}") else f"show-{file.stem}.mp4"

@@ -12,6 +12,7 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from zoetic.cli import app
+from zoetic.io import make_dir
 
 console = Console()
 
@@ -105,7 +106,8 @@ def track(
     out: Path = typer.Option(Path("runs/track"), help="Run directory to write."),
     interval: float = typer.Option(1.0, min=0.05, help="Re-evaluation interval (s)."),
     radius: float = typer.Option(None, help="Reaching radius (m); default half a body length."),
-    time_limit: float = typer.Option(120.0, min=0.1, help="Give up after this many seconds."),
+    time_limit: float = typer.Option(120.0, min=0.1, max=3600.0,
+                                     help="Give up after this many seconds."),  # fmt: skip
     turn_radius: float = typer.Option(
         None,
         help="Metres per radian of bearing added to the distance in the gain (default 1.5 "
@@ -132,7 +134,7 @@ def track(
 
         result = run_track(body, rep, pts, config, progress=update)
         bar.update(tid, total=result.sim_time, completed=result.sim_time)
-    out.mkdir(parents=True, exist_ok=True)
+    make_dir(out)
     check = replay(body, result)
     drift = float(np.nanmax(np.abs(check.positions[0] - result.positions)))
     summary = result.summary() | {
@@ -174,10 +176,12 @@ def macro(
         [], help="Obstacle disc 'x,z,r' to keep out of (repeat for more)."
     ),
     method: str = typer.Option("ga", help="anneal (simulated annealing) or ga (genetic)."),
-    budget: int = typer.Option(2000, min=1, help="Plans (simulations) to evaluate."),
+    budget: int = typer.Option(2000, min=1, max=10_000_000,
+                              help="Plans (simulations) to evaluate."),  # fmt: skip
     seed: int = typer.Option(0, help="Random seed: same seed, same result."),
     segments: int = typer.Option(6, min=1, help="Repertoire entries in a plan."),
-    horizon: float = typer.Option(60.0, min=0.1, help="Seconds the plan is judged over."),
+    horizon: float = typer.Option(60.0, min=0.1, max=3600.0,
+                                  help="Seconds the plan is judged over."),  # fmt: skip
     out: Path = typer.Option(Path("runs/macro"), help="Run directory to write."),
     video: bool = typer.Option(True, help="Write video.mp4 (goal and obstacle rims as buoys)."),
     fps: int = typer.Option(30, min=1),
@@ -211,7 +215,7 @@ def macro(
                        info=f"E {opt.best_f:.3f} {st}")  # fmt: skip
 
         result = search(problem, method, budget, seed, progress=update, evaluator=evaluator)
-    out.mkdir(parents=True, exist_ok=True)
+    make_dir(out)
     save_controller(result.sequence, out / "controller.json")
     summary = result.summary() | {
         "animal": body.name, "memory": str(memory), "goal_xz": g.tolist(),

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from zoetic.errors import ZoeticError
+from zoetic.io import abbrev
 
 __all__ = [
     "Actuator",
@@ -266,7 +267,7 @@ class Creature:
 
 def _finite(val: Any, where: str) -> float:
     if isinstance(val, bool) or not isinstance(val, int | float):
-        raise CreatureError(f"{where} must be a number, got {val!r}")
+        raise CreatureError(f"{where} must be a number, got {abbrev(val)}")
     out = float(val)
     if not math.isfinite(out):
         raise CreatureError(f"{where} must be finite, got {val!r}")

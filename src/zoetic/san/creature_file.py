@@ -15,11 +15,11 @@ from __future__ import annotations
 import json
 import math
 import os
-import tomllib
 from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
+from zoetic.io import LIMITS, abbrev, check_keys, is_path, load_toml, suggest
 from zoetic.san.creature import (
     _DEG,
     ACTUATOR_KINDS,
@@ -48,26 +48,33 @@ def list_creatures() -> list[str]:
 
 
 def load_creature(name_or_path: str | os.PathLike) -> Creature:
-    """Return the creature from the zoo (by name, e.g. "cart") or from a .toml file."""
+    """Return the creature from the zoo (by name, e.g. "cart") or from a .toml file.
+
+    A bare name always means the zoo entry (a folder ``cart/`` in the working directory does
+    not hide it); a file is written as a path (``./cart.toml``, ``runs/x/creature.toml``).
+    """
     text_name = str(name_or_path)
-    path = Path(name_or_path)
-    if not text_name.endswith(".toml") and not path.exists():
-        zoo = ZOO_DIR / f"{text_name}.toml"
-        if not zoo.exists():
+    if is_path(text_name):
+        path = Path(text_name)
+        if not path.exists():
+            raise CreatureError(f"{text_name}: no such creature file")
+    else:
+        path = ZOO_DIR / f"{text_name}.toml"
+        if not path.exists():
+            here = Path(text_name).exists()
+            hint = f" (to use the file {text_name!r} here, write ./{text_name})" if here else ""
             raise CreatureError(
-                f"unknown creature {text_name!r}: not a file, and the zoo has "
-                f"{', '.join(list_creatures())}"
+                f"unknown creature {text_name!r}{suggest(text_name, list_creatures())}: not "
+                f"in the zoo, which has {', '.join(list_creatures())}{hint}"
             )
-        path = zoo
-    if not path.exists():
-        raise CreatureError(f"{path}: no such creature file")
-    try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as e:
-        raise CreatureError(f"{path}: not valid TOML: {e}") from None
-    except OSError as e:
-        raise CreatureError(f"{path}: cannot read: {e}") from None
+    data = load_toml(path, what="creature file", error=CreatureError)
     return creature_from_dict(data, path)
+
+
+# A creature's simulation may take at most this many physics steps (seconds / dt): the
+# planar world steps a few hundred thousand times a second, and a search runs many.
+MAX_CREATURE_STEPS = 1_000_000
+MIN_CREATURE_DT = 1e-5
 
 
 class _Table:
@@ -88,18 +95,27 @@ class _Table:
         self.used.add(key)
         if key not in self.data:
             if default is ...:
-                raise self.err(f"missing required key {key!r}")
+                raise self.missing(key)
             return default
         val = self.data[key]
         if not isinstance(val, str) or not val:
-            raise self.err(f"{key} must be a non-empty string, got {val!r}")
+            raise self.err(f"{key} must be a non-empty string, got {abbrev(val)}")
         if choices is not None and val not in choices:
-            raise self.err(f"unknown {key} {val!r} (expected one of {', '.join(choices)})")
+            raise self.err(
+                f"unknown {key} {abbrev(val, 40)}{suggest(val, choices)} (expected one of "
+                f"{', '.join(choices)})"
+            )
         return val
+
+    def missing(self, key: str) -> CreatureError:
+        """The error for a missing required key, pointing at a misspelling of it if any."""
+        near = suggest(key, [k for k in self.data if k not in self.used])
+        found = f"; found {near[15:-2]} (misspelled?)" if near else ""
+        return self.err(f"missing required key {key!r}{found}")
 
     def num(self, key: str, default: Any = ..., angle: bool = False, per_deg: bool = False):
         """A finite float; ``key_deg`` accepted in degrees when ``angle`` (or per degree)."""
-        self.used.update((key, key + "_deg"))
+        self.used.update((key, key + "_deg") if angle or per_deg else (key,))
         scale = 1.0
         if (angle or per_deg) and key + "_deg" in self.data:
             if key in self.data:
@@ -107,12 +123,12 @@ class _Table:
             key, scale = key + "_deg", (1.0 / _DEG if per_deg else _DEG)
         if key not in self.data:
             if default is ...:
-                raise self.err(f"missing required key {key!r}")
+                raise self.missing(key)
             return default
         return _finite(self.data[key], f"{self.where}: {key}") * scale
 
     def pair(self, key: str, default: Any = ..., angle: bool = False):
-        self.used.update((key, key + "_deg"))
+        self.used.update((key, key + "_deg") if angle else (key,))
         scale = 1.0
         if angle and key + "_deg" in self.data:
             if key in self.data:
@@ -120,23 +136,23 @@ class _Table:
             key, scale = key + "_deg", _DEG
         if key not in self.data:
             if default is ...:
-                raise self.err(f"missing required key {key!r}")
+                raise self.missing(key)
             return default
         val = self.data[key]
         if not isinstance(val, list) or len(val) != 2:
-            raise self.err(f"{key} must be a list of two numbers, got {val!r}")
+            raise self.err(f"{key} must be a list of two numbers, got {abbrev(val)}")
         return tuple(_finite(v, f"{self.where}: {key}") * scale for v in val)
 
     def finish(self) -> None:
-        extra = sorted(set(self.data) - self.used)
-        if extra:
-            raise self.err(f"unknown key(s) {', '.join(map(repr, extra))}")
+        check_keys(self.data, self.used, self.where, CreatureError)
 
 
 def _entries(data: dict, key: str, where: str) -> list:
     val = data.get(key, [])
     if not isinstance(val, list):
         raise CreatureError(f"{where}: [[{key}]] must be an array of tables")
+    if len(val) > LIMITS.links:
+        raise CreatureError(f"{where}: {len(val)} [[{key}]] entries (at most {LIMITS.links})")
     return val
 
 
@@ -169,6 +185,16 @@ def creature_from_dict(data: dict, path: str | os.PathLike | None = None) -> Cre
         if val <= 0:
             raise h.err(f"{key} must be positive, got {val:g}")
         kw[key] = val
+    if kw["dt"] < MIN_CREATURE_DT:
+        raise h.err(f"dt = {kw['dt']:g} s is below the smallest allowed ({MIN_CREATURE_DT:g} s)")
+    steps = kw["seconds"] / kw["dt"]
+    if steps > MAX_CREATURE_STEPS:
+        raise h.err(
+            f"seconds / dt = {kw['seconds']:g} / {kw['dt']:g} is {steps:,.0f} steps (at most "
+            f"{MAX_CREATURE_STEPS:,}); use a shorter time or a larger dt"
+        )
+    if kw["control_dt"] > kw["seconds"]:
+        raise h.err(f"control_dt ({kw['control_dt']:g}) is longer than seconds")
     ratio = kw["control_dt"] / kw["dt"]
     if abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:
         raise h.err(f"control_dt ({kw['control_dt']:g}) must be a whole multiple of dt")
@@ -176,8 +202,8 @@ def creature_from_dict(data: dict, path: str | os.PathLike | None = None) -> Cre
     if "hidden" in h.data:
         h.used.add("hidden")
         hid = h.data["hidden"]
-        if isinstance(hid, bool) or not isinstance(hid, int) or hid < 0:
-            raise h.err(f"hidden must be a non-negative integer, got {hid!r}")
+        if isinstance(hid, bool) or not isinstance(hid, int) or not 0 <= hid <= LIMITS.links:
+            raise h.err(f"hidden must be an integer in [0, {LIMITS.links}], got {abbrev(hid)}")
         kw["hidden"] = hid
     kw["root_angle"] = h.num("root_angle", 0.0, angle=True)
     for key in ("friction", "hop_k", "water_k", "follow_speed", "follow_lead", "rough_height"):
@@ -297,6 +323,10 @@ def creature_from_dict(data: dict, path: str | os.PathLike | None = None) -> Cre
         a = Actuator(name, kind, jn, lo, hi, ks, kd)
         _check_actuator_values(a, t.where)
         acts.append(a)
+    if not acts:
+        raise CreatureError(
+            f"{src}: a creature needs at least one [[actuator]] (a network has nothing to drive)"
+        )
     act_by = {a.name: a for a in acts}
 
     sens, sseen = [], set()

@@ -23,8 +23,9 @@ from typing import Any
 
 import numpy as np
 
+from zoetic import io as rd
 from zoetic.errors import ZoeticError
-from zoetic.io import read_json, write_json
+from zoetic.io import LIMITS, abbrev, check_keys, read_json, write_json
 
 __all__ = [
     "FORMAT",
@@ -186,7 +187,7 @@ def _validate(net: Network, source: str | os.PathLike | None) -> None:
             raise NetworkError(f"{at}{name} must have one value per node ({n}), got {k.shape}")
         if not np.all(np.isfinite(k)) or np.any(sign * k <= 0):
             what = "positive (T_on = 1/k1)" if sign > 0 else "negative (T_off = -1/k2)"
-            raise NetworkError(f"{at}{name} must be finite and {what}, got {k.tolist()}")
+            raise NetworkError(f"{at}{name} must be finite and {what}, got {abbrev(k.tolist())}")
         object.__setattr__(net, name, k.copy())
     if net.tuning is not None:
         tuning = {}
@@ -199,6 +200,8 @@ def _validate(net: Network, source: str | os.PathLike | None) -> None:
             size = sizes["sensor" if key.startswith("sensor") else "actuator"]
             if arr.shape != (size,):
                 raise NetworkError(f"{at}tuning {key} must have {size} values, got {arr.shape}")
+            if not np.isfinite(arr).all():
+                raise NetworkError(f"{at}tuning {key} holds non-finite values: {arr.tolist()}")
             tuning[key] = arr.copy()
         object.__setattr__(net, "tuning", tuning)
 
@@ -218,35 +221,57 @@ def check_fits(network: Network, creature, source: str | os.PathLike | None = No
         )
 
 
+NETWORK_KEYS = ("format", "version", "creature", "n_sensors", "n_hidden", "n_actuators",
+                "weights", "k1", "k2", "tuning", "info")  # fmt: skip
+
+
 def network_from_dict(data: Any, source: str | os.PathLike | None = None) -> Network:
-    """Return the network described by JSON data; errors name ``source`` and the entry."""
+    """Return the network described by JSON data; errors name ``source`` and the entry.
+
+    Strict: unknown keys are refused, counts must be whole numbers, every array is checked
+    for shape and size before it becomes a NumPy array.
+    """
     at = _where(source)
+    src = str(source) if source else "network"
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise NetworkError(f"{at}not a sensor-actuator network file (format != {FORMAT!r})")
+    check_keys(data, NETWORK_KEYS, src, NetworkError)
     for key in ("creature", "weights", "k1", "k2", "n_hidden"):
         if key not in data:
             raise NetworkError(f"{at}missing entry {key!r}")
-    try:
-        weights = np.asarray(data["weights"], dtype=float)
-        k1 = np.asarray(data["k1"], dtype=float)
-        k2 = np.asarray(data["k2"], dtype=float)
-        n_hidden = int(data["n_hidden"])
-    except (TypeError, ValueError) as exc:
-        raise NetworkError(f"{at}weights, k1, k2 and n_hidden must be numbers ({exc})") from None
+    creature = rd.string(data["creature"], f"{src}: creature", NetworkError)
+    n_hidden = rd.integer(data["n_hidden"], f"{src}: n_hidden", NetworkError, 0, LIMITS.links)
+    rows = data["weights"]
+    if not isinstance(rows, list) or not 1 <= len(rows) <= 2 * LIMITS.links:
+        raise NetworkError(
+            f"{at}weights must be a list of 1 to {2 * LIMITS.links} rows, got {rd.abbrev(rows)}"
+        )
+    weights = np.asarray(rd.matrix(rows, f"{src}: weights", NetworkError), dtype=float)
+    n = weights.shape[0]
+    k1 = np.asarray(rd.numbers(data["k1"], f"{src}: k1", NetworkError, size=n), dtype=float)
+    k2 = np.asarray(rd.numbers(data["k2"], f"{src}: k2", NetworkError, size=n), dtype=float)
     tuning = data.get("tuning")
-    if tuning is not None and not isinstance(tuning, dict):
-        raise NetworkError(f"{at}tuning must be a table of six arrays")
+    if tuning is not None:
+        if not isinstance(tuning, dict):
+            raise NetworkError(f"{at}tuning must be a table of six arrays")
+        check_keys(tuning, TUNING_KEYS, f"{src}: tuning", NetworkError)
+        tuning = {k: rd.numbers(v, f"{src}: tuning {k}", NetworkError) for k, v in tuning.items()}
+    info = data.get("info") or {}
+    if not isinstance(info, dict):
+        raise NetworkError(f"{at}info must be a table, got {rd.abbrev(info)}")
     shell = object.__new__(Network)
-    fields = dict(creature=str(data["creature"]), weights=weights, k1=k1, k2=k2,
-                  n_hidden=n_hidden, tuning=tuning, info=dict(data.get("info") or {}))  # fmt: skip
+    fields = dict(creature=creature, weights=weights, k1=k1, k2=k2,
+                  n_hidden=n_hidden, tuning=tuning, info=dict(info))  # fmt: skip
     for key, value in fields.items():
         object.__setattr__(shell, key, value)
     _validate(shell, source)  # errors name the file
     for key in ("n_sensors", "n_actuators"):
-        if key in data and int(data[key]) != getattr(shell, key):
-            raise NetworkError(
-                f"{at}{key} = {data[key]} disagrees with the weights ({getattr(shell, key)})"
-            )
+        if key in data:
+            value = rd.integer(data[key], f"{src}: {key}", NetworkError, 0)
+            if value != getattr(shell, key):
+                raise NetworkError(
+                    f"{at}{key} = {value} disagrees with the weights ({getattr(shell, key)})"
+                )
     return shell
 
 
@@ -257,12 +282,7 @@ def save_network(network: Network, path: str | os.PathLike) -> Path:
 
 def load_network(path: str | os.PathLike, creature=None) -> Network:
     """Return the network in a JSON file, checked against ``creature`` when given."""
-    try:
-        data = read_json(path, "network file")
-    except NetworkError:
-        raise
-    except ZoeticError as exc:
-        raise NetworkError(str(exc)) from None
+    data = read_json(path, "network file", NetworkError)
     net = network_from_dict(data, path)
     if creature is not None:
         check_fits(net, creature, path)
@@ -274,7 +294,10 @@ def load_with_creature(path: str | os.PathLike, creature=None):
     from zoetic.san import load_creature
 
     net = load_network(path)
-    c = load_creature(creature if creature is not None else net.creature)
+    try:
+        c = load_creature(creature if creature is not None else net.creature)
+    except ZoeticError as exc:
+        raise NetworkError(f"{path}: its creature: {exc}") from None
     check_fits(net, c, path)
     return net, c
 
