@@ -159,7 +159,7 @@ def finish_run(run, video: bool = True, fps: int = 30) -> dict:
 MAX_BUDGET = 10_000_000  # evaluations of one learning run
 CHOICES = {  # the controller kinds are left to learn.run.build, which names its own
     "interp": ("linear", "bspline"),
-    "evaluator": ("batch", "process"),
+    "evaluator": ("batch", "process", "ray"),
     "coupling": ("none", "antiphase"),
     "medium": ("ground", "water", "sea", "vacuum"),
 }
