@@ -1,4 +1,4 @@
-"""The world: lockstep with open-loop simulate, contacts that conserve momentum, state as a value."""
+"""The world: lockstep with open-loop simulate, contacts that conserve momentum, state a value."""
 
 from __future__ import annotations
 

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from zoetic.physics.kernel import BUOY, DRAG, FLOOR, G, LEVEL
+from zoetic.physics.kernel import DRAG, FLOOR, LEVEL, G
 
 
 @njit(cache=True, inline="always")
