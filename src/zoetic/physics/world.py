@@ -14,12 +14,14 @@ far from everything the animals run whole slices through the kernel at full spee
 from __future__ import annotations
 
 import io
+import math
 import types
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 from zoetic.bodies import Body
 from zoetic.errors import SimulationError
@@ -194,6 +196,38 @@ def _parallel_kernel():
     return simulate_chunks
 
 
+@njit(cache=True)
+def fill_table(u, out) -> bool:
+    """Copy activations u (B|1, T|1, A) into the kernel's table out (T, A, B), clipped to
+    [0, 1]; return False if any is not finite."""
+    steps, n_act, batch = out.shape
+    one_b = u.shape[0] == 1
+    one_t = u.shape[1] == 1
+    for t in range(steps):
+        for b in range(batch):
+            for k in range(n_act):
+                x = u[0 if one_b else b, 0 if one_t else t, k]
+                if not math.isfinite(x):
+                    return False
+                out[t, k, b] = min(max(x, 0.0), 1.0)
+    return True
+
+
+@njit(cache=True)
+def mark_failed(failed, fs) -> None:
+    """Set the kernel's per-call failure marks: 0 (dead) where a lane failed before."""
+    for b in range(failed.shape[0]):
+        fs[b] = 0 if failed[b] >= 0 else -1
+
+
+@njit(cache=True)
+def merge_failed(failed, fs, base) -> None:
+    """Record lanes the kernel found blowing up during a call that began at step ``base``."""
+    for b in range(failed.shape[0]):
+        if failed[b] < 0 and fs[b] >= 0:
+            failed[b] = base + fs[b]
+
+
 class World:
     """Animals and passive objects in one medium, B copies stepped together.
 
@@ -272,6 +306,14 @@ class World:
         self._food = np.zeros((self.batch, len(self.foods), 3))
         self._eaten = np.zeros((self.batch, len(self.foods)), dtype=bool)
         self._n = 0
+        self._tables: dict[tuple[int, int], np.ndarray] = {}
+        self._views = [(self._pos[o0:o1], self._vel[o0:o1])
+                       for o0, o1 in zip(self._off[:-1], self._off[1:], strict=True)]  # fmt: skip
+        self._dt32 = F32(self.dt)
+        self._vmax32 = F32(VMAX)
+        self._no_contacts = Contacts(
+            tuple(np.zeros((self.batch, b.n_nodes, 0, 3)) for b in self.bodies), ()
+        )
         self._kernel = serial_kernel() if self.batch < PARALLEL_FROM else _parallel_kernel()
         self._chunk = chunk_size(self.batch)
         self.restore(self.initial_state())
@@ -389,36 +431,36 @@ class World:
         return int(round((self._n * self.dt + seconds) / self.dt)) - self._n
 
     def _table(self, a: int, acts, steps: int) -> np.ndarray:
+        """Return the (T, A, B) float32 table the kernel reads (a reused buffer)."""
         body = self.bodies[a]
-        out = np.zeros((steps, max(1, body.n_actuators), self.batch), dtype=F32)
+        key = (a, steps)
+        out = self._tables.get(key)
+        if out is None:
+            out = self._tables[key] = np.zeros((steps, max(1, body.n_actuators), self.batch), F32)
         if acts is None or body.n_actuators == 0:
+            out[...] = 0.0
             return out
-        u = np.asarray(acts, dtype=F32)
-        want = {1: (body.n_actuators,), 2: (self.batch, body.n_actuators),
-                3: (self.batch, steps, body.n_actuators)}.get(u.ndim)  # fmt: skip
-        if u.ndim == 3 and u.shape[1] != steps:
+        u = np.asarray(acts)
+        na = body.n_actuators
+        if u.ndim == 3 and u.shape[0] == self.batch and u.shape[2] == na and u.shape[1] != steps:
             raise SimulationError(
                 f"the {body.name}'s activations hold {u.shape[1]} rows; this step takes "
                 f"{steps} steps"
             )
-        if want is None or u.shape != want:
+        if u.shape not in ((na,), (self.batch, na), (self.batch, steps, na)):
             raise SimulationError(
                 f"activations for the {body.name} must be shaped (A,), (B, A) or (B, T, A) with "
-                f"B = {self.batch} lanes and A = {body.n_actuators} actuators, got {u.shape}"
+                f"B = {self.batch} lanes and A = {na} actuators, got {u.shape}"
             )
-        if not np.isfinite(u).all():
+        u3 = u if u.ndim == 3 else u[:, None, :] if u.ndim == 2 else u[None, None, :]
+        if not fill_table(u3, out):
             raise SimulationError(f"activations for the {body.name} contain non-finite values")
-        if u.ndim == 1:  # held for all lanes and steps
-            out[...] = u[None, :, None]
-        elif u.ndim == 2:  # per lane, held over the slice
-            out[...] = u.T[None]
-        else:  # one row a step
-            out[...] = u.transpose(1, 2, 0)
-        np.clip(out, 0.0, 1.0, out=out)
         return out
 
     def _per_animal(self, activations) -> list:
         n = len(self.animals)
+        if n == 1 and isinstance(activations, np.ndarray):
+            return [activations]
         if activations is None:
             return [None] * n
         if isinstance(activations, dict):
@@ -436,20 +478,17 @@ class World:
         return [activations]
 
     def _animals_run(self, tables, t0: int, t1: int) -> None:
-        dt32 = F32(self.dt)
+        fs = self._fs
         for a in range(len(self.animals)):
-            o0, o1 = self._off[a], self._off[a + 1]
-            p, v = self._pos[o0:o1], self._vel[o0:o1]
+            p, v = self._views[a]
             failed = self._failed[a]
-            fs = self._fs
-            fs[:] = np.where(failed >= 0, 0, -1)
+            mark_failed(failed, fs)
             self._kernel(
-                p, v, tables[a][t0:t1], dt32, t1 - t0, self._chunk, F32(VMAX), *self._karr[a],
-                self._med32, self._rec[a], p, v, fs,
+                p, v, tables[a][t0:t1] if t0 or t1 < len(tables[a]) else tables[a], self._dt32,
+                t1 - t0, self._chunk, self._vmax32, *self._karr[a], self._med32, self._rec[a],
+                p, v, fs,
             )  # fmt: skip
-            new = (fs >= 0) & (failed < 0)
-            if new.any():
-                failed[new] = self._n + t0 + fs[new]
+            merge_failed(failed, fs, self._n + t0)
 
     def step(self, seconds: float, activations=None) -> Contacts:
         """Advance the world by ``seconds`` (rounded to whole time steps) and return the
@@ -463,6 +502,10 @@ class World:
         if steps < 0:
             raise SimulationError(f"cannot step back in time ({seconds} s)")
         tables = [self._table(a, u, steps) for a, u in enumerate(self._per_animal(activations))]
+        if not self.objects:  # the lone-animal fast path: nothing to touch, nothing to eat
+            self._animals_run(tables, 0, steps)
+            self._n += steps
+            return self._no_contacts
         heads = self._heads() if len(self.foods) else []
         n_obj = len(self.objects)
         impulse = [np.zeros((b.n_nodes, n_obj, 3, self.batch)) for b in self.bodies]
@@ -479,7 +522,8 @@ class World:
                     self._balls(t1 - t)
             t = t1
         self._n += steps
-        self._food_update(steps, heads)
+        if self.foods:
+            self._food_update(steps, heads)
         return Contacts(
             tuple(i.transpose(3, 0, 1, 2) for i in impulse),
             tuple(o.name for o in self.objects),
@@ -520,8 +564,6 @@ class World:
     def _food_update(self, steps: int, heads_before: list[np.ndarray]) -> None:
         """Drift the food with the current; a food particle is eaten when a head's path
         during the slice (relative to the particle) came within its radius."""
-        if not len(self.foods):
-            return
         f0 = self._food.copy()
         self._food += self.current * steps * self.dt
         radius = np.array([f.radius for f in self.foods])
