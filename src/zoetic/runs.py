@@ -11,7 +11,7 @@ from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller, controller_from_spec
 from zoetic.errors import SimulationError
 from zoetic.io import atomic_write_bytes
-from zoetic.physics import Medium, Trajectory, get_medium, simulate
+from zoetic.physics import Medium, Trajectory, get_medium
 
 
 def record_stride(dt: float, rate_hz: float = 100.0) -> int:
@@ -29,9 +29,18 @@ def save_trajectory(path: Path, traj: Trajectory, index: int = 0) -> Path:
 def run_controller(
     body: Body, ctrl: Controller, seconds: float, medium: Medium, dt: float
 ) -> Trajectory:
-    """Return the trajectory of one body driven by one controller for ``seconds``."""
-    steps = int(round(seconds / dt))
-    traj = simulate(body, ctrl.table(steps, dt), medium, dt, record_every=record_stride(dt))
+    """Return the trajectory of one body driven by one controller for ``seconds``.
+
+    It runs as a closed-loop rollout of a one-animal World under the controller as an
+    open-loop policy: the same kernel and numbers as ``physics.simulate``.
+    """
+    from zoetic.control.policy import OpenLoopPolicy
+    from zoetic.control.rollout import rollout
+    from zoetic.physics.world import World
+
+    world = World([body], medium=medium, dt=dt)
+    stride = record_stride(dt)
+    traj = rollout(world, OpenLoopPolicy(ctrl), seconds, seconds, stride).trajectory(0)
     if traj.failed[0]:
         raise SimulationError(
             f"the simulation of the {body.name} blew up at t = {traj.failed_step[0] * dt:.3f} s "
