@@ -80,17 +80,18 @@ def rollout(
 
     policies: one per animal (a list, a dict by animal name, or one for a lone animal): a
     Policy, a Controller or an activation table. Each is reset with ``seed`` and then asked
-    every ``control_period`` s. record_every: steps between records (default one control
-    period); a record is taken at t = now and at each multiple of it.
+    every ``control_period`` s. record_every: steps between records (default: at the end of
+    each control period); a record is taken at t = now and at each multiple of it.
     target: a point or an object of the world, for the target sensors.
     """
     pols = _policies(world, policies)
     for p in pols:
         p.reset(seed)
     dt = world.dt
-    ctrl_steps = max(1, int(round(control_period / dt)))
-    rec_every = int(record_every or ctrl_steps)
-    if rec_every < 1:
+    if not control_period > 0:
+        raise ControllerError(f"control_period must be positive, got {control_period}")
+    rec_every = int(record_every) if record_every is not None else 0  # 0: at each period end
+    if record_every is not None and rec_every < 1:
         raise ControllerError("record_every must be at least 1")
     start = world.step_count
     end = start + world.steps_for(seconds)
@@ -101,8 +102,12 @@ def rollout(
     touched = np.zeros(world.batch, dtype=np.int64)
     contacts = None
     k = start
+    i = 0
     while k < end:
-        steps = min(ctrl_steps, end - k)
+        # periods end on the dt grid nearest to multiples of control_period (1/30 s with dt
+        # 5 ms alternates 7 and 6 steps), so that policies are asked at the asked-for rate
+        i += 1
+        steps = min(max(1, start + int(round(i * control_period / dt)) - k), end - k)
         period = Period(k, steps, dt)
         rows = []
         for a, p in enumerate(pols):
@@ -111,12 +116,12 @@ def rollout(
         j = 0
         while j < steps:
             here = k + j - start
-            m = min(steps - j, rec_every - here % rec_every)
+            m = steps - j if not rec_every else min(steps - j, rec_every - here % rec_every)
             contacts = world.step(m * dt, [r[:, j : j + m] for r in rows])
             if world.objects:
                 touched += contacts.count
             j += m
-            if (k + j - start) % rec_every == 0:
+            if (j == steps if not rec_every else (k + j - start) % rec_every == 0):
                 times.append(world.time)
                 for a in range(len(world.animals)):
                     pos[a].append(world.positions(a))
