@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import zoetic
 
@@ -22,6 +23,7 @@ def _section_code(title: str) -> list[str]:
     return re.findall(r"```python\n(.*?)```", section, flags=re.S)
 
 
+@pytest.mark.filterwarnings("ignore:.*Box observation space:UserWarning")
 def test_the_readme_python_api_examples_run(tmp_path, monkeypatch, capsys):
     blocks = _section_code("Python API")
     assert len(blocks) >= 3
@@ -37,7 +39,8 @@ def test_the_readme_python_api_examples_run(tmp_path, monkeypatch, capsys):
     assert scope["touches"] > 0 and scope["scene"].ball_velocities[0, 0, 0] == 0.0
     assert scope["scene"].time == 0.0  # restored to "now"
     assert scope["run"].final.time == 2.0
-    assert "(1, 61, 23, 3)" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "(1, 61, 23, 3)" in out and "(64, 18) (240, 320, 3)" in out
 
 
 def test_import_zoetic_is_light_and_names_load_lazily():

@@ -31,7 +31,9 @@ from zoetic.physics.objects import Ball, Box, Cylinder, Food, pack_balls, pack_s
 from zoetic.physics.simulate import VMAX, _kernel_arrays, chunk_size
 
 F32 = np.float32
-PARALLEL_FROM = 32  # lanes: below this one thread steps them (no thread-pool launch per slice)
+# lane-steps per kernel call from which the thread pool is worth its launch (and its barrier,
+# which is slow on a busy host): 64 gym lanes x 10 steps run faster on one thread
+PARALLEL_FROM = 8192
 MAX_SLICE = 20  # steps between reach checks while objects are about
 
 
@@ -314,7 +316,8 @@ class World:
         self._no_contacts = Contacts(
             tuple(np.zeros((self.batch, b.n_nodes, 0, 3)) for b in self.bodies), ()
         )
-        self._kernel = serial_kernel() if self.batch < PARALLEL_FROM else _parallel_kernel()
+        self._serial = serial_kernel()
+        self._parallel = _parallel_kernel() if self.batch > 8 else self._serial
         self._chunk = chunk_size(self.batch)
         self.restore(self.initial_state())
 
@@ -479,11 +482,12 @@ class World:
 
     def _animals_run(self, tables, t0: int, t1: int) -> None:
         fs = self._fs
+        kernel = self._parallel if self.batch * (t1 - t0) >= PARALLEL_FROM else self._serial
         for a in range(len(self.animals)):
             p, v = self._views[a]
             failed = self._failed[a]
             mark_failed(failed, fs)
-            self._kernel(
+            kernel(
                 p, v, tables[a][t0:t1] if t0 or t1 < len(tables[a]) else tables[a], self._dt32,
                 t1 - t0, self._chunk, self._vmax32, *self._karr[a], self._med32, self._rec[a],
                 p, v, fs,
