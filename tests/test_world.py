@@ -7,6 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+import zoetic.physics.world as world_module
 from zoetic.bodies import load_animal
 from zoetic.control import wave_controller
 from zoetic.errors import SimulationError
@@ -154,3 +155,27 @@ def test_lanes_restore_on_their_own_and_bad_input_is_refused():
         World([body, body]).step(0.1, np.zeros(body.n_actuators))
     with pytest.raises(SimulationError, match="animals"):
         world.restore(replace(world.state, positions=()))
+
+
+def test_two_kinds_of_animal_step_together_each_as_on_its_own():
+    shark, ray = load_animal("shark"), load_animal("ray")
+    steps = 240
+    acts = {"shark": wave_controller(shark).table(steps, shark.dt),
+            "ray": wave_controller(ray).table(steps, ray.dt)}  # fmt: skip
+    world = World([Animal(ray, offset=(0.0, 0.0, 3.0)), shark], medium="water")
+    world.step(steps * world.dt, {k: v[None] for k, v in acts.items()})
+    alone = simulate(shark, acts["shark"], medium="water")
+    np.testing.assert_allclose(world.positions(1), alone.final.positions, atol=1e-5)
+    ray_alone = simulate(ray, acts["ray"], medium="water")
+    np.testing.assert_allclose(world.positions(0), ray_alone.final.positions + [0, 0, 3], atol=1e-5)
+
+
+def test_a_big_batch_in_one_long_slice_takes_the_threaded_kernel_and_agrees():
+    body = load_animal("snake")
+    batch, steps = 16, 600  # 16 x 600 lane-steps: past the threaded kernel's threshold
+    rng = np.random.default_rng(1)
+    table = np.repeat(rng.random((batch, steps // 50, body.n_actuators)), 50, axis=1)
+    world = World([body], batch=batch)
+    assert batch * steps >= world_module.PARALLEL_FROM
+    world.step(steps * body.dt, table)
+    np.testing.assert_allclose(world.positions(0), simulate(body, table).final.positions, atol=1e-5)
