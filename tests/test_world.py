@@ -11,7 +11,7 @@ import zoetic.physics.world as world_module
 from zoetic.bodies import load_animal
 from zoetic.control import wave_controller
 from zoetic.errors import SimulationError
-from zoetic.physics import simulate
+from zoetic.physics import State, simulate
 from zoetic.physics.objects import Ball, Box, Cylinder, Food
 from zoetic.physics.world import Animal, World, WorldState
 
@@ -179,3 +179,21 @@ def test_a_big_batch_in_one_long_slice_takes_the_threaded_kernel_and_agrees():
     assert batch * steps >= world_module.PARALLEL_FROM
     world.step(steps * body.dt, table)
     np.testing.assert_allclose(world.positions(0), simulate(body, table).final.positions, atol=1e-5)
+
+
+def test_a_blow_up_is_reported_with_its_step_and_spares_the_other_lanes():
+    body = load_animal("shark")
+    steps = 60
+    table = np.stack([wave_controller(body).table(steps, body.dt)] * 2)
+    world = World([body], batch=2)
+    start = world.state
+    vel = start.velocities[0].copy()
+    vel[0, body.head] = (1e6, 0.0, 0.0)  # far faster than any node may go: lane 0 fails
+    world.restore(replace(start, velocities=(vel,)))
+    _slices(world, table, period=0.1)
+    failed = world.state.failed_step[0]
+    alone = simulate(body, table, state=State(start.positions[0], vel))
+    assert failed[0] > 0 and failed[1] == -1
+    # the kernel checks every 8 steps and at each call's end, so slices can find it sooner
+    assert failed[0] <= alone.failed_step[0] and alone.failed_step[1] == -1
+    assert np.isnan(world.positions(0)[0]).all() and np.isfinite(world.positions(0)[1]).all()

@@ -31,7 +31,7 @@ def _best_time(fn, repeats: int) -> float:
     return best
 
 
-def closed_loop_overhead(body, table: np.ndarray, period: float = 1 / 30, repeats: int = 5):
+def closed_loop_overhead(body, table: np.ndarray, period: float = 1 / 30, repeats: int = 9):
     """Return wall time of one animal stepped through a World in ``period`` slices over wall
     time of the same table through open-loop ``simulate`` (best of ``repeats``, interleaved)."""
     from zoetic.physics.world import World

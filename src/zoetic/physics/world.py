@@ -216,13 +216,6 @@ def fill_table(u, out) -> bool:
 
 
 @njit(cache=True)
-def mark_failed(failed, fs) -> None:
-    """Set the kernel's per-call failure marks: 0 (dead) where a lane failed before."""
-    for b in range(failed.shape[0]):
-        fs[b] = 0 if failed[b] >= 0 else -1
-
-
-@njit(cache=True)
 def merge_failed(failed, fs, base) -> None:
     """Record lanes the kernel found blowing up during a call that began at step ``base``."""
     for b in range(failed.shape[0]):
@@ -300,7 +293,8 @@ class World:
         self._mass = [b.mass.astype(np.float64) for b in self.bodies]
         self._karr = [_kernel_arrays(b) for b in self.bodies]
         self._rec = [np.empty((2, b.n_nodes, 3, self.batch), dtype=F32) for b in self.bodies]
-        self._fs = np.empty(self.batch, dtype=np.int64)
+        # the kernel's own failure marks, one array per animal: >= 0 marks a dead lane
+        self._fs = [-np.ones(self.batch, dtype=np.int64) for _ in self.bodies]
         self._failed = [-np.ones(self.batch, dtype=np.int64) for _ in self.bodies]
         self._bpos = np.zeros((len(self.balls), 3, self.batch))
         self._bvel = np.zeros_like(self._bpos)
@@ -382,6 +376,7 @@ class World:
             self._pos[o0:o1, :, sel] = np.asarray(p).transpose(1, 2, 0)
             self._vel[o0:o1, :, sel] = np.asarray(state.velocities[a]).transpose(1, 2, 0)
             self._failed[a][sel] = state.failed_step[a]
+            self._fs[a][sel] = np.where(np.asarray(state.failed_step[a]) >= 0, 0, -1)
         self._bpos[:, :, sel] = np.asarray(state.ball_positions).transpose(1, 2, 0)
         self._bvel[:, :, sel] = np.asarray(state.ball_velocities).transpose(1, 2, 0)
         self._food[sel] = state.food_positions
@@ -481,12 +476,11 @@ class World:
         return [activations]
 
     def _animals_run(self, tables, t0: int, t1: int) -> None:
-        fs = self._fs
         kernel = self._parallel if self.batch * (t1 - t0) >= PARALLEL_FROM else self._serial
         for a in range(len(self.animals)):
             p, v = self._views[a]
             failed = self._failed[a]
-            mark_failed(failed, fs)
+            fs = self._fs[a]
             kernel(
                 p, v, tables[a][t0:t1] if t0 or t1 < len(tables[a]) else tables[a], self._dt32,
                 t1 - t0, self._chunk, self._vmax32, *self._karr[a], self._med32, self._rec[a],
