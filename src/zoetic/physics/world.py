@@ -302,9 +302,10 @@ class World:
         self._food = np.zeros((self.batch, len(self.foods), 3))
         self._eaten = np.zeros((self.batch, len(self.foods)), dtype=bool)
         self._n = 0
-        self._tables: dict[tuple[int, int], np.ndarray] = {}
+        self._tables: dict[tuple[int, int], tuple[np.ndarray, tuple]] = {}
         self._views = [(self._pos[o0:o1], self._vel[o0:o1])
                        for o0, o1 in zip(self._off[:-1], self._off[1:], strict=True)]  # fmt: skip
+        self._lone = len(self.animals) == 1
         self._dt32 = F32(self.dt)
         self._vmax32 = F32(VMAX)
         self._no_contacts = Contacts(
@@ -430,16 +431,25 @@ class World:
 
     def _table(self, a: int, acts, steps: int) -> np.ndarray:
         """Return the (T, A, B) float32 table the kernel reads (a reused buffer)."""
+        cached = self._tables.get((a, steps))
+        if cached is not None and type(acts) is np.ndarray and acts.shape == cached[1]:
+            # the common case, checked once: (B, T, A) rows for this slice length
+            if not fill_table(acts, cached[0]):
+                raise SimulationError(
+                    f"activations for the {self.bodies[a].name} contain non-finite values"
+                )
+            return cached[0]
         body = self.bodies[a]
-        key = (a, steps)
-        out = self._tables.get(key)
-        if out is None:
-            out = self._tables[key] = np.zeros((steps, max(1, body.n_actuators), self.batch), F32)
-        if acts is None or body.n_actuators == 0:
+        na = body.n_actuators
+        if cached is None:
+            out = np.zeros((steps, max(1, na), self.batch), F32)
+            self._tables[(a, steps)] = (out, (self.batch, steps, na))
+        else:
+            out = cached[0]
+        if acts is None or na == 0:
             out[...] = 0.0
             return out
         u = np.asarray(acts)
-        na = body.n_actuators
         if u.ndim == 3 and u.shape[0] == self.batch and u.shape[2] == na and u.shape[1] != steps:
             raise SimulationError(
                 f"the {body.name}'s activations hold {u.shape[1]} rows; this step takes "
@@ -477,15 +487,12 @@ class World:
 
     def _animals_run(self, tables, t0: int, t1: int) -> None:
         kernel = self._parallel if self.batch * (t1 - t0) >= PARALLEL_FROM else self._serial
-        for a in range(len(self.animals)):
-            p, v = self._views[a]
-            failed = self._failed[a]
-            fs = self._fs[a]
-            kernel(
-                p, v, tables[a][t0:t1] if t0 or t1 < len(tables[a]) else tables[a], self._dt32,
-                t1 - t0, self._chunk, self._vmax32, *self._karr[a], self._med32, self._rec[a],
-                p, v, fs,
-            )  # fmt: skip
+        dt32, chunk, vmax32, med32 = self._dt32, self._chunk, self._vmax32, self._med32
+        for (p, v), karr, rec, fs, failed, table in zip(
+            self._views, self._karr, self._rec, self._fs, self._failed, tables, strict=False
+        ):
+            rows = table[t0:t1] if t0 or t1 < len(table) else table
+            kernel(p, v, rows, dt32, t1 - t0, chunk, vmax32, *karr, med32, rec, p, v, fs)
             merge_failed(failed, fs, self._n + t0)
 
     def step(self, seconds: float, activations=None) -> Contacts:
@@ -496,10 +503,14 @@ class World:
         animal) an array (A,) or (B, A) held over the slice, or (B, T, A) one row a step with
         T = ``steps_for(seconds)``; None holds every actuator at 0.
         """
-        steps = self.steps_for(seconds)
+        steps = int(round((self._n * self.dt + seconds) / self.dt)) - self._n  # steps_for
         if steps < 0:
             raise SimulationError(f"cannot step back in time ({seconds} s)")
-        tables = [self._table(a, u, steps) for a, u in enumerate(self._per_animal(activations))]
+        if self._lone and type(activations) is np.ndarray:
+            tables = [self._table(0, activations, steps)]
+        else:
+            acts = self._per_animal(activations)
+            tables = [self._table(a, u, steps) for a, u in enumerate(acts)]
         if not self.objects:  # the lone-animal fast path: nothing to touch, nothing to eat
             self._animals_run(tables, 0, steps)
             self._n += steps
