@@ -85,6 +85,10 @@ def test_sensors_read_heading_pitch_roll_depth_and_bearing():
     rx = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
     turned = body.rest_pos @ rx.T
     np.testing.assert_allclose(orientation(body, turned[None])[0], rx, atol=1e-9)
+    q = np.linalg.qr(np.random.default_rng(2).normal(size=(20, 3, 3)))[0]
+    q *= np.sign(np.linalg.det(q))[:, None, None]  # proper rotations only
+    moved = np.einsum("bij,nj->bni", q, body.rest_pos) + [1.0, -2.0, 0.5]
+    np.testing.assert_allclose(orientation(body, moved), q, atol=1e-9)
     with pytest.raises(ControllerError, match="unknown sensor"):
         observe(world, sensors=("smell",))
     with pytest.raises(ControllerError, match="no target"):

@@ -4,7 +4,9 @@ Each sensor returns an array with the batch axis first. ``observe(world, animal,
 collects the named ones into an observation dict; policies declare the sensors they read, so
 an open-loop policy costs no sensing at all. Angles follow the objective's conventions: y is
 up, heading = atan2(f_z, f_x) of the forward axis f (left turns positive), pitch > 0 nose up,
-roll > 0 when the back tilts toward the animal's right (+z when heading along +x).
+roll > 0 when the back tilts toward the animal's right (+z when heading along +x). The forward
+and up axes are the rest pose's carried by the best linear fit of the current pose (exactly
+the rotation for a rigid motion; ``orientation`` gives the best rotation, at an SVD a lane).
 """
 
 from __future__ import annotations
@@ -29,10 +31,23 @@ def orientation(body: Body, positions: np.ndarray) -> np.ndarray:
     x = positions - np.einsum("n,bnk->bk", w, positions)[:, None, :]
     h = np.einsum("n,ni,bnj->bij", w, r0, x)
     u, _, vt = np.linalg.svd(h)
-    d = np.sign(np.linalg.det(np.einsum("bji,bkj->bik", vt, u)))
-    fix = np.ones((len(d), 3))
-    fix[:, 2] = d
-    return np.einsum("bji,bj,bkj->bik", vt, fix, u)
+    r = np.einsum("bji,bkj->bik", vt, u)  # V U^T, a rotation unless it reflects
+    det = np.einsum("bi,bi->b", r[:, :, 0], np.cross(r[:, :, 1], r[:, :, 2]))
+    bad = det < 0
+    if bad.any():  # flip the least significant axis: V diag(1, 1, -1) U^T
+        r[bad] -= 2 * np.einsum("bi,bk->bik", vt[bad, 2], u[bad, :, 2])
+    return r
+
+
+def linear_fit(body: Body, positions: np.ndarray) -> np.ndarray:
+    """Return the linear maps L (B, 3, 3) that best carry the centred rest pose onto the
+    centred ``positions`` in the mass-weighted least-squares sense (the rotation itself for
+    a rigid motion; cheaper than ``orientation``, which needs an SVD per lane)."""
+    w = body.mass / body.total_mass
+    r0 = body.rest_pos - w @ body.rest_pos
+    m_inv = np.linalg.pinv(np.einsum("n,ni,nj->ij", w, r0, r0))
+    x = positions - np.einsum("n,bnk->bk", w, positions)[:, None, :]
+    return np.einsum("n,bni,nj,jk->bik", w, x, r0, m_inv, optimize=True)
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -65,14 +80,20 @@ class Senses:
         return orientation(self.body, self.positions)
 
     @cached_property
+    def frame(self) -> np.ndarray:
+        return linear_fit(self.body, self.positions)
+
+    @cached_property
     def forward(self) -> np.ndarray:
-        return _unit(self.rotation @ self.body.forward)
+        """(B, 3) the body's forward axis: the rest heading carried by the best linear fit."""
+        return _unit(self.frame @ self.body.forward)
 
     @cached_property
     def up(self) -> np.ndarray:
+        """(B, 3) the body's up axis, made perpendicular to ``forward``."""
         f0 = self.body.forward
-        up0 = _unit(np.array([0.0, 1.0, 0.0]) - f0[1] * f0)
-        return _unit(self.rotation @ up0)
+        u = self.frame @ _unit(np.array([0.0, 1.0, 0.0]) - f0[1] * f0)
+        return _unit(u - (u * self.forward).sum(-1, keepdims=True) * self.forward)
 
     def need_target(self) -> np.ndarray:
         if self.target is None:
