@@ -10,5 +10,5 @@ PY=".venv/bin/python"
 "$Z" bench simulate --json | tail -n 1
 "$Z" bench learn --json | tail -n 1
 "$Z" bench san --json | tail -n 1
-"$Z" bench gym --json | tail -n 1
 "$PY" bench/jax_sim.py
+"$Z" bench gym --json | tail -n 1

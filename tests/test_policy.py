@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from zoetic.bodies import load_animal
-from zoetic.control import OpenLoopPolicy, Period, Policy, TablePolicy, as_policy, wave_controller
+from zoetic.control import wave_controller
+from zoetic.control.policy import OpenLoopPolicy, Period, Policy, TablePolicy, as_policy
 from zoetic.control.rollout import rollout
 from zoetic.control.sensors import observe, orientation
 from zoetic.errors import ControllerError

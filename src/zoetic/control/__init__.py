@@ -17,7 +17,6 @@ from zoetic.control.controllers import (
     WaveController,
     fourier_basis,
 )
-from zoetic.control.policy import OpenLoopPolicy, Period, Policy, TablePolicy, as_policy
 from zoetic.errors import ControllerError, ZoeticError
 
 __all__ = [
@@ -25,13 +24,8 @@ __all__ = [
     "Controller",
     "FrequencyDomainController",
     "MirroredController",
-    "OpenLoopPolicy",
-    "Period",
-    "Policy",
-    "TablePolicy",
     "TimeDomainController",
     "WaveController",
-    "as_policy",
     "check_fits",
     "controller_from_spec",
     "frequency_domain",
