@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import sys
 import types
+from dataclasses import dataclass
 from importlib import import_module
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 __version__ = "0.1.0"
@@ -24,8 +26,6 @@ _EXPORTS: dict[str, str] = {
     "Body": "zoetic.bodies",
     "load_task": "zoetic.tasks",
     "list_tasks": "zoetic.tasks",
-    "simulate": "zoetic.api",
-    "LearnResult": "zoetic.api",
     "World": "zoetic.physics.world",
     "WorldState": "zoetic.physics.world",
     "Animal": "zoetic.physics.world",
@@ -72,9 +72,10 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:  # for type checkers and IDEs; at run time the names load lazily
-    from zoetic.api import LearnResult, simulate
+    import numpy as np
+
     from zoetic.bodies import Body, list_animals, load_animal
-    from zoetic.control import load_controller, wave_controller
+    from zoetic.control import Controller, load_controller, wave_controller
     from zoetic.control.policy import OpenLoopPolicy, Policy
     from zoetic.control.rollout import rollout
     from zoetic.control.sensors import observe
@@ -99,12 +100,99 @@ def __dir__() -> list[str]:
     return sorted([*globals(), *_EXPORTS])
 
 
+# ---- the API's own calls (imports inside, so that ``import zoetic`` stays light) ----------
+
+
+def _body(animal: Body | str | Path) -> Body:
+    from zoetic.bodies import Body, load_animal
+
+    return animal if isinstance(animal, Body) else load_animal(animal)
+
+
+def simulate(
+    animal: Body | str | Path,
+    controller: Controller | str | np.ndarray = "wave",
+    seconds: float = 4.0,
+    medium: str | None = None,
+    dt: float | None = None,
+) -> Trajectory:
+    """Return the Trajectory of an animal under a controller (object, 'wave', 'rest', a
+    controller file, or a policy) for ``seconds``, recorded at about 100 Hz."""
+    from zoetic.control import controller_from_spec
+    from zoetic.control.rollout import rollout
+    from zoetic.physics.world import World
+    from zoetic.runs import record_stride
+
+    body = _body(animal)
+    if isinstance(controller, str | Path):
+        controller = controller_from_spec(str(controller), body)
+    world = World([body], medium=medium, dt=dt)
+    stride = record_stride(world.dt)
+    return rollout(world, controller, seconds, 1 / 30, record_every=stride).trajectory(0)
+
+
+@dataclass(frozen=True)
+class LearnResult:
+    """A finished learning run: the best controller, its energy E, and E of every evaluation
+    in order (``history``, (n,)); ``run_dir`` when one was written."""
+
+    controller: Controller
+    best_E: float
+    history: np.ndarray
+    run_dir: Path | None = None
+
+
+def _learn(
+    animal: Body | str | Path,
+    task: str | Path = "swim-straight",
+    optimizer: str = "cmaes",
+    budget: int = 2000,
+    seed: int = 0,
+    controller: str = "time",
+    out: str | Path | None = None,
+    **options,
+) -> LearnResult:
+    """Learn a controller for an animal and a task and return a LearnResult; ``out`` keeps
+    the run directory (resumable with ``zoetic learn --resume``), else it is temporary.
+
+    options: further LearnConfig fields (nodes, popsize, chains, evaluator, coupling, medium).
+    """
+    import tempfile
+
+    import numpy as np
+
+    from zoetic.bodies import Body
+    from zoetic.learn.run import LearnConfig, Run
+
+    name = animal.source if isinstance(animal, Body) and Path(animal.source).exists() else animal
+    if isinstance(name, Body):
+        name = name.name
+    config = LearnConfig(
+        animal=str(name), task=str(task), optimizer=optimizer, budget=budget, seed=seed,
+        controller=controller, **options,
+    )  # fmt: skip
+
+    def run_in(directory: Path) -> LearnResult:
+        run = Run.create(directory, config).learn()
+        return LearnResult(
+            controller=run.best_controller(),
+            best_E=float(run.setup.optimizer.best_f),
+            history=np.array(run.log.E, dtype=float),
+            run_dir=Path(out) if out is not None else None,
+        )
+
+    if out is not None:
+        return run_in(Path(out))
+    with tempfile.TemporaryDirectory(prefix="zoetic-learn-") as tmp:
+        return run_in(Path(tmp))
+
+
 class _Learn:
-    """``zoetic.learn(...)`` learns (see ``zoetic.api.learn``); ``zoetic.learn.<module>``
+    """``zoetic.learn(...)`` learns (see ``_learn``); ``zoetic.learn.<module>``
     still reaches the ``zoetic.learn`` package, whose name this callable shares."""
 
     def __call__(self, *args: Any, **kwargs: Any) -> Any:
-        return import_module("zoetic.api").learn(*args, **kwargs)
+        return _learn(*args, **kwargs)
 
     def __getattr__(self, name: str) -> Any:
         return getattr(import_module("zoetic.learn"), name)
@@ -113,11 +201,11 @@ class _Learn:
     def __signature__(self):  # so that help() and IDEs show api.learn's typed signature
         import inspect
 
-        return inspect.signature(import_module("zoetic.api").learn)
+        return inspect.signature(_learn)
 
     @property
     def __doc__(self) -> str | None:  # type: ignore[override]
-        return import_module("zoetic.api").learn.__doc__
+        return _learn.__doc__
 
 
 learn = _Learn()
