@@ -197,3 +197,18 @@ def test_a_blow_up_is_reported_with_its_step_and_spares_the_other_lanes():
     # the kernel checks every 8 steps and at each call's end, so slices can find it sooner
     assert failed[0] <= alone.failed_step[0] and alone.failed_step[1] == -1
     assert np.isnan(world.positions(0)[0]).all() and np.isfinite(world.positions(0)[1]).all()
+
+
+def test_a_dropped_ball_comes_to_rest_on_a_rock_and_rolls_off_nothing():
+    body = load_animal("snake")
+    rock = Box(center=(5.0, 0.25, 0.0), half_size=(0.5, 0.25, 0.5))
+    ball = Ball(radius=0.1, mass=0.5, position=(5.0, 1.5, 0.0))
+    world = World([body, rock, ball], medium="ground")
+    world.step(3.0)
+    centre = world.ball_positions[0, 0]
+    assert centre[1] == pytest.approx(0.5 + 0.1, abs=0.02)  # on top of the rock
+    assert abs(centre[0] - 5.0) < 0.01 and abs(world.ball_velocities[0, 0]).max() < 0.05
+    # on the floor beside it, it rests at its radius
+    world = World([body, Ball(radius=0.1, mass=0.5, position=(7.0, 1.0, 0.0))], medium="ground")
+    world.step(3.0)
+    assert world.ball_positions[0, 0, 1] == pytest.approx(0.1, abs=0.02)
