@@ -12,7 +12,7 @@ from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller, controller_from_spec
 from zoetic.errors import BlowUpError, SimulationError
 from zoetic.io import atomic_write_bytes, check_memory, check_steps, make_dir
-from zoetic.physics import Medium, Trajectory, get_medium, simulate
+from zoetic.physics import Medium, Trajectory, get_medium
 from zoetic.physics.simulate import check_dt, good_dt
 
 
@@ -37,11 +37,19 @@ def run_controller(
 ) -> Trajectory:
     """Return the trajectory of one body driven by one controller for ``seconds``.
 
-    A blow-up (which the step check should have prevented) is a BlowUpError (exit code 3)
-    naming the step, the animal and a time step that works.
+    It runs as a closed-loop rollout of a one-animal World under the controller as an
+    open-loop policy: the same kernel and numbers as ``physics.simulate``. A blow-up (which
+    the step check should have prevented) is a BlowUpError (exit code 3) naming the step, the
+    animal and a time step that works.
     """
+    from zoetic.control.policy import OpenLoopPolicy
+    from zoetic.control.rollout import rollout
+    from zoetic.physics.world import World
+
+    world = World([body], medium=medium, dt=dt)
+    stride = record_stride(dt)
+    traj = rollout(world, OpenLoopPolicy(ctrl), seconds, seconds, stride).trajectory(0)
     steps = int(round(seconds / dt))
-    traj = simulate(body, ctrl.table(steps, dt), medium, dt, record_every=record_stride(dt))
     if traj.failed[0] or not np.isfinite(traj.positions[0]).all():
         step = int(traj.failed_step[0]) if traj.failed[0] else steps
         raise BlowUpError(

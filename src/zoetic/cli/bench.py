@@ -18,3 +18,16 @@ def _emit(result: dict, as_json: bool) -> None:
     else:
         for key, value in result.items():
             print(f"{key:40s} {value}")
+
+
+@bench_app.command("gym")
+def bench_gym_cmd(
+    env_id: str = typer.Option("zoetic/SharkSwim-v0", "--env", help="A zoetic environment id."),
+    num_envs: int = typer.Option(64, min=1, help="Environments stepped together."),
+    steps: int = typer.Option(100, min=1, help="Vector steps timed."),
+    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Env steps per second: the native vector env against SyncVectorEnv, same actions."""
+    from zoetic.gym.bench import bench_gym
+
+    _emit(bench_gym(env_id, num_envs, steps), json)

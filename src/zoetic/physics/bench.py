@@ -31,6 +31,57 @@ def _best_time(fn, repeats: int) -> float:
     return best
 
 
+def closed_loop_overhead(
+    body, table: np.ndarray, period: float = 1 / 30, window: float = 1.0, repeats: int = 31
+) -> dict[str, float]:
+    """Return the cost of stepping one animal through a World in ``period`` slices against
+    the same rows open loop, each the best of interleaved runs.
+
+    ``closed_loop_overhead``: CPU time of this thread for ``window`` simulated seconds, slices
+    against one kernel call (the open-loop path through the same compiled kernel); both run
+    on this thread, and short windows that nothing disturbed decide.
+    ``closed_loop_overhead_wall``: wall time over the whole table, slices against
+    ``simulate`` (threaded kernel, as the learning path runs it).
+    """
+    from zoetic.physics.world import World
+
+    world = World([body])
+    start = world.state
+
+    def sliced(rows):
+        world.restore(start)
+        steps = rows.shape[1]
+        while world.step_count < steps:
+            n = min(world.steps_for(period), steps - world.step_count)
+            k = world.step_count
+            world.step(n * world.dt, rows[:, k : k + n])
+
+    def whole(rows):
+        world.restore(start)
+        world.step(rows.shape[1] * world.dt, rows)
+
+    def cpu(fn, rows) -> float:
+        t0 = time.thread_time()
+        fn(rows)
+        return time.thread_time() - t0
+
+    short = table[None, : max(1, int(round(window / body.dt)))]
+    full = table[None]
+    sliced(full), whole(full), simulate(body, full)
+    cpu_sliced = cpu_whole = wall_sliced = wall_sim = np.inf
+    for r in range(repeats):
+        cpu_sliced = min(cpu_sliced, cpu(sliced, short))
+        cpu_whole = min(cpu_whole, cpu(whole, short))
+        if r % 4 == 0:
+            wall_sliced = min(wall_sliced, _best_time(lambda: sliced(full), 1))
+            wall_sim = min(wall_sim, _best_time(
+                lambda: simulate(body, full, record_every=full.shape[1]), 1))  # fmt: skip
+    return {
+        "closed_loop_overhead": round(cpu_sliced / cpu_whole, 3),
+        "closed_loop_overhead_wall": round(wall_sliced / wall_sim, 3),
+    }
+
+
 def bench_simulate(
     animal: str = "shark", seconds: float = 10.0, batch: int = 512, repeats: int = 3
 ) -> dict:
@@ -68,4 +119,7 @@ def bench_simulate(
         out["sim_seconds_per_second_batched"] / out["numpy_reference_sim_seconds_per_second"], 1
     )
     out["realtime_factor_batched"] = out["sim_seconds_per_second_batched"]
+    # one animal in 1/30 s slices through a World (closed-loop stepping) over open-loop
+    out |= closed_loop_overhead(body, wave)
+    out["closed_loop_period_s"] = round(1 / 30, 4)
     return out

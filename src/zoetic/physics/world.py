@@ -1,0 +1,585 @@
+"""A world: animals of any kinds plus passive objects in one medium, stepped in lockstep.
+
+``World([shark, Ball(...), Box(...)], medium="sea", batch=B)`` holds B copies (candidates)
+of the scene. ``world.step(seconds, activations)`` advances them all with the batched animal
+kernel (the same compiled code as ``physics.simulate``, so a lone animal stepped in slices
+follows the open-loop trajectory) and moves the objects; animal-object contacts are penalty
+forces (see ``physics.contacts``) and each step() returns their record. ``world.state`` is a
+frozen value that can be copied, saved and restored, so a planner can look ahead from "now".
+
+Contacts are resolved every time step, but only while some node is within reach of an object;
+far from everything the animals run whole slices through the kernel at full speed.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import types
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numba import njit
+
+from zoetic.bodies import Body
+from zoetic.errors import SimulationError
+from zoetic.physics.contacts import balls_step, near, node_contacts
+from zoetic.physics.media import Medium, get_medium
+from zoetic.physics.objects import Ball, Box, Cylinder, Food, pack_balls, pack_statics
+from zoetic.physics.simulate import VMAX, _kernel_arrays, chunk_size
+
+F32 = np.float32
+# lane-steps per kernel call from which the thread pool is worth its launch (and its barrier,
+# which is slow on a busy host): 64 gym lanes x 10 steps run faster on one thread
+PARALLEL_FROM = 8192
+MAX_SLICE = 20  # steps between reach checks while objects are about
+
+
+@dataclass(frozen=True)
+class Animal:
+    """An animal placed in a world: its body, where (offset of the rest pose; default the
+    body's start offset), which way (yaw about the vertical, rad, left positive), how fast."""
+
+    body: Body
+    offset: tuple[float, float, float] | None = None
+    yaw: float = 0.0
+    velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    @property
+    def name(self) -> str:
+        return self.body.name
+
+
+def placed_pose(body: Body, offset=None, yaw: float = 0.0) -> np.ndarray:
+    """Return the rest pose (N, 3) turned by ``yaw`` about the vertical through its centre of
+    mass, then shifted by ``offset`` (default the body's start offset)."""
+    off = body.start_offset if offset is None else np.asarray(offset, float)
+    rest = body.rest_pos
+    com = (body.mass @ rest) / body.total_mass
+    c, s = np.cos(yaw), np.sin(yaw)
+    rel = rest - com
+    turned = np.stack([c * rel[:, 0] - s * rel[:, 2], rel[:, 1], s * rel[:, 0] + c * rel[:, 2]], 1)
+    return turned + com + off
+
+
+@dataclass(frozen=True)
+class WorldState:
+    """Everything that changes in a world, as arrays with a leading batch axis B.
+
+    positions/velocities: per animal (B, N, 3) m, m/s; failed_step: per animal (B,) step at
+    which it blew up (-1 if not); balls (B, K, 3); food (B, F, 3) and eaten (B, F).
+    """
+
+    step: int
+    dt: float
+    positions: tuple[np.ndarray, ...]
+    velocities: tuple[np.ndarray, ...]
+    failed_step: tuple[np.ndarray, ...]
+    ball_positions: np.ndarray
+    ball_velocities: np.ndarray
+    food_positions: np.ndarray
+    food_eaten: np.ndarray
+
+    @property
+    def time(self) -> float:
+        """Return the simulated time in s."""
+        return self.step * self.dt
+
+    @property
+    def batch(self) -> int:
+        return int(self.ball_positions.shape[0])
+
+    def take(self, index) -> WorldState:
+        """Return the lanes at ``index`` (an int keeps a batch axis of one)."""
+        idx = np.atleast_1d(np.asarray(index))
+        return WorldState(
+            self.step, self.dt, tuple(p[idx] for p in self.positions),
+            tuple(v[idx] for v in self.velocities), tuple(f[idx] for f in self.failed_step),
+            self.ball_positions[idx], self.ball_velocities[idx], self.food_positions[idx],
+            self.food_eaten[idx],
+        )  # fmt: skip
+
+    def to_bytes(self) -> bytes:
+        """Return the state as the bytes of an .npz file."""
+        arrays = {
+            "step": np.array(self.step), "dt": np.array(self.dt),
+            "ball_positions": self.ball_positions, "ball_velocities": self.ball_velocities,
+            "food_positions": self.food_positions, "food_eaten": self.food_eaten,
+        }  # fmt: skip
+        for a, (p, v, f) in enumerate(zip(self.positions, self.velocities, self.failed_step,
+                                          strict=True)):  # fmt: skip
+            arrays |= {f"positions_{a}": p, f"velocities_{a}": v, f"failed_step_{a}": f}
+        buf = io.BytesIO()
+        np.savez_compressed(buf, **arrays)
+        return buf.getvalue()
+
+    def save(self, path: str | Path) -> Path:
+        """Write the state to an .npz file (atomically); returns the path."""
+        from zoetic.io import atomic_write_bytes
+
+        return atomic_write_bytes(path, self.to_bytes())
+
+    @classmethod
+    def load(cls, path: str | Path) -> WorldState:
+        """Return the state saved in an .npz file by ``save``."""
+        try:
+            with np.load(path) as z:
+                n = sum(1 for k in z.files if k.startswith("positions_"))
+                return cls(
+                    int(z["step"]), float(z["dt"]),
+                    tuple(z[f"positions_{a}"] for a in range(n)),
+                    tuple(z[f"velocities_{a}"] for a in range(n)),
+                    tuple(z[f"failed_step_{a}"] for a in range(n)),
+                    z["ball_positions"], z["ball_velocities"], z["food_positions"],
+                    z["food_eaten"],
+                )  # fmt: skip
+        except (OSError, KeyError, ValueError) as exc:
+            raise SimulationError(f"{path}: not a saved world state ({exc})") from None
+
+
+@dataclass(frozen=True)
+class Contacts:
+    """What touched what during one ``World.step``: impulses in N s, batch axis first.
+
+    impulse: per animal (B, N, O, 3), the impulse each node got from each object
+    (objects indexed as in ``World.objects``; food and fixed shapes included, food never
+    pushes). An object received minus the sum over nodes.
+    """
+
+    impulse: tuple[np.ndarray, ...]
+    objects: tuple[str, ...] = field(default=())
+
+    @property
+    def touching(self) -> np.ndarray:
+        """Return (B, animals, O) bools: did any node of the animal touch the object."""
+        return np.stack([np.abs(i).sum(axis=(1, 3)) > 0 for i in self.impulse], axis=1)
+
+    @property
+    def count(self) -> np.ndarray:
+        """Return (B,) the number of (node, object) pairs that touched."""
+        return sum(
+            ((np.abs(i).sum(axis=3) > 0).sum(axis=(1, 2)) for i in self.impulse),
+            np.zeros(self.impulse[0].shape[0], dtype=np.int64) if self.impulse else 0,
+        )
+
+    def on_object(self, index: int) -> np.ndarray:
+        """Return (B, 3) the impulse the animals gave object ``index``."""
+        return -sum(i[:, :, index].sum(axis=1) for i in self.impulse)
+
+
+_SERIAL = None
+
+
+def serial_kernel():
+    """Return the animal kernel compiled for one thread: the same source as
+    ``kernel.simulate_chunks`` (its ``prange`` runs as ``range``), without the thread-pool
+    launch that would cost more than a short slice of one animal."""
+    global _SERIAL
+    if _SERIAL is None:
+        from numba import njit
+
+        from zoetic.physics import kernel
+
+        py = kernel.simulate_chunks.py_func
+        # a copy under its own name, so that its on-disk cache entry is apart from the
+        # parallel one's (numba keys the cache by the function's qualified name)
+        fn = types.FunctionType(py.__code__, py.__globals__, "simulate_chunks_serial",
+                                py.__defaults__, py.__closure__)  # fmt: skip
+        fn.__qualname__ = "simulate_chunks_serial"
+        _SERIAL = njit(cache=True, fastmath=kernel.FM)(fn)
+    return _SERIAL
+
+
+def _parallel_kernel():
+    from zoetic.physics.kernel import simulate_chunks
+
+    return simulate_chunks
+
+
+@njit(cache=True)
+def fill_table(u, out) -> bool:
+    """Copy activations u (B|1, T|1, A) into the kernel's table out (T, A, B), clipped to
+    [0, 1]; return False if any is not finite."""
+    steps, n_act, batch = out.shape
+    one_b = u.shape[0] == 1
+    one_t = u.shape[1] == 1
+    for t in range(steps):
+        for b in range(batch):
+            for k in range(n_act):
+                x = u[0 if one_b else b, 0 if one_t else t, k]
+                if not math.isfinite(x):
+                    return False
+                out[t, k, b] = min(max(x, 0.0), 1.0)
+    return True
+
+
+@njit(cache=True)
+def merge_failed(failed, fs, base) -> None:
+    """Record lanes the kernel found blowing up during a call that began at step ``base``."""
+    for b in range(failed.shape[0]):
+        if failed[b] < 0 and fs[b] >= 0:
+            failed[b] = base + fs[b]
+
+
+class World:
+    """Animals and passive objects in one medium, B copies stepped together.
+
+    members: Bodies (placed at their start offset), ``Animal`` placements, and ``Ball``,
+    ``Box``, ``Cylinder`` and ``Food`` objects, in any order. medium: a Medium or a name
+    (default the first animal's). dt: default the smallest of the animals' own. current:
+    water velocity (m/s) that carries food and drags balls.
+    """
+
+    def __init__(
+        self,
+        members: Sequence[Body | Animal | Ball | Box | Cylinder | Food],
+        medium: str | Medium | None = None,
+        batch: int = 1,
+        dt: float | None = None,
+        current: Sequence[float] = (0.0, 0.0, 0.0),
+        node_radius: float = 0.03,
+        contact_steps: int = 4,
+        damping_ratio: float = 0.3,
+        friction: float = 0.5,
+    ) -> None:
+        self.animals: list[Animal] = []
+        self.objects: list[Ball | Box | Cylinder | Food] = []
+        for m in members:
+            if isinstance(m, Body):
+                self.animals.append(Animal(m))
+            elif isinstance(m, Animal):
+                self.animals.append(m)
+            elif isinstance(m, Ball | Box | Cylinder | Food):
+                self.objects.append(m)
+            else:
+                raise SimulationError(f"a world holds animals and objects, not {type(m)!r}")
+        if not self.animals:
+            raise SimulationError("a world needs at least one animal")
+        if batch < 1:
+            raise SimulationError(f"batch must be at least 1, got {batch}")
+        self.bodies = [a.body for a in self.animals]
+        self.medium = get_medium(medium or self.bodies[0].medium)
+        self.dt = float(dt or min(b.dt for b in self.bodies))
+        if not self.dt > 0:
+            raise SimulationError(f"dt must be positive, got {self.dt}")
+        self.batch = int(batch)
+        self.current = np.asarray(current, float).reshape(3)
+        self.node_radius = float(node_radius)
+        self._w = np.pi / (contact_steps * self.dt)
+        self._zeta = float(damping_ratio)
+        self._mu = float(friction)
+        self._med32 = self.medium.as_array().astype(F32)
+        self._med64 = self.medium.as_array()
+        # objects by kind, each with its index in self.objects
+        idx = {k: [i for i, o in enumerate(self.objects) if isinstance(o, k)]
+               for k in (Ball, Box, Cylinder, Food)}  # fmt: skip
+        self._ball_obj = np.array(idx[Ball], dtype=np.int64)
+        self._static_obj = np.array(sorted(idx[Box] + idx[Cylinder]), dtype=np.int64)
+        self._food_obj = np.array(idx[Food], dtype=np.int64)
+        self.balls = [self.objects[i] for i in self._ball_obj]
+        self.statics = [self.objects[i] for i in self._static_obj]
+        self.foods = [self.objects[i] for i in self._food_obj]
+        self._bpar = pack_balls(self.balls)
+        self._skind, self._scenter, self._ssize = pack_statics(self.statics)
+        self._solids = len(self.balls) + len(self.statics) > 0
+        # animal state: one (N_total, 3, B) float32 array; each animal a contiguous slice
+        sizes = [b.n_nodes for b in self.bodies]
+        self._off = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
+        n_tot = int(self._off[-1])
+        self._pos = np.zeros((n_tot, 3, self.batch), dtype=F32)
+        self._vel = np.zeros_like(self._pos)
+        self._mass = [b.mass.astype(np.float64) for b in self.bodies]
+        self._karr = [_kernel_arrays(b) for b in self.bodies]
+        self._rec = [np.empty((2, b.n_nodes, 3, self.batch), dtype=F32) for b in self.bodies]
+        # the kernel's own failure marks, one array per animal: >= 0 marks a dead lane
+        self._fs = [-np.ones(self.batch, dtype=np.int64) for _ in self.bodies]
+        self._failed = [-np.ones(self.batch, dtype=np.int64) for _ in self.bodies]
+        self._bpos = np.zeros((len(self.balls), 3, self.batch))
+        self._bvel = np.zeros_like(self._bpos)
+        self._bforce = np.zeros_like(self._bpos)
+        self._food = np.zeros((self.batch, len(self.foods), 3))
+        self._eaten = np.zeros((self.batch, len(self.foods)), dtype=bool)
+        self._n = 0
+        self._tables: dict[tuple[int, int], tuple[np.ndarray, tuple]] = {}
+        self._views = [(self._pos[o0:o1], self._vel[o0:o1])
+                       for o0, o1 in zip(self._off[:-1], self._off[1:], strict=True)]  # fmt: skip
+        self._lone = len(self.animals) == 1
+        self._dt32 = F32(self.dt)
+        self._vmax32 = F32(VMAX)
+        self._no_contacts = Contacts(
+            tuple(np.zeros((self.batch, b.n_nodes, 0, 3)) for b in self.bodies), ()
+        )
+        self._serial = serial_kernel()
+        self._parallel = _parallel_kernel() if self.batch > 8 else self._serial
+        self._chunk = chunk_size(self.batch)
+        self.restore(self.initial_state())
+
+    # ---- state as a value -------------------------------------------------------------
+    def initial_state(self) -> WorldState:
+        """Return the state at t = 0: animals and objects where they were placed, B copies."""
+        B = self.batch
+        pos, vel = [], []
+        for a in self.animals:
+            p = placed_pose(a.body, a.offset, a.yaw)
+            pos.append(np.broadcast_to(p, (B, *p.shape)).copy())
+            vel.append(np.broadcast_to(np.asarray(a.velocity, float), (B, *p.shape)).copy())
+
+        def rows(values, n):
+            return np.broadcast_to(np.asarray(values, float).reshape(n, 3), (B, n, 3)).copy()
+
+        nb, nf = len(self.balls), len(self.foods)
+        return WorldState(
+            0, self.dt, tuple(pos), tuple(vel),
+            tuple(-np.ones(B, dtype=np.int64) for _ in self.animals),
+            rows([b.position for b in self.balls], nb), rows([b.velocity for b in self.balls], nb),
+            rows([f.position for f in self.foods], nf), np.zeros((B, nf), dtype=bool),
+        )  # fmt: skip
+
+    @property
+    def time(self) -> float:
+        """Return the simulated time in s."""
+        return self._n * self.dt
+
+    @property
+    def step_count(self) -> int:
+        """Return the number of time steps taken since t = 0."""
+        return self._n
+
+    @property
+    def state(self) -> WorldState:
+        """Return the current state as a value (copies: later steps do not change it)."""
+        pos = tuple(self.positions(a) for a in range(len(self.animals)))
+        vel = tuple(self.velocities(a) for a in range(len(self.animals)))
+        return WorldState(
+            self._n, self.dt, pos, vel, tuple(f.copy() for f in self._failed),
+            self._bpos.transpose(2, 0, 1).copy(), self._bvel.transpose(2, 0, 1).copy(),
+            self._food.copy(), self._eaten.copy(),
+        )  # fmt: skip
+
+    def restore(self, state: WorldState, lanes=None) -> None:
+        """Make ``state`` the current one; with ``lanes``, only those lanes take it (the
+        state then holds one lane per index, or one for all) and the clock stays."""
+        if len(state.positions) != len(self.animals):
+            raise SimulationError(
+                f"the state holds {len(state.positions)} animals; this world {len(self.animals)}"
+            )
+        sel = slice(None) if lanes is None else np.atleast_1d(np.asarray(lanes))
+        for a, body in enumerate(self.bodies):
+            p = np.asarray(state.positions[a])
+            if p.shape[1:] != (body.n_nodes, 3):
+                raise SimulationError(
+                    f"the state's animal {a} has {p.shape[1:]} positions; the {body.name} "
+                    f"has ({body.n_nodes}, 3)"
+                )
+            o0, o1 = self._off[a], self._off[a + 1]
+            self._pos[o0:o1, :, sel] = np.asarray(p).transpose(1, 2, 0)
+            self._vel[o0:o1, :, sel] = np.asarray(state.velocities[a]).transpose(1, 2, 0)
+            self._failed[a][sel] = state.failed_step[a]
+            self._fs[a][sel] = np.where(np.asarray(state.failed_step[a]) >= 0, 0, -1)
+        self._bpos[:, :, sel] = np.asarray(state.ball_positions).transpose(1, 2, 0)
+        self._bvel[:, :, sel] = np.asarray(state.ball_velocities).transpose(1, 2, 0)
+        self._food[sel] = state.food_positions
+        self._eaten[sel] = state.food_eaten
+        if lanes is None:
+            if state.batch != self.batch:
+                raise SimulationError(
+                    f"the state holds {state.batch} lanes; this world {self.batch}"
+                )
+            self._n = int(state.step)
+
+    def positions(self, animal: int = 0) -> np.ndarray:
+        """Return the animal's node positions (B, N, 3) in m (a copy)."""
+        o0, o1 = self._off[animal], self._off[animal + 1]
+        return self._pos[o0:o1].transpose(2, 0, 1).astype(np.float64)
+
+    def velocities(self, animal: int = 0) -> np.ndarray:
+        """Return the animal's node velocities (B, N, 3) in m/s (a copy)."""
+        o0, o1 = self._off[animal], self._off[animal + 1]
+        return self._vel[o0:o1].transpose(2, 0, 1).astype(np.float64)
+
+    def failed(self, animal: int = 0) -> np.ndarray:
+        """Return (B,) bools: True where that animal blew up."""
+        return self._failed[animal] >= 0
+
+    @property
+    def ball_positions(self) -> np.ndarray:
+        """Return the balls' centres (B, K, 3) in m."""
+        return self._bpos.transpose(2, 0, 1).copy()
+
+    @property
+    def ball_velocities(self) -> np.ndarray:
+        """Return the balls' velocities (B, K, 3) in m/s."""
+        return self._bvel.transpose(2, 0, 1).copy()
+
+    @property
+    def food_positions(self) -> np.ndarray:
+        """Return the food particles (B, F, 3) in m."""
+        return self._food.copy()
+
+    @property
+    def food_eaten(self) -> np.ndarray:
+        """Return (B, F) bools: which food particles have been eaten."""
+        return self._eaten.copy()
+
+    # ---- stepping ---------------------------------------------------------------------
+    def steps_for(self, seconds: float) -> int:
+        """Return how many time steps ``step(seconds)`` takes from now (the clock stays on
+        the dt grid: 30 steps of 1/30 s with dt 5 ms take 200 steps in all)."""
+        return int(round((self._n * self.dt + seconds) / self.dt)) - self._n
+
+    def _table(self, a: int, acts, steps: int) -> np.ndarray:
+        """Return the (T, A, B) float32 table the kernel reads (a reused buffer)."""
+        cached = self._tables.get((a, steps))
+        if cached is not None and type(acts) is np.ndarray and acts.shape == cached[1]:
+            # the common case, checked once: (B, T, A) rows for this slice length
+            if not fill_table(acts, cached[0]):
+                raise SimulationError(
+                    f"activations for the {self.bodies[a].name} contain non-finite values"
+                )
+            return cached[0]
+        body = self.bodies[a]
+        na = body.n_actuators
+        if cached is None:
+            out = np.zeros((steps, max(1, na), self.batch), F32)
+            self._tables[(a, steps)] = (out, (self.batch, steps, na))
+        else:
+            out = cached[0]
+        if acts is None or na == 0:
+            out[...] = 0.0
+            return out
+        u = np.asarray(acts)
+        if u.ndim == 3 and u.shape[0] == self.batch and u.shape[2] == na and u.shape[1] != steps:
+            raise SimulationError(
+                f"the {body.name}'s activations hold {u.shape[1]} rows; this step takes "
+                f"{steps} steps"
+            )
+        if u.shape not in ((na,), (self.batch, na), (self.batch, steps, na)):
+            raise SimulationError(
+                f"activations for the {body.name} must be shaped (A,), (B, A) or (B, T, A) with "
+                f"B = {self.batch} lanes and A = {na} actuators, got {u.shape}"
+            )
+        u3 = u if u.ndim == 3 else u[:, None, :] if u.ndim == 2 else u[None, None, :]
+        if not fill_table(u3, out):
+            raise SimulationError(f"activations for the {body.name} contain non-finite values")
+        return out
+
+    def _per_animal(self, activations) -> list:
+        n = len(self.animals)
+        if n == 1 and isinstance(activations, np.ndarray):
+            return [activations]
+        if activations is None:
+            return [None] * n
+        if isinstance(activations, dict):
+            names = [a.name for a in self.animals]
+            unknown = set(activations) - set(names)
+            if unknown:
+                raise SimulationError(f"no animal named {sorted(unknown)} in this world")
+            return [activations.get(nm) for nm in names]
+        if isinstance(activations, list | tuple):
+            if len(activations) != n:
+                raise SimulationError(f"{len(activations)} activation arrays for {n} animals")
+            return list(activations)
+        if n != 1:
+            raise SimulationError(f"this world holds {n} animals: give one array for each")
+        return [activations]
+
+    def _animals_run(self, tables, t0: int, t1: int) -> None:
+        kernel = self._parallel if self.batch * (t1 - t0) >= PARALLEL_FROM else self._serial
+        dt32, chunk, vmax32, med32 = self._dt32, self._chunk, self._vmax32, self._med32
+        for (p, v), karr, rec, fs, failed, table in zip(
+            self._views, self._karr, self._rec, self._fs, self._failed, tables, strict=False
+        ):
+            rows = table[t0:t1] if t0 or t1 < len(table) else table
+            kernel(p, v, rows, dt32, t1 - t0, chunk, vmax32, *karr, med32, rec, p, v, fs)
+            merge_failed(failed, fs, self._n + t0)
+
+    def step(self, seconds: float, activations=None) -> Contacts:
+        """Advance the world by ``seconds`` (rounded to whole time steps) and return the
+        contacts it made.
+
+        activations: for each animal (a list, a dict by animal name, or one array for a lone
+        animal) an array (A,) or (B, A) held over the slice, or (B, T, A) one row a step with
+        T = ``steps_for(seconds)``; None holds every actuator at 0.
+        """
+        steps = int(round((self._n * self.dt + seconds) / self.dt)) - self._n  # steps_for
+        if steps < 0:
+            raise SimulationError(f"cannot step back in time ({seconds} s)")
+        if self._lone and type(activations) is np.ndarray:
+            tables = [self._table(0, activations, steps)]
+        else:
+            acts = self._per_animal(activations)
+            tables = [self._table(a, u, steps) for a, u in enumerate(acts)]
+        if not self.objects:  # the lone-animal fast path: nothing to touch, nothing to eat
+            self._animals_run(tables, 0, steps)
+            self._n += steps
+            return self._no_contacts
+        heads = self._heads() if len(self.foods) else []
+        n_obj = len(self.objects)
+        impulse = [np.zeros((b.n_nodes, n_obj, 3, self.batch)) for b in self.bodies]
+        t = 0
+        while t < steps:
+            t1 = steps if not self._solids else min(steps, t + MAX_SLICE)
+            if self._solids and self._any_near((t1 - t) * self.dt):
+                for s in range(t, t1):
+                    self._contact_step(tables, s, impulse)
+            else:
+                self._animals_run(tables, t, t1)
+                if len(self.balls):
+                    self._bforce[:] = 0.0
+                    self._balls(t1 - t)
+            t = t1
+        self._n += steps
+        if self.foods:
+            self._food_update(steps, heads)
+        return Contacts(
+            tuple(i.transpose(3, 0, 1, 2) for i in impulse),
+            tuple(o.name for o in self.objects),
+        )
+
+    def _any_near(self, horizon: float) -> bool:
+        for a in range(len(self.animals)):
+            o0, o1 = self._off[a], self._off[a + 1]
+            if near(self._pos[o0:o1], self._vel[o0:o1], self.node_radius, self._bpos, self._bvel,
+                    self._bpar, self._skind, self._scenter, self._ssize, horizon):  # fmt: skip
+                return True
+        return False
+
+    def _balls(self, steps: int) -> None:
+        balls_step(
+            self._bpos, self._bvel, self._bpar, self._bforce, self._med64, self.current,
+            self._skind, self._scenter, self._ssize, self.dt, steps, self._w, self._zeta, self._mu,
+        )  # fmt: skip
+
+    def _contact_step(self, tables, s: int, impulse) -> None:
+        self._bforce[:] = 0.0
+        for a in range(len(self.animals)):
+            o0, o1 = self._off[a], self._off[a + 1]
+            node_contacts(
+                self._pos[o0:o1], self._vel[o0:o1], self._mass[a], self.node_radius,
+                self._bpos, self._bvel, self._bpar, self._skind, self._scenter, self._ssize,
+                self._ball_obj, self._static_obj, self.dt, self._w, self._zeta, self._mu,
+                self._bforce, impulse[a],
+            )  # fmt: skip
+        self._animals_run(tables, s, s + 1)
+        if len(self.balls):
+            self._balls(1)
+
+    def _heads(self) -> list[np.ndarray]:
+        return [self._pos[self._off[a] + b.head].T.astype(np.float64)
+                for a, b in enumerate(self.bodies)]  # fmt: skip
+
+    def _food_update(self, steps: int, heads_before: list[np.ndarray]) -> None:
+        """Drift the food with the current; a food particle is eaten when a head's path
+        during the slice (relative to the particle) came within its radius."""
+        f0 = self._food.copy()
+        self._food += self.current * steps * self.dt
+        radius = np.array([f.radius for f in self.foods])
+        for h0, h1 in zip(heads_before, self._heads(), strict=True):
+            a = h0[:, None, :] - f0  # (B, F, 3) head relative to the food, before and after
+            b = h1[:, None, :] - self._food
+            d = b - a
+            s = np.clip(-(a * d).sum(-1) / ((d * d).sum(-1) + 1e-12), 0.0, 1.0)
+            closest = np.linalg.norm(a + s[..., None] * d, axis=-1)
+            self._eaten |= np.isfinite(closest) & (closest < radius)
