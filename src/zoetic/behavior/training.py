@@ -22,7 +22,7 @@ from zoetic.control.abstract import AbstractController, SequenceController
 from zoetic.errors import RunDirError, ZoeticError
 from zoetic.io import read_json, read_toml, write_json
 from zoetic.learn.abstraction import Abstraction, abstract, compare, mirror_abstract
-from zoetic.tasks import Task, load_task
+from zoetic.tasks import Task, capabilities, fits, load_task
 
 # (entry name, task per medium kind): the paper's basic training, in order
 PLAN = (
@@ -43,14 +43,14 @@ class Entry:
 
 def plan_for(body: Body) -> list[Entry]:
     """Return the entries the basic training learns for this animal (tasks that allow it)."""
-    kind = "ground" if body.medium == "ground" else "water"
+    kind = "water" if "water" in capabilities(body) else "ground"
     out = []
     for name, tasks in PLAN:
         task = load_task(tasks[kind])
-        if body.name in task.animals:
+        if fits(task, body):
             out.append(Entry(name, task))
     if not out:
-        raise ZoeticError(f"no basic-training task lists the {body.name}")
+        raise ZoeticError(f"no basic-training task fits the {body.name}")
     return out
 
 

@@ -22,7 +22,8 @@ def tasks() -> None:
     for name in list_tasks():
         t = load_task(name)
         console.print(
-            f"[bold]{name:16s}[/] {', '.join(t.animals):28s} {t.horizon:4.1f} s  {t.description}"
+            f"[bold]{name:16s}[/] {', '.join(t.requires) or '-':28s} {t.horizon:4.1f} s  "
+            f"{t.description}"
         )
 
 
@@ -101,12 +102,7 @@ def learn(
             evaluator=evaluator, coupling=coupling,
         )  # fmt: skip
         out = out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}"
-        if config.optimizer == "gradient":
-            from zoetic.learn.gradient_run import GradientRun
-
-            run = GradientRun.create(out, config)
-        else:
-            run = Run.create(out, config)
+        run = Run.create(out, config)
     cfg = run.setup.config
     run_with_progress(run, f"{cfg.animal} {cfg.optimizer}")
     summary = finish_run(run, video=video)

@@ -57,7 +57,7 @@ def bench_learn(budget: int = 3500, seed: int = 0, max_seconds: float = 60.0) ->
     out["cmaes_seconds_to_match_anneal"] = cm["seconds_to_match"]
     out["cmaes_evaluations_to_match"] = cm["evaluations"]
     try:
-        from zoetic.learn.gradient_run import bench_gradient
+        from zoetic.learn.gradient import bench_gradient
 
         out.update(bench_gradient(base, target, max_seconds))
     except ImportError as exc:  # JAX missing: say so rather than invent a number
