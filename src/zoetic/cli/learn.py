@@ -41,7 +41,7 @@ def _progress_bar() -> Progress:
     )
 
 
-def run_with_progress(run, label: str) -> None:
+def run_with_progress(run, label: str, every_s: float = 2.0) -> None:
     """Learn to the run's budget with a Rich progress bar; Ctrl-C leaves a resumable run."""
     budget = run.setup.config.budget
     with _progress_bar() as bar:
@@ -59,7 +59,7 @@ def run_with_progress(run, label: str) -> None:
             )  # fmt: skip
 
         try:
-            run.learn(progress=update)
+            run.learn(progress=update, every_s=every_s)
         except KeyboardInterrupt:
             console.print(
                 f"[yellow]interrupted at {run.evaluations} evaluations; nothing is lost: "
@@ -85,6 +85,7 @@ def learn(
     out: Path = typer.Option(None, help="Run directory (default runs/<animal>-<task>)."),
     resume: Path = typer.Option(None, help="Continue the run in this directory."),
     video: bool = typer.Option(True, help="Write video.mp4 of the best controller."),
+    checkpoint_every: float = typer.Option(2.0, min=0.0, help="Seconds between checkpoints."),
 ) -> None:
     """Learn a controller for an animal and a task; writes a resumable run directory."""
     from zoetic.learn.run import LearnConfig, Run
@@ -104,7 +105,7 @@ def learn(
         out = out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}"
         run = Run.create(out, config)
     cfg = run.setup.config
-    run_with_progress(run, f"{cfg.animal} {cfg.optimizer}")
+    run_with_progress(run, f"{cfg.animal} {cfg.optimizer}", checkpoint_every)
     summary = finish_run(run, video=video)
     for key, value in summary.items():
         console.print(f"{key:>14}: {value}")

@@ -294,7 +294,8 @@ class CMAES(Optimizer):
     """CMA-ES from the ``cma`` package, with its own handling of the box bounds.
 
     Its state is the pickled strategy (exact resume) plus the mean, step size, covariance and
-    evolution paths, from which a strategy is rebuilt if a later ``cma`` cannot read the pickle.
+    evolution paths, from which a fresh strategy is rebuilt (continuing, not bit-identical) if
+    a later ``cma`` cannot read the pickle.
     """
 
     name = "cmaes"
@@ -351,11 +352,12 @@ class CMAES(Optimizer):
         es.mean = np.array(s["mean"], float)
         es.sigma = float(s["sigma"])
         es.sm.C = np.array(s["C"], float)
-        es.sm.update_now(-1) if hasattr(es.sm, "update_now") else None
+        if hasattr(es.sm, "_decompose_C"):
+            es.sm._decompose_C()
         es.pc = np.array(s["pc"], float)
         if hasattr(es.adapt_sigma, "ps"):
             es.adapt_sigma.ps = np.array(s["ps"], float)
-        es.countiter, es.countevals = int(s["countiter"]), int(s["countevals"])
+        es.countevals = int(s["countevals"])  # iterations are counted afresh
         es.opts["randn"].rng.bit_generator.state = s["rng"]
 
 

@@ -187,6 +187,7 @@ class Run:
         self.setup = setup
         self.log = log or Log()
         self._before: tuple | None = None  # (log length, batches, state) while a step runs
+        self._saved: int | None = None  # evaluations in the last checkpoint written
         self.t_start = time.perf_counter() - (self.log.wall[-1] if self.log.wall else 0.0)
 
     @classmethod
@@ -249,6 +250,7 @@ class Run:
         if (self.out / CHECKPOINT).exists():
             (self.out / CHECKPOINT).replace(self.out / PREVIOUS)
         atomic_write_bytes(self.out / CHECKPOINT, data)
+        self._saved = self.evaluations
         atomic_write_bytes(self.out / "history.csv", self.log.history_csv())
         if np.isfinite(self.setup.optimizer.best_f):
             save_controller(self.best_controller(), self.out / "controller.json")
@@ -292,6 +294,7 @@ class Run:
                     last = time.perf_counter()
         finally:
             evaluator.close()
-            self.checkpoint()
+            if self._before is not None or self._saved != self.evaluations:
+                self.checkpoint()
             self.setup.optimizer.close()
         return self
