@@ -27,8 +27,8 @@ def abstract_cmd(
     out: Path = typer.Option(None, help="Where abstract.json/.png go (default: SOURCE's dir)."),
 ) -> None:
     """Abstract a learned controller into its primary modes (FFT) and say what it keeps."""
-    from zoetic.behavior.training import abstract_files
     from zoetic.learn.abstraction import parse_modes
+    from zoetic.runs import abstract_files
 
     out = out or (source if source.is_dir() else source.parent)
     info = abstract_files(source, out, parse_modes(modes), threshold, task)
@@ -54,8 +54,9 @@ def train_cmd(
     seed: int = typer.Option(0, help="Random seed: same seed, same repertoire."),
 ) -> None:
     """Learn the basic repertoire (straight, sharp and wide turns, mirrored); resumable."""
-    from zoetic.behavior.training import show_repertoire, train_repertoire
+    from zoetic.behavior.training import train_repertoire
     from zoetic.learn.abstraction import parse_modes
+    from zoetic.runs import show_repertoire
 
     out = out or Path("memory") / Path(animal).stem
     with _progress_bar() as bar:
@@ -102,7 +103,7 @@ def show_cmd(
     json_out: bool = typer.Option(False, "--json", help="Print the rows as JSON."),
 ) -> None:
     """Print a repertoire's entries and what each does; writes repertoire.png beside them."""
-    from zoetic.behavior.training import show_repertoire
+    from zoetic.runs import show_repertoire
 
     rows = show_repertoire(memory)
     if json_out:

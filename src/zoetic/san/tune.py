@@ -247,27 +247,9 @@ def tune(
 
 def plot_tuning(result: TuneResult, path, title: str = ""):
     """Write tuning.png: each candidate's metric, the accepted and the best against trials."""
-    import matplotlib
+    from zoetic.viz.san import plot_tuning as plot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from zoetic.viz.plots import save_figure
-
-    t = np.arange(1, result.trials + 1)
-    fig, ax = plt.subplots(figsize=(7, 4), dpi=110)
-    tried = np.where(np.isfinite(result.tried), result.tried, np.nan)
-    ax.scatter(t, tried, s=4, color="0.7", label="candidate")
-    ax.plot(t, result.current, color="tab:blue", lw=1, label="current")
-    ax.plot(t, result.best, color="tab:red", lw=1.5, label="best")
-    ax.axhline(result.before, color="0.3", ls=":", lw=1, label="start")
-    ax.set_xlabel("trial")
-    ax.set_ylabel("metric")
-    ax.set_title(title or f"{result.method}: {result.before:.4g} -> {result.after:.4g}")
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    return save_figure(fig, path)
-
+    return plot(result, path, title)
 
 def write_tune(result: TuneResult, creature, out, terrain: str = "flat", video: bool = True):
     """Write a tune run directory (san.json, start.json, history.csv, tuning.png, video.mp4)."""
