@@ -197,3 +197,19 @@ def test_jax_objective_scores_like_the_numpy_objective():
     assert np.allclose(ev.E, jev.E, rtol=1e-3, atol=1e-5)
     assert np.allclose(ev.E_u, jev.E_u, rtol=1e-4)
     assert grad.shape == X.shape and np.all(np.isfinite(grad)) and np.any(grad != 0)
+
+
+def test_abstraction_measure_scores_like_the_objective_from_the_tasks_start():
+    from zoetic.learn.abstraction import measure
+
+    body = load_animal("shark")
+    task = parse_task(_task(horizon=0.6, nodes=4, start={"heading": -0.4, "speed": 0.3},
+                            terms=[{"kind": k, "target": 0.1} for k in
+                                   ("distance_along_heading", "heading_change", "effort",
+                                    "mean_speed")]))  # fmt: skip
+    obj = Objective(task, body, time_domain(body, 4, 0.6))
+    x = np.random.default_rng(2).uniform(*obj.bounds())
+    ev = obj.evaluate(x[None])
+    m = measure(body, obj.controller(x), task.horizon, task=task)
+    assert m["E"] == pytest.approx(ev.E[0], rel=1e-6, abs=1e-9)
+    assert m["forward"] == pytest.approx(ev.terms["distance_along_heading"][0], abs=1e-9)
