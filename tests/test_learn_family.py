@@ -189,3 +189,17 @@ def test_sigkill_during_learning_then_resume_gives_the_same_history(tmp_path, sh
     assert main(["learn", "--resume", str(out), "--no-video"]) == 0
     assert _history_E(out / "history.csv") == _history_E(tmp_path / "whole" / "history.csv")
     assert len(whole.log.E) == 60
+
+
+def test_cmaes_draws_what_plain_cma_draws():
+    import cma
+
+    opt = _make("cmaes")
+    es = cma.CMAEvolutionStrategy(list(np.full(5, 0.9)), 0.3, {
+        "bounds": [[0.0] * 5, [1.0] * 5], "seed": 5, "verbose": -9, "CMA_stds": [1.0] * 5,
+        "popsize": 6})  # fmt: skip
+    for _ in range(3):
+        X, Y = opt.ask(), np.array(es.ask())
+        assert np.array_equal(X, Y)
+        opt.tell(X, _f(X))
+        es.tell(list(Y), list(_f(Y)))

@@ -303,13 +303,29 @@ class Simplex(Optimizer):
 
 
 class _Randn:
-    """CMA-ES's normal samples from the optimizer's own generator (not NumPy's global one)."""
+    """CMA-ES's normal samples from the optimizer's own generator, not NumPy's global one.
+
+    It is the stream ``cma`` itself would draw after seeding NumPy's global generator (the
+    legacy Mersenne Twister), so results are those of plain ``cma``, yet the state is ours.
+    """
 
     def __init__(self, seed: int):
-        self.rng = np.random.default_rng(seed)
+        self.rng = np.random.RandomState(seed)
 
     def __call__(self, *shape):
-        return self.rng.standard_normal(shape)
+        return self.rng.randn(*shape)
+
+    def state(self) -> dict:
+        """Return the generator's state as plain values."""
+        s = self.rng.get_state(legacy=False)
+        return {"key": s["state"]["key"].tolist(), "pos": int(s["state"]["pos"]),
+                "has_gauss": int(s["has_gauss"]), "gauss": float(s["gauss"])}  # fmt: skip
+
+    def load(self, s: dict) -> None:
+        """Restore a state from ``state``."""
+        self.rng.set_state({"bit_generator": "MT19937",
+                            "state": {"key": np.asarray(s["key"], np.uint32), "pos": s["pos"]},
+                            "has_gauss": s["has_gauss"], "gauss": s["gauss"]})  # fmt: skip
 
 
 class CMAES(Optimizer):
@@ -332,7 +348,7 @@ class CMAES(Optimizer):
             "seed": self.seed + 1,  # cma treats 0 as "seed from the clock"
             "verbose": -9,
             "CMA_stds": list(scale / scale.mean()),
-            "randn": _Randn(self.seed),
+            "randn": _Randn(self.seed + 1),
         }
         if popsize:
             opts["popsize"] = int(popsize)
@@ -361,7 +377,7 @@ class CMAES(Optimizer):
                 "C": np.array(es.sm.C, float), "pc": np.array(es.pc, float),
                 "ps": np.array(getattr(es.adapt_sigma, "ps", np.zeros(self.dimension)), float),
                 "countiter": int(es.countiter), "countevals": int(es.countevals),
-                "rng": es.opts["randn"].rng.bit_generator.state}  # fmt: skip
+                "rng": es.opts["randn"].state()}  # fmt: skip
 
     def _load(self, s):
         try:
@@ -380,7 +396,7 @@ class CMAES(Optimizer):
         if hasattr(es.adapt_sigma, "ps"):
             es.adapt_sigma.ps = np.array(s["ps"], float)
         es.countevals = int(s["countevals"])  # iterations are counted afresh
-        es.opts["randn"].rng.bit_generator.state = s["rng"]
+        es.opts["randn"].load(s["rng"])
 
 
 def _gradient(*args, **kwargs) -> Optimizer:
