@@ -156,6 +156,9 @@ def test_a_damaged_checkpoint_says_so_and_offers_the_previous_one(tmp_path, shor
         Run.resume(tmp_path / "r")
     (tmp_path / "r" / PREVIOUS).replace(tmp_path / "r" / CHECKPOINT)
     assert Run.resume(tmp_path / "r").evaluations == 5
+    np.savez(tmp_path / "r" / CHECKPOINT, X=np.zeros((2, 3)), E=np.zeros(2))  # an old format
+    with pytest.raises(RunDirError, match="older zoetic that saved no optimizer state"):
+        Run.resume(tmp_path / "r")
 
 
 def _history_E(path):

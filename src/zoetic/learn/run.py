@@ -159,6 +159,11 @@ def read_checkpoint(path: Path) -> tuple[Log, dict]:
     try:
         with np.load(path, allow_pickle=False) as z:
             arrays = {k: z[k] for k in z.files}
+        if "sha256" not in arrays and "X" in arrays:
+            raise RunDirError(
+                f"{path}: written by an older zoetic that saved no optimizer state, so it "
+                f"cannot be resumed; start afresh with another --out (or delete {path.parent})"
+            )
         digest = arrays.pop("sha256").tobytes().decode()
         if digest != _digest(arrays):
             raise ValueError("checksum mismatch")
@@ -166,6 +171,8 @@ def read_checkpoint(path: Path) -> tuple[Log, dict]:
         state |= {k[4:]: v for k, v in arrays.items() if k.startswith("opt.")}
         log = Log(*(list(arrays[k]) for k in LOG_KEYS[:-1]),
                   batches=[int(b) for b in arrays["batches"]])  # fmt: skip
+    except RunDirError:
+        raise
     except Exception as exc:  # noqa: BLE001 - any damage reads the same to the user
         prev = path.parent / PREVIOUS
         offer = (
