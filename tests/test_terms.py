@@ -213,3 +213,17 @@ def test_abstraction_measure_scores_like_the_objective_from_the_tasks_start():
     m = measure(body, obj.controller(x), task.horizon, task=task)
     assert m["E"] == pytest.approx(ev.E[0], rel=1e-6, abs=1e-9)
     assert m["forward"] == pytest.approx(ev.terms["distance_along_heading"][0], abs=1e-9)
+
+
+def test_a_users_repertoire_finds_its_animal_file(my_eel, tmp_path):
+    from zoetic.errors import BodyError
+    from zoetic.io import write_toml
+    from zoetic.runs import repertoire_body
+
+    memory = tmp_path / "memory"
+    (memory / "runs" / "go-straight").mkdir(parents=True)
+    write_toml(memory / "runs" / "go-straight" / "config.toml", {"run": {"animal": str(my_eel)}})
+    assert repertoire_body(memory, "my_eel").name == "my_eel"
+    assert repertoire_body(memory, "shark").name == "shark"
+    with pytest.raises(BodyError):
+        repertoire_body(memory, "my_newt")

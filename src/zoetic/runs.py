@@ -167,6 +167,23 @@ def _by_strength(freq: np.ndarray, amp: np.ndarray) -> list[float]:
     return sorted(total, key=lambda f: -total[f])
 
 
+def repertoire_body(directory: str | Path, animal: str) -> Body:
+    """Return the body a repertoire is for: a zoo animal, or the file its training runs used."""
+    from zoetic.errors import BodyError
+    from zoetic.io import read_toml
+
+    try:
+        return load_animal(animal)
+    except BodyError:
+        for config in sorted(Path(directory).glob("runs/*/config.toml")):
+            source = read_toml(config, what="run configuration").get("run", {}).get("animal")
+            if source and Path(source).exists():
+                body = load_animal(source)
+                if body.name == animal:
+                    return body
+        raise
+
+
 def show_repertoire(directory: str | Path, plot: bool = True) -> list[dict[str, object]]:
     """Return one row per entry (modes, frequencies, what it does from rest); plot it too.
 
@@ -179,7 +196,7 @@ def show_repertoire(directory: str | Path, plot: bool = True) -> list[dict[str, 
 
     directory = Path(directory)
     rep = Repertoire.load(directory)
-    body = load_animal(rep.animal)
+    body = repertoire_body(directory, rep.animal)
     rep = Repertoire.load(directory, body)
     rows, signals, paths = [], {}, {}
     for name, ctrl in rep.controllers.items():
