@@ -16,7 +16,6 @@ so it saves to ``.npz`` and resumes exactly (``state_to_numpy`` / ``state_from_n
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, NamedTuple
 
@@ -325,29 +324,3 @@ class Gradient(Optimizer):
     def _load(self, s):
         arrays = {k[3:]: np.asarray(v) for k, v in s.items() if k.startswith("gd_")}
         self.state = self.gd.state_from_numpy(arrays)
-
-
-def bench_gradient(base: dict, target: float, max_seconds: float) -> dict:
-    """Return the gradient path's compile time and wall time to reach E <= target."""
-    from zoetic.learn.run import LearnConfig, build
-
-    setup = build(LearnConfig(optimizer="gradient", budget=10**6, **base))
-    opt, obj = setup.optimizer, setup.objective
-    t0 = time.perf_counter()
-    value_and_grad(obj, opt.x0[None])  # compile outside the clock
-    compile_s = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    reached = None
-    while time.perf_counter() - t0 < max_seconds:
-        X = opt.ask()
-        ev, G = value_and_grad(obj, X)
-        opt.tell(X, ev.E, G)
-        if opt.best_f <= target:
-            reached = time.perf_counter() - t0
-            break
-    return {
-        "gradient_compile_seconds": round(compile_s, 2),
-        "gradient_seconds_to_match_anneal": None if reached is None else round(reached, 3),
-        "gradient_steps": opt.evaluations,
-        "gradient_best_E": round(opt.best_f, 4),
-    }
