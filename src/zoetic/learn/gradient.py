@@ -16,6 +16,7 @@ so it saves to ``.npz`` and resumes exactly (``state_to_numpy`` / ``state_from_n
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Callable
 from typing import TYPE_CHECKING, NamedTuple
 
@@ -276,14 +277,17 @@ def jax_objective(objective: Objective) -> Callable:
     return evaluate
 
 
+_COMPILED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # objective -> jitted E, dE
+
+
 def value_and_grad(objective: Objective, X: np.ndarray) -> tuple[Evaluation, np.ndarray]:
     """Return the Evaluation of points (K, dim) and the gradient of E at each, (K, dim)."""
     from zoetic.learn.objective import Evaluation
 
-    vg = getattr(objective, "_jax_value_and_grad", None)
+    vg = _COMPILED.get(objective)
     if vg is None:
         vg = jax.jit(jax.value_and_grad(jax_objective(objective), has_aux=True))
-        objective._jax_value_and_grad = vg
+        _COMPILED[objective] = vg
     out = [vg(jnp.asarray(x, F32)) for x in np.atleast_2d(X)]
     E = np.array([float(o[0][0]) for o in out])
     e_u = np.array([float(o[0][1][0]) for o in out])

@@ -41,14 +41,14 @@ def control_energy(u_nodes: np.ndarray, h: float, nu1: float, nu2: float) -> np.
 
 
 def signals(task: Task, body: Body, positions, activations=None, dt: float = 0.05,
-            medium: Medium | str | None = None, xp=np) -> Signals:
+            medium: Medium | str | None = None, xp=np, frame: BodyFrame | None = None) -> Signals:
     """Return what a task's terms see of recordings (K, R, N, 3) taken ``dt`` seconds apart."""
     k, r = positions.shape[:2]
     if activations is None:
         activations = xp.zeros((k, r, body.n_actuators))
     level = get_medium(medium or body.medium).water_level
-    return Signals(xp, BodyFrame.of(body), positions, activations, np.arange(r) * dt, level,
-                   task.horizon)  # fmt: skip
+    return Signals(xp, frame or BodyFrame.of(body), positions, activations, np.arange(r) * dt,
+                   level, task.horizon)  # fmt: skip
 
 
 def heading_angles(body: Body, positions: np.ndarray) -> np.ndarray:
@@ -97,6 +97,7 @@ class Objective:
         self.steps = int(round(task.horizon / self.dt))
         self.record_every = max(1, int(round(1.0 / (task.record_hz * self.dt))))
         self.start = start if start is not None else start_state(task, body, self.medium)
+        self.frame = BodyFrame.of(body)
         times = np.arange(self.steps) * self.dt
         self._basis = template.design_matrix(times)  # (T, M): activations are linear in params
         self.node_times = np.linspace(0.0, task.horizon, task.nodes)
@@ -182,7 +183,7 @@ class Objective:
         traj = self._run(tables)
         acts = tables[:, self.record_rows(traj.positions.shape[1])]
         s = signals(self.task, self.body, traj.positions, acts, self.record_every * self.dt,
-                    self.medium)  # fmt: skip
+                    self.medium, frame=self.frame)  # fmt: skip
         values = evaluate_terms(np, s, self.task.terms)
         terms = dict(zip(term_names(self.task.terms), values, strict=True))
         e_v = sum(t.weight * v for t, v in zip(self.task.terms, values, strict=True))
