@@ -13,6 +13,8 @@ from __future__ import annotations
 import hashlib
 import io
 import json
+import os
+import shutil
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -154,6 +156,19 @@ def checkpoint_bytes(log: Log, state: dict) -> bytes:
     return buf.getvalue()
 
 
+def keep_previous(path: Path, previous: Path) -> None:
+    """Make ``previous`` a copy of ``path`` (if any) while ``path`` stays in place."""
+    if not path.exists():
+        return
+    tmp = previous.with_name(previous.name + ".tmp")
+    tmp.unlink(missing_ok=True)
+    try:
+        os.link(path, tmp)  # a second name for the same bytes: nothing is copied
+    except OSError:
+        shutil.copyfile(path, tmp)
+    os.replace(tmp, previous)
+
+
 def read_checkpoint(path: Path) -> tuple[Log, dict]:
     """Return the log and optimizer state of a checkpoint; RunDirError if it is damaged."""
     try:
@@ -223,9 +238,12 @@ class Run:
         except (KeyError, TypeError) as exc:
             raise RunDirError(f"{out / 'config.toml'}: malformed ({exc})") from None
         setup = build(config, task)
-        if not (out / CHECKPOINT).exists():
+        path = out / CHECKPOINT
+        if not path.exists() and (out / PREVIOUS).exists():
+            path = out / PREVIOUS  # killed between keeping the previous and writing the next
+        if not path.exists():
             return cls(out, setup)
-        log, state = read_checkpoint(out / CHECKPOINT)
+        log, state = read_checkpoint(path)
         try:
             setup.optimizer.load_state_dict(state)
         except (KeyError, ValueError, TypeError, ZoeticError) as exc:
@@ -254,8 +272,7 @@ class Run:
             self.setup.optimizer.load_state_dict(state)
             self._before = None
         data = checkpoint_bytes(self.log, state)
-        if (self.out / CHECKPOINT).exists():
-            (self.out / CHECKPOINT).replace(self.out / PREVIOUS)
+        keep_previous(self.out / CHECKPOINT, self.out / PREVIOUS)
         atomic_write_bytes(self.out / CHECKPOINT, data)
         self._saved = self.evaluations
         atomic_write_bytes(self.out / "history.csv", self.log.history_csv())
