@@ -154,6 +154,8 @@ def test_a_damaged_checkpoint_says_so_and_offers_the_previous_one(tmp_path, shor
     (tmp_path / "r" / CHECKPOINT).write_bytes(bytes(data))
     with pytest.raises(RunDirError, match=r"damaged checkpoint.*checkpoint.prev.npz.*afresh"):
         Run.resume(tmp_path / "r")
+    (tmp_path / "r" / CHECKPOINT).unlink()  # as if killed between the two writes
+    assert Run.resume(tmp_path / "r").evaluations == 5
     (tmp_path / "r" / PREVIOUS).replace(tmp_path / "r" / CHECKPOINT)
     assert Run.resume(tmp_path / "r").evaluations == 5
     np.savez(tmp_path / "r" / CHECKPOINT, X=np.zeros((2, 3)), E=np.zeros(2))  # an old format
