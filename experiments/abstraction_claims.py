@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from zoetic.behavior.training import abstract_files
+from zoetic.runs import abstract_files
 from zoetic.bodies import load_animal
 from zoetic.learn.abstraction import abstract, compare, spectrum
 from zoetic.learn.run import LearnConfig, Run
