@@ -15,7 +15,7 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=2)
     ap.add_argument("--numba", action="store_true", help="also run the Numba kernel's bench")
     args = ap.parse_args()
-    from zoetic.physics.jax_backend import benchmark
+    from zoetic.physics.jax_bench import benchmark
 
     out = {"jax": benchmark(args.animal, args.seconds, args.batch, args.repeats)}
     if args.numba:

@@ -20,11 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
-from zoetic.behavior.training import abstract_files
 from zoetic.bodies import load_animal
 from zoetic.learn.abstraction import abstract, compare, spectrum
 from zoetic.learn.run import LearnConfig, Run
 from zoetic.physics import get_medium, rest_state, simulate
+from zoetic.runs import abstract_files
 from zoetic.tasks import load_task
 
 FIGS = Path(__file__).resolve().parents[1] / "docs" / "figures"

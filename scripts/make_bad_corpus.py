@@ -142,7 +142,7 @@ coupling = "none"
 
 [task]
 name = "swim-straight"
-animals = ["shark", "ray", "dolphin"]
+requires = ["water"]
 horizon = 4.0
 nodes = 8
 mu1 = 0.0

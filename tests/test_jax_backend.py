@@ -16,15 +16,15 @@ import jax.numpy as jnp  # noqa: E402
 
 from zoetic.bodies import list_animals, load_animal  # noqa: E402
 from zoetic.control import frequency_domain, time_domain, wave_controller  # noqa: E402
-from zoetic.learn.gradient import GradientDescent, optimize_gradient  # noqa: E402
-from zoetic.physics import rest_state, simulate  # noqa: E402
-from zoetic.physics.jax_backend import (  # noqa: E402
-    blown_up,
-    jax_table,
+from zoetic.control.jax_sampling import jax_table  # noqa: E402
+from zoetic.learn.gradient import (  # noqa: E402
+    GradientDescent,
     make_loss,
-    make_rollout,
+    optimize_gradient,
     swim_distance,
 )
+from zoetic.physics import rest_state, simulate  # noqa: E402
+from zoetic.physics.jax_backend import blown_up, make_rollout  # noqa: E402
 from zoetic.physics.reference import simulate_reference  # noqa: E402
 
 # Both backends step in float32 from the same arrays; they differ only in the order of

@@ -7,7 +7,7 @@ import pytest
 
 from zoetic.bodies import load_animal
 from zoetic.control import rest_controller, time_domain, wave_controller
-from zoetic.errors import RunDirError, TaskError, ZoeticError
+from zoetic.errors import RunDirError, TaskError
 from zoetic.learn.objective import Objective, control_energy
 from zoetic.learn.optimizers import make_optimizer
 from zoetic.learn.run import LearnConfig, Run
@@ -15,7 +15,7 @@ from zoetic.tasks import list_tasks, load_task, parse_task
 
 SHORT = """
 name = "short-swim"
-animals = ["shark"]
+requires = ["water"]
 horizon = 1.0
 nodes = 5
 [[terms]]
@@ -119,12 +119,7 @@ def test_annealing_follows_the_papers_schedule():
 def _learn(out, task, optimizer, budget=60, stop_at=None):
     config = LearnConfig(animal="shark", task=str(task), optimizer=optimizer, budget=budget,
                          seed=3, popsize=8)  # fmt: skip
-    if optimizer == "gradient":
-        from zoetic.learn.gradient_run import GradientRun
-
-        run = GradientRun.create(out, config)
-    else:
-        run = Run.create(out, config)
+    run = Run.create(out, config)
 
     def interrupt(r):
         if stop_at is not None and r.evaluations >= stop_at:
@@ -172,7 +167,7 @@ def test_same_seed_same_result_and_refusals(tmp_path, short_task):
         _learn(tmp_path / "a", short_task, "anneal", budget=30)
     with pytest.raises(RunDirError, match="not a zoetic run"):
         Run.resume(tmp_path / "nothing")
-    with pytest.raises(ZoeticError, match="not the snake"):
+    with pytest.raises(TaskError, match="cannot apply to the snake .*requires water"):
         Run.create(tmp_path / "c", LearnConfig(animal="snake", task=str(short_task)))
 
 

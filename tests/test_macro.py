@@ -122,3 +122,14 @@ def test_macro_command_writes_its_run(tmp_path, capsys):
     assert "unknown search method" in capsys.readouterr().err
     assert main([*args[:8], "--obstacle", "1,1,-1", "--no-video"]) == 2
     assert "radii must be positive" in capsys.readouterr().err
+
+
+def test_plan_annealing_runs_on_the_one_annealing_of_learn(problem):
+    from zoetic.learn.optimizers import Annealing
+
+    sa = PlanAnnealing(problem, seed=0, chains=4)
+    assert isinstance(sa.sa, Annealing) and sa.sa.relative
+    e, d = sa.ask()
+    sa.tell(e, d, np.array([2.0, 4.0, 6.0, 8.0]))
+    assert sa.sa.scale == 5.0  # temperatures in units of the chains' mean starting cost
+    assert np.array_equal(sa.sa.x[:, : problem.segments], e)

@@ -178,16 +178,16 @@ def test_reader_refuses_deep_nesting_and_oversized_files(tmp_path):
 
 def test_nan_never_reaches_a_summary(tmp_path, capsys, monkeypatch):
     """Even a NaN the kernel did not flag ends in an error (exit 3), not in distance_m: nan."""
-    import zoetic.runs as runs
+    import zoetic.control.rollout as rollout_module
 
-    real = runs.simulate
+    real = rollout_module.rollout
 
     def poisoned(*args, **kwargs):
-        traj = real(*args, **kwargs)
-        traj.positions[0, -1, 0, 0] = np.nan
-        return traj
+        result = real(*args, **kwargs)
+        result.positions[0][0, -1, 0, 0] = np.nan
+        return result
 
-    monkeypatch.setattr(runs, "simulate", poisoned)
+    monkeypatch.setattr(rollout_module, "rollout", poisoned)
     code = main(["simulate", "shark", "--seconds", "1", "--no-video", "--out", str(tmp_path)])
     captured = capsys.readouterr()
     assert code == 3 and "distance_m" not in captured.out and "blew up" in captured.err

@@ -331,3 +331,18 @@ def test_tuning_in_the_fake_world_is_at_least_as_fast(fake_world):
     tuned = tune(net, creature, method="sga", trials=20, seed=0)
     assert tuned.before == pytest.approx(res.metrics.max())
     assert tuned.after >= tuned.before
+
+
+def test_tuning_runs_on_the_one_annealing_of_learn(monkeypatch):
+    from zoetic.learn.optimizers import Annealing
+
+    told = []
+    tell = Annealing.tell
+    monkeypatch.setattr(Annealing, "tell", lambda self, X, f, grad=None: (told.append(len(f)),
+                                                                          tell(self, X, f)))
+    creature = FakeCreature()
+    net = random_network(creature, np.random.default_rng(0), n_hidden=2)
+    for method in ("anneal", "sga"):
+        told.clear()
+        tune(net, creature, method=method, trials=7, seed=1, evaluate=_bowl)
+        assert told == [1] * 8  # the start, then one per trial

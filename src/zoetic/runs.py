@@ -1,4 +1,5 @@
-"""Run directories for simulations: the files a user gets from ``zoetic simulate``."""
+"""Run directories and the files a user gets from the commands (simulate, learn, abstract,
+repertoire show): where the library's results meet the disk and the pictures."""
 
 from __future__ import annotations
 
@@ -307,3 +308,99 @@ def mark_demo(out: Path, before: set[str]) -> None:
     made = sorted(p.name for p in Path(out).iterdir() if p.is_file() and p.name not in before)
     text = "\n".join(n for n in made if n != MARKER) + "\n"
     atomic_write_bytes(Path(out) / MARKER, text.encode())
+
+
+def abstract_files(
+    source: str | Path,
+    out: str | Path,
+    modes: str | int = "auto",
+    threshold: float = 0.3,
+    task: str | None = None,
+) -> dict[str, object]:
+    """Abstract a learned controller; write abstract.json and abstract.png; return a summary."""
+    from zoetic.behavior.training import abstract_source, abstraction_report
+    from zoetic.io import write_json
+    from zoetic.learn.abstraction import abstract
+    from zoetic.viz.abstraction import plot_abstraction
+
+    body, ctrl, task_obj = abstract_source(source, task)
+    ab = abstract(ctrl, modes, threshold)
+    info = abstraction_report(body, ctrl, ab, task_obj)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    write_json(out / "abstract.json", ab.controller.to_dict() | {"abstraction": info})
+    duration = float(getattr(ctrl, "duration", task_obj.horizon))
+    t = np.linspace(0.0, duration, 400)
+    spec = ab.spectrum
+    plot_abstraction(
+        t, ctrl.sample(t), ab.controller.sample(t), tuple(body.actuator_names), spec.freq,
+        spec.amp, spec.phase, ab.kept, out / "abstract.png",
+        title=f"{body.name}: {task_obj.name}, {ab.rule}, kept {info['kept']:.0%} of "
+        f"{info['measure']}",
+    )  # fmt: skip
+    return info | {"file": str(out / "abstract.json"), "figure": str(out / "abstract.png")}
+
+
+def _by_strength(freq: np.ndarray, amp: np.ndarray) -> list[float]:
+    """Return the frequencies (Hz) present, strongest first (amplitude summed over actuators)."""
+    total: dict[float, float] = {}
+    for f, a in zip(np.ravel(freq), np.ravel(np.abs(amp)), strict=True):
+        if a > 0:
+            total[round(float(f), 3)] = total.get(round(float(f), 3), 0.0) + float(a)
+    return sorted(total, key=lambda f: -total[f])
+
+
+def repertoire_body(directory: str | Path, animal: str) -> Body:
+    """Return the body a repertoire is for: a zoo animal, or the file its training runs used."""
+    from zoetic.errors import BodyError
+    from zoetic.io import read_toml
+
+    try:
+        return load_animal(animal)
+    except BodyError:
+        for config in sorted(Path(directory).glob("runs/*/config.toml")):
+            source = read_toml(config, what="run configuration").get("run", {}).get("animal")
+            if source and Path(source).exists():
+                body = load_animal(source)
+                if body.name == animal:
+                    return body
+        raise
+
+
+def show_repertoire(directory: str | Path, plot: bool = True) -> list[dict[str, object]]:
+    """Return one row per entry (modes, frequencies, what it does from rest); plot it too.
+
+    Each entry is played from rest for its duration; forward (m along the start heading) and
+    turn (degrees, left positive) say what it does; frequencies_hz come strongest first.
+    Writes repertoire.png into the directory (paths: each entry played three times over).
+    """
+    from zoetic.behavior.repertoire import Repertoire
+    from zoetic.learn.abstraction import measure
+
+    directory = Path(directory)
+    rep = Repertoire.load(directory)
+    body = repertoire_body(directory, rep.animal)
+    rep = Repertoire.load(directory, body)
+    rows, signals, paths = [], {}, {}
+    for name, ctrl in rep.controllers.items():
+        seconds = rep.durations[name]
+        m = measure(body, ctrl, seconds)
+        amp = np.asarray(getattr(ctrl, "amp", np.zeros((0, 0))))
+        freq = np.asarray(getattr(ctrl, "freq", np.zeros((0, 0))))
+        rows.append({
+            "entry": name, "kind": ctrl.kind, "seconds": round(seconds, 3),
+            "modes": int(np.count_nonzero(amp)),
+            "frequencies_hz": _by_strength(freq, amp),
+            "forward_m": round(m["forward"], 3),
+            "turn_deg": round(float(np.degrees(m["heading_change"])), 1),
+            "source": rep.info.get(name, {}).get("source", ""),
+        })  # fmt: skip
+        t = np.linspace(0.0, seconds, 300)
+        signals[name] = (t, ctrl.sample(t))
+        paths[name] = measure(body, ctrl, 3 * seconds)["com"]  # played three times over
+    if plot:
+        from zoetic.viz.abstraction import plot_repertoire
+
+        plot_repertoire(signals, paths, tuple(body.actuator_names), directory / "repertoire.png",
+                        title=f"{rep.animal} repertoire ({len(rep.names)} entries)")  # fmt: skip
+    return rows

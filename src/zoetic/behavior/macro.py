@@ -24,6 +24,7 @@ from zoetic.behavior.repertoire import Repertoire
 from zoetic.behavior.tracking import OVERLAP, TrackingError, body_length, obstacle_seconds
 from zoetic.bodies import Body
 from zoetic.control.abstract import SequenceController
+from zoetic.learn.optimizers import Annealing
 from zoetic.physics import Trajectory, simulate
 
 
@@ -172,50 +173,49 @@ class PlanAnnealing(_Search):
     T0 = 0.5, T <- 0.9 T after at most 10 n steps or n accepted moves (n = 2L variables).
     Each step moves every duration uniformly by up to 10% of its range, replaces each entry
     by another with probability 10%, and swaps two neighbouring segments with probability
-    10%. Temperatures are in units of the chains' mean starting cost.
+    10%. Temperatures are in units of the chains' mean starting cost. The annealing itself is
+    ``learn.optimizers.Annealing`` over plans coded as [entries, durations].
     """
 
     name = "anneal"
 
     def __init__(self, problem, seed, chains=16, t0=0.5, alpha=0.9, step=0.1, swap=0.1):
         super().__init__(problem, seed)
-        self.T, self.alpha, self.step, self.swap = float(t0), float(alpha), float(step), swap
-        self.e, self.d = self.random(int(chains))
-        self.f: np.ndarray | None = None
-        self.scale = 1.0
-        self.max_steps, self.min_accepts = 20 * self.length, 2 * self.length
-        self.steps_at_T = self.accepts_at_T = 0
-        self.acceptance = 1.0
+        e, d = self.random(int(chains))
+        n = self.length
+        lower = np.concatenate([np.zeros(n), np.full(n, self.lo)])
+        upper = np.concatenate([np.full(n, self.k - 1.0), np.full(n, self.hi)])
+
+        def perturb(x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+            e, d = _move(x[:, :n].astype(int), x[:, n:], rng, self.k, self.lo, self.hi, step,
+                         swap)  # fmt: skip
+            return np.hstack([e, d])
+
+        self.sa = Annealing(np.hstack([e, d]), lower, upper, seed, t0=t0, alpha=alpha,
+                            chains=int(chains), perturb=perturb, relative=True,
+                            rng=self.rng)  # fmt: skip
+
+    @property
+    def e(self) -> np.ndarray:
+        """Return the chains' current entries (chains, L)."""
+        return self.sa.x[:, : self.length].astype(int)
+
+    @property
+    def T(self) -> float:
+        return self.sa.T
 
     def ask(self) -> tuple[np.ndarray, np.ndarray]:
         """Return the next batch of plans to evaluate: (entries, durations)."""
-        if self.f is None:
-            return self.e.copy(), self.d.copy()
-        return _move(self.e, self.d, self.rng, self.k, self.lo, self.hi, self.step, self.swap)
+        x = self.sa.ask()
+        return x[:, : self.length].astype(int), x[:, self.length :].copy()
 
     def tell(self, e, d, f) -> None:
         """Accept or reject each chain's move by the Metropolis rule at the current T."""
         f = self._record(e, d, f)
-        if self.f is None:
-            self.f = f.copy()
-            good = f[np.isfinite(f)]
-            self.scale = float(np.mean(np.abs(good))) if len(good) else 1.0
-            return
-        u = self.rng.random(len(f))
-        with np.errstate(over="ignore", invalid="ignore"):
-            accept = np.isfinite(f) & (
-                (f <= self.f) | (u < np.exp(-(f - self.f) / (self.T * self.scale)))
-            )
-        self.e[accept], self.d[accept], self.f[accept] = e[accept], d[accept], f[accept]
-        self.steps_at_T += len(f)
-        self.accepts_at_T += int(accept.sum())
-        self.acceptance = 0.9 * self.acceptance + 0.1 * float(accept.mean())
-        if self.steps_at_T >= self.max_steps or self.accepts_at_T >= self.min_accepts:
-            self.T *= self.alpha
-            self.steps_at_T = self.accepts_at_T = 0
+        self.sa.tell(np.hstack([e, d]).astype(float), f)
 
     def status(self):
-        return {"T": self.T, "accept": self.acceptance}
+        return self.sa.status()
 
 
 class PlanGenetic(_Search):

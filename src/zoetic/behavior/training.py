@@ -20,9 +20,9 @@ from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller, load_controller
 from zoetic.control.abstract import AbstractController, SequenceController
 from zoetic.errors import RunDirError, ZoeticError
-from zoetic.io import read_json, read_toml, write_json
+from zoetic.io import read_json, read_toml
 from zoetic.learn.abstraction import Abstraction, abstract, compare, mirror_abstract
-from zoetic.tasks import Task, load_task
+from zoetic.tasks import Task, capabilities, fits, load_task
 
 # (entry name, task per medium kind): the paper's basic training, in order
 PLAN = (
@@ -43,14 +43,14 @@ class Entry:
 
 def plan_for(body: Body) -> list[Entry]:
     """Return the entries the basic training learns for this animal (tasks that allow it)."""
-    kind = "ground" if body.medium == "ground" else "water"
+    kind = "water" if "water" in capabilities(body) else "ground"
     out = []
     for name, tasks in PLAN:
         task = load_task(tasks[kind])
-        if body.name in task.animals:
+        if fits(task, body):
             out.append(Entry(name, task))
     if not out:
-        raise ZoeticError(f"no basic-training task lists the {body.name}")
+        raise ZoeticError(f"no basic-training task fits the {body.name}")
     return out
 
 
@@ -163,34 +163,6 @@ def abstract_source(path: str | Path, task: str | None = None) -> tuple[Body, Co
     return body, ctrl, load_task(task or default)
 
 
-def abstract_files(
-    source: str | Path,
-    out: str | Path,
-    modes: str | int = "auto",
-    threshold: float = 0.3,
-    task: str | None = None,
-) -> dict[str, object]:
-    """Abstract a learned controller; write abstract.json and abstract.png; return a summary."""
-    from zoetic.viz.abstraction import plot_abstraction
-
-    body, ctrl, task_obj = abstract_source(source, task)
-    ab = abstract(ctrl, modes, threshold)
-    info = abstraction_report(body, ctrl, ab, task_obj)
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    write_json(out / "abstract.json", ab.controller.to_dict() | {"abstraction": info})
-    duration = float(getattr(ctrl, "duration", task_obj.horizon))
-    t = np.linspace(0.0, duration, 400)
-    spec = ab.spectrum
-    plot_abstraction(
-        t, ctrl.sample(t), ab.controller.sample(t), tuple(body.actuator_names), spec.freq,
-        spec.amp, spec.phase, ab.kept, out / "abstract.png",
-        title=f"{body.name}: {task_obj.name}, {ab.rule}, kept {info['kept']:.0%} of "
-        f"{info['measure']}",
-    )  # fmt: skip
-    return info | {"file": str(out / "abstract.json"), "figure": str(out / "abstract.png")}
-
-
 def parse_sequence(text: str, rep: Repertoire) -> list[tuple[str, float]]:
     """Return [(entry, seconds)] from "name:seconds,name,..." (seconds default to the entry's)."""
     items = []
@@ -218,50 +190,3 @@ def build_sequence(rep: Repertoire, items: list[tuple[str, float]], overlap: flo
     """Return the SequenceController playing repertoire entries in turn, cross-faded."""
     parts = tuple((rep.controllers[name], seconds) for name, seconds in items)
     return SequenceController(rep.animal, tuple(rep.actuators), parts, overlap)
-
-
-def _by_strength(freq: np.ndarray, amp: np.ndarray) -> list[float]:
-    """Return the frequencies (Hz) present, strongest first (amplitude summed over actuators)."""
-    total: dict[float, float] = {}
-    for f, a in zip(np.ravel(freq), np.ravel(np.abs(amp)), strict=True):
-        if a > 0:
-            total[round(float(f), 3)] = total.get(round(float(f), 3), 0.0) + float(a)
-    return sorted(total, key=lambda f: -total[f])
-
-
-def show_repertoire(directory: str | Path, plot: bool = True) -> list[dict[str, object]]:
-    """Return one row per entry (modes, frequencies, what it does from rest); plot it too.
-
-    Each entry is played from rest for its duration; forward (m along the start heading) and
-    turn (degrees, left positive) say what it does; frequencies_hz come strongest first.
-    Writes repertoire.png into the directory (paths: each entry played three times over).
-    """
-    from zoetic.learn.abstraction import measure
-
-    directory = Path(directory)
-    rep = Repertoire.load(directory)
-    body = load_animal(rep.animal)
-    rep = Repertoire.load(directory, body)
-    rows, signals, paths = [], {}, {}
-    for name, ctrl in rep.controllers.items():
-        seconds = rep.durations[name]
-        m = measure(body, ctrl, seconds)
-        amp = np.asarray(getattr(ctrl, "amp", np.zeros((0, 0))))
-        freq = np.asarray(getattr(ctrl, "freq", np.zeros((0, 0))))
-        rows.append({
-            "entry": name, "kind": ctrl.kind, "seconds": round(seconds, 3),
-            "modes": int(np.count_nonzero(amp)),
-            "frequencies_hz": _by_strength(freq, amp),
-            "forward_m": round(m["forward"], 3),
-            "turn_deg": round(float(np.degrees(m["heading_change"])), 1),
-            "source": rep.info.get(name, {}).get("source", ""),
-        })  # fmt: skip
-        t = np.linspace(0.0, seconds, 300)
-        signals[name] = (t, ctrl.sample(t))
-        paths[name] = measure(body, ctrl, 3 * seconds)["com"]  # played three times over
-    if plot:
-        from zoetic.viz.abstraction import plot_repertoire
-
-        plot_repertoire(signals, paths, tuple(body.actuator_names), directory / "repertoire.png",
-                        title=f"{rep.animal} repertoire ({len(rep.names)} entries)")  # fmt: skip
-    return rows

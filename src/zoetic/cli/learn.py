@@ -23,7 +23,8 @@ def tasks() -> None:
     for name in list_tasks():
         t = load_task(name)
         console.print(
-            f"[bold]{name:16s}[/] {', '.join(t.animals):28s} {t.horizon:4.1f} s  {t.description}"
+            f"[bold]{name:16s}[/] {', '.join(t.requires) or '-':28s} {t.horizon:4.1f} s  "
+            f"{t.description}"
         )
 
 
@@ -41,7 +42,7 @@ def _progress_bar() -> Progress:
     )
 
 
-def run_with_progress(run, label: str) -> None:
+def run_with_progress(run, label: str, every_s: float = 2.0) -> None:
     """Learn to the run's budget with a Rich progress bar; Ctrl-C leaves a resumable run."""
     budget = run.setup.config.budget
     with _progress_bar() as bar:
@@ -59,7 +60,7 @@ def run_with_progress(run, label: str) -> None:
             )  # fmt: skip
 
         try:
-            run.learn(progress=update)
+            run.learn(progress=update, every_s=every_s)
         except KeyboardInterrupt:
             console.print(
                 f"[yellow]interrupted at {run.evaluations} evaluations; nothing is lost: "
@@ -91,6 +92,7 @@ def learn(
     out: Path = typer.Option(None, help="Run directory (default runs/<animal>-<task>)."),
     resume: Path = typer.Option(None, help="Continue the run in this directory."),
     video: bool = typer.Option(True, help="Write video.mp4 of the best controller."),
+    checkpoint_every: float = typer.Option(2.0, min=0.0, help="Seconds between checkpoints."),
 ) -> None:
     """Learn a controller for an animal and a task; writes a resumable run directory."""
     from zoetic.learn.run import LearnConfig, Run
@@ -124,14 +126,9 @@ def learn(
         check_learnable(animal)
         check_learn_size(config.to_dict())
         out = check_out_dir(out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}")
-        if config.optimizer == "gradient":
-            from zoetic.learn.gradient_run import GradientRun
-
-            run = GradientRun.create(out, config)
-        else:
-            run = Run.create(out, config)
+        run = Run.create(out, config)
     cfg = run.setup.config
-    run_with_progress(run, f"{cfg.animal} {cfg.optimizer}")
+    run_with_progress(run, f"{cfg.animal} {cfg.optimizer}", checkpoint_every)
     summary = finish_run(run, video=video)
     for key, value in summary.items():
         console.print(f"{key:>14}: {value}")

@@ -27,8 +27,8 @@ def abstract_cmd(
     out: Path = typer.Option(None, help="Where abstract.json/.png go (default: SOURCE's dir)."),
 ) -> None:
     """Abstract a learned controller into its primary modes (FFT) and say what it keeps."""
-    from zoetic.behavior.training import abstract_files
     from zoetic.learn.abstraction import parse_modes
+    from zoetic.runs import abstract_files
 
     if source.is_dir():
         from zoetic.runs import check_run_dir
@@ -65,10 +65,10 @@ def train_cmd(
         import os
 
         os.environ["RAY_ADDRESS"] = ray_address
-    from zoetic.behavior.training import show_repertoire, train_repertoire
+    from zoetic.behavior.training import train_repertoire
     from zoetic.io import check_out_dir
     from zoetic.learn.abstraction import parse_modes
-    from zoetic.runs import check_learnable
+    from zoetic.runs import check_learnable, show_repertoire
 
     check_learnable(animal)
     out = check_out_dir(out or Path("memory") / Path(animal).stem)
@@ -116,8 +116,8 @@ def show_cmd(
     json_out: bool = typer.Option(False, "--json", help="Print the rows as JSON."),
 ) -> None:
     """Print a repertoire's entries and what each does; writes repertoire.png beside them."""
-    from zoetic.behavior.training import show_repertoire
     from zoetic.errors import ZoeticError, naming
+    from zoetic.runs import show_repertoire
 
     try:
         rows = show_repertoire(memory)

@@ -30,9 +30,13 @@ from zoetic.control import (
 )
 from zoetic.control.abstract import AbstractController
 from zoetic.errors import ControllerError, ZoeticError
-from zoetic.learn.objective import control_energy, heading_angles, motion_terms
+from zoetic.learn.objective import control_energy, signals
 from zoetic.physics import Medium, get_medium, rest_state, simulate
-from zoetic.tasks import Task, Term
+from zoetic.tasks import Task, parse_task, start_state
+from zoetic.tasks.terms import evaluate_terms
+
+FORWARD = parse_task({"name": "forward", "horizon": 1.0,
+                     "terms": [{"kind": "distance_along_heading"}]})  # fmt: skip
 
 FLOOR = 1e-3  # modes weaker than this (activation units) are numerical noise, never kept
 
@@ -195,11 +199,6 @@ def mirror_abstract(ctrl: AbstractController, mirror) -> AbstractController:
                               ctrl.amp[p], ctrl.phase[p], ctrl.period)  # fmt: skip
 
 
-def _forward_task(seconds: float) -> Task:
-    return Task("forward", "", (), seconds, 2, 0.0, 1.0, 0.0, 0.0,
-                (Term("distance_along_heading", 1.0),))  # fmt: skip
-
-
 def measure(
     body: Body,
     ctrl: Controller,
@@ -208,34 +207,39 @@ def measure(
     dt: float | None = None,
     task: Task | None = None,
 ) -> dict:
-    """Return how a controller moves the body from rest: distance, forward, heading, E, path.
+    """Return how a controller moves the body: distance, forward, heading, E, path.
 
-    distance: metres the centre of mass moved (top view); forward: metres along the start
-    heading; heading_change: rad, left positive; E, E_u, E_v: the task's objective (as
-    ``Objective`` scores it) when a task is given; com (R, 3), heading (R,), times (R,).
+    It starts from rest, or from the task's start state when a task is given. distance:
+    metres the centre of mass moved (top view); forward: metres along the start heading;
+    heading_change: rad, left positive; E, E_u, E_v: the task's objective (as ``Objective``
+    scores it, with the same terms) when a task is given; com (R, 3), heading (R,), times (R,).
     """
     med = get_medium(medium or body.medium)
     dt = float(dt or body.dt)
     steps = int(round(seconds / dt))
-    every = max(1, int(round(0.05 / dt)))
-    traj = simulate(body, ctrl.table(steps, dt)[None], med, dt, rest_state(body, 1), every)
+    rate = task.record_hz if task is not None else 20.0
+    every = max(1, int(round(1.0 / (rate * dt))))
+    start = start_state(task, body, med) if task is not None else rest_state(body, 1)
+    table = ctrl.table(steps, dt)
+    traj = simulate(body, table[None], med, dt, start, every)
     pos = traj.positions
-    com = traj.com(body)[0]
-    heading = heading_angles(body, pos)[0]
-    forward = motion_terms(_forward_task(seconds), body, pos, seconds)["distance_along_heading"]
+    rows = np.minimum(np.arange(pos.shape[1]) * every, steps - 1)
+    s = signals(task or FORWARD, body, pos, table[rows][None], every * dt, med)
+    com = s.com[0]
+    heading = s.heading[0]
     out = {
         "seconds": float(seconds),
         "failed": bool(traj.failed[0]),
         "distance": float(np.linalg.norm(com[-1, [0, 2]] - com[0, [0, 2]])),
-        "forward": float(forward[0]),
+        "forward": float(s.along[0]),
         "heading_change": float(heading[-1] - heading[0]),
         "com": com,
         "heading": heading,
         "times": traj.times,
     }
     if task is not None:
-        terms = motion_terms(task, body, pos, task.horizon)
-        e_v = float(sum(t.weight * terms[t.kind][0] for t in task.terms))
+        values = evaluate_terms(np, s, task.terms)
+        e_v = float(sum(t.weight * v[0] for t, v in zip(task.terms, values, strict=True)))
         u = ctrl.raw(np.linspace(0.0, task.horizon, task.nodes)).T[None]
         e_u = float(control_energy(u, task.horizon / (task.nodes - 1), task.nu1, task.nu2)[0])
         out |= {"E": task.mu1 * e_u + task.mu2 * e_v, "E_u": e_u, "E_v": e_v}

@@ -2,6 +2,8 @@
 
 An Evaluator maps an Objective and a batch of parameter vectors to an Evaluation. Optimizers
 never see it, so a cluster backend (Ray) plugs in by implementing ``__call__`` and ``close``.
+When the optimizer needs gradients, ``value_and_grad`` also returns dE/dparams, through the
+JAX simulator (in this process: one point at a time).
 """
 
 from __future__ import annotations
@@ -11,7 +13,25 @@ import numpy as np
 from zoetic.learn.objective import Evaluation, Objective
 
 
-class BatchEvaluator:
+class Evaluator:
+    """What every evaluator offers: scores of a batch, and scores with gradients."""
+
+    name = "base"
+
+    def __call__(self, objective: Objective, params: np.ndarray) -> Evaluation:
+        raise NotImplementedError  # pragma: no cover - abstract
+
+    def value_and_grad(self, objective: Objective, params: np.ndarray):
+        """Return (Evaluation, gradients (K, dim)) of a batch, through the JAX simulator."""
+        from zoetic.learn.gradient import value_and_grad
+
+        return value_and_grad(objective, params)
+
+    def close(self) -> None:
+        """Release what the evaluator holds."""
+
+
+class BatchEvaluator(Evaluator):
     """Simulate the whole batch at once on all cores with the Numba kernel."""
 
     name = "batch"
@@ -49,7 +69,7 @@ def merge(parts: list[Evaluation]) -> Evaluation:
     )
 
 
-class ProcessPoolEvaluator:
+class ProcessPoolEvaluator(Evaluator):
     """Split each batch over worker processes, one single-threaded simulator each."""
 
     name = "process"

@@ -1,5 +1,10 @@
 """Gradient descent on a differentiable loss: Adam (optax) inside box bounds.
 
+``Gradient`` is that method as an ordinary ask/tell optimizer of ``learn.optimizers``: it asks
+for one point at a time and needs the gradient there, which the evaluator supplies through
+``value_and_grad`` (the task's objective rebuilt in JAX from the same term registry and
+differentiated through the JAX simulator). ``make_loss`` builds a loss for custom objectives.
+
 The parameters are optimised in bounds-normalised coordinates z = (x - lower) / (upper -
 lower), so a learning rate of 0.02 moves each parameter by about 2% of its range per step
 whatever its units. Each step clips the gradient's global norm (contact makes rare huge
@@ -11,13 +16,27 @@ so it saves to ``.npz`` and resumes exactly (``state_to_numpy`` / ``state_from_n
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Callable
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 import optax
+
+from zoetic.bodies import Body
+from zoetic.control import Controller
+from zoetic.control.jax_sampling import jax_table
+from zoetic.learn.optimizers import Optimizer
+from zoetic.physics.jax_backend import F32, rollout_fn
+from zoetic.physics.simulate import rest_state
+from zoetic.tasks.terms import BodyFrame, Signals, evaluate_terms
+
+if TYPE_CHECKING:
+    from zoetic.learn.objective import Evaluation, Objective
+
+Loss = Callable[[jax.Array, jax.Array, jax.Array], jax.Array]
 
 ValueAndGrad = Callable[[jax.Array], tuple[jax.Array, jax.Array]]
 
@@ -171,3 +190,141 @@ def optimize_gradient(
     if np.isfinite(f_last) and f_last < float(state.best_f):
         return opt.x(state), f_last, history
     return opt.best_x(state), float(state.best_f), history
+
+
+def make_loss(
+    body: Body,
+    ctrl: Controller,
+    steps: int,
+    objective: Loss,
+    medium=None,
+    dt: float | None = None,
+    state=None,
+    record_every: int | None = None,
+):
+    """Return the pure scalar loss ``p -> objective(rec (R,N,3), final x, final v)``.
+
+    It samples the controller (``jax_table``), rolls one candidate out from ``state`` (a
+    ``State`` with batch 1; default the rest pose) and applies the JAX objective. Wrap it in
+    ``jax.jit(jax.value_and_grad(...))`` (or pass it to ``learn.gradient.optimize_gradient``).
+    """
+    dt = float(dt or body.dt)
+    state = state or rest_state(body, 1)
+    x0 = jnp.asarray(state.positions[0], F32)
+    v0 = jnp.asarray(state.velocities[0], F32)
+    table = jax_table(ctrl, steps, dt)
+    roll = rollout_fn(body, medium, dt, record_every or steps)
+
+    def loss(p: jax.Array) -> jax.Array:
+        rec, x, v = roll(x0, v0, table(p))
+        return objective(rec, x, v)
+
+    return loss
+
+
+def swim_distance(body: Body) -> Loss:
+    """Return an objective: minus the distance the centre of mass moved along the heading."""
+    w = jnp.asarray(body.mass / body.total_mass, F32)
+    fwd = jnp.asarray(body.forward, F32)
+
+    def objective(rec: jax.Array, x: jax.Array, v: jax.Array) -> jax.Array:
+        return -jnp.dot(w @ x - w @ rec[0], fwd)
+
+    return objective
+
+
+def linear_map(objective: Objective) -> tuple[np.ndarray, np.ndarray]:
+    """Return (L, c) with full coefficients = L @ free + c (the coupling is affine)."""
+    n = objective.dimension
+    c = objective.full_coefficients(np.zeros((1, n)))[0].ravel()
+    cols = objective.full_coefficients(np.eye(n)).reshape(n, -1) - c
+    return cols.T, c
+
+
+def jax_objective(objective: Objective) -> Callable:
+    """Return ``p -> (E, (E_u, E_v))`` in JAX for a free parameter vector p.
+
+    The same terms (``tasks.terms``) as the NumPy objective, on the same records, from the
+    same start state, through the JAX simulator.
+    """
+    from zoetic.learn.objective import control_energy_xp
+
+    task, body = objective.task, objective.body
+    L, c = (jnp.asarray(a, F32) for a in linear_map(objective))
+    basis = jnp.asarray(objective._basis, F32)  # (T, M)
+    node_basis = jnp.asarray(objective._node_basis, F32)
+    shape = objective.full_shape
+    x0 = jnp.asarray(objective.start.positions[0], F32)
+    v0 = jnp.asarray(objective.start.velocities[0], F32)
+    roll = rollout_fn(body, objective.medium, objective.dt, objective.record_every)
+    frame = BodyFrame.of(body)
+    n_rec = objective.steps // objective.record_every + 1
+    rows = objective.record_rows(n_rec)
+    times = np.arange(n_rec) * objective.record_every * objective.dt
+    level = objective.medium.water_level
+
+    def evaluate(p):
+        coef = jnp.reshape(L @ p + c, shape)
+        act = jnp.clip(basis @ coef.T, 0.0, 1.0)
+        rec, _, _ = roll(x0, v0, act)
+        s = Signals(jnp, frame, rec[None], act[rows][None], times, level, task.horizon)
+        values = evaluate_terms(jnp, s, task.terms)
+        e_v = sum(t.weight * v[0] for t, v in zip(task.terms, values, strict=True))
+        u = jnp.einsum("jm,am->aj", node_basis, coef)[None]
+        e_u = control_energy_xp(jnp, u, objective.h, task.nu1, task.nu2)[0]
+        return task.mu1 * e_u + task.mu2 * e_v, (e_u, e_v)
+
+    return evaluate
+
+
+_COMPILED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # objective -> jitted E, dE
+
+
+def value_and_grad(objective: Objective, X: np.ndarray) -> tuple[Evaluation, np.ndarray]:
+    """Return the Evaluation of points (K, dim) and the gradient of E at each, (K, dim)."""
+    from zoetic.learn.objective import Evaluation
+
+    vg = _COMPILED.get(objective)
+    if vg is None:
+        vg = jax.jit(jax.value_and_grad(jax_objective(objective), has_aux=True))
+        _COMPILED[objective] = vg
+    out = [vg(jnp.asarray(x, F32)) for x in np.atleast_2d(X)]
+    E = np.array([float(o[0][0]) for o in out])
+    e_u = np.array([float(o[0][1][0]) for o in out])
+    e_v = np.array([float(o[0][1][1]) for o in out])
+    G = np.stack([np.asarray(o[1], dtype=np.float64) for o in out])
+    failed = ~np.isfinite(E)
+    return Evaluation(np.where(failed, np.inf, E), e_u, e_v, {}, failed), G
+
+
+class Gradient(Optimizer):
+    """Adam in box bounds (``GradientDescent``) as an ask/tell optimizer that needs gradients."""
+
+    name = "gradient"
+    needs_gradient = True
+
+    def __init__(self, x0, lower, upper, seed, budget=None, learning_rate=0.02,
+                 max_grad_norm=1.0):  # fmt: skip
+        super().__init__(x0, lower, upper, seed)
+        self.gd = GradientDescent(learning_rate, max_grad_norm)
+        self.state = self.gd.init(self.x0, self.lower, self.upper, seed)
+
+    def ask(self):
+        return self.gd.x(self.state)[None]
+
+    def tell(self, X, f, grad=None):
+        if grad is None:
+            raise ValueError("the gradient optimizer needs the gradient of each point it asks")
+        self.record(X, f)
+        self.state = self.gd._update(self.state, jnp.asarray(f[0], jnp.float32),
+                                     jnp.asarray(grad[0], jnp.float32))  # fmt: skip
+
+    def status(self):
+        return {"|g|": float(self.state.grad_norm)}
+
+    def _state(self):
+        return {f"gd_{k}": v for k, v in self.gd.state_to_numpy(self.state).items()}
+
+    def _load(self, s):
+        arrays = {k[3:]: np.asarray(v) for k, v in s.items() if k.startswith("gd_")}
+        self.state = self.gd.state_from_numpy(arrays)

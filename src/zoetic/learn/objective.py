@@ -4,7 +4,8 @@ E_u is discretised on the controller's M nodes exactly as section 4.2 writes it:
     E_u = sum_i sum_j  nu1 / (2 h^2) (u_i^{j+1} - u_i^j)^2
                      + nu2 / (2 h^4) (u_i^{j+1} - 2 u_i^j + u_i^{j-1})^2
 with h the time between nodal parameters (a frequency-domain controller is sampled at the same
-M node times). E_v is a weighted sum of named motion terms (``zoetic.tasks.TERM_KINDS``).
+M node times). E_v is a weighted sum of named terms (``zoetic.tasks.terms.TERMS``), which see
+the motion recorded at the task's ``record_hz``.
 A candidate whose simulation blew up scores +inf and is counted, never raised.
 """
 
@@ -17,63 +18,51 @@ import numpy as np
 from zoetic.bodies import Body
 from zoetic.control import Controller
 from zoetic.errors import ZoeticError
-from zoetic.physics import Medium, State, get_medium, rest_state, simulate
-from zoetic.tasks import Task
+from zoetic.physics import Medium, State, get_medium, simulate
+from zoetic.tasks import Task, start_state
+from zoetic.tasks.terms import BodyFrame, Signals, evaluate_terms, term_names
+
+
+def control_energy_xp(xp, u_nodes, h: float, nu1: float, nu2: float):
+    """Return E_u (K,) for nodal values u (K, A, M) spaced h seconds apart, with module xp."""
+    e = xp.zeros(u_nodes.shape[0])
+    if nu1:
+        d1 = u_nodes[..., 1:] - u_nodes[..., :-1]
+        e = e + nu1 / (2 * h**2) * xp.sum(d1**2, axis=(-2, -1))
+    if nu2:
+        d2 = u_nodes[..., 2:] - 2 * u_nodes[..., 1:-1] + u_nodes[..., :-2]
+        e = e + nu2 / (2 * h**4) * xp.sum(d2**2, axis=(-2, -1))
+    return e
 
 
 def control_energy(u_nodes: np.ndarray, h: float, nu1: float, nu2: float) -> np.ndarray:
     """Return E_u (K,) for nodal values u (K, A, M) spaced h seconds apart."""
-    e = np.zeros(u_nodes.shape[0])
-    if nu1:
-        d1 = np.diff(u_nodes, axis=-1)
-        e += nu1 / (2 * h**2) * np.sum(d1**2, axis=(-2, -1))
-    if nu2:
-        d2 = u_nodes[..., 2:] - 2 * u_nodes[..., 1:-1] + u_nodes[..., :-2]
-        e += nu2 / (2 * h**4) * np.sum(d2**2, axis=(-2, -1))
-    return e
+    return control_energy_xp(np, np.asarray(u_nodes, float), h, nu1, nu2)
 
 
-def _xz_unit(v: np.ndarray) -> np.ndarray:
-    w = v[..., [0, 2]]
-    return w / (np.linalg.norm(w, axis=-1, keepdims=True) + 1e-12)
+def signals(task: Task, body: Body, positions, activations=None, dt: float = 0.05,
+            medium: Medium | str | None = None, xp=np, frame: BodyFrame | None = None) -> Signals:
+    """Return what a task's terms see of recordings (K, R, N, 3) taken ``dt`` seconds apart."""
+    k, r = positions.shape[:2]
+    if activations is None:
+        activations = xp.zeros((k, r, body.n_actuators))
+    level = get_medium(medium or body.medium).water_level
+    return Signals(xp, frame or BodyFrame.of(body), positions, activations, np.arange(r) * dt,
+                   level, task.horizon)  # fmt: skip
 
 
 def heading_angles(body: Body, positions: np.ndarray) -> np.ndarray:
     """Return the unwrapped heading (rad, left turns positive) over time, (K, R)."""
-    w = body.mass / body.total_mass
-    com = np.einsum("krnd,n->krd", positions, w)
-    h = _xz_unit(positions[:, :, body.head] - com)
-    return np.unwrap(np.arctan2(h[..., 1], h[..., 0]), axis=1)
+    return Signals(np, BodyFrame.of(body), positions, None, np.zeros(0), 0.0, 1.0).heading
 
 
-def motion_terms(task: Task, body: Body, positions: np.ndarray, horizon: float) -> dict:
-    """Return each term's raw value (K,) for recorded positions (K, R, N, 3)."""
-    w = body.mass / body.total_mass
-    com = np.einsum("krnd,n->krd", positions, w)
-    disp = com[:, -1] - com[:, 0]
-    h0 = _xz_unit(positions[:, 0, body.head] - com[:, 0])
-    left0 = np.stack([-h0[:, 1], h0[:, 0]], axis=-1)
-    along = np.sum(disp[:, [0, 2]] * h0, axis=-1)
-    out = {}
-    for t in task.terms:
-        if t.kind == "distance_along_heading":
-            v = along
-        elif t.kind == "lateral_deviation":
-            v = np.sum(disp[:, [0, 2]] * left0, axis=-1) ** 2
-        elif t.kind == "depth_keeping":
-            v = np.mean((com[:, :, 1] - com[:, :1, 1]) ** 2, axis=1)
-        elif t.kind == "heading_change":
-            ang = heading_angles(body, positions)
-            v = (ang[:, -1] - ang[:, 0] - t.target) ** 2
-        elif t.kind == "goal_distance2":
-            goal = positions[:, 0, body.head] + np.asarray(t.goal)
-            v = np.sum((positions[:, -1, body.head] - goal) ** 2, axis=-1)
-        elif t.kind == "speed_deviation":
-            v = (along / horizon - t.target) ** 2
-        else:  # pragma: no cover - tasks are validated on load
-            raise ValueError(t.kind)
-        out[t.kind] = v
-    return out
+def motion_terms(task: Task, body: Body, positions: np.ndarray, horizon: float | None = None,
+                 activations=None, dt: float = 0.05, medium=None) -> dict:  # fmt: skip
+    """Return each term's raw value (K,) for recorded positions (K, R, N, 3), by term name."""
+    s = signals(task, body, positions, activations, dt, medium)
+    if horizon is not None:
+        s.horizon = float(horizon)
+    return dict(zip(term_names(task.terms), evaluate_terms(np, s, task.terms), strict=True))
 
 
 @dataclass(frozen=True)
@@ -106,8 +95,9 @@ class Objective:
         self.medium = get_medium(medium or body.medium)
         self.dt = float(dt or body.dt)
         self.steps = int(round(task.horizon / self.dt))
-        self.record_every = max(1, int(round(0.05 / self.dt)))
-        self.start = start
+        self.record_every = max(1, int(round(1.0 / (task.record_hz * self.dt))))
+        self.start = start if start is not None else start_state(task, body, self.medium)
+        self.frame = BodyFrame.of(body)
         times = np.arange(self.steps) * self.dt
         self._basis = template.design_matrix(times)  # (T, M): activations are linear in params
         self.node_times = np.linspace(0.0, task.horizon, task.nodes)
@@ -172,20 +162,31 @@ class Objective:
 
     def simulate(self, params: np.ndarray):
         """Return the Trajectory of each parameter vector over the task's horizon."""
-        tables = self.tables(params)
+        return self._run(self.tables(params))
+
+    def _run(self, tables: np.ndarray):
         k = tables.shape[0]
-        start = self.start if self.start is not None else rest_state(self.body, 1)
+        start = self.start
         state = State(
             np.repeat(start.positions[:1], k, axis=0), np.repeat(start.velocities[:1], k, axis=0)
         )
         return simulate(self.body, tables, self.medium, self.dt, state, self.record_every)
 
+    def record_rows(self, n_records: int) -> np.ndarray:
+        """Return the activation-table rows applied at each recorded instant, (R,)."""
+        return np.minimum(np.arange(n_records) * self.record_every, self.steps - 1)
+
     def evaluate(self, params: np.ndarray) -> Evaluation:
         """Return the Evaluation of a batch of parameter vectors (K, dim)."""
         params = np.atleast_2d(params)
-        traj = self.simulate(params)
-        terms = motion_terms(self.task, self.body, traj.positions, self.task.horizon)
-        e_v = sum(t.weight * terms[t.kind] for t in self.task.terms)
+        tables = self.tables(params)
+        traj = self._run(tables)
+        acts = tables[:, self.record_rows(traj.positions.shape[1])]
+        s = signals(self.task, self.body, traj.positions, acts, self.record_every * self.dt,
+                    self.medium, frame=self.frame)  # fmt: skip
+        values = evaluate_terms(np, s, self.task.terms)
+        terms = dict(zip(term_names(self.task.terms), values, strict=True))
+        e_v = sum(t.weight * v for t, v in zip(self.task.terms, values, strict=True))
         e_u = self.control_cost(params)
         e = self.task.mu1 * e_u + self.task.mu2 * e_v
         failed = traj.failed | ~np.isfinite(e)

@@ -1,14 +1,20 @@
 """A learning run: optimizer x objective x evaluator, checkpointed, resumable, reproducible.
 
-The checkpoint is the log of every ask/tell exchange. Because each optimizer is deterministic
-given its seed, resuming rebuilds it from ``config.toml`` and replays the log (no simulation),
-which leaves it in exactly the state it had, then carries on to the same budget: an
-interrupted run and an uninterrupted one with the same seed end with the same result.
+The checkpoint (``checkpoint.npz``) holds the log of every evaluation and the optimizer's
+whole state (``state_dict``), with a SHA-256 checksum over both; it is written atomically and
+the previous one is kept as ``checkpoint.prev.npz``. Resuming rebuilds the problem from
+``config.toml`` and restores the optimizer's state (nothing is replayed), then carries on to
+the same budget: an interrupted run and an uninterrupted one with the same seed end with the
+same history. The budget is an upper bound: a batch that would pass it is cut short.
 """
 
 from __future__ import annotations
 
+import hashlib
 import io
+import json
+import os
+import shutil
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -23,7 +29,7 @@ from zoetic.io import atomic_write_bytes, read_toml, write_toml
 from zoetic.learn.evaluate import make_evaluator
 from zoetic.learn.objective import Objective
 from zoetic.learn.optimizers import Optimizer, make_optimizer
-from zoetic.tasks import Task, load_task, parse_task
+from zoetic.tasks import Task, check_fits, load_task, parse_task
 
 
 @dataclass
@@ -65,10 +71,7 @@ def build(config: LearnConfig, task: Task | None = None) -> Setup:
     """Return the body, task, objective and a fresh optimizer for a configuration."""
     body = load_animal(config.animal)
     task = task or load_task(config.task)
-    if task.animals and body.name not in task.animals:
-        raise ZoeticError(
-            f"task {task.name!r} is for {', '.join(task.animals)}, not the {body.name}"
-        )
+    check_fits(task, body, config.medium)
     m = config.nodes or task.nodes
     if config.controller == "time":
         template = time_domain(body, m, task.horizon, interp=config.interp)
@@ -89,6 +92,7 @@ def build(config: LearnConfig, task: Task | None = None) -> Setup:
         options["popsize"] = config.popsize
     if config.optimizer == "anneal" and config.chains > 1:
         options["chains"] = config.chains
+    options |= config.extra.get("optimizer", {})
     opt = make_optimizer(config.optimizer, x0, lo, hi, config.seed, config.budget, **options)
     return Setup(config, task, objective, opt, template)
 
@@ -112,23 +116,6 @@ class Log:
         self.wall.extend([wall] * len(ev.E))
         self.batches.append(len(ev.E))
 
-    def save(self, path: Path) -> None:
-        buf = io.BytesIO()
-        np.savez_compressed(
-            buf, X=np.array(self.X), E=np.array(self.E), E_u=np.array(self.E_u),
-            E_v=np.array(self.E_v), wall=np.array(self.wall), batches=np.array(self.batches),
-        )  # fmt: skip
-        atomic_write_bytes(path, buf.getvalue())
-
-    @classmethod
-    def load(cls, path: Path) -> Log:
-        try:
-            with np.load(path) as z:
-                return cls(*(list(z[k]) for k in ("X", "E", "E_u", "E_v", "wall")),
-                           batches=list(z["batches"]))  # fmt: skip
-        except (OSError, KeyError, ValueError) as exc:
-            raise RunDirError(f"{path}: unreadable checkpoint ({exc})") from None
-
     def history_csv(self) -> bytes:
         best = np.minimum.accumulate(np.array(self.E)) if self.E else np.array([])
         lines = ["evaluation,E,E_u,E_v,best_E,wall_time"]
@@ -139,20 +126,98 @@ class Log:
         return ("\n".join(lines) + "\n").encode()
 
 
-def _replay(opt: Optimizer, log: Log) -> None:
-    """Feed a fresh optimizer the logged exchanges, checking it asks for the same points."""
-    X = np.array(log.X)
-    E = np.array(log.E)
-    i = 0
-    for n in log.batches:
-        asked = opt.ask()
-        if asked.shape[0] != n or not np.allclose(asked, X[i : i + n], rtol=0, atol=1e-12):
+CHECKPOINT = "checkpoint.npz"
+PREVIOUS = "checkpoint.prev.npz"
+LOG_KEYS = ("X", "E", "E_u", "E_v", "wall", "batches")
+
+
+def _digest(arrays: dict[str, np.ndarray]) -> str:
+    h = hashlib.sha256()
+    for key in sorted(arrays):
+        a = np.ascontiguousarray(arrays[key])
+        h.update(f"{key}|{a.dtype.str}|{a.shape}|".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def checkpoint_bytes(log: Log, state: dict, config: dict | None = None) -> bytes:
+    """Return the checkpoint file's bytes: the log, the optimizer state, the run's settings
+    (to tell an edited config.toml on resume) and their checksum."""
+    arrays = {k: np.array(getattr(log, k)) for k in LOG_KEYS}
+    if config is not None:
+        text = json.dumps(config, sort_keys=True, default=str)
+        arrays["config_json"] = np.frombuffer(text.encode(), dtype=np.uint8)
+    plain = {}
+    for key, value in state.items():
+        if isinstance(value, np.ndarray):
+            arrays[f"opt.{key}"] = value
+        else:
+            plain[key] = value
+    arrays["opt_json"] = np.frombuffer(json.dumps(plain).encode(), dtype=np.uint8)
+    arrays["sha256"] = np.frombuffer(_digest(arrays).encode(), dtype=np.uint8)
+    buf = io.BytesIO()
+    np.savez(buf, **arrays)
+    return buf.getvalue()
+
+
+def saved_config(path: Path) -> dict | None:
+    """Return the run settings a (verified) checkpoint was written with, if it holds them."""
+    with np.load(path, allow_pickle=False) as z:
+        if "config_json" not in z.files:
+            return None
+        return json.loads(z["config_json"].tobytes().decode())
+
+
+def edited_keys(saved: dict, now: dict) -> list[str]:
+    """Return the settings that differ between a checkpoint's and config.toml's."""
+    norm = json.loads(json.dumps(now, sort_keys=True, default=str))
+    return sorted(k for k in saved.keys() | norm.keys() if saved.get(k) != norm.get(k))
+
+
+def keep_previous(path: Path, previous: Path) -> None:
+    """Make ``previous`` a copy of ``path`` (if any) while ``path`` stays in place."""
+    if not path.exists():
+        return
+    tmp = previous.with_name(previous.name + ".tmp")
+    tmp.unlink(missing_ok=True)
+    try:
+        os.link(path, tmp)  # a second name for the same bytes: nothing is copied
+    except OSError:
+        shutil.copyfile(path, tmp)
+    os.replace(tmp, previous)
+
+
+def read_checkpoint(path: Path) -> tuple[Log, dict]:
+    """Return the log and optimizer state of a checkpoint; RunDirError if it is damaged."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in z.files}
+        if "sha256" not in arrays and "X" in arrays:
             raise RunDirError(
-                "the checkpoint does not match this configuration (the optimizer asks for "
-                "different points); was config.toml edited?"
+                f"{path}: written by an older zoetic that saved no optimizer state, so it "
+                f"cannot be resumed; start afresh with another --out (or delete {path.parent})"
             )
-        opt.tell(asked, E[i : i + n])
-        i += n
+        digest = arrays.pop("sha256").tobytes().decode()
+        if digest != _digest(arrays):
+            raise ValueError("checksum mismatch")
+        arrays.pop("config_json", None)  # read by saved_config
+        state = json.loads(arrays.pop("opt_json").tobytes().decode())
+        state |= {k[4:]: v for k, v in arrays.items() if k.startswith("opt.")}
+        log = Log(*(list(arrays[k]) for k in LOG_KEYS[:-1]),
+                  batches=[int(b) for b in arrays["batches"]])  # fmt: skip
+    except RunDirError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - any damage reads the same to the user
+        prev = path.parent / PREVIOUS
+        offer = (
+            f"the previous good checkpoint is {prev}: move it over {path} to resume from there, "
+            if path.name != PREVIOUS and prev.exists() else ""
+        )  # fmt: skip
+        raise RunDirError(
+            f"{path}: damaged checkpoint ({type(exc).__name__}: {exc}); {offer}or start afresh "
+            f"with another --out (or delete {path.parent})"
+        ) from None
+    return log, state
 
 
 class Run:
@@ -162,13 +227,15 @@ class Run:
         self.out = Path(out)
         self.setup = setup
         self.log = log or Log()
+        self._before: tuple | None = None  # (log length, batches, state) while a step runs
+        self._saved: int | None = None  # evaluations in the last checkpoint written
         self.t_start = time.perf_counter() - (self.log.wall[-1] if self.log.wall else 0.0)
 
     @classmethod
     def create(cls, out: Path, config: LearnConfig) -> Run:
         """Start a new run in ``out`` (refuses a directory that already holds one)."""
         out = Path(out)
-        if (out / "checkpoint.npz").exists():
+        if (out / CHECKPOINT).exists():
             raise RunDirError(
                 f"{out} already holds a run; resume it with --resume {out} or choose another --out"
             )
@@ -189,13 +256,27 @@ class Run:
             task = parse_task(doc["task"], str(out / "config.toml"))
         except (KeyError, TypeError) as exc:
             raise RunDirError(f"{out / 'config.toml'}: malformed ({exc})") from None
-        if config.optimizer == "gradient" and cls is Run:
-            from zoetic.learn.gradient_run import GradientRun
-
-            return GradientRun.resume_gradient(out)
         setup = build(config, task)
-        log = Log.load(out / "checkpoint.npz") if (out / "checkpoint.npz").exists() else Log()
-        _replay(setup.optimizer, log)
+        path = out / CHECKPOINT
+        if not path.exists() and (out / PREVIOUS).exists():
+            path = out / PREVIOUS  # killed between keeping the previous and writing the next
+        if not path.exists():
+            return cls(out, setup)
+        log, state = read_checkpoint(path)
+        saved = saved_config(path)
+        changed = edited_keys(saved, config.to_dict()) if saved is not None else []
+        if changed:
+            raise RunDirError(
+                f"{out / 'config.toml'}: was edited since the checkpoint was written "
+                f"({', '.join(changed)} changed); undo the edit, or start afresh with another --out"
+            )
+        try:
+            setup.optimizer.load_state_dict(state)
+        except (KeyError, ValueError, TypeError, ZoeticError) as exc:
+            raise RunDirError(
+                f"{out / CHECKPOINT}: the saved {config.optimizer} state does not fit this "
+                f"configuration ({exc}); was config.toml edited?"
+            ) from None
         return cls(out, setup, log)
 
     @property
@@ -208,7 +289,18 @@ class Run:
 
     def checkpoint(self) -> None:
         """Write checkpoint.npz, history.csv and controller.json (each atomically)."""
-        self.log.save(self.out / "checkpoint.npz")
+        state = self.setup.optimizer.state_dict()
+        if self._before is not None:  # interrupted inside a step: save the state before it
+            n, batches, state = self._before
+            for key in LOG_KEYS[:-1]:
+                del getattr(self.log, key)[n:]
+            del self.log.batches[batches:]
+            self.setup.optimizer.load_state_dict(state)
+            self._before = None
+        data = checkpoint_bytes(self.log, state, self.setup.config.to_dict())
+        keep_previous(self.out / CHECKPOINT, self.out / PREVIOUS)
+        atomic_write_bytes(self.out / CHECKPOINT, data)
+        self._saved = self.evaluations
         atomic_write_bytes(self.out / "history.csv", self.log.history_csv())
         if np.isfinite(self.setup.optimizer.best_f):
             save_controller(self.best_controller(), self.out / "controller.json")
@@ -216,12 +308,24 @@ class Run:
     def step(self, evaluator) -> int:
         """Ask, evaluate and tell one batch; return how many evaluations it made."""
         opt = self.setup.optimizer
+        self._before = (len(self.log.E), len(self.log.batches), opt.state_dict())
         X = opt.ask()
-        if len(X) == 0:
+        room = self.setup.config.budget - self.evaluations
+        if len(X) == 0 or room <= 0:
+            self._before = None
             return 0
-        ev = evaluator(self.setup.objective, X)
-        opt.tell(X, ev.E)
+        cut = len(X) > room
+        X = X[:room]
+        if opt.needs_gradient:
+            ev, grad = evaluator.value_and_grad(self.setup.objective, X)
+        else:
+            ev, grad = evaluator(self.setup.objective, X), None
+        if cut:  # the last, partial batch: counted and kept if best, not a step of the method
+            opt.record(X, ev.E)
+        else:
+            opt.tell(X, ev.E, grad)
         self.log.add(X, ev, time.perf_counter() - self.t_start)
+        self._before = None
         return len(X)
 
     def learn(self, progress: Callable[[Run], None] | None = None, every_s: float = 2.0):
@@ -240,8 +344,7 @@ class Run:
                     last = time.perf_counter()
         finally:
             evaluator.close()
-            self.checkpoint()
-            close = getattr(self.setup.optimizer, "close", None)
-            if close:
-                close()
+            if self._before is not None or self._saved != self.evaluations:
+                self.checkpoint()
+            self.setup.optimizer.close()
         return self

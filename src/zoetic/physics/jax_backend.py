@@ -4,7 +4,8 @@ The model is the one in ``reference.py`` and ``kernel.py``, term for term: sprin
 muscles, gravity and buoyancy, water panels whose force can at most stop a panel's normal
 motion in one step, fins, a penalty floor with implicit directional Coulomb friction, implicit
 nodal damping and semi-implicit Euler. Everything here is a pure function of arrays; ``jit``
-and ``vmap`` are applied only at the edge (``make_rollout``, ``make_loss``), brax-style.
+and ``vmap`` are applied only at the edge (``make_rollout``; losses in ``learn.gradient``),
+brax-style.
 
 Unlike the Numba kernel, a candidate that blows up is not reset to rest: its state simply
 becomes large or non-finite, and ``blown_up`` tells which ones did. Square roots and unit
@@ -14,8 +15,6 @@ velocities are exactly zero.
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
 from typing import NamedTuple
 
 import jax
@@ -23,21 +22,13 @@ import jax.numpy as jnp
 import numpy as np
 
 from zoetic.bodies import Body
-from zoetic.control.controllers import (
-    Controller,
-    FrequencyDomainController,
-    TimeDomainController,
-)
-from zoetic.errors import ControllerError, SimulationError
+from zoetic.errors import SimulationError
 from zoetic.physics.media import Medium, get_medium
 from zoetic.physics.simulate import VMAX
 
 F32 = jnp.float32
 TINY = 1e-12  # the kernel's guard on lengths
 TINY2 = 1e-30  # the kernel's guard on squared panel normals
-
-Objective = Callable[[jax.Array, jax.Array, jax.Array], jax.Array]
-
 
 class JaxBody(NamedTuple):
     """A Body's arrays as float32 / int32 JAX constants (fins vectorised with a node mask)."""
@@ -250,132 +241,3 @@ def blown_up(positions: jax.Array, velocities: jax.Array) -> jax.Array:
     speed2 = jnp.sum(velocities * velocities, axis=-1).max(axis=-1)
     finite = jnp.isfinite(positions).all(axis=(-1, -2)) & jnp.isfinite(speed2)
     return ~finite | (speed2 >= VMAX * VMAX)
-
-
-def _tents(t: jax.Array, duration: float, nodes: int) -> jax.Array:
-    """Return the (T, M) piecewise-linear interpolation basis on M even nodes over duration."""
-    tc = jnp.clip(t, 0.0, duration)
-    knots = jnp.linspace(0.0, duration, nodes, dtype=F32)
-    h = duration / (nodes - 1)
-    return jnp.maximum(1.0 - jnp.abs(tc[:, None] - knots[None, :]) / h, 0.0)
-
-
-def _basis(ctrl: Controller, t: np.ndarray) -> jax.Array:
-    """Return the (T, M) basis B of a controller linear in its (A, M) parameters."""
-    tj = jnp.asarray(t, F32)
-    if isinstance(ctrl, TimeDomainController) and ctrl.interp == "linear":
-        return _tents(tj, float(ctrl.duration), ctrl.nodes)
-    if isinstance(ctrl, FrequencyDomainController):
-        om, ph = jnp.asarray(ctrl.omega, F32), jnp.asarray(ctrl.phase, F32)
-        return jnp.cos(tj[:, None] * om[None, :] + ph[None, :])
-    if isinstance(ctrl, TimeDomainController):  # B-spline: a constant basis, sampled once
-        m = ctrl.nodes
-        cols = [ctrl.with_params(np.tile(e, ctrl.n_actuators)).raw(t)[:, 0] for e in np.eye(m)]
-        return jnp.asarray(np.stack(cols, axis=1), F32)
-    raise ControllerError(
-        f"no JAX sampling for a learnable {ctrl.kind!r} controller (time or frequency only)"
-    )
-
-
-def jax_table(ctrl: Controller, steps: int, dt: float, t0: float = 0.0):
-    """Return ``p -> activations (steps, A)`` in [0, 1]: the controller's table, differentiable.
-
-    A controller without learnable parameters gives its fixed table for any (empty) p.
-    """
-    t = t0 + np.arange(steps) * dt
-    n_params = ctrl.params().size
-    if n_params == 0:
-        fixed = jnp.asarray(ctrl.table(steps, dt, t0), F32)
-        return lambda p: fixed
-    basis = _basis(ctrl, t)  # (T, M)
-    shape = (ctrl.n_actuators, basis.shape[1])
-    if shape[0] * shape[1] != n_params:
-        raise ControllerError(f"{ctrl.kind} controller: {n_params} parameters, expected {shape}")
-
-    def table(p: jax.Array) -> jax.Array:
-        return jnp.clip(basis @ jnp.reshape(p, shape).T, 0.0, 1.0)
-
-    return table
-
-
-def make_loss(
-    body: Body,
-    ctrl: Controller,
-    steps: int,
-    objective: Objective,
-    medium=None,
-    dt: float | None = None,
-    state=None,
-    record_every: int | None = None,
-):
-    """Return the pure scalar loss ``p -> objective(rec (R,N,3), final x, final v)``.
-
-    It samples the controller (``jax_table``), rolls one candidate out from ``state`` (a
-    ``State`` with batch 1; default the rest pose) and applies the JAX objective. Wrap it in
-    ``jax.jit(jax.value_and_grad(...))`` (or pass it to ``learn.gradient.optimize_gradient``).
-    """
-    from zoetic.physics.simulate import rest_state
-
-    dt = float(dt or body.dt)
-    state = state or rest_state(body, 1)
-    x0 = jnp.asarray(state.positions[0], F32)
-    v0 = jnp.asarray(state.velocities[0], F32)
-    table = jax_table(ctrl, steps, dt)
-    roll = rollout_fn(body, medium, dt, record_every or steps)
-
-    def loss(p: jax.Array) -> jax.Array:
-        rec, x, v = roll(x0, v0, table(p))
-        return objective(rec, x, v)
-
-    return loss
-
-
-def swim_distance(body: Body) -> Objective:
-    """Return an objective: minus the distance the centre of mass moved along the heading."""
-    w = jnp.asarray(body.mass / body.total_mass, F32)
-    fwd = jnp.asarray(body.forward, F32)
-
-    def objective(rec: jax.Array, x: jax.Array, v: jax.Array) -> jax.Array:
-        return -jnp.dot(w @ x - w @ rec[0], fwd)
-
-    return objective
-
-
-def benchmark(
-    animal: str = "shark", seconds: float = 10.0, batch: int = 256, repeats: int = 2
-) -> dict:
-    """Return simulated seconds per wall second of the JAX batch, compile time apart."""
-    from zoetic.bodies import load_animal
-    from zoetic.control import wave_controller
-    from zoetic.physics.simulate import rest_state
-
-    body = load_animal(animal)
-    steps = int(round(seconds / body.dt))
-    rng = np.random.default_rng(0)
-    wave = wave_controller(body).table(steps, body.dt)
-    gains = rng.uniform(0.5, 1.0, (batch, 1, body.n_actuators))
-    shifts = rng.integers(0, steps, batch)
-    acts = jnp.asarray(np.stack([np.roll(wave, s, axis=0) for s in shifts]) * gains, F32)
-    st = rest_state(body, batch)
-    x0, v0 = jnp.asarray(st.positions, F32), jnp.asarray(st.velocities, F32)
-    roll = make_rollout(body, record_every=steps)
-    t0 = time.perf_counter()
-    jax.block_until_ready(roll(x0, v0, acts))
-    first = time.perf_counter() - t0
-    best = float("inf")
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = jax.block_until_ready(roll(x0, v0, acts))
-        best = min(best, time.perf_counter() - t0)
-    return {
-        "animal": animal,
-        "device": str(jax.devices()[0]),
-        "backend": jax.default_backend(),
-        "batch": batch,
-        "horizon_seconds": seconds,
-        "steps": steps,
-        "compile_seconds": round(max(first - best, 0.0), 2),
-        "run_seconds": round(best, 3),
-        "sim_seconds_per_second_batched": round(batch * seconds / best, 1),
-        "blown_up": int(np.asarray(blown_up(out[1], out[2])).sum()),
-    }

@@ -277,42 +277,9 @@ def useful_mask(result: SearchResult, threshold_cm_s: float | None = None) -> np
 
 def plot_ranking(result: SearchResult, path, top: int = 10):
     """Write ranking.png: every trial's metric from best to worst (the long-tailed curve)."""
-    import matplotlib
+    from zoetic.viz.san import plot_ranking as plot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from zoetic.viz.plots import save_figure
-
-    order = result.order
-    m = result.metrics[order]
-    m = np.where(np.isfinite(m), m, np.nan)
-    ranks = np.arange(1, len(m) + 1)
-    c = result.creature
-    fig, ax = plt.subplots(figsize=(7, 4), dpi=110)
-    ax.plot(ranks, m, color="0.3", lw=1.2)
-    ax.scatter(ranks[:top], m[:top], color="tab:red", s=14, zorder=3, label=f"kept ({top})")
-    use = useful_mask(result)[order]
-    if use.any():
-        ax.scatter(ranks[use], m[use], facecolor="none", edgecolor="tab:green", s=40,
-                   label=f"useful ({use.sum()}/{len(m)})")  # fmt: skip
-    ax.set_xlabel("rank of the random network")
-    unit = {"distance": "|x| (m), 0 if fallen", "follow": "∫ v·F dt (m)", "hop": "∫ ẋ + k y² dt"}
-    ax.set_ylabel(f"metric: {unit.get(c.metric, c.metric)}")
-    ax.set_title(f"{c.name}: {len(m)} random SANs, {result.seconds:g} s each, "
-                 f"{result.terrain} terrain (seed {result.seed})", fontsize=10)  # fmt: skip
-    ax.grid(alpha=0.3)
-    ax.legend(loc="upper right", fontsize=8)
-    sec = ax.secondary_yaxis(
-        "right",
-        functions=(lambda v: 100 * v / result.seconds, lambda s: s * result.seconds / 100),
-    )
-    if c.metric in ("distance", "follow"):
-        sec.set_ylabel("speed (cm/s)")
-    else:
-        sec.remove()
-    return save_figure(fig, path)
-
+    return plot(result, path, top)
 
 def _video_job(job: tuple) -> Path:
     """Replay one kept network and write its video; returns the video's path."""

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from zoetic.errors import ZoeticError
+from zoetic.learn.optimizers import Annealing
 from zoetic.san.network import TUNING_KEYS, Network, SanPolicy, check_fits
 
 __all__ = ["METHODS", "Param", "TuneResult", "WorldEvaluator", "tunable_parameters", "tune"]
@@ -177,7 +178,6 @@ def tune(
         raise TuneError("trials must be >= 0")
     check_fits(network, creature)
     evaluate = evaluate or WorldEvaluator(terrain, seed, seconds)
-    rng = np.random.default_rng(seed)
     params = tunable_parameters(network, creature, delta)
     if not params:
         raise TuneError(f"creature {creature.name!r} has no tunable parameters")
@@ -190,35 +190,51 @@ def tune(
         return net, (f if np.isfinite(f) else -math.inf)
 
     values = _start_values(network, creature)
+    keys = list(values)
+    sizes = [values[k].size for k in keys]
+
+    def unflat(x: np.ndarray) -> dict[str, np.ndarray]:
+        parts = np.split(np.asarray(x, dtype=float), np.cumsum(sizes)[:-1])
+        return {k: a.reshape(values[k].shape).copy() for k, a in zip(keys, parts, strict=True)}
+
+    invalid = [False]
+
+    def perturb(x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        p = params[int(rng.integers(len(params)))]
+        sign = 1 if rng.random() < 0.5 else -1
+        cand = _perturbed(unflat(x[0]), p, sign)
+        invalid[0] = cand is None
+        return x if cand is None else np.concatenate([cand[k].ravel() for k in keys])[None]
+
+    x0 = np.concatenate([values[k].ravel() for k in keys])
     start_net, f_cur = score(values)
-    best_net, f_best, f_start = start_net, f_cur, f_cur
+    f_start = f_cur
     temp = float(temperature) if temperature is not None else 0.1 * max(abs(f_cur), 1e-3)
+    # one annealing (learn.optimizers.Annealing) minimising -metric: T drops every
+    # ``per_temperature`` trials; sga is the same walk at T = 0, keeping strict improvements
+    sa = Annealing(x0, np.full(x0.size, -np.inf), np.full(x0.size, np.inf), seed,
+                   t0=temp if method == "anneal" else 0.0, alpha=cooling, perturb=perturb,
+                   max_steps=per_temperature, min_accepts=10**18,
+                   accept_ties=method == "anneal")  # fmt: skip
+    sa.tell(sa.ask(), np.array([-f_cur]))
     current = np.empty(trials)
     best = np.empty(trials)
     tried = np.full(trials, np.nan)
     accepted = 0
     for t in range(trials):
-        if method == "anneal" and t > 0 and t % per_temperature == 0:
-            temp *= cooling
-        p = params[int(rng.integers(len(params)))]
-        sign = 1 if rng.random() < 0.5 else -1
-        cand = _perturbed(values, p, sign)
-        u = rng.random()  # drawn every trial so the stream does not depend on outcomes
-        if cand is not None:
-            net, f = score(cand)
-            tried[t] = f
-            if method == "sga":
-                keep = f > f_cur
-            else:
-                keep = f >= f_cur or (np.isfinite(f) and u < math.exp((f - f_cur) / temp))
-            if keep:
-                values, f_cur = cand, f
-                accepted += 1
-                if f > f_best:
-                    best_net, f_best = net, f
-        current[t], best[t] = f_cur, f_best
+        X = sa.ask()
+        if invalid[0]:
+            g = np.inf  # not evaluated; rejected, but the trial counts in the schedule
+        else:
+            _, f = score(unflat(X[0]))
+            tried[t], g = f, -f
+        sa.tell(X, np.array([g]))
+        accepted += int(sa.last_accept[0])
+        current[t], best[t] = -sa.f[0], -sa.best_f
         if progress is not None:
-            progress(t + 1, trials, f_best)
+            progress(t + 1, trials, -sa.best_f)
+    f_best = -sa.best_f
+    best_net = _network(network, unflat(sa.best_x)) if sa.best_f < -f_start else start_net
     info = dict(network.info)
     info.update(tuned=method, trials=trials, seed=seed, before=f_start, after=f_best)
     best_net = best_net.with_params(info=info)
@@ -231,27 +247,9 @@ def tune(
 
 def plot_tuning(result: TuneResult, path, title: str = ""):
     """Write tuning.png: each candidate's metric, the accepted and the best against trials."""
-    import matplotlib
+    from zoetic.viz.san import plot_tuning as plot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from zoetic.viz.plots import save_figure
-
-    t = np.arange(1, result.trials + 1)
-    fig, ax = plt.subplots(figsize=(7, 4), dpi=110)
-    tried = np.where(np.isfinite(result.tried), result.tried, np.nan)
-    ax.scatter(t, tried, s=4, color="0.7", label="candidate")
-    ax.plot(t, result.current, color="tab:blue", lw=1, label="current")
-    ax.plot(t, result.best, color="tab:red", lw=1.5, label="best")
-    ax.axhline(result.before, color="0.3", ls=":", lw=1, label="start")
-    ax.set_xlabel("trial")
-    ax.set_ylabel("metric")
-    ax.set_title(title or f"{result.method}: {result.before:.4g} -> {result.after:.4g}")
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    return save_figure(fig, path)
-
+    return plot(result, path, title)
 
 def write_tune(result: TuneResult, creature, out, terrain: str = "flat", video: bool = True):
     """Write a tune run directory (san.json, start.json, history.csv, tuning.png, video.mp4)."""

@@ -1,21 +1,46 @@
-"""Named tasks: an objective (weighted terms), a horizon and a controller size, in TOML files."""
+"""Named tasks: weighted objective terms, a horizon, a start state and the capabilities they need.
+
+A task file (TOML) holds ``name``, ``description``, ``requires`` (capabilities an animal and its
+medium must have, e.g. ``["water"]``; ``"a|b"`` accepts either), ``horizon`` (s), ``nodes``
+(controller parameters per actuator), ``mu1``/``mu2``/``nu1``/``nu2`` (the objective's weights),
+``record_hz`` (how often terms see the motion), an optional ``[start]`` table (``position``
+[x, y, z] m of the centre of mass, ``depth`` m below the water surface, ``heading`` and
+``pitch`` rad, ``speed`` m/s along the heading) and ``[[terms]]`` entries (``kind`` from
+``zoetic.tasks.terms.TERMS``, ``weight``, ``target``, ``goal``). Keys are checked strictly.
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import difflib
+import math
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
 
 from zoetic.errors import TaskError, ZoeticError
+from zoetic.tasks.terms import TERMS
+
+if TYPE_CHECKING:
+    from zoetic.bodies import Body
+    from zoetic.physics import Medium, State
 
 TASK_DIR = Path(__file__).parent
-TERM_KINDS = {
-    "distance_along_heading": "metres the centre of mass travelled along the start heading",
-    "lateral_deviation": "squared sideways displacement of the centre of mass (m^2)",
-    "depth_keeping": "mean squared change of the centre of mass's height (m^2)",
-    "heading_change": "squared error of the heading change against 'target' (rad^2)",
-    "goal_distance2": "squared distance of the head to 'goal', relative to its start (m^2)",
-    "speed_deviation": "squared deviation of the mean forward speed from 'target' (m^2/s^2)",
+TERM_KINDS = {name: d.doc for name, d in TERMS.items()}
+CAPABILITIES = {
+    "water": "its medium has water to swim in",
+    "deep-water": "water everywhere, no surface to leave",
+    "surface": "water with air above it (leaps)",
+    "ground": "a floor to crawl on",
+    "fins": "it has fins",
+    "head": "it has a head node",
+    "mirror": "it is left-right symmetric (mirrored turns)",
 }
+TOP_KEYS = ("name", "description", "requires", "horizon", "nodes", "mu1", "mu2", "nu1", "nu2",
+            "record_hz", "start", "terms")  # fmt: skip
+START_KEYS = ("position", "depth", "heading", "pitch", "speed")
+TERM_KEYS = ("kind", "weight", "target", "goal")
 
 
 @dataclass(frozen=True)
@@ -27,12 +52,32 @@ class Term:
 
 
 @dataclass(frozen=True)
+class Start:
+    """Where and how a task's rollouts start; None keeps the body's own start."""
+
+    position: tuple[float, float, float] | None = None  # m, centre of mass
+    depth: float | None = None  # m below the water surface (sets the height)
+    heading: float = 0.0  # rad, left turns (toward +z) positive
+    pitch: float = 0.0  # rad, nose up positive
+    speed: float = 0.0  # m/s along the start heading
+
+    def to_dict(self) -> dict:
+        """Return the non-default entries as a TOML-able dict."""
+        d = {"heading": self.heading, "pitch": self.pitch, "speed": self.speed}
+        if self.position is not None:
+            d["position"] = list(self.position)
+        if self.depth is not None:
+            d["depth"] = self.depth
+        return d
+
+
+@dataclass(frozen=True)
 class Task:
     """What to learn: E = mu1 * E_u + mu2 * E_v over a horizon, E_v = sum of weighted terms."""
 
     name: str
     description: str
-    animals: tuple[str, ...]
+    requires: tuple[str, ...]
     horizon: float
     nodes: int
     mu1: float
@@ -41,18 +86,32 @@ class Task:
     nu2: float
     terms: tuple[Term, ...]
     source: str = "<memory>"
+    start: Start = field(default_factory=Start)
+    record_hz: float = 20.0
 
     def to_dict(self) -> dict:
         """Return the task as a TOML-able dict (for a run's config.toml)."""
         return {
-            "name": self.name, "description": self.description, "animals": list(self.animals),
+            "name": self.name, "description": self.description, "requires": list(self.requires),
             "horizon": self.horizon, "nodes": self.nodes, "mu1": self.mu1, "mu2": self.mu2,
-            "nu1": self.nu1, "nu2": self.nu2,
+            "nu1": self.nu1, "nu2": self.nu2, "record_hz": self.record_hz,
+            "start": self.start.to_dict(),
             "terms": [
                 {"kind": t.kind, "weight": t.weight, "target": t.target, "goal": list(t.goal)}
                 for t in self.terms
             ],
         }  # fmt: skip
+
+
+def _did_you_mean(word: str, choices) -> str:
+    close = difflib.get_close_matches(str(word), list(choices), n=1)
+    return f"; did you mean {close[0]!r}?" if close else f" (choose from {', '.join(choices)})"
+
+
+def _check_keys(d: dict, allowed, where: str) -> None:
+    for key in d:
+        if key not in allowed:
+            raise TaskError(f"{where}: unknown key {key!r}{_did_you_mean(key, allowed)}")
 
 
 def _num(d: dict, key: str, where: str, default=None) -> float:
@@ -61,12 +120,45 @@ def _num(d: dict, key: str, where: str, default=None) -> float:
         raise TaskError(f"{where}: missing '{key}'")
     if isinstance(v, bool) or not isinstance(v, int | float):
         raise TaskError(f"{where}: '{key}' must be a number, got {v!r}")
+    if not math.isfinite(v):
+        raise TaskError(f"{where}: '{key}' must be finite, got {v!r}")
     return float(v)
+
+
+def _vec3(d: dict, key: str, where: str, default=None):
+    v = d.get(key, default)
+    if v is None:
+        return None
+    if not (isinstance(v, list | tuple) and len(v) == 3):
+        raise TaskError(f"{where}: '{key}' must be [x, y, z], got {v!r}")
+    return tuple(_num({"v": g}, "v", f"{where}: '{key}'") for g in v)
+
+
+def _parse_start(raw, where: str) -> Start:
+    if not isinstance(raw, dict):
+        raise TaskError(f"{where}: [start] must be a table")
+    _check_keys(raw, START_KEYS, f"{where}: start")
+    w = f"{where}: start"
+    depth = None if raw.get("depth") is None else _num(raw, "depth", w)
+    return Start(_vec3(raw, "position", w), depth, _num(raw, "heading", w, 0.0),
+                 _num(raw, "pitch", w, 0.0), _num(raw, "speed", w, 0.0))  # fmt: skip
+
+
+def _parse_requires(raw, where: str) -> tuple[str, ...]:
+    if not isinstance(raw, list) or not all(isinstance(r, str) for r in raw):
+        raise TaskError(f"{where}: 'requires' must be a list of capabilities, got {raw!r}")
+    for r in raw:
+        for alt in r.split("|"):
+            if alt not in CAPABILITIES:
+                raise TaskError(f"{where}: requires: unknown capability {alt!r}"
+                                f"{_did_you_mean(alt, CAPABILITIES)}")  # fmt: skip
+    return tuple(raw)
 
 
 def parse_task(doc: dict, source: str = "<memory>") -> Task:
     """Return the Task a parsed TOML document describes; TaskError names what is wrong."""
     where = source
+    _check_keys(doc, TOP_KEYS, where)
     name = doc.get("name")
     if not isinstance(name, str):
         raise TaskError(f"{where}: missing 'name'")
@@ -76,30 +168,27 @@ def parse_task(doc: dict, source: str = "<memory>") -> Task:
     nodes = int(_num(doc, "nodes", where, 15))
     if nodes < 2:
         raise TaskError(f"{where}: 'nodes' must be at least 2, got {nodes}")
+    record_hz = _num(doc, "record_hz", where, 20.0)
+    if record_hz <= 0:
+        raise TaskError(f"{where}: 'record_hz' must be positive, got {record_hz}")
     terms = []
     raw_terms = doc.get("terms", [])
     if not isinstance(raw_terms, list) or not raw_terms:
         raise TaskError(f"{where}: a task needs at least one [[terms]] entry")
     for k, t in enumerate(raw_terms):
         w = f"{where}: terms[{k}]"
-        kind = t.get("kind") if isinstance(t, dict) else None
-        if kind not in TERM_KINDS:
-            raise TaskError(f"{w}: unknown kind {kind!r} (choose from {', '.join(TERM_KINDS)})")
-        goal = t.get("goal", [0.0, 0.0, 0.0])
-        if not (isinstance(goal, list) and len(goal) == 3):
-            raise TaskError(f"{w}: 'goal' must be [x, y, z]")
-        terms.append(
-            Term(
-                kind,
-                _num(t, "weight", w, 1.0),
-                _num(t, "target", w, 0.0),
-                tuple(float(g) for g in goal),
-            )  # fmt: skip
-        )
+        if not isinstance(t, dict):
+            raise TaskError(f"{w}: must be a table")
+        _check_keys(t, TERM_KEYS, w)
+        kind = t.get("kind")
+        if kind not in TERMS:
+            raise TaskError(f"{w}: unknown kind {kind!r}{_did_you_mean(kind, TERMS)}")
+        terms.append(Term(kind, _num(t, "weight", w, 1.0), _num(t, "target", w, 0.0),
+                          _vec3(t, "goal", w, [0.0, 0.0, 0.0])))  # fmt: skip
     return Task(
         name=name,
         description=str(doc.get("description", "")),
-        animals=tuple(doc.get("animals", [])),
+        requires=_parse_requires(doc.get("requires", []), where),
         horizon=horizon,
         nodes=nodes,
         mu1=_num(doc, "mu1", where, 0.0),
@@ -108,6 +197,8 @@ def parse_task(doc: dict, source: str = "<memory>") -> Task:
         nu2=_num(doc, "nu2", where, 0.0),
         terms=tuple(terms),
         source=source,
+        start=_parse_start(doc.get("start", {}), where),
+        record_hz=record_hz,
     )
 
 
@@ -133,3 +224,75 @@ def load_task(name_or_path: str | Path) -> Task:
     except ZoeticError as exc:
         raise TaskError(str(exc)) from None
     return parse_task(doc, str(path))
+
+
+def capabilities(body: Body, medium: Medium | str | None = None) -> set[str]:
+    """Return the capabilities an animal has in a medium (default: its own)."""
+    from zoetic.physics import get_medium
+    from zoetic.physics.media import FAR
+
+    med = get_medium(medium or body.medium)
+    caps = {"head"} if 0 <= body.head < body.n_nodes else set()
+    if med.water_drag > 0 and med.water_level > -FAR:
+        caps.add("water")
+        caps.add("deep-water" if med.water_level >= FAR else "surface")
+    if med.floor:
+        caps.add("ground")
+    if len(body.fin_area):
+        caps.add("fins")
+    if body.is_mirror_symmetric:
+        caps.add("mirror")
+    return caps
+
+
+def missing(task: Task, body: Body, medium: Medium | str | None = None) -> list[str]:
+    """Return the task's requirements the animal (in that medium) does not meet."""
+    caps = capabilities(body, medium)
+    return [r for r in task.requires if not set(r.split("|")) & caps]
+
+
+def fits(task: Task, body: Body, medium: Medium | str | None = None) -> bool:
+    """Return True when the task can apply to the animal in that medium."""
+    return not missing(task, body, medium)
+
+
+def check_fits(task: Task, body: Body, medium: Medium | str | None = None) -> None:
+    """Raise TaskError saying why the task cannot apply to the animal, if it cannot."""
+    lack = missing(task, body, medium)
+    if lack:
+        med = medium if isinstance(medium, str) else getattr(medium, "name", None) or body.medium
+        needs = ", ".join(" or ".join(r.split("|")) for r in lack)
+        raise TaskError(
+            f"task {task.name!r} ({task.source}) cannot apply to the {body.name} (medium "
+            f"{med!r}): it requires {needs}, which the {body.name} does not have there"
+        )
+
+
+def start_state(task: Task, body: Body, medium: Medium | str | None = None) -> State:
+    """Return the task's start state for a body (batch 1): placed, turned, pitched, moving."""
+    from zoetic.physics import State, get_medium, rest_state
+    from zoetic.physics.media import FAR
+
+    st = task.start
+    base = rest_state(body, 1)
+    if st == Start():
+        return base
+    w = body.mass / body.total_mass
+    pos = base.positions[0]
+    com = w @ pos
+    cp, sp = math.cos(st.pitch), math.sin(st.pitch)
+    ch, sh = math.cos(st.heading), math.sin(st.heading)
+    pitch = np.array([[cp, -sp, 0.0], [sp, cp, 0.0], [0.0, 0.0, 1.0]])  # x toward +y
+    turn = np.array([[ch, 0.0, -sh], [0.0, 1.0, 0.0], [sh, 0.0, ch]])  # x toward +z
+    rot = turn @ pitch
+    target = np.array(st.position if st.position is not None else com, float)
+    if st.depth is not None:
+        level = get_medium(medium or body.medium).water_level
+        if abs(level) >= FAR:
+            raise TaskError(f"{task.source}: start depth needs a water surface, and "
+                            f"{medium or body.medium} has none")  # fmt: skip
+        target[1] = level - st.depth
+    new = (pos - com) @ rot.T + target
+    fwd = rot @ np.asarray(body.forward, float)
+    vel = np.broadcast_to(st.speed * fwd, new.shape)
+    return State(new[None].copy(), np.array(vel)[None].copy())

@@ -212,10 +212,10 @@ def _prism(outline: np.ndarray, depth: float, axis: str) -> tuple[np.ndarray, np
 def _from_san(run: Path, fps: float) -> Scene:
     from PIL import ImageColor
 
-    from zoetic.san.draw import _LINK_COLOURS, link_outline
     from zoetic.san.network import load_with_creature
     from zoetic.san.search import speed_cm_s
     from zoetic.san.show import replay, resolve_network
+    from zoetic.viz.san import _LINK_COLOURS, link_outline
 
     file = resolve_network(run)
     net, c = load_with_creature(file)

@@ -1,0 +1,242 @@
+"""Objective terms, each defined once for NumPy and JAX.
+
+A term is a function ``term(xp, s, params) -> (K,)`` written against an array module ``xp``
+(``numpy`` or ``jax.numpy``) and a ``Signals`` view of a batch of recordings: positions
+(K, R, N, 3), the activations applied at those instants (K, R, A), their times (R,), and the
+medium's water level. ``Signals`` derives what terms read (centre of mass, its velocity, the
+body frame's heading, pitch and roll, which nodes are in water) with the same ``xp``, so the
+NumPy objective and the JAX gradient evaluate the very same formulas. The registry ``TERMS``
+is what task files name; a conformance test runs every entry through both modules.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from zoetic.bodies import Body
+
+EPS = 1e-12  # guard on lengths (as the objective always used)
+
+
+@dataclass(frozen=True)
+class BodyFrame:
+    """The constant arrays terms need from a body: mass weights, head, mirror pairs."""
+
+    weights: np.ndarray  # (N,) mass fractions
+    head: int
+    left: np.ndarray  # (P,) nodes on the left (z > 0) that have a mirror node
+    right: np.ndarray  # (P,) their mirror nodes
+
+    @classmethod
+    def of(cls, body: Body) -> BodyFrame:
+        """Return the frame arrays of a body."""
+        z = body.rest_pos[:, 2] - np.average(body.rest_pos[:, 2], weights=body.mass)
+        left = np.array([n for n in range(body.n_nodes)
+                         if body.node_mirror[n] >= 0 and z[n] > 1e-9], dtype=int)  # fmt: skip
+        right = body.node_mirror[left].astype(int) if left.size else np.zeros(0, int)
+        return cls(body.mass / body.total_mass, int(body.head), left, right)
+
+
+def _xz(v):
+    return v[..., 0], v[..., 2]
+
+
+def _norm_xz(xp, v):
+    x, z = _xz(v)
+    return xp.sqrt(x * x + z * z)
+
+
+class Signals:
+    """What a batch of recordings shows, derived lazily with one array module ``xp``."""
+
+    def __init__(self, xp, frame: BodyFrame, positions, activations, times, level: float,
+                 horizon: float):  # fmt: skip
+        self.xp = xp
+        self.frame = frame
+        self.positions = positions  # (K, R, N, 3)
+        self.activations = activations  # (K, R, A)
+        self.times = times  # (R,)
+        self.level = level
+        self.horizon = float(horizon)
+
+    @cached_property
+    def com(self):
+        """Centre of mass (K, R, 3)."""
+        return self.xp.einsum("krnd,n->krd", self.positions, self.xp.asarray(self.frame.weights))
+
+    @cached_property
+    def head(self):
+        """Head node position (K, R, 3)."""
+        return self.positions[:, :, self.frame.head]
+
+    @cached_property
+    def heading_xz(self):
+        """Unit top-view heading (K, R, 2): the head's direction from the centre of mass."""
+        xp = self.xp
+        d = self.head - self.com
+        n = _norm_xz(xp, d) + EPS
+        return xp.stack([d[..., 0] / n, d[..., 2] / n], axis=-1)
+
+    @cached_property
+    def heading(self):
+        """Unwrapped heading (K, R), rad, left turns (toward +z) positive."""
+        h = self.heading_xz
+        return self.xp.unwrap(self.xp.arctan2(h[..., 1], h[..., 0]), axis=1)
+
+    @cached_property
+    def pitch(self):
+        """Pitch (K, R), rad, nose up positive: the head's elevation seen from the centre."""
+        d = self.head - self.com
+        return self.xp.arctan2(d[..., 1], _norm_xz(self.xp, d) + EPS)
+
+    @cached_property
+    def roll(self):
+        """Roll (K, R), rad: the tilt of the left-right axis (mirror pairs); 0 without pairs."""
+        xp = self.xp
+        if self.frame.left.size == 0:
+            return xp.zeros(self.positions.shape[:2])
+        pos = self.positions
+        lat = xp.mean(pos[:, :, self.frame.left] - pos[:, :, self.frame.right], axis=2)
+        return xp.arctan2(-lat[..., 1], _norm_xz(xp, lat) + EPS)
+
+    @cached_property
+    def velocity(self):
+        """Centre-of-mass velocity (K, R-1, 3), m/s, between records."""
+        dt = self.times[1] - self.times[0] if len(self.times) > 1 else 1.0
+        return (self.com[:, 1:] - self.com[:, :-1]) / dt
+
+    @cached_property
+    def in_water(self):
+        """1.0 where a node is under the water level, else 0.0, (K, R, N)."""
+        return self.xp.where(self.positions[..., 1] < self.level, 1.0, 0.0)
+
+    @cached_property
+    def displacement_xz(self):
+        """Top-view displacement of the centre of mass, start to end, (K, 2)."""
+        d = self.com[:, -1] - self.com[:, 0]
+        return self.xp.stack([d[:, 0], d[:, 2]], axis=-1)
+
+    @cached_property
+    def along(self):
+        """Metres travelled along the start heading, (K,)."""
+        return self.xp.sum(self.displacement_xz * self.heading_xz[:, 0], axis=-1)
+
+
+@dataclass(frozen=True)
+class TermParams:
+    """A term's settings from the task file: weight, target and goal."""
+
+    target: float = 0.0
+    goal: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+TermFn = Callable[[Any, Signals, TermParams], Any]
+
+
+@dataclass(frozen=True)
+class TermDef:
+    """One registered term: its name, what it measures (with units) and its formula."""
+
+    name: str
+    doc: str
+    fn: TermFn
+
+
+TERMS: dict[str, TermDef] = {}
+
+
+def term(doc: str) -> Callable[[TermFn], TermFn]:
+    """Register the decorated function as the term of its name."""
+
+    def register(fn: TermFn) -> TermFn:
+        TERMS[fn.__name__] = TermDef(fn.__name__, doc, fn)
+        return fn
+
+    return register
+
+
+@term("metres the centre of mass travelled along the start heading")
+def distance_along_heading(xp, s: Signals, p: TermParams):
+    return s.along
+
+
+@term("squared sideways displacement of the centre of mass (m^2)")
+def lateral_deviation(xp, s: Signals, p: TermParams):
+    h0 = s.heading_xz[:, 0]
+    left0 = xp.stack([-h0[:, 1], h0[:, 0]], axis=-1)
+    return xp.sum(s.displacement_xz * left0, axis=-1) ** 2
+
+
+@term("mean squared change of the centre of mass's height (m^2)")
+def depth_keeping(xp, s: Signals, p: TermParams):
+    y = s.com[:, :, 1]
+    return xp.mean((y - y[:, :1]) ** 2, axis=1)
+
+
+@term("squared error of the heading change against 'target' (rad^2)")
+def heading_change(xp, s: Signals, p: TermParams):
+    return (s.heading[:, -1] - s.heading[:, 0] - p.target) ** 2
+
+
+@term("squared distance of the head to 'goal', relative to its start (m^2)")
+def goal_distance2(xp, s: Signals, p: TermParams):
+    goal = s.head[:, 0] + xp.asarray(p.goal)
+    return xp.sum((s.head[:, -1] - goal) ** 2, axis=-1)
+
+
+@term("squared deviation of the mean forward speed from 'target' (m^2/s^2)")
+def speed_deviation(xp, s: Signals, p: TermParams):
+    return (s.along / s.horizon - p.target) ** 2
+
+
+@term("squared error of the final pitch against 'target' (rad^2, nose up positive)")
+def final_pitch(xp, s: Signals, p: TermParams):
+    return (s.pitch[:, -1] - p.target) ** 2
+
+
+@term("mean squared roll of the body's left-right axis (rad^2): staying upright")
+def roll_keeping(xp, s: Signals, p: TermParams):
+    return xp.mean(s.roll**2, axis=1)
+
+
+@term("greatest height of the centre of mass above its start (m): leaps")
+def max_height(xp, s: Signals, p: TermParams):
+    y = s.com[:, :, 1]
+    return xp.max(y, axis=1) - y[:, 0]
+
+
+@term("fraction of the recorded time the body is wholly out of the water")
+def air_time(xp, s: Signals, p: TermParams):
+    out = 1.0 - xp.max(s.in_water, axis=2)  # 1 when no node is wet
+    return xp.mean(out, axis=1)
+
+
+@term("mean speed of the centre of mass (m/s)")
+def mean_speed(xp, s: Signals, p: TermParams):
+    v = s.velocity
+    return xp.mean(xp.sqrt(xp.sum(v * v, axis=-1) + EPS), axis=1)
+
+
+@term("mean squared muscle activation: effort")
+def effort(xp, s: Signals, p: TermParams):
+    return xp.mean(s.activations**2, axis=(1, 2))
+
+
+def evaluate_terms(xp, s: Signals, terms) -> list:
+    """Return each task term's raw value (K,) in order, for ``Term``-like items."""
+    return [TERMS[t.kind].fn(xp, s, TermParams(t.target, t.goal)) for t in terms]
+
+
+def term_names(terms) -> list[str]:
+    """Return result keys for a task's terms: the kind, numbered when a kind repeats."""
+    seen: dict[str, int] = {}
+    out = []
+    for t in terms:
+        seen[t.kind] = seen.get(t.kind, 0) + 1
+        out.append(t.kind if seen[t.kind] == 1 else f"{t.kind}#{seen[t.kind]}")
+    return out
