@@ -159,7 +159,7 @@ def test_learning_improves_and_writes_a_loadable_controller(tmp_path, short_task
     e = np.array(run.log.E)
     assert run.setup.optimizer.best_f < e[:8].min()
     ctrl = load_controller(tmp_path / "r" / "controller.json", load_animal("shark"))
-    assert ctrl.kind == "time"
+    assert ctrl.kind == "frequency"  # the default periodic gait
     lines = (tmp_path / "r" / "history.csv").read_text().splitlines()
     assert lines[0] == "evaluation,E,E_u,E_v,best_E,wall_time" and len(lines) == len(e) + 1
 

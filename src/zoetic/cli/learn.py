@@ -71,13 +71,20 @@ def run_with_progress(run, label: str) -> None:
 def learn(
     animal: str = typer.Argument(None, help="Zoo animal name or animal .toml file."),
     task: str = typer.Option("swim-straight", help="Task name (see `zoetic tasks`) or .toml file."),
-    optimizer: str = typer.Option("anneal", help="anneal, simplex, cmaes or gradient."),
+    optimizer: str = typer.Option("cmaes", help="cmaes, anneal, simplex or gradient."),
     budget: int = typer.Option(3500, min=1, help="Evaluations (simulations) to spend."),
     seed: int = typer.Option(0, help="Random seed: same seed, same result."),
-    controller: str = typer.Option("time", help="Representation: time or frequency."),
-    nodes: int = typer.Option(None, min=2, help="M, parameters per actuator (default: task's)."),
+    controller: str = typer.Option(
+        "periodic", help="Representation: periodic (a gait that repeats), time or frequency."
+    ),
+    nodes: int = typer.Option(
+        None, min=2, help="M, parameters per actuator (default 5 periodic, else the task's)."
+    ),
+    frequency: float = typer.Option(
+        None, min=0.01, help="Periodic controller's base frequency, Hz (default: animal's wave)."
+    ),
     interp: str = typer.Option("linear", help="Time-domain interpolation: linear or bspline."),
-    popsize: int = typer.Option(None, min=2, help="CMA-ES population size."),
+    popsize: int = typer.Option(None, min=2, help="CMA-ES population size (default 32)."),
     chains: int = typer.Option(1, min=1, help="Parallel annealing chains."),
     evaluator: str = typer.Option("batch", help="batch (Numba threads) or process (pool)."),
     coupling: str = typer.Option("none", help="none, or antiphase: right side = 1 - left."),
@@ -98,7 +105,7 @@ def learn(
         config = LearnConfig(
             animal=animal, task=task, optimizer=optimizer, budget=budget, seed=seed,
             controller=controller, nodes=nodes, interp=interp, popsize=popsize, chains=chains,
-            evaluator=evaluator, coupling=coupling,
+            evaluator=evaluator, coupling=coupling, frequency=frequency,
         )  # fmt: skip
         out = out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}"
         if config.optimizer == "gradient":

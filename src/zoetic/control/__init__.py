@@ -71,9 +71,10 @@ def time_domain(body: Body, nodes: int, duration: float, values=None, interp="li
     return TimeDomainController(body.name, body.actuator_names, duration, vals, interp)
 
 
-def frequency_domain(body: Body, nodes: int, duration: float, amplitudes=None):
-    """Return a frequency-domain controller on a Fourier basis of M functions over duration."""
-    omega, phase = fourier_basis(nodes, duration)
+def frequency_domain(body: Body, nodes: int, duration: float, amplitudes=None, base=None):
+    """Return a frequency-domain controller on a Fourier basis of M functions over duration
+    (harmonics of 1/duration), or of harmonics of ``base`` Hz (a periodic gait)."""
+    omega, phase = fourier_basis(nodes, duration, base)
     amp = np.zeros((body.n_actuators, nodes)) if amplitudes is None else amplitudes
     return FrequencyDomainController(body.name, body.actuator_names, omega, phase, amp)
 

@@ -162,12 +162,20 @@ class TimeDomainController(Controller):
         }
 
 
-def fourier_basis(m: int, duration: float) -> tuple[np.ndarray, np.ndarray]:
-    """Return (omega, phase) of M cosine bases: a constant, then cos/sin pairs of harmonics."""
+def fourier_basis(
+    m: int, duration: float, base: float | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return (omega, phase) of M cosine bases: a constant, then cos/sin pairs of harmonics.
+
+    The harmonics are of 1/duration (the horizon, the paper's basis) or of ``base`` Hz when it
+    is given: then the signal repeats every 1/base seconds, so a gait learned on a horizon
+    keeps going when it is played longer than that.
+    """
     omega, phase = [0.0], [0.0]
+    fundamental = (1.0 / duration) if base is None else float(base)
     k = 1
     while len(omega) < m:
-        w = 2 * np.pi * k / duration
+        w = 2 * np.pi * k * fundamental
         omega.append(w)
         phase.append(0.0)
         if len(omega) < m:
