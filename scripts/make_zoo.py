@@ -80,9 +80,16 @@ class Lattice:
 
 # ----------------------------------------------------------------------------- fish lattice
 FISH_L = 0.04  # metres per MODEL-FACTS length unit: a 1.04 m shark
-FISH_M = 0.1  # kilograms per MODEL-FACTS mass unit: 10.7 kg in all
-FISH_RINGS = [(-5, 2.0, 6.6), (-10, 3.0, 11.0), (-15, 2.0, 6.6), (-20, 1.0, 1.1), (-22, 0.8, 1.1)]
-FISH_K = {"cross": 1300.0, "muscle": 1000.0, "structural": 1100.0, "fin": 250.0}
+FISH_M = 0.1  # kilograms per MODEL-FACTS mass unit: 11.7 kg in all
+# (x, half-size, mass units) of the 5 rings. MODEL-FACTS gives 6.6, 11, 6.6, 1.1, 1.1: we move
+# 2 units from the middle ring to each tail ring (3.3): a real shark's caudal peduncle is
+# muscle, and the light tail nodes set the lattice's highest frequency, so heavier ones let
+# the whole body be 3x stiffer (3x the muscle force) at the same 5 ms step.
+FISH_RINGS = [(-5, 2.0, 6.6), (-10, 3.0, 9.0), (-15, 2.0, 6.6), (-20, 1.0, 3.3), (-22, 0.8, 3.3)]
+FISH_TIP_MASS = 0.5  # mass units of each caudal fin tip (MODEL-FACTS 0.165; 3x, as the springs)
+FISH_K = {"cross": 3900.0, "muscle": 3000.0, "structural": 3300.0, "fin": 750.0}
+FISH_WAVE_LAG = 0.2  # cycles of phase between successive segments of the built-in wave
+FISH_WAVE_HZ = 4.0  # the built-in wave's (and the learned gait's base) stroke frequency
 
 
 def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
@@ -106,8 +113,8 @@ def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
             ]
         )
     tips = [
-        lat.node("tail_top", place(-26, 3, 0), 0.165 * FISH_M),
-        lat.node("tail_bottom", place(-26, -3, 0), 0.165 * FISH_M),
+        lat.node("tail_top", place(-26, 3, 0), FISH_TIP_MASS * FISH_M),
+        lat.node("tail_bottom", place(-26, -3, 0), FISH_TIP_MASS * FISH_M),
     ]
     for i in rings[0]:
         lat.spring(nose, i, FISH_K["structural"], "structural")
@@ -180,8 +187,8 @@ def shark() -> dict:
     lat, _ = fish_lattice(rotate_on_side=False)
     phases = {}
     for i, seg in enumerate(("front", "middle", "back")):
-        phases[f"{seg}_left"] = round(0.1 * i, 3)
-        phases[f"{seg}_right"] = round(0.1 * i + 0.5, 3)
+        phases[f"{seg}_left"] = round(FISH_WAVE_LAG * i, 3)
+        phases[f"{seg}_right"] = round(FISH_WAVE_LAG * i + 0.5, 3)
     lat.damp_springs(10.0)
     print(f"shark   omega_max = {lat.omega_max():7.1f} rad/s")
     return lat.doc(
@@ -193,7 +200,7 @@ def shark() -> dict:
         forward=[1.0, 0.0, 0.0],
         defaults={"node_damping": 0.05, "spring_damping": 0.0},
         actuators=fish_actuators(),
-        wave={"frequency": 2.0, "amplitude": 1.0, "offset": 0.0, "phases": phases},
+        wave={"frequency": FISH_WAVE_HZ, "amplitude": 1.0, "offset": 0.0, "phases": phases},
     )
 
 
