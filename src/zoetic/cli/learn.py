@@ -160,3 +160,16 @@ def bench_learn_cmd(
     from zoetic.learn.bench import bench_learn
 
     _emit(bench_learn(budget), json)
+
+
+@bench_app.command("skills")
+def bench_skills_cmd(
+    animal: list[str] = typer.Option(None, help="Animals to learn (default: the whole zoo)."),
+    budget: int = typer.Option(None, min=10, help="Evaluations per skill (default: learn's)."),
+    seed: int = typer.Option(0),
+    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Learn each basic skill with defaults; print it beside the hand-made entry, and the time."""
+    from zoetic.behavior.skills import bench_skills
+
+    _emit(bench_skills(animal or None, budget, seed), json)
