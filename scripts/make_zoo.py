@@ -87,9 +87,9 @@ FISH_M = 0.1  # kilograms per MODEL-FACTS mass unit: 11.7 kg in all
 # the whole body be 3x stiffer (3x the muscle force) at the same 5 ms step.
 FISH_RINGS = [(-5, 2.0, 6.6), (-10, 3.0, 9.0), (-15, 2.0, 6.6), (-20, 1.0, 3.3), (-22, 0.8, 3.3)]
 FISH_TIP_MASS = 0.5  # mass units of each caudal fin tip (MODEL-FACTS 0.165; 3x, as the springs)
-FISH_K = {"cross": 3900.0, "muscle": 3000.0, "structural": 3300.0, "fin": 750.0}
-FISH_WAVE_LAG = 0.2  # cycles of phase between successive segments of the built-in wave
-FISH_WAVE_HZ = 4.0  # the built-in wave's (and the learned gait's base) stroke frequency
+FISH_K = {"cross": 3900.0, "muscle": 3000.0, "structural": 3300.0, "fin": 2250.0}
+FISH_WAVE_LAG = 0.1  # cycles of phase between successive segments of the built-in wave
+FISH_WAVE_HZ = 5.0  # the built-in wave's (and the learned gait's base) stroke frequency
 
 
 def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:

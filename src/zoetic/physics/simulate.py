@@ -148,6 +148,7 @@ def simulate(
         raise SimulationError("record_every must be at least 1")
 
     from zoetic.physics.kernel import simulate_chunks
+    from zoetic.physics.multirate import split
 
     n = body.n_nodes
     f32 = np.float32
@@ -168,9 +169,11 @@ def simulate(
     final_vel = np.empty((n, 3, batch), dtype=f32)
     failed_step = -np.ones(batch, dtype=np.int64)
     k = _kernel_arrays(body)
+    sp = split(body, dt)
     simulate_chunks(
         pos0, vel0, act_t, f32(dt), record_every, chunk_size(batch), f32(VMAX), *k,
         med.as_array().astype(f32), rec, final_pos, final_vel, failed_step,
+        sp.slow_springs, sp.fast_springs, sp.substeps, sp.slow_nodes, sp.fast_nodes,
     )  # fmt: skip
     times = np.arange(n_rec) * record_every * dt
     return Trajectory(
