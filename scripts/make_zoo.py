@@ -183,8 +183,40 @@ def fish_actuators(sides: dict[str, str] | None = None) -> list[dict]:
     return out
 
 
+SHARK_FIN_AREA = 0.015  # m^2 per pectoral fin: about 15 cm x 10 cm on a 1 m leopard shark
+
+
+def shark_fins(lat: Lattice, rings: list[list[int]]) -> tuple[list[dict], list[dict]]:
+    """Two pectoral fins on the sides of the first ring (the dolphin's, on an upright fish).
+
+    Each fin's forward axis runs along its own side (ring 1 to ring 3, parallel to the body
+    axis), so the two are mirror images; the span axis (right to left) is shared.
+    """
+    names = [n["name"] for n in lat.nodes]
+    r1, r3 = rings[0], rings[2]
+    # ring corners k = 0..3 are (y, z) signs (+,+), (+,-), (-,-), (-,+): left is k = 0, 3
+    sides = {"left": ([r1[0], r1[3]], [r1[0], r3[0]]), "right": ([r1[1], r1[2]], [r1[1], r3[1]])}
+    acts, fins = [], []
+    for side, other in (("left", "right"), ("right", "left")):
+        nodes, fwd = sides[side]
+        acts.append({"name": f"fin_{side}", "kind": "fin", "side": side, "mirror": f"fin_{other}"})
+        fins.append(
+            {
+                "name": f"pectoral_{side}",
+                "actuator": f"fin_{side}",
+                "nodes": [names[i] for i in nodes],
+                "forward": [names[i] for i in fwd],
+                "span": [names[r1[0]], names[r1[1]]],
+                "area": SHARK_FIN_AREA,
+                "angle_range": [-0.5, 0.5],
+            }
+        )
+    return acts, fins
+
+
 def shark() -> dict:
-    lat, _ = fish_lattice(rotate_on_side=False)
+    lat, rings = fish_lattice(rotate_on_side=False)
+    fin_acts, fins = shark_fins(lat, rings)
     phases = {}
     for i, seg in enumerate(("front", "middle", "back")):
         phases[f"{seg}_left"] = round(FISH_WAVE_LAG * i, 3)
@@ -193,13 +225,17 @@ def shark() -> dict:
     print(f"shark   omega_max = {lat.omega_max():7.1f} rad/s")
     return lat.doc(
         name="shark",
-        description="Leopard shark: the 23-node, 91-spring fish lattice; 12 muscles, 6 actuators.",
+        description=(
+            "Leopard shark: the 23-node, 91-spring fish lattice; 12 muscles, 6 muscle "
+            "actuators and two pectoral fins."
+        ),
         medium="water",
         dt=0.005,
         head="nose",
         forward=[1.0, 0.0, 0.0],
         defaults={"node_damping": 0.05, "spring_damping": 0.0},
-        actuators=fish_actuators(),
+        actuators=fish_actuators() + fin_acts,
+        fins=fins,
         wave={"frequency": FISH_WAVE_HZ, "amplitude": 1.0, "offset": 0.0, "phases": phases},
     )
 

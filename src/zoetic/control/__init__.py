@@ -61,6 +61,11 @@ def wave_controller(body: Body) -> WaveController:
         amplitude=body.wave_amplitude,
         offset=body.wave_offset,
         phases=tuple(float(p) for p in phases),
+        hold=tuple(
+            (name, float(v))
+            for name, v in zip(body.actuator_names, body.wave_held, strict=True)
+            if not np.isnan(v)
+        ),
     )
     return ctrl
 
@@ -87,9 +92,13 @@ def from_dict(d: dict, where: str = "controller") -> Controller:
         if kind == "constant":
             return ConstantController(*common, tuple(float(v) for v in d["values"]))
         if kind == "wave":
+            unknown = set(d.get("hold", {})) - set(common[1])
+            if unknown:
+                raise ControllerError(f"hold names unknown actuators {sorted(unknown)}")
             return WaveController(
                 *common, float(d["frequency"]), float(d["amplitude"]), float(d["offset"]),
                 tuple(float(p) for p in d["phases"]),
+                tuple((str(k), float(v)) for k, v in d.get("hold", {}).items()),
             )  # fmt: skip
         if kind == "time":
             return TimeDomainController(

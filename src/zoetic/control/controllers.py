@@ -76,26 +76,34 @@ class ConstantController(Controller):
 
 @dataclass(frozen=True)
 class WaveController(Controller):
-    """A travelling wave: u_a(t) = offset + amplitude * (1 + sin(2 pi (f t - phase_a))) / 2."""
+    """A travelling wave: u_a(t) = offset + amplitude * (1 + sin(2 pi (f t - phase_a))) / 2;
+    actuators in ``hold`` (name, value) are held at that value instead."""
 
     frequency: float = 1.0
     amplitude: float = 1.0
     offset: float = 0.0
     phases: tuple[float, ...] = ()
+    hold: tuple[tuple[str, float], ...] = ()
     kind = "wave"
 
     def raw(self, t):
         ph = np.asarray(self.phases, float)
         s = np.sin(2 * np.pi * (self.frequency * t[:, None] - ph[None, :]))
-        return self.offset + self.amplitude * 0.5 * (1.0 + s)
+        u = self.offset + self.amplitude * 0.5 * (1.0 + s)
+        for name, value in self.hold:
+            u[:, self.actuators.index(name)] = value
+        return u
 
     def to_dict(self):
-        return super().to_dict() | {
+        out = super().to_dict() | {
             "frequency": self.frequency,
             "amplitude": self.amplitude,
             "offset": self.offset,
             "phases": list(self.phases),
         }
+        if self.hold:
+            out["hold"] = dict(self.hold)
+        return out
 
 
 @dataclass(frozen=True)
