@@ -91,7 +91,7 @@ def handmade_repertoire(body: Body) -> Repertoire:
     sharp = wave_abstraction(body, 0.2, 0.3)
     wide = wave_abstraction(body, 0.5, 0.1)
     rest = AbstractController(
-        body.name, body.actuator_names, np.zeros(body.n_actuators),
+        body.name, body.actuator_names, np.nan_to_num(body.wave_held),  # fins level
         np.zeros((body.n_actuators, 1)), np.zeros((body.n_actuators, 1)),
         np.zeros((body.n_actuators, 1)), period,
     )  # fmt: skip
