@@ -275,8 +275,8 @@ def dolphin() -> dict:
         )
     phases = {}
     for i, seg in enumerate(("front", "middle", "back")):
-        phases[f"{seg}_dorsal"] = round(0.1 * i, 3)
-        phases[f"{seg}_ventral"] = round(0.1 * i + 0.5, 3)
+        phases[f"{seg}_dorsal"] = round(FISH_WAVE_LAG * i, 3)
+        phases[f"{seg}_ventral"] = round(FISH_WAVE_LAG * i + 0.5, 3)
     lat.damp_springs(10.0)
     print(f"dolphin omega_max = {lat.omega_max():7.1f} rad/s")
     return lat.doc(
@@ -293,7 +293,7 @@ def dolphin() -> dict:
         defaults={"node_damping": 0.05, "spring_damping": 0.0},
         actuators=doc_acts,
         fins=fins,
-        wave={"frequency": 2.0, "amplitude": 1.0, "offset": 0.0, "phases": phases},
+        wave={"frequency": FISH_WAVE_HZ, "amplitude": 1.0, "offset": 0.0, "phases": phases},
     )
 
 

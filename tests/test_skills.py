@@ -80,3 +80,18 @@ def test_a_users_own_animal_file_learns_with_a_built_in_task(tmp_path):
     assert ctrl.animal == "my_fish"
     fig = skill_figures(load_animal(str(path)), ctrl, task)
     assert fig["E"] < 0 and fig["speed_bl_s"] > 0.05
+
+
+def test_depth_change_with_the_fins_and_the_dolphins_burst_are_reported():
+    from zoetic.behavior.skills import burst, depth_change
+    from zoetic.behavior.tracking import handmade_repertoire
+
+    shark = load_animal("shark")
+    gait = handmade_repertoire(shark).controllers["go-straight"]
+    d = depth_change(shark, gait, seconds=2.0)
+    assert d["up_bl"] > 0.3 and d["down_bl"] < -0.3  # fins up rise, fins down sink
+    assert burst(shark, gait) is None  # no free surface in the shark's water
+    assert depth_change(load_animal("snake"), gait) is None  # no fins
+    dolphin = load_animal("dolphin")
+    b = burst(dolphin, handmade_repertoire(dolphin).controllers["go-straight"], seconds=1.0)
+    assert 0.2 < b["top_speed_m_s"] < 20.0 and b["t_surface_s"] is None  # 2 m deep: 1 s

@@ -5,7 +5,9 @@
 ``zoetic learn`` and score the learned controller and the hand-made one (the animal's wave,
 bent for turns: ``tracking.handmade_repertoire``) on the same task, from rest, with the same
 figures: the task's E, speed in body lengths per second, the heading change, the time to
-turn 90 degrees, and for going straight the speed sustained when played for 10 s.
+turn 90 degrees, and for going straight the speed sustained when played for 10 s; for an
+animal with fins, the go-straight gait's depth change with the fins up and down, and in the
+sea its burst toward the surface from 2 m depth.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from zoetic.behavior.training import plan_for
 from zoetic.bodies import Body, list_animals, load_animal
 from zoetic.control import Controller
 from zoetic.learn.objective import heading_angles, motion_terms
-from zoetic.physics import simulate
+from zoetic.physics import rest_state, simulate
 from zoetic.tasks import Task
 
 SUSTAINED_SECONDS = 10.0
@@ -56,6 +58,61 @@ def sustained_speed(body: Body, ctrl: Controller, seconds: float = SUSTAINED_SEC
     half = com.shape[0] // 2
     dist = np.linalg.norm((com[-1] - com[half])[[0, 2]])
     return round(float(dist / (tr.times[-1] - tr.times[half]) / body_length(body)), 3)
+
+
+def fin_columns(body: Body) -> np.ndarray:
+    """Return the indices of the body's fin actuators."""
+    return np.array([k for k, kind in enumerate(body.actuator_kind) if kind == "fin"], dtype=int)
+
+
+def depth_change(body: Body, ctrl: Controller, seconds: float = 3.0) -> dict | None:
+    """Return how far the gait ``ctrl`` rises and sinks with both fins fully up or down.
+
+    Played from rest for ``seconds``; figures in body lengths (BL) and the time to change
+    depth by one body length. None for a body without fins.
+    """
+    fins = fin_columns(body)
+    if fins.size == 0:
+        return None
+    steps = int(round(seconds / body.dt))
+    base = ctrl.table(steps, body.dt)
+    tables = np.stack([base, base])
+    tables[0][:, fins] = 1.0  # nose up
+    tables[1][:, fins] = 0.0  # nose down
+    every = max(1, int(round(0.05 / body.dt)))
+    tr = simulate(body, tables, record_every=every)
+    dy = (tr.com(body)[:, :, 1] - tr.com(body)[:, :1, 1]) / body_length(body)
+    out = {}
+    for k, (name, sign) in enumerate((("up", 1.0), ("down", -1.0))):
+        past = np.flatnonzero(sign * dy[k] >= 1.0)
+        out[f"{name}_bl"] = round(float(dy[k, -1]), 3)
+        out[f"t_1bl_{name}_s"] = None if past.size == 0 else round(float(tr.times[past[0]]), 2)
+    return out
+
+
+def burst(body: Body, ctrl: Controller, depth: float = 2.0, seconds: float = 4.0) -> dict | None:
+    """Return the top speed (m/s) of ``ctrl`` with the fins up, from rest ``depth`` m deep.
+
+    For an animal of the sea (a free surface): also the centre of mass's speed when its head
+    first reaches the surface. None for other media or a body without fins.
+    """
+    fins = fin_columns(body)
+    if body.medium != "sea" or fins.size == 0:
+        return None
+    steps = int(round(seconds / body.dt))
+    table = ctrl.table(steps, body.dt)
+    table[:, fins] = 1.0
+    start = rest_state(body, 1, offset=(0.0, -depth, 0.0))
+    tr = simulate(body, table, state=start, record_every=1)
+    com = tr.com(body)[0]
+    v = np.linalg.norm(np.diff(com, axis=0), axis=1) / body.dt
+    head_y = tr.positions[0, 1:, body.head, 1]
+    up = np.flatnonzero(head_y >= 0.0)
+    return {
+        "top_speed_m_s": round(float(v.max()), 2),
+        "speed_at_surface_m_s": None if up.size == 0 else round(float(v[up[0]]), 2),
+        "t_surface_s": None if up.size == 0 else round(float(tr.times[up[0] + 1]), 2),
+    }
 
 
 def learn_skill(animal: str, task: Task, seed: int = 0, budget: int | None = None):
@@ -99,5 +156,13 @@ def bench_skills(animals=None, budget: int | None = None, seed: int = 0) -> dict
                 "learned_beats_hand_made": learned["E"] <= made["E"],
                 "learn_wall_s": round(wall, 2),
             }
+            if entry.name == "go-straight":  # the gait with the fins: depth change, burst
+                for key, fn in (("depth_change", depth_change), ("burst", burst)):
+                    got = fn(body, ctrl)
+                    if got is not None:
+                        skills[entry.name][key] = {
+                            "learned": got,
+                            "hand_made": fn(body, hand.controllers[entry.name]),
+                        }
         out[name] = skills
     return out
