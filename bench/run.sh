@@ -9,6 +9,7 @@ PY=".venv/bin/python"
 [ -x "$Z" ] || { echo "no .venv: run ./run.sh test (or ./run.sh demo) first" >&2; exit 2; }
 "$Z" bench simulate --json | tail -n 1
 "$Z" bench learn --json | tail -n 1
+"$Z" bench skills --json | tail -n 1
 "$Z" bench san --json | tail -n 1
 "$Z" bench ray --json 2>/dev/null | tail -n 1
 "$PY" bench/jax_sim.py

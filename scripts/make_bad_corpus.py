@@ -107,11 +107,12 @@ ks_deg = 0.002
 """
 
 SHARK_ACTS = ["front_left", "front_right", "middle_left", "middle_right", "back_left",
-              "back_right"]  # fmt: skip
+              "back_right", "fin_left", "fin_right"]  # fmt: skip
+NA = len(SHARK_ACTS)
 
 
 def _constant(**over) -> dict:
-    d = {"type": "constant", "animal": "shark", "actuators": SHARK_ACTS, "values": [0.5] * 6}
+    d = {"type": "constant", "animal": "shark", "actuators": SHARK_ACTS, "values": [0.5] * NA}
     return d | over
 
 
@@ -234,7 +235,7 @@ def controllers() -> dict[str, bytes | str]:
         "constant-wrong-length.json": _constant(values=[0.5] * 5),
         "mirror-out-of-range.json": {"type": "mirrored", "animal": "shark",
                                      "actuators": SHARK_ACTS, "inner": _constant(),
-                                     "mirror": [1, 0, 3, 2, 5, 60]},  # fmt: skip
+                                     "mirror": [1, 0, 3, 2, 5, 4, 7, 60]},  # fmt: skip
         "deep-nesting.json": inner,
         "non-finite.json": _constant(values=[0.5, 0.5, float("nan"), 0.5, 0.5, 0.5]),
         "wave-phases-wrong-length.json": {"type": "wave", "animal": "shark",
@@ -246,17 +247,17 @@ def controllers() -> dict[str, bytes | str]:
         "ragged-values.json": {"type": "time", "animal": "shark", "actuators": SHARK_ACTS,
                                "duration": 2.0, "values": [[0.1, 0.2]] * 5 + [[0.1]]},
         "negative-duration.json": {"type": "time", "animal": "shark", "actuators": SHARK_ACTS,
-                                   "duration": -2.0, "values": [[0.1, 0.2]] * 6},
+                                   "duration": -2.0, "values": [[0.1, 0.2]] * NA},
         "for-another-animal.json": _constant(animal="ray"),
         "wrong-actuators.json": _constant(actuators=[f"a{i}" for i in range(6)]),
         "misspelled-key.json": {"type": "constant", "animal": "shark", "actuators": SHARK_ACTS,
-                                "valeus": [0.5] * 6},
-        "string-values.json": _constant(values=["0.5"] * 6),
+                                "valeus": [0.5] * NA},
+        "string-values.json": _constant(values=["0.5"] * NA),
         "not-an-object.json": [1, 2, 3],
         "huge-duration.json": {"type": "time", "animal": "shark", "actuators": SHARK_ACTS,
-                               "duration": 1e300, "values": [[0.1, 0.2]] * 6},
+                               "duration": 1e300, "values": [[0.1, 0.2]] * NA},
         "one-node.json": {"type": "time", "animal": "shark", "actuators": SHARK_ACTS,
-                          "duration": 2.0, "values": [[0.1]] * 6},
+                          "duration": 2.0, "values": [[0.1]] * NA},
     }
     out: dict[str, bytes | str] = {k: json.dumps(v) for k, v in files.items()}
     out["truncated.json"] = json.dumps(_constant())[:40]

@@ -80,9 +80,16 @@ class Lattice:
 
 # ----------------------------------------------------------------------------- fish lattice
 FISH_L = 0.04  # metres per MODEL-FACTS length unit: a 1.04 m shark
-FISH_M = 0.1  # kilograms per MODEL-FACTS mass unit: 10.7 kg in all
-FISH_RINGS = [(-5, 2.0, 6.6), (-10, 3.0, 11.0), (-15, 2.0, 6.6), (-20, 1.0, 1.1), (-22, 0.8, 1.1)]
-FISH_K = {"cross": 1300.0, "muscle": 1000.0, "structural": 1100.0, "fin": 250.0}
+FISH_M = 0.1  # kilograms per MODEL-FACTS mass unit: 11.7 kg in all
+# (x, half-size, mass units) of the 5 rings. MODEL-FACTS gives 6.6, 11, 6.6, 1.1, 1.1: we move
+# 2 units from the middle ring to each tail ring (3.3): a real shark's caudal peduncle is
+# muscle, and the light tail nodes set the lattice's highest frequency, so heavier ones let
+# the whole body be 3x stiffer (3x the muscle force) at the same 5 ms step.
+FISH_RINGS = [(-5, 2.0, 6.6), (-10, 3.0, 9.0), (-15, 2.0, 6.6), (-20, 1.0, 3.3), (-22, 0.8, 3.3)]
+FISH_TIP_MASS = 0.5  # mass units of each caudal fin tip (MODEL-FACTS 0.165; 3x, as the springs)
+FISH_K = {"cross": 3900.0, "muscle": 3000.0, "structural": 3300.0, "fin": 2250.0}
+FISH_WAVE_LAG = 0.1  # cycles of phase between successive segments of the built-in wave
+FISH_WAVE_HZ = 5.0  # the built-in wave's (and the learned gait's base) stroke frequency
 
 
 def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
@@ -106,8 +113,8 @@ def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
             ]
         )
     tips = [
-        lat.node("tail_top", place(-26, 3, 0), 0.165 * FISH_M),
-        lat.node("tail_bottom", place(-26, -3, 0), 0.165 * FISH_M),
+        lat.node("tail_top", place(-26, 3, 0), FISH_TIP_MASS * FISH_M),
+        lat.node("tail_bottom", place(-26, -3, 0), FISH_TIP_MASS * FISH_M),
     ]
     for i in rings[0]:
         lat.spring(nose, i, FISH_K["structural"], "structural")
@@ -176,24 +183,60 @@ def fish_actuators(sides: dict[str, str] | None = None) -> list[dict]:
     return out
 
 
+SHARK_FIN_AREA = 0.015  # m^2 per pectoral fin: about 15 cm x 10 cm on a 1 m leopard shark
+
+
+def shark_fins(lat: Lattice, rings: list[list[int]]) -> tuple[list[dict], list[dict]]:
+    """Two pectoral fins on the sides of the first ring (the dolphin's, on an upright fish).
+
+    Each fin's forward axis runs along its own side (ring 1 to ring 3, parallel to the body
+    axis), so the two are mirror images; the span axis (right to left) is shared.
+    """
+    names = [n["name"] for n in lat.nodes]
+    r1, r3 = rings[0], rings[2]
+    # ring corners k = 0..3 are (y, z) signs (+,+), (+,-), (-,-), (-,+): left is k = 0, 3
+    sides = {"left": ([r1[0], r1[3]], [r1[0], r3[0]]), "right": ([r1[1], r1[2]], [r1[1], r3[1]])}
+    acts, fins = [], []
+    for side, other in (("left", "right"), ("right", "left")):
+        nodes, fwd = sides[side]
+        acts.append({"name": f"fin_{side}", "kind": "fin", "side": side, "mirror": f"fin_{other}"})
+        fins.append(
+            {
+                "name": f"pectoral_{side}",
+                "actuator": f"fin_{side}",
+                "nodes": [names[i] for i in nodes],
+                "forward": [names[i] for i in fwd],
+                "span": [names[r1[0]], names[r1[1]]],
+                "area": SHARK_FIN_AREA,
+                "angle_range": [-0.5, 0.5],
+            }
+        )
+    return acts, fins
+
+
 def shark() -> dict:
-    lat, _ = fish_lattice(rotate_on_side=False)
+    lat, rings = fish_lattice(rotate_on_side=False)
+    fin_acts, fins = shark_fins(lat, rings)
     phases = {}
     for i, seg in enumerate(("front", "middle", "back")):
-        phases[f"{seg}_left"] = round(0.1 * i, 3)
-        phases[f"{seg}_right"] = round(0.1 * i + 0.5, 3)
+        phases[f"{seg}_left"] = round(FISH_WAVE_LAG * i, 3)
+        phases[f"{seg}_right"] = round(FISH_WAVE_LAG * i + 0.5, 3)
     lat.damp_springs(10.0)
     print(f"shark   omega_max = {lat.omega_max():7.1f} rad/s")
     return lat.doc(
         name="shark",
-        description="Leopard shark: the 23-node, 91-spring fish lattice; 12 muscles, 6 actuators.",
+        description=(
+            "Leopard shark: the 23-node, 91-spring fish lattice; 12 muscles, 6 muscle "
+            "actuators and two pectoral fins."
+        ),
         medium="water",
         dt=0.005,
         head="nose",
         forward=[1.0, 0.0, 0.0],
         defaults={"node_damping": 0.05, "spring_damping": 0.0},
-        actuators=fish_actuators(),
-        wave={"frequency": 2.0, "amplitude": 1.0, "offset": 0.0, "phases": phases},
+        actuators=fish_actuators() + fin_acts,
+        fins=fins,
+        wave={"frequency": FISH_WAVE_HZ, "amplitude": 1.0, "offset": 0.0, "phases": phases},
     )
 
 
@@ -232,8 +275,8 @@ def dolphin() -> dict:
         )
     phases = {}
     for i, seg in enumerate(("front", "middle", "back")):
-        phases[f"{seg}_dorsal"] = round(0.1 * i, 3)
-        phases[f"{seg}_ventral"] = round(0.1 * i + 0.5, 3)
+        phases[f"{seg}_dorsal"] = round(FISH_WAVE_LAG * i, 3)
+        phases[f"{seg}_ventral"] = round(FISH_WAVE_LAG * i + 0.5, 3)
     lat.damp_springs(10.0)
     print(f"dolphin omega_max = {lat.omega_max():7.1f} rad/s")
     return lat.doc(
@@ -250,7 +293,7 @@ def dolphin() -> dict:
         defaults={"node_damping": 0.05, "spring_damping": 0.0},
         actuators=doc_acts,
         fins=fins,
-        wave={"frequency": 2.0, "amplitude": 1.0, "offset": 0.0, "phases": phases},
+        wave={"frequency": FISH_WAVE_HZ, "amplitude": 1.0, "offset": 0.0, "phases": phases},
     )
 
 

@@ -40,7 +40,7 @@ def test_the_readme_python_api_examples_run(tmp_path, monkeypatch, capsys):
     assert scope["scene"].time == 0.0  # restored to "now"
     assert scope["run"].final.time == 2.0
     out = capsys.readouterr().out
-    assert "(1, 61, 23, 3)" in out and "(64, 18) (240, 320, 3)" in out
+    assert "(1, 61, 23, 3)" in out and "(64, 20) (240, 320, 3)" in out
 
 
 def test_import_zoetic_is_light_and_names_load_lazily():

@@ -167,7 +167,9 @@ def test_blow_up_is_detected():
     body = load_animal("shark")
     act = wave_controller(body).table(300, body.dt)[None]
     st = rest_state(body, 1)
-    _, x, v = make_rollout(body, dt=0.05, record_every=300)(st.positions, st.velocities, act)
+    # a too-large step is substepped where stiff (multirate), so tear the body apart instead
+    st.positions[:, 0, 1] += 100.0
+    _, x, v = make_rollout(body, record_every=300)(st.positions, st.velocities, act)
     assert np.asarray(blown_up(x, v)).all()
 
 

@@ -58,7 +58,7 @@ def test_objective_prefers_swimming_to_resting():
     # fit the time-domain template to the wave and to rest by sampling at its nodes
     swim = wave.sample(tmpl.node_times()).T.ravel()
     rest = rest_controller(body).sample(tmpl.node_times()).T.ravel()
-    ev = Objective(task, body, tmpl).evaluate(np.stack([swim, rest]))
+    ev = Objective(task, body, tmpl, fins="free").evaluate(np.stack([swim, rest]))
     assert ev.E[0] < ev.E[1] - 0.3
     assert not ev.failed.any()
 
@@ -71,7 +71,8 @@ def test_turn_objective_rewards_turning_left_over_right():
     left = wave_controller(body).sample(t)
     left[:, [k for k, s in enumerate(body.actuator_side) if s == "right"]] *= 0.2
     right = body.mirror_actuators(left)
-    ev = Objective(task, body, tmpl).evaluate(np.stack([left.T.ravel(), right.T.ravel()]))
+    obj = Objective(task, body, tmpl, fins="free")
+    ev = obj.evaluate(np.stack([left.T.ravel(), right.T.ravel()]))
     assert ev.terms["heading_change"][0] < ev.terms["heading_change"][1]
 
 
@@ -154,7 +155,7 @@ def test_learning_improves_and_writes_a_loadable_controller(tmp_path, short_task
     e = np.array(run.log.E)
     assert run.setup.optimizer.best_f < e[:8].min()
     ctrl = load_controller(tmp_path / "r" / "controller.json", load_animal("shark"))
-    assert ctrl.kind == "time"
+    assert ctrl.kind == "frequency"  # the default periodic gait
     lines = (tmp_path / "r" / "history.csv").read_text().splitlines()
     assert lines[0] == "evaluation,E,E_u,E_v,best_E,wall_time" and len(lines) == len(e) + 1
 

@@ -26,19 +26,15 @@ def test_the_animals_own_dt_is_accepted_and_a_dt_above_the_bound_refused(name):
     assert name in str(info.value) and "--dt" in str(info.value)
 
 
-@pytest.mark.parametrize("name", ["shark", "snake"])
-def test_the_bound_is_where_the_simulation_blows_up(name):
-    """The bound is no mere safety margin: just under it the wave gait runs, just over it
-    the same gait blows up (the kernel's check is switched off to see that)."""
+@pytest.mark.parametrize("name", list_animals())
+def test_just_under_the_bound_the_gait_runs(name):
+    """The bound is safe: just under it the wave gait runs for 3 s without failing. (Above
+    it the multirate step sub-steps more springs, so the bound is conservative there.)"""
     body = load_animal(name)
-    limit = stable_dt(body)
-    failed = {}
-    for f in (0.95, 1.1):
-        dt = f * limit
-        steps = int(3.0 / dt)
-        tr = simulate(body, wave_controller(body).table(steps, dt), dt=dt, check_step=False)
-        failed[f] = bool(tr.failed[0])
-    assert failed == {0.95: False, 1.1: True}
+    dt = 0.95 * stable_dt(body)
+    steps = int(3.0 / dt)
+    tr = simulate(body, wave_controller(body).table(steps, dt), dt=dt, check_step=False)
+    assert not tr.failed[0]
 
 
 def test_the_bound_follows_the_stiffest_spring_and_lightest_node():
@@ -47,6 +43,7 @@ def test_the_bound_follows_the_stiffest_spring_and_lightest_node():
     from dataclasses import replace
 
     body = load_animal("shark")
+    body = replace(body, dt=body.dt / 8)  # a step at which no spring needs sub-stepping
     half = stable_dt(body) / 2
     stiffer = replace(body, stiffness=body.stiffness * 4, spring_damping=body.spring_damping * 2)
     lighter = replace(body, mass=body.mass / 4, spring_damping=body.spring_damping / 2)
@@ -75,6 +72,13 @@ def test_a_blow_up_that_gets_past_the_check_exits_3_naming_step_animal_and_dt(
 
     sim = importlib.import_module("zoetic.physics.simulate")  # the module, not the function
     monkeypatch.setattr(sim, "_stable_cached", lambda body, med: 1.0)  # a wrong bound
+    from zoetic.physics import multirate, world
+
+    def no_split(body, dt):  # and no sub-stepping of the stiff springs either
+        every, nodes = np.arange(body.n_springs), np.arange(body.n_nodes)
+        return multirate.Split(every, every[:0], 1, nodes, nodes[:0])
+
+    monkeypatch.setattr(world, "split", no_split)
     code = main(["simulate", "shark", "--dt", "0.05", "--seconds", "2", "--no-video",
                  "--out", str(tmp_path / "o")])  # fmt: skip
     err = capsys.readouterr().err

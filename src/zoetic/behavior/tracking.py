@@ -69,6 +69,9 @@ def wave_abstraction(body: Body, right_scale: float = 1.0, left_bias: float = 0.
     offset = (body.wave_offset + 0.5 * a) * scale + np.where(left, left_bias, 0.0)
     amp = (0.5 * a * scale)[:, None]
     phase = (-2 * np.pi * np.asarray(body.wave_phase, float) - np.pi / 2)[:, None]
+    held = ~np.isnan(body.wave_held)  # not driven by the wave: relaxed muscles, level fins
+    offset = np.where(held, np.nan_to_num(body.wave_held), offset)
+    amp[held] = 0.0
     freq = np.full_like(amp, body.wave_frequency)
     return AbstractController(
         body.name, body.actuator_names, offset, freq, amp, phase, 1.0 / body.wave_frequency
@@ -88,7 +91,7 @@ def handmade_repertoire(body: Body) -> Repertoire:
     sharp = wave_abstraction(body, 0.2, 0.3)
     wide = wave_abstraction(body, 0.5, 0.1)
     rest = AbstractController(
-        body.name, body.actuator_names, np.zeros(body.n_actuators),
+        body.name, body.actuator_names, np.nan_to_num(body.wave_held),  # fins level
         np.zeros((body.n_actuators, 1)), np.zeros((body.n_actuators, 1)),
         np.zeros((body.n_actuators, 1)), period,
     )  # fmt: skip

@@ -60,10 +60,11 @@ def mirrored_name(name: str) -> str | None:
 
 
 def rest_abstraction(body: Body) -> AbstractController:
-    """Return the do-nothing entry: all muscles relaxed, no modes."""
+    """Return the do-nothing entry: all muscles relaxed, fins level, no modes."""
     a = len(body.actuator_names)
     empty = np.zeros((a, 0))
-    return AbstractController(body.name, tuple(body.actuator_names), np.zeros(a), empty, empty,
+    level = np.nan_to_num(body.wave_held)
+    return AbstractController(body.name, tuple(body.actuator_names), level, empty, empty,
                               empty, REST_SECONDS)  # fmt: skip
 
 

@@ -59,6 +59,7 @@ class Body:
     wave_amplitude: float
     wave_offset: float
     wave_phase: np.ndarray  # (A,) cycles
+    wave_held: np.ndarray  # (A,) NaN where the wave drives the actuator, else its held value
     start_offset: np.ndarray  # (3,) m: where the rest pose is placed at the start of a run
 
     @property
@@ -193,9 +194,19 @@ def compile_body(spec: AnimalSpec) -> Body:
         fin_nodes[k, : len(f.nodes)] = f.nodes
     phase = np.zeros(len(spec.actuators))
     wave = spec.wave
+    # an actuator missing from [wave].phases is not driven by the wave: a muscle stays relaxed
+    # (0) and a fin is held level (the activation of angle 0, clipped to its range)
+    held = np.full(len(spec.actuators), np.nan)
     if wave is not None:
+        held[:] = 0.0
         for nm, p in wave.phases.items():
             phase[act_index[nm]] = p
+            held[act_index[nm]] = np.nan
+        for f in spec.fins:
+            k = act_index[f.actuator]
+            if not np.isnan(held[k]):
+                lo, hi = f.angle_range
+                held[k] = float(np.clip(-lo / (hi - lo), 0.0, 1.0)) if hi != lo else 0.0
     return Body(
         name=spec.name,
         medium=spec.medium,
@@ -236,5 +247,6 @@ def compile_body(spec: AnimalSpec) -> Body:
         wave_amplitude=wave.amplitude if wave else 1.0,
         wave_offset=wave.offset if wave else 0.0,
         wave_phase=_frozen(phase, np.float64),
+        wave_held=_frozen(held, np.float64),
         start_offset=_frozen(spec.start_offset, np.float64),
     )

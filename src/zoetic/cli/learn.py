@@ -73,13 +73,20 @@ def run_with_progress(run, label: str, every_s: float = 2.0) -> None:
 def learn(
     animal: str = typer.Argument(None, help="Zoo animal name or animal .toml file."),
     task: str = typer.Option("swim-straight", help="Task name (see `zoetic tasks`) or .toml file."),
-    optimizer: str = typer.Option("anneal", help="anneal, simplex, cmaes or gradient."),
+    optimizer: str = typer.Option("cmaes", help="cmaes, anneal, simplex or gradient."),
     budget: int = typer.Option(3500, min=1, max=10_000_000, help="Evaluations to spend."),
     seed: int = typer.Option(0, help="Random seed: same seed, same result."),
-    controller: str = typer.Option("time", help="Representation: time or frequency."),
-    nodes: int = typer.Option(None, min=2, help="M, parameters per actuator (default: task's)."),
+    controller: str = typer.Option(
+        "periodic", help="Representation: periodic (a gait that repeats), time or frequency."
+    ),
+    nodes: int = typer.Option(
+        None, min=2, help="M, parameters per actuator (default 5 periodic, else the task's)."
+    ),
+    frequency: float = typer.Option(
+        None, min=0.01, help="Periodic controller's base frequency, Hz (default: animal's wave)."
+    ),
     interp: str = typer.Option("linear", help="Time-domain interpolation: linear or bspline."),
-    popsize: int = typer.Option(None, min=2, help="CMA-ES population size."),
+    popsize: int = typer.Option(None, min=2, help="CMA-ES population size (default 32)."),
     chains: int = typer.Option(1, min=1, help="Parallel annealing chains."),
     evaluator: str = typer.Option(
         "batch", help="batch (Numba threads), process (pool) or ray (actors on a Ray cluster)."
@@ -118,7 +125,7 @@ def learn(
         config = LearnConfig(
             animal=animal, task=task, optimizer=optimizer, budget=budget, seed=seed,
             controller=controller, nodes=nodes, interp=interp, popsize=popsize, chains=chains,
-            evaluator=evaluator, coupling=coupling,
+            evaluator=evaluator, coupling=coupling, frequency=frequency,
         )  # fmt: skip
         from zoetic.runs import check_learn_config, check_learn_size, check_learnable
 
@@ -175,3 +182,16 @@ def bench_learn_cmd(
     from zoetic.learn.bench import bench_learn
 
     _emit(bench_learn(budget), json)
+
+
+@bench_app.command("skills")
+def bench_skills_cmd(
+    animal: list[str] = typer.Option(None, help="Animals to learn (default: the whole zoo)."),
+    budget: int = typer.Option(None, min=10, help="Evaluations per skill (default: learn's)."),
+    seed: int = typer.Option(0),
+    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Learn each basic skill with defaults; print it beside the hand-made entry, and the time."""
+    from zoetic.behavior.skills import bench_skills
+
+    _emit(bench_skills(animal or None, budget, seed), json)

@@ -62,6 +62,11 @@ def wave_controller(body: Body) -> WaveController:
         amplitude=body.wave_amplitude,
         offset=body.wave_offset,
         phases=tuple(float(p) for p in phases),
+        hold=tuple(
+            (name, float(v))
+            for name, v in zip(body.actuator_names, body.wave_held, strict=True)
+            if not np.isnan(v)
+        ),
     )
     return ctrl
 
@@ -72,9 +77,10 @@ def time_domain(body: Body, nodes: int, duration: float, values=None, interp="li
     return TimeDomainController(body.name, body.actuator_names, duration, vals, interp)
 
 
-def frequency_domain(body: Body, nodes: int, duration: float, amplitudes=None):
-    """Return a frequency-domain controller on a Fourier basis of M functions over duration."""
-    omega, phase = fourier_basis(nodes, duration)
+def frequency_domain(body: Body, nodes: int, duration: float, amplitudes=None, base=None):
+    """Return a frequency-domain controller on a Fourier basis of M functions over duration
+    (harmonics of 1/duration), or of harmonics of ``base`` Hz (a periodic gait)."""
+    omega, phase = fourier_basis(nodes, duration, base)
     amp = np.zeros((body.n_actuators, nodes)) if amplitudes is None else amplitudes
     return FrequencyDomainController(body.name, body.actuator_names, omega, phase, amp)
 
@@ -82,7 +88,7 @@ def frequency_domain(body: Body, nodes: int, duration: float, amplitudes=None):
 # keys each controller type's file holds (besides type, animal, actuators and metadata)
 CONTROLLER_KEYS = {
     "constant": ("values",),
-    "wave": ("frequency", "amplitude", "offset", "phases"),
+    "wave": ("frequency", "amplitude", "offset", "phases", "hold"),
     "time": ("duration", "values", "interp"),
     "frequency": ("omega", "phase", "amplitudes"),
     "mirrored": ("inner", "mirror"),
@@ -108,7 +114,7 @@ def _check_controller(d: dict, where: str, depth: int = 0) -> None:
     at = f"{where} ({kind})"
     rd.check_keys(d, ("type", "animal", "actuators", *CONTROLLER_KEYS[kind], *METADATA_KEYS), at, E)
     for key in ("animal", "actuators", *CONTROLLER_KEYS[kind]):
-        if key not in d and key not in ("interp", "period", "overlap"):
+        if key not in d and key not in ("interp", "period", "overlap", "hold"):
             raise E(f"{at}: missing {key!r}")
     rd.string(d["animal"], f"{at}: animal", E)
     acts = d["actuators"]
@@ -127,6 +133,11 @@ def _check_controller(d: dict, where: str, depth: int = 0) -> None:
         rd.number(d["amplitude"], f"{at}: amplitude", E)
         rd.number(d["offset"], f"{at}: offset", E)
         rd.numbers(d["phases"], f"{at}: phases", E, size=n)
+        hold = d.get("hold", {})
+        if not isinstance(hold, dict):
+            raise E(f"{at}: hold must be an object of actuator: value, got {rd.abbrev(hold)}")
+        for name, value in hold.items():
+            rd.number(value, f"{at}: hold.{name}", E, lo=0.0, hi=1.0)
     elif kind == "time":
         rd.number(d["duration"], f"{at}: duration", E, hi=rd.LIMITS.seconds, positive=True)
         rd.matrix(d["values"], f"{at}: values", E, rows=n, limit=n * m_max)
@@ -175,9 +186,13 @@ def from_dict(d: dict, where: str = "controller") -> Controller:
         if kind == "constant":
             return ConstantController(*common, tuple(float(v) for v in d["values"]))
         if kind == "wave":
+            unknown = set(d.get("hold", {})) - set(common[1])
+            if unknown:
+                raise ControllerError(f"hold names unknown actuators {sorted(unknown)}")
             return WaveController(
                 *common, float(d["frequency"]), float(d["amplitude"]), float(d["offset"]),
                 tuple(float(p) for p in d["phases"]),
+                tuple((str(k), float(v)) for k, v in d.get("hold", {}).items()),
             )  # fmt: skip
         if kind == "time":
             return TimeDomainController(

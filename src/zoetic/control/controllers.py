@@ -76,26 +76,34 @@ class ConstantController(Controller):
 
 @dataclass(frozen=True)
 class WaveController(Controller):
-    """A travelling wave: u_a(t) = offset + amplitude * (1 + sin(2 pi (f t - phase_a))) / 2."""
+    """A travelling wave: u_a(t) = offset + amplitude * (1 + sin(2 pi (f t - phase_a))) / 2;
+    actuators in ``hold`` (name, value) are held at that value instead."""
 
     frequency: float = 1.0
     amplitude: float = 1.0
     offset: float = 0.0
     phases: tuple[float, ...] = ()
+    hold: tuple[tuple[str, float], ...] = ()
     kind = "wave"
 
     def raw(self, t):
         ph = np.asarray(self.phases, float)
         s = np.sin(2 * np.pi * (self.frequency * t[:, None] - ph[None, :]))
-        return self.offset + self.amplitude * 0.5 * (1.0 + s)
+        u = self.offset + self.amplitude * 0.5 * (1.0 + s)
+        for name, value in self.hold:
+            u[:, self.actuators.index(name)] = value
+        return u
 
     def to_dict(self):
-        return super().to_dict() | {
+        out = super().to_dict() | {
             "frequency": self.frequency,
             "amplitude": self.amplitude,
             "offset": self.offset,
             "phases": list(self.phases),
         }
+        if self.hold:
+            out["hold"] = dict(self.hold)
+        return out
 
 
 @dataclass(frozen=True)
@@ -162,12 +170,20 @@ class TimeDomainController(Controller):
         }
 
 
-def fourier_basis(m: int, duration: float) -> tuple[np.ndarray, np.ndarray]:
-    """Return (omega, phase) of M cosine bases: a constant, then cos/sin pairs of harmonics."""
+def fourier_basis(
+    m: int, duration: float, base: float | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return (omega, phase) of M cosine bases: a constant, then cos/sin pairs of harmonics.
+
+    The harmonics are of 1/duration (the horizon, the paper's basis) or of ``base`` Hz when it
+    is given: then the signal repeats every 1/base seconds, so a gait learned on a horizon
+    keeps going when it is played longer than that.
+    """
     omega, phase = [0.0], [0.0]
+    fundamental = (1.0 / duration) if base is None else float(base)
     k = 1
     while len(omega) < m:
-        w = 2 * np.pi * k / duration
+        w = 2 * np.pi * k * fundamental
         omega.append(w)
         phase.append(0.0)
         if len(omega) < m:

@@ -88,6 +88,7 @@ class Objective:
         dt: float | None = None,
         start: State | None = None,
         coupling: str = "none",
+        fins: str = "held",
     ):
         self.task = task
         self.body = body
@@ -106,15 +107,27 @@ class Objective:
         m = self._basis.shape[1]
         self.full_shape = (body.n_actuators, m)
         self.coupling = coupling
+        # pectoral fins are not learned with the gait (the fish model's separate pitch/roll
+        # controllers drive them): held level, as the built-in wave holds them, unless "free"
+        if fins not in ("held", "free"):
+            raise ZoeticError(f"unknown fins mode {fins!r} (held or free)")
+        is_fin = np.array([k == "fin" for k in body.actuator_kind], dtype=bool)
+        self.held = np.flatnonzero(is_fin) if fins == "held" else np.zeros(0, dtype=int)
+        self._one = np.linalg.lstsq(self._basis, np.ones(self.steps), rcond=None)[0]
         if coupling == "none":
-            self.free = np.arange(body.n_actuators)
+            self.free = np.setdiff1d(np.arange(body.n_actuators), self.held)
         elif coupling == "antiphase":
             # the paper's Fig. 6 set-up: one signal per segment, the right side 1 - left
             if not body.is_mirror_symmetric:
                 raise ZoeticError(f"the {body.name} has no mirror pairs to couple")
-            self.free = np.array([k for k, s in enumerate(body.actuator_side) if s != "right"])
-            # o with B o = 1: the coefficients of the constant signal 1 in this basis
-            self._one = np.linalg.lstsq(self._basis, np.ones(self.steps), rcond=None)[0]
+            self.free = np.array(
+                [
+                    k
+                    for k, s in enumerate(body.actuator_side)
+                    if s != "right" and k not in self.held
+                ],
+                dtype=int,
+            )
         else:
             raise ZoeticError(f"unknown coupling {coupling!r} (none or antiphase)")
         self.shape = (len(self.free), m)
@@ -135,14 +148,17 @@ class Objective:
     def full_coefficients(self, params: np.ndarray) -> np.ndarray:
         """Return the coefficients (K, A, M) of every actuator for free parameters (K, dim)."""
         free = np.asarray(params, dtype=np.float64).reshape(-1, *self.shape)
-        if self.coupling == "none":
+        if self.coupling == "none" and len(self.held) == 0:
             return free
         coef = np.empty((free.shape[0], *self.full_shape))
         coef[:, self.free] = free
-        mirror = self.body.actuator_mirror
-        for k in self.free:
-            if mirror[k] != k:
-                coef[:, mirror[k]] = self._one - free[:, list(self.free).index(k)]
+        for k in self.held:  # level: the wave's held activation (the angle 0)
+            coef[:, k] = self._one * np.nan_to_num(self.body.wave_held[k], nan=0.5)
+        if self.coupling == "antiphase":
+            mirror = self.body.actuator_mirror
+            for k in self.free:
+                if mirror[k] != k:
+                    coef[:, mirror[k]] = self._one - free[:, list(self.free).index(k)]
         return coef
 
     def controller(self, params: np.ndarray) -> Controller:

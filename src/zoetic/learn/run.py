@@ -31,6 +31,13 @@ from zoetic.learn.objective import Objective
 from zoetic.learn.optimizers import Optimizer, make_optimizer
 from zoetic.tasks import Task, check_fits, load_task, parse_task
 
+# Defaults measured on the zoo (docs/reproduction.md, "Why default learning was weak"): a
+# gait is periodic, so the default controller is a Fourier series on harmonics of the animal's
+# stroke frequency (a constant and two harmonics per actuator), which keeps going past the
+# horizon; CMA-ES asks for populations of 32, which the batched kernel simulates at once.
+PERIODIC_NODES = 5
+CMAES_POPSIZE = 32
+
 
 @dataclass
 class LearnConfig:
@@ -38,10 +45,10 @@ class LearnConfig:
 
     animal: str = "shark"
     task: str = "swim-straight"
-    optimizer: str = "anneal"
+    optimizer: str = "cmaes"
     budget: int = 3500
     seed: int = 0
-    controller: str = "time"
+    controller: str = "periodic"
     nodes: int | None = None
     interp: str = "linear"
     popsize: int | None = None
@@ -49,6 +56,7 @@ class LearnConfig:
     evaluator: str = "batch"
     coupling: str = "none"
     medium: str | None = None
+    frequency: float | None = None  # periodic controller's base frequency, Hz (animal's wave)
     extra: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
@@ -72,24 +80,32 @@ def build(config: LearnConfig, task: Task | None = None) -> Setup:
     body = load_animal(config.animal)
     task = task or load_task(config.task)
     check_fits(task, body, config.medium)
-    m = config.nodes or task.nodes
+    periodic = config.controller == "periodic"
+    m = config.nodes or (PERIODIC_NODES if periodic else task.nodes)
     if config.controller == "time":
         template = time_domain(body, m, task.horizon, interp=config.interp)
     elif config.controller == "frequency":
         template = frequency_domain(body, m, task.horizon)
+    elif periodic:
+        base = config.frequency or body.wave_frequency
+        if not base > 0:
+            raise ZoeticError(f"the periodic controller needs a positive frequency, got {base}")
+        template = frequency_domain(body, m, task.horizon, base=base)
     else:
-        raise ZoeticError(f"unknown controller {config.controller!r} (time or frequency)")
+        raise ZoeticError(
+            f"unknown controller {config.controller!r} (periodic, time or frequency)"
+        )
     if m != task.nodes:
         task = parse_task({**task.to_dict(), "nodes": m}, task.source)
     objective = Objective(task, body, template, config.medium, coupling=config.coupling)
     lo, hi = objective.bounds()
     rng = np.random.default_rng(config.seed)
     x0 = rng.uniform(lo, hi)
-    if config.controller == "frequency":  # random small amplitudes about a mid-level constant
+    if config.controller != "time":  # random small amplitudes about a mid-level constant
         x0 = np.clip(x0 * 0.5 + np.where(hi == 1.0, 0.25, 0.0), lo, hi)
     options = {}
-    if config.optimizer == "cmaes" and config.popsize:
-        options["popsize"] = config.popsize
+    if config.optimizer == "cmaes":
+        options["popsize"] = config.popsize or CMAES_POPSIZE
     if config.optimizer == "anneal" and config.chains > 1:
         options["chains"] = config.chains
     options |= config.extra.get("optimizer", {})

@@ -24,6 +24,7 @@ import numpy as np
 from zoetic.bodies import Body
 from zoetic.errors import SimulationError
 from zoetic.physics.media import Medium, get_medium
+from zoetic.physics.multirate import split
 from zoetic.physics.simulate import VMAX
 
 F32 = jnp.float32
@@ -107,14 +108,16 @@ def _unit(a: jax.Array) -> jax.Array:
     return a / (_norm(a) + TINY)[..., None]
 
 
-def _springs(m: JaxBody, x: jax.Array, v: jax.Array, a: jax.Array) -> jax.Array:
-    d = x[m.spring_b] - x[m.spring_a]
+def _springs(m: JaxBody, x: jax.Array, v: jax.Array, a: jax.Array, idx) -> jax.Array:
+    """Forces of the springs with indices ``idx`` (a NumPy array, fixed at trace time)."""
+    sa, sb = m.spring_a[idx], m.spring_b[idx]
+    d = x[sb] - x[sa]
     length = _norm(d) + TINY
     u = d / length[:, None]
-    rest = m.relaxed + m.muscle * a[m.spring_actuator] * m.delta
-    edot = jnp.sum((v[m.spring_b] - v[m.spring_a]) * u, axis=-1)
-    fs = (m.stiffness * (length - rest) + m.spring_damping * edot)[:, None] * u
-    return jnp.zeros_like(x).at[m.spring_a].add(fs).at[m.spring_b].add(-fs)
+    rest = m.relaxed[idx] + m.muscle[idx] * a[m.spring_actuator[idx]] * m.delta[idx]
+    edot = jnp.sum((v[sb] - v[sa]) * u, axis=-1)
+    fs = (m.stiffness[idx] * (length - rest) + m.spring_damping[idx] * edot)[:, None] * u
+    return jnp.zeros_like(x).at[sa].add(fs).at[sb].add(-fs)
 
 
 def _water(m: JaxBody, x: jax.Array, v: jax.Array, level: float, drag: float) -> jax.Array:
@@ -178,11 +181,21 @@ def make_step(body: Body, medium: str | Medium | None = None, dt: float | None =
     water = med.water_drag > 0 and med.water_level > -1e8
     fins = water and len(body.fin_area) > 0
     g, level = med.gravity, med.water_level
+    sp = split(body, dt)
+    slow, fast, substeps = sp.slow_springs, sp.fast_springs, sp.substeps
+    sn, fn = sp.slow_nodes, sp.fast_nodes
     hm = jnp.asarray(np.float32(dt) / body.mass.astype(np.float32), F32)[:, None]
     damp = 1.0 / (1.0 + hm * m.node_damping[:, None])
+    h = np.float32(dt) / np.float32(substeps)
+    hms = jnp.asarray(h / body.mass[fn].astype(np.float32), F32)[:, None]
+    damps = 1.0 / (1.0 + hms * m.node_damping[fn][:, None])
+
+    def advance(x, v, f):
+        v = (v + hm * f) * damp
+        return x + dt * v, v
 
     def step(x: jax.Array, v: jax.Array, a: jax.Array) -> tuple[jax.Array, jax.Array]:
-        f = _springs(m, x, v, a)
+        f = _springs(m, x, v, a, slow)
         wet = x[:, 1] < level
         fy = jnp.where(wet, m.mass * (g * med.buoyancy - g), -m.mass * g)
         f = f.at[:, 1].add(fy)
@@ -192,8 +205,16 @@ def make_step(body: Body, medium: str | Medium | None = None, dt: float | None =
             f = f + _fins(m, x, v, a, level, med.water_drag, dt)
         if med.floor:
             f = f + _ground(m, x, v, f, med, dt)
-        v = (v + hm * f) * damp
-        return x + dt * v, v
+        if len(fast) == 0:
+            return advance(x, v, f)
+        xs, vs = advance(x, v, f)  # nodes no stiff spring touches: as without a split
+        x, v = x.at[sn].set(xs[sn]), v.at[sn].set(vs[sn])
+        v = v.at[fn].add(hm[fn] * f[fn])  # one kick, then the stiff springs' sub-steps
+        for _ in range(substeps):  # (multirate.split)
+            fq = _springs(m, x, v, a, fast)[fn]
+            vq = (v[fn] + hms * fq) * damps
+            x, v = x.at[fn].add(h * vq), v.at[fn].set(vq)
+        return x, v
 
     return step
 

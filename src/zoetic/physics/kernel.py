@@ -10,7 +10,10 @@ updated with nodal damping implicit, then positions from the new velocity. Groun
 solved last, against the velocity the other forces would produce (implicit Coulomb), and
 water forces can at most stop a face's normal motion in one step, so stiff drag on light
 nodes cannot blow up. A candidate whose state is non-finite or faster than ``vmax`` is marked
-failed, reset to rest (so it cannot slow or poison the others) and reported.
+failed, reset to rest (so it cannot slow or poison the others) and reported. Springs too
+stiff for the step (``multirate.split``) are integrated in sub-steps inside each step, after
+one kick of every other force (impulse multirate), so a stiff caudal fin does not shrink the
+whole body's step.
 
 Cost (shark, AVX2 host): springs are about 3/4 of a step, water panels 1/4. Each spring moves
 about 25 lane-vectors through memory (positions, velocities, both nodes' forces, one
@@ -55,8 +58,9 @@ G, LEVEL, BUOY, DRAG, FLOOR, FLOOR_K, FLOOR_C, MU_F, MU_B, MU_L = range(10)
 @njit(cache=True, fastmath=FM, inline="always")
 def _forces(
     x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
-    mass, sa, sb, stiff, sdamp, relaxed, shorten, scol, med,
+    mass, sa, sb, stiff, sdamp, relaxed, shorten, scol, med, sidx,
 ):  # fmt: skip
+    """Gravity, buoyancy and the springs listed in ``sidx`` (the slow ones, see multirate)."""
     n_nodes = mass.shape[0]
     level = med[LEVEL]
     g = med[G]
@@ -70,10 +74,23 @@ def _forces(
             fx[i, b] = ZERO
             fy[i, b] = wet if y[i, b] < level else dry
             fz[i, b] = ZERO
+    _springs(
+        x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
+        sa, sb, stiff, sdamp, relaxed, shorten, scol, sidx,
+    )  # fmt: skip
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def _springs(
+    x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
+    sa, sb, stiff, sdamp, relaxed, shorten, scol, sidx,
+):  # fmt: skip
+    """Add the forces of the springs listed in ``sidx``."""
     # springs and muscles: l = a*l_c + (1-a)*l_r = l_r + a*(l_c - l_r). Branch-free: a passive
     # spring reads column 0 and has l_c - l_r = 0 (``shorten``). A branch on "is it a muscle"
     # here kept LLVM from vectorising the loop: removing it made the shark 2x, the snake 3.4x.
-    for s in range(sa.shape[0]):
+    for q in range(sidx.shape[0]):
+        s = sidx[q]
         i = sa[s]
         j = sb[s]
         k = stiff[s]
@@ -267,14 +284,36 @@ def _ground(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, front, back, med, dt):
             fz[i, b] += ff * tz + fl * tx
 
 
+@njit(cache=True, fastmath=FM, inline="always")
+def _advance(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, ndamp, h, nodes):
+    """Symplectic Euler over h of ``nodes``: velocities (nodal damping implicit), positions."""
+    for q in range(nodes.shape[0]):
+        i = nodes[q]
+        hm = h / mass[i]
+        damp = ONE / (ONE + hm * ndamp[i])
+        for b in range(nb):
+            vx[i, b] = (vx[i, b] + hm * fx[i, b]) * damp
+            vy[i, b] = (vy[i, b] + hm * fy[i, b]) * damp
+            vz[i, b] = (vz[i, b] + hm * fz[i, b]) * damp
+            x[i, b] += h * vx[i, b]
+            y[i, b] += h * vy[i, b]
+            z[i, b] += h * vz[i, b]
+
+
 @njit(cache=True, fastmath=FM, parallel=True)
 def simulate_chunks(
     pos0, vel0, act, dt, record_every, chunk, vmax,
     mass, ndamp, sa, sb, stiff, sdamp, relaxed, shorten, scol, panels, pw,
     fin_nodes, fin_fwd, fin_span, fin_area, fin_angle, fin_act, front, back, rest_pos, med,
-    rec, final_pos, final_vel, failed_step,
+    rec, final_pos, final_vel, failed_step, slow_idx, fast_idx, substeps, slow_nodes, fast_nodes,
 ):  # fmt: skip
-    """Step every candidate through all activation rows; fills rec, final_* and failed_step."""
+    """Step every candidate through all activation rows; fills rec, final_* and failed_step.
+
+    ``slow_idx`` / ``fast_idx`` split the springs (``multirate.split``): every other force
+    kicks the velocities once, then the fast springs drive ``substeps`` sub-steps of
+    dt / substeps (nodal damping implicit in each) of the ``fast_nodes`` they touch; the
+    ``slow_nodes`` (all of them when there is no split) step once.
+    """
     n_nodes = mass.shape[0]
     n_lanes = pos0.shape[2]
     n_steps = act.shape[0]
@@ -283,6 +322,7 @@ def simulate_chunks(
     water_on = med[DRAG] > 0.0 and med[LEVEL] > -1e8
     level = med[LEVEL]
     drag = med[DRAG]
+    hsub = dt / F(max(substeps, 1))
     for c in prange(n_chunks):
         b0 = c * chunk
         nb = min(chunk, n_lanes - b0)
@@ -295,6 +335,9 @@ def simulate_chunks(
         fx = np.empty((n_nodes, nb), dtype=np.float32)
         fy = np.empty((n_nodes, nb), dtype=np.float32)
         fz = np.empty((n_nodes, nb), dtype=np.float32)
+        gx = np.empty((n_nodes, nb), dtype=np.float32)
+        gy = np.empty((n_nodes, nb), dtype=np.float32)
+        gz = np.empty((n_nodes, nb), dtype=np.float32)
         for i in range(n_nodes):
             for b in range(nb):
                 x[i, b] = pos0[i, 0, b0 + b]
@@ -317,7 +360,7 @@ def simulate_chunks(
                 break
             _forces(
                 x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
-                mass, sa, sb, stiff, sdamp, relaxed, shorten, scol, med,
+                mass, sa, sb, stiff, sdamp, relaxed, shorten, scol, med, slow_idx,
             )  # fmt: skip
             if water_on:
                 _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, panels, pw, level, drag, dt)
@@ -328,16 +371,33 @@ def simulate_chunks(
                     )  # fmt: skip
             if floor_on:
                 _ground(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, front, back, med, dt)
-            for i in range(n_nodes):
-                hm = dt / mass[i]
-                damp = ONE / (ONE + hm * ndamp[i])
-                for b in range(nb):
-                    vx[i, b] = (vx[i, b] + hm * fx[i, b]) * damp
-                    vy[i, b] = (vy[i, b] + hm * fy[i, b]) * damp
-                    vz[i, b] = (vz[i, b] + hm * fz[i, b]) * damp
-                    x[i, b] += dt * vx[i, b]
-                    y[i, b] += dt * vy[i, b]
-                    z[i, b] += dt * vz[i, b]
+            if fast_idx.shape[0] == 0:
+                _advance(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, ndamp, dt, slow_nodes)
+            else:
+                # impulse (RESPA) order: the slow forces kick the velocity once, then the
+                # stiff springs drive sub-steps; holding the slow forces over the sub-steps
+                # instead is not symplectic and grows energy (det of the step map > 1)
+                # (nodes no fast spring touches step once, exactly as without a split)
+                _advance(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, ndamp, dt, slow_nodes)
+                for q in range(fast_nodes.shape[0]):
+                    i = fast_nodes[q]
+                    hm = dt / mass[i]
+                    for b in range(nb):
+                        vx[i, b] += hm * fx[i, b]
+                        vy[i, b] += hm * fy[i, b]
+                        vz[i, b] += hm * fz[i, b]
+                for _sub in range(substeps):
+                    for q in range(fast_nodes.shape[0]):
+                        i = fast_nodes[q]
+                        for b in range(nb):
+                            gx[i, b] = ZERO
+                            gy[i, b] = ZERO
+                            gz[i, b] = ZERO
+                    _springs(
+                        x, y, z, vx, vy, vz, gx, gy, gz, act, t, b0, nb,
+                        sa, sb, stiff, sdamp, relaxed, shorten, scol, fast_idx,
+                    )  # fmt: skip
+                    _advance(x, y, z, vx, vy, vz, gx, gy, gz, nb, mass, ndamp, hsub, fast_nodes)
             if t % 8 == 7 or t == n_steps - 1:
                 for b in range(nb):
                     worst = ZERO

@@ -10,6 +10,7 @@ import numpy as np
 
 from zoetic.bodies import Body
 from zoetic.physics.media import Medium, get_medium
+from zoetic.physics.multirate import split
 from zoetic.physics.simulate import State, rest_state
 
 
@@ -20,19 +21,29 @@ def _scatter(n: int, idx: np.ndarray, values: np.ndarray) -> np.ndarray:
     return out
 
 
-def forces(body: Body, x: np.ndarray, v: np.ndarray, a: np.ndarray, med: Medium, dt: float):
-    """Return the total nodal forces (B, N, 3) for positions, velocities and activations (B, A)."""
+def spring_forces(body: Body, x: np.ndarray, v: np.ndarray, a: np.ndarray, springs=None):
+    """Return the nodal forces (B, N, 3) of the springs with indices ``springs`` (default all)."""
+    idx = np.arange(body.n_springs) if springs is None else np.asarray(springs)
     n = body.n_nodes
-    sa, sb = body.spring_a, body.spring_b
+    sa, sb = body.spring_a[idx], body.spring_b[idx]
     d = x[:, sb] - x[:, sa]
     length = np.linalg.norm(d, axis=-1) + 1e-12
     u = d / length[..., None]
-    act = np.where(body.spring_actuator >= 0, a[:, body.spring_actuator], 0.0)
-    rest = body.relaxed + act * (body.contracted - body.relaxed)
+    muscle = body.spring_actuator[idx]
+    act = np.where(muscle >= 0, a[:, muscle], 0.0)
+    rest = body.relaxed[idx] + act * (body.contracted[idx] - body.relaxed[idx])
     edot = np.einsum("bsk,bsk->bs", v[:, sb] - v[:, sa], u)
-    mag = body.stiffness * (length - rest) + body.spring_damping * edot
+    mag = body.stiffness[idx] * (length - rest) + body.spring_damping[idx] * edot
     fs = mag[..., None] * u
-    f = _scatter(n, sa, fs) - _scatter(n, sb, fs)
+    return _scatter(n, sa, fs) - _scatter(n, sb, fs)
+
+
+def forces(
+    body: Body, x: np.ndarray, v: np.ndarray, a: np.ndarray, med: Medium, dt: float, springs=None
+):
+    """Return the total nodal forces (B, N, 3) for positions, velocities and activations (B, A)
+    with the springs ``springs`` (default all; ``step`` passes the slow ones)."""
+    f = spring_forces(body, x, v, a, springs)
     wet = x[..., 1] < med.water_level
     f[..., 1] += body.mass * med.gravity * (med.buoyancy * wet - 1.0)
     if med.water_drag > 0 and med.water_level > -1e8:
@@ -108,11 +119,26 @@ def _ground(body: Body, x, v, f_other, med: Medium, dt: float) -> np.ndarray:
 
 
 def step(body: Body, x, v, a, med: Medium, dt: float):
-    """Return (x, v) after one semi-implicit Euler step of the same scheme as the kernel."""
-    f = forces(body, x, v, a, med, dt)
-    hm = dt / body.mass[None, :, None]
-    v = (v + hm * f) / (1.0 + hm * body.node_damping[None, :, None])
-    return x + dt * v, v
+    """Return (x, v) after one semi-implicit Euler step of the same scheme as the kernel: the
+    springs too stiff for dt (``multirate.split``) in sub-steps after one kick of the rest."""
+    sp = split(body, dt)
+    f = forces(body, x, v, a, med, dt, sp.slow_springs)
+    x, v = x.copy(), v.copy()
+    s, q = sp.slow_nodes, sp.fast_nodes
+    x[:, s], v[:, s] = _advance(body, s, x[:, s], v[:, s], f[:, s], dt)
+    if len(q) == 0:
+        return x, v
+    v[:, q] += dt * f[:, q] / body.mass[None, q, None]  # one kick of the rest (impulse order)
+    for _ in range(sp.substeps):
+        g = spring_forces(body, x, v, a, sp.fast_springs)[:, q]
+        x[:, q], v[:, q] = _advance(body, q, x[:, q], v[:, q], g, dt / sp.substeps)
+    return x, v
+
+
+def _advance(body: Body, nodes, x, v, f, h: float):
+    hm = h / body.mass[None, nodes, None]
+    v = (v + hm * f) / (1.0 + hm * body.node_damping[None, nodes, None])
+    return x + h * v, v
 
 
 def simulate_reference(

@@ -69,6 +69,7 @@ def rest_state(
     return State(pos.copy(), vel.copy())
 
 
+MAX_SUBSTEPS = 4  # the most sub-steps of stiff springs a body's own step may ask for
 DENSE_NODES = 150  # up to this many nodes the eigenproblems are solved densely, beyond sparsely
 
 
@@ -116,12 +117,23 @@ def stable_dt(body: Body, medium: Medium | str | None = None) -> float:
     Semi-implicit Euler with explicit spring forces is stable for the linearised lattice
     while dt^2 M^-1 K + 2 dt M^-1 C < 4 I (K the stiffness and C the spring-damping matrix at
     the rest pose, plus the floor's penalty contact on the nodes that rest on it); nodal
-    damping is implicit and water drag is capped, so neither limits the step. The limit is
-    found by bisection on the largest eigenvalue (dense up to ``DENSE_NODES`` nodes, Lanczos
-    beyond); on the built-in animals it predicts the step at which they blow up to within a
-    few per cent.
+    damping is implicit and water drag is capped, so neither limits the step. The springs
+    that the multirate step sub-steps at the body's own dt (``multirate.split``: a stiff
+    caudal fin, say) are left out of K and C, since they are stepped at a fraction of dt (at
+    most ``MAX_SUBSTEPS`` of them, else no spring is exempt); the bound is conservative above
+    the body's own dt, where more springs would be sub-stepped.
+    The limit is found by bisection on the largest eigenvalue (dense up to ``DENSE_NODES``
+    nodes, Lanczos beyond); for a body with no sub-stepped springs it predicts the step at
+    which its gait blows up to within a few per cent.
     """
+    from zoetic.physics.multirate import split
+
     med = get_medium(medium or body.medium)
+    own = split(body, float(body.dt))
+    slow = np.zeros(body.n_springs, dtype=bool)
+    slow[own.slow_springs] = True
+    if own.substeps > MAX_SUBSTEPS:  # a file whose own step is far too large: no exemption
+        slow[:] = True
     n = body.n_nodes
     floor_k = np.zeros(n)
     floor_c = np.zeros(n)
@@ -130,8 +142,8 @@ def stable_dt(body: Body, medium: Medium | str | None = None) -> float:
         contact = y <= y.min() + 1e-6
         floor_k[contact] = med.floor_stiffness
         floor_c[contact] = med.floor_damping
-    ks = _lattice_matrix(body, body.stiffness, floor_k)
-    cs = _lattice_matrix(body, body.spring_damping, floor_c)
+    ks = _lattice_matrix(body, np.where(slow, body.stiffness, 0.0), floor_k)
+    cs = _lattice_matrix(body, np.where(slow, body.spring_damping, 0.0), floor_c)
     lam = _largest(ks)
     eta = max(_largest(cs), 0.0)
     if lam <= 0:
@@ -268,6 +280,7 @@ def simulate(
         raise SimulationError("record_every must be at least 1")
 
     from zoetic.physics.kernel import simulate_chunks
+    from zoetic.physics.multirate import split
 
     n = body.n_nodes
     f32 = np.float32
@@ -288,9 +301,11 @@ def simulate(
     final_vel = np.empty((n, 3, batch), dtype=f32)
     failed_step = -np.ones(batch, dtype=np.int64)
     k = _kernel_arrays(body)
+    sp = split(body, dt)
     simulate_chunks(
         pos0, vel0, act_t, f32(dt), record_every, chunk_size(batch), f32(VMAX), *k,
         med.as_array().astype(f32), rec, final_pos, final_vel, failed_step,
+        sp.slow_springs, sp.fast_springs, sp.substeps, sp.slow_nodes, sp.fast_nodes,
     )  # fmt: skip
     times = np.arange(n_rec) * record_every * dt
     return Trajectory(

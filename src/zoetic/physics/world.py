@@ -27,6 +27,7 @@ from zoetic.bodies import Body
 from zoetic.errors import SimulationError
 from zoetic.physics.contacts import balls_step, near, node_contacts
 from zoetic.physics.media import Medium, get_medium
+from zoetic.physics.multirate import split
 from zoetic.physics.objects import Ball, Box, Cylinder, Food, pack_balls, pack_statics
 from zoetic.physics.simulate import VMAX, _kernel_arrays, chunk_size
 
@@ -292,6 +293,8 @@ class World:
         self._vel = np.zeros_like(self._pos)
         self._mass = [b.mass.astype(np.float64) for b in self.bodies]
         self._karr = [_kernel_arrays(b) for b in self.bodies]
+        # the multirate split of each body at this dt (stiff springs sub-stepped), as simulate
+        self._splits = [tuple(split(b, self.dt)) for b in self.bodies]
         self._rec = [np.empty((2, b.n_nodes, 3, self.batch), dtype=F32) for b in self.bodies]
         # the kernel's own failure marks, one array per animal: >= 0 marks a dead lane
         self._fs = [-np.ones(self.batch, dtype=np.int64) for _ in self.bodies]
@@ -488,11 +491,12 @@ class World:
     def _animals_run(self, tables, t0: int, t1: int) -> None:
         kernel = self._parallel if self.batch * (t1 - t0) >= PARALLEL_FROM else self._serial
         dt32, chunk, vmax32, med32 = self._dt32, self._chunk, self._vmax32, self._med32
-        for (p, v), karr, rec, fs, failed, table in zip(
-            self._views, self._karr, self._rec, self._fs, self._failed, tables, strict=False
+        for (p, v), karr, sp, rec, fs, failed, table in zip(
+            self._views, self._karr, self._splits, self._rec, self._fs, self._failed, tables,
+            strict=False,
         ):
             rows = table[t0:t1] if t0 or t1 < len(table) else table
-            kernel(p, v, rows, dt32, t1 - t0, chunk, vmax32, *karr, med32, rec, p, v, fs)
+            kernel(p, v, rows, dt32, t1 - t0, chunk, vmax32, *karr, med32, rec, p, v, fs, *sp)
             merge_failed(failed, fs, self._n + t0)
 
     def step(self, seconds: float, activations=None) -> Contacts:
