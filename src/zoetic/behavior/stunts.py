@@ -341,3 +341,44 @@ def object_markers(objects, balls: np.ndarray, spacing: float = 0.08) -> np.ndar
     r = balls.shape[0]
     return np.concatenate([balls.reshape(r, -1, 3), np.broadcast_to(fix, (r, *fix.shape))],
                           axis=1)  # fmt: skip
+
+
+@dataclass
+class Stunt:
+    """A discovered stunt: the search's result, its problem, and its best plan re-recorded."""
+
+    problem: StuntProblem
+    result: object  # behavior.macro.MacroResult
+    record: StuntRecord  # the best plan, recorded every other time step
+    scores: dict  # its E ('cost') and term values (B = 1)
+    measures: dict  # measures() of it
+
+    def summary(self) -> dict:
+        """Return the JSON-able numbers of the stunt (without the search history)."""
+        r, seconds = self.result, self.problem.steps * self.problem.body.dt
+        starts = r.sequence.starts()
+        return {
+            "animal": self.problem.body.name, "trick": self.problem.trick.name,
+            "trick_file": self.problem.task.source, "method": r.method, "seconds": seconds,
+            **self.measures,
+            "E": round(float(self.scores["cost"][0]), 5),
+            "terms": {k: round(float(v[0]), 5) for k, v in self.scores.items() if k != "cost"},
+            "plan": [{"entry": n, "start_s": round(float(t), 3),
+                      "duration_s": round(float(d), 3), "played": bool(t < seconds)}
+                     for n, t, d in zip(r.names, starts, r.durations, strict=True)],
+            "evaluations": r.evaluations, "wall_s": round(r.wall, 2),
+        }  # fmt: skip
+
+
+def discover(body: Body, repertoire: Repertoire, trick: Trick, method: str = "anneal",
+             budget: int = 3200, seed: int = 0, segments: int | None = None,
+             progress=None) -> Stunt:  # fmt: skip
+    """Return the best stunt ``method`` (anneal: 16 chains; ga: 32 a generation) finds for the
+    trick within ``budget`` plan evaluations."""
+    from zoetic.behavior.macro import search
+
+    problem = StuntProblem(body, repertoire, trick, segments)
+    opts = {"chains": min(16, budget)} if method == "anneal" else {"popsize": min(32, budget)}
+    result = search(problem, method, budget, seed, progress=progress, **opts)
+    rec = problem.record(result.entries[None], result.durations[None], record_every=2)
+    return Stunt(problem, result, rec, problem.scores(rec), measures(problem, rec))

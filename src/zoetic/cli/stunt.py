@@ -8,6 +8,7 @@ import typer
 from rich.console import Console
 
 from zoetic.cli import app
+from zoetic.cli.bench import _emit, bench_app
 from zoetic.cli.track import _progress
 
 console = Console()
@@ -43,7 +44,7 @@ def stunt(
     trick: str = typer.Option("leap", help="A built-in trick (leap, hurdle, somersault, "
                               "ball-nose, ball-tail) or a trick .toml file."),  # fmt: skip
     method: str = typer.Option("anneal", help="anneal (simulated annealing) or ga (genetic)."),
-    budget: int = typer.Option(320, min=1, max=10_000_000,
+    budget: int = typer.Option(3200, min=1, max=10_000_000,
                               help="Plans (stunt simulations) to evaluate."),  # fmt: skip
     seed: int = typer.Option(0, help="Random seed: same seed, same result."),
     segments: int = typer.Option(None, min=1, help="Entries in a plan (default: the trick's)."),
@@ -54,16 +55,8 @@ def stunt(
     """Discover a stunt: a macro controller of repertoire entries that scores the trick's style
     terms best; writes macro.json (replay: zoetic simulate ANIMAL --controller macro.json),
     video.mp4, score.png and summary.json."""
-    from zoetic.behavior.macro import search
     from zoetic.behavior.repertoire import Repertoire
-    from zoetic.behavior.stunts import (
-        StuntProblem,
-        load_trick,
-        macro_document,
-        measures,
-        object_markers,
-        score_series,
-    )
+    from zoetic.behavior.stunts import discover, load_trick, macro_document, score_series
     from zoetic.bodies import load_animal
     from zoetic.io import check_out_dir, make_dir, write_json
     from zoetic.viz.stunts import plot_score
@@ -72,41 +65,30 @@ def stunt(
     body = load_animal(animal)
     rep = Repertoire.load(memory, body)
     tr = load_trick(trick)
-    problem = StuntProblem(body, rep, tr, segments)
-    chains = {"chains": min(16, budget)} if method == "anneal" else {"popsize": min(32, budget)}
     with _progress(budget, "plans") as bar:
         tid = bar.add_task(f"{body.name} {tr.name} ({method})", total=budget, info="")
 
         def update(opt) -> None:
             bar.update(tid, completed=min(opt.evaluations, budget), info=f"E {opt.best_f:.3f}")
 
-        result = search(problem, method, budget, seed, progress=update, **chains)
+        found = discover(body, rep, tr, method, budget, seed, segments, progress=update)
+    problem, result, rec = found.problem, found.result, found.record
     make_dir(out)
     write_json(out / "macro.json", macro_document(problem, result.sequence, tr.task.source))
-    rec = problem.record(result.entries[None], result.durations[None], record_every=2)
-    scores = problem.scores(rec)
-    got = measures(problem, rec)
-    starts = result.sequence.starts()
-    seconds = problem.steps * body.dt
-    summary = {
-        "animal": body.name, "trick": tr.name, "trick_file": tr.task.source,
-        "memory": str(memory), "method": method, "seed": seed, "seconds": seconds,
-        **got,
-        "E": round(float(scores["cost"][0]), 5),
-        "terms": {k: round(float(v[0]), 5) for k, v in scores.items() if k != "cost"},
-        "plan": [{"entry": n, "start_s": round(float(t), 3), "duration_s": round(float(d), 3),
-                  "played": bool(t < seconds)}
-                 for n, t, d in zip(result.names, starts, result.durations, strict=True)],
-        "evaluations": result.evaluations, "wall_s": round(result.wall, 2),
+    summary = found.summary() | {
+        "memory": str(memory), "seed": seed,
         "history": [[n, round(f, 5)] for n, f in result.history],
     }  # fmt: skip
     write_json(out / "summary.json", summary)
-    series = score_series(problem, rec)
-    plot_score(rec.traj.times, series, out / "score.png", starts[starts < seconds],
+    got, seconds = found.measures, summary["seconds"]
+    starts = result.sequence.starts()
+    plot_score(rec.traj.times, score_series(problem, rec), out / "score.png",
+               starts[starts < seconds],
                title=f"{body.name} {tr.name}: E = {summary['E']:.3f}, apex "
                      f"{got['apex_above_surface_m']:.2f} m, {got['air_time_s']:.2f} s in air, "
                      f"{got['rotation_in_air_deg']:.0f} deg in air")  # fmt: skip
     if video:
+        from zoetic.behavior.stunts import object_markers
         from zoetic.viz.render3d import render_video
 
         render_video(body, rec.traj.positions[0], rec.traj.times, body.medium,
@@ -124,3 +106,30 @@ def stunt(
     console.print("plan: " + ", ".join(played))
     console.print(f"wrote {out}/ (macro.json, summary.json, score.png"
                   f"{', video.mp4' if video else ''})")  # fmt: skip
+
+
+@bench_app.command("stunts")
+def bench_stunts_cmd(
+    memory: Path = typer.Option(..., help="The dolphin's repertoire (zoetic repertoire train)."),
+    animal: str = typer.Option("dolphin"),
+    tricks: str = typer.Option("leap,somersault,hurdle,ball-nose,ball-tail",
+                               help="Comma-separated tricks."),  # fmt: skip
+    method: str = typer.Option("anneal"),
+    budget: int = typer.Option(3200, min=1),
+    seed: int = typer.Option(0),
+    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Each trick discovered with the defaults: wall time, evaluations and what it achieved."""
+    from zoetic.behavior.repertoire import Repertoire
+    from zoetic.behavior.stunts import discover, load_trick
+    from zoetic.bodies import load_animal
+
+    body = load_animal(animal)
+    rep = Repertoire.load(memory, body)
+    out: dict = {"animal": body.name, "method": method, "budget": budget, "seed": seed}
+    keep = ("apex_above_surface_m", "apex_body_lengths", "air_time_s", "rotation_in_air_deg",
+            "contacts", "ball_rise_m", "E", "evaluations", "wall_s")  # fmt: skip
+    for name in [t.strip() for t in tricks.split(",") if t.strip()]:
+        s = discover(body, rep, load_trick(name), method, budget, seed).summary()
+        out[name] = {k: s[k] for k in keep if k in s}
+    _emit(out, json)
