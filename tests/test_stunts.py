@@ -167,7 +167,8 @@ def test_a_ball_struck_from_below_rises_and_the_terms_see_contact(dolphin, reper
     assert mk.shape == (rec.balls.shape[1], 1, 3) and np.allclose(mk[:, 0], rec.balls[0, :, 0])
 
 
-def test_stunt_cli_writes_its_files_and_the_macro_replays(tmp_path, dolphin, repertoire):
+def test_stunt_cli_writes_its_files_and_the_macro_replays(tmp_path, capsys, dolphin,
+                                                          repertoire):
     memory = tmp_path / "memory"
     repertoire.save(memory)
     trick = tmp_path / "short-leap.toml"
@@ -194,6 +195,10 @@ def test_stunt_cli_writes_its_files_and_the_macro_replays(tmp_path, dolphin, rep
     assert times[-1] == pytest.approx(0.5)  # the stunt's own duration by default
     com_y = pos[..., 1] @ (dolphin.mass / dolphin.total_mass)
     assert com_y.max() == pytest.approx(s["apex_above_surface_m"], abs=2e-3)
+    code = main(["stunt", "dolphin", "--memory", str(memory), "--trick", "backflop",
+                 "--budget", "2", "--out", str(tmp_path / "no")])  # fmt: skip
+    assert code == 2 and not (tmp_path / "no").exists()
+    assert "unknown trick 'backflop'" in capsys.readouterr().err.replace("\n", " ")
 
 
 def test_a_tiny_stunt_search_improves_on_its_first_plans(dolphin, repertoire):
