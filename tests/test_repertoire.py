@@ -35,7 +35,9 @@ def test_plans_follow_the_medium():
         "go-straight", "sharp-turn-left", "wide-turn-left"]  # fmt: skip
     snake = plan_for(load_animal("snake"))
     assert snake[0].task.name == "crawl-straight"
-    assert [e.name for e in plan_for(load_animal("dolphin"))] == ["go-straight"]
+    dolphin = plan_for(load_animal("dolphin"))  # the five basic motor tasks (right: mirrored)
+    assert [e.name for e in dolphin] == ["move-forward", "turn-down", "turn-up", "turn-left"]
+    assert dolphin[0].task.start.speed == 0.0 and dolphin[1].task.start.speed > 0
 
 
 def test_training_writes_a_reloadable_mirrored_repertoire(trained, shark):

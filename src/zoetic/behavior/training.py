@@ -30,6 +30,15 @@ PLAN = (
     ("sharp-turn-left", {"ground": "sharp-turn-left", "water": "sharp-turn-left"}),
     ("wide-turn-left", {"ground": "wide-turn-left", "water": "wide-turn-left"}),
 )
+# an animal with a water surface above it (the dolphin): the five basic motor tasks of the
+# paper's section 3.2 (turn-right is the mirror of turn-left); forward from rest, turns from a
+# swimming start
+SURFACE_PLAN = (
+    ("move-forward", "move-forward"),
+    ("turn-down", "turn-down"),
+    ("turn-up", "turn-up"),
+    ("turn-left", "turn-left-swimming"),
+)
 REST_SECONDS = 1.0
 
 
@@ -43,10 +52,13 @@ class Entry:
 
 def plan_for(body: Body) -> list[Entry]:
     """Return the entries the basic training learns for this animal (tasks that allow it)."""
-    kind = "water" if "water" in capabilities(body) else "ground"
+    caps = capabilities(body)
+    kind = "water" if "water" in caps else "ground"
+    plan = [(n, t) for n, t in SURFACE_PLAN] if "surface" in caps else [
+        (n, t[kind]) for n, t in PLAN]  # fmt: skip
     out = []
-    for name, tasks in PLAN:
-        task = load_task(tasks[kind])
+    for name, task_name in plan:
+        task = load_task(task_name)
         if fits(task, body):
             out.append(Entry(name, task))
     if not out:

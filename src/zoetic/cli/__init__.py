@@ -36,6 +36,7 @@ def _register() -> None:
         repertoire,
         san,
         simulate,
+        stunt,
         track,
         view,
     )

@@ -35,7 +35,8 @@ def animals() -> None:
 def simulate(
     animal: str = typer.Argument(..., help="A zoo animal's name or an animal .toml file."),
     controller: str = typer.Option("wave", help="wave, rest, or a controller .json file."),
-    seconds: float = typer.Option(10.0, min=0.01, help="Simulated time (s)."),
+    seconds: float = typer.Option(None, min=0.01, help="Simulated time (s); default 10, or "
+                                  "a stunt's own duration for its macro.json."),  # fmt: skip
     out: Path = typer.Option(Path("runs/simulate"), help="Output directory."),
     medium: str = typer.Option(None, help="Override the medium: ground, water, sea, vacuum."),
     dt: float = typer.Option(None, help="Time step (s); default the animal's own."),
@@ -43,9 +44,17 @@ def simulate(
     fps: int = typer.Option(30, min=1, help="Video frame rate."),
 ) -> None:
     """Simulate one animal under a controller; write trajectory.npz, video.mp4 and path.png."""
+    from zoetic.behavior.stunts import is_macro_file
     from zoetic.runs import simulate_run
 
-    result = simulate_run(animal, controller, seconds, out, medium, dt, video, fps)
+    if is_macro_file(controller) and medium is None and dt is None:  # a stunt, replayed whole
+        from zoetic.bodies import load_animal
+        from zoetic.cli.stunt import write_replay
+
+        result = write_replay(load_animal(animal), Path(controller), seconds, out, video, fps)
+    else:
+        result = simulate_run(animal, controller, 10.0 if seconds is None else seconds, out,
+                              medium, dt, video, fps)  # fmt: skip
     for key, value in result.items():
         console.print(f"{key:>12}: {value}")
 

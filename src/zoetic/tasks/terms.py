@@ -55,7 +55,7 @@ class Signals:
     """What a batch of recordings shows, derived lazily with one array module ``xp``."""
 
     def __init__(self, xp, frame: BodyFrame, positions, activations, times, level: float,
-                 horizon: float):  # fmt: skip
+                 horizon: float, contacts=None, balls=None):  # fmt: skip
         self.xp = xp
         self.frame = frame
         self.positions = positions  # (K, R, N, 3)
@@ -63,6 +63,11 @@ class Signals:
         self.times = times  # (R,)
         self.level = level
         self.horizon = float(horizon)
+        # from a World rollout: (node, object) contacts since the previous record (K, R), and
+        # ball centres (K, R, nb, 3); none without objects
+        k, r = positions.shape[:2]
+        self.contacts = xp.zeros((k, r)) if contacts is None else contacts
+        self.balls = xp.zeros((k, r, 0, 3)) if balls is None else balls
 
     @cached_property
     def com(self):
@@ -103,6 +108,21 @@ class Signals:
         pos = self.positions
         lat = xp.mean(pos[:, :, self.frame.left] - pos[:, :, self.frame.right], axis=2)
         return xp.arctan2(-lat[..., 1], _norm_xz(xp, lat) + EPS)
+
+    @cached_property
+    def body_angle(self):
+        """Unwrapped angle (K, R), rad, of the head about the centre of mass in the vertical
+        plane of the start heading: 0 level, pi/2 nose up, 2 pi after a full back somersault."""
+        xp = self.xp
+        d = self.head - self.com
+        h0 = self.heading_xz[:, :1]  # (K, 1, 2)
+        ahead = d[..., 0] * h0[..., 0] + d[..., 2] * h0[..., 1]
+        return xp.unwrap(xp.arctan2(d[..., 1], ahead), axis=1)
+
+    @cached_property
+    def airborne(self):
+        """1.0 where no node is in the water, else 0.0, (K, R)."""
+        return 1.0 - self.xp.max(self.in_water, axis=2)
 
     @cached_property
     def velocity(self):
@@ -225,6 +245,66 @@ def mean_speed(xp, s: Signals, p: TermParams):
 @term("mean squared muscle activation: effort")
 def effort(xp, s: Signals, p: TermParams):
     return xp.mean(s.activations**2, axis=(1, 2))
+
+
+@term("squared error of the pitch change, end minus start, against 'target' (rad^2, nose up "
+      "positive): turning up or down")
+def pitch_change(xp, s: Signals, p: TermParams):
+    return (s.pitch[:, -1] - s.pitch[:, 0] - p.target) ** 2
+
+
+@term("greatest height of the centre of mass above the water surface (m): a leap's apex")
+def apex_above_surface(xp, s: Signals, p: TermParams):
+    return xp.max(s.com[:, :, 1], axis=1) - s.level
+
+
+@term("greatest fraction of the nodes out of the water at one instant (1: the whole body "
+      "clears the water)")
+def clear_fraction(xp, s: Signals, p: TermParams):
+    return xp.max(xp.mean(1.0 - s.in_water, axis=2), axis=1)
+
+
+@term("rotation (rad, unsigned) of the body in its vertical plane while wholly out of the "
+      "water: somersaults")
+def flight_rotation(xp, s: Signals, p: TermParams):
+    both = s.airborne[:, 1:] * s.airborne[:, :-1]
+    return xp.abs(xp.sum(xp.diff(s.body_angle, axis=1) * both, axis=1))
+
+
+@term("squared error of the pitch at the apex of the centre of mass against 'target' (rad^2): "
+      "horizontal over a hurdle")
+def apex_pitch(xp, s: Signals, p: TermParams):
+    i = xp.argmax(s.com[:, :, 1], axis=1)[:, None]
+    return (xp.take_along_axis(s.pitch, i, axis=1)[:, 0] - p.target) ** 2
+
+
+@term("height (m) of the centre of mass above goal[1] where it passes closest to x = goal[0] "
+      "(world m): clearing a hurdle bar")
+def bar_crossing_height(xp, s: Signals, p: TermParams):
+    i = xp.argmin(xp.abs(s.com[:, :, 0] - p.goal[0]), axis=1)[:, None]
+    return xp.take_along_axis(s.com[:, :, 1], i, axis=1)[:, 0] - p.goal[1]
+
+
+@term("node-object contacts over the motion (node-steps touching a ball, hurdle or post; "
+      "0 without objects)")
+def contact_count(xp, s: Signals, p: TermParams):
+    return xp.sum(s.contacts, axis=1)
+
+
+@term("greatest rise of the first ball above its start (m; 0 without a ball): a struck ball")
+def ball_rise(xp, s: Signals, p: TermParams):
+    if s.balls.shape[2] == 0:
+        return xp.zeros(s.positions.shape[0])
+    y = s.balls[:, :, 0, 1]
+    return xp.max(y, axis=1) - y[:, 0]
+
+
+@term("closest approach (m) of the head to the first ball (0 without a ball)")
+def ball_head_distance(xp, s: Signals, p: TermParams):
+    if s.balls.shape[2] == 0:
+        return xp.zeros(s.positions.shape[0])
+    d = s.head - s.balls[:, :, 0]
+    return xp.min(xp.sqrt(xp.sum(d * d, axis=-1) + EPS), axis=1)
 
 
 def evaluate_terms(xp, s: Signals, terms) -> list:

@@ -383,7 +383,8 @@ def render_frames(
     """Yield one (H, W, 3) uint8 picture per recorded time of the animals in their medium.
 
     positions: per animal (R, N, 3) m, or one (B, R, N, 3) array of B animals of one body;
-    markers: (M, 3) fixed world points drawn as buoys; labels: one text per animal;
+    markers: (M, 3) fixed world points drawn as buoys, or (R, M, 3) moving ones;
+    labels: one text per animal;
     colors: one RGB tuple or colour name per animal (default by animal name).
     """
     times = np.asarray(times, float).reshape(-1)
@@ -400,8 +401,10 @@ def render_frames(
     base = medium.water_level if abs(medium.water_level) < 1e8 else 0.0
     seabed = min(base - _SEABED_DEPTH, targets[:, 1].min() - 2 * extent - 1.0)  # under them all
     mesh = _mesh(bodies, colors)
-    mk = None if markers is None else np.asarray(markers, float).reshape(-1, 3)
-    mk_col = None if mk is None else _marker_colors(marker_colors, len(mk))
+    mk = None if markers is None else np.asarray(markers, float)
+    if mk is not None and not (mk.ndim == 3 and len(mk) == len(times)):  # (R, M, 3): moving
+        mk = np.broadcast_to(mk.reshape(-1, 3), (len(times), *mk.reshape(-1, 3).shape))
+    mk_col = None if mk is None else _marker_colors(marker_colors, mk.shape[1])
     radius = marker_radius or 0.12 * extent
     font, small = _font(max(10, h // 22)), _font(max(9, h // 28))
     for r in range(len(times)):
@@ -410,8 +413,8 @@ def render_frames(
         draw = ImageDraw.Draw(img)
         pos = np.concatenate([p[r] for p in positions])
         items = _face_items(pos, mesh, eye, rot, focal, size, medium)
-        if mk is not None and len(mk):
-            items += _marker_items(mk, mk_col, radius, eye, rot, focal, size, medium)
+        if mk is not None and mk.shape[1]:
+            items += _marker_items(mk[r], mk_col, radius, eye, rot, focal, size, medium)
         items.sort(key=lambda it: -it[0])
         for _, kind, geom, col in items:
             if kind == 0:
@@ -457,5 +460,10 @@ def render_video(
 
     times = np.asarray(times, float).reshape(-1)
     bodies, positions = _as_lists(bodies, positions, len(times))
-    t_new, pos_new = resample(positions, times, fps)
+    mk = kw.get("markers")
+    moving = mk is not None and np.ndim(mk) == 3 and len(mk) == len(times)  # (R, M, 3)
+    t_new, pos_new = resample([*positions, *([np.asarray(mk, float)] if moving else [])],
+                              times, fps)  # fmt: skip
+    if moving:
+        kw["markers"] = pos_new.pop()
     return write_mp4(render_frames(bodies, pos_new, t_new, medium, **kw), path, fps)

@@ -1,0 +1,384 @@
+"""Stunts (section 3.2, Plate 5): macro controllers searched for a trick's style terms.
+
+A trick is a task file with two more tables: ``[trick]`` (``segments``, the number of
+repertoire entries in a plan, and ``durations`` [min, max] s of each) and ``[[objects]]``
+(``kind`` = ``ball``, ``box`` or ``cylinder`` and that object's fields, in world metres: a
+hurdle's bar, a beach ball on its post). Its ``horizon`` is the stunt's duration, its
+``[start]`` where the animal starts (e.g. at depth, at rest) and its ``[[terms]]`` the style
+terms (``zoetic.tasks.terms``), which here also see the World's contact record and the balls.
+
+A plan, as for ``behavior.macro``, is a sequence of repertoire entries with durations, played
+cross-faded (5%); the same searches (simulated annealing on ``learn.optimizers.Annealing``, or
+the genetic algorithm) look for the plan of least E = sum of weighted terms, every batch of
+plans simulated as one World (the animal in B copies beside the trick's objects).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from zoetic.behavior.macro import MacroProblem
+from zoetic.behavior.repertoire import Repertoire
+from zoetic.behavior.tracking import TrackingError, body_length
+from zoetic.bodies import Body
+from zoetic.control.abstract import SequenceController
+from zoetic.errors import TaskError, ZoeticError
+from zoetic.physics import Trajectory, get_medium
+from zoetic.physics.objects import Ball, Box, Cylinder
+from zoetic.tasks import TASK_DIR, Task, check_fits, parse_task, start_state
+from zoetic.tasks.terms import BodyFrame, Signals, evaluate_terms, term_names
+
+TRICK_DIR = TASK_DIR / "tricks"
+TRICK_KEYS = ("segments", "durations")
+OBJECTS = {"ball": Ball, "box": Box, "cylinder": Cylinder}
+MACRO_FORMAT = "zoetic-stunt-macro"
+
+
+@dataclass(frozen=True)
+class Trick:
+    """A stunt to discover: the task (duration, start, style terms) and the world's objects."""
+
+    task: Task
+    objects: tuple[Ball | Box | Cylinder, ...] = ()
+    segments: int = 4
+    durations: tuple[float, float] = (0.3, 2.0)
+
+    @property
+    def name(self) -> str:
+        return self.task.name
+
+    def to_dict(self) -> dict:
+        """Return the trick as a JSON-able dict (task, objects, plan shape)."""
+        objs = [{"kind": k, **dataclasses.asdict(o)} for o in self.objects
+                for k, c in OBJECTS.items() if type(o) is c]  # fmt: skip
+        return {"task": self.task.to_dict(), "objects": objs, "segments": self.segments,
+                "durations": list(self.durations)}  # fmt: skip
+
+
+def _object(raw, where: str):
+    if not isinstance(raw, dict) or raw.get("kind") not in OBJECTS:
+        raise TaskError(f"{where}: an object needs kind = ball, box or cylinder")
+    cls = OBJECTS[raw["kind"]]
+    fields = {f.name for f in dataclasses.fields(cls)}
+    args = {k: v for k, v in raw.items() if k != "kind"}
+    bad = sorted(set(args) - fields)
+    if bad:
+        raise TaskError(f"{where}: unknown key(s) {bad} for a {raw['kind']} "
+                        f"(it has {sorted(fields)})")  # fmt: skip
+    try:
+        return cls(**args)
+    except (ZoeticError, TypeError, ValueError) as exc:
+        raise TaskError(f"{where}: {exc}") from None
+
+
+def parse_trick(doc: dict, source: str = "<memory>") -> Trick:
+    """Return the Trick a parsed TOML document describes; TaskError names what is wrong."""
+    if not isinstance(doc, dict):
+        raise TaskError(f"{source}: a trick file holds a table")
+    doc = dict(doc)
+    raw_trick = doc.pop("trick", {})
+    raw_objects = doc.pop("objects", [])
+    task = parse_task(doc, source)
+    if not isinstance(raw_trick, dict):
+        raise TaskError(f"{source}: [trick] must be a table")
+    bad = sorted(set(raw_trick) - set(TRICK_KEYS))
+    if bad:
+        raise TaskError(f"{source}: trick: unknown key(s) {bad} (allowed: {list(TRICK_KEYS)})")
+    segments = raw_trick.get("segments", 4)
+    if isinstance(segments, bool) or not isinstance(segments, int) or segments < 1:
+        raise TaskError(f"{source}: trick: 'segments' must be a positive integer, got {segments!r}")
+    durations = raw_trick.get("durations", [0.3, min(2.0, task.horizon)])
+    ok = isinstance(durations, list) and len(durations) == 2 and all(
+        isinstance(d, int | float) and not isinstance(d, bool) for d in durations)  # fmt: skip
+    if not ok or not 0 < durations[0] < durations[1]:
+        raise TaskError(f"{source}: trick: 'durations' must be [min, max] s with "
+                        f"0 < min < max, got {durations!r}")  # fmt: skip
+    if not isinstance(raw_objects, list):
+        raise TaskError(f"{source}: objects must be [[objects]] tables")
+    objects = tuple(_object(o, f"{source}: objects[{k}]") for k, o in enumerate(raw_objects))
+    return Trick(task, objects, int(segments), (float(durations[0]), float(durations[1])))
+
+
+def list_tricks() -> list[str]:
+    """Return the names of the built-in tricks."""
+    return sorted(p.stem for p in TRICK_DIR.glob("*.toml"))
+
+
+def load_trick(name_or_path: str | Path) -> Trick:
+    """Return a built-in trick by name, or the trick in a TOML file."""
+    from zoetic.io import read_toml
+
+    path = Path(name_or_path)
+    if not (path.suffix == ".toml" or path.exists()):
+        path = TRICK_DIR / f"{name_or_path}.toml"
+        if not path.exists():
+            raise TaskError(f"unknown trick {str(name_or_path)!r}: choose one of "
+                            f"{', '.join(list_tricks())} or give a trick .toml file")  # fmt: skip
+    try:
+        doc = read_toml(path, what="trick file")
+    except ZoeticError as exc:
+        raise TaskError(str(exc)) from None
+    return parse_trick(doc, str(path))
+
+
+@dataclass
+class StuntRecord:
+    """A batch of stunts as the terms see them: trajectories plus the world's records."""
+
+    traj: Trajectory  # positions (B, R, N, 3), times (R,)
+    activations: np.ndarray  # (B, R, A) at the records
+    contacts: np.ndarray  # (B, R) node-object contacts since the previous record
+    balls: np.ndarray  # (B, R, nb, 3)
+    failed: np.ndarray  # (B,)
+
+
+class StuntProblem(MacroProblem):
+    """A trick over a repertoire: plans of L (entry, duration) segments, scored in batches."""
+
+    def __init__(self, body: Body, repertoire: Repertoire, trick: Trick,
+                 segments: int | None = None, record_every: int | None = None,
+                 allowed: tuple[str, ...] | None = None):  # fmt: skip
+        check_fits(trick.task, body)
+        self.body, self.trick, self.task = body, trick, trick.task
+        self.names = list(repertoire.names if allowed is None else allowed)
+        missing = [n for n in self.names if n not in repertoire.controllers]
+        if missing or not self.names:
+            raise TrackingError(f"the repertoire has no entries {missing or self.names}")
+        self.ctrls = [repertoire.controllers[n] for n in self.names]
+        self.segments = int(segments or trick.segments)
+        if self.segments < 1:
+            raise TrackingError("a plan needs at least one segment")
+        self.lower, self.upper = trick.durations
+        every = record_every or max(1, int(round(1.0 / (trick.task.record_hz * body.dt))))
+        self.record_every = int(every)
+        self.steps = max(1, int(round(trick.task.horizon / body.dt / every))) * every
+        self.start = start_state(trick.task, body)
+        self.frame = BodyFrame.of(body)
+        self.level = get_medium(body.medium).water_level
+        self.radius = 0.0
+
+    def world(self, batch: int):
+        """Return the trick's World (the animal at the start state, the objects), B lanes."""
+        from zoetic.physics.world import World
+
+        w = World([self.body, *self.trick.objects], medium=self.body.medium, batch=batch)
+        st = w.initial_state()
+        b = (batch, self.body.n_nodes, 3)
+        pos = np.broadcast_to(self.start.positions[0], b).copy()
+        vel = np.broadcast_to(self.start.velocities[0], b).copy()
+        w.restore(dataclasses.replace(st, positions=(pos,), velocities=(vel,)))
+        return w
+
+    def record(self, entries, durations, record_every: int | None = None) -> StuntRecord:
+        """Return what plans (B, L) do from the trick's start state over its duration."""
+        from zoetic.control.rollout import rollout
+
+        e, d = np.atleast_2d(entries), np.atleast_2d(durations)
+        dt = self.body.dt
+        tables = np.stack(
+            [self.sequence(a, b).table(self.steps, dt) for a, b in zip(e, d, strict=True)]
+        )
+        every = int(record_every or self.record_every)
+        world = self.world(len(e))
+        seconds = self.steps * dt
+        ro = rollout(world, tables, seconds, control_period=seconds, record_every=every)
+        traj = ro.trajectory(0)
+        rows = np.minimum(np.arange(traj.positions.shape[1]) * every, self.steps - 1)
+        return StuntRecord(traj, tables[:, rows], ro.contacts, ro.ball_positions,
+                           np.asarray(traj.failed))  # fmt: skip
+
+    def signals(self, rec: StuntRecord) -> Signals:
+        """Return the terms' view of a batch of stunts."""
+        return Signals(np, self.frame, rec.traj.positions, rec.activations, rec.traj.times,
+                       self.level, self.task.horizon, rec.contacts.astype(float),
+                       rec.balls)  # fmt: skip
+
+    def terms(self, rec: StuntRecord) -> dict[str, np.ndarray]:
+        """Return each style term's raw value (B,) by name."""
+        vals = evaluate_terms(np, self.signals(rec), self.task.terms)
+        return dict(zip(term_names(self.task.terms), vals, strict=True))
+
+    def evaluate(self, entries: np.ndarray, durations: np.ndarray) -> dict:
+        """Return E ('cost', inf for a blow-up) and the terms of plans (B, L), one batch."""
+        rec = self.record(entries, durations)
+        return self.scores(rec)
+
+    def scores(self, rec: StuntRecord) -> dict:  # type: ignore[override]
+        terms = self.terms(rec)
+        cost = sum(t.weight * v for t, v in zip(self.task.terms, terms.values(), strict=True))
+        ok = ~rec.failed & np.isfinite(cost)
+        return {"cost": np.where(ok, cost, np.inf), **terms}
+
+
+def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
+    """Return what one stunt achieved, in plain units (the numbers a judge reads)."""
+    s = problem.signals(rec)
+    dt = float(rec.traj.times[1] - rec.traj.times[0]) if len(rec.traj.times) > 1 else 0.0
+    com_y = s.com[lane, :, 1]
+    air = s.airborne[lane]
+    both = air[1:] * air[:-1]
+    rot = float(abs(np.sum(np.diff(s.body_angle[lane]) * both)))
+    length = body_length(problem.body)
+    apex = float(com_y.max() - problem.level)
+    out = {
+        "apex_above_surface_m": round(apex, 3),
+        "apex_body_lengths": round(apex / length, 3),
+        "apex_time_s": round(float(rec.traj.times[int(com_y.argmax())]), 3),
+        "air_time_s": round(float(air.sum() * dt), 3),
+        "most_nodes_out_of_water": round(float(np.mean(1 - s.in_water[lane], axis=1).max()), 3),
+        "rotation_in_air_deg": round(float(np.degrees(rot)), 1),
+        "rotations_in_air": round(rot / (2 * np.pi), 3),
+        "contacts": int(rec.contacts[lane].sum()),
+        "body_length_m": round(length, 3),
+    }
+    if rec.balls.shape[2]:
+        b = rec.balls[lane, :, 0]
+        out["ball_rise_m"] = round(float(b[:, 1].max() - b[0, 1]), 3)
+        out["ball_moved_m"] = round(float(np.linalg.norm(b - b[0], axis=1).max()), 3)
+    return out
+
+
+def macro_document(problem: StuntProblem, sequence: SequenceController, trick_source: str) -> dict:
+    """Return macro.json's content: the controller, the trick, the start state, the duration."""
+    return {
+        "format": MACRO_FORMAT,
+        "animal": problem.body.name,
+        "trick": trick_source,
+        "seconds": problem.steps * problem.body.dt,
+        "start": {"positions": problem.start.positions[0].tolist(),
+                  "velocities": problem.start.velocities[0].tolist()},
+        "objects": problem.trick.to_dict()["objects"],
+        "controller": sequence.to_dict(),
+    }  # fmt: skip
+
+
+def is_macro_file(path: str | Path) -> bool:
+    """Return True when ``path`` is a stunt's macro.json."""
+    import json
+
+    p = Path(path)
+    if p.suffix != ".json" or not p.is_file():
+        return False
+    try:
+        return json.loads(p.read_text()).get("format") == MACRO_FORMAT
+    except (ValueError, AttributeError, OSError):
+        return False
+
+
+def load_macro(path: str | Path, body: Body) -> tuple[SequenceController, dict]:
+    """Return the controller of a macro.json (checked against the body) and the document."""
+    from zoetic.control import check_fits as controller_fits
+    from zoetic.control import from_dict
+    from zoetic.io import read_json
+
+    doc = read_json(path, what="stunt macro file")
+    try:
+        ctrl = controller_fits(from_dict(doc["controller"], where=str(path)), body, str(path))
+        pos = np.asarray(doc["start"]["positions"], float)
+        vel = np.asarray(doc["start"]["velocities"], float)
+        seconds = float(doc["seconds"])
+        objects = tuple(_object(o, f"{path}: objects[{k}]")
+                        for k, o in enumerate(doc["objects"]))  # fmt: skip
+    except (KeyError, TypeError, ValueError) as exc:
+        raise TaskError(f"{path}: malformed stunt macro file ({exc})") from None
+    if pos.shape != (body.n_nodes, 3) or vel.shape != pos.shape:
+        raise TaskError(f"{path}: the start state is for {pos.shape[0]} nodes; the "
+                        f"{body.name} has {body.n_nodes}")  # fmt: skip
+    return ctrl, {"seconds": seconds, "positions": pos, "velocities": vel, "objects": objects}
+
+
+def replay(body: Body, path: str | Path, seconds: float | None = None,
+           record_every: int = 2) -> tuple[Trajectory, np.ndarray]:  # fmt: skip
+    """Replay a macro.json from its start state among its objects; return the trajectory and
+    the balls' positions (R, nb, 3)."""
+    from zoetic.control.policy import OpenLoopPolicy
+    from zoetic.control.rollout import rollout
+    from zoetic.physics.world import World
+
+    ctrl, info = load_macro(path, body)
+    seconds = float(info["seconds"] if seconds is None else seconds)
+    w = World([body, *info["objects"]], medium=body.medium, batch=1)
+    st = w.initial_state()
+    w.restore(dataclasses.replace(st, positions=(info["positions"][None],),
+                                  velocities=(info["velocities"][None],)))  # fmt: skip
+    ro = rollout(w, OpenLoopPolicy(ctrl), seconds, control_period=seconds,
+                 record_every=record_every)  # fmt: skip
+    return ro.trajectory(0), ro.ball_positions[0]
+
+
+def score_series(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict[str, np.ndarray]:
+    """Return what the style terms read over time (R,) for one stunt, by label."""
+    s = problem.signals(rec)
+    out = {
+        "COM above surface (m)": s.com[lane, :, 1] - problem.level,
+        "nodes out of water": np.mean(1.0 - s.in_water[lane], axis=1),
+        "body angle (deg)": np.degrees(s.body_angle[lane]),
+        "contacts (cumulative)": np.cumsum(rec.contacts[lane]),
+    }
+    if rec.balls.shape[2]:
+        out["ball height (m)"] = rec.balls[lane, :, 0, 1]
+    return out
+
+
+def object_markers(objects, balls: np.ndarray, spacing: float = 0.08) -> np.ndarray:
+    """Return (R, M, 3) points to draw the objects with: fixed shapes sampled along their
+    long axis (a bar, a post; a box's centre), the balls where they are at each record."""
+    balls = np.asarray(balls, float)
+    fixed = []
+    for o in objects:
+        if isinstance(o, Cylinder):
+            n = max(2, int(np.ceil(o.length / spacing)) + 1)
+            pts = np.tile(np.asarray(o.center, float), (n, 1))
+            pts[:, "xyz".index(o.axis)] += np.linspace(-o.length / 2, o.length / 2, n)
+            fixed.append(pts)
+        elif isinstance(o, Box):
+            fixed.append(np.asarray(o.center, float)[None])
+    fix = np.concatenate(fixed) if fixed else np.zeros((0, 3))
+    r = balls.shape[0]
+    return np.concatenate([balls.reshape(r, -1, 3), np.broadcast_to(fix, (r, *fix.shape))],
+                          axis=1)  # fmt: skip
+
+
+@dataclass
+class Stunt:
+    """A discovered stunt: the search's result, its problem, and its best plan re-recorded."""
+
+    problem: StuntProblem
+    result: object  # behavior.macro.MacroResult
+    record: StuntRecord  # the best plan, recorded every other time step
+    scores: dict  # its E ('cost') and term values (B = 1)
+    measures: dict  # measures() of it
+
+    def summary(self) -> dict:
+        """Return the JSON-able numbers of the stunt (without the search history)."""
+        r, seconds = self.result, self.problem.steps * self.problem.body.dt
+        starts = r.sequence.starts()
+        return {
+            "animal": self.problem.body.name, "trick": self.problem.trick.name,
+            "trick_file": self.problem.task.source, "method": r.method, "seconds": seconds,
+            **self.measures,
+            "E": round(float(self.scores["cost"][0]), 5),
+            "terms": {k: round(float(v[0]), 5) for k, v in self.scores.items() if k != "cost"},
+            "plan": [{"entry": n, "start_s": round(float(t), 3),
+                      "duration_s": round(float(d), 3), "played": bool(t < seconds)}
+                     for n, t, d in zip(r.names, starts, r.durations, strict=True)],
+            "evaluations": r.evaluations, "wall_s": round(r.wall, 2),
+        }  # fmt: skip
+
+
+def discover(body: Body, repertoire: Repertoire, trick: Trick, method: str = "anneal",
+             budget: int = 3200, seed: int = 0, segments: int | None = None,
+             progress=None) -> Stunt:  # fmt: skip
+    """Return the best stunt ``method`` (anneal: 16 chains; ga: 32 a generation) finds for the
+    trick within ``budget`` plan evaluations."""
+    from zoetic.behavior.macro import search
+
+    problem = StuntProblem(body, repertoire, trick, segments)
+    opts = {"chains": min(16, budget)} if method == "anneal" else {"popsize": min(32, budget)}
+    result = search(problem, method, budget, seed, progress=progress, **opts)
+    rec = problem.record(result.entries[None], result.durations[None], record_every=2)
+    return Stunt(problem, result, rec, problem.scores(rec), measures(problem, rec))

@@ -1,0 +1,135 @@
+"""``zoetic stunt``: discover a macro controller for a trick (leap, hurdle, somersault, ...)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+from rich.console import Console
+
+from zoetic.cli import app
+from zoetic.cli.bench import _emit, bench_app
+from zoetic.cli.track import _progress
+
+console = Console()
+
+
+def write_replay(body, path: Path, seconds: float | None, out: Path, video: bool,
+                 fps: int) -> dict:  # fmt: skip
+    """Replay a stunt's macro.json; write trajectory.npz, score.png, video.mp4 into out."""
+    from zoetic.behavior.stunts import load_macro, object_markers, replay
+    from zoetic.io import make_dir
+    from zoetic.runs import save_trajectory
+
+    traj, balls = replay(body, path, seconds)
+    _, info = load_macro(path, body)
+    make_dir(out)
+    save_trajectory(out / "trajectory.npz", traj, animal=body.name, controller=str(path))
+    com = traj.com(body)[0]
+    files = {"trajectory": str(out / "trajectory.npz")}
+    if video:
+        from zoetic.viz.render3d import render_video
+
+        files["video"] = str(render_video(
+            body, traj.positions[0], traj.times, body.medium, out / "video.mp4", fps=fps,
+            markers=object_markers(info["objects"], balls), marker_colors=(240, 200, 40)))
+    return {"animal": body.name, "seconds": round(float(traj.times[-1]), 3),
+            "apex_y_m": round(float(com[:, 1].max()), 3), **files}  # fmt: skip
+
+
+@app.command()
+def stunt(
+    animal: str = typer.Argument(..., help="Zoo animal name or animal .toml file."),
+    memory: Path = typer.Option(..., help="Repertoire directory (zoetic repertoire train)."),
+    trick: str = typer.Option("leap", help="A built-in trick (leap, hurdle, somersault, "
+                              "ball-nose, ball-tail) or a trick .toml file."),  # fmt: skip
+    method: str = typer.Option("anneal", help="anneal (simulated annealing) or ga (genetic)."),
+    budget: int = typer.Option(3200, min=1, max=10_000_000,
+                              help="Plans (stunt simulations) to evaluate."),  # fmt: skip
+    seed: int = typer.Option(0, help="Random seed: same seed, same result."),
+    segments: int = typer.Option(None, min=1, help="Entries in a plan (default: the trick's)."),
+    out: Path = typer.Option(Path("runs/stunt"), help="Run directory to write."),
+    video: bool = typer.Option(True, help="Write video.mp4 (objects drawn as buoys)."),
+    fps: int = typer.Option(30, min=1),
+) -> None:
+    """Discover a stunt: a macro controller of repertoire entries that scores the trick's style
+    terms best; writes macro.json (replay: zoetic simulate ANIMAL --controller macro.json),
+    video.mp4, score.png and summary.json."""
+    from zoetic.behavior.repertoire import Repertoire
+    from zoetic.behavior.stunts import discover, load_trick, macro_document, score_series
+    from zoetic.bodies import load_animal
+    from zoetic.io import check_out_dir, make_dir, write_json
+    from zoetic.viz.stunts import plot_score
+
+    check_out_dir(out)
+    body = load_animal(animal)
+    rep = Repertoire.load(memory, body)
+    tr = load_trick(trick)
+    with _progress(budget, "plans") as bar:
+        tid = bar.add_task(f"{body.name} {tr.name} ({method})", total=budget, info="")
+
+        def update(opt) -> None:
+            bar.update(tid, completed=min(opt.evaluations, budget), info=f"E {opt.best_f:.3f}")
+
+        found = discover(body, rep, tr, method, budget, seed, segments, progress=update)
+    problem, result, rec = found.problem, found.result, found.record
+    make_dir(out)
+    write_json(out / "macro.json", macro_document(problem, result.sequence, tr.task.source))
+    summary = found.summary() | {
+        "memory": str(memory), "seed": seed,
+        "history": [[n, round(f, 5)] for n, f in result.history],
+    }  # fmt: skip
+    write_json(out / "summary.json", summary)
+    got, seconds = found.measures, summary["seconds"]
+    starts = result.sequence.starts()
+    plot_score(rec.traj.times, score_series(problem, rec), out / "score.png",
+               starts[starts < seconds],
+               title=f"{body.name} {tr.name}: E = {summary['E']:.3f}, apex "
+                     f"{got['apex_above_surface_m']:.2f} m, {got['air_time_s']:.2f} s in air, "
+                     f"{got['rotation_in_air_deg']:.0f} deg in air")  # fmt: skip
+    if video:
+        from zoetic.behavior.stunts import object_markers
+        from zoetic.viz.render3d import render_video
+
+        render_video(body, rec.traj.positions[0], rec.traj.times, body.medium,
+                     out / "video.mp4", fps=fps,
+                     markers=object_markers(tr.objects, rec.balls[0]),
+                     marker_colors=(240, 200, 40))  # fmt: skip
+    console.print(
+        f"{tr.name} ({method}, {result.evaluations} plans, {result.wall:.1f} s): "
+        f"E = {summary['E']:.4f}; apex {got['apex_above_surface_m']:.3f} m above the surface "
+        f"({got['apex_body_lengths']:.2f} body lengths), {got['air_time_s']:.2f} s wholly in "
+        f"the air, {got['rotation_in_air_deg']:.0f} deg rotation in the air, "
+        f"{got['contacts']} contacts"
+    )
+    played = [f"{p['entry']} {p['duration_s']:.2f} s" for p in summary["plan"] if p["played"]]
+    console.print("plan: " + ", ".join(played))
+    console.print(f"wrote {out}/ (macro.json, summary.json, score.png"
+                  f"{', video.mp4' if video else ''})")  # fmt: skip
+
+
+@bench_app.command("stunts")
+def bench_stunts_cmd(
+    memory: Path = typer.Option(..., help="The dolphin's repertoire (zoetic repertoire train)."),
+    animal: str = typer.Option("dolphin"),
+    tricks: str = typer.Option("leap,somersault,hurdle,ball-nose,ball-tail",
+                               help="Comma-separated tricks."),  # fmt: skip
+    method: str = typer.Option("anneal"),
+    budget: int = typer.Option(3200, min=1),
+    seed: int = typer.Option(0),
+    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Each trick discovered with the defaults: wall time, evaluations and what it achieved."""
+    from zoetic.behavior.repertoire import Repertoire
+    from zoetic.behavior.stunts import discover, load_trick
+    from zoetic.bodies import load_animal
+
+    body = load_animal(animal)
+    rep = Repertoire.load(memory, body)
+    out: dict = {"animal": body.name, "method": method, "budget": budget, "seed": seed}
+    keep = ("apex_above_surface_m", "apex_body_lengths", "air_time_s", "rotation_in_air_deg",
+            "contacts", "ball_rise_m", "E", "evaluations", "wall_s")  # fmt: skip
+    for name in [t.strip() for t in tricks.split(",") if t.strip()]:
+        s = discover(body, rep, load_trick(name), method, budget, seed).summary()
+        out[name] = {k: s[k] for k in keep if k in s}
+    _emit(out, json)
