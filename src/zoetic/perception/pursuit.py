@@ -21,10 +21,10 @@ from zoetic.errors import ZoeticError
 from zoetic.perception.eyes import EyeSpec, head_frame, look
 from zoetic.perception.gaze import GazeController, GazeState, fixation
 from zoetic.perception.recognition import histogram
-from zoetic.physics.objects import Box, Cylinder
+from zoetic.physics.objects import Ball, Box, Cylinder
 from zoetic.physics.world import Animal, World
 from zoetic.render import Cameras, look_rotation, render, world_mesh
-from zoetic.render.scene import Mesh
+from zoetic.render.scene import Mesh, merge
 
 PREDATOR, PREY, DISTRACTOR = (0.45, 0.5, 0.58), (0.85, 0.22, 0.16), (0.9, 0.8, 0.2)
 FOG = (0.05, 0.25, 0.35)
@@ -51,11 +51,18 @@ class Scenery:
 
     colors: tuple
     floor: tuple = (0.0, 0.0, SEABED_LEVEL, SEABED_EXTENT)
+    _static: dict = field(default_factory=dict, repr=False)
 
-    def mesh(self, world: World) -> Mesh:
-        """Return the world's triangles now (lane 0)."""
-        pos = [world.positions(a)[0] for a in range(len(world.animals))]
-        return world_mesh(world.bodies, pos, self.colors, world.objects, None, self.floor)
+    def mesh(self, world: World, positions=None) -> Mesh:
+        """Return the world's triangles now (lane 0), or with the animals at ``positions``
+        (one (N, 3) array each); the fixed objects and seabed are built once."""
+        key = id(world)
+        if key not in self._static:
+            fixed = [o for o in world.objects if not isinstance(o, Ball)]
+            self._static[key] = world_mesh([], [], [], fixed, None, self.floor)
+        pos = positions or [world.positions(a)[0] for a in range(len(world.animals))]
+        moving = world_mesh(world.bodies, pos, self.colors, world.balls, world.ball_positions[0])
+        return merge(moving, self._static[key])
 
 
 @dataclass

@@ -1,5 +1,6 @@
 """A z-buffered software rasteriser (Numba): triangles with flat colours into RGB images from
-pinhole cameras, batched over cameras (one thread each), with exponential underwater fog.
+pinhole cameras, batched over cameras, with exponential underwater fog. One thread: on a
+shared 2-core host a thread pool over 8 small eye images ran 4x slower than a plain loop.
 
 Conventions follow the project's axes (x forward, y up, z left). A camera's rotation holds the
 right, up and forward unit axes as rows (as ``viz.render3d.look_at``). A point p lands at the
@@ -12,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from zoetic.errors import ZoeticError
 
@@ -81,12 +82,12 @@ def project(points, cameras: Cameras) -> tuple[np.ndarray, np.ndarray]:
     return np.stack([col, row], axis=-1), z
 
 
-@njit(cache=True, parallel=True, fastmath=True)
+@njit(cache=True, fastmath=True)
 def _raster(vert, tris, colors, eyes, rots, focal, width, height, fog_color, fog_dist,
             out, depth):  # fmt: skip
     n_cam = eyes.shape[0]
     n_tri = tris.shape[0]
-    for c in prange(n_cam):
+    for c in range(n_cam):
         zbuf = depth[c]
         img = out[c]
         for j in range(height):

@@ -141,3 +141,14 @@ def world_mesh(
     c = np.concatenate(cols) if cols else np.zeros((0, 3))
     return Mesh(v, t, shade(v, t, c) if len(t) else c, np.concatenate(owner) if owner else
                 np.zeros(0, np.int64))  # fmt: skip
+
+
+def merge(*meshes: Mesh) -> Mesh:
+    """Return one mesh holding the triangles of several (owners kept)."""
+    base = np.cumsum([0] + [len(m.vertices) for m in meshes[:-1]])
+    return Mesh(
+        np.concatenate([m.vertices for m in meshes]),
+        np.concatenate([m.triangles + b for m, b in zip(meshes, base, strict=True)]),
+        np.concatenate([m.colors for m in meshes]),
+        np.concatenate([m.owner for m in meshes]),
+    )

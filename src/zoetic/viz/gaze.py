@@ -92,7 +92,7 @@ def chase_frames(world, scenery, result, width: int = 320, height: int = 240, ev
                  fog=(0.05, 0.25, 0.35), visibility: float = 12.0):  # fmt: skip
     """Yield video frames of a chase: the world seen from above and behind the predator
     (rasterised), the gaze rays drawn, the two retinas beside it."""
-    from zoetic.render import Cameras, look_rotation, project, render, world_mesh
+    from zoetic.render import Cameras, look_rotation, project, render
 
     pred, prey = result.positions[0], result.positions[1]
     centre = 0.5 * (pred.mean(1) + prey.mean(1))
@@ -104,7 +104,7 @@ def chase_frames(world, scenery, result, width: int = 320, height: int = 240, ev
     for i in range(0, len(result.log), every):
         rec = result.log[i]
         pos = [p[i] for p in result.positions]
-        mesh = world_mesh(world.bodies, pos, scenery.colors, world.objects, None, scenery.floor)
+        mesh = scenery.mesh(world, pos)
         gap = np.linalg.norm(pred[i].mean(0) - prey[i].mean(0))
         eye = smooth[i] + np.array([-1.5 - 0.8 * gap, 2.0 + 0.6 * gap, 0.5])
         cam = Cameras(eye[None], look_rotation((smooth[i] - eye)[None]),
