@@ -130,3 +130,14 @@ def test_eyes_sit_on_the_head_of_a_placed_fish():
     fr = head_frame(shark, pos)
     assert np.allclose(fr.forward, [np.cos(0.5), 0.0, np.sin(0.5)], atol=1e-6)
     assert np.allclose(fr.up, [0, 1, 0], atol=1e-6) and np.allclose(fr.origin, pos[shark.head])
+
+
+def test_correlating_two_foveas_finds_their_disparity():
+    from scipy.ndimage import gaussian_filter, shift
+
+    from zoetic.perception.gaze import correlate
+
+    base = gaussian_filter(np.random.default_rng(1).random((64, 64)), 1.5)
+    moved = shift(base, (-2.0, 5.0), order=3, mode="wrap")  # content 5 px right, 2 px up
+    u, v, peak = correlate(base, moved)
+    assert abs(u - 5.0) < 0.3 and abs(v + 2.0) < 0.3 and peak > 0.3

@@ -92,6 +92,30 @@ def image_shift(prev: np.ndarray, cur: np.ndarray, iterations: int = 3) -> tuple
     return float(u), float(v)
 
 
+def correlate(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
+    """Return the shift (u, v) in pixels (cols, rows) with b(x + (u, v)) ~ a(x), found by
+    phase correlation (sub-pixel by a parabola through the peak), and the peak's height."""
+    ga = _gray(a) if a.ndim == 3 else np.asarray(a, float)
+    gb = _gray(b) if b.ndim == 3 else np.asarray(b, float)
+    win = np.outer(np.hanning(ga.shape[0]), np.hanning(ga.shape[1]))
+    fa = np.fft.fft2((ga - ga.mean()) * win)
+    fb = np.fft.fft2((gb - gb.mean()) * win)
+    cross = fb * np.conj(fa)
+    r = np.real(np.fft.ifft2(cross / (np.abs(cross) + 1e-12)))
+    j, i = np.unravel_index(int(np.argmax(r)), r.shape)
+    h, w = r.shape
+
+    def sub(m1: float, m0: float, p1: float) -> float:
+        den = m1 - 2 * m0 + p1
+        return 0.5 * (m1 - p1) / den if abs(den) > 1e-12 else 0.0
+
+    di = sub(r[j, i - 1], r[j, i], r[j, (i + 1) % w])
+    dj = sub(r[j - 1, i], r[j, i], r[(j + 1) % h, i])
+    u = (i + w // 2) % w - w // 2 + di
+    v = (j + h // 2) % h - h // 2 + dj
+    return float(u), float(v), float(r[j, i])
+
+
 @dataclass
 class GazeState:
     """What the gaze controller remembers: angles (2, 2) rows (theta, phi) for the left and
@@ -110,7 +134,9 @@ class GazeController:
     threshold: backprojection strength that counts as a detection; max_shift: the largest
     image motion (fovea px) trusted to the flow; centre_tol: fovea px off centre at which a
     detected target is re-foveated by a saccade; match: the histogram intersection of the
-    fovea with the model below which the fovea no longer holds the target.
+    fovea with the model below which the fovea no longer holds the target; verge: correlate
+    the two foveas so that the right eye fixates the point the left one does (accepted when
+    the phase-correlation peak reaches ``verge_peak``).
     """
 
     model: np.ndarray
@@ -121,6 +147,8 @@ class GazeController:
     match: float = 0.05
     max_theta: float = np.radians(60.0)
     max_phi: float = np.radians(45.0)
+    verge: bool = True
+    verge_peak: float = 0.1
 
     def step(self, state: GazeState, frame: HeadFrame, images: np.ndarray,
              cameras: Cameras) -> GazeState:  # fmt: skip
@@ -129,6 +157,7 @@ class GazeController:
         n = self.spec.levels
         s = self.spec.size
         new = GazeState(state.angles.copy(), state.locked.copy(), list(state.fovea), state.saccades)
+        aim: list = [None, None]  # the foveal pixel each eye now centres on, when it has one
         for eye in (LEFT, RIGHT):
             fov = images[eye, n - 1]
             held = intersection(histogram(fov), self.model) >= self.match
@@ -137,6 +166,7 @@ class GazeController:
                 if np.hypot(u, v) <= self.max_shift:  # optokinetic: follow the image motion
                     th, ph = saccade(frame, cameras, eye * n + n - 1, 0.5 * s + u, 0.5 * s + v)
                     new.angles[eye] = (th, ph)
+                    aim[eye] = (0.5 * s + u, 0.5 * s + v)
                 else:
                     new.locked[eye] = False
             found = None
@@ -155,8 +185,17 @@ class GazeController:
                     th, ph = saccade(frame, cameras, eye * n + lev, det.col, det.row)
                     new.angles[eye] = (th, ph)
                     new.saccades += 1
+                    aim[eye] = (det.col, det.row) if lev == n - 1 else None
+                elif aim[eye] is None:
+                    aim[eye] = (0.5 * s, 0.5 * s)
                 new.locked[eye] = True
             new.fovea[eye] = fov
+        if self.verge and new.locked.all() and aim[LEFT] is not None:
+            # vergence: the right eye fixates what the left fovea centres on (correlation)
+            u, v, peak = correlate(images[LEFT, n - 1], images[RIGHT, n - 1])
+            if peak >= self.verge_peak and np.hypot(u, v) < 0.25 * s:
+                col, row = aim[LEFT][0] + u, aim[LEFT][1] + v
+                new.angles[RIGHT] = saccade(frame, cameras, RIGHT * n + n - 1, col, row)
         new.angles[:, 0] = np.clip(new.angles[:, 0], -self.max_theta, self.max_theta)
         new.angles[:, 1] = np.clip(new.angles[:, 1], -self.max_phi, self.max_phi)
         return new

@@ -311,7 +311,8 @@ def run_chase(chase: Chase, seconds: float, fps: float = 30.0, seed: int = 0,
 def summarize(result: ChaseResult, spec: EyeSpec) -> dict:
     """Return the chase's figures: caught, time to catch, fraction of frames with the prey
     foveated (some node of it inside both foveas' field of view), distractor fixations
-    (frames on which a distractor, not the prey, was in a fovea), range error while verged."""
+    (frames on which a distractor, not the prey, was in a fovea), the relative error of the
+    triangulated range (against the prey node nearest the left gaze ray) while foveated."""
     half = 0.5 * spec.fovs[-1]
     prey = result.positions[1].mean(1)
     fov, distr, rng_err = [], 0, []
@@ -323,7 +324,12 @@ def summarize(result: ChaseResult, spec: EyeSpec) -> dict:
             if (o < half).any() and not (off < half).any():
                 distr += 1
         if np.isfinite(rec.range) and fov[-1]:
-            true = np.linalg.norm(prey[i] - rec.eye_pos.mean(0))
+            # the truth: the distance to the prey's node nearest the left eye's gaze ray
+            nodes = result.positions[1][i]
+            rel = nodes - rec.eye_pos[0]
+            along = rel @ rec.eye_dirs[0]
+            miss = np.linalg.norm(rel - along[:, None] * rec.eye_dirs[0], axis=1)
+            true = np.linalg.norm(nodes[np.argmin(miss)] - rec.eye_pos.mean(0))
             rng_err.append(abs(rec.range - true) / true)
     head = result.positions[0][:, 0]
     dist = np.linalg.norm(prey - head, axis=-1)
