@@ -193,17 +193,20 @@ class CruisePolicy:
         return steer(self.body, period.times, 0.0, self.amplitude)[None]
 
 
-def learn_model(body: Body, positions: np.ndarray, color, spec: EyeSpec, distance: float = 2.0):
-    """Return the colour histogram of the prey seen alone from the side at ``distance`` m
-    through the same water (its pixels only, by the depth buffer)."""
+def learn_model(body: Body, positions: np.ndarray, color, spec: EyeSpec,
+                distances=(0.6, 1.2, 2.4, 4.0)) -> np.ndarray:  # fmt: skip
+    """Return the colour histogram of the prey seen alone from the side through the same
+    water, its pixels only (by the depth buffer), pooled over views at ``distances`` m (the
+    fog shifts its colours with range)."""
     mesh = world_mesh([body], [positions], [color])
     com = positions.mean(0)
-    eye = com + np.array([0.0, 0.3, distance])
-    cam = Cameras(eye[None], look_rotation((com - eye)[None]), np.array([np.radians(50.0)]),
+    eyes = np.array([com + np.array([0.0, 0.15 * d, d]) for d in distances])
+    cam = Cameras(eyes, look_rotation(com - eyes), np.full(len(eyes), np.radians(50.0)),
                   (spec.size, spec.size))  # fmt: skip
     img, depth = render(mesh.vertices, mesh.triangles, mesh.colors, cam, FOG, spec.visibility,
                         with_depth=True)  # fmt: skip
-    return histogram(img[0], np.isfinite(depth[0]))
+    hist = np.mean([histogram(i, np.isfinite(d)) for i, d in zip(img, depth, strict=True)], 0)
+    return hist / hist.sum()
 
 
 @dataclass
@@ -311,8 +314,9 @@ def run_chase(chase: Chase, seconds: float, fps: float = 30.0, seed: int = 0,
 def summarize(result: ChaseResult, spec: EyeSpec) -> dict:
     """Return the chase's figures: caught, time to catch, fraction of frames with the prey
     foveated (some node of it inside both foveas' field of view), distractor fixations
-    (frames on which a distractor, not the prey, was in a fovea), the relative error of the
-    triangulated range (against the prey node nearest the left gaze ray) while foveated."""
+    (frames on which the eyes held a distractor, not the prey, in a fovea), the relative
+    error of the triangulated range (against the prey node nearest the left gaze ray) while
+    foveated."""
     half = 0.5 * spec.fovs[-1]
     prey = result.positions[1].mean(1)
     fov, distr, rng_err = [], 0, []
@@ -321,7 +325,7 @@ def summarize(result: ChaseResult, spec: EyeSpec) -> dict:
         fov.append(bool((off < half).all()))
         for a in range(2, len(result.positions)):
             o = _off_gaze(rec.eye_dirs, rec.eye_pos, result.positions[a][i])
-            if (o < half).any() and not (off < half).any():
+            if rec.locked.any() and (o < half).any() and not (off < half).any():
                 distr += 1
         if np.isfinite(rec.range) and fov[-1]:
             # the truth: the distance to the prey's node nearest the left eye's gaze ray
