@@ -14,3 +14,4 @@ PY=".venv/bin/python"
 "$Z" bench ray --json 2>/dev/null | tail -n 1
 "$PY" bench/jax_sim.py
 "$Z" bench gym --json | tail -n 1
+"$Z" bench vision --json | tail -n 1

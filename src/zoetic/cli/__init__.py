@@ -33,6 +33,7 @@ def _register() -> None:
         cluster,
         export,
         learn,
+        pursue,
         repertoire,
         san,
         simulate,

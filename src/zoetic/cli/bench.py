@@ -31,3 +31,14 @@ def bench_gym_cmd(
     from zoetic.gym.bench import bench_gym
 
     _emit(bench_gym(env_id, num_envs, steps), json)
+
+
+@bench_app.command("vision")
+def bench_vision_cmd(
+    frames: int = typer.Option(150, min=10, help="Vision frames timed."),
+    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Animat vision: retina frames/s (2 eyes x 4 levels) and the whole pursuit loop's."""
+    from zoetic.perception.bench import bench_vision
+
+    _emit(bench_vision(frames), json)

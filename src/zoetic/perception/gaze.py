@@ -1,0 +1,207 @@
+"""Gaze control: saccades to a detected target, vergence of both eyes on it, range by
+triangulation, and stabilisation of the fovea by least-squares translational optical flow
+(seed 003, section 3.1; Horn's Robot Vision for the flow constraint). Each eye is controlled
+independently; the vergence angle is theta_V = theta_R - theta_L (Fig. 6).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.ndimage import gaussian_filter
+from scipy.ndimage import shift as nd_shift
+
+from zoetic.perception.eyes import (
+    LEFT,
+    RIGHT,
+    EyeSpec,
+    HeadFrame,
+    eye_positions,
+    gaze_angles,
+    gaze_direction,
+    pixel_direction,
+)
+from zoetic.perception.recognition import histogram, intersection, locate
+from zoetic.render import Cameras
+
+
+def saccade(frame: HeadFrame, cameras: Cameras, index: int, col: float, row: float):
+    """Return the gaze angles (theta, phi) that bring pixel (col, row) of camera ``index`` to
+    the centre of that eye's images."""
+    th, ph = gaze_angles(frame, pixel_direction(cameras, index, col, row))
+    return float(th), float(ph)
+
+
+def triangulate(origins: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, float]:
+    """Return the point (3,) nearest both gaze rays (origins, directions (2, 3)) and its range
+    (m) from the midpoint between the eyes; inf for rays that do not converge ahead."""
+    p, q = origins
+    d, e = directions / np.linalg.norm(directions, axis=1, keepdims=True)
+    w = p - q
+    b = d @ e
+    den = 1.0 - b * b
+    if den < 1e-12:
+        return np.full(3, np.nan), float("inf")
+    s = (b * (e @ w) - (d @ w)) / den
+    t = ((e @ w) - b * (d @ w)) / den
+    if s <= 0 or t <= 0:
+        return np.full(3, np.nan), float("inf")
+    x = 0.5 * (p + s * d + q + t * e)
+    return x, float(np.linalg.norm(x - 0.5 * (p + q)))
+
+
+def vergence_range(theta_left: float, theta_right: float, baseline: float) -> float:
+    """Return the range (m) to a fixated point straight from the eyes' theta angles in the
+    horizontal plane (eyes at +-baseline/2 along the left axis): the sine rule on the triangle
+    the baseline and the two gaze rays make; inf when they do not converge."""
+    verg = theta_right - theta_left
+    if verg <= 1e-9:
+        return float("inf")
+    # distance from the left eye along its ray, then the range from the midpoint
+    s = baseline * np.cos(theta_right) / np.sin(verg)
+    x, z = s * np.cos(theta_left), 0.5 * baseline + s * np.sin(theta_left)
+    return float(np.hypot(x, z))
+
+
+def _gray(img: np.ndarray) -> np.ndarray:
+    return gaussian_filter(np.asarray(img, float).mean(-1) / 255.0, 1.0)
+
+
+def image_shift(prev: np.ndarray, cur: np.ndarray, iterations: int = 3) -> tuple[float, float]:
+    """Return the translation (u, v) in pixels (cols, rows) that carries image ``prev`` onto
+    ``cur`` (RGB or gray), by least squares on the optical-flow constraint
+    Ix u + Iy v + It = 0 over the image, refined by warping a few times."""
+    a = _gray(prev) if prev.ndim == 3 else np.asarray(prev, float)
+    b = _gray(cur) if cur.ndim == 3 else np.asarray(cur, float)
+    u = v = 0.0
+    m = 3  # ignore the margin, where warping invents pixels
+    for _ in range(iterations):
+        w = nd_shift(a, (v, u), order=1, mode="nearest") if (u or v) else a
+        gy, gx = np.gradient(0.5 * (w + b))
+        gt = b - w
+        gx, gy, gt = gx[m:-m, m:-m], gy[m:-m, m:-m], gt[m:-m, m:-m]
+        mat = np.array([[(gx * gx).sum(), (gx * gy).sum()], [(gx * gy).sum(), (gy * gy).sum()]])
+        rhs = -np.array([(gx * gt).sum(), (gy * gt).sum()])
+        if np.linalg.det(mat) < 1e-9:
+            break
+        du, dv = np.linalg.solve(mat, rhs)
+        u, v = u + du, v + dv
+        if abs(du) + abs(dv) < 1e-3:
+            break
+    return float(u), float(v)
+
+
+def correlate(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
+    """Return the shift (u, v) in pixels (cols, rows) with b(x + (u, v)) ~ a(x), found by
+    phase correlation (sub-pixel by a parabola through the peak), and the peak's height."""
+    ga = _gray(a) if a.ndim == 3 else np.asarray(a, float)
+    gb = _gray(b) if b.ndim == 3 else np.asarray(b, float)
+    win = np.outer(np.hanning(ga.shape[0]), np.hanning(ga.shape[1]))
+    fa = np.fft.fft2((ga - ga.mean()) * win)
+    fb = np.fft.fft2((gb - gb.mean()) * win)
+    cross = fb * np.conj(fa)
+    r = np.real(np.fft.ifft2(cross / (np.abs(cross) + 1e-12)))
+    j, i = np.unravel_index(int(np.argmax(r)), r.shape)
+    h, w = r.shape
+
+    def sub(m1: float, m0: float, p1: float) -> float:
+        den = m1 - 2 * m0 + p1
+        return 0.5 * (m1 - p1) / den if abs(den) > 1e-12 else 0.0
+
+    di = sub(r[j, i - 1], r[j, i], r[j, (i + 1) % w])
+    dj = sub(r[j - 1, i], r[j, i], r[(j + 1) % h, i])
+    u = (i + w // 2) % w - w // 2 + di
+    v = (j + h // 2) % h - h // 2 + dj
+    return float(u), float(v), float(r[j, i])
+
+
+@dataclass
+class GazeState:
+    """What the gaze controller remembers: angles (2, 2) rows (theta, phi) for the left and
+    right eyes, whether each eye holds the target, and its last foveal image."""
+
+    angles: np.ndarray = field(default_factory=lambda: np.zeros((2, 2)))
+    locked: np.ndarray = field(default_factory=lambda: np.zeros(2, bool))
+    fovea: list = field(default_factory=lambda: [None, None])
+    saccades: int = 0
+
+
+@dataclass(frozen=True)
+class GazeController:
+    """Foveation, stabilisation and vergence for two eyes hunting a colour model.
+
+    threshold: backprojection strength that counts as a detection; max_shift: the largest
+    image motion (fovea px) trusted to the flow; centre_tol: fovea px off centre at which a
+    detected target is re-foveated by a saccade; match: the histogram intersection of the
+    fovea with the model below which the fovea no longer holds the target; verge: correlate
+    the two foveas so that the right eye fixates the point the left one does (accepted when
+    the phase-correlation peak reaches ``verge_peak``).
+    """
+
+    model: np.ndarray
+    spec: EyeSpec = EyeSpec()
+    threshold: float = 0.2
+    max_shift: float = 4.0
+    centre_tol: float = 2.0
+    match: float = 0.05
+    max_theta: float = np.radians(60.0)
+    max_phi: float = np.radians(45.0)
+    verge: bool = True
+    verge_peak: float = 0.1
+
+    def step(self, state: GazeState, frame: HeadFrame, images: np.ndarray,
+             cameras: Cameras) -> GazeState:  # fmt: skip
+        """Return the gaze state after one frame: stabilise each eye on its fovea's motion,
+        re-foveate (saccade) when the target drifts or is lost, verge both eyes on it."""
+        n = self.spec.levels
+        s = self.spec.size
+        new = GazeState(state.angles.copy(), state.locked.copy(), list(state.fovea), state.saccades)
+        aim: list = [None, None]  # the foveal pixel each eye now centres on, when it has one
+        for eye in (LEFT, RIGHT):
+            fov = images[eye, n - 1]
+            held = intersection(histogram(fov), self.model) >= self.match
+            if new.locked[eye] and held and new.fovea[eye] is not None:
+                u, v = image_shift(new.fovea[eye], fov)
+                if np.hypot(u, v) <= self.max_shift:  # optokinetic: follow the image motion
+                    th, ph = saccade(frame, cameras, eye * n + n - 1, 0.5 * s + u, 0.5 * s + v)
+                    new.angles[eye] = (th, ph)
+                    aim[eye] = (0.5 * s + u, 0.5 * s + v)
+                else:
+                    new.locked[eye] = False
+            found = None
+            for lev in range(n - 1, -1, -1):  # finest level that sees the target
+                det = locate(images[eye, lev], self.model)
+                if det.strength >= self.threshold:
+                    found = (lev, det)
+                    break
+            if found is None:
+                new.locked[eye] = False
+                new.angles[eye] *= 0.8  # drift back toward straight ahead while searching
+            else:
+                lev, det = found
+                off = np.hypot(det.col - 0.5 * s, det.row - 0.5 * s) * 2.0 ** (n - 1 - lev)
+                if not new.locked[eye] or off > self.centre_tol:
+                    th, ph = saccade(frame, cameras, eye * n + lev, det.col, det.row)
+                    new.angles[eye] = (th, ph)
+                    new.saccades += 1
+                    aim[eye] = (det.col, det.row) if lev == n - 1 else None
+                elif aim[eye] is None:
+                    aim[eye] = (0.5 * s, 0.5 * s)
+                new.locked[eye] = True
+            new.fovea[eye] = fov
+        if self.verge and new.locked.all() and aim[LEFT] is not None:
+            # vergence: the right eye fixates what the left fovea centres on (correlation)
+            u, v, peak = correlate(images[LEFT, n - 1], images[RIGHT, n - 1])
+            if peak >= self.verge_peak and np.hypot(u, v) < 0.25 * s:
+                col, row = aim[LEFT][0] + u, aim[LEFT][1] + v
+                new.angles[RIGHT] = saccade(frame, cameras, RIGHT * n + n - 1, col, row)
+        new.angles[:, 0] = np.clip(new.angles[:, 0], -self.max_theta, self.max_theta)
+        new.angles[:, 1] = np.clip(new.angles[:, 1], -self.max_phi, self.max_phi)
+        return new
+
+
+def fixation(frame: HeadFrame, angles: np.ndarray, spec: EyeSpec) -> tuple[np.ndarray, float]:
+    """Return the point both gaze rays verge on and its range (m) (inf if they diverge)."""
+    dirs = gaze_direction(frame, angles[:, 0], angles[:, 1])
+    return triangulate(eye_positions(frame, spec), dirs)

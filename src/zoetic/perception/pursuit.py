@@ -1,0 +1,357 @@
+"""Vision-guided pursuit (seed 003, section 3.2): a predator fish that sees with its eyes,
+a reddish prey that wanders and flees, and a yellowish distractor that passes behind it.
+
+Turning uses the animal's own muscles: its travelling wave with a left/right bias added to
+one side's muscles (a minimal local turn controller; the behaviour layer's turn motor
+controllers may replace it). The shark has no pectoral-fin actuators, so the up/down turn
+angle phi_P is computed and logged but not acted on.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from zoetic.bodies import Body, load_animal
+from zoetic.control import wave_controller
+from zoetic.control.policy import Period
+from zoetic.control.sensors import observe
+from zoetic.errors import ZoeticError
+from zoetic.perception.eyes import EyeSpec, head_frame, look
+from zoetic.perception.gaze import GazeController, GazeState, fixation
+from zoetic.perception.recognition import histogram
+from zoetic.physics.objects import Ball, Box, Cylinder
+from zoetic.physics.world import Animal, World
+from zoetic.render import Cameras, look_rotation, render, world_mesh
+from zoetic.render.scene import Mesh, merge
+
+PREDATOR, PREY, DISTRACTOR = (0.45, 0.5, 0.58), (0.85, 0.22, 0.16), (0.9, 0.8, 0.2)
+FOG = (0.05, 0.25, 0.35)
+SEABED_LEVEL, SEABED_EXTENT = -2.0, 30.0
+
+
+def _wrap(a):
+    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+
+
+def steer(body: Body, times: np.ndarray, bias: float, amplitude: float = 1.0) -> np.ndarray:
+    """Return activations (T, A): the body's own travelling wave (``control.wave_controller``,
+    fins held level) with its muscles' swing scaled by ``amplitude`` and ``bias`` added to its
+    left muscles and taken from its right ones (bias > 0 turns left)."""
+    u = wave_controller(body).sample(times)
+    muscle = np.array([k == "muscle" for k in body.actuator_kind])
+    side = np.array([1.0 if s == "left" else -1.0 if s == "right" else 0.0
+                     for s in body.actuator_side]) * muscle  # fmt: skip
+    swing = np.where(muscle, body.wave_offset + amplitude * (u - body.wave_offset), u)
+    return np.clip(swing + bias * side, 0, 1)
+
+
+@dataclass
+class Scenery:
+    """The fixed part of the picture and the animals' colours."""
+
+    colors: tuple
+    floor: tuple = (0.0, 0.0, SEABED_LEVEL, SEABED_EXTENT)
+    _static: dict = field(default_factory=dict, repr=False)
+
+    def mesh(self, world: World, positions=None) -> Mesh:
+        """Return the world's triangles now (lane 0), or with the animals at ``positions``
+        (one (N, 3) array each); the fixed objects and seabed are built once."""
+        key = id(world)
+        if key not in self._static:
+            fixed = [o for o in world.objects if not isinstance(o, Ball)]
+            self._static[key] = world_mesh([], [], [], fixed, None, self.floor)
+        pos = positions or [world.positions(a)[0] for a in range(len(world.animals))]
+        moving = world_mesh(world.bodies, pos, self.colors, world.balls, world.ball_positions[0])
+        return merge(moving, self._static[key])
+
+
+@dataclass
+class VisionRecord:
+    """One frame of the predator's vision: gaze angles (2, 2), the locks, the turn angles,
+    the triangulated range (m) and the component images (2, L, S, S, 3)."""
+
+    time: float
+    angles: np.ndarray
+    locked: np.ndarray
+    theta_p: float
+    phi_p: float
+    range: float
+    images: np.ndarray
+    eye_dirs: np.ndarray
+    eye_pos: np.ndarray
+
+
+@dataclass
+class PredatorPolicy:
+    """A Policy: the predator renders what its eyes see each control period, foveates the
+    prey by its colour model, and turns toward the gaze direction (theta_P) with its muscles.
+
+    gain: turn bias per rad of theta_P; threshold: |theta_P| (rad) below which it swims
+    straight; search_bias: the turn bias while nothing is in sight.
+    """
+
+    world: World
+    animal: int
+    scenery: Scenery
+    gaze: GazeController
+    gain: float = 1.2
+    max_bias: float = 0.4
+    threshold: float = np.radians(3.0)
+    search_bias: float = 0.25
+    sensors: tuple[str, ...] = ()
+    state: GazeState = field(default_factory=GazeState)
+    log: list = field(default_factory=list)
+
+    def reset(self, seed: int | None = None) -> None:
+        """Start with the eyes looking ahead and an empty log."""
+        self.state = GazeState()
+        self.log = []
+
+    def act(self, observation: Mapping[str, np.ndarray], period: Period) -> np.ndarray:
+        """Return (1, T, A) activations: see, move the eyes, steer."""
+        body = self.world.bodies[self.animal]
+        pos = self.world.positions(self.animal)[0]
+        frame = head_frame(body, pos)
+        spec = self.gaze.spec
+        images, cams = look(self.scenery.mesh(self.world), frame, self.state.angles, spec, FOG)
+        self.state = self.gaze.step(self.state, frame, images, cams)
+        a = self.state.angles
+        theta_p, phi_p = float(a[:, 0].mean()), float(a[:, 1].mean())
+        _, rng = fixation(frame, a, spec) if self.state.locked.all() else (None, np.inf)
+        if self.state.locked.any():
+            bias = 0.0 if abs(theta_p) < self.threshold else self.gain * theta_p
+        else:
+            bias = self.search_bias
+        bias = float(np.clip(bias, -self.max_bias, self.max_bias))
+        n = spec.levels
+        self.log.append(VisionRecord(
+            period.t0, a.copy(), self.state.locked.copy(), theta_p, phi_p, float(rng), images,
+            cams.rotation[::n, 2].copy(), cams.eye[::n].copy(),
+        ))  # fmt: skip
+        return steer(body, period.times, bias)[None]
+
+
+@dataclass
+class WanderFleePolicy:
+    """A Policy for the prey: wanders (a new heading every few seconds), flees straight away
+    from the predator when it comes within ``flee_radius``, stays within ``arena`` of the
+    start; swims with its wave at ``amplitude`` (slower than a full wave)."""
+
+    world: World
+    animal: int
+    predator: int
+    seed: int = 0
+    amplitude: float = 0.5
+    flee_radius: float = 1.2
+    arena: float = 8.0
+    wander_every: float = 4.0
+    sensors: tuple[str, ...] = ("com", "heading")
+    _rng: np.random.Generator = field(default=None, repr=False)  # type: ignore[assignment]
+    _goal: float = 0.0
+    _next: float = 0.0
+    _home: np.ndarray | None = None
+
+    def reset(self, seed: int | None = None) -> None:
+        """Reseed the wandering."""
+        self._rng = np.random.default_rng(self.seed if seed is None else seed)
+        self._next = 0.0
+        self._home = None
+
+    def act(self, observation: Mapping[str, np.ndarray], period: Period) -> np.ndarray:
+        """Return (1, T, A) activations steering toward the current goal heading."""
+        com, heading = observation["com"][0], float(observation["heading"][0])
+        if self._home is None:
+            self._home = com.copy()
+            self._goal = heading
+        pred = self.world.positions(self.predator)[0].mean(0)
+        away = com - pred
+        if np.hypot(away[0], away[2]) < self.flee_radius:
+            self._goal = float(np.arctan2(away[2], away[0]))
+        elif np.hypot(*(com - self._home)[[0, 2]]) > self.arena:
+            back = self._home - com
+            self._goal = float(np.arctan2(back[2], back[0]))
+        elif period.t0 >= self._next:
+            self._goal = heading + self._rng.uniform(-1.0, 1.0)
+            self._next = period.t0 + self.wander_every
+        bias = float(np.clip(0.8 * _wrap(self._goal - heading), -0.4, 0.4))
+        return steer(self.world.bodies[self.animal], period.times, bias, self.amplitude)[None]
+
+
+@dataclass
+class CruisePolicy:
+    """A Policy that swims its wave straight at ``amplitude`` (the distractor)."""
+
+    body: Body
+    amplitude: float = 0.8
+    sensors: tuple[str, ...] = ()
+
+    def reset(self, seed: int | None = None) -> None:
+        """Nothing to reset."""
+
+    def act(self, observation: Mapping[str, np.ndarray], period: Period) -> np.ndarray:
+        """Return (1, T, A) activations of the wave."""
+        return steer(self.body, period.times, 0.0, self.amplitude)[None]
+
+
+def learn_model(body: Body, positions: np.ndarray, color, spec: EyeSpec,
+                distances=(0.6, 1.2, 2.4, 4.0)) -> np.ndarray:  # fmt: skip
+    """Return the colour histogram of the prey seen alone from the side through the same
+    water, its pixels only (by the depth buffer), pooled over views at ``distances`` m (the
+    fog shifts its colours with range)."""
+    mesh = world_mesh([body], [positions], [color])
+    com = positions.mean(0)
+    eyes = np.array([com + np.array([0.0, 0.15 * d, d]) for d in distances])
+    cam = Cameras(eyes, look_rotation(com - eyes), np.full(len(eyes), np.radians(50.0)),
+                  (spec.size, spec.size))  # fmt: skip
+    img, depth = render(mesh.vertices, mesh.triangles, mesh.colors, cam, FOG, spec.visibility,
+                        with_depth=True)  # fmt: skip
+    hist = np.mean([histogram(i, np.isfinite(d)) for i, d in zip(img, depth, strict=True)], 0)
+    return hist / hist.sum()
+
+
+@dataclass
+class Chase:
+    """A pursuit scene: the world (predator 0, prey 1, distractors after), the policies."""
+
+    world: World
+    policies: list
+    scenery: Scenery
+    predator: PredatorPolicy
+
+
+def make_chase(seed: int = 0, distractors: int = 1, visibility: float = 6.0,
+               spec: EyeSpec | None = None, start_distance: float | None = None,
+               rocks: bool = True) -> Chase:  # fmt: skip
+    """Return a chase scene: a shark with eyes, a reddish prey ahead of it (off to one side,
+    in its periphery), yellowish distractors crossing behind the prey, rocks and seaweed."""
+    if distractors < 0:
+        raise ZoeticError(f"distractors must be 0 or more, got {distractors}")
+    rng = np.random.default_rng(seed)
+    shark = load_animal("shark")
+    spec = spec or EyeSpec(visibility=visibility)
+    d = start_distance if start_distance is not None else rng.uniform(2.5, 3.5)
+    bearing = rng.choice([-1, 1]) * rng.uniform(0.35, 0.6)
+    prey_at = np.array([d * np.cos(bearing), 0.0, d * np.sin(bearing)])
+    members: list = [Animal(shark, (0.0, 0.0, 0.0), 0.0),
+                     Animal(shark, tuple(prey_at), float(rng.uniform(-0.8, 0.8)))]  # fmt: skip
+    for k in range(distractors):
+        side = -1.0 if k % 2 == 0 else 1.0
+        start = prey_at + np.array([2.0 + 0.8 * k, 0.3 * k, 3.0 * side])
+        members.append(Animal(shark, tuple(start), float(-side * np.pi / 2)))
+    if rocks:
+        for k in range(6):
+            x, z = rng.uniform(-3, 12), rng.choice([-1, 1]) * rng.uniform(3.0, 8.0)
+            h = rng.uniform(0.3, 0.7)
+            members.append(Box((x, SEABED_LEVEL + h, z), (h, h, rng.uniform(0.3, 0.8)),
+                               name=f"rock{k}"))  # fmt: skip
+        for k in range(10):
+            x, z = rng.uniform(-3, 14), rng.choice([-1, 1]) * rng.uniform(2.5, 9.0)
+            ln = rng.uniform(1.0, 1.8)
+            members.append(Cylinder((x, SEABED_LEVEL + 0.5 * ln, z), 0.04, ln,
+                                    name=f"seaweed{k}"))  # fmt: skip
+    world = World(members, medium="water")
+    colors = (PREDATOR, PREY) + (DISTRACTOR,) * distractors
+    scenery = Scenery(colors)
+    model = learn_model(shark, world.positions(1)[0], PREY, spec)
+    pred = PredatorPolicy(world, 0, scenery, GazeController(model, spec))
+    pols = [pred, WanderFleePolicy(world, 1, 0, seed=seed)]
+    pols += [CruisePolicy(shark) for _ in range(distractors)]
+    return Chase(world, pols, scenery, pred)
+
+
+@dataclass
+class ChaseResult:
+    """What a chase recorded: times (R,), positions per animal (R, N, 3), the predator's
+    vision log (one record per frame), caught and when (s, or None)."""
+
+    times: np.ndarray
+    positions: list
+    log: list
+    caught: bool
+    time_to_catch: float | None
+    catch_radius: float
+
+
+def _off_gaze(dirs: np.ndarray, eyes: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """Return per eye (2,) the smallest angle (rad) between its gaze and an animal's node."""
+    to = nodes[None] - eyes[:, None]
+    to = to / np.linalg.norm(to, axis=-1, keepdims=True)
+    return np.arccos(np.clip((to * dirs[:, None]).sum(-1), -1.0, 1.0)).min(1)
+
+
+def run_chase(chase: Chase, seconds: float, fps: float = 30.0, seed: int = 0,
+              catch_radius: float = 0.3) -> ChaseResult:  # fmt: skip
+    """Run the chase for ``seconds`` (stopping at a catch: the predator's head within
+    ``catch_radius`` m of a prey node) with every policy asked ``fps`` times a second."""
+    world = chase.world
+    for p in chase.policies:
+        p.reset(seed)
+    period_steps = max(1, int(round(1.0 / (fps * world.dt))))
+    end = world.steps_for(seconds)
+    head = world.bodies[0].head
+    times, positions = [], [[] for _ in world.animals]
+    caught, t_catch = False, None
+    k = 0
+    while k < end:
+        steps = min(period_steps, end - k)
+        period = Period(world.step_count, steps, world.dt)
+        rows = [p.act(observe(world, a, p.sensors), period) for a, p in enumerate(chase.policies)]
+        times.append(world.time)
+        for a in range(len(world.animals)):
+            positions[a].append(world.positions(a)[0])
+        world.step(steps * world.dt, rows)
+        k += steps
+        if world.failed(0)[0] or world.failed(1)[0]:
+            raise ZoeticError("the chase blew up (an animal's state went non-finite)")
+        gap = np.linalg.norm(world.positions(1)[0] - world.positions(0)[0][head], axis=-1).min()
+        if gap < catch_radius:
+            caught, t_catch = True, world.time
+            break
+    return ChaseResult(np.array(times), [np.stack(p) for p in positions], chase.predator.log,
+                       caught, t_catch, catch_radius)  # fmt: skip
+
+
+def summarize(result: ChaseResult, spec: EyeSpec) -> dict:
+    """Return the chase's figures: caught, time to catch, fraction of frames with the prey
+    foveated (some node of it inside both foveas' field of view), distractor fixations
+    (frames on which the eyes held a distractor, not the prey, in a fovea), the relative
+    error of the triangulated range (against the prey node nearest the left gaze ray) while
+    foveated."""
+    half = 0.5 * spec.fovs[-1]
+    prey = result.positions[1].mean(1)
+    fov, distr, rng_err = [], 0, []
+    for i, rec in enumerate(result.log):
+        off = _off_gaze(rec.eye_dirs, rec.eye_pos, result.positions[1][i])
+        fov.append(bool((off < half).all()))
+        for a in range(2, len(result.positions)):
+            o = _off_gaze(rec.eye_dirs, rec.eye_pos, result.positions[a][i])
+            if rec.locked.any() and (o < half).any() and not (off < half).any():
+                distr += 1
+        if np.isfinite(rec.range) and fov[-1]:
+            # the truth: the distance to the prey's node nearest the left eye's gaze ray
+            nodes = result.positions[1][i]
+            rel = nodes - rec.eye_pos[0]
+            along = rel @ rec.eye_dirs[0]
+            miss = np.linalg.norm(rel - along[:, None] * rec.eye_dirs[0], axis=1)
+            true = np.linalg.norm(nodes[np.argmin(miss)] - rec.eye_pos.mean(0))
+            rng_err.append(abs(rec.range - true) / true)
+    head = result.positions[0][:, 0]
+    dist = np.linalg.norm(prey - head, axis=-1)
+    verg = [r.angles[1, 0] - r.angles[0, 0] for r in result.log]
+    th = np.array([r.angles[:, 0] for r in result.log])
+    corr = float(np.corrcoef(th[:, 0], th[:, 1])[0, 1]) if len(th) > 2 else float("nan")
+    return {
+        "caught": result.caught,
+        "time_to_catch_s": result.time_to_catch,
+        "frames": len(result.log),
+        "foveated_fraction": float(np.mean(fov)) if fov else 0.0,
+        "distractor_fixations": distr,
+        "start_distance_m": float(dist[0]),
+        "final_distance_m": float(dist[-1]),
+        "mean_range_error": float(np.mean(rng_err)) if rng_err else None,
+        "max_vergence_deg": float(np.degrees(np.max(verg))) if verg else 0.0,
+        "gaze_correlation_theta": corr,
+    }

@@ -1,0 +1,143 @@
+"""Animat vision: foveated eyes, colour recognition, saccades, vergence and stabilisation."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from zoetic.bodies import load_animal
+from zoetic.perception.eyes import (
+    EyeSpec,
+    HeadFrame,
+    composite,
+    eye_cameras,
+    head_frame,
+    look,
+)
+from zoetic.perception.gaze import (
+    GazeController,
+    GazeState,
+    fixation,
+    image_shift,
+    saccade,
+    vergence_range,
+)
+from zoetic.perception.recognition import histogram, intersection, locate
+from zoetic.physics.world import placed_pose
+from zoetic.render import project
+from zoetic.render.scene import Mesh, _sphere, shade
+
+FRAME = HeadFrame(np.zeros(3), np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), np.array([0, 0, 1.0]))
+RED, YELLOW = (0.85, 0.12, 0.1), (0.9, 0.85, 0.1)
+
+
+def _balls(centres, colours, radius=0.1) -> Mesh:
+    vs, ts, cs, base = [], [], [], 0
+    for c, col in zip(centres, colours, strict=True):
+        v, t = _sphere(np.asarray(c, float), radius)
+        vs.append(v)
+        ts.append(t + base)
+        cs.append(np.tile(col, (len(t), 1)))
+        base += len(v)
+    v, t = np.concatenate(vs), np.concatenate(ts)
+    return Mesh(v, t, shade(v, t, np.concatenate(cs)), np.zeros(len(t), np.int64))
+
+
+def _red_model(spec: EyeSpec) -> np.ndarray:
+    img, _ = look(_balls([(1.0, 0, 0)], [RED]), FRAME, np.zeros((2, 2)), spec)
+    fov = img[0, -1]
+    return histogram(fov, fov[..., 0] > 2 * fov[..., 2])
+
+
+def test_a_point_projects_to_the_expected_pixel_in_every_level():
+    spec = EyeSpec()
+    cams = eye_cameras(FRAME, np.zeros((2, 2)), spec)
+    # a point straight ahead of the left eye projects onto the centre of all its levels
+    left = np.array([-spec.setback, 0.0, 0.5 * spec.baseline])
+    uv, _ = project([left + [2.0, 0.0, 0.0]], cams)
+    assert np.allclose(uv[:4, 0], 32.0)
+    # 0.1 m to the right at 2 m: 0.05 rad off axis, focal f_l pixels to the right in level l
+    uv, _ = project([left + [2.0, 0.0, -0.1]], cams)
+    assert np.allclose(uv[:4, 0, 0], 32.0 + spec.focals * 0.05)
+
+
+def test_the_retina_composites_levels_with_borders():
+    lev = np.stack([np.full((64, 64, 3), 40 * (k + 1), np.uint8) for k in range(4)])
+    img = composite(lev, 256)
+    assert img[5, 5, 0] == 40 and img[128, 128, 0] == 160 and img[64, 100, 0] == 255
+
+
+def test_the_histogram_model_finds_a_red_square_and_ignores_a_yellow_one():
+    img = np.zeros((64, 64, 3), np.uint8)
+    img[...] = (20, 70, 90)
+    img[40:48, 10:18] = (210, 30, 25)
+    img[8:20, 40:52] = (230, 215, 30)
+    model = histogram(img[40:48, 10:18])
+    det = locate(img, model)
+    assert abs(det.col - 14) < 1 and abs(det.row - 44) < 1 and det.strength > 0.9
+    assert intersection(histogram(img[40:48, 10:18]), model) > 0.99
+    assert intersection(histogram(img[8:20, 40:52]), model) < 0.01
+
+
+def test_a_saccade_centres_the_target_in_the_fovea_in_one_step():
+    spec = EyeSpec()
+    model = _red_model(spec)
+    mesh = _balls([(2.5, 0.3, -1.2), (2.0, -0.2, 1.0)], [RED, YELLOW], radius=0.2)
+    img, cams = look(mesh, FRAME, np.zeros((2, 2)), spec)
+    det = locate(img[0, 0], model)  # in the periphery, off to the right
+    assert det.strength > 0.2 and det.col > 40
+    angles = np.zeros((2, 2))
+    angles[0] = saccade(FRAME, cams, 0, det.col, det.row)
+    img2, _ = look(mesh, FRAME, angles, spec)
+    centre = locate(img2[0, 3], model)
+    # one peripheral pixel is 8 foveal ones: centred within a peripheral pixel
+    assert np.hypot(centre.col - 32, centre.row - 32) < 8
+    target = np.array([2.5, 0.3, -1.2]) - np.array([-spec.setback, 0, 0.5 * spec.baseline])
+    assert np.isclose(angles[0, 0], np.arctan2(target[2], target[0]), atol=0.03)
+
+
+def test_two_eyes_verge_on_the_target_and_triangulate_its_range():
+    spec = EyeSpec()
+    model = _red_model(spec)
+    point = np.array([1.5, 0.1, 0.3])
+    mesh = _balls([point], [RED], radius=0.06)
+    ctl = GazeController(model, spec)
+    state = GazeState()
+    for _ in range(3):
+        img, cams = look(mesh, FRAME, state.angles, spec)
+        state = ctl.step(state, FRAME, img, cams)
+    assert state.locked.all() and state.angles[1, 0] > state.angles[0, 0]  # theta_V > 0
+    x, rng = fixation(FRAME, state.angles, spec)
+    true = np.linalg.norm(point - np.array([-spec.setback, 0, 0]))
+    assert abs(rng - true) < 0.1 * true and np.linalg.norm(x - point) < 0.15 * true
+    flat = vergence_range(0.0 - np.arctan2(0.06, 1.0), np.arctan2(0.06, 1.0), 0.12)
+    assert np.isclose(flat, 1.0, rtol=1e-6)
+
+
+def test_the_stabiliser_recovers_a_known_image_shift():
+    rng = np.random.default_rng(0)
+    from scipy.ndimage import gaussian_filter, shift
+
+    base = gaussian_filter(rng.random((80, 80)), 2.0)
+    for du, dv in ((1.5, -0.7), (-2.5, 1.0)):
+        moved = shift(base, (dv, du), order=3, mode="nearest")
+        u, v = image_shift(base[8:-8, 8:-8], moved[8:-8, 8:-8])
+        assert abs(u - du) < 0.15 and abs(v - dv) < 0.15
+
+
+def test_eyes_sit_on_the_head_of_a_placed_fish():
+    shark = load_animal("shark")
+    pos = placed_pose(shark, (0.0, 0.0, 0.0), yaw=0.5)
+    fr = head_frame(shark, pos)
+    assert np.allclose(fr.forward, [np.cos(0.5), 0.0, np.sin(0.5)], atol=1e-6)
+    assert np.allclose(fr.up, [0, 1, 0], atol=1e-6) and np.allclose(fr.origin, pos[shark.head])
+
+
+def test_correlating_two_foveas_finds_their_disparity():
+    from scipy.ndimage import gaussian_filter, shift
+
+    from zoetic.perception.gaze import correlate
+
+    base = gaussian_filter(np.random.default_rng(1).random((64, 64)), 1.5)
+    moved = shift(base, (-2.0, 5.0), order=3, mode="wrap")  # content 5 px right, 2 px up
+    u, v, peak = correlate(base, moved)
+    assert abs(u - 5.0) < 0.3 and abs(v + 2.0) < 0.3 and peak > 0.3
