@@ -27,7 +27,7 @@ from zoetic.tasks import Task, capabilities, fits, load_task
 # (entry name, task per medium kind): the paper's basic training, in order
 PLAN = (
     ("go-straight", {"ground": "crawl-straight", "water": "swim-straight"}),
-    ("sharp-turn-left", {"ground": "sharp-turn-left", "water": "sharp-turn-left"}),
+    ("sharp-turn-left", {"ground": "sharp-turn-left", "water": "quick-turn-left"}),
     ("wide-turn-left", {"ground": "wide-turn-left", "water": "wide-turn-left"}),
 )
 # an animal with a water surface above it (the dolphin): the five basic motor tasks of the

@@ -1,0 +1,143 @@
+"""Parameterised motor controllers built from a learned repertoire: swim(speed), turn(angle),
+pitch(angle), as the artificial fish has (Tu & Terzopoulos 94, section 5).
+
+An abstracted entry is a sum of cosines per actuator, so a blend of two entries,
+(1 - w) u_a + w u_b, is again one (offsets mixed, modes of both kept with scaled amplitudes):
+``blend``. ``MotorControllers.calibrate`` measures, in one batched simulation from rest, the
+speed of blends of do-nothing and go-straight and the turning rate of blends of go-straight
+and the sharp turns; ``swim`` and ``turn`` invert those tables by interpolation. ``pitch``
+holds the pectoral fins (actuators of kind "fin") at the activation of an angle on top of the
+go-straight gait. Every result is an ordinary AbstractController: playable, savable, and an
+entry a repertoire (and so greedy tracking) can use (``motor_repertoire``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from zoetic.behavior.repertoire import Repertoire
+from zoetic.behavior.tracking import body_length
+from zoetic.bodies import Body
+from zoetic.control.abstract import AbstractController
+from zoetic.errors import ZoeticError
+from zoetic.learn.objective import heading_angles
+from zoetic.physics import simulate
+
+WEIGHTS = np.linspace(0.0, 1.0, 6)
+CALIBRATION_SECONDS = 3.0
+
+
+def blend(a: AbstractController, b: AbstractController, w: float) -> AbstractController:
+    """Return the controller playing (1 - w) a + w b (w in [0, 1])."""
+    if tuple(a.actuators) != tuple(b.actuators):
+        raise ZoeticError("blend: the two controllers drive different actuators")
+    w = float(np.clip(w, 0.0, 1.0))
+    return AbstractController(
+        a.animal, a.actuators, (1 - w) * a.offset + w * b.offset,
+        np.concatenate([a.freq, b.freq], axis=1), np.concatenate([(1 - w) * a.amp, w * b.amp], 1),
+        np.concatenate([a.phase, b.phase], axis=1), max(a.period, b.period),
+    )  # fmt: skip
+
+
+def fin_activation(body: Body, angle: float) -> np.ndarray:
+    """Return, per fin actuator, the activation that sets its fins to ``angle`` rad (clipped)."""
+    out = {}
+    for k, act in enumerate(body.fin_actuator):
+        lo, hi = body.fin_angle[k]
+        out[int(act)] = float(np.clip((angle - lo) / (hi - lo), 0.0, 1.0)) if hi != lo else 0.0
+    return out
+
+
+@dataclass
+class MotorControllers:
+    """swim / turn / pitch for one body, calibrated on one repertoire's entries."""
+
+    body: Body
+    rep: Repertoire
+    speeds: np.ndarray  # (W,) m/s of blend(do-nothing, go-straight, w) over WEIGHTS
+    rates: np.ndarray  # (W,) deg/s of blend(go-straight, sharp-turn-left, w) over WEIGHTS
+
+    @classmethod
+    def calibrate(cls, body: Body, rep: Repertoire) -> MotorControllers:
+        """Measure the blends' speeds and turning rates (one batched run from rest)."""
+        need = ("do-nothing", "go-straight", "sharp-turn-left", "sharp-turn-right")
+        missing = [n for n in need if n not in rep.controllers]
+        if missing:
+            raise ZoeticError(f"motor controllers need the entries {missing} in the repertoire")
+        c = rep.controllers
+        ctrls = [blend(c["do-nothing"], c["go-straight"], w) for w in WEIGHTS]
+        ctrls += [blend(c["go-straight"], c["sharp-turn-left"], w) for w in WEIGHTS]
+        steps = int(round(CALIBRATION_SECONDS / body.dt))
+        tr = simulate(body, np.stack([k.table(steps, body.dt) for k in ctrls]), record_every=10)
+        com = tr.com(body)
+        dist = np.linalg.norm(np.diff(com[..., [0, 2]], axis=1), axis=-1).sum(axis=1)
+        heading = np.degrees(heading_angles(body, tr.positions))
+        n = len(WEIGHTS)
+        return cls(body, rep, dist[:n] / CALIBRATION_SECONDS,
+                   (heading[n:, -1] - heading[n:, 0]) / CALIBRATION_SECONDS)  # fmt: skip
+
+    def swim(self, speed: float) -> AbstractController:
+        """Return a gait swimming about ``speed`` m/s (clipped to what the entries reach)."""
+        order = np.argsort(self.speeds)
+        w = np.interp(speed, self.speeds[order], WEIGHTS[order])
+        c = self.rep.controllers
+        return blend(c["do-nothing"], c["go-straight"], float(w))
+
+    def turn(self, angle: float, seconds: float = 1.5) -> tuple[AbstractController, float]:
+        """Return (controller, duration s) turning ``angle`` degrees (positive left).
+
+        The blend whose rate turns ``angle`` in ``seconds``; beyond the sharp turn's rate the
+        sharp turn itself, for as long as it needs.
+        """
+        rates = np.abs(self.rates)
+        need = abs(angle) / seconds
+        order = np.argsort(rates)
+        w = float(np.interp(need, rates[order], WEIGHTS[order]))
+        top = float(rates.max())
+        duration = seconds if need <= top else abs(angle) / max(top, 1e-9)
+        c = self.rep.controllers
+        side = "sharp-turn-left" if angle >= 0 else "sharp-turn-right"
+        return blend(c["go-straight"], c[side], w), duration
+
+    def pitch(self, angle: float, speed: float | None = None) -> AbstractController:
+        """Return the gait (``swim(speed)``, default go-straight) with the fins at ``angle`` rad
+        (positive: nose up)."""
+        if len(self.body.fin_actuator) == 0:
+            raise ZoeticError(f"the {self.body.name} has no fins to pitch with")
+        gait = self.rep.controllers["go-straight"] if speed is None else self.swim(speed)
+        offset, amp = gait.offset.copy(), gait.amp.copy()
+        for k, a in fin_activation(self.body, angle).items():
+            offset[k], amp[k] = a, 0.0
+        return AbstractController(
+            gait.animal, gait.actuators, offset, gait.freq, amp, gait.phase, gait.period
+        )
+
+    def summary(self) -> dict:
+        """Return the calibration tables (speeds in m/s and BL/s, rates in deg/s)."""
+        bl = body_length(self.body)
+        return {
+            "weights": WEIGHTS.round(2).tolist(),
+            "speed_m_s": self.speeds.round(3).tolist(),
+            "speed_bl_s": (self.speeds / bl).round(3).tolist(),
+            "turn_deg_s": self.rates.round(1).tolist(),
+        }
+
+
+def motor_repertoire(motor: MotorControllers, speeds=(), turns=(), pitches=()) -> Repertoire:
+    """Return the repertoire with added parameterised entries ("swim-0.5", "turn-45",
+    "pitch-0.3", ...), e.g. for greedy tracking to choose among."""
+    rep = Repertoire(motor.rep.animal, motor.rep.actuators)
+    for name in motor.rep.names:
+        rep.add(name, motor.rep.controllers[name], motor.rep.durations[name],
+                **motor.rep.info.get(name, {}))  # fmt: skip
+    period = motor.rep.durations["go-straight"]
+    for v in speeds:
+        rep.add(f"swim-{v:g}", motor.swim(v), period, source="motor")
+    for a in turns:
+        ctrl, duration = motor.turn(a)
+        rep.add(f"turn-{a:g}", ctrl, duration, source="motor")
+    for p in pitches:
+        rep.add(f"pitch-{p:g}", motor.pitch(p), period, source="motor")
+    return rep
