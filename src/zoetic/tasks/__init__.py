@@ -11,7 +11,6 @@ medium must have, e.g. ``["water"]``; ``"a|b"`` accepts either), ``horizon`` (s)
 
 from __future__ import annotations
 
-import difflib
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,6 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from zoetic import io as rd
 from zoetic.errors import TaskError, ZoeticError
 from zoetic.tasks.terms import TERMS
 
@@ -104,25 +104,18 @@ class Task:
 
 
 def _did_you_mean(word: str, choices) -> str:
-    close = difflib.get_close_matches(str(word), list(choices), n=1)
-    return f"; did you mean {close[0]!r}?" if close else f" (choose from {', '.join(choices)})"
+    return rd.suggest(str(word), choices) or f" (choose from {', '.join(choices)})"
 
 
 def _check_keys(d: dict, allowed, where: str) -> None:
-    for key in d:
-        if key not in allowed:
-            raise TaskError(f"{where}: unknown key {key!r}{_did_you_mean(key, allowed)}")
+    rd.check_keys(d, allowed, where, TaskError)
 
 
-def _num(d: dict, key: str, where: str, default=None) -> float:
+def _num(d: dict, key: str, where: str, default=None, **bounds) -> float:
     v = d.get(key, default)
     if v is None:
         raise TaskError(f"{where}: missing '{key}'")
-    if isinstance(v, bool) or not isinstance(v, int | float):
-        raise TaskError(f"{where}: '{key}' must be a number, got {v!r}")
-    if not math.isfinite(v):
-        raise TaskError(f"{where}: '{key}' must be finite, got {v!r}")
-    return float(v)
+    return rd.number(v, f"{where}: '{key}'", TaskError, **bounds)
 
 
 def _vec3(d: dict, key: str, where: str, default=None):
@@ -162,15 +155,10 @@ def parse_task(doc: dict, source: str = "<memory>") -> Task:
     name = doc.get("name")
     if not isinstance(name, str):
         raise TaskError(f"{where}: missing 'name'")
-    horizon = _num(doc, "horizon", where)
-    if horizon <= 0:
-        raise TaskError(f"{where}: 'horizon' must be positive, got {horizon}")
-    nodes = int(_num(doc, "nodes", where, 15))
-    if nodes < 2:
-        raise TaskError(f"{where}: 'nodes' must be at least 2, got {nodes}")
-    record_hz = _num(doc, "record_hz", where, 20.0)
-    if record_hz <= 0:
-        raise TaskError(f"{where}: 'record_hz' must be positive, got {record_hz}")
+    horizon = _num(doc, "horizon", where, positive=True, hi=rd.LIMITS.seconds)
+    nodes = rd.integer(doc.get("nodes", 15), f"{where}: 'nodes'", TaskError, 2,
+                       rd.LIMITS.controller_nodes)  # fmt: skip
+    record_hz = _num(doc, "record_hz", where, 20.0, positive=True, hi=10_000.0)
     terms = []
     raw_terms = doc.get("terms", [])
     if not isinstance(raw_terms, list) or not raw_terms:
