@@ -1,0 +1,122 @@
+"""The perception oracle: what each fish perceives of the world model, as distances.
+
+A fish sees another fish, a food particle or an obstacle when it lies within its view volume
+(``view_angle`` degrees about its heading, 300 by default, and ``view_range`` metres) and the
+sight line from its eye (the nose) is not blocked by an obstacle; food is also smelled within
+``smell_range`` whatever the view. Occlusion is tested by the obstacles' signed distance at
+points along the sight line, at most ``STEP`` m apart. Obstacles themselves are perceived by
+their nearest surface point (range and view only: a rock does not hide a rock).
+Pure functions over arrays; positions (n, 3) in m with y up.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from zoetic.physics.objects import BOX
+
+STEP = 0.2  # m between occlusion probes along a sight line
+
+
+def obstacle_distance(points: np.ndarray, kind, center, size) -> np.ndarray:
+    """Return the signed distance (..., S) from points (..., 3) to each obstacle's surface
+    (negative inside): boxes (size = half sizes), cylinders (size = radius, half length, axis)
+    and spheres (kind 2, size[0] = radius)."""
+    p = np.asarray(points, float)[..., None, :] - center  # (..., S, 3)
+    out = np.empty(p.shape[:-1])
+    kind = np.asarray(kind)
+    for s in range(len(kind)):
+        q = p[..., s, :]
+        if kind[s] == BOX:
+            e = np.abs(q) - size[s]
+            out[..., s] = np.linalg.norm(np.maximum(e, 0), axis=-1) + np.minimum(e.max(-1), 0)
+        elif kind[s] == 2:
+            out[..., s] = np.linalg.norm(q, axis=-1) - size[s][0]
+        else:
+            ax = int(size[s][2])
+            other = [i for i in range(3) if i != ax]
+            e = np.stack([np.linalg.norm(q[..., other], axis=-1) - size[s][0],
+                          np.abs(q[..., ax]) - size[s][1]], -1)  # fmt: skip
+            out[..., s] = np.linalg.norm(np.maximum(e, 0), axis=-1) + np.minimum(e.max(-1), 0)
+    return out
+
+
+def blocked(eyes: np.ndarray, targets: np.ndarray, kind, center, size) -> np.ndarray:
+    """Return (n, m) bools: is the segment from each eye (n, 3) to each target (m, 3) blocked
+    by an obstacle (probed every ``STEP`` m, the end points excluded)?"""
+    n, m = len(eyes), len(targets)
+    if len(kind) == 0 or n == 0 or m == 0:
+        return np.zeros((n, m), bool)
+    seg = targets[None, :, :] - eyes[:, None, :]
+    k = max(2, int(np.ceil(np.linalg.norm(seg, axis=-1).max() / STEP)))
+    u = (np.arange(1, k) / k)[None, None, :, None]
+    pts = eyes[:, None, None, :] + u * seg[:, :, None, :]  # (n, m, k-1, 3)
+    return (obstacle_distance(pts, kind, center, size) < 0).any(axis=(-1, -2))
+
+
+def in_view(eyes, forwards, targets, view_angle, view_range) -> tuple[np.ndarray, np.ndarray]:
+    """Return (distances (n, m), visible (n, m)): within range and the view angle (degrees)."""
+    rel = targets[None, :, :] - eyes[:, None, :]
+    d = np.linalg.norm(rel, axis=-1)
+    cos = (rel * forwards[:, None, :]).sum(-1) / np.maximum(d, 1e-9)
+    half = np.radians(np.asarray(view_angle, float)) / 2
+    ok = (d <= np.asarray(view_range, float)[..., None] if np.ndim(view_range) else
+          d <= view_range)  # fmt: skip
+    return d, ok & (cos >= np.cos(half)[..., None] if np.ndim(half) else cos >= np.cos(half))
+
+
+@dataclass(frozen=True)
+class Percepts:
+    """What every fish perceives: distances (inf where not perceived) to each fish (n, n),
+    food particle (n, F) and obstacle surface (n, S)."""
+
+    fish: np.ndarray
+    food: np.ndarray
+    obstacles: np.ndarray
+
+
+def perceive(
+    eyes: np.ndarray,
+    forwards: np.ndarray,
+    fish_centers: np.ndarray,
+    alive: np.ndarray,
+    food: np.ndarray,
+    food_left: np.ndarray,
+    kind,
+    center,
+    size,
+    view_angle,
+    view_range,
+    smell_range,
+) -> Percepts:
+    """Return the oracle's percepts for n fishes (eyes, forwards, centres (n, 3)) of the live
+    fishes, the food left (F, 3) and the obstacles (packed as ``physics.objects.pack_statics``,
+    spheres as kind 2); view_angle, view_range, smell_range are per fish (n,) or scalars."""
+    n = len(eyes)
+    va = np.broadcast_to(np.asarray(view_angle, float), (n,))
+    vr = np.broadcast_to(np.asarray(view_range, float), (n,))
+    sr = np.broadcast_to(np.asarray(smell_range, float), (n,))
+    df, vf = in_view(eyes, forwards, fish_centers, va, vr)
+    vf &= ~blocked(eyes, fish_centers, kind, center, size) & alive[None, :]
+    np.fill_diagonal(vf, False)
+    food = np.asarray(food, float).reshape(-1, 3)
+    if len(food):
+        dd, vd = in_view(eyes, forwards, food, va, vr)
+        vd &= ~blocked(eyes, food, kind, center, size)
+        vd |= dd <= sr[:, None]
+        vd &= np.asarray(food_left, bool)[None, :]
+    else:
+        dd = vd = np.zeros((n, 0), bool)
+    if len(kind):
+        do = obstacle_distance(eyes, kind, center, size)  # (n, S)
+        # the nearest surface point of each obstacle, seen from the eye
+        rel_ok = do <= vr[:, None]
+        to_c = np.asarray(center)[None] - eyes[:, None]
+        cos = (to_c * forwards[:, None]).sum(-1) / np.maximum(np.linalg.norm(to_c, axis=-1), 1e-9)
+        seen = rel_ok & ((cos >= np.cos(np.radians(va) / 2)[:, None]) | (do < 1.0))
+        obst = np.where(seen, do, np.inf)
+    else:
+        obst = np.zeros((n, 0))
+    return Percepts(np.where(vf, df, np.inf), np.where(vd, dd, np.inf), obst)
