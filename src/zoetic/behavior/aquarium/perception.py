@@ -17,43 +17,57 @@ import numpy as np
 
 from zoetic.physics.objects import BOX
 
-STEP = 0.2  # m between occlusion probes along a sight line
+STEP = 0.25  # m between occlusion probes along a sight line
+
+
+def _box_sdf(q: np.ndarray, half: np.ndarray) -> np.ndarray:
+    e = np.abs(q) - half
+    return np.linalg.norm(np.maximum(e, 0), axis=-1) + np.minimum(e.max(-1), 0)
 
 
 def obstacle_distance(points: np.ndarray, kind, center, size) -> np.ndarray:
     """Return the signed distance (..., S) from points (..., 3) to each obstacle's surface
     (negative inside): boxes (size = half sizes), cylinders (size = radius, half length, axis)
     and spheres (kind 2, size[0] = radius)."""
+    kind = np.asarray(kind)
+    center, size = np.asarray(center, float), np.asarray(size, float)
     p = np.asarray(points, float)[..., None, :] - center  # (..., S, 3)
     out = np.empty(p.shape[:-1])
-    kind = np.asarray(kind)
-    for s in range(len(kind)):
-        q = p[..., s, :]
-        if kind[s] == BOX:
-            e = np.abs(q) - size[s]
-            out[..., s] = np.linalg.norm(np.maximum(e, 0), axis=-1) + np.minimum(e.max(-1), 0)
-        elif kind[s] == 2:
-            out[..., s] = np.linalg.norm(q, axis=-1) - size[s][0]
-        else:
-            ax = int(size[s][2])
+    box = kind == BOX
+    if box.any():
+        out[..., box] = _box_sdf(p[..., box, :], size[box])
+    ball = kind == 2
+    if ball.any():
+        out[..., ball] = np.linalg.norm(p[..., ball, :], axis=-1) - size[ball, 0]
+    for ax in range(3):
+        cyl = (kind == 1) & (size[:, 2] == ax)
+        if cyl.any():
+            q = p[..., cyl, :]
             other = [i for i in range(3) if i != ax]
-            e = np.stack([np.linalg.norm(q[..., other], axis=-1) - size[s][0],
-                          np.abs(q[..., ax]) - size[s][1]], -1)  # fmt: skip
-            out[..., s] = np.linalg.norm(np.maximum(e, 0), axis=-1) + np.minimum(e.max(-1), 0)
+            e = np.stack([np.linalg.norm(q[..., other], axis=-1) - size[cyl, 0],
+                          np.abs(q[..., ax]) - size[cyl, 1]], -1)  # fmt: skip
+            out[..., cyl] = np.linalg.norm(np.maximum(e, 0), axis=-1) + np.minimum(e.max(-1), 0)
     return out
 
 
-def blocked(eyes: np.ndarray, targets: np.ndarray, kind, center, size) -> np.ndarray:
+def blocked(eyes: np.ndarray, targets: np.ndarray, kind, center, size,
+            pairs: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
     """Return (n, m) bools: is the segment from each eye (n, 3) to each target (m, 3) blocked
-    by an obstacle (probed every ``STEP`` m, the end points excluded)?"""
+    by an obstacle (probed every ``STEP`` m, the end points excluded)? Only the ``pairs``
+    (n, m) asked about are tested (default all)."""
     n, m = len(eyes), len(targets)
+    out = np.zeros((n, m), bool)
     if len(kind) == 0 or n == 0 or m == 0:
-        return np.zeros((n, m), bool)
-    seg = targets[None, :, :] - eyes[:, None, :]
+        return out
+    ii, jj = np.nonzero(np.ones((n, m), bool) if pairs is None else pairs)
+    if len(ii) == 0:
+        return out
+    seg = targets[jj] - eyes[ii]  # (P, 3)
     k = max(2, int(np.ceil(np.linalg.norm(seg, axis=-1).max() / STEP)))
-    u = (np.arange(1, k) / k)[None, None, :, None]
-    pts = eyes[:, None, None, :] + u * seg[:, :, None, :]  # (n, m, k-1, 3)
-    return (obstacle_distance(pts, kind, center, size) < 0).any(axis=(-1, -2))
+    u = (np.arange(1, k) / k)[None, :, None]
+    pts = eyes[ii][:, None, :] + u * seg[:, None, :]  # (P, k-1, 3)
+    out[ii, jj] = (obstacle_distance(pts, kind, center, size) < 0).any(axis=(-1, -2))
+    return out
 
 
 def in_view(eyes, forwards, targets, view_angle, view_range) -> tuple[np.ndarray, np.ndarray]:
@@ -99,12 +113,14 @@ def perceive(
     vr = np.broadcast_to(np.asarray(view_range, float), (n,))
     sr = np.broadcast_to(np.asarray(smell_range, float), (n,))
     df, vf = in_view(eyes, forwards, fish_centers, va, vr)
-    vf &= ~blocked(eyes, fish_centers, kind, center, size) & alive[None, :]
+    vf &= alive[None, :]
+    vf &= ~blocked(eyes, fish_centers, kind, center, size, vf)
     np.fill_diagonal(vf, False)
     food = np.asarray(food, float).reshape(-1, 3)
     if len(food):
         dd, vd = in_view(eyes, forwards, food, va, vr)
-        vd &= ~blocked(eyes, food, kind, center, size)
+        vd &= np.asarray(food_left, bool)[None, :]
+        vd &= ~blocked(eyes, food, kind, center, size, vd)
         vd |= dd <= sr[:, None]
         vd &= np.asarray(food_left, bool)[None, :]
     else:

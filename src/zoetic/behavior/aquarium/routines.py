@@ -1,0 +1,170 @@
+"""Behaviour routines: an intention and its focused target in, a motor demand out.
+
+avoid (static obstacles and other fishes), eat, mate, leave, wander, escape, school and the
+predator's hunt. Each is a small pure function of the fish's own kinematics (``Me``) and what it
+perceives (``Around``); the tank turns the demand into muscle activations (``locomotion``).
+Directions are steered in the horizontal plane (the lattice fishes have no fins to pitch).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from zoetic.behavior.aquarium.locomotion import Demand
+from zoetic.behavior.aquarium.perception import obstacle_distance
+
+LOOKAHEAD = 2.5  # s of travel (at least 1.2 m) probed ahead for an imminent collision
+CLEARANCE = 0.5  # m: a probe nearer than this to an obstacle means a collision is imminent
+FISH_CLEARANCE = 0.8  # m between centres ahead that triggers avoid-fish
+
+
+@dataclass(frozen=True)
+class Me:
+    """A fish's own state: centre, nose, unit heading (3,), velocity (3,) and its speeds."""
+
+    com: np.ndarray
+    nose: np.ndarray
+    forward: np.ndarray
+    velocity: np.ndarray
+    cruise: float
+    top: float
+
+
+@dataclass(frozen=True)
+class Around:
+    """What a fish perceives for its routines: perceived fishes (centres, headings, same
+    species?), predators' and prey's centres, the focused target and the way away from a
+    threatening obstacle."""
+
+    fish: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    fish_forward: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    same: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    predators: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    target: np.ndarray | None = None
+    target_velocity: np.ndarray | None = None
+    away: np.ndarray | None = None  # unit horizontal direction away from the threat
+
+
+def _flat(v: np.ndarray) -> np.ndarray:
+    v = np.array(v, float)
+    v[..., 1] = 0.0
+    return v
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    n = np.linalg.norm(v)
+    return v / n if n > 1e-9 else np.zeros_like(v)
+
+
+def bearing(forward: np.ndarray, direction: np.ndarray) -> float:
+    """Return the horizontal angle (rad, left positive, in (-pi, pi]) from forward to direction."""
+    a = np.arctan2(direction[2], direction[0]) - np.arctan2(forward[2], forward[0])
+    return float((a + np.pi) % (2 * np.pi) - np.pi)
+
+
+def steer(me: Me, direction: np.ndarray, speed: float) -> Demand:
+    """Return the demand to swim along ``direction`` at ``speed`` (slower while turning hard)."""
+    d = _flat(direction)
+    if np.linalg.norm(d) < 1e-9:
+        return Demand(speed, 0.0)
+    turn = bearing(me.forward, d)
+    return Demand(speed * (1.0 - 0.5 * min(abs(turn) / np.pi, 1.0)), turn)
+
+
+def collision_ahead(me: Me, kind, center, size, others: np.ndarray
+                    ) -> tuple[bool, np.ndarray | None]:  # fmt: skip
+    """Return (imminent?, the unit way out): probes along the heading up to LOOKAHEAD s of
+    travel against the obstacles (clearance CLEARANCE m) and other fishes' centres ahead."""
+    speed = max(float(np.linalg.norm(me.velocity)), me.cruise)
+    reach = max(1.2, LOOKAHEAD * speed)
+    f = _unit(_flat(me.forward))
+    if len(kind):
+        probes = me.nose + np.linspace(0.0, reach, 6)[:, None] * f
+        d = obstacle_distance(probes, kind, center, size)  # (6, S)
+        k, s = np.unravel_index(np.argmin(d), d.shape)
+        if d[k, s] < CLEARANCE:
+            # the surface normal at the probe (finite differences of the signed distance)
+            eps = 0.05
+            g = np.array([
+                obstacle_distance(probes[k] + eps * e, kind[s:s + 1], center[s:s + 1],
+                                  size[s:s + 1])[0] - d[k, s]
+                for e in np.eye(3)
+            ])  # fmt: skip
+            n = _unit(_flat(g))
+            side = np.array([-f[2], 0.0, f[0]])  # the fish's left
+            # slide along the obstacle on the side its normal points to (left if head-on)
+            turn_left = float(n @ side) >= 0.0
+            out = _unit(n + (side if turn_left else -side))
+            return True, out
+    if len(others):
+        rel = _flat(others - me.com)
+        dist = np.linalg.norm(rel, axis=1)
+        ahead = (rel @ f) > 0.3 * dist
+        close = ahead & (dist < FISH_CLEARANCE)
+        if close.any():
+            j = int(np.argmin(np.where(close, dist, np.inf)))
+            side = np.array([-f[2], 0.0, f[0]])
+            away = -side if float(rel[j] @ side) > 0 else side
+            return True, away
+    return False, None
+
+
+def avoid(me: Me, around: Around) -> Demand:
+    """Turn away from the threatening obstacle or fish, slowing down."""
+    if around.away is None:
+        return Demand(me.cruise, 0.0)
+    return steer(me, around.away, 0.6 * me.cruise)
+
+
+def wander(me: Me, around: Around, rng: np.random.Generator) -> Demand:
+    """Cruise with a slowly wandering heading (a random turn, small)."""
+    return Demand(me.cruise, float(rng.normal(0.0, 0.3)))
+
+
+def leave(me: Me, around: Around) -> Demand:
+    """Swim away from the centre of the perceived fishes."""
+    if len(around.fish) == 0:
+        return Demand(me.cruise, 0.0)
+    return steer(me, me.com - around.fish.mean(axis=0), me.cruise)
+
+
+def go_to(me: Me, around: Around, rng: np.random.Generator, lead: float = 0.0) -> Demand:
+    """Swim to the focused target (eat, mate, hunt; ahead of a moving one by ``lead`` s);
+    wander in search of one when none is perceived."""
+    if around.target is None:
+        return wander(me, around, rng)
+    aim = around.target + (lead * around.target_velocity
+                           if around.target_velocity is not None else 0.0)  # fmt: skip
+    dist = float(np.linalg.norm(_flat(aim - me.nose)))
+    speed = me.top if dist > 2.0 else max(me.cruise * 0.6, me.top * dist / 2.0)
+    return steer(me, aim - me.nose, speed)
+
+
+def escape(me: Me, around: Around) -> Demand:
+    """Flee at full speed, away from the predators (nearer ones weigh more)."""
+    if len(around.predators) == 0:
+        return Demand(me.top, 0.0)
+    rel = _flat(me.com - around.predators)
+    w = 1.0 / np.maximum(np.linalg.norm(rel, axis=1), 0.1) ** 2
+    return steer(me, (w[:, None] * rel).sum(0), me.top)
+
+
+def school(me: Me, around: Around) -> Demand:
+    """Swim with the perceived schoolmates (cohesion, alignment, separation) and away from
+    the predators; alone, escape."""
+    mates = around.fish[around.same] if len(around.fish) else around.fish
+    if len(mates) == 0:
+        return escape(me, around)
+    heads = around.fish_forward[around.same]
+    rel = _flat(mates - me.com)
+    dist = np.maximum(np.linalg.norm(rel, axis=1), 1e-3)
+    cohesion = _unit(rel.mean(0))
+    alignment = _unit(_flat(heads.mean(0)))
+    separation = _unit(-(rel / dist[:, None] ** 2 * (dist < 1.0)[:, None]).sum(0))
+    flee = np.zeros(3)
+    if len(around.predators):
+        flee = _unit(_flat(me.com - around.predators.mean(0)))
+    direction = 0.8 * cohesion + 1.0 * alignment + 1.2 * separation + 1.0 * flee
+    return steer(me, direction, 0.5 * (me.cruise + me.top))
