@@ -15,7 +15,7 @@ import numpy as np
 from zoetic.behavior.aquarium.locomotion import Demand
 from zoetic.behavior.aquarium.perception import obstacle_distance
 
-LOOKAHEAD = 2.5  # s of travel (at least 1.2 m) probed ahead for an imminent collision
+LOOKAHEAD = 6.0  # s of travel (at least 1.5 m) probed ahead for an imminent collision
 CLEARANCE = 0.5  # m: a probe nearer than this to an obstacle means a collision is imminent
 FISH_CLEARANCE = 0.8  # m between centres ahead that triggers avoid-fish
 
@@ -70,15 +70,17 @@ def steer(me: Me, direction: np.ndarray, speed: float) -> Demand:
     if np.linalg.norm(d) < 1e-9:
         return Demand(speed, 0.0)
     turn = bearing(me.forward, d)
-    return Demand(speed * (1.0 - 0.5 * min(abs(turn) / np.pi, 1.0)), turn)
+    # a fish turns about as fast at any amplitude, so it slows down to turn tighter
+    return Demand(speed * max(0.35, float(np.cos(min(abs(turn), np.pi / 2)))), turn)
 
 
-def collision_ahead(me: Me, kind, center, size, others: np.ndarray
+def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int = 0
                     ) -> tuple[bool, np.ndarray | None]:  # fmt: skip
     """Return (imminent?, the unit way out): probes along the heading up to LOOKAHEAD s of
-    travel against the obstacles (clearance CLEARANCE m) and other fishes' centres ahead."""
+    travel against the obstacles (clearance CLEARANCE m) and other fishes' centres ahead.
+    prefer: +1 (left) or -1 (right) keeps the side an avoidance already turns to."""
     speed = max(float(np.linalg.norm(me.velocity)), me.cruise)
-    reach = max(1.2, LOOKAHEAD * speed)
+    reach = max(1.5, LOOKAHEAD * speed)
     f = _unit(_flat(me.forward))
     if len(kind):
         probes = me.nose + np.linspace(0.0, reach, 6)[:, None] * f
@@ -95,7 +97,7 @@ def collision_ahead(me: Me, kind, center, size, others: np.ndarray
             n = _unit(_flat(g))
             side = np.array([-f[2], 0.0, f[0]])  # the fish's left
             # slide along the obstacle on the side its normal points to (left if head-on)
-            turn_left = float(n @ side) >= 0.0
+            turn_left = float(n @ side) >= 0.0 if prefer == 0 else prefer > 0
             out = _unit(n + (side if turn_left else -side))
             return True, out
     if len(others):
@@ -107,6 +109,8 @@ def collision_ahead(me: Me, kind, center, size, others: np.ndarray
             j = int(np.argmin(np.where(close, dist, np.inf)))
             side = np.array([-f[2], 0.0, f[0]])
             away = -side if float(rel[j] @ side) > 0 else side
+            if prefer:
+                away = side * prefer
             return True, away
     return False, None
 
@@ -115,7 +119,7 @@ def avoid(me: Me, around: Around) -> Demand:
     """Turn away from the threatening obstacle or fish, slowing down."""
     if around.away is None:
         return Demand(me.cruise, 0.0)
-    return steer(me, around.away, 0.6 * me.cruise)
+    return steer(me, around.away, me.cruise)
 
 
 def wander(me: Me, around: Around, rng: np.random.Generator) -> Demand:

@@ -66,7 +66,7 @@ class TankConfig:
         """Return the half width of the tank (m)."""
         if self.half_size is not None:
             return float(self.half_size)
-        return 2.5 + 0.9 * math.sqrt(self.fishes + self.obstacles)
+        return 3.0 + 1.2 * math.sqrt(self.fishes + self.obstacles)
 
 
 @dataclass(frozen=True)
@@ -162,7 +162,8 @@ def build_tank(cfg: TankConfig) -> Tank:
         yaw = float(rng.uniform(-np.pi, np.pi))
         # the offset places the rest pose; shift it so that the body's centre lands on p
         com0 = body.mass @ body.rest_pos / body.total_mass
-        animals.append(Animal(body, tuple(p - com0), yaw))
+        v0 = spec.motor.cruise_speed * np.array([np.cos(yaw), 0.0, np.sin(yaw)])
+        animals.append(Animal(body, tuple(p - com0), yaw, tuple(v0)))
         fishes.append(Fish(f"{spec.name}_{i}", spec, body))
     foods = [
         Food(tuple(_place(rng, half, lambda p: free(p, 0.4), 0.6)), cfg.food_radius)
@@ -218,6 +219,7 @@ class FishBrain:
         m = species.motor
         self.locomotion = WaveLocomotion(body, m.frequency, m.max_speed)
         self.alive = True
+        self.avoid_side = 0
         self.reset(0)
 
     def reset(self, seed: int | None = None) -> None:
@@ -403,7 +405,10 @@ def live(tank: Tank, seconds: float | None = None,
             me = Me(com[i], nose[i], fwd[i], vel[i], f.species.motor.cruise_speed,
                     f.species.motor.max_speed)  # fmt: skip
             others = com[np.isfinite(pc.fish[i])]
-            hit, away = collision_ahead(me, kind, center, size, others)
+            prefer = b.avoid_side if b.thought.intention == "avoid" else 0
+            hit, away = collision_ahead(me, kind, center, size, others, prefer)
+            if hit and away is not None:
+                b.avoid_side = 1 if float(np.cross(fwd[i], away)[1]) < 0 else -1
             view = View(me, pc.fish[i], com, fwd, vel, names, pc.food[i], food_pos,
                         pc.obstacles[i], hit, away)  # fmt: skip
             rows.append(b.act({"view": view, "time": np.array([t])}, period))
@@ -518,3 +523,24 @@ def summarize(tank: Tank, life: Life) -> dict:
         "wall_seconds": life.wall_seconds,
         "realtime_factor": sim / life.wall_seconds if life.wall_seconds > 0 else None,
     }
+
+
+def events_csv(life: Life) -> str:
+    """Return the events as CSV text: columns time, fish, event, detail."""
+    import csv
+    import io
+
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["time", "fish", "event", "detail"])
+    for t, fish, event, detail in life.events:
+        w.writerow([f"{t:.2f}", fish, event, detail])
+    return buf.getvalue()
+
+
+def frame_labels(life: Life, names: list[str]) -> list[list[str]]:
+    """Return per record time one label per fish: its name and the intention it followed."""
+    k = np.clip(np.searchsorted(life.brain_times, life.times + 1e-9, side="right") - 1, 0,
+                max(len(life.brain_times) - 1, 0))  # fmt: skip
+    return [[f"{nm}: {INTENTIONS[life.intentions[j, i]]}" if life.alive[j, i] else f"{nm}: caught"
+             for i, nm in enumerate(names)] for j in k]  # fmt: skip
