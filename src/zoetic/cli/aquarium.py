@@ -8,6 +8,7 @@ import typer
 from rich.console import Console
 
 from zoetic.cli import app
+from zoetic.cli.bench import _emit, bench_app
 
 console = Console()
 
@@ -85,3 +86,18 @@ def aquarium(
         f"{summary['survivors']}/{summary['fishes']}"
     )
     console.print(f"wrote {out}/events.csv, mind.png, summary.json" + (", video.mp4" * video))
+
+
+@bench_app.command("aquarium")
+def bench_aquarium_cmd(
+    fishes: int = typer.Option(10),
+    food: int = typer.Option(15),
+    obstacles: int = typer.Option(5),
+    seconds: float = typer.Option(60.0, min=0.5),
+    seed: int = typer.Option(0),
+    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Realtime factor of a tank with oracle perception, against its physics alone."""
+    from zoetic.behavior.aquarium.bench import bench_aquarium
+
+    _emit(bench_aquarium(fishes, food, obstacles, seconds, seed), json)

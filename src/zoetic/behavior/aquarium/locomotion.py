@@ -47,7 +47,7 @@ class WaveLocomotion:
 
     def __init__(self, body: Body, frequency: float | None = None, max_speed: float = 0.36,
                  turn_gain: float = 1.0, max_bias: float = 0.5,
-                 min_amplitude: float = 0.3) -> None:  # fmt: skip
+                 min_amplitude: float = 0.45) -> None:  # fmt: skip
         self.body = body
         self.frequency = float(frequency or body.wave_frequency)
         self.max_speed = float(max_speed)

@@ -15,7 +15,7 @@ import numpy as np
 from zoetic.behavior.aquarium.locomotion import Demand
 from zoetic.behavior.aquarium.perception import obstacle_distance
 
-LOOKAHEAD = 6.0  # s of travel (at least 1.5 m) probed ahead for an imminent collision
+LOOKAHEAD = 8.0  # s of travel (at least 2.5 m) probed ahead for an imminent collision
 CLEARANCE = 0.5  # m: a probe nearer than this to an obstacle means a collision is imminent
 FISH_CLEARANCE = 0.8  # m between centres ahead that triggers avoid-fish
 
@@ -71,7 +71,7 @@ def steer(me: Me, direction: np.ndarray, speed: float) -> Demand:
         return Demand(speed, 0.0)
     turn = bearing(me.forward, d)
     # a fish turns about as fast at any amplitude, so it slows down to turn tighter
-    return Demand(speed * max(0.35, float(np.cos(min(abs(turn), np.pi / 2)))), turn)
+    return Demand(speed * max(0.6, float(np.cos(min(abs(turn), np.pi / 2)))), turn)
 
 
 def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int = 0
@@ -80,26 +80,24 @@ def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int 
     travel against the obstacles (clearance CLEARANCE m) and other fishes' centres ahead.
     prefer: +1 (left) or -1 (right) keeps the side an avoidance already turns to."""
     speed = max(float(np.linalg.norm(me.velocity)), me.cruise)
-    reach = max(1.5, LOOKAHEAD * speed)
+    reach = max(2.5, LOOKAHEAD * speed)
     f = _unit(_flat(me.forward))
     if len(kind):
-        probes = me.nose + np.linspace(0.0, reach, 6)[:, None] * f
-        d = obstacle_distance(probes, kind, center, size)  # (6, S)
+        probes = me.nose + np.linspace(0.0, reach, 8)[:, None] * f
+        d = obstacle_distance(probes, kind, center, size)  # (8, S)
         k, s = np.unravel_index(np.argmin(d), d.shape)
         if d[k, s] < CLEARANCE:
-            # the surface normal at the probe (finite differences of the signed distance)
-            eps = 0.05
-            g = np.array([
-                obstacle_distance(probes[k] + eps * e, kind[s:s + 1], center[s:s + 1],
-                                  size[s:s + 1])[0] - d[k, s]
-                for e in np.eye(3)
-            ])  # fmt: skip
-            n = _unit(_flat(g))
             side = np.array([-f[2], 0.0, f[0]])  # the fish's left
-            # slide along the obstacle on the side its normal points to (left if head-on)
-            turn_left = float(n @ side) >= 0.0 if prefer == 0 else prefer > 0
-            out = _unit(n + (side if turn_left else -side))
-            return True, out
+            if prefer:
+                return True, side * prefer
+            # turn to the side with more room: probe 60 degrees to either side
+            c, sn = 0.5, np.sqrt(3) / 2
+            room = []
+            for sgn in (1.0, -1.0):
+                ray = c * f + sgn * sn * side
+                pts = me.nose + np.linspace(0.3, reach, 6)[:, None] * ray
+                room.append(float(obstacle_distance(pts, kind, center, size).min()))
+            return True, side if room[0] >= room[1] else -side
     if len(others):
         rel = _flat(others - me.com)
         dist = np.linalg.norm(rel, axis=1)
@@ -116,10 +114,12 @@ def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int 
 
 
 def avoid(me: Me, around: Around) -> Demand:
-    """Turn away from the threatening obstacle or fish, slowing down."""
+    """Turn hard to the side of the way out (kept while the avoidance lasts) at cruise speed."""
     if around.away is None:
         return Demand(me.cruise, 0.0)
-    return steer(me, around.away, me.cruise)
+    f = _unit(_flat(me.forward))
+    left = float(around.away @ np.array([-f[2], 0.0, f[0]])) >= 0.0
+    return Demand(me.cruise, np.pi / 2 if left else -np.pi / 2)
 
 
 def wander(me: Me, around: Around, rng: np.random.Generator) -> Demand:
@@ -134,13 +134,18 @@ def leave(me: Me, around: Around) -> Demand:
     return steer(me, me.com - around.fish.mean(axis=0), me.cruise)
 
 
-def go_to(me: Me, around: Around, rng: np.random.Generator, lead: float = 0.0) -> Demand:
-    """Swim to the focused target (eat, mate, hunt; ahead of a moving one by ``lead`` s);
-    wander in search of one when none is perceived."""
+def go_to(me: Me, around: Around, rng: np.random.Generator, lead: float = 0.0,
+          beside: float = 0.0) -> Demand:  # fmt: skip
+    """Swim to the focused target (eat, mate, hunt; ahead of a moving one by ``lead`` s, or
+    to a point ``beside`` m to its side, a suitor's place); wander in search of one when
+    none is perceived."""
     if around.target is None:
         return wander(me, around, rng)
     aim = around.target + (lead * around.target_velocity
                            if around.target_velocity is not None else 0.0)  # fmt: skip
+    if beside:
+        off = _flat(me.com - aim)
+        aim = aim + beside * _unit(off)
     dist = float(np.linalg.norm(_flat(aim - me.nose)))
     speed = me.top if dist > 2.0 else max(me.cruise * 0.6, me.top * dist / 2.0)
     return steer(me, aim - me.nose, speed)

@@ -39,6 +39,7 @@ from zoetic.physics.objects import Box, Cylinder, Food, pack_statics
 from zoetic.physics.world import Animal, World
 
 WALL = 0.25  # m: half thickness of the tank's walls
+APART = 1.0  # s: a touch counts as a new collision after this long apart
 HEIGHT = 2.0  # m: half height of the walls, rocks and seaweed (all span the fishes' layer)
 
 
@@ -293,8 +294,10 @@ class FishBrain:
             demand = escape(me, around)
         elif intention == "school":
             demand = school(me, around)
-        elif intention in ("eat", "mate"):
+        elif intention == "eat":
             demand = go_to(me, around, self.rng)
+        elif intention == "mate":
+            demand = go_to(me, around, self.rng, beside=0.8)
         elif intention == "hunt":
             demand = go_to(me, around, self.rng, lead=0.5)
         elif intention == "leave":
@@ -372,8 +375,8 @@ def live(tank: Tank, seconds: float | None = None,
     times, positions, foods, eaten = [], [[] for _ in fishes], [], []
     b_times, drives, intents, alive_rec = [], [], [], []
     events: list[tuple[float, str, str, str]] = []
-    touching = np.zeros((n, len(world.objects)), bool)
-    fish_touch = np.zeros((n, n), bool)
+    touching = np.full((n, len(world.objects)), -np.inf)  # when each pair last touched
+    fish_touch = np.full((n, n), -np.inf)
     in_fear = np.zeros(n, bool)
     deepest = 0.0
     static_obj = [i for i, o in enumerate(world.objects) if isinstance(o, Box | Cylinder)]
@@ -442,11 +445,11 @@ def live(tank: Tank, seconds: float | None = None,
                     events.append((world.time, fishes[i].name, "eat", f"food_{q}"))
             if contacts.impulse and contacts.impulse[0].shape[2]:
                 now = contacts.touching[0]
-                for i, o in zip(*np.nonzero(now & ~touching), strict=True):
-                    if o in static_obj:
+                for i, o in zip(*np.nonzero(now), strict=True):
+                    if o in static_obj and world.time - touching[i, o] > APART:
                         events.append((world.time, fishes[i].name, "collision",
                                        world.objects[o].name))  # fmt: skip
-                touching = now
+                    touching[i, o] = world.time
             if world.step_count % rec_steps == 0 or world.step_count == end:
                 pos = [world.positions(a)[0] for a in range(n)]
                 record(pos)
@@ -476,10 +479,11 @@ def live(tank: Tank, seconds: float | None = None,
                 if dcom < 1.5:
                     gap = np.linalg.norm(pos[i][:, None] - pos[j2][None], axis=-1).min()
                     touch = gap < 2 * world.node_radius
-                    if touch and not fish_touch[i, j2]:
+                    if touch and t1 - fish_touch[i, j2] > APART:
                         events.append((t1, f.name, "collision", g.name))
-                    fish_touch[i, j2] = touch
-                if (f.species.name == g.species.name and dcom < 1.0
+                    if touch:
+                        fish_touch[i, j2] = t1
+                if (f.species.name == g.species.name and dcom < 1.3
                         and brains[i].thought.intention == "mate"
                         and brains[j2].thought.intention == "mate"):  # fmt: skip
                     brains[i].mated(t1)
