@@ -11,43 +11,55 @@ Pure functions over arrays; positions (n, 3) in m with y up.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
-
-from zoetic.physics.objects import BOX
+from numba import njit
 
 STEP = 0.25  # m between occlusion probes along a sight line
 
 
-def _box_sdf(q: np.ndarray, half: np.ndarray) -> np.ndarray:
-    e = np.abs(q) - half
-    return np.linalg.norm(np.maximum(e, 0), axis=-1) + np.minimum(e.max(-1), 0)
+@njit(cache=True)
+def _sdf(p, kind, center, size, out) -> None:
+    """Fill out (P, S) with the signed distances of points p (P, 3) to the obstacles."""
+    for i in range(p.shape[0]):
+        for s in range(kind.shape[0]):
+            q0 = p[i, 0] - center[s, 0]
+            q1 = p[i, 1] - center[s, 1]
+            q2 = p[i, 2] - center[s, 2]
+            if kind[s] == 2:  # sphere
+                out[i, s] = math.sqrt(q0 * q0 + q1 * q1 + q2 * q2) - size[s, 0]
+                continue
+            if kind[s] == 0:  # box: half sizes
+                e0 = abs(q0) - size[s, 0]
+                e1 = abs(q1) - size[s, 1]
+                e2 = abs(q2) - size[s, 2]
+                o = math.sqrt(max(e0, 0.0) ** 2 + max(e1, 0.0) ** 2 + max(e2, 0.0) ** 2)
+                out[i, s] = o + min(max(e0, max(e1, e2)), 0.0)
+                continue
+            ax = int(size[s, 2])  # cylinder: radius, half length, axis
+            if ax == 0:
+                r, a = math.sqrt(q1 * q1 + q2 * q2), abs(q0)
+            elif ax == 1:
+                r, a = math.sqrt(q0 * q0 + q2 * q2), abs(q1)
+            else:
+                r, a = math.sqrt(q0 * q0 + q1 * q1), abs(q2)
+            e0 = r - size[s, 0]
+            e1 = a - size[s, 1]
+            out[i, s] = math.sqrt(max(e0, 0.0) ** 2 + max(e1, 0.0) ** 2) + min(max(e0, e1), 0.0)
 
 
 def obstacle_distance(points: np.ndarray, kind, center, size) -> np.ndarray:
     """Return the signed distance (..., S) from points (..., 3) to each obstacle's surface
-    (negative inside): boxes (size = half sizes), cylinders (size = radius, half length, axis)
-    and spheres (kind 2, size[0] = radius)."""
-    kind = np.asarray(kind)
-    center, size = np.asarray(center, float), np.asarray(size, float)
-    p = np.asarray(points, float)[..., None, :] - center  # (..., S, 3)
-    out = np.empty(p.shape[:-1])
-    box = kind == BOX
-    if box.any():
-        out[..., box] = _box_sdf(p[..., box, :], size[box])
-    ball = kind == 2
-    if ball.any():
-        out[..., ball] = np.linalg.norm(p[..., ball, :], axis=-1) - size[ball, 0]
-    for ax in range(3):
-        cyl = (kind == 1) & (size[:, 2] == ax)
-        if cyl.any():
-            q = p[..., cyl, :]
-            other = [i for i in range(3) if i != ax]
-            e = np.stack([np.linalg.norm(q[..., other], axis=-1) - size[cyl, 0],
-                          np.abs(q[..., ax]) - size[cyl, 1]], -1)  # fmt: skip
-            out[..., cyl] = np.linalg.norm(np.maximum(e, 0), axis=-1) + np.minimum(e.max(-1), 0)
-    return out
+    (negative inside): boxes (kind 0, size = half sizes), cylinders (kind 1, size = radius,
+    half length, axis index) and spheres (kind 2, size[0] = radius)."""
+    pts = np.asarray(points, float)
+    kind = np.asarray(kind, np.int64)
+    flat = np.ascontiguousarray(pts.reshape(-1, 3))
+    out = np.empty((len(flat), len(kind)))
+    _sdf(flat, kind, np.ascontiguousarray(center, float), np.ascontiguousarray(size, float), out)
+    return out.reshape(*pts.shape[:-1], len(kind))
 
 
 def blocked(eyes: np.ndarray, targets: np.ndarray, kind, center, size,
