@@ -17,6 +17,7 @@ from zoetic.behavior.aquarium.perception import obstacle_distance
 
 LOOKAHEAD = 8.0  # s of travel (at least 2.5 m) probed ahead for an imminent collision
 CLEARANCE = 0.5  # m: a probe nearer than this to an obstacle means a collision is imminent
+TURN_RADIUS = 1.9  # m: the circle the built-in wave turns at full amplitude (measured)
 FISH_CLEARANCE = 0.8  # m between centres ahead that triggers avoid-fish
 
 
@@ -65,13 +66,15 @@ def bearing(forward: np.ndarray, direction: np.ndarray) -> float:
 
 
 def steer(me: Me, direction: np.ndarray, speed: float) -> Demand:
-    """Return the demand to swim along ``direction`` at ``speed`` (slower while turning hard)."""
+    """Return the demand to swim along ``direction`` at ``speed`` (faster while turning hard:
+    measured on the shark, amplitude 1 with bias 0.5 turns 0.14 rad/s, amplitude 0.6 only
+    0.09 rad/s)."""
     d = _flat(direction)
     if np.linalg.norm(d) < 1e-9:
         return Demand(speed, 0.0)
     turn = bearing(me.forward, d)
-    # a fish turns about as fast at any amplitude, so it slows down to turn tighter
-    return Demand(speed * max(0.6, float(np.cos(min(abs(turn), np.pi / 2)))), turn)
+    # the wave turns a fish only as fast as water flows past it: beat harder to turn
+    return Demand(max(speed, me.top * min(1.0, abs(turn) / 0.5)), turn)
 
 
 def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int = 0
@@ -114,12 +117,12 @@ def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int 
 
 
 def avoid(me: Me, around: Around) -> Demand:
-    """Turn hard to the side of the way out (kept while the avoidance lasts) at cruise speed."""
+    """Turn hard to the side of the way out (kept while the avoidance lasts), beating hard."""
     if around.away is None:
         return Demand(me.cruise, 0.0)
     f = _unit(_flat(me.forward))
     left = float(around.away @ np.array([-f[2], 0.0, f[0]])) >= 0.0
-    return Demand(me.cruise, np.pi / 2 if left else -np.pi / 2)
+    return Demand(me.top, np.pi / 2 if left else -np.pi / 2)
 
 
 def wander(me: Me, around: Around, rng: np.random.Generator) -> Demand:
@@ -148,6 +151,10 @@ def go_to(me: Me, around: Around, rng: np.random.Generator, lead: float = 0.0,
         aim = aim + beside * _unit(off)
     dist = float(np.linalg.norm(_flat(aim - me.nose)))
     speed = me.top if dist > 2.0 else max(me.cruise * 0.6, me.top * dist / 2.0)
+    beta = abs(bearing(me.forward, _flat(aim - me.nose)))
+    if beta < np.pi / 2 and dist < 2 * TURN_RADIUS * np.sin(beta):
+        # inside the turning circle: swim on to gain room instead of circling the target
+        return Demand(me.cruise, 0.0)
     return steer(me, aim - me.nose, speed)
 
 

@@ -297,7 +297,7 @@ class FishBrain:
         elif intention == "eat":
             demand = go_to(me, around, self.rng)
         elif intention == "mate":
-            demand = go_to(me, around, self.rng, beside=0.8)
+            demand = go_to(me, around, self.rng, beside=0.6)
         elif intention == "hunt":
             demand = go_to(me, around, self.rng, lead=0.5)
         elif intention == "leave":
@@ -483,7 +483,7 @@ def live(tank: Tank, seconds: float | None = None,
                         events.append((t1, f.name, "collision", g.name))
                     if touch:
                         fish_touch[i, j2] = t1
-                if (f.species.name == g.species.name and dcom < 1.3
+                if (f.species.name == g.species.name and dcom < 1.5
                         and brains[i].thought.intention == "mate"
                         and brains[j2].thought.intention == "mate"):  # fmt: skip
                     brains[i].mated(t1)
