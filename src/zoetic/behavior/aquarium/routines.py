@@ -15,7 +15,7 @@ import numpy as np
 from zoetic.behavior.aquarium.locomotion import Demand
 from zoetic.behavior.aquarium.perception import obstacle_distance
 
-LOOKAHEAD = 8.0  # s of travel (at least 2.5 m) probed ahead for an imminent collision
+LOOKAHEAD = 10.0  # s of travel (at least 3 m) probed ahead for an imminent collision
 CLEARANCE = 0.5  # m: a probe nearer than this to an obstacle means a collision is imminent
 TURN_RADIUS = 1.9  # m: the circle the built-in wave turns at full amplitude (measured)
 FISH_CLEARANCE = 0.8  # m between centres ahead that triggers avoid-fish
@@ -83,7 +83,7 @@ def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int 
     travel against the obstacles (clearance CLEARANCE m) and other fishes' centres ahead.
     prefer: +1 (left) or -1 (right) keeps the side an avoidance already turns to."""
     speed = max(float(np.linalg.norm(me.velocity)), me.cruise)
-    reach = max(2.5, LOOKAHEAD * speed)
+    reach = max(3.0, LOOKAHEAD * speed)
     f = _unit(_flat(me.forward))
     if len(kind):
         probes = me.nose + np.linspace(0.0, reach, 8)[:, None] * f

@@ -167,7 +167,7 @@ def build_tank(cfg: TankConfig) -> Tank:
         animals.append(Animal(body, tuple(p - com0), yaw, tuple(v0)))
         fishes.append(Fish(f"{spec.name}_{i}", spec, body))
     foods = [
-        Food(tuple(_place(rng, half, lambda p: free(p, 0.4), 0.6)), cfg.food_radius)
+        Food(tuple(_place(rng, half, lambda p: free(p, 0.6), 1.5)), cfg.food_radius)
         for _ in range(cfg.food)
     ]
     world = World([*animals, *statics, *foods], medium="water", current=cfg.current)
@@ -230,6 +230,15 @@ class FishBrain:
                                             self.species.mind.hunger_rate)  # fmt: skip
         self.alive = True
         self.thought = Thought(0.0, 0.0, 0.0, self.mind.intention, None)
+
+    def willing(self) -> bool:
+        """Return True when the fish would mate now: courting, or its libido above the
+        desire threshold and it is not fleeing or avoiding."""
+        th = self.thought
+        return th.intention == "mate" or (
+            th.libido > self.species.mind.desire_threshold
+            and th.intention not in ("escape", "school", "avoid")
+        )
 
     def ate(self, t: float, particles: float = 1.0) -> None:
         """Record a meal at time t."""
@@ -484,8 +493,8 @@ def live(tank: Tank, seconds: float | None = None,
                     if touch:
                         fish_touch[i, j2] = t1
                 if (f.species.name == g.species.name and dcom < 1.5
-                        and brains[i].thought.intention == "mate"
-                        and brains[j2].thought.intention == "mate"):  # fmt: skip
+                        and {brains[i].thought.intention, brains[j2].thought.intention}
+                        & {"mate"} and brains[i].willing() and brains[j2].willing()):  # fmt: skip
                     brains[i].mated(t1)
                     brains[j2].mated(t1)
                     events.append((t1, f.name, "mate", g.name))
