@@ -82,7 +82,7 @@ def tank_frames(
     (R, n) are given."""
     from zoetic.viz.render3d import Camera, render_frames
 
-    cam = Camera(azimuth=30.0, elevation=60.0, distance=2.4 * half_size, fov=50.0,
+    cam = Camera(azimuth=30.0, elevation=65.0, distance=2.0 * half_size, fov=50.0,
                  target=(0.0, 0.0, 0.0))  # fmt: skip
     obstacles = np.asarray(obstacles, float).reshape(-1, 3)
     for r in range(len(times)):

@@ -67,7 +67,7 @@ class TankConfig:
         """Return the half width of the tank (m)."""
         if self.half_size is not None:
             return float(self.half_size)
-        return 3.0 + 1.2 * math.sqrt(self.fishes + self.obstacles)
+        return 3.7 + 1.5 * math.sqrt(self.fishes + self.obstacles)
 
 
 @dataclass(frozen=True)
