@@ -51,3 +51,16 @@ def test_a_bad_species_file_is_refused_naming_the_file_and_entry(tmp_path, edit,
 def test_an_unknown_species_name_suggests_the_closest():
     with pytest.raises(SpeciesError, match="did you mean 'minnow'"):
         load_species("minow")
+
+
+def test_a_coward_fears_from_farther():
+    from dataclasses import replace
+
+    from zoetic.behavior.aquarium.species import COWARD_FEAR
+    from zoetic.behavior.mind import fear
+
+    s = load_species("minnow")
+    brave = s.fear_constants().fear_distance
+    coward = replace(s, habits=replace(s.habits, coward=True)).fear_constants().fear_distance
+    assert coward == pytest.approx(COWARD_FEAR * brave)
+    assert fear([4.0], coward) > fear([4.0], brave)

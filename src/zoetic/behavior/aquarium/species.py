@@ -10,7 +10,7 @@ entry named. Built-in species are the files in ``species/``; a user adds one wit
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -18,7 +18,8 @@ from zoetic.errors import ZoeticError
 from zoetic.io import Table, is_path, load_toml, suggest, write_toml
 
 SPECIES_DIR = Path(__file__).parent / "species"
-HABIT_WORDS = ("company", "crowd", "obstacles", "open_water")
+HABIT_WORDS = ("company", "crowd", "obstacles")
+COWARD_FEAR = 2.5  # a coward fears from 2.5 times as far (the re-implementation's 500 vs 200)
 MOTOR_SKILLS = ("built-in",)
 
 
@@ -85,11 +86,18 @@ class Species:
     predator: bool
     prey: tuple[str, ...]
     habits: Habits
-    mind: MindConstants
+    mind: MindConstants  # as in the file; ``fear_constants`` applies cowardice
     senses: Senses
     motor: Motor
     description: str = ""
     source: str = "<memory>"
+
+    def fear_constants(self) -> MindConstants:
+        """Return the mind constants the fish lives by: a coward's fear distance is
+        ``COWARD_FEAR`` times the file's."""
+        if not self.habits.coward:
+            return self.mind
+        return replace(self.mind, fear_distance=COWARD_FEAR * self.mind.fear_distance)
 
     def to_dict(self) -> dict[str, Any]:
         """Return the species as the table its file holds."""

@@ -219,6 +219,7 @@ class FishBrain:
         self.species, self.body, self.hunted_by = species, body, hunted_by
         m = species.motor
         self.locomotion = WaveLocomotion(body, m.frequency, m.max_speed)
+        self.constants = species.fear_constants()
         self.alive = True
         self.avoid_side = 0
         self.reset(0)
@@ -279,7 +280,8 @@ class FishBrain:
         v: View = observation["view"]
         sp = self.species
         sit, same, hunters, prey_d = self._situation(v)
-        self.mind, drives = think(self.mind, period.t0, sp.mind, sp.habits, sit, sp.predator)
+        self.mind, drives = think(self.mind, period.t0, self.constants, sp.habits, sit,
+                                  sp.predator)  # fmt: skip
         intention = self.mind.intention
         candidates = {"eat": v.food_distance, "mate": np.where(same, v.fish_distance, np.inf),
                       "hunt": prey_d}.get(intention)  # fmt: skip
