@@ -123,3 +123,19 @@ def test_cli_aquarium_refuses_vision_and_bad_counts_cleanly(tmp_path, capsys):
     assert "not yet available" in capsys.readouterr().err
     assert main(["aquarium", "--fishes", "2", "--predators", "3",
                  "--out", str(tmp_path / "b")]) == 2  # fmt: skip
+
+
+def test_a_fish_that_just_mated_is_not_willing_again_until_its_libido_returns():
+    from zoetic.behavior.aquarium.species import load_species
+    from zoetic.behavior.aquarium.tank import FishBrain, Thought
+    from zoetic.bodies import load_animal
+
+    sp = load_species("minnow")
+    b = FishBrain(sp, load_animal(sp.body), frozenset({"shark"}))
+    b.thought = Thought(0.3, 0.9, 0.0, "mate", 1)
+    assert b.willing(30.0)  # libido grown over 30 s
+    b.mated(30.0)
+    assert not b.willing(30.1)
+    assert b.willing(30.0 + 20.0)
+    b.thought = Thought(0.3, 0.9, 0.9, "escape", None)
+    assert not b.willing(60.0)  # a fleeing fish does not court

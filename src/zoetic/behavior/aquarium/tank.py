@@ -30,7 +30,16 @@ from zoetic.behavior.aquarium.routines import (
     wander,
 )
 from zoetic.behavior.aquarium.species import Species, SpeciesError, load_species
-from zoetic.behavior.mind import INTENTIONS, MindState, Situation, ate, focus, initial_mind, think
+from zoetic.behavior.mind import (
+    INTENTIONS,
+    MindState,
+    Situation,
+    ate,
+    drives,
+    focus,
+    initial_mind,
+    think,
+)
 from zoetic.behavior.mind import mated as mind_mated
 from zoetic.bodies import Body, load_animal
 from zoetic.control.policy import Period
@@ -232,14 +241,12 @@ class FishBrain:
         self.alive = True
         self.thought = Thought(0.0, 0.0, 0.0, self.mind.intention, None)
 
-    def willing(self) -> bool:
-        """Return True when the fish would mate now: courting, or its libido above the
-        desire threshold and it is not fleeing or avoiding."""
-        th = self.thought
-        return th.intention == "mate" or (
-            th.libido > self.species.mind.desire_threshold
-            and th.intention not in ("escape", "school", "avoid")
-        )
+    def willing(self, t: float) -> bool:
+        """Return True when the fish would mate at time t: its libido (which a mating resets)
+        above the desire threshold, and it is not fleeing or avoiding."""
+        lib = drives(self.mind, t, self.constants).libido
+        return lib > self.species.mind.desire_threshold and self.thought.intention not in (
+            "escape", "school", "avoid")
 
     def ate(self, t: float, particles: float = 1.0) -> None:
         """Record a meal at time t."""
@@ -384,7 +391,7 @@ def live(tank: Tank, seconds: float | None = None,
     dt = world.dt
     t_start = time.perf_counter()
     times, positions, foods, eaten = [], [[] for _ in fishes], [], []
-    b_times, drives, intents, alive_rec = [], [], [], []
+    b_times, drive_rec, intents, alive_rec = [], [], [], []
     events: list[tuple[float, str, str, str]] = []
     touching = np.full((n, len(world.objects)), -np.inf)  # when each pair last touched
     fish_touch = np.full((n, n), -np.inf)
@@ -428,7 +435,7 @@ def live(tank: Tank, seconds: float | None = None,
             rows.append(b.act({"view": view, "time": np.array([t])}, period))
         th = [b.thought for b in brains]
         b_times.append(t)
-        drives.append([(x.hunger, x.libido, x.fear) for x in th])
+        drive_rec.append([(x.hunger, x.libido, x.fear) for x in th])
         intents.append([INTENTIONS.index(x.intention) for x in th])
         alive_rec.append(alive)
         # fear episodes that end with the fish alive are escapes
@@ -495,8 +502,8 @@ def live(tank: Tank, seconds: float | None = None,
                     if touch:
                         fish_touch[i, j2] = t1
                 if (f.species.name == g.species.name and dcom < 1.5
-                        and {brains[i].thought.intention, brains[j2].thought.intention}
-                        & {"mate"} and brains[i].willing() and brains[j2].willing()):  # fmt: skip
+                        and "mate" in (brains[i].thought.intention, brains[j2].thought.intention)
+                        and brains[i].willing(t1) and brains[j2].willing(t1)):  # fmt: skip
                     brains[i].mated(t1)
                     brains[j2].mated(t1)
                     events.append((t1, f.name, "mate", g.name))
@@ -506,7 +513,7 @@ def live(tank: Tank, seconds: float | None = None,
     return Life(
         times=np.array(times) - times[0], positions=[np.stack(p) for p in positions],
         food=np.stack(foods), eaten=np.stack(eaten), brain_times=np.array(b_times),
-        drives=np.array(drives, float).reshape(-1, n, 3),
+        drives=np.array(drive_rec, float).reshape(-1, n, 3),
         intentions=np.array(intents, int).reshape(-1, n),
         alive=np.array(alive_rec, bool).reshape(-1, n), events=events,
         wall_seconds=time.perf_counter() - t_start, deepest=deepest,
