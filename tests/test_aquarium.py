@@ -135,6 +135,7 @@ def test_a_fish_that_just_mated_is_not_willing_again_until_its_libido_returns():
     b.thought = Thought(0.3, 0.9, 0.0, "mate", 1)
     assert b.willing(30.0)  # libido grown over 30 s
     b.mated(30.0)
+    b.ate(30.0)  # fed: a starving fish has no libido
     assert not b.willing(30.1)
     assert b.willing(30.0 + 20.0)
     b.thought = Thought(0.3, 0.9, 0.9, "escape", None)
