@@ -29,6 +29,7 @@ def _root(debug: bool = typer.Option(False, "--debug", help="Show full traceback
 
 def _register() -> None:
     from zoetic.cli import (  # noqa: F401  (commands register)
+        aquarium,
         bench,
         cluster,
         export,

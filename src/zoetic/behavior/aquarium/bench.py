@@ -1,0 +1,36 @@
+"""``zoetic bench aquarium``: how fast a tank lives, and what happened in it."""
+
+from __future__ import annotations
+
+import time
+
+from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live, summarize
+
+
+def bench_aquarium(fishes: int = 10, food: int = 15, obstacles: int = 5, seconds: float = 60.0,
+                   seed: int = 0) -> dict:  # fmt: skip
+    """Return the realtime factor of the oracle-perception tank (brains, perception and
+    physics together, no video), its physics-only share, and the run's outcome figures."""
+    cfg = TankConfig(fishes=fishes, food=food, obstacles=obstacles, seconds=seconds, seed=seed)
+    live(build_tank(TankConfig(fishes=2, food=1, obstacles=1, seconds=0.2)))  # compile, warm
+    tank = build_tank(cfg)
+    life = live(tank)
+    s = summarize(tank, life)
+    # the same world stepped with the same number of calls and no brains: the physics share
+    bare = build_tank(cfg)
+    t0 = time.perf_counter()
+    steps = bare.world.steps_for(cfg.record_period)
+    for _ in range(int(round(seconds / cfg.record_period))):
+        bare.world.step(steps * bare.world.dt, None)
+    physics = time.perf_counter() - t0
+    return {
+        "scene": f"{fishes} fishes, {food} food, {obstacles} obstacles, {seconds:g} s, oracle",
+        "realtime_factor": s["realtime_factor"],
+        "wall_seconds": s["wall_seconds"],
+        "physics_only_realtime_factor": seconds / physics if physics > 0 else None,
+        "events": s["events"],
+        "food_eaten_fraction": s["food_eaten_fraction"],
+        "collisions_with_obstacles": s["collisions_with_obstacles"],
+        "deepest_into_obstacle_m": s["deepest_into_obstacle_m"],
+        "survivors": s["survivors"],
+    }

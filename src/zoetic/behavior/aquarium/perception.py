@@ -1,0 +1,150 @@
+"""The perception oracle: what each fish perceives of the world model, as distances.
+
+A fish sees another fish, a food particle or an obstacle when it lies within its view volume
+(``view_angle`` degrees about its heading, 300 by default, and ``view_range`` metres) and the
+sight line from its eye (the nose) is not blocked by an obstacle; food is also smelled within
+``smell_range`` whatever the view. Occlusion is tested by the obstacles' signed distance at
+points along the sight line, at most ``STEP`` m apart. Obstacles themselves are perceived by
+their nearest surface point (range and view only: a rock does not hide a rock).
+Pure functions over arrays; positions (n, 3) in m with y up.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+STEP = 0.25  # m between occlusion probes along a sight line
+
+
+@njit(cache=True)
+def _sdf(p, kind, center, size, out) -> None:
+    """Fill out (P, S) with the signed distances of points p (P, 3) to the obstacles."""
+    for i in range(p.shape[0]):
+        for s in range(kind.shape[0]):
+            q0 = p[i, 0] - center[s, 0]
+            q1 = p[i, 1] - center[s, 1]
+            q2 = p[i, 2] - center[s, 2]
+            if kind[s] == 2:  # sphere
+                out[i, s] = math.sqrt(q0 * q0 + q1 * q1 + q2 * q2) - size[s, 0]
+                continue
+            if kind[s] == 0:  # box: half sizes
+                e0 = abs(q0) - size[s, 0]
+                e1 = abs(q1) - size[s, 1]
+                e2 = abs(q2) - size[s, 2]
+                o = math.sqrt(max(e0, 0.0) ** 2 + max(e1, 0.0) ** 2 + max(e2, 0.0) ** 2)
+                out[i, s] = o + min(max(e0, max(e1, e2)), 0.0)
+                continue
+            ax = int(size[s, 2])  # cylinder: radius, half length, axis
+            if ax == 0:
+                r, a = math.sqrt(q1 * q1 + q2 * q2), abs(q0)
+            elif ax == 1:
+                r, a = math.sqrt(q0 * q0 + q2 * q2), abs(q1)
+            else:
+                r, a = math.sqrt(q0 * q0 + q1 * q1), abs(q2)
+            e0 = r - size[s, 0]
+            e1 = a - size[s, 1]
+            out[i, s] = math.sqrt(max(e0, 0.0) ** 2 + max(e1, 0.0) ** 2) + min(max(e0, e1), 0.0)
+
+
+def obstacle_distance(points: np.ndarray, kind, center, size) -> np.ndarray:
+    """Return the signed distance (..., S) from points (..., 3) to each obstacle's surface
+    (negative inside): boxes (kind 0, size = half sizes), cylinders (kind 1, size = radius,
+    half length, axis index) and spheres (kind 2, size[0] = radius)."""
+    pts = np.asarray(points, float)
+    kind = np.asarray(kind, np.int64)
+    flat = np.ascontiguousarray(pts.reshape(-1, 3))
+    out = np.empty((len(flat), len(kind)))
+    _sdf(flat, kind, np.ascontiguousarray(center, float), np.ascontiguousarray(size, float), out)
+    return out.reshape(*pts.shape[:-1], len(kind))
+
+
+def blocked(eyes: np.ndarray, targets: np.ndarray, kind, center, size,
+            pairs: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+    """Return (n, m) bools: is the segment from each eye (n, 3) to each target (m, 3) blocked
+    by an obstacle (probed every ``STEP`` m, the end points excluded)? Only the ``pairs``
+    (n, m) asked about are tested (default all)."""
+    n, m = len(eyes), len(targets)
+    out = np.zeros((n, m), bool)
+    if len(kind) == 0 or n == 0 or m == 0:
+        return out
+    ii, jj = np.nonzero(np.ones((n, m), bool) if pairs is None else pairs)
+    if len(ii) == 0:
+        return out
+    seg = targets[jj] - eyes[ii]  # (P, 3)
+    k = max(2, int(np.ceil(np.linalg.norm(seg, axis=-1).max() / STEP)))
+    u = (np.arange(1, k) / k)[None, :, None]
+    pts = eyes[ii][:, None, :] + u * seg[:, None, :]  # (P, k-1, 3)
+    out[ii, jj] = (obstacle_distance(pts, kind, center, size) < 0).any(axis=(-1, -2))
+    return out
+
+
+def in_view(eyes, forwards, targets, view_angle, view_range) -> tuple[np.ndarray, np.ndarray]:
+    """Return (distances (n, m), visible (n, m)): within range and the view angle (degrees)."""
+    rel = targets[None, :, :] - eyes[:, None, :]
+    d = np.linalg.norm(rel, axis=-1)
+    cos = (rel * forwards[:, None, :]).sum(-1) / np.maximum(d, 1e-9)
+    half = np.radians(np.asarray(view_angle, float)) / 2
+    ok = (d <= np.asarray(view_range, float)[..., None] if np.ndim(view_range) else
+          d <= view_range)  # fmt: skip
+    return d, ok & (cos >= np.cos(half)[..., None] if np.ndim(half) else cos >= np.cos(half))
+
+
+@dataclass(frozen=True)
+class Percepts:
+    """What every fish perceives: distances (inf where not perceived) to each fish (n, n),
+    food particle (n, F) and obstacle surface (n, S)."""
+
+    fish: np.ndarray
+    food: np.ndarray
+    obstacles: np.ndarray
+
+
+def perceive(
+    eyes: np.ndarray,
+    forwards: np.ndarray,
+    fish_centers: np.ndarray,
+    alive: np.ndarray,
+    food: np.ndarray,
+    food_left: np.ndarray,
+    kind,
+    center,
+    size,
+    view_angle,
+    view_range,
+    smell_range,
+) -> Percepts:
+    """Return the oracle's percepts for n fishes (eyes, forwards, centres (n, 3)) of the live
+    fishes, the food left (F, 3) and the obstacles (packed as ``physics.objects.pack_statics``,
+    spheres as kind 2); view_angle, view_range, smell_range are per fish (n,) or scalars."""
+    n = len(eyes)
+    va = np.broadcast_to(np.asarray(view_angle, float), (n,))
+    vr = np.broadcast_to(np.asarray(view_range, float), (n,))
+    sr = np.broadcast_to(np.asarray(smell_range, float), (n,))
+    df, vf = in_view(eyes, forwards, fish_centers, va, vr)
+    vf &= alive[None, :]
+    vf &= ~blocked(eyes, fish_centers, kind, center, size, vf)
+    np.fill_diagonal(vf, False)
+    food = np.asarray(food, float).reshape(-1, 3)
+    if len(food):
+        dd, vd = in_view(eyes, forwards, food, va, vr)
+        vd &= np.asarray(food_left, bool)[None, :]
+        vd &= ~blocked(eyes, food, kind, center, size, vd)
+        vd |= dd <= sr[:, None]
+        vd &= np.asarray(food_left, bool)[None, :]
+    else:
+        dd = vd = np.zeros((n, 0), bool)
+    if len(kind):
+        do = obstacle_distance(eyes, kind, center, size)  # (n, S)
+        # the nearest surface point of each obstacle, seen from the eye
+        rel_ok = do <= vr[:, None]
+        to_c = np.asarray(center)[None] - eyes[:, None]
+        cos = (to_c * forwards[:, None]).sum(-1) / np.maximum(np.linalg.norm(to_c, axis=-1), 1e-9)
+        seen = rel_ok & ((cos >= np.cos(np.radians(va) / 2)[:, None]) | (do < 1.0))
+        obst = np.where(seen, do, np.inf)
+    else:
+        obst = np.zeros((n, 0))
+    return Percepts(np.where(vf, df, np.inf), np.where(vd, dd, np.inf), obst)

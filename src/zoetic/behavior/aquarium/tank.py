@@ -1,0 +1,568 @@
+"""A tank of artificial fishes living together: each a brain (a Policy) over one World.
+
+``build_tank(TankConfig(...))`` places prey fishes and predators, rocks and seaweed, food and
+four walls in water; ``live(tank)`` runs it: every control period the perception oracle looks at
+the world for every fish, each fish's brain (mind, focuser, behaviour routine, motor layer)
+returns its activations, and the world steps them all in lockstep. What happens is recorded as
+events (eat, catch, escape, mate, collision), mind timelines and positions.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from zoetic.behavior.aquarium.locomotion import WaveLocomotion
+from zoetic.behavior.aquarium.perception import obstacle_distance, perceive
+from zoetic.behavior.aquarium.routines import (
+    Around,
+    Me,
+    avoid,
+    collision_ahead,
+    escape,
+    go_to,
+    leave,
+    school,
+    wander,
+)
+from zoetic.behavior.aquarium.species import Species, SpeciesError, load_species
+from zoetic.behavior.mind import (
+    INTENTIONS,
+    MindState,
+    Situation,
+    ate,
+    drives,
+    focus,
+    initial_mind,
+    think,
+)
+from zoetic.behavior.mind import mated as mind_mated
+from zoetic.bodies import Body, load_animal
+from zoetic.control.policy import Period
+from zoetic.errors import SimulationError
+from zoetic.physics.objects import Box, Cylinder, Food, pack_statics
+from zoetic.physics.world import Animal, World
+
+WALL = 0.25  # m: half thickness of the tank's walls
+APART = 1.0  # s: a touch counts as a new collision after this long apart
+HEIGHT = 2.0  # m: half height of the walls, rocks and seaweed (all span the fishes' layer)
+
+
+@dataclass(frozen=True)
+class TankConfig:
+    """A tank: how many fishes (predators among them), food particles and obstacles, for how
+    long, from which seed; ``half_size`` (m, default grows with the crowd), the water
+    current (m/s) that carries the food, the brains' control period and the record period (s)."""
+
+    fishes: int = 10
+    predators: int = 1
+    food: int = 15
+    obstacles: int = 5
+    seconds: float = 60.0
+    seed: int = 0
+    half_size: float | None = None
+    current: tuple[float, float, float] = (0.02, 0.0, 0.0)
+    control_period: float = 0.1
+    record_period: float = 0.05
+    prey_species: str = "minnow"
+    predator_species: str = "shark"
+    food_radius: float = 0.25
+
+    def size(self) -> float:
+        """Return the half width of the tank (m)."""
+        if self.half_size is not None:
+            return float(self.half_size)
+        return 3.7 + 1.5 * math.sqrt(self.fishes + self.obstacles)
+
+
+@dataclass(frozen=True)
+class Fish:
+    """A fish of the tank: its name, species and body."""
+
+    name: str
+    species: Species
+    body: Body
+
+
+@dataclass
+class Tank:
+    """A built tank: the world, its fishes (in the world's animal order), obstacles and walls."""
+
+    config: TankConfig
+    world: World
+    fishes: list[Fish]
+    kind: np.ndarray
+    center: np.ndarray
+    size: np.ndarray
+    static_names: list[str]
+
+
+def _check(cfg: TankConfig) -> None:
+    if cfg.fishes < 1 or cfg.predators < 0 or cfg.predators > cfg.fishes:
+        raise SimulationError(
+            f"a tank needs at least one fish and at most as many predators as fishes "
+            f"(got {cfg.fishes} fishes, {cfg.predators} predators)"
+        )
+    if cfg.food < 0 or cfg.obstacles < 0:
+        raise SimulationError("--food and --obstacles must be at least 0")
+    if cfg.fishes > 60 or cfg.food > 500 or cfg.obstacles > 60:
+        raise SimulationError("at most 60 fishes, 500 food particles and 60 obstacles")
+    if not 0 < cfg.seconds <= 3600:
+        raise SimulationError(f"--seconds must be in (0, 3600], got {cfg.seconds:g}")
+    if not 0 < cfg.control_period <= 1.0 or not 0 < cfg.record_period <= cfg.control_period:
+        raise SimulationError("need 0 < record period <= control period <= 1 s")
+
+
+def _place(rng, half: float, ok: Callable[[np.ndarray], bool], margin: float) -> np.ndarray:
+    for _ in range(2000):
+        p = np.array([rng.uniform(-half + margin, half - margin), 0.0,
+                      rng.uniform(-half + margin, half - margin)])  # fmt: skip
+        if ok(p):
+            return p
+    raise SimulationError(
+        "the tank is too crowded to place everything; use fewer fishes or obstacles"
+    )
+
+
+def build_tank(cfg: TankConfig) -> Tank:
+    """Return a tank as ``cfg`` describes it, laid out from its seed."""
+    _check(cfg)
+    rng = np.random.default_rng(cfg.seed)
+    half = cfg.size()
+    prey, pred = load_species(cfg.prey_species), load_species(cfg.predator_species)
+    if not pred.predator:
+        raise SpeciesError(f"{pred.source}: species {pred.name!r} is not a predator")
+    statics: list[Box | Cylinder] = []
+    for sx, sz in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+        c = (sx * (half + WALL), 0.0, sz * (half + WALL))
+        hs = (WALL if sx else half + 2 * WALL, HEIGHT, WALL if sz else half + 2 * WALL)
+        statics.append(Box(c, hs, name="wall"))
+    rocks: list[np.ndarray] = []
+
+    def clear_of_rocks(p, gap):
+        return all(np.hypot(*(p - r)[[0, 2]]) > gap for r in rocks)
+
+    for k in range(cfg.obstacles):
+        p = _place(rng, half, lambda p: clear_of_rocks(p, 3.0), 1.5)
+        rocks.append(p)
+        r = float(rng.uniform(0.35, 0.7))
+        if k % 2 == 0:
+            statics.append(Box(tuple(p), (r, HEIGHT, float(rng.uniform(0.35, 0.7))), name="rock"))
+        else:
+            statics.append(Cylinder(tuple(p), r, 2 * HEIGHT, "y", name="seaweed"))
+    kind, center, size = pack_statics(statics)
+
+    def free(p, gap):
+        return len(kind) == 0 or obstacle_distance(p, kind, center, size).min() > gap
+
+    placed: list[np.ndarray] = []
+    fishes, animals = [], []
+    for i in range(cfg.fishes):
+        spec = pred if i < cfg.predators else prey
+        body = load_animal(spec.body)
+        if body.medium not in ("water", "sea"):
+            raise SpeciesError(f"{spec.source}: body {spec.body!r} does not live in water")
+        p = _place(rng, half, lambda p: free(p, 1.5) and all(
+            np.linalg.norm(p - q) > 2.0 for q in placed), 1.0)  # fmt: skip
+        placed.append(p)
+        yaw = float(rng.uniform(-np.pi, np.pi))
+        # the offset places the rest pose; shift it so that the body's centre lands on p
+        com0 = body.mass @ body.rest_pos / body.total_mass
+        v0 = spec.motor.cruise_speed * np.array([np.cos(yaw), 0.0, np.sin(yaw)])
+        animals.append(Animal(body, tuple(p - com0), yaw, tuple(v0)))
+        fishes.append(Fish(f"{spec.name}_{i}", spec, body))
+    foods = [
+        Food(tuple(_place(rng, half, lambda p: free(p, 0.6), 1.5)), cfg.food_radius)
+        for _ in range(cfg.food)
+    ]
+    world = World([*animals, *statics, *foods], medium="water", current=cfg.current)
+    names = [s.name for s in statics]
+    return Tank(cfg, world, fishes, kind, center, size, names)
+
+
+# ============================================================================ the brain
+
+
+@dataclass(frozen=True)
+class View:
+    """One fish's percept for one control period (what the brain's ``act`` reads)."""
+
+    me: Me
+    fish_distance: np.ndarray  # (n,) inf where not perceived (itself included)
+    fish_com: np.ndarray  # (n, 3)
+    fish_forward: np.ndarray  # (n, 3)
+    fish_velocity: np.ndarray  # (n, 3)
+    fish_species: tuple[str, ...]
+    food_distance: np.ndarray  # (F,)
+    food: np.ndarray  # (F, 3)
+    obstacle_distance: np.ndarray  # (S,)
+    collision: bool
+    away: np.ndarray | None
+
+
+@dataclass(frozen=True)
+class Thought:
+    """What a brain decided in one period: its drives, intention and target."""
+
+    hunger: float
+    libido: float
+    fear: float
+    intention: str
+    target: int | None
+
+
+class FishBrain:
+    """A fish's brain as a Policy: percept in (``observation["view"]``), activations out.
+
+    Mind (drives, intention generator), focuser, behaviour routine and motor layer in one
+    control period. A dead fish (``alive = False``) stops moving its muscles.
+    """
+
+    sensors: tuple[str, ...] = ()
+
+    def __init__(self, species: Species, body: Body, hunted_by: frozenset[str]) -> None:
+        self.species, self.body, self.hunted_by = species, body, hunted_by
+        m = species.motor
+        self.locomotion = WaveLocomotion(body, m.frequency, m.max_speed)
+        self.constants = species.fear_constants()
+        self.alive = True
+        self.avoid_side = 0
+        self.reset(0)
+
+    def reset(self, seed: int | None = None) -> None:
+        """Start a life: a fresh mind with the species' initial hunger, a reseeded wander."""
+        self.rng = np.random.default_rng(seed)
+        self.mind: MindState = initial_mind(self.species.mind.initial_hunger,
+                                            self.species.mind.hunger_rate)  # fmt: skip
+        self.alive = True
+        self.thought = Thought(0.0, 0.0, 0.0, self.mind.intention, None)
+
+    def willing(self, t: float) -> bool:
+        """Return True when the fish would mate at time t: its libido (which a mating resets)
+        above the desire threshold, and it is not fleeing or avoiding."""
+        lib = drives(self.mind, t, self.constants).libido
+        return lib > self.species.mind.desire_threshold and self.thought.intention not in (
+            "escape", "school", "avoid")
+
+    def ate(self, t: float, particles: float = 1.0) -> None:
+        """Record a meal at time t."""
+        self.mind = ate(self.mind, t, particles)
+
+    def mated(self, t: float) -> None:
+        """Record a mating at time t."""
+        self.mind = mind_mated(self.mind, t)
+
+    def _situation(self, v: View) -> tuple[Situation, np.ndarray, np.ndarray, np.ndarray]:
+        sp = self.species
+        names = np.array(v.fish_species)
+        same = names == sp.name
+        hunters = np.isin(names, list(self.hunted_by))
+        prey = np.isin(names, list(sp.prey))
+        d = v.fish_distance
+        pred_d = d[hunters & np.isfinite(d)]
+        mates = np.where(same, d, np.inf)
+        prey_d = np.where(prey, d, np.inf)
+        crowd = int((d < sp.habits.personal_space).sum())
+        sit = Situation(
+            collision=v.collision,
+            predator_distances=tuple(float(x) for x in pred_d),
+            food_distance=float(v.food_distance.min()) if len(v.food_distance) else np.inf,
+            mate_distance=float(mates.min()) if len(mates) else np.inf,
+            prey_distance=float(prey_d.min()) if len(prey_d) else np.inf,
+            crowded=crowd > sp.habits.crowd,
+            alone=not np.isfinite(d).any(),
+            near_obstacle=bool(len(v.obstacle_distance))
+            and float(v.obstacle_distance.min()) < sp.habits.personal_space,
+        )
+        return sit, same, hunters, prey_d
+
+    def act(self, observation: Mapping, period: Period) -> np.ndarray:
+        """Return activations (1, T, A) for the period from the fish's percept."""
+        if not self.alive:
+            return np.zeros((1, period.steps, self.body.n_actuators))
+        v: View = observation["view"]
+        sp = self.species
+        sit, same, hunters, prey_d = self._situation(v)
+        self.mind, drives = think(self.mind, period.t0, self.constants, sp.habits, sit,
+                                  sp.predator)  # fmt: skip
+        intention = self.mind.intention
+        candidates = {"eat": v.food_distance, "mate": np.where(same, v.fish_distance, np.inf),
+                      "hunt": prey_d}.get(intention)  # fmt: skip
+        target = None if candidates is None else focus(candidates, self.mind.target)
+        if target != self.mind.target:
+            self.mind = replace(self.mind, target=target)
+        seen = np.isfinite(v.fish_distance)
+        around = Around(
+            fish=v.fish_com[seen], fish_forward=v.fish_forward[seen], same=same[seen],
+            predators=v.fish_com[seen & hunters],
+            target=None if target is None else (v.food if intention == "eat" else v.fish_com)[
+                target],
+            target_velocity=None if target is None or intention == "eat"
+            else v.fish_velocity[target],
+            away=v.away,
+        )  # fmt: skip
+        me = v.me
+        if intention == "avoid":
+            demand = avoid(me, around)
+        elif intention == "escape":
+            demand = escape(me, around)
+        elif intention == "school":
+            demand = school(me, around)
+        elif intention == "eat":
+            demand = go_to(me, around, self.rng)
+        elif intention == "mate":
+            demand = go_to(me, around, self.rng, beside=0.6)
+        elif intention == "hunt":
+            demand = go_to(me, around, self.rng, lead=0.5)
+        elif intention == "leave":
+            demand = leave(me, around)
+        else:
+            demand = wander(me, around, self.rng)
+        self.thought = Thought(drives.hunger, drives.libido, drives.fear, intention, target)
+        return self.locomotion.activations(demand, period.times)[None]
+
+
+# ============================================================================ living
+
+
+@dataclass
+class Life:
+    """What a tank's run recorded."""
+
+    times: np.ndarray  # (R,) s
+    positions: list[np.ndarray]  # per fish (R, N, 3)
+    food: np.ndarray  # (R, F, 3)
+    eaten: np.ndarray  # (R, F) bool
+    brain_times: np.ndarray  # (K,) s
+    drives: np.ndarray  # (K, n, 3) hunger, libido, fear
+    intentions: np.ndarray  # (K, n) index into INTENTIONS
+    alive: np.ndarray  # (K, n) bool
+    events: list[tuple[float, str, str, str]] = field(default_factory=list)
+    wall_seconds: float = 0.0
+    deepest: float = 0.0  # m: the deepest any node went into an obstacle (0 if none)
+
+
+def heading_weights(body: Body) -> np.ndarray:
+    """Return c (N,) with sum_n c_n x_n = the best linear fit's image of the rest heading
+    (``control.sensors.linear_fit`` applied to ``body.forward``, in one dot product)."""
+    w = body.mass / body.total_mass
+    r0 = body.rest_pos - w @ body.rest_pos
+    m_inv = np.linalg.pinv(np.einsum("n,ni,nj->ij", w, r0, r0))
+    return w * (r0 @ (m_inv @ body.forward))
+
+
+def _kinematics(world: World, fishes: list[Fish], cw: list[np.ndarray]):
+    pos = [world.positions(a)[0] for a in range(len(fishes))]
+    vel = [world.velocities(a)[0] for a in range(len(fishes))]
+    com, fwd, cv, nose = [], [], [], []
+    for f, p, v, c in zip(fishes, pos, vel, cw, strict=True):
+        w = f.body.mass / f.body.total_mass
+        com.append(w @ p)
+        cv.append(w @ v)
+        fr = c @ p
+        fwd.append(fr / (np.linalg.norm(fr) + 1e-12))
+        nose.append(p[f.body.head])
+    return pos, np.array(com), np.array(fwd), np.array(cv), np.array(nose)
+
+
+def live(tank: Tank, seconds: float | None = None,
+         progress: Callable[[float], None] | None = None) -> Life:  # fmt: skip
+    """Run the tank for ``seconds`` (default the config's) and return what happened."""
+    cfg, world, fishes = tank.config, tank.world, tank.fishes
+    seconds = cfg.seconds if seconds is None else seconds
+    n = len(fishes)
+    hunted_by = {
+        s.name: frozenset(f.species.name for f in fishes if s.name in f.species.prey)
+        for s in {f.species.name: f.species for f in fishes}.values()
+    }
+    brains = [FishBrain(f.species, f.body, hunted_by[f.species.name]) for f in fishes]
+    for i, b in enumerate(brains):
+        b.reset(cfg.seed * 1000 + i)
+    names = tuple(f.species.name for f in fishes)
+    kind, center, size = tank.kind, tank.center, tank.size
+    va = np.array([f.species.senses.view_angle for f in fishes])
+    vr = np.array([f.species.senses.view_range for f in fishes])
+    sr = np.array([f.species.senses.smell_range for f in fishes])
+    cw = [heading_weights(f.body) for f in fishes]
+    dt = world.dt
+    t_start = time.perf_counter()
+    times, positions, foods, eaten = [], [[] for _ in fishes], [], []
+    b_times, drive_rec, intents, alive_rec = [], [], [], []
+    events: list[tuple[float, str, str, str]] = []
+    touching = np.full((n, len(world.objects)), -np.inf)  # when each pair last touched
+    fish_touch = np.full((n, n), -np.inf)
+    in_fear = np.zeros(n, bool)
+    deepest = 0.0
+    static_obj = [i for i, o in enumerate(world.objects) if isinstance(o, Box | Cylinder)]
+
+    def record(pos):
+        times.append(world.time)
+        for a in range(n):
+            positions[a].append(pos[a])
+        foods.append(world.food_positions[0])
+        eaten.append(world.food_eaten[0])
+
+    pos, com, fwd, vel, nose = _kinematics(world, fishes, cw)
+    record(pos)
+    end = world.step_count + world.steps_for(seconds)
+    rec_steps = max(1, int(round(cfg.record_period / dt)))
+    k = 0
+    while world.step_count < end:
+        k += 1
+        start = world.step_count
+        steps = min(max(1, int(round(cfg.control_period / dt))), end - start)
+        period = Period(start, steps, dt)
+        t = period.t0
+        alive = np.array([b.alive for b in brains])
+        food_pos = world.food_positions[0]
+        left = ~world.food_eaten[0]
+        pc = perceive(nose, fwd, com, alive, food_pos, left, kind, center, size, va, vr, sr)
+        rows = []
+        for i, (f, b) in enumerate(zip(fishes, brains, strict=True)):
+            me = Me(com[i], nose[i], fwd[i], vel[i], f.species.motor.cruise_speed,
+                    f.species.motor.max_speed)  # fmt: skip
+            others = com[np.isfinite(pc.fish[i])]
+            prefer = b.avoid_side if b.thought.intention == "avoid" else 0
+            hit, away = collision_ahead(me, kind, center, size, others, prefer)
+            if hit and away is not None:
+                b.avoid_side = 1 if float(np.cross(fwd[i], away)[1]) < 0 else -1
+            view = View(me, pc.fish[i], com, fwd, vel, names, pc.food[i], food_pos,
+                        pc.obstacles[i], hit, away)  # fmt: skip
+            rows.append(b.act({"view": view, "time": np.array([t])}, period))
+        th = [b.thought for b in brains]
+        b_times.append(t)
+        drive_rec.append([(x.hunger, x.libido, x.fear) for x in th])
+        intents.append([INTENTIONS.index(x.intention) for x in th])
+        alive_rec.append(alive)
+        # fear episodes that end with the fish alive are escapes
+        for i, x in enumerate(th):
+            afraid = alive[i] and x.intention in ("escape", "school")
+            if in_fear[i] and not afraid and alive[i] and x.intention != "avoid":
+                events.append((t, fishes[i].name, "escape", f"fear {x.fear:.2f}"))
+            if x.intention != "avoid":
+                in_fear[i] = afraid
+        j = 0
+        while j < steps:
+            m = min(steps - j, rec_steps - (world.step_count % rec_steps))
+            before = world.food_eaten[0]
+            heads = np.array([world.positions(a)[0][fishes[a].body.head] for a in range(n)])
+            contacts = world.step(m * dt, [r[:, j:j + m] for r in rows])
+            j += m
+            new = world.food_eaten[0] & ~before
+            if new.any():
+                fp = world.food_positions[0]
+                for q in np.flatnonzero(new):
+                    d = np.linalg.norm(heads - fp[q], axis=1)
+                    d[~alive] = np.inf
+                    i = int(np.argmin(d))
+                    brains[i].ate(world.time)
+                    events.append((world.time, fishes[i].name, "eat", f"food_{q}"))
+            if contacts.impulse and contacts.impulse[0].shape[2]:
+                now = contacts.touching[0]
+                for i, o in zip(*np.nonzero(now), strict=True):
+                    if o in static_obj and world.time - touching[i, o] > APART:
+                        events.append((world.time, fishes[i].name, "collision",
+                                       world.objects[o].name))  # fmt: skip
+                    touching[i, o] = world.time
+            if world.step_count % rec_steps == 0 or world.step_count == end:
+                pos = [world.positions(a)[0] for a in range(n)]
+                record(pos)
+                if len(kind):
+                    allpos = np.concatenate(pos)
+                    deepest = max(deepest, float(-obstacle_distance(allpos, kind, center,
+                                                                    size).min()))  # fmt: skip
+        pos, com, fwd, vel, nose = _kinematics(world, fishes, cw)
+        t1 = world.time
+        # catches, matings, fish-fish collisions
+        for i, f in enumerate(fishes):
+            if not brains[i].alive:
+                continue
+            for j2, g in enumerate(fishes):
+                if j2 == i or not brains[j2].alive:
+                    continue
+                dcom = float(np.linalg.norm(com[i] - com[j2]))
+                if g.species.name in f.species.prey and brains[i].thought.intention == "hunt":
+                    reach = np.linalg.norm(pos[j2] - nose[i], axis=1).min()
+                    if reach < f.species.motor.catch_radius:
+                        brains[j2].alive = False
+                        brains[i].ate(t1, 3.0)
+                        events.append((t1, f.name, "catch", g.name))
+                        continue
+                if j2 < i:
+                    continue
+                if dcom < 1.5:
+                    gap = np.linalg.norm(pos[i][:, None] - pos[j2][None], axis=-1).min()
+                    touch = gap < 2 * world.node_radius
+                    if touch and t1 - fish_touch[i, j2] > APART:
+                        events.append((t1, f.name, "collision", g.name))
+                    if touch:
+                        fish_touch[i, j2] = t1
+                if (f.species.name == g.species.name and dcom < 1.5
+                        and "mate" in (brains[i].thought.intention, brains[j2].thought.intention)
+                        and brains[i].willing(t1) and brains[j2].willing(t1)):  # fmt: skip
+                    brains[i].mated(t1)
+                    brains[j2].mated(t1)
+                    events.append((t1, f.name, "mate", g.name))
+                    events.append((t1, g.name, "mate", f.name))
+        if progress is not None:
+            progress(t1)
+    return Life(
+        times=np.array(times) - times[0], positions=[np.stack(p) for p in positions],
+        food=np.stack(foods), eaten=np.stack(eaten), brain_times=np.array(b_times),
+        drives=np.array(drive_rec, float).reshape(-1, n, 3),
+        intentions=np.array(intents, int).reshape(-1, n),
+        alive=np.array(alive_rec, bool).reshape(-1, n), events=events,
+        wall_seconds=time.perf_counter() - t_start, deepest=deepest,
+    )  # fmt: skip
+
+
+def summarize(tank: Tank, life: Life) -> dict:
+    """Return the run's figures: events by kind, food eaten, catches, survivors, timing."""
+    kinds = ("eat", "catch", "escape", "mate", "collision")
+    counts = {k: sum(1 for e in life.events if e[2] == k) for k in kinds}
+    fish_names = {f.name for f in tank.fishes}
+    obstacle_hits = sum(1 for e in life.events if e[2] == "collision" and e[3] not in fish_names)
+    sim = float(life.times[-1]) if len(life.times) else 0.0
+    share = {name: float(np.mean(life.intentions == k)) for k, name in enumerate(INTENTIONS)}
+    return {
+        "fishes": len(tank.fishes),
+        "predators": sum(f.species.predator for f in tank.fishes),
+        "food": len(tank.world.foods),
+        "obstacles": len(tank.static_names) - 4,
+        "seconds": sim,
+        "seed": tank.config.seed,
+        "tank_half_size_m": tank.config.size(),
+        "events": counts,
+        "collisions_with_obstacles": obstacle_hits,
+        "food_eaten_fraction": float(life.eaten[-1].mean()) if life.eaten.size else 0.0,
+        "survivors": int(life.alive[-1].sum()) if life.alive.size else len(tank.fishes),
+        "deepest_into_obstacle_m": life.deepest,
+        "intention_share": share,
+        "wall_seconds": life.wall_seconds,
+        "realtime_factor": sim / life.wall_seconds if life.wall_seconds > 0 else None,
+    }
+
+
+def events_csv(life: Life) -> str:
+    """Return the events as CSV text: columns time, fish, event, detail."""
+    import csv
+    import io
+
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["time", "fish", "event", "detail"])
+    for t, fish, event, detail in life.events:
+        w.writerow([f"{t:.2f}", fish, event, detail])
+    return buf.getvalue()
+
+
+def frame_labels(life: Life, names: list[str]) -> list[list[str]]:
+    """Return per record time one label per fish: its name and the intention it followed."""
+    k = np.clip(np.searchsorted(life.brain_times, life.times + 1e-9, side="right") - 1, 0,
+                max(len(life.brain_times) - 1, 0))  # fmt: skip
+    return [[f"{nm}: {INTENTIONS[life.intentions[j, i]]}" if life.alive[j, i] else f"{nm}: caught"
+             for i, nm in enumerate(names)] for j in k]  # fmt: skip

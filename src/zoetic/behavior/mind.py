@@ -1,0 +1,190 @@
+"""An artificial fish's mind: mental state, the intention generator and the focuser.
+
+Formulas of Tu & Terzopoulos's artificial fish (X. Tu's thesis; ``MODEL-FACTS.md``):
+
+- hunger H = min(1 - n_e R(dt_H) / alpha, 1), R(x) = 1 - p0 x, clipped at 0 from below
+  (n_e: food eaten at the last meal, dt_H: time since it);
+- libido L = min(s(dt_L) (1 - H), 1), s(x) = p1 x (dt_L: time since the last mating);
+- fear F = min(sum_i min(D0 / d_i, 1), 1) over the perceived predators at distances d_i;
+- a stimulus s = 1/d of the nearest food or mate enters through ``ramp`` (0 below q1, 1
+  above q2): the motive is the drive times (1 + ramp), capped at 1 (our reading).
+
+The intention generator follows the thesis's priorities: (1) an imminent collision -> avoid;
+(2) F > f0 -> school (a schooling fish, F < f1) or escape; (3) max(H, L) > r -> eat or mate
+(a predator hunts instead of eating), the previous one of the two kept on a tie; (4) wander if
+the habits are content with the surroundings, else leave. Intentions persist: a new intention
+of the same or a lower priority level replaces the current one only after ``persistence``
+seconds, a more urgent one at once, so that the choice does not flicker between periods.
+Pure functions over plain numbers and small arrays; constants in SI (see ``aquarium.species``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+INTENTIONS = ("avoid", "escape", "school", "eat", "mate", "hunt", "wander", "leave")
+LEVEL = {"avoid": 0, "escape": 1, "school": 1, "eat": 2, "mate": 2, "hunt": 2,
+         "wander": 3, "leave": 3}  # fmt: skip
+
+
+def ramp(s, q1: float, q2: float):
+    """Return the stimulus ramp of s: 0 below q1, 1 above q2, (s - q1)/(2 q2 - q1 - s) between."""
+    s = np.asarray(s, dtype=float)
+    mid = (s - q1) / np.maximum(2 * q2 - q1 - s, 1e-12)
+    out = np.where(s <= q1, 0.0, np.where(s >= q2, 1.0, mid))
+    return out if out.ndim else float(out)
+
+
+def hunger(eaten: float, since_meal: float, p0: float, alpha: float = 1.0) -> float:
+    """Return the hunger H in [0, 1] after ``since_meal`` s since a meal of ``eaten`` particles."""
+    r = 1.0 - p0 * since_meal
+    return float(np.clip(1.0 - eaten * r / alpha, 0.0, 1.0))
+
+
+def libido(since_mating: float, p1: float, h: float) -> float:
+    """Return the libido L in [0, 1] after ``since_mating`` s at hunger ``h``."""
+    return float(np.clip(p1 * since_mating * (1.0 - h), 0.0, 1.0))
+
+
+def fear(distances, d0: float) -> float:
+    """Return the fear F in [0, 1] of predators perceived at ``distances`` (m)."""
+    d = np.asarray(distances, dtype=float).reshape(-1)
+    if d.size == 0:
+        return 0.0
+    return float(min(np.minimum(d0 / np.maximum(d, 1e-9), 1.0).sum(), 1.0))
+
+
+@dataclass(frozen=True)
+class Drives:
+    """The three mental variables at one moment."""
+
+    hunger: float
+    libido: float
+    fear: float
+
+
+@dataclass(frozen=True)
+class Situation:
+    """What the intention generator needs of perception: flags and the nearest distances (m)."""
+
+    collision: bool = False
+    predator_distances: tuple[float, ...] = ()
+    food_distance: float = np.inf  # nearest perceived (seen or smelled) food
+    mate_distance: float = np.inf  # nearest perceived fish of the same species
+    prey_distance: float = np.inf  # nearest perceived prey (predators)
+    crowded: bool = False  # more fishes within personal space than the habits tolerate
+    alone: bool = False  # no fish perceived at all
+    near_obstacle: bool = False  # an obstacle within personal space
+
+
+@dataclass(frozen=True)
+class MindState:
+    """A fish's mental state: its last meal and mating, and its current intention and target."""
+
+    eaten: float = 1.0  # particles eaten at the last meal
+    meal_time: float = 0.0  # s
+    mating_time: float = 0.0  # s
+    intention: str = "wander"
+    since: float = -np.inf  # when the current intention was chosen (s)
+    target: int | None = None
+
+
+def initial_mind(initial_hunger: float, p0: float, t: float = 0.0) -> MindState:
+    """Return a mind whose hunger is ``initial_hunger`` at time t (a meal placed in the past)."""
+    back = initial_hunger / p0 if p0 > 0 else 0.0
+    return MindState(eaten=1.0, meal_time=t - back, mating_time=t)
+
+
+def drives(state: MindState, t: float, c, predator_distances=()) -> Drives:
+    """Return hunger, libido and fear at time t for a mind with constants ``c``
+    (a ``MindConstants``): rates p0, p1 in 1/s, the fear distance D0 in m."""
+    h = hunger(state.eaten, t - state.meal_time, c.hunger_rate, c.alpha)
+    return Drives(
+        h, libido(t - state.mating_time, c.libido_rate, h),
+        fear(predator_distances, c.fear_distance),
+    )  # fmt: skip
+
+
+def desire(drive: float, distance: float, q: tuple[float, float]) -> float:
+    """Return a motive: the drive times (1 + the ramp of the stimulus 1/d of the nearest
+    target), capped at 1 (a target in reach at most doubles an appetite)."""
+    s = 1.0 / distance if np.isfinite(distance) and distance > 0 else 0.0
+    return min(1.0, drive * (1.0 + float(ramp(s, q[0], q[1]))))
+
+
+def intend(
+    d: Drives,
+    sit: Situation,
+    c,
+    habits,
+    predator: bool = False,
+    previous: str = "wander",
+) -> str:
+    """Return the intention the priorities give (before persistence), for drives ``d``."""
+    if sit.collision:
+        return "avoid"
+    if not predator and d.fear > c.fear_threshold:
+        if habits.schooling and d.fear < c.panic_threshold:
+            return "school"
+        return "escape"
+    h = desire(d.hunger, sit.prey_distance if predator else sit.food_distance, c.hunger_ramp)
+    lib = desire(d.libido, sit.mate_distance, c.libido_ramp)
+    if max(h, lib) > c.desire_threshold:
+        feed = "hunt" if predator else "eat"
+        if h > lib:
+            return feed
+        if lib > h:
+            return "mate"
+        return previous if previous in (feed, "mate") else feed
+    content = not (
+        ("crowd" in habits.dislikes and sit.crowded)
+        or ("obstacles" in habits.dislikes and sit.near_obstacle)
+        or ("company" in habits.likes and sit.alone and not habits.schooling)
+    )
+    return "wander" if content else "leave"
+
+
+def persist(previous: str, since: float, candidate: str, t: float, persistence: float) -> str:
+    """Return the intention to follow: the candidate if more urgent than the previous one or
+    once the previous has lasted ``persistence`` s, else the previous one."""
+    if candidate == previous or LEVEL[candidate] < LEVEL[previous]:
+        return candidate
+    return candidate if t - since >= persistence else previous
+
+
+def focus(distances, previous: int | None = None, keep_within: float = 1.25) -> int | None:
+    """Return the index of the target to attend to among candidates at ``distances`` (inf:
+    not perceived): the nearest, but the previous target is kept while it is perceived and
+    no more than ``keep_within`` times farther than the nearest (no dithering)."""
+    d = np.asarray(distances, dtype=float).reshape(-1)
+    if d.size == 0 or not np.isfinite(d).any():
+        return None
+    best = int(np.argmin(d))
+    if previous is not None and 0 <= previous < d.size and np.isfinite(d[previous]):
+        if d[previous] <= keep_within * d[best]:
+            return previous
+    return best
+
+
+def think(state: MindState, t: float, c, habits, sit: Situation, predator: bool = False
+          ) -> tuple[MindState, Drives]:  # fmt: skip
+    """Return the mind after one brain period at time t, and its drives: the intention the
+    priorities and persistence choose (the target is left to the focuser)."""
+    d = drives(state, t, c, sit.predator_distances)
+    cand = intend(d, sit, c, habits, predator, state.intention)
+    chosen = persist(state.intention, state.since, cand, t, c.persistence)
+    if chosen != state.intention:
+        state = replace(state, intention=chosen, since=t, target=None)
+    return state, d
+
+
+def ate(state: MindState, t: float, particles: float = 1.0) -> MindState:
+    """Return the mind after a meal of ``particles`` at time t (hunger drops)."""
+    return replace(state, eaten=float(particles), meal_time=t)
+
+
+def mated(state: MindState, t: float) -> MindState:
+    """Return the mind after mating at time t (libido drops to 0)."""
+    return replace(state, mating_time=t)

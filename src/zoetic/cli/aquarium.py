@@ -1,0 +1,103 @@
+"""``zoetic aquarium``: a tank of artificial fishes living for a while, and what they did."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+from rich.console import Console
+
+from zoetic.cli import app
+from zoetic.cli.bench import _emit, bench_app
+
+console = Console()
+
+
+@app.command()
+def aquarium(
+    fishes: int = typer.Option(10, help="Fishes in the tank, predators included."),
+    predators: int = typer.Option(1, help="How many of them are predators (sharks)."),
+    food: int = typer.Option(15, help="Food particles drifting in the current."),
+    obstacles: int = typer.Option(5, help="Rocks and seaweed."),
+    seconds: float = typer.Option(60.0, help="Simulated time (s)."),
+    seed: int = typer.Option(0, help="Seed of the layout and of the fishes' wandering."),
+    out: Path = typer.Option(Path("runs/tank"), help="Output directory."),
+    perception: str = typer.Option("oracle", help="oracle (the world model) or vision."),
+    prey: str = typer.Option("minnow", help="Prey species: a built-in name or a .toml file."),
+    predator: str = typer.Option("shark", help="Predator species: a name or a .toml file."),
+    video: bool = typer.Option(True, help="Write video.mp4."),
+    labels: bool = typer.Option(True, help="Label each fish with its intention in the video."),
+    control_period: float = typer.Option(0.1, help="Brain period (s)."),
+) -> None:
+    """Let a tank of fishes live: write events.csv, mind.png, summary.json and video.mp4."""
+    from zoetic.behavior.aquarium.tank import (
+        TankConfig,
+        build_tank,
+        events_csv,
+        frame_labels,
+        live,
+        summarize,
+    )
+    from zoetic.behavior.mind import INTENTIONS
+    from zoetic.errors import ZoeticError
+    from zoetic.io import atomic_write_bytes, check_out_dir, make_dir, write_json
+
+    if perception != "oracle":
+        if perception == "vision":
+            raise ZoeticError(
+                "--perception vision: the fishes' animat vision is not yet available in this "
+                "build; use --perception oracle"
+            )
+        raise ZoeticError(f"--perception must be oracle or vision, got {perception!r}")
+    check_out_dir(out)
+    cfg = TankConfig(fishes=fishes, predators=predators, food=food, obstacles=obstacles,
+                     seconds=seconds, seed=seed, prey_species=prey, predator_species=predator,
+                     control_period=control_period,
+                     record_period=min(0.05, control_period))  # fmt: skip
+    tank = build_tank(cfg)
+    with console.status("the fishes live...") as status:
+        life = live(tank, progress=lambda t: status.update(f"t = {t:.1f} s"))
+    make_dir(out)
+    names = [f.name for f in tank.fishes]
+    atomic_write_bytes(out / "events.csv", events_csv(life).encode())
+    summary = summarize(tank, life)
+    from zoetic.viz.aquarium import plot_minds, write_tank_video
+
+    plot_minds(life.brain_times, life.drives, life.intentions, life.alive, names, INTENTIONS,
+               out / "mind.png")  # fmt: skip
+    if video:
+        statics = [s for s in tank.static_names]
+        centers = [tank.center[k] for k, nm in enumerate(statics) if nm != "wall"]
+        with console.status("rendering the video..."):
+            write_tank_video(
+                out / "video.mp4", fps=1.0 / cfg.record_period,
+                bodies=[f.body for f in tank.fishes], positions=life.positions, times=life.times,
+                colors=[f.species.color for f in tank.fishes], obstacles=centers,
+                food=life.food, eaten=life.eaten,
+                labels=frame_labels(life, names) if labels else None, half_size=cfg.size(),
+            )  # fmt: skip
+    write_json(out / "summary.json", summary)
+    ev = summary["events"]
+    console.print(
+        f"{summary['seconds']:.1f} s simulated in {summary['wall_seconds']:.1f} s "
+        f"(x{summary['realtime_factor']:.1f} real time); events: "
+        + ", ".join(f"{k} {v}" for k, v in ev.items())
+        + f"; food eaten {100 * summary['food_eaten_fraction']:.0f} %; survivors "
+        f"{summary['survivors']}/{summary['fishes']}"
+    )
+    console.print(f"wrote {out}/events.csv, mind.png, summary.json" + (", video.mp4" * video))
+
+
+@bench_app.command("aquarium")
+def bench_aquarium_cmd(
+    fishes: int = typer.Option(10),
+    food: int = typer.Option(15),
+    obstacles: int = typer.Option(5),
+    seconds: float = typer.Option(60.0, min=0.5),
+    seed: int = typer.Option(0),
+    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Realtime factor of a tank with oracle perception, against its physics alone."""
+    from zoetic.behavior.aquarium.bench import bench_aquarium
+
+    _emit(bench_aquarium(fishes, food, obstacles, seconds, seed), json)

@@ -1,0 +1,142 @@
+"""The aquarium: perception oracle, behaviour routines on constructed scenes, the CLI."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import numpy as np
+import pytest
+
+from zoetic.behavior.aquarium.perception import blocked, obstacle_distance, perceive
+from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live
+from zoetic.cli import main
+from zoetic.physics.objects import Box, Cylinder, pack_statics
+
+
+def _statics(*objs):
+    return pack_statics(list(objs))
+
+
+def test_obstacle_distance_of_boxes_cylinders_and_spheres():
+    kind, center, size = _statics(Box((0, 0, 0), (1, 1, 1)), Cylinder((5, 0, 0), 0.5, 2.0))
+    d = obstacle_distance(np.array([[2.0, 0, 0], [0, 0, 0], [5, 0, 1.5], [5, 2, 0]]),
+                          kind, center, size)  # fmt: skip
+    assert d[0, 0] == pytest.approx(1.0) and d[1, 0] == pytest.approx(-1.0)
+    assert d[2, 1] == pytest.approx(1.0) and d[3, 1] == pytest.approx(1.0)
+    ball = obstacle_distance(np.array([[0.0, 3, 0]]), np.array([2]), np.zeros((1, 3)),
+                             np.array([[1.0, 0, 0]]))  # fmt: skip
+    assert ball[0, 0] == pytest.approx(2.0)
+
+
+def test_oracle_sees_within_300_degrees_and_range_and_not_through_a_rock():
+    kind, center, size = _statics(Box((0, 0, 5), (1, 1, 0.5)))
+    eyes = np.zeros((1, 3))
+    fwd = np.array([[1.0, 0, 0]])
+    fish = np.array([[0, 0, 0], [3, 0, 0], [-3, 0, 0.3], [0, 0, 8], [20, 0, 0], [-3, 0, 3]])
+    alive = np.ones(6, bool)
+    pc = perceive(eyes, fwd, fish, alive, np.zeros((0, 3)), np.zeros(0, bool), kind, center,
+                  size, 300.0, 10.0, 0.0)  # fmt: skip
+    d = pc.fish[0]
+    assert np.isfinite(d[1]) and d[1] == pytest.approx(3.0)  # ahead
+    assert np.isinf(d[2])  # straight behind: in the 60-degree blind cone
+    assert np.isinf(d[3])  # behind the rock
+    assert np.isinf(d[4])  # out of range
+    assert np.isfinite(d[5])  # behind-left, but inside the 300 degrees
+    assert blocked(eyes, fish[3:4], kind, center, size)[0, 0]
+    # food is smelled within the smell range whatever the view
+    pc = perceive(eyes, fwd, fish[:1], alive[:1], np.array([[-1.0, 0, 0]]), np.ones(1, bool),
+                  kind, center, size, 300.0, 10.0, 2.0)  # fmt: skip
+    assert pc.food[0, 0] == pytest.approx(1.0)
+
+
+def _one_fish_tank(seconds: float, **kw):
+    cfg = TankConfig(fishes=1, predators=0, food=0, obstacles=0, seconds=seconds, seed=1,
+                     half_size=12.0, **kw)  # fmt: skip
+    return cfg
+
+
+def test_collision_avoidance_keeps_a_fish_off_a_rock_in_its_path():
+    from zoetic.behavior.aquarium import tank as tk
+    from zoetic.physics.world import Animal, World
+
+    t = build_tank(_one_fish_tank(1.0))
+    body = t.fishes[0].body
+    rock = Box((4.0, 0.0, 0.0), (0.6, 2.0, 0.6), name="rock")
+    com0 = body.mass @ body.rest_pos / body.total_mass
+    fish = Animal(body, tuple(np.array([0.0, 0.0, 0.0]) - com0), 0.0, (0.2, 0.0, 0.0))
+    walls = [s for s in t.world.statics]
+    world = World([fish, *walls, rock], medium="water")
+    kind, center, size = pack_statics([*walls, rock])
+    tank = tk.Tank(t.config, world, t.fishes, kind, center, size, [*t.static_names, "rock"])
+    life = live(tank, 25.0)
+    hits = [e for e in life.events if e[2] == "collision"]
+    assert hits == [] and life.deepest == 0.0
+    # it did swim past the rock's front face rather than stopping short of it
+    path = life.positions[0].mean(axis=1)
+    assert np.abs(path[:, 2]).max() > 0.8
+    assert "avoid" in {tk.INTENTIONS[k] for k in life.intentions[:, 0]}
+
+
+def test_a_hungry_fish_reaches_a_food_particle():
+    from zoetic.behavior.aquarium import tank as tk
+    from zoetic.physics.objects import Food
+    from zoetic.physics.world import Animal, World
+
+    t = build_tank(_one_fish_tank(1.0))
+    body = t.fishes[0].body
+    com0 = body.mass @ body.rest_pos / body.total_mass
+    # the food lies ahead and to the left: the fish must turn to it
+    fish = Animal(body, tuple(-com0), 0.0, (0.2, 0.0, 0.0))
+    world = World([fish, *t.world.statics, Food((3.0, 0.0, 1.5), 0.25)], medium="water")
+    tank = tk.Tank(t.config, world, t.fishes, t.kind, t.center, t.size, t.static_names)
+    life = live(tank, 25.0)
+    eats = [e for e in life.events if e[2] == "eat"]
+    assert len(eats) == 1 and eats[0][1] == t.fishes[0].name
+    after = np.searchsorted(life.brain_times, eats[0][0] + 1e-9)
+    assert life.drives[after, 0, 0] < 0.05 < life.drives[0, 0, 0]  # the meal stilled hunger
+
+
+def test_a_tank_run_is_reproducible_from_its_seed():
+    cfg = TankConfig(fishes=3, predators=1, food=3, obstacles=1, seconds=2.0, seed=3)
+    a, b = live(build_tank(cfg)), live(build_tank(cfg))
+    assert np.array_equal(a.positions[1], b.positions[1])
+    assert a.events == b.events and np.array_equal(a.intentions, b.intentions)
+
+
+def test_cli_aquarium_writes_its_files(tmp_path):
+    out = tmp_path / "tank"
+    args = ["aquarium", "--fishes", "3", "--food", "3", "--obstacles", "1", "--seconds", "2",
+            "--seed", "0", "--out", str(out)]  # fmt: skip
+    assert main(args) == 0
+    for name in ("video.mp4", "mind.png", "events.csv", "summary.json"):
+        assert (out / name).stat().st_size > 0
+    rows = list(csv.reader((out / "events.csv").open()))
+    assert rows[0] == ["time", "fish", "event", "detail"]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["fishes"] == 3 and summary["predators"] == 1 and summary["seconds"] == 2.0
+    assert set(summary["events"]) == {"eat", "catch", "escape", "mate", "collision"}
+
+
+def test_cli_aquarium_refuses_vision_and_bad_counts_cleanly(tmp_path, capsys):
+    assert main(["aquarium", "--perception", "vision", "--out", str(tmp_path / "a")]) == 2
+    assert "not yet available" in capsys.readouterr().err
+    assert main(["aquarium", "--fishes", "2", "--predators", "3",
+                 "--out", str(tmp_path / "b")]) == 2  # fmt: skip
+
+
+def test_a_fish_that_just_mated_is_not_willing_again_until_its_libido_returns():
+    from zoetic.behavior.aquarium.species import load_species
+    from zoetic.behavior.aquarium.tank import FishBrain, Thought
+    from zoetic.bodies import load_animal
+
+    sp = load_species("minnow")
+    b = FishBrain(sp, load_animal(sp.body), frozenset({"shark"}))
+    b.thought = Thought(0.3, 0.9, 0.0, "mate", 1)
+    assert b.willing(30.0)  # libido grown over 30 s
+    b.mated(30.0)
+    b.ate(30.0)  # fed: a starving fish has no libido
+    assert not b.willing(30.1)
+    assert b.willing(30.0 + 20.0)
+    b.thought = Thought(0.3, 0.9, 0.9, "escape", None)
+    assert not b.willing(60.0)  # a fleeing fish does not court
