@@ -225,3 +225,19 @@ def test_an_output_path_that_is_a_file_is_an_error_not_a_traceback(tmp_path, cap
         err = capsys.readouterr().err
         assert code == 2 and str(afile) in err and "Traceback" not in err
     assert afile.read_text() == "keep me"
+
+
+def test_learning_says_how_many_candidates_failed_and_refuses_an_all_failed_run(
+    tmp_path, capsys
+):
+    from types import SimpleNamespace
+
+    from zoetic.runs import finish_run
+
+    dead = SimpleNamespace(out=tmp_path, log=SimpleNamespace(E=[np.inf] * 5))
+    with pytest.raises(BlowUpError, match="every one of the 5 candidates"):
+        finish_run(dead, video=False)
+    out = tmp_path / "r"
+    assert main(["learn", "shark", "--budget", "8", "--popsize", "4", "--no-video",
+                 "--out", str(out)]) == 0  # fmt: skip
+    assert "failed_candidates: 0" in capsys.readouterr().out.replace("  ", "")

@@ -127,9 +127,20 @@ def simulate_run(
 
 
 def finish_run(run, video: bool = True, fps: int = 30) -> dict:
-    """Write learning.png, controller.png and video.mp4 of a finished learning run."""
+    """Write learning.png, controller.png and video.mp4 of a finished learning run.
+
+    The summary says how many candidates failed (blew up); a run in which every candidate
+    failed is a BlowUpError, not a result.
+    """
     from zoetic.viz.learning import plot_controller, plot_learning
 
+    failed = int(np.count_nonzero(~np.isfinite(np.asarray(run.log.E, float))))
+    if run.log.E and failed == len(run.log.E):
+        raise BlowUpError(
+            f"{run.out}: every one of the {failed} candidates evaluated blew up, so there is "
+            "no result; check the animal file (its springs, masses and dt) or give its task "
+            "a shorter horizon"
+        )
     setup = run.setup
     body, task, obj = setup.objective.body, setup.task, setup.objective
     out = Path(run.out)
@@ -156,6 +167,7 @@ def finish_run(run, video: bool = True, fps: int = 30) -> dict:
     travelled = float(np.linalg.norm(com[-1, [0, 2]] - com[0, [0, 2]]))
     return {
         "evaluations": run.evaluations,
+        "failed_candidates": failed,
         "best_E": round(float(ev.E[0]), 4),
         "distance_m": round(travelled, 3),
         "run": str(out),

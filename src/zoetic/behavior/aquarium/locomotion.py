@@ -1,22 +1,21 @@
 """The motor layer of the aquarium: motor demands (speed, turn, pitch) in, muscle activations out.
 
 ``Locomotion`` is the small interface the behaviour routines call; ``WaveLocomotion`` is the
-built-in motor skill: the body's travelling wave, its amplitude set by the demanded speed and a
-left/right bias added to the muscles by the demanded turn (left muscles shortened more turn the
-fish left). Measured on the zoo shark in water (from 3 s of straight swimming): amplitude 1 at
-2 Hz swims about 0.36 m/s (0.41 at 3 Hz) and a bias of 0.5 turns about 0.15 rad/s. The
-parameterised swim(speed)/turn(angle) controllers learned elsewhere can replace it behind the
-same interface.
+built-in motor skill: the body's own travelling wave (``control.wave_controller``), its swing
+scaled by the demanded speed and a left/right bias added to the muscles by the demanded turn
+(left muscles shortened more turn the fish left). The parameterised swim(speed)/turn(angle)
+controllers of ``behavior.motor`` can replace it behind the same interface.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Protocol
 
 import numpy as np
 
 from zoetic.bodies import Body
+from zoetic.control import wave_controller
 
 
 @dataclass(frozen=True)
@@ -57,14 +56,14 @@ class WaveLocomotion:
         self._muscle = muscle
         self._side = side * muscle
         self._fin = ~muscle
-        self._phase = np.asarray(body.wave_phase, float)
+        self._wave = replace(wave_controller(body), frequency=self.frequency)
 
     def activations(self, demand: Demand, times: np.ndarray) -> np.ndarray:
         """Return activations (T, A): the wave at the demanded amplitude plus the turn bias."""
-        t = np.asarray(times, float)[:, None]
         amp = float(np.clip(demand.speed / self.max_speed, self.min_amplitude, 1.0))
         bias = float(np.clip(self.turn_gain * demand.turn, -self.max_bias, self.max_bias))
-        wave = 0.5 * amp * (1.0 + np.sin(2 * np.pi * (self.frequency * t - self._phase)))
+        off = self.body.wave_offset
+        wave = off + amp * (self._wave.sample(np.asarray(times, float)) - off)
         u = np.where(self._muscle, wave + bias * self._side, 0.0)
         u = np.where(self._fin, 0.5 + np.clip(demand.pitch, -1.5, 1.5) / np.pi, u)
         return np.clip(u, 0.0, 1.0)

@@ -70,7 +70,7 @@ class Motor:
     """Motor skills: which controllers, cruising and top speed (m/s), a predator's catch radius."""
 
     skills: str = "built-in"
-    frequency: float = 2.0
+    frequency: float | None = None  # Hz of the wave; None: the body's own stroke frequency
     cruise_speed: float = 0.25
     max_speed: float = 0.5
     catch_radius: float = 0.3
@@ -109,6 +109,8 @@ class Species:
             d["habits"][k] = list(d["habits"][k])
         for k in ("hunger_ramp", "libido_ramp"):
             d["mind"][k] = list(d["mind"][k])
+        if d["motor"]["frequency"] is None:  # the body's own: TOML has no null, so leave it out
+            del d["motor"]["frequency"]
         return d
 
     def save(self, path: str | Path) -> Path:
@@ -199,7 +201,7 @@ def parse_species(doc: dict[str, Any], source: str = "<memory>") -> Species:
     mo.where = f"{source}: [motor]"
     motor = Motor(
         mo.string("skills", "built-in", choices=MOTOR_SKILLS),
-        mo.number("frequency", 2.0, positive=True, hi=20.0),
+        mo.number("frequency", None, positive=True, hi=20.0),
         mo.number("cruise_speed", 0.25, positive=True, hi=20.0),
         mo.number("max_speed", 0.5, positive=True, hi=20.0),
         mo.number("catch_radius", 0.3, positive=True, hi=10.0),
