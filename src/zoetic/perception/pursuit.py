@@ -90,7 +90,8 @@ class PredatorPolicy:
     prey by its colour model, and turns toward the gaze direction (theta_P) with its muscles.
 
     gain: turn bias per rad of theta_P; threshold: |theta_P| (rad) below which it swims
-    straight; search_bias: the turn bias while nothing is in sight.
+    straight; search_bias: the turn bias while nothing is in sight; vor: hold the eyes'
+    world directions against the head's own rotation between frames (``GazeController.hold``).
     """
 
     world: World
@@ -101,6 +102,7 @@ class PredatorPolicy:
     max_bias: float = 0.4
     threshold: float = np.radians(3.0)
     search_bias: float = 0.25
+    vor: bool = True
     sensors: tuple[str, ...] = ()
     state: GazeState = field(default_factory=GazeState)
     log: list = field(default_factory=list)
@@ -116,6 +118,8 @@ class PredatorPolicy:
         pos = self.world.positions(self.animal)[0]
         frame = head_frame(body, pos)
         spec = self.gaze.spec
+        if self.vor:
+            self.state = self.gaze.hold(self.state, frame)
         images, cams = look(self.scenery.mesh(self.world), frame, self.state.angles, spec, FOG)
         self.state = self.gaze.step(self.state, frame, images, cams)
         a = self.state.angles
