@@ -3,8 +3,9 @@ a reddish prey that wanders and flees, and a yellowish distractor that passes be
 
 Turning uses the animal's own muscles: its travelling wave with a left/right bias added to
 one side's muscles (a minimal local turn controller; the behaviour layer's turn motor
-controllers may replace it). The shark has no pectoral-fin actuators, so the up/down turn
-angle phi_P is computed and logged but not acted on.
+controllers may replace it); pitching uses the pectoral fins, tilted from level by the
+up/down turn angle phi_P. Both turn angles are the gaze direction relative to the body's
+mean heading (``eyes.body_frame``), so the head's wag does not feed back into the steering.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from zoetic.control import wave_controller
 from zoetic.control.policy import Period
 from zoetic.control.sensors import observe
 from zoetic.errors import ZoeticError
-from zoetic.perception.eyes import EyeSpec, head_frame, look
+from zoetic.perception.eyes import EyeSpec, body_frame, gaze_angles, head_frame, look
 from zoetic.perception.gaze import GazeController, GazeState, fixation
 from zoetic.perception.recognition import histogram
 from zoetic.physics.objects import Ball, Box, Cylinder
@@ -36,16 +37,19 @@ def _wrap(a):
     return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
 
 
-def steer(body: Body, times: np.ndarray, bias: float, amplitude: float = 1.0) -> np.ndarray:
+def steer(body: Body, times: np.ndarray, bias: float, amplitude: float = 1.0,
+          pitch: float = 0.0) -> np.ndarray:  # fmt: skip
     """Return activations (T, A): the body's own travelling wave (``control.wave_controller``,
-    fins held level) with its muscles' swing scaled by ``amplitude`` and ``bias`` added to its
-    left muscles and taken from its right ones (bias > 0 turns left)."""
+    fins held level) with its muscles' swing scaled by ``amplitude``, ``bias`` added to its
+    left muscles and taken from its right ones (bias > 0 turns left), and ``pitch`` added to
+    its fins' level value (pitch > 0 tilts the fins nose up: the animal rises)."""
     u = wave_controller(body).sample(times)
     muscle = np.array([k == "muscle" for k in body.actuator_kind])
+    fin = np.array([k == "fin" for k in body.actuator_kind])
     side = np.array([1.0 if s == "left" else -1.0 if s == "right" else 0.0
                      for s in body.actuator_side]) * muscle  # fmt: skip
     swing = np.where(muscle, body.wave_offset + amplitude * (u - body.wave_offset), u)
-    return np.clip(swing + bias * side, 0, 1)
+    return np.clip(swing + bias * side + pitch * fin, 0, 1)
 
 
 @dataclass
@@ -90,7 +94,8 @@ class PredatorPolicy:
     prey by its colour model, and turns toward the gaze direction (theta_P) with its muscles.
 
     gain: turn bias per rad of theta_P; threshold: |theta_P| (rad) below which it swims
-    straight; search_bias: the turn bias while nothing is in sight; vor: hold the eyes'
+    straight; search_bias: the turn bias while nothing is in sight; fin_gain: fin tilt
+    (fraction of the fins' range) per rad of phi_P, up to max_pitch; vor: hold the eyes'
     world directions against the head's own rotation between frames (``GazeController.hold``).
     """
 
@@ -103,6 +108,8 @@ class PredatorPolicy:
     threshold: float = np.radians(3.0)
     search_bias: float = 0.25
     vor: bool = True
+    fin_gain: float = 2.0
+    max_pitch: float = 0.5
     sensors: tuple[str, ...] = ()
     state: GazeState = field(default_factory=GazeState)
     log: list = field(default_factory=list)
@@ -123,19 +130,25 @@ class PredatorPolicy:
         images, cams = look(self.scenery.mesh(self.world), frame, self.state.angles, spec, FOG)
         self.state = self.gaze.step(self.state, frame, images, cams)
         a = self.state.angles
-        theta_p, phi_p = float(a[:, 0].mean()), float(a[:, 1].mean())
+        # turn angles: the gaze relative to the body's mean heading, not the wagging head
+        look_dir = self.state.directions.sum(0)
+        th_p, ph_p = gaze_angles(body_frame(body, pos), look_dir)
+        theta_p, phi_p = float(th_p), float(ph_p)
         _, rng = fixation(frame, a, spec) if self.state.locked.all() else (None, np.inf)
         if self.state.locked.any():
             bias = 0.0 if abs(theta_p) < self.threshold else self.gain * theta_p
         else:
             bias = self.search_bias
         bias = float(np.clip(bias, -self.max_bias, self.max_bias))
+        pitch = 0.0
+        if self.state.locked.any() and abs(phi_p) >= self.threshold:
+            pitch = float(np.clip(self.fin_gain * phi_p, -self.max_pitch, self.max_pitch))
         n = spec.levels
         self.log.append(VisionRecord(
             period.t0, a.copy(), self.state.locked.copy(), theta_p, phi_p, float(rng), images,
             cams.rotation[::n, 2].copy(), cams.eye[::n].copy(),
         ))  # fmt: skip
-        return steer(body, period.times, bias)[None]
+        return steer(body, period.times, bias, pitch=pitch)[None]
 
 
 @dataclass
