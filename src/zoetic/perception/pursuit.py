@@ -334,9 +334,10 @@ def run_chase(chase: Chase, seconds: float, fps: float = 30.0, seed: int = 0,
 def summarize(result: ChaseResult, spec: EyeSpec) -> dict:
     """Return the chase's figures: caught, time to catch, fraction of frames with the prey
     foveated (some node of it inside both foveas' field of view), distractor fixations
-    (frames on which the eyes held a distractor, not the prey, in a fovea), the relative
-    error of the triangulated range (against the prey node nearest the left gaze ray) while
-    foveated."""
+    (frames on which the eyes, aimed by a lock when the image was taken, held a distractor,
+    not the prey, in a fovea: frame 0, seen straight ahead before any lock, does not count),
+    the relative error of the triangulated range (against the prey node nearest the left
+    gaze ray) while foveated."""
     half = 0.5 * spec.fovs[-1]
     prey = result.positions[1].mean(1)
     fov, distr, rng_err = [], 0, []
@@ -345,7 +346,8 @@ def summarize(result: ChaseResult, spec: EyeSpec) -> dict:
         fov.append(bool((off < half).all()))
         for a in range(2, len(result.positions)):
             o = _off_gaze(rec.eye_dirs, rec.eye_pos, result.positions[a][i])
-            if rec.locked.any() and (o < half).any() and not (off < half).any():
+            aimed = i > 0 and result.log[i - 1].locked.any()  # the gaze came from a lock
+            if aimed and (o < half).any() and not (off < half).any():
                 distr += 1
         if np.isfinite(rec.range) and fov[-1]:
             # the truth: the distance to the prey's node nearest the left eye's gaze ray
