@@ -51,6 +51,19 @@ def main() -> None:
         "mean_gaze_correlation_theta": float(np.mean([r["gaze_correlation_theta"] for r in rows])),
         "runs": rows,
     }
+    # pitching with the fins: seed 0's prey started 0.6 m above or below, fins on and off
+    pitch = []
+    for height in (0.6, -0.6):
+        for gain in (2.0, 0.0):
+            chase = make_chase(0, prey_height=height)
+            chase.predator.fin_gain = gain
+            res = run_chase(chase, 15.0, seed=0)
+            s = summarize(res, chase.predator.gaze.spec)
+            pitch.append({"prey_height_m": height, "fin_gain": gain, "caught": s["caught"],
+                          "time_to_catch_s": s["time_to_catch_s"],
+                          "foveated_fraction": s["foveated_fraction"]})  # fmt: skip
+            print(pitch[-1])
+    table["pitch_seed0_15s"] = pitch
     write_json(OUT / "vision_pursuit.json", table)
     print({k: v for k, v in table.items() if k != "runs"})
 

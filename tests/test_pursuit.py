@@ -46,6 +46,17 @@ def test_a_short_pursuit_keeps_the_prey_foveated_and_closes_in():
     assert s["mean_range_error"] is not None and s["mean_range_error"] < 0.4
 
 
+def test_the_fins_pitch_the_predator_toward_a_prey_above_it():
+    gaps = []
+    for gain in (2.0, 0.0):
+        chase = make_chase(0, distractors=0, rocks=False, start_distance=2.0, prey_height=0.5)
+        chase.predator.fin_gain = gain
+        result = run_chase(chase, 2.5, fps=15.0)
+        gaps.append(result.positions[1][-1, :, 1].mean() - result.positions[0][-1, 0, 1])
+        assert np.mean([r.phi_p for r in chase.predator.log[1:]]) > 0  # phi_P points up
+    assert gaps[0] < gaps[1] - 0.15 and gaps[0] < 0.3
+
+
 def test_pursue_command_writes_its_outputs(tmp_path):
     out = tmp_path / "chase"
     rc = main(["pursue", "--seconds", "0.5", "--seed", "1", "--out", str(out), "--width", "96"])

@@ -241,9 +241,10 @@ class Chase:
 
 def make_chase(seed: int = 0, distractors: int = 1, visibility: float = 6.0,
                spec: EyeSpec | None = None, start_distance: float | None = None,
-               rocks: bool = True) -> Chase:  # fmt: skip
+               rocks: bool = True, prey_height: float = 0.0) -> Chase:  # fmt: skip
     """Return a chase scene: a shark with eyes, a reddish prey ahead of it (off to one side,
-    in its periphery), yellowish distractors crossing behind the prey, rocks and seaweed."""
+    in its periphery, ``prey_height`` m above it), yellowish distractors crossing behind the
+    prey, rocks and seaweed."""
     if distractors < 0:
         raise ZoeticError(f"distractors must be 0 or more, got {distractors}")
     rng = np.random.default_rng(seed)
@@ -251,7 +252,7 @@ def make_chase(seed: int = 0, distractors: int = 1, visibility: float = 6.0,
     spec = spec or EyeSpec(visibility=visibility)
     d = start_distance if start_distance is not None else rng.uniform(2.5, 3.5)
     bearing = rng.choice([-1, 1]) * rng.uniform(0.35, 0.6)
-    prey_at = np.array([d * np.cos(bearing), 0.0, d * np.sin(bearing)])
+    prey_at = np.array([d * np.cos(bearing), prey_height, d * np.sin(bearing)])
     members: list = [Animal(shark, (0.0, 0.0, 0.0), 0.0),
                      Animal(shark, tuple(prey_at), float(rng.uniform(-0.8, 0.8)))]  # fmt: skip
     for k in range(distractors):
