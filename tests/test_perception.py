@@ -141,3 +141,24 @@ def test_correlating_two_foveas_finds_their_disparity():
     moved = shift(base, (-2.0, 5.0), order=3, mode="wrap")  # content 5 px right, 2 px up
     u, v, peak = correlate(base, moved)
     assert abs(u - 5.0) < 0.3 and abs(v + 2.0) < 0.3 and peak > 0.3
+
+
+def test_the_vestibulo_ocular_reflex_keeps_the_gaze_on_the_target_as_the_head_turns():
+    spec = EyeSpec()
+    model = _red_model(spec)
+    mesh = _balls([(2.0, 0.1, 0.4)], [RED], radius=0.1)
+    ctl = GazeController(model, spec)
+    state = GazeState()
+    for _ in range(3):
+        img, cams = look(mesh, FRAME, state.angles, spec)
+        state = ctl.step(state, FRAME, img, cams)
+    # the head yaws 12 deg (more than the fovea's half field of 7.5 deg) between frames
+    c, s = np.cos(np.radians(12.0)), np.sin(np.radians(12.0))
+    turned = HeadFrame(np.zeros(3), np.array([c, 0, s]), np.array([0, 1.0, 0]),
+                       np.array([-s, 0, c]))  # fmt: skip
+    held = ctl.hold(state, turned)
+    assert np.allclose(held.angles[:, 0], state.angles[:, 0] - np.radians(12.0), atol=1e-6)
+    img, _ = look(mesh, turned, held.angles, spec)
+    assert locate(img[0, -1], model).strength > 0.5  # still in the fovea
+    img, _ = look(mesh, turned, state.angles, spec)  # without the reflex it has left it
+    assert locate(img[0, -1], model).strength < 0.2

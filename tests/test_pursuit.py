@@ -7,8 +7,10 @@ import json
 
 import numpy as np
 
+from zoetic.bodies import load_animal
 from zoetic.cli import main
 from zoetic.perception.pursuit import make_chase, run_chase, steer, summarize
+from zoetic.physics.world import Animal, World
 
 
 def test_the_turn_bias_contracts_one_side_more():
@@ -20,14 +22,39 @@ def test_the_turn_bias_contracts_one_side_more():
     assert u[:, left].mean() > u[:, ~left].mean() + 0.2 and u.min() >= 0 and u.max() <= 1
 
 
+def test_the_fins_tilt_from_level_with_pitch_and_raise_or_sink_the_shark():
+    shark = load_animal("shark")
+    fins = np.array([k == "fin" for k in shark.actuator_kind])
+    t = np.arange(400) * shark.dt
+    level = steer(shark, t, 0.0)[:, fins]
+    assert np.allclose(steer(shark, t, 0.0, pitch=0.3)[:, fins], level + 0.3)
+    world = World([Animal(shark, (0.0, 0.0, 0.0), 0.0), Animal(shark, (0.0, 0.0, 3.0), 0.0)],
+                  medium="water")  # fmt: skip
+    t = np.arange(world.steps_for(1.0)) * world.dt
+    world.step(1.0, [steer(shark, t, 0.0, pitch=p)[None] for p in (0.4, -0.4)])
+    rise, sink = (world.positions(a)[0][:, 1].mean() for a in (0, 1))
+    assert rise > 0.015 and sink < -0.015
+
+
 def test_a_short_pursuit_keeps_the_prey_foveated_and_closes_in():
     chase = make_chase(0, distractors=0, rocks=False, start_distance=2.0)
     result = run_chase(chase, 4.0, fps=15.0)
     s = summarize(result, chase.predator.gaze.spec)
-    assert s["foveated_fraction"] > 0.8
+    assert s["foveated_fraction"] > 0.95
     assert s["final_distance_m"] < s["start_distance_m"] - 0.3
     # verged on the prey: the triangulated range is near the true one
     assert s["mean_range_error"] is not None and s["mean_range_error"] < 0.4
+
+
+def test_the_fins_pitch_the_predator_toward_a_prey_above_it():
+    gaps = []
+    for gain in (2.0, 0.0):
+        chase = make_chase(0, distractors=0, rocks=False, start_distance=2.0, prey_height=0.5)
+        chase.predator.fin_gain = gain
+        result = run_chase(chase, 2.5, fps=15.0)
+        gaps.append(result.positions[1][-1, :, 1].mean() - result.positions[0][-1, 0, 1])
+        assert np.mean([r.phi_p for r in chase.predator.log[1:]]) > 0  # phi_P points up
+    assert gaps[0] < gaps[1] - 0.15 and gaps[0] < 0.3
 
 
 def test_pursue_command_writes_its_outputs(tmp_path):

@@ -69,7 +69,16 @@ def head_cluster(body: Body) -> np.ndarray:
 
 def head_frame(body: Body, positions: np.ndarray) -> HeadFrame:
     """Return the head frame of one animal's pose (N, 3)."""
-    idx = head_cluster(body)
+    return _fitted_frame(body, positions, head_cluster(body))
+
+
+def body_frame(body: Body, positions: np.ndarray) -> HeadFrame:
+    """Return the whole body's frame (the best rotation of all its nodes, origin at the head
+    node): its mean heading, which hardly wags as the body undulates."""
+    return _fitted_frame(body, positions, np.arange(len(body.rest_pos)))
+
+
+def _fitted_frame(body: Body, positions: np.ndarray, idx: np.ndarray) -> HeadFrame:
     r0 = body.rest_pos[idx] - body.rest_pos[idx].mean(0)
     x = positions[idx] - positions[idx].mean(0)
     u, _, vt = np.linalg.svd(r0.T @ x)

@@ -119,12 +119,14 @@ def correlate(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
 @dataclass
 class GazeState:
     """What the gaze controller remembers: angles (2, 2) rows (theta, phi) for the left and
-    right eyes, whether each eye holds the target, and its last foveal image."""
+    right eyes relative to the head, whether each eye holds the target, its last foveal
+    image, and the gaze directions (2, 3) in the world (None before the first frame)."""
 
     angles: np.ndarray = field(default_factory=lambda: np.zeros((2, 2)))
     locked: np.ndarray = field(default_factory=lambda: np.zeros(2, bool))
     fovea: list = field(default_factory=lambda: [None, None])
     saccades: int = 0
+    directions: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -150,13 +152,27 @@ class GazeController:
     verge: bool = True
     verge_peak: float = 0.1
 
+    def hold(self, state: GazeState, frame: HeadFrame) -> GazeState:
+        """Return the state with its angles re-expressed in the head's new ``frame`` so that
+        each eye keeps looking along its world direction: the vestibulo-ocular reflex, which
+        cancels the head's own rotation (the animal knows its body's motion) before the
+        image is taken, leaving the flow only the target's motion to follow."""
+        if state.directions is None:
+            return state
+        th, ph = gaze_angles(frame, state.directions)
+        a = np.stack([np.clip(th, -self.max_theta, self.max_theta),
+                      np.clip(ph, -self.max_phi, self.max_phi)], 1)  # fmt: skip
+        return GazeState(a, state.locked.copy(), list(state.fovea), state.saccades,
+                         state.directions)  # fmt: skip
+
     def step(self, state: GazeState, frame: HeadFrame, images: np.ndarray,
              cameras: Cameras) -> GazeState:  # fmt: skip
         """Return the gaze state after one frame: stabilise each eye on its fovea's motion,
         re-foveate (saccade) when the target drifts or is lost, verge both eyes on it."""
         n = self.spec.levels
         s = self.spec.size
-        new = GazeState(state.angles.copy(), state.locked.copy(), list(state.fovea), state.saccades)
+        new = GazeState(state.angles.copy(), state.locked.copy(), list(state.fovea),
+                        state.saccades)  # fmt: skip
         aim: list = [None, None]  # the foveal pixel each eye now centres on, when it has one
         for eye in (LEFT, RIGHT):
             fov = images[eye, n - 1]
@@ -198,6 +214,7 @@ class GazeController:
                 new.angles[RIGHT] = saccade(frame, cameras, RIGHT * n + n - 1, col, row)
         new.angles[:, 0] = np.clip(new.angles[:, 0], -self.max_theta, self.max_theta)
         new.angles[:, 1] = np.clip(new.angles[:, 1], -self.max_phi, self.max_phi)
+        new.directions = gaze_direction(frame, new.angles[:, 0], new.angles[:, 1])
         return new
 
 

@@ -3,8 +3,9 @@ a reddish prey that wanders and flees, and a yellowish distractor that passes be
 
 Turning uses the animal's own muscles: its travelling wave with a left/right bias added to
 one side's muscles (a minimal local turn controller; the behaviour layer's turn motor
-controllers may replace it). The shark has no pectoral-fin actuators, so the up/down turn
-angle phi_P is computed and logged but not acted on.
+controllers may replace it); pitching uses the pectoral fins, tilted from level by the
+up/down turn angle phi_P. Both turn angles are the gaze direction relative to the body's
+mean heading (``eyes.body_frame``), so the head's wag does not feed back into the steering.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from zoetic.control import wave_controller
 from zoetic.control.policy import Period
 from zoetic.control.sensors import observe
 from zoetic.errors import ZoeticError
-from zoetic.perception.eyes import EyeSpec, head_frame, look
+from zoetic.perception.eyes import EyeSpec, body_frame, gaze_angles, head_frame, look
 from zoetic.perception.gaze import GazeController, GazeState, fixation
 from zoetic.perception.recognition import histogram
 from zoetic.physics.objects import Ball, Box, Cylinder
@@ -36,16 +37,19 @@ def _wrap(a):
     return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
 
 
-def steer(body: Body, times: np.ndarray, bias: float, amplitude: float = 1.0) -> np.ndarray:
+def steer(body: Body, times: np.ndarray, bias: float, amplitude: float = 1.0,
+          pitch: float = 0.0) -> np.ndarray:  # fmt: skip
     """Return activations (T, A): the body's own travelling wave (``control.wave_controller``,
-    fins held level) with its muscles' swing scaled by ``amplitude`` and ``bias`` added to its
-    left muscles and taken from its right ones (bias > 0 turns left)."""
+    fins held level) with its muscles' swing scaled by ``amplitude``, ``bias`` added to its
+    left muscles and taken from its right ones (bias > 0 turns left), and ``pitch`` added to
+    its fins' level value (pitch > 0 tilts the fins nose up: the animal rises)."""
     u = wave_controller(body).sample(times)
     muscle = np.array([k == "muscle" for k in body.actuator_kind])
+    fin = np.array([k == "fin" for k in body.actuator_kind])
     side = np.array([1.0 if s == "left" else -1.0 if s == "right" else 0.0
                      for s in body.actuator_side]) * muscle  # fmt: skip
     swing = np.where(muscle, body.wave_offset + amplitude * (u - body.wave_offset), u)
-    return np.clip(swing + bias * side, 0, 1)
+    return np.clip(swing + bias * side + pitch * fin, 0, 1)
 
 
 @dataclass
@@ -90,7 +94,9 @@ class PredatorPolicy:
     prey by its colour model, and turns toward the gaze direction (theta_P) with its muscles.
 
     gain: turn bias per rad of theta_P; threshold: |theta_P| (rad) below which it swims
-    straight; search_bias: the turn bias while nothing is in sight.
+    straight; search_bias: the turn bias while nothing is in sight; fin_gain: fin tilt
+    (fraction of the fins' range) per rad of phi_P, up to max_pitch; vor: hold the eyes'
+    world directions against the head's own rotation between frames (``GazeController.hold``).
     """
 
     world: World
@@ -101,6 +107,9 @@ class PredatorPolicy:
     max_bias: float = 0.4
     threshold: float = np.radians(3.0)
     search_bias: float = 0.25
+    vor: bool = True
+    fin_gain: float = 2.0
+    max_pitch: float = 0.5
     sensors: tuple[str, ...] = ()
     state: GazeState = field(default_factory=GazeState)
     log: list = field(default_factory=list)
@@ -116,22 +125,30 @@ class PredatorPolicy:
         pos = self.world.positions(self.animal)[0]
         frame = head_frame(body, pos)
         spec = self.gaze.spec
+        if self.vor:
+            self.state = self.gaze.hold(self.state, frame)
         images, cams = look(self.scenery.mesh(self.world), frame, self.state.angles, spec, FOG)
         self.state = self.gaze.step(self.state, frame, images, cams)
         a = self.state.angles
-        theta_p, phi_p = float(a[:, 0].mean()), float(a[:, 1].mean())
+        # turn angles: the gaze relative to the body's mean heading, not the wagging head
+        look_dir = self.state.directions.sum(0)
+        th_p, ph_p = gaze_angles(body_frame(body, pos), look_dir)
+        theta_p, phi_p = float(th_p), float(ph_p)
         _, rng = fixation(frame, a, spec) if self.state.locked.all() else (None, np.inf)
         if self.state.locked.any():
             bias = 0.0 if abs(theta_p) < self.threshold else self.gain * theta_p
         else:
             bias = self.search_bias
         bias = float(np.clip(bias, -self.max_bias, self.max_bias))
+        pitch = 0.0
+        if self.state.locked.any() and abs(phi_p) >= self.threshold:
+            pitch = float(np.clip(self.fin_gain * phi_p, -self.max_pitch, self.max_pitch))
         n = spec.levels
         self.log.append(VisionRecord(
             period.t0, a.copy(), self.state.locked.copy(), theta_p, phi_p, float(rng), images,
             cams.rotation[::n, 2].copy(), cams.eye[::n].copy(),
         ))  # fmt: skip
-        return steer(body, period.times, bias)[None]
+        return steer(body, period.times, bias, pitch=pitch)[None]
 
 
 @dataclass
@@ -224,9 +241,10 @@ class Chase:
 
 def make_chase(seed: int = 0, distractors: int = 1, visibility: float = 6.0,
                spec: EyeSpec | None = None, start_distance: float | None = None,
-               rocks: bool = True) -> Chase:  # fmt: skip
+               rocks: bool = True, prey_height: float = 0.0) -> Chase:  # fmt: skip
     """Return a chase scene: a shark with eyes, a reddish prey ahead of it (off to one side,
-    in its periphery), yellowish distractors crossing behind the prey, rocks and seaweed."""
+    in its periphery, ``prey_height`` m above it), yellowish distractors crossing behind the
+    prey, rocks and seaweed."""
     if distractors < 0:
         raise ZoeticError(f"distractors must be 0 or more, got {distractors}")
     rng = np.random.default_rng(seed)
@@ -234,7 +252,7 @@ def make_chase(seed: int = 0, distractors: int = 1, visibility: float = 6.0,
     spec = spec or EyeSpec(visibility=visibility)
     d = start_distance if start_distance is not None else rng.uniform(2.5, 3.5)
     bearing = rng.choice([-1, 1]) * rng.uniform(0.35, 0.6)
-    prey_at = np.array([d * np.cos(bearing), 0.0, d * np.sin(bearing)])
+    prey_at = np.array([d * np.cos(bearing), prey_height, d * np.sin(bearing)])
     members: list = [Animal(shark, (0.0, 0.0, 0.0), 0.0),
                      Animal(shark, tuple(prey_at), float(rng.uniform(-0.8, 0.8)))]  # fmt: skip
     for k in range(distractors):
@@ -317,9 +335,10 @@ def run_chase(chase: Chase, seconds: float, fps: float = 30.0, seed: int = 0,
 def summarize(result: ChaseResult, spec: EyeSpec) -> dict:
     """Return the chase's figures: caught, time to catch, fraction of frames with the prey
     foveated (some node of it inside both foveas' field of view), distractor fixations
-    (frames on which the eyes held a distractor, not the prey, in a fovea), the relative
-    error of the triangulated range (against the prey node nearest the left gaze ray) while
-    foveated."""
+    (frames on which the eyes, aimed by a lock when the image was taken, held a distractor,
+    not the prey, in a fovea: frame 0, seen straight ahead before any lock, does not count),
+    the relative error of the triangulated range (against the prey node nearest the left
+    gaze ray) while foveated."""
     half = 0.5 * spec.fovs[-1]
     prey = result.positions[1].mean(1)
     fov, distr, rng_err = [], 0, []
@@ -328,7 +347,8 @@ def summarize(result: ChaseResult, spec: EyeSpec) -> dict:
         fov.append(bool((off < half).all()))
         for a in range(2, len(result.positions)):
             o = _off_gaze(rec.eye_dirs, rec.eye_pos, result.positions[a][i])
-            if rec.locked.any() and (o < half).any() and not (off < half).any():
+            aimed = i > 0 and result.log[i - 1].locked.any()  # the gaze came from a lock
+            if aimed and (o < half).any() and not (off < half).any():
                 distr += 1
         if np.isfinite(rec.range) and fov[-1]:
             # the truth: the distance to the prey's node nearest the left eye's gaze ray
