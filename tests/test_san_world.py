@@ -209,8 +209,9 @@ def test_no_actuation_at_rest_has_no_drift(name):
 def test_a_mirror_symmetric_cart_cannot_move():
     """Crossed at the middle, the cart is mirror-symmetric: whatever it does, its centre of
     mass stays put (the zoo's cart crosses off-centre for that reason)."""
-    sym = CART.replace("start = -0.12", "start = -0.15").replace("at = -0.12", "at = -0.15")
-    sym = sym.replace("at = 0.18", "at = 0.15")
+    sym = CART.replace("start = -0.048", "start = -0.06").replace("at = -0.048", "at = -0.06")
+    sym = sym.replace("at = 0.072", "at = 0.06")
+    assert sym.count("-0.06") == 4 and sym.count("at = 0.06") == 2
     import tomllib
 
     from zoetic.san.creature_file import creature_from_dict
