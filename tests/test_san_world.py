@@ -285,7 +285,7 @@ def test_fish_swims_and_is_still_without_actuation():
 def test_hand_policies_move_the_ground_creatures():
     for name, period, phase in (
         ("bouncer", 0.2, [0, 0.125, 0.25, 0.375]),
-        ("luxo", 0.4, [0, 0.25]),
+        ("luxo", 0.2, [0, 0.75]),  # hops ~2 m in 6 s; most full-swing waves tip it over
     ):
         c = load_creature(name)
         r = World(c).run(Square(period, phase))
