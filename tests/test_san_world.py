@@ -102,6 +102,10 @@ def test_zoo_has_the_ten_creatures_of_table_1():
 def test_creature_loads_with_table_1_counts_and_stays_finite(name):
     c = load_creature(name)
     assert (c.n_links, c.n_sensors, c.n_actuators) == TABLE1[name]
+    # an absolute usefulness bar: a quarter of Table 1's speed where the paper gives one
+    assert c.useful_speed is not None and c.useful_speed > 0
+    if c.paper_speed is not None:
+        assert c.useful_speed == pytest.approx(c.paper_speed / 4)
     assert c.name == name and c.dt > 0 and c.control_dt >= c.dt
     assert c.seconds == (30.0 if name in ("crawler", "fish") else 6.0)
     assert c.metric == ("follow" if name in ("crawler", "fish") else "distance")
@@ -160,6 +164,7 @@ def test_joint_to_a_missing_link_is_refused_naming_file_and_link(tmp_path):
         ('medium = "ground"', 'medium = "lava"', ["[creature]", "unknown medium 'lava'"]),
         ("radius = 0.01", "radius = 0.01\ncolour = 3", ["L1", "unknown key(s) 'colour'"]),
         ("[[link]]", "[[link]\n", ["not valid TOML"]),
+        ("useful_speed_cm_s = 5.75", "useful_speed_cm_s = 0", ["useful_speed_cm_s", "positive"]),
     ],
 )
 def test_invalid_files_are_refused_with_the_entry_named(tmp_path, old, new, words):
