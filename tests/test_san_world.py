@@ -328,6 +328,17 @@ def test_rough_terrain_differs_from_flat():
     assert World(c, terrain="rough", seed=2).terrain[:, 1].tolist() != rough.terrain[:, 1].tolist()
 
 
+def test_hill_is_a_valley_the_creature_must_climb_out_of():
+    c = load_creature("bouncer")
+    hill = World(c, terrain="hill")
+    # flat for |x| < 0.5 m, then 10% uphill either way
+    assert np.allclose(hill.ground(np.array([0.0, 0.4, 1.5, -2.5])), [0.0, 0.0, 0.1, 0.2])
+    wave = Square(0.2, [0, 0.125, 0.25, 0.375], 1.0)
+    flat, up = World(c).run(wave), hill.run(wave)
+    assert not flat.fell and not up.fell
+    assert abs(up.distance) < 0.6 * abs(flat.distance)  # the same gait climbs more slowly
+
+
 def test_set_tuning_and_evaluate():
     c = load_creature("twolink")
     w = World(c)
