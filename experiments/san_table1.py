@@ -15,7 +15,7 @@ and san_cart_gaits.json (+ san_cart_gaits.png, one still per distinct mode).
 
 Run: python experiments/san_table1.py [--trials 200] [--seed 0] [--creatures cart,walker]
      [--tune-top 2] [--tune-trials 250] [--workers 2] [--cart-trials 1000]
-     [--no-gaits | --only-gaits]
+     [--no-gaits | --only-gaits] [--gait-creatures cart,bouncer,walker]
 """
 
 from __future__ import annotations
@@ -152,9 +152,11 @@ def gait_mode(f: dict, creature) -> str:
     return "shuffles"
 
 
-def cart_gaits(trials: int, seed: int, keep: int = 20, workers: int = 2) -> dict:
-    """Search the cart with ``trials`` networks and sort its best ``keep`` into modes."""
-    c = load_creature("cart")
+def cart_gaits(
+    trials: int, seed: int, keep: int = 20, workers: int = 2, name: str = "cart"
+) -> dict:
+    """Search ``name`` (the cart) with ``trials`` networks and sort its best ``keep`` into modes."""
+    c = load_creature(name)
     res = search(c, trials=trials, seed=seed, workers=workers)
     modes: dict[str, list] = {}
     stills = []
@@ -204,6 +206,7 @@ def main() -> None:
     ap.add_argument("--cart-trials", type=int, default=1000)
     ap.add_argument("--no-gaits", action="store_true")
     ap.add_argument("--only-gaits", action="store_true")
+    ap.add_argument("--gait-creatures", default="cart", help="whose kept gaits to sort")
     args = ap.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     names = [n for n in args.creatures.split(",") if n] or list_creatures()
@@ -213,16 +216,17 @@ def main() -> None:
         )
         (OUT / "san_table1.json").write_text(json.dumps(rows, indent=2) + "\n")
         plot_rankings(results, OUT / "san_table1_ranking.png")
-    if not args.no_gaits:
-        gaits = cart_gaits(args.cart_trials, args.seed, workers=args.workers)
+    for name in [] if args.no_gaits else args.gait_creatures.split(","):
+        n = args.cart_trials if name == "cart" else args.trials
+        gaits = cart_gaits(n, args.seed, workers=args.workers, name=name)
         stills = gaits.pop("_stills")
-        (OUT / "san_cart_gaits.json").write_text(json.dumps(gaits, indent=2) + "\n")
+        (OUT / f"san_{name}_gaits.json").write_text(json.dumps(gaits, indent=2) + "\n")
         try:
             if stills:
-                plot_stills(load_creature("cart"), stills, OUT / "san_cart_gaits.png")
+                plot_stills(load_creature(name), stills, OUT / f"san_{name}_gaits.png")
         except ImportError as exc:  # drawing is optional for the numbers
             print(f"no stills: {exc}")
-        print(json.dumps({k: len(v) for k, v in gaits["modes"].items()}, indent=2))
+        print(name, json.dumps({k: len(v) for k, v in gaits["modes"].items()}, indent=2))
 
 
 if __name__ == "__main__":
