@@ -328,6 +328,18 @@ def test_rough_terrain_differs_from_flat():
     assert World(c, terrain="rough", seed=2).terrain[:, 1].tolist() != rough.terrain[:, 1].tolist()
 
 
+def test_ground_friction_below_one_is_applied():
+    """MuJoCo takes the larger of two geoms' frictions: the links must not mask the ground's."""
+    import dataclasses
+
+    c = load_creature("fourlink")
+    runs = [
+        World(dataclasses.replace(c, friction=mu)).run(RandomSwitch(3, seed=2), seconds=2.0)
+        for mu in (0.3, 0.6, 1.0)
+    ]
+    assert len({r.distance for r in runs}) == 3
+
+
 def test_hill_is_a_valley_the_creature_must_climb_out_of():
     c = load_creature("bouncer")
     hill = World(c, terrain="hill")

@@ -91,7 +91,10 @@ def build_mjcf(creature: Creature, terrain: np.ndarray | None = None, root_z: fl
     c = creature
     vertical = c.plane == "vertical"
     gravity = f"0 0 {-GRAVITY}" if vertical else "0 0 0"
-    contact = 'contype="2" conaffinity="0"' if vertical else 'contype="0" conaffinity="0"'
+    # MuJoCo combines two geoms' friction with max(): the links carry the ground's coefficient
+    # too, or their default 1.0 would override any lower ``friction``
+    fr = f'friction="{_f(c.friction)} 0.005 0.0001"'
+    contact = f'contype="2" conaffinity="0" {fr}' if vertical else 'contype="0" conaffinity="0"'
     children: dict[str, list] = {}
     for j in c.joints:
         children.setdefault(j.parent, []).append(j)
@@ -134,7 +137,6 @@ def build_mjcf(creature: Creature, terrain: np.ndarray | None = None, root_z: fl
 
     asset, floor = "", ""
     if vertical:
-        fr = f'friction="{_f(c.friction)} 0.005 0.0001"'
         if terrain is None:
             floor = (
                 f'<geom name="ground" type="plane" size="0 0 1" {fr} contype="1" conaffinity="2"/>'
