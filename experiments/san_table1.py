@@ -214,8 +214,13 @@ def main() -> None:
         rows, results = table(
             names, args.trials, args.seed, args.tune_top, args.tune_trials, args.workers
         )
-        (OUT / "san_table1.json").write_text(json.dumps(rows, indent=2) + "\n")
-        plot_rankings(results, OUT / "san_table1_ranking.png")
+        path = OUT / "san_table1.json"
+        if args.creatures and path.exists():  # a partial run updates its creatures' rows
+            rows = {**json.loads(path.read_text()), **rows}
+            print("partial run: san_table1_ranking.png not redrawn")
+        else:
+            plot_rankings(results, OUT / "san_table1_ranking.png")
+        path.write_text(json.dumps(dict(sorted(rows.items())), indent=2) + "\n")
     for name in [] if args.no_gaits else args.gait_creatures.split(","):
         n = args.cart_trials if name == "cart" else args.trials
         gaits = cart_gaits(n, args.seed, workers=args.workers, name=name)
