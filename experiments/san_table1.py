@@ -15,7 +15,7 @@ and san_cart_gaits.json (+ san_cart_gaits.png, one still per distinct mode).
 
 Run: python experiments/san_table1.py [--trials 200] [--seed 0] [--creatures cart,walker]
      [--tune-top 2] [--tune-trials 250] [--workers 2] [--cart-trials 1000]
-     [--no-gaits | --only-gaits] [--gait-creatures cart,bouncer,walker]
+     [--no-gaits | --only-gaits] [--gait-creatures cart,bouncer,walker] [--rankings-only]
 """
 
 from __future__ import annotations
@@ -206,10 +206,16 @@ def main() -> None:
     ap.add_argument("--cart-trials", type=int, default=1000)
     ap.add_argument("--no-gaits", action="store_true")
     ap.add_argument("--only-gaits", action="store_true")
+    ap.add_argument("--rankings-only", action="store_true", help="phase 1 and the ranking plot")
     ap.add_argument("--gait-creatures", default="cart", help="whose kept gaits to sort")
     args = ap.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     names = [n for n in args.creatures.split(",") if n] or list_creatures()
+    if args.rankings_only:
+        res = {n: search(load_creature(n), args.trials, seed=args.seed, workers=args.workers)
+               for n in names}  # fmt: skip
+        plot_rankings(res, OUT / "san_table1_ranking.png")
+        return
     if not args.only_gaits:
         rows, results = table(
             names, args.trials, args.seed, args.tune_top, args.tune_trials, args.workers
