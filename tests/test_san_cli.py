@@ -10,7 +10,7 @@ import pytest
 from zoetic.cli import main
 from zoetic.san import load_creature
 from zoetic.san.network import SanPolicy, load_network, random_network, save_network
-from zoetic.san.search import search
+from zoetic.san.search import search, useful_mask
 from zoetic.san.tune import tune
 from zoetic.san.world import World
 
@@ -47,6 +47,11 @@ def test_search_writes_ranked_reloadable_networks(search_run, cart):
     assert again == pytest.approx(recorded[0], rel=1e-9, abs=1e-12)
     summary = json.loads((search_run / "summary.json").read_text())
     assert summary["creature"] == "cart" and summary["trials"] == 8
+    n_abs = int(useful_mask(search(cart, trials=8, seed=0, seconds=SECONDS), 5.75).sum())
+    assert (
+        summary["useful_absolute"].startswith(f"{n_abs}/8 (")
+        and ">= 5.75 cm/s" in summary["useful_absolute"]
+    )
 
 
 def test_fixed_seed_search_is_reproducible(cart):

@@ -102,6 +102,10 @@ def test_zoo_has_the_ten_creatures_of_table_1():
 def test_creature_loads_with_table_1_counts_and_stays_finite(name):
     c = load_creature(name)
     assert (c.n_links, c.n_sensors, c.n_actuators) == TABLE1[name]
+    # an absolute usefulness bar: a quarter of Table 1's speed where the paper gives one
+    assert c.useful_speed is not None and c.useful_speed > 0
+    if c.paper_speed is not None:
+        assert c.useful_speed == pytest.approx(c.paper_speed / 4)
     assert c.name == name and c.dt > 0 and c.control_dt >= c.dt
     assert c.seconds == (30.0 if name in ("crawler", "fish") else 6.0)
     assert c.metric == ("follow" if name in ("crawler", "fish") else "distance")
@@ -160,6 +164,7 @@ def test_joint_to_a_missing_link_is_refused_naming_file_and_link(tmp_path):
         ('medium = "ground"', 'medium = "lava"', ["[creature]", "unknown medium 'lava'"]),
         ("radius = 0.01", "radius = 0.01\ncolour = 3", ["L1", "unknown key 'colour'"]),
         ("[[link]]", "[[link]\n", ["not valid TOML"]),
+        ("useful_speed_cm_s = 5.75", "useful_speed_cm_s = 0", ["useful_speed_cm_s", "positive"]),
     ],
 )
 def test_invalid_files_are_refused_with_the_entry_named(tmp_path, old, new, words):
@@ -209,8 +214,9 @@ def test_no_actuation_at_rest_has_no_drift(name):
 def test_a_mirror_symmetric_cart_cannot_move():
     """Crossed at the middle, the cart is mirror-symmetric: whatever it does, its centre of
     mass stays put (the zoo's cart crosses off-centre for that reason)."""
-    sym = CART.replace("start = -0.12", "start = -0.15").replace("at = -0.12", "at = -0.15")
-    sym = sym.replace("at = 0.18", "at = 0.15")
+    sym = CART.replace("start = -0.048", "start = -0.06").replace("at = -0.048", "at = -0.06")
+    sym = sym.replace("at = 0.072", "at = 0.06")
+    assert sym.count("-0.06") == 4 and sym.count("at = 0.06") == 2
     import tomllib
 
     from zoetic.san.creature_file import creature_from_dict
@@ -282,12 +288,13 @@ def test_fish_swims_and_is_still_without_actuation():
 
 
 def test_hand_policies_move_the_ground_creatures():
-    for name, period, phase in (
-        ("bouncer", 0.2, [0, 0.125, 0.25, 0.375]),
-        ("luxo", 0.4, [0, 0.25]),
+    # half-range waves for the bouncer (~3 m in 6 s); full swings of its 1 kg body tip it over
+    for name, period, phase, amp in (
+        ("bouncer", 0.2, [0, 0.125, 0.25, 0.375], 1.0),
+        ("luxo", 0.2, [0, 0.75], 2.0),  # hops ~2 m in 6 s; most full-swing waves tip it over
     ):
         c = load_creature(name)
-        r = World(c).run(Square(period, phase))
+        r = World(c).run(Square(period, phase, amp))
         assert not r.fell and r.metric > 0.5, (name, r.metric)
 
 
@@ -319,6 +326,29 @@ def test_rough_terrain_differs_from_flat():
     assert rough.terrain.shape[1] == 2 and rough.terrain[:, 1].max() > 0.01
     assert rough.distance != flat.distance
     assert World(c, terrain="rough", seed=2).terrain[:, 1].tolist() != rough.terrain[:, 1].tolist()
+
+
+def test_ground_friction_below_one_is_applied():
+    """MuJoCo takes the larger of two geoms' frictions: the links must not mask the ground's."""
+    import dataclasses
+
+    c = load_creature("fourlink")
+    runs = [
+        World(dataclasses.replace(c, friction=mu)).run(RandomSwitch(3, seed=2), seconds=2.0)
+        for mu in (0.3, 0.6, 1.0)
+    ]
+    assert len({r.distance for r in runs}) == 3
+
+
+def test_hill_is_a_valley_the_creature_must_climb_out_of():
+    c = load_creature("bouncer")
+    hill = World(c, terrain="hill")
+    # flat for |x| < 0.5 m, then 10% uphill either way
+    assert np.allclose(hill.ground(np.array([0.0, 0.4, 1.5, -2.5])), [0.0, 0.0, 0.1, 0.2])
+    wave = Square(0.2, [0, 0.125, 0.25, 0.375], 1.0)
+    flat, up = World(c).run(wave), hill.run(wave)
+    assert not flat.fell and not up.fell
+    assert abs(up.distance) < 0.6 * abs(flat.distance)  # the same gait climbs more slowly
 
 
 def test_set_tuning_and_evaluate():

@@ -160,7 +160,9 @@ class Creature:
     ``fall_links`` fall when they touch the ground; ``fall_tilt`` (rad) when the root link
     turns that far from its start angle. Friction: ``friction`` (ground contact, vertical
     plane); ``crawl_friction`` (forward, backward, lateral) coefficients of the horizontal
-    anisotropic friction; ``water_k`` (N*s/m^3) the water drag per area.
+    anisotropic friction; ``water_k`` (N*s/m^3) the water drag per area. ``paper_speed`` is
+    Table 1's speed (cm/s); ``useful_speed`` (cm/s) the absolute bar from which a gait that
+    does not fall counts as useful.
     """
 
     name: str
@@ -173,6 +175,7 @@ class Creature:
     medium: str = "ground"
     expected_cycle: float = 0.5
     paper_speed: float | None = None
+    useful_speed: float | None = None
     dt: float = 0.001
     control_dt: float = 0.005
     plane: str = "vertical"

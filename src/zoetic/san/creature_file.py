@@ -199,6 +199,9 @@ def creature_from_dict(data: dict, path: str | os.PathLike | None = None) -> Cre
     if abs(ratio - round(ratio)) > 1e-6 or round(ratio) < 1:
         raise h.err(f"control_dt ({kw['control_dt']:g}) must be a whole multiple of dt")
     kw["paper_speed"] = h.num("paper_speed_cm_s", None)
+    kw["useful_speed"] = h.num("useful_speed_cm_s", None)
+    if kw["useful_speed"] is not None and kw["useful_speed"] <= 0:
+        raise h.err(f"useful_speed_cm_s must be positive, got {kw['useful_speed']:g}")
     if "hidden" in h.data:
         h.used.add("hidden")
         hid = h.data["hidden"]
@@ -387,9 +390,11 @@ def creature_to_dict(c: Creature) -> dict:
     head = {
         f.name: getattr(c, f.name)
         for f in fields(c)
-        if f.name not in ("links", "joints", "sensors", "actuators", "path", "paper_speed")
+        if f.name
+        not in ("links", "joints", "sensors", "actuators", "path", "paper_speed", "useful_speed")
     }
     head["paper_speed_cm_s"] = c.paper_speed
+    head["useful_speed_cm_s"] = c.useful_speed
     head["fall_links"] = list(c.fall_links)
     head["crawl_friction"] = list(c.crawl_friction)
     out: dict[str, Any] = {"creature": _clean(head)}

@@ -21,9 +21,10 @@ import numpy as np
 
 from zoetic.san.creature import Creature
 
-__all__ = ["GRAVITY", "build_mjcf", "plane_quat", "rough_profile"]
+__all__ = ["GRAVITY", "HILL_SLOPE", "build_mjcf", "hill_profile", "plane_quat", "rough_profile"]
 
 GRAVITY = 9.81
+HILL_SLOPE = 0.1  # rise over run of ``hill_profile`` (5.7 degrees)
 
 
 def plane_quat(angle: float) -> str:
@@ -50,6 +51,17 @@ def rough_profile(
     z = np.convolve(z, np.ones(3) / 3.0, mode="same")
     ramp = np.clip((np.abs(x) - flat) / 0.5, 0.0, 1.0)
     return np.stack([x, height * z * ramp], axis=1)
+
+
+def hill_profile(
+    slope: float = HILL_SLOPE, half_width: float = 10.0, spacing: float = 0.05, flat: float = 0.5
+) -> np.ndarray:
+    """Return a valley profile (K, 2): flat for |x| < ``flat``, then uphill either way (Fig. 13).
+
+    The creature starts on the flat floor and, whichever way it goes, climbs at ``slope``.
+    """
+    x = np.arange(-half_width, half_width + spacing / 2, spacing)
+    return np.stack([x, slope * np.clip(np.abs(x) - flat, 0.0, None)], axis=1)
 
 
 def _geom(link, contact: str) -> str:
@@ -79,7 +91,10 @@ def build_mjcf(creature: Creature, terrain: np.ndarray | None = None, root_z: fl
     c = creature
     vertical = c.plane == "vertical"
     gravity = f"0 0 {-GRAVITY}" if vertical else "0 0 0"
-    contact = 'contype="2" conaffinity="0"' if vertical else 'contype="0" conaffinity="0"'
+    # MuJoCo combines two geoms' friction with max(): the links carry the ground's coefficient
+    # too, or their default 1.0 would override any lower ``friction``
+    fr = f'friction="{_f(c.friction)} 0.005 0.0001"'
+    contact = f'contype="2" conaffinity="0" {fr}' if vertical else 'contype="0" conaffinity="0"'
     children: dict[str, list] = {}
     for j in c.joints:
         children.setdefault(j.parent, []).append(j)
@@ -122,7 +137,6 @@ def build_mjcf(creature: Creature, terrain: np.ndarray | None = None, root_z: fl
 
     asset, floor = "", ""
     if vertical:
-        fr = f'friction="{_f(c.friction)} 0.005 0.0001"'
         if terrain is None:
             floor = (
                 f'<geom name="ground" type="plane" size="0 0 1" {fr} contype="1" conaffinity="2"/>'

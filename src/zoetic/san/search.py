@@ -336,6 +336,11 @@ def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -
             with ProcessPoolExecutor(max_workers=workers, mp_context=_pool_context()) as pool:
                 videos = list(pool.map(_video_job, jobs))
     use = useful_mask(result)
+    bar = getattr(c, "useful_speed", None)  # the creature's absolute bar (cm/s)
+    absolute = None
+    if bar is not None:
+        ab = useful_mask(result, bar)
+        absolute = f"{int(ab.sum())}/{len(ab)} ({100 * ab.mean():.1f}%, >= {bar:g} cm/s, no fall)"
     summary = {
         "creature": c.name,
         "trials": len(result.networks),
@@ -344,6 +349,7 @@ def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -
         "paper_speed_cm_s": getattr(c, "paper_speed", None),
         "useful": f"{int(use.sum())}/{len(use)} ({100 * use.mean():.1f}%, "
         f">= {useful_threshold_cm_s(result):.3g} cm/s, half the best, without falling)",
+        "useful_absolute": absolute,
         "fell": int(result.fell.sum()),
         "evaluation_s": round(result.elapsed, 2),
         "sans": str(out / "sans"),

@@ -10,7 +10,7 @@ Public interface::
     Rollout   frozen dataclass: metric, fell, distance, seconds, times (R,), poses (R, L, 3),
               sensors (R, S), commands (R, A), targets (R, A), states (R, N) | None,
               follow (R, 2) | None, terrain (K, 2) | None, unstable
-    World(creature, terrain="flat" | "rough", seed=0, follow=None)
+    World(creature, terrain="flat" | "rough" | "hill", seed=0, follow=None)
         .run(policy, seconds=None, record_every=0) -> Rollout
         .set_tuning(creature)                  same structure, new Fig. 8 parameters
         .read_sensors(follow_point=None), .poses(), .com(), .ground(x)   for the current state
@@ -60,7 +60,7 @@ from zoetic.errors import SimulationError
 from zoetic.san.creature import Creature, CreatureError
 from zoetic.san.follow import FollowPath
 from zoetic.san.kernels import ANGLE, EYE, LENGTH, TOUCH, command, fallen, medium_forces, sense
-from zoetic.san.mjcf import GRAVITY, build_mjcf, rough_profile
+from zoetic.san.mjcf import GRAVITY, build_mjcf, hill_profile, rough_profile
 
 __all__ = ["Policy", "Rollout", "World", "evaluate"]
 
@@ -118,13 +118,14 @@ def _probes(link, at: float | None) -> list[tuple[float, float, float]]:
 
 
 class World:
-    """A creature compiled into MuJoCo once, on flat or rough ground; ``run`` resets it."""
+    """A creature compiled into MuJoCo once, on flat or rough ground or in a valley between two
+    hills (``hill``: uphill at 10% either way from |x| = 0.5 m); ``run`` resets it."""
 
     def __init__(
         self, creature: Creature, terrain: str = "flat", seed: int = 0, follow: bool | None = None
     ):
-        if terrain not in ("flat", "rough"):
-            raise CreatureError(f"unknown terrain {terrain!r} (expected 'flat' or 'rough')")
+        if terrain not in ("flat", "rough", "hill"):
+            raise CreatureError(f"unknown terrain {terrain!r} (expected 'flat', 'rough' or 'hill')")
         c = creature
         self.creature, self.terrain_kind, self.seed = c, terrain, int(seed)
         self.vertical = c.plane == "vertical"
@@ -132,6 +133,8 @@ class World:
         self.terrain = None
         if terrain == "rough" and self.vertical:
             self.terrain = rough_profile(c.rough_height, self.seed)
+        elif terrain == "hill" and self.vertical:
+            self.terrain = hill_profile()
         self.model = mujoco.MjModel.from_xml_string(build_mjcf(c, self.terrain))
         m = self.model
         if self.terrain is not None:
