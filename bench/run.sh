@@ -15,3 +15,4 @@ PY=".venv/bin/python"
 "$PY" bench/jax_sim.py
 "$Z" bench gym --json | tail -n 1
 "$Z" bench vision --json | tail -n 1
+"$Z" bench aquarium --json | tail -n 1
