@@ -160,6 +160,16 @@ def _sub(text: str, old: str, new: str) -> str:
     return text.replace(old, new, 1)
 
 
+EYES = """
+[eyes]
+node = "a"
+offset = [0.0, 0.01, 0.02]
+fov = 90.0
+levels = 2
+pixels = 16
+"""
+
+
 def animals() -> dict[str, bytes | str]:
     a = ANIMAL
     med = 'medium = "water"'
@@ -201,6 +211,10 @@ def animals() -> dict[str, bytes | str]:
         "one-node.toml": a.split("[[nodes]]")[0] + '[[nodes]]\npos = [0, 0, 0]\nmass = 1.0\n',
         "pos-nan.toml": _sub(a, "pos = [0.1, 0.0, 0.0]", "pos = [0.1, nan, 0.0]"),
         "huge-number.toml": _sub(a, "mass = 0.1", "mass = 1e400"),
+        "eyes-unknown-node.toml": a + _sub(EYES, 'node = "a"', 'node = "eye"'),
+        "eyes-negative-fov.toml": a + _sub(EYES, "fov = 90.0", "fov = -90.0"),
+        "eyes-misspelled-key.toml": a + _sub(EYES, "pixels =", "pixel ="),
+        "eyes-zero-levels.toml": a + _sub(EYES, "levels = 2", "levels = 0"),
     }  # fmt: skip
 
 

@@ -90,6 +90,10 @@ FISH_TIP_MASS = 0.5  # mass units of each caudal fin tip (MODEL-FACTS 0.165; 3x,
 FISH_K = {"cross": 3900.0, "muscle": 3000.0, "structural": 3300.0, "fin": 2250.0}
 FISH_WAVE_LAG = 0.1  # cycles of phase between successive segments of the built-in wave
 FISH_WAVE_HZ = 5.0  # the built-in wave's (and the learned gait's base) stroke frequency
+# the eyes the fish see with (zoetic.perception): on the nose, 8 cm behind it and 6 cm to each
+# side; 4 levels of 64 x 64 pixels, 120 degrees wide down to the 15-degree fovea
+FISH_EYES = {"node": "nose", "offset": [-0.08, 0.0, 0.06], "fov": 120.0, "levels": 4,
+             "pixels": 64}  # fmt: skip
 
 
 def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
@@ -237,6 +241,7 @@ def shark() -> dict:
         actuators=fish_actuators() + fin_acts,
         fins=fins,
         wave={"frequency": FISH_WAVE_HZ, "amplitude": 1.0, "offset": 0.0, "phases": phases},
+        eyes=FISH_EYES,
     )
 
 
@@ -294,6 +299,7 @@ def dolphin() -> dict:
         actuators=doc_acts,
         fins=fins,
         wave={"frequency": FISH_WAVE_HZ, "amplitude": 1.0, "offset": 0.0, "phases": phases},
+        eyes=FISH_EYES,
     )
 
 
@@ -525,6 +531,7 @@ def main() -> None:
             "forward",
             "defaults",
             "wave",
+            "eyes",
             "actuators",
             "fins",
             "nodes",

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from zoetic.bodies import ZOO_DIR, list_animals, load_animal, parse_animal
+from zoetic.bodies import ZOO_DIR, compile_body, list_animals, load_animal, parse_animal
 from zoetic.errors import BodyError
 from zoetic.io import read_toml
 
@@ -158,3 +158,33 @@ def test_body_arrays_are_immutable():
     b = load_animal("shark")
     with pytest.raises(ValueError):
         b.mass[0] = 1.0
+
+
+def test_the_eyes_table_compiles_into_the_body():
+    doc = _shark_doc()
+    doc["eyes"] = {"node": "r1_1", "offset": [0.01, 0.02, 0.03], "fov": 90.0, "levels": 3,
+                   "pixels": 32}  # fmt: skip
+    b = compile_body(parse_animal(doc, source="eyed.toml"))
+    assert b.eye_node == b.node_names.index("r1_1") != b.head
+    assert np.allclose(b.eye_offset, [0.01, 0.02, 0.03]) and np.isclose(b.eye_fov, np.pi / 2)
+    assert (b.eye_levels, b.eye_pixels) == (3, 32)
+    del doc["eyes"]
+    eyeless = compile_body(parse_animal(doc, source="eyeless.toml"))
+    assert eyeless.eye_node is None and eyeless.eye_offset is None and eyeless.eye_fov is None
+
+
+@pytest.mark.parametrize(
+    ("change", "match"),
+    [
+        ({"colour": "blue"}, r"\[eyes\].*unknown key 'colour'"),
+        ({"node": "r9_9"}, r"\[eyes\].*'node': unknown node 'r9_9'"),
+        ({"fov": -30.0}, r"\[eyes\].*fov must be positive"),
+        ({"fov": 200.0}, r"\[eyes\].*'fov' = 200 degrees must be below 180"),
+        ({"levels": 0}, r"\[eyes\].*levels must be at least 1"),
+        ({"offset": [0.0, 0.1]}, r"\[eyes\].*offset"),
+    ],
+)
+def test_a_bad_eyes_entry_is_refused_naming_the_file_and_entry(change, match):
+    doc = _shark_doc()
+    doc["eyes"].update(change)
+    _expect(doc, match)

@@ -3,13 +3,17 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from zoetic.bodies import load_animal
+from zoetic.errors import ZoeticError
+from zoetic.io import read_toml
 from zoetic.perception.eyes import (
     EyeSpec,
     HeadFrame,
     composite,
     eye_cameras,
+    eye_positions,
     head_frame,
     look,
 )
@@ -49,10 +53,10 @@ def _red_model(spec: EyeSpec) -> np.ndarray:
 
 
 def test_a_point_projects_to_the_expected_pixel_in_every_level():
-    spec = EyeSpec()
+    spec = EyeSpec.of(load_animal("shark"))
     cams = eye_cameras(FRAME, np.zeros((2, 2)), spec)
     # a point straight ahead of the left eye projects onto the centre of all its levels
-    left = np.array([-spec.setback, 0.0, 0.5 * spec.baseline])
+    left = np.array(spec.offset)
     uv, _ = project([left + [2.0, 0.0, 0.0]], cams)
     assert np.allclose(uv[:4, 0], 32.0)
     # 0.1 m to the right at 2 m: 0.05 rad off axis, focal f_l pixels to the right in level l
@@ -79,7 +83,7 @@ def test_the_histogram_model_finds_a_red_square_and_ignores_a_yellow_one():
 
 
 def test_a_saccade_centres_the_target_in_the_fovea_in_one_step():
-    spec = EyeSpec()
+    spec = EyeSpec.of(load_animal("shark"))
     model = _red_model(spec)
     mesh = _balls([(2.5, 0.3, -1.2), (2.0, -0.2, 1.0)], [RED, YELLOW], radius=0.2)
     img, cams = look(mesh, FRAME, np.zeros((2, 2)), spec)
@@ -91,12 +95,12 @@ def test_a_saccade_centres_the_target_in_the_fovea_in_one_step():
     centre = locate(img2[0, 3], model)
     # one peripheral pixel is 8 foveal ones: centred within a peripheral pixel
     assert np.hypot(centre.col - 32, centre.row - 32) < 8
-    target = np.array([2.5, 0.3, -1.2]) - np.array([-spec.setback, 0, 0.5 * spec.baseline])
+    target = np.array([2.5, 0.3, -1.2]) - np.array(spec.offset)
     assert np.isclose(angles[0, 0], np.arctan2(target[2], target[0]), atol=0.03)
 
 
 def test_two_eyes_verge_on_the_target_and_triangulate_its_range():
-    spec = EyeSpec()
+    spec = EyeSpec.of(load_animal("shark"))
     model = _red_model(spec)
     point = np.array([1.5, 0.1, 0.3])
     mesh = _balls([point], [RED], radius=0.06)
@@ -107,7 +111,7 @@ def test_two_eyes_verge_on_the_target_and_triangulate_its_range():
         state = ctl.step(state, FRAME, img, cams)
     assert state.locked.all() and state.angles[1, 0] > state.angles[0, 0]  # theta_V > 0
     x, rng = fixation(FRAME, state.angles, spec)
-    true = np.linalg.norm(point - np.array([-spec.setback, 0, 0]))
+    true = np.linalg.norm(point - np.array([spec.offset[0], 0, 0]))
     assert abs(rng - true) < 0.1 * true and np.linalg.norm(x - point) < 0.15 * true
     flat = vergence_range(0.0 - np.arctan2(0.06, 1.0), np.arctan2(0.06, 1.0), 0.12)
     assert np.isclose(flat, 1.0, rtol=1e-6)
@@ -132,6 +136,37 @@ def test_eyes_sit_on_the_head_of_a_placed_fish():
     assert np.allclose(fr.up, [0, 1, 0], atol=1e-6) and np.allclose(fr.origin, pos[shark.head])
 
 
+def test_the_animal_file_places_the_eyes_and_sets_their_fields_of_view(tmp_path):
+    import tomli_w
+
+    from zoetic.bodies import ZOO_DIR
+
+    doc = read_toml(ZOO_DIR / "shark.toml")
+    doc["eyes"] = {"node": "r1_1", "offset": [0.02, 0.05, 0.1], "fov": 80.0, "levels": 3,
+                   "pixels": 24}  # fmt: skip
+    path = tmp_path / "wide-eyed.toml"
+    path.write_text(tomli_w.dumps(doc))
+    fish = load_animal(path)
+    spec = EyeSpec.of(fish)
+    pos = placed_pose(fish, (0.0, 0.0, 0.0), yaw=0.5)
+    fr = head_frame(fish, pos)
+    node = pos[fish.node_names.index("r1_1")]
+    assert np.allclose(fr.origin, node)
+    left = node + 0.02 * fr.forward + 0.05 * fr.up + 0.1 * fr.left
+    right = node + 0.02 * fr.forward + 0.05 * fr.up - 0.1 * fr.left
+    assert np.allclose(eye_positions(fr, spec), [left, right])
+    cams = eye_cameras(fr, np.zeros((2, 2)), spec)
+    assert np.allclose(np.degrees(cams.fov), [80.0, 40.0, 20.0] * 2)
+    assert cams.size == (24, 24) and np.allclose(cams.eye[:3], left)
+    img, _ = look(_balls([node + 2.0 * fr.forward], [RED]), fr, np.zeros((2, 2)), spec)
+    assert img.shape == (2, 3, 24, 24, 3)
+    del doc["eyes"]
+    blind = tmp_path / "blind.toml"
+    blind.write_text(tomli_w.dumps(doc))
+    with pytest.raises(ZoeticError, match=r"blind\.toml.*no eyes.*\[eyes\]"):
+        EyeSpec.of(load_animal(blind))
+
+
 def test_correlating_two_foveas_finds_their_disparity():
     from scipy.ndimage import gaussian_filter, shift
 
@@ -144,7 +179,7 @@ def test_correlating_two_foveas_finds_their_disparity():
 
 
 def test_the_vestibulo_ocular_reflex_keeps_the_gaze_on_the_target_as_the_head_turns():
-    spec = EyeSpec()
+    spec = EyeSpec.of(load_animal("shark"))
     model = _red_model(spec)
     mesh = _balls([(2.0, 0.1, 0.4)], [RED], radius=0.1)
     ctl = GazeController(model, spec)

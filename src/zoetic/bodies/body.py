@@ -61,6 +61,14 @@ class Body:
     wave_phase: np.ndarray  # (A,) cycles
     wave_held: np.ndarray  # (A,) NaN where the wave drives the actuator, else its held value
     start_offset: np.ndarray  # (3,) m: where the rest pose is placed at the start of a run
+    # the file's [eyes] (all None for an animal without eyes): the node they ride on, the left
+    # eye's offset (3,) m along forward, up, left (the right eye mirrored), the widest level's
+    # field of view (rad), the number of levels (halving per level), pixels per image side
+    eye_node: int | None = None
+    eye_offset: np.ndarray | None = None
+    eye_fov: float | None = None
+    eye_levels: int | None = None
+    eye_pixels: int | None = None
 
     @property
     def n_nodes(self) -> int:
@@ -249,4 +257,13 @@ def compile_body(spec: AnimalSpec) -> Body:
         wave_phase=_frozen(phase, np.float64),
         wave_held=_frozen(held, np.float64),
         start_offset=_frozen(spec.start_offset, np.float64),
+        **_eye_fields(spec),
     )
+
+
+def _eye_fields(spec: AnimalSpec) -> dict:
+    e = spec.eyes
+    if e is None:
+        return {}
+    return dict(eye_node=e.node, eye_offset=_frozen(e.offset, np.float64),
+                eye_fov=float(np.radians(e.fov)), eye_levels=e.levels, eye_pixels=e.pixels)

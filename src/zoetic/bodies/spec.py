@@ -64,6 +64,20 @@ class WaveSpec:
 
 
 @dataclass(frozen=True)
+class EyesSpec:
+    """Two eyes riding on a node: the left eye's offset from it (m) along the rest pose's
+    forward, up and left axes (the right eye mirrored across left), the widest level's field
+    of view (degrees), the number of levels (field of view halving per level), and the pixels
+    along each side of a component image."""
+
+    node: int
+    offset: tuple[float, float, float]
+    fov: float
+    levels: int
+    pixels: int
+
+
+@dataclass(frozen=True)
 class AnimalSpec:
     name: str
     description: str
@@ -78,6 +92,7 @@ class AnimalSpec:
     fins: tuple[FinSpec, ...] = ()
     wave: WaveSpec | None = None
     start_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    eyes: EyesSpec | None = None
     source: str = "<memory>"
     extra: dict[str, Any] = field(default_factory=dict)
 
@@ -112,8 +127,26 @@ def _vector(r: Table, key: str, n: int) -> tuple[float, ...]:
     return out
 
 
+MAX_EYE_LEVELS = 8  # the fovea's field of view is the widest level's / 2**(levels - 1)
+MAX_EYE_PIXELS = 1024
+
+
+def _eyes(top: Table, source: str, index: dict[str, int], n: int) -> EyesSpec:
+    e = top.table("eyes")
+    e.where = f"{source}: [eyes]"
+    node = _node_ref(e, e.raw("node"), index, n, "'node'")
+    offset = _vector(e, "offset", 3)
+    fov = e.number("fov", positive=True)
+    if fov >= 180.0:
+        raise e.fail(f"'fov' = {fov:g} degrees must be below 180")
+    levels = e.integer("levels", lo=1, hi=MAX_EYE_LEVELS)
+    pixels = e.integer("pixels", lo=2, hi=MAX_EYE_PIXELS)
+    e.finish()
+    return EyesSpec(node, offset, fov, levels, pixels)
+
+
 TOP_KEYS = ("name", "description", "medium", "dt", "defaults", "nodes", "springs", "actuators",
-            "faces", "fins", "wave", "head", "forward", "start_offset")  # fmt: skip
+            "faces", "fins", "wave", "head", "forward", "start_offset", "eyes")  # fmt: skip
 
 
 def parse_animal(doc: dict[str, Any], source: str = "<memory>") -> AnimalSpec:
@@ -289,6 +322,7 @@ def parse_animal(doc: dict[str, Any], source: str = "<memory>") -> AnimalSpec:
         w.finish()
 
     head = _node_ref(top, top.raw("head", 0), index, n, "'head'")
+    eyes = _eyes(top, source, index, n) if "eyes" in doc else None
     forward = _vector(top, "forward", 3) if "forward" in doc else (1.0, 0.0, 0.0)
     if math.hypot(*forward) < 1e-9:
         raise top.fail("'forward' must be a non-zero vector")
@@ -310,6 +344,7 @@ def parse_animal(doc: dict[str, Any], source: str = "<memory>") -> AnimalSpec:
         faces=tuple(faces),
         fins=tuple(fins),
         wave=wave,
+        eyes=eyes,
         source=source,
     )
 

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from zoetic.bodies import Body
+from zoetic.errors import ZoeticError
 from zoetic.render import Cameras, look_rotation, render
 from zoetic.render.scene import Mesh
 
@@ -23,16 +24,26 @@ LEFT, RIGHT = 0, 1
 
 @dataclass(frozen=True)
 class EyeSpec:
-    """Two eyes: component image size (px), levels, level-0 field of view (rad), baseline
-    between the eyes (m), how far behind the head node they sit (m), and the water's
-    visibility (fog e-folding distance, m; 0 clear)."""
+    """Two eyes: component image size (px), levels, level-0 field of view (rad), the left
+    eye's offset (3,) m from the node they ride on along the head's forward, up and left axes
+    (the right eye mirrored across left), and the water's visibility (fog e-folding distance,
+    m; 0 clear). An animal's eyes come from its file's [eyes] table: ``EyeSpec.of(body)``."""
 
-    size: int = 64
-    levels: int = 4
-    fov: float = np.radians(120.0)
-    baseline: float = 0.12
-    setback: float = 0.08
+    size: int
+    levels: int
+    fov: float
+    offset: tuple[float, float, float]
     visibility: float = 6.0
+
+    @classmethod
+    def of(cls, body: Body, visibility: float = 6.0) -> EyeSpec:
+        """Return the eyes declared in the body's animal file; raise ZoeticError if it has
+        none."""
+        if body.eye_node is None or body.eye_offset is None:
+            raise ZoeticError(f"{body.source}: animal {body.name!r} has no eyes; add an [eyes] "
+                              "table (see docs/animals.md)")  # fmt: skip
+        return cls(int(body.eye_pixels), int(body.eye_levels), float(body.eye_fov),
+                   tuple(float(v) for v in body.eye_offset), visibility)  # fmt: skip
 
     @property
     def fovs(self) -> np.ndarray:
@@ -60,25 +71,31 @@ class HeadFrame:
         return np.stack([self.forward, self.up, self.left])
 
 
+def eye_node(body: Body) -> int:
+    """Return the node the eyes ride on (the head node for an animal without eyes)."""
+    return body.head if body.eye_node is None else body.eye_node
+
+
 def head_cluster(body: Body) -> np.ndarray:
-    """Return the indices of the head node and the nodes it is sprung to."""
-    h = body.head
+    """Return the indices of the eyes' node and the nodes it is sprung to."""
+    h = eye_node(body)
     nb = np.concatenate([body.spring_b[body.spring_a == h], body.spring_a[body.spring_b == h]])
     return np.unique(np.concatenate([[h], nb]))
 
 
 def head_frame(body: Body, positions: np.ndarray) -> HeadFrame:
-    """Return the head frame of one animal's pose (N, 3)."""
-    return _fitted_frame(body, positions, head_cluster(body))
+    """Return the head frame of one animal's pose (N, 3), its origin at the eyes' node."""
+    return _fitted_frame(body, positions, head_cluster(body), eye_node(body))
 
 
 def body_frame(body: Body, positions: np.ndarray) -> HeadFrame:
     """Return the whole body's frame (the best rotation of all its nodes, origin at the head
     node): its mean heading, which hardly wags as the body undulates."""
-    return _fitted_frame(body, positions, np.arange(len(body.rest_pos)))
+    return _fitted_frame(body, positions, np.arange(len(body.rest_pos)), body.head)
 
 
-def _fitted_frame(body: Body, positions: np.ndarray, idx: np.ndarray) -> HeadFrame:
+def _fitted_frame(body: Body, positions: np.ndarray, idx: np.ndarray,
+                  origin: int) -> HeadFrame:  # fmt: skip
     r0 = body.rest_pos[idx] - body.rest_pos[idx].mean(0)
     x = positions[idx] - positions[idx].mean(0)
     u, _, vt = np.linalg.svd(r0.T @ x)
@@ -89,7 +106,7 @@ def _fitted_frame(body: Body, positions: np.ndarray, idx: np.ndarray) -> HeadFra
     f0 = body.forward
     up0 = np.array([0.0, 1.0, 0.0]) - f0[1] * f0
     f, up = rot @ f0, rot @ (up0 / np.linalg.norm(up0))
-    return HeadFrame(np.asarray(positions[body.head], float), f, up, np.cross(f, up))
+    return HeadFrame(np.asarray(positions[origin], float), f, up, np.cross(f, up))
 
 
 def gaze_direction(frame: HeadFrame, theta, phi) -> np.ndarray:
@@ -110,9 +127,9 @@ def gaze_angles(frame: HeadFrame, direction) -> tuple[np.ndarray, np.ndarray]:
 
 def eye_positions(frame: HeadFrame, spec: EyeSpec) -> np.ndarray:
     """Return the (2, 3) positions of the left and right eyes in m."""
-    c = frame.origin - spec.setback * frame.forward
-    half = 0.5 * spec.baseline * frame.left
-    return np.stack([c + half, c - half])
+    fwd, up, side = spec.offset
+    c = frame.origin + fwd * frame.forward + up * frame.up
+    return np.stack([c + side * frame.left, c - side * frame.left])
 
 
 def eye_cameras(frame: HeadFrame, angles: np.ndarray, spec: EyeSpec) -> Cameras:

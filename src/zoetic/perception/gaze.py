@@ -142,7 +142,7 @@ class GazeController:
     """
 
     model: np.ndarray
-    spec: EyeSpec = EyeSpec()
+    spec: EyeSpec
     threshold: float = 0.2
     max_shift: float = 4.0
     centre_tol: float = 2.0

@@ -249,7 +249,7 @@ def make_chase(seed: int = 0, distractors: int = 1, visibility: float = 6.0,
         raise ZoeticError(f"distractors must be 0 or more, got {distractors}")
     rng = np.random.default_rng(seed)
     shark = load_animal("shark")
-    spec = spec or EyeSpec(visibility=visibility)
+    spec = spec or EyeSpec.of(shark, visibility=visibility)
     d = start_distance if start_distance is not None else rng.uniform(2.5, 3.5)
     bearing = rng.choice([-1, 1]) * rng.uniform(0.35, 0.6)
     prey_at = np.array([d * np.cos(bearing), prey_height, d * np.sin(bearing)])
