@@ -129,3 +129,51 @@ def test_macro_search_on_ray_matches_in_process(local_ray):
     on_ray = search(problem, "ga", budget=16, seed=1, popsize=8, evaluator="ray")
     assert here.history == on_ray.history and np.array_equal(here.entries, on_ray.entries)
     assert np.array_equal(here.durations, on_ray.durations)
+
+
+def test_stunt_search_on_ray_matches_in_process(local_ray, tmp_path, monkeypatch):
+    """A tiny stunt (a dolphin's short leap, two annealing steps of 16 plans): ``zoetic stunt
+    --evaluator ray --ray-address`` finds the same plans, step by step, as discover in process."""
+    import json
+
+    from zoetic.behavior.repertoire import Repertoire
+    from zoetic.behavior.stunts import discover, load_trick, macro_document
+    from zoetic.behavior.training import rest_abstraction
+    from zoetic.bodies import load_animal
+    from zoetic.control.abstract import AbstractController
+    from zoetic.learn.ray_eval import RayPool
+
+    dolphin = load_animal("dolphin")
+    a = dolphin.n_actuators
+    beat = AbstractController(dolphin.name, tuple(dolphin.actuator_names), np.full(a, 0.5),
+                              np.full((a, 1), 2.0), np.full((a, 1), 0.5),
+                              -np.pi * np.arange(a)[:, None] / 4, 1.0)  # fmt: skip
+    rep = Repertoire(dolphin.name, tuple(dolphin.actuator_names))
+    rep.add("do-nothing", rest_abstraction(dolphin), 1.0)
+    rep.add("beat", beat, 1.0)
+    rep.save(tmp_path / "memory")
+    (tmp_path / "hop.toml").write_text(
+        'name = "hop"\nrequires = ["surface"]\nhorizon = 0.3\nrecord_hz = 20.0\n'
+        "[start]\ndepth = 0.5\npitch = 0.6\nspeed = 1.5\n"
+        "[trick]\nsegments = 2\ndurations = [0.1, 0.3]\n"
+        '[[terms]]\nkind = "apex_above_surface"\nweight = -1.0\n')  # fmt: skip
+    here = discover(dolphin, rep, load_trick(tmp_path / "hop.toml"), "anneal", budget=32, seed=1)
+    batches: list[int] = []
+    ray_map = RayPool.map
+
+    def counted(pool, job, items, on_part=None):
+        batches.append(len(items))
+        return ray_map(pool, job, items, on_part)
+
+    monkeypatch.setattr(RayPool, "map", counted)
+    out = tmp_path / "ray"
+    code = main(["stunt", "dolphin", "--memory", str(tmp_path / "memory"), "--trick",
+                 str(tmp_path / "hop.toml"), "--budget", "32", "--seed", "1", "--no-video",
+                 "--out", str(out), "--evaluator", "ray", "--ray-address", local_ray])  # fmt: skip
+    assert code == 0 and batches == [16, 16]  # both steps' plans went to the Ray actors
+    s = json.loads((out / "summary.json").read_text())
+    assert [n for n, _ in here.result.history] == [16, 32]
+    assert here.result.history[1][1] < here.result.history[0][1] - 1e-4  # the 2nd step is better
+    assert s["history"] == [[n, round(f, 5)] for n, f in here.result.history]
+    plan = json.loads((out / "macro.json").read_text())["controller"]
+    assert plan == macro_document(here.problem, here.result.sequence, "")["controller"]

@@ -372,13 +372,17 @@ class Stunt:
 
 def discover(body: Body, repertoire: Repertoire, trick: Trick, method: str = "anneal",
              budget: int = 3200, seed: int = 0, segments: int | None = None,
-             progress=None) -> Stunt:  # fmt: skip
+             progress=None, evaluator: str = "batch") -> Stunt:  # fmt: skip
     """Return the best stunt ``method`` (anneal: 16 chains; ga: 32 a generation) finds for the
-    trick within ``budget`` plan evaluations."""
+    trick within ``budget`` plan evaluations.
+
+    ``evaluator``: batch (this process) or ray (each batch of plans on Ray actors, the problem
+    put in the object store once; same seed, same stunt as in process)."""
     from zoetic.behavior.macro import search
 
     problem = StuntProblem(body, repertoire, trick, segments)
     opts = {"chains": min(16, budget)} if method == "anneal" else {"popsize": min(32, budget)}
-    result = search(problem, method, budget, seed, progress=progress, **opts)
+    result = search(problem, method, budget, seed, progress=progress, evaluator=evaluator,
+                    **opts)  # fmt: skip
     rec = problem.record(result.entries[None], result.durations[None], record_every=2)
     return Stunt(problem, result, rec, problem.scores(rec), measures(problem, rec))

@@ -51,10 +51,16 @@ def stunt(
     out: Path = typer.Option(Path("runs/stunt"), help="Run directory to write."),
     video: bool = typer.Option(True, help="Write video.mp4 (objects drawn as buoys)."),
     fps: int = typer.Option(30, min=1),
+    evaluator: str = typer.Option("batch", help="batch (this machine) or ray (a cluster)."),
+    ray_address: str = typer.Option(None, help="Ray cluster for --evaluator ray."),
 ) -> None:
     """Discover a stunt: a macro controller of repertoire entries that scores the trick's style
     terms best; writes macro.json (replay: zoetic simulate ANIMAL --controller macro.json),
     video.mp4, score.png and summary.json."""
+    if ray_address:  # ray.init() reads it
+        import os
+
+        os.environ["RAY_ADDRESS"] = ray_address
     from zoetic.behavior.repertoire import Repertoire
     from zoetic.behavior.stunts import discover, load_trick, macro_document, score_series
     from zoetic.bodies import load_animal
@@ -71,7 +77,8 @@ def stunt(
         def update(opt) -> None:
             bar.update(tid, completed=min(opt.evaluations, budget), info=f"E {opt.best_f:.3f}")
 
-        found = discover(body, rep, tr, method, budget, seed, segments, progress=update)
+        found = discover(body, rep, tr, method, budget, seed, segments, progress=update,
+                         evaluator=evaluator)  # fmt: skip
     problem, result, rec = found.problem, found.result, found.record
     make_dir(out)
     write_json(out / "macro.json", macro_document(problem, result.sequence, tr.task.source))
