@@ -198,6 +198,22 @@ def test_policy_matches_literal_figure_7(seed):
     assert len(np.unique(ref_states[:, -net.n_nodes :], axis=0)) > 3  # the nodes did switch
 
 
+def test_a_san_is_a_policy_of_the_one_protocol_and_acts_as_it_steps():
+    from zoetic.control.policy import Period, Policy
+
+    rng = np.random.default_rng(3)
+    creature = FakeCreature(n_sensors=6, n_actuators=2, expected_cycle=0.5)
+    net = random_network(creature, rng, n_hidden=5)
+    seq = np.repeat(rng.random((30, 6)) < 0.5, rng.integers(1, 6, 30), axis=0)
+    ref_cmds, _ = _reference(net, seq, 1 / 64)
+    pol = SanPolicy(net, creature)
+    assert isinstance(pol, Policy) and pol.sensors == ("san_sensors",)
+    pol.reset(seed=0)
+    cmds = [pol.act({"san_sensors": s[None]}, Period(k, 1, 1 / 64))[0].copy()
+            for k, s in enumerate(seq)]  # fmt: skip
+    np.testing.assert_array_equal(np.array(cmds), ref_cmds)
+
+
 # --- validation and files -------------------------------------------------------------------
 
 

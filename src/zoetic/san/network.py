@@ -340,6 +340,10 @@ def random_network(
 class SanPolicy:
     """The network run as a controller: binary sensors (S,) -> actuator commands (A,) in [-2, 2].
 
+    It is a ``zoetic.control.policy.Policy`` like every other controller: ``act`` takes the
+    observation ``{"san_sensors": (1, S)}`` and a control ``Period`` and returns the commands
+    (1, A) held over it (``step`` is the same, unbatched, for the SAN world's hot loop).
+
     ``state`` is the per-node internal state (N,) in [0, 1] followed by the binary outputs
     (N,); all start at 0 (``reset``). Nodes update synchronously from the previous outputs.
 
@@ -359,8 +363,16 @@ class SanPolicy:
         self._dt = -1.0
         self.reset()
 
-    def reset(self) -> None:
-        """Set every node's internal state and output to 0."""
+    sensors: tuple[str, ...] = ("san_sensors",)
+
+    def act(self, observation, period) -> np.ndarray:
+        """Return the commands (1, A) for a control period, after advancing the nodes over it
+        with the binary sensor values ``observation["san_sensors"]`` (1, S)."""
+        seen = np.asarray(observation["san_sensors"], dtype=np.float64).reshape(-1)
+        return self.step(seen, period.steps * period.dt)[None, :]
+
+    def reset(self, seed: int | None = None) -> None:
+        """Set every node's internal state and output to 0 (deterministic: ``seed`` unused)."""
         n = self._n
         self._x = np.zeros(self._s + n)  # [sensors, node outputs]
         self._ist = [0.0] * n
