@@ -91,3 +91,14 @@ def test_depth_change_with_the_fins_and_the_dolphins_burst_are_reported():
     dolphin = load_animal("dolphin")
     b = burst(dolphin, handmade_repertoire(dolphin).controllers["go-straight"], seconds=1.0)
     assert 0.2 < b["top_speed_m_s"] < 20.0 and b["t_surface_s"] is None  # 2 m deep: 1 s
+
+
+def test_the_skills_bench_compares_every_entry_of_the_dolphins_plan_with_a_hand_made_one():
+    from zoetic.behavior.skills import bench_skills
+
+    got = bench_skills(["dolphin"], budget=32)["dolphin"]
+    assert set(got) == {"move-forward", "turn-down", "turn-up", "turn-left"}
+    assert got["move-forward"]["hand_made_entry"] == "go-straight"
+    assert got["turn-left"]["hand_made_entry"] == "sharp-turn-left"
+    assert "burst" in got["move-forward"]  # the sea has a surface to burst toward
+    assert all(isinstance(v["learned_beats_hand_made"], bool) for v in got.values())
