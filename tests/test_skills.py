@@ -102,3 +102,20 @@ def test_the_skills_bench_compares_every_entry_of_the_dolphins_plan_with_a_hand_
     assert got["turn-left"]["hand_made_entry"] == "sharp-turn-left"
     assert "burst" in got["move-forward"]  # the sea has a surface to burst toward
     assert all(isinstance(v["learned_beats_hand_made"], bool) for v in got.values())
+
+
+def test_a_steered_wave_biases_the_muscles_and_tilts_the_fins():
+    from zoetic.control import steered_wave, wave_controller
+
+    shark = load_animal("shark")
+    t = np.linspace(0.0, 1.0, 40)
+    muscle = np.array([k == "muscle" for k in shark.actuator_kind])
+    left = np.array([s == "left" for s in shark.actuator_side]) & muscle
+    plain = steered_wave(shark, t)
+    np.testing.assert_allclose(plain, wave_controller(shark).sample(t))
+    turned = steered_wave(shark, t, bias=0.2, fins=0.1)
+    assert turned[:, left].mean() > plain[:, left].mean() + 0.1
+    assert turned[:, muscle & ~left].mean() < plain[:, muscle & ~left].mean() - 0.1
+    np.testing.assert_allclose(turned[:, ~muscle], plain[:, ~muscle] + 0.1)
+    weak = steered_wave(shark, t, amplitude=0.5)
+    assert np.ptp(weak[:, muscle], axis=0).max() < 0.6 * np.ptp(plain[:, muscle], axis=0).max()

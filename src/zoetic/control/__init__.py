@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -34,6 +35,7 @@ __all__ = [
     "load_controller",
     "rest_controller",
     "save_controller",
+    "steered_wave",
     "time_domain",
     "wave_controller",
 ]
@@ -69,6 +71,22 @@ def wave_controller(body: Body) -> WaveController:
         ),
     )
     return ctrl
+
+
+def steered_wave(body: Body, times: np.ndarray, amplitude: float = 1.0, bias: float = 0.0,
+                 fins: float = 0.0, frequency: float | None = None) -> np.ndarray:
+    """Return activations (T, A): the body's own wave (at ``frequency``, default its own) with
+    the muscles' swing scaled by ``amplitude`` about the wave's offset, ``bias`` added to the
+    left muscles and taken from the right ones (bias > 0 turns left), and ``fins`` added to
+    the fins' held level (> 0 tilts them nose up: the animal rises); clipped to [0, 1]."""
+    wave = wave_controller(body)
+    if frequency is not None:
+        wave = replace(wave, frequency=float(frequency))
+    u = wave.sample(np.asarray(times, float))
+    muscle = np.array([k == "muscle" for k in body.actuator_kind])
+    side = np.array([{"left": 1.0, "right": -1.0}.get(s, 0.0) for s in body.actuator_side])
+    swing = np.where(muscle, body.wave_offset + amplitude * (u - body.wave_offset), u)
+    return np.clip(swing + np.where(muscle, bias * side, fins), 0.0, 1.0)
 
 
 def time_domain(body: Body, nodes: int, duration: float, values=None, interp="linear"):

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from zoetic.bodies import Body, load_animal
-from zoetic.control import wave_controller
+from zoetic.control import steered_wave
 from zoetic.control.policy import Period
 from zoetic.control.sensors import observe
 from zoetic.errors import ZoeticError
@@ -39,17 +39,9 @@ def _wrap(a):
 
 def steer(body: Body, times: np.ndarray, bias: float, amplitude: float = 1.0,
           pitch: float = 0.0) -> np.ndarray:  # fmt: skip
-    """Return activations (T, A): the body's own travelling wave (``control.wave_controller``,
-    fins held level) with its muscles' swing scaled by ``amplitude``, ``bias`` added to its
-    left muscles and taken from its right ones (bias > 0 turns left), and ``pitch`` added to
-    its fins' level value (pitch > 0 tilts the fins nose up: the animal rises)."""
-    u = wave_controller(body).sample(times)
-    muscle = np.array([k == "muscle" for k in body.actuator_kind])
-    fin = np.array([k == "fin" for k in body.actuator_kind])
-    side = np.array([1.0 if s == "left" else -1.0 if s == "right" else 0.0
-                     for s in body.actuator_side]) * muscle  # fmt: skip
-    swing = np.where(muscle, body.wave_offset + amplitude * (u - body.wave_offset), u)
-    return np.clip(swing + bias * side + pitch * fin, 0, 1)
+    """Return activations (T, A): the body's own wave steered (``control.steered_wave``):
+    ``bias`` > 0 turns left, ``pitch`` > 0 tilts the fins nose up (the animal rises)."""
+    return steered_wave(body, times, amplitude, bias, pitch)
 
 
 @dataclass

@@ -9,13 +9,13 @@ controllers of ``behavior.motor`` can replace it behind the same interface.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 
 from zoetic.bodies import Body
-from zoetic.control import wave_controller
+from zoetic.control import steered_wave
 
 
 @dataclass(frozen=True)
@@ -41,7 +41,7 @@ class WaveLocomotion:
 
     max_speed: speed (m/s) at full amplitude; turn_gain: bias per radian of turn wanted;
     max_bias: the largest bias; min_amplitude: the wave never stops (a fish keeps steerage).
-    Fins (if the body has any) take 0.5 + pitch / pi.
+    Fins (if the body has any) take their held level + pitch / pi (``control.steered_wave``).
     """
 
     def __init__(self, body: Body, frequency: float | None = None, max_speed: float = 0.36,
@@ -51,19 +51,10 @@ class WaveLocomotion:
         self.frequency = float(frequency or body.wave_frequency)
         self.max_speed = float(max_speed)
         self.turn_gain, self.max_bias, self.min_amplitude = turn_gain, max_bias, min_amplitude
-        muscle = np.array([k == "muscle" for k in body.actuator_kind])
-        side = np.array([{"left": 1.0, "right": -1.0}.get(s, 0.0) for s in body.actuator_side])
-        self._muscle = muscle
-        self._side = side * muscle
-        self._fin = ~muscle
-        self._wave = replace(wave_controller(body), frequency=self.frequency)
 
     def activations(self, demand: Demand, times: np.ndarray) -> np.ndarray:
         """Return activations (T, A): the wave at the demanded amplitude plus the turn bias."""
         amp = float(np.clip(demand.speed / self.max_speed, self.min_amplitude, 1.0))
         bias = float(np.clip(self.turn_gain * demand.turn, -self.max_bias, self.max_bias))
-        off = self.body.wave_offset
-        wave = off + amp * (self._wave.sample(np.asarray(times, float)) - off)
-        u = np.where(self._muscle, wave + bias * self._side, 0.0)
-        u = np.where(self._fin, 0.5 + np.clip(demand.pitch, -1.5, 1.5) / np.pi, u)
-        return np.clip(u, 0.0, 1.0)
+        fins = float(np.clip(demand.pitch, -1.5, 1.5)) / np.pi
+        return steered_wave(self.body, times, amp, bias, fins, self.frequency)
