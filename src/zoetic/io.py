@@ -204,30 +204,27 @@ def check_depth(obj: Any, where: str, error=ZoeticError, limit: int | None = Non
             stack.extend((v, depth + 1) for v in item if isinstance(v, list | dict))
 
 
-def load_toml(path: str | os.PathLike, what: str = "file", error=ZoeticError) -> dict[str, Any]:
-    """Return the parsed TOML in ``path``, read safely (see :func:`read_text`)."""
+def _load(path, what: str, error, loads, invalid: type[Exception], fmt: str) -> Any:
+    """Return ``loads`` of the text in ``path`` (read safely), nesting checked; errors name it."""
     text = read_text(path, what, error)
     try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise error(f"{path}: not valid TOML ({exc}); fix the {what}") from None
+        doc = loads(text)
+    except invalid as exc:
+        raise error(f"{path}: not valid {fmt} ({exc}); fix the {what}") from None
     except (RecursionError, MemoryError):
         raise error(f"{path}: the {what} nests too deeply or is too large to read") from None
     check_depth(doc, str(path), error)
     return doc
+
+
+def load_toml(path: str | os.PathLike, what: str = "file", error=ZoeticError) -> dict[str, Any]:
+    """Return the parsed TOML in ``path``, read safely (see :func:`read_text`)."""
+    return _load(path, what, error, tomllib.loads, tomllib.TOMLDecodeError, "TOML")
 
 
 def load_json(path: str | os.PathLike, what: str = "file", error=ZoeticError) -> Any:
     """Return the parsed JSON in ``path``, read safely (see :func:`read_text`)."""
-    text = read_text(path, what, error)
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise error(f"{path}: not valid JSON ({exc}); fix the {what}") from None
-    except (RecursionError, MemoryError):
-        raise error(f"{path}: the {what} nests too deeply or is too large to read") from None
-    check_depth(doc, str(path), error)
-    return doc
+    return _load(path, what, error, json.loads, json.JSONDecodeError, "JSON")
 
 
 # ----------------------------------------------------------------------------- values
