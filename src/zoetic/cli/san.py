@@ -87,6 +87,8 @@ def search_cmd(
     workers: int = typer.Option(None, min=1, help="Worker processes (default: all cores)."),
     out: Path = typer.Option(None, help="Output directory (default runs/<creature>)."),
     video: bool = typer.Option(True, help="Write a video of each kept gait."),
+    gaits: bool = typer.Option(False, "--gaits", help="Cluster the kept gaits into distinct "
+                               "modes: modes.json and one labelled clip per mode."),
     evaluator: str = typer.Option("process", help="process (this machine) or ray (a cluster)."),
     ray_address: str = typer.Option(None, help="Ray cluster for --evaluator ray."),
 ) -> None:
@@ -110,6 +112,105 @@ def search_cmd(
         summary = write_search(result, out, top=top, video=video)
     for key, value in summary.items():
         console.print(f"{key:>18}: {value}")
+    if gaits:
+        _gaits(result, top, out, video, workers)
+
+
+def _gaits(result, top: int, out: Path, video: bool, workers: int | None) -> None:
+    """Cluster the search's kept gaits that did not fall into modes; print and write them."""
+    from zoetic.san.gaits import write_modes
+
+    kept = [i for i in result.top(top) if not result.fell[i]]
+    info = [{"rank": r, "trial": i} for r, i in enumerate(result.top(top), 1) if i in kept]
+    with console.status(f"sorting {len(kept)} gaits into modes" + (" (clips)" if video else "")):
+        doc = write_modes(result.creature, [result.networks[i] for i in kept], info, out,
+                          seconds=result.seconds, terrain=result.terrain, seed=result.seed,
+                          video=video, workers=workers)  # fmt: skip
+    console.print(f"{'distinct modes':>18}: {doc['modes_found']} among {len(kept)} kept gaits "
+                  f"that did not fall (distance > {doc['threshold']:g} scaled units)")  # fmt: skip
+    for m in doc["modes"]:
+        best = m["best"]
+        console.print(f"{'mode ' + str(m['mode']):>18}: {m['label']} ({m['count']} networks, "
+                      f"best {best['speed_cm_s']:.1f} cm/s, rank {best['rank']})")  # fmt: skip
+    console.print(f"{'modes':>18}: {out / 'modes.json'}")
+
+
+@san_app.command("evolve")
+def evolve_cmd(
+    creature: str = typer.Argument(..., help="Built-in creature name or creature .toml file."),
+    network: Path = typer.Option(None, help="Start from this network .json (default: the best "
+                                 "of a phase-1 search of --search random networks)."),
+    search_trials: int = typer.Option(200, "--search", min=1, max=1_000_000,
+                                      help="Random networks for the start (without --network)."),
+    trials: int = typer.Option(500, min=0, max=10_000_000,
+                               help="Evolution steps (one evaluation each)."),
+    seed: int = typer.Option(0, help="Random seed: same seed, same result."),
+    terrain: str = typer.Option("flat", help="flat, or rough (uneven ground)."),
+    out: Path = typer.Option(None, help="Output directory (default runs/<creature>-evolve)."),
+    video: bool = typer.Option(True, help="Write video.mp4 of the evolved creature."),
+    resume: bool = typer.Option(False, "--resume",
+                                help="Continue from <out>/checkpoint.npz of the same run."),
+    workers: int = typer.Option(None, min=1, help="Worker processes for the start's search."),
+) -> None:
+    """Evolve the body (link lengths, sections, attachment points; masses coupled to them and
+    to actuator strength) together with the network's Fig. 8 parameters (paper, 6.3)."""
+    from zoetic.san import load_creature
+    from zoetic.san.creature import CreatureError
+    from zoetic.san.evolve import (
+        check_evolvable,
+        evolve,
+        load_checkpoint,
+        save_checkpoint,
+        write_evolve,
+    )
+    from zoetic.san.network import load_network, save_network
+    from zoetic.san.search import TERRAINS, search
+
+    if terrain not in TERRAINS:
+        raise CreatureError(f"unknown terrain {terrain!r} (expected 'flat' or 'rough')")
+    c = load_creature(creature)
+    check_evolvable(c)
+    out = out or Path("runs") / f"{c.name}-evolve"
+    ckpt = out / "checkpoint.npz"
+    start_file = out / "start.json"
+    history = None
+    if resume and ckpt.exists() and start_file.exists():
+        net = load_network(start_file, c)
+    elif network is not None:
+        net = load_network(network, c)
+    else:
+        bar, tid = _bar(f"{c.name} start search", search_trials)
+        with bar:
+            res = search(c, trials=search_trials, seed=seed, terrain=terrain, workers=workers,
+                         progress=_progress(bar, tid))  # fmt: skip
+        ok = [i for i in res.top(len(res.networks)) if not res.fell[i]]
+        net = res.networks[(ok or res.top(1))[0]]
+    config = {"creature": c.name, "seed": seed, "trials": trials, "terrain": terrain,
+              "network": net.to_dict()}  # fmt: skip
+    if resume and ckpt.exists():
+        history = load_checkpoint(ckpt, config)
+        console.print(f"resuming {ckpt} at step {int(history['done'])} of {trials}")
+    save_network(net, start_file)
+    bar, tid = _bar(f"{c.name} evolve", trials)
+    with bar:
+        result = evolve(net, c, trials=trials, seed=seed, terrain=terrain,
+                        progress=_progress(bar, tid), resume=history,
+                        checkpoint=lambda _t, _sa, h: save_checkpoint(ckpt, config, h))  # fmt: skip
+    with console.status(f"writing {out}" + (" (video)" if video else "")):
+        summary = write_evolve(result, out, terrain=terrain, video=video)
+    from rich.table import Table
+
+    table = Table(box=None, header_style="bold", title=f"what evolution changed ({c.name})")
+    for col in ("parameter", "before", "after"):
+        table.add_column(col, justify="left" if col == "parameter" else "right")
+    for row in summary["changes"]:
+        table.add_row(row["parameter"], f"{row['before']:.4g}", f"{row['after']:.4g}")
+    table.add_row("speed (cm/s)", f"{summary['speed_before_cm_s']:.2f}",
+                  f"{summary['speed_after_cm_s']:.2f}")  # fmt: skip
+    console.print(table)
+    for key in ("creature_file", "network", "video"):
+        if key in summary:
+            console.print(f"{key:>14}: {summary[key]}")
 
 
 @san_app.command("tune")
@@ -150,6 +251,8 @@ def show_cmd(
     terrain: str = typer.Option(None, help="flat or rough (default: the run's)."),
     out: Path = typer.Option(None, help="Video file (default <run>/show.mp4)."),
     fps: int = typer.Option(30, min=1, help="Video frame rate."),
+    creature: str = typer.Option(None, help="Creature (default: the one the file names; for "
+                                 "an evolve run, its creature.toml)."),
 ) -> None:
     """Replay a network with its sensor and node states drawn beside the creature (video)."""
     from zoetic.san.network import load_with_creature
@@ -157,7 +260,9 @@ def show_cmd(
     from zoetic.san.show import resolve_network, show_video
 
     file = resolve_network(path, rank)
-    net, c = load_with_creature(file)
+    if creature is None and (file.parent / "creature.toml").is_file():
+        creature = str(file.parent / "creature.toml")  # an evolve run's own body
+    net, c = load_with_creature(file, creature)
     _check_seconds(c, seconds)
     terrain = terrain or str(net.info.get("terrain", "flat"))
     default = (path if path.is_dir() else file.parent) / (

@@ -152,6 +152,114 @@ class TuneResult:
     elapsed: float
 
 
+@dataclass(frozen=True, eq=False)
+class Walk:
+    """What one annealing walk over named parameter arrays found."""
+
+    values: dict[str, np.ndarray]  # the best values seen (the start's when nothing beat it)
+    before: float
+    after: float
+    current: np.ndarray
+    best: np.ndarray
+    tried: np.ndarray
+    accepted: int
+    state: dict  # the optimizer's state_dict() at the end (to resume)
+
+
+Checkpoint = Callable[[int, "Annealing", dict], None]  # (trials done, optimizer, history)
+
+
+def anneal_values(
+    values: dict[str, np.ndarray],
+    params: list[Param],
+    score: Callable[[dict[str, np.ndarray]], float],
+    method: str = "anneal",
+    trials: int = 1000,
+    seed: int = 0,
+    progress: Progress | None = None,
+    per_temperature: int = 65,
+    cooling: float = 0.75,
+    temperature: float | None = None,
+    valid: Callable[[dict[str, np.ndarray]], bool] | None = None,
+    resume: dict | None = None,
+    checkpoint: Checkpoint | None = None,
+    every: int = 25,
+) -> Walk:
+    """Maximise ``score(values)`` by moving one of ``params`` a step at a time (the walk
+    of ``tune``, also used by ``evolve``): annealing (learn.optimizers.Annealing) minimising
+    -score, T dropping every ``per_temperature`` trials; ``sga`` is the same walk at T = 0,
+    keeping strict improvements. A step that ``_perturbed`` or ``valid`` refuses counts as a
+    trial but is not evaluated. ``resume`` (a ``checkpoint``'s history) continues a walk.
+    """
+    keys = list(values)
+    sizes = [values[k].size for k in keys]
+
+    def unflat(x: np.ndarray) -> dict[str, np.ndarray]:
+        parts = np.split(np.asarray(x, dtype=float), np.cumsum(sizes)[:-1])
+        return {k: a.reshape(values[k].shape).copy() for k, a in zip(keys, parts, strict=True)}
+
+    invalid = [False]
+
+    def perturb(x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        p = params[int(rng.integers(len(params)))]
+        sign = 1 if rng.random() < 0.5 else -1
+        cand = _perturbed(unflat(x[0]), p, sign)
+        if cand is not None and valid is not None and not valid(cand):
+            cand = None
+        invalid[0] = cand is None
+        return x if cand is None else np.concatenate([cand[k].ravel() for k in keys])[None]
+
+    def safe(v: dict[str, np.ndarray]) -> float:
+        f = float(score(v))
+        return f if np.isfinite(f) else -math.inf
+
+    x0 = np.concatenate([values[k].ravel() for k in keys])
+    current, best = np.empty(trials), np.empty(trials)
+    tried = np.full(trials, np.nan)
+    if resume is not None:
+        f_start, accepted = float(resume["before"]), int(resume["accepted"])
+        done = int(resume["done"])
+        temp = float(resume["temperature"])
+    else:
+        f_start, accepted, done = safe(values), 0, 0
+        temp = float(temperature) if temperature is not None else 0.1 * max(abs(f_start), 1e-3)
+    sa = Annealing(x0, np.full(x0.size, -np.inf), np.full(x0.size, np.inf), seed,
+                   t0=temp if method == "anneal" else 0.0, alpha=cooling, perturb=perturb,
+                   max_steps=per_temperature, min_accepts=10**18,
+                   accept_ties=method == "anneal")  # fmt: skip
+    if resume is not None:
+        sa.load_state_dict(resume["state"])
+        n = min(done, trials)
+        for name, arr in (("current", current), ("best", best), ("tried", tried)):
+            arr[:n] = np.asarray(resume[name], dtype=float)[:n]
+    else:
+        sa.tell(sa.ask(), np.array([-f_start]))
+    for t in range(done, trials):
+        X = sa.ask()
+        if invalid[0]:
+            g = np.inf  # not evaluated; rejected, but the trial counts in the schedule
+        else:
+            f = safe(unflat(X[0]))
+            tried[t], g = f, -f
+        sa.tell(X, np.array([g]))
+        accepted += int(sa.last_accept[0])
+        current[t], best[t] = -sa.f[0], -sa.best_f
+        if progress is not None:
+            progress(t + 1, trials, -sa.best_f)
+        if checkpoint is not None and ((t + 1) % every == 0 or t + 1 == trials):
+            checkpoint(t + 1, sa, {
+                "before": f_start, "accepted": accepted, "done": t + 1, "temperature": temp,
+                "current": current[: t + 1].tolist(), "best": best[: t + 1].tolist(),
+                "tried": tried[: t + 1].tolist(), "state": sa.state_dict(),
+            })  # fmt: skip
+    f_best = -sa.best_f
+    return Walk(
+        values=unflat(sa.best_x) if f_best > f_start else {k: v.copy() for k, v in values.items()},
+        before=f_start, after=max(f_best, f_start), current=current, best=best, tried=tried,
+        accepted=accepted, state=sa.state_dict(),
+    )  # fmt: skip
+
+
 def tune(
     network: Network,
     creature,
@@ -183,58 +291,19 @@ def tune(
         raise TuneError(f"creature {creature.name!r} has no tunable parameters")
     t0 = time.perf_counter()
 
-    def score(values: dict[str, np.ndarray]) -> tuple[Network, float]:
+    def score(values: dict[str, np.ndarray]) -> float:
         net = _network(network, values)
         tuned = creature.with_tuning(**{k: values[k] for k in TUNING_KEYS})
-        f = float(evaluate(net, tuned))
-        return net, (f if np.isfinite(f) else -math.inf)
+        return float(evaluate(net, tuned))
 
-    values = _start_values(network, creature)
-    keys = list(values)
-    sizes = [values[k].size for k in keys]
-
-    def unflat(x: np.ndarray) -> dict[str, np.ndarray]:
-        parts = np.split(np.asarray(x, dtype=float), np.cumsum(sizes)[:-1])
-        return {k: a.reshape(values[k].shape).copy() for k, a in zip(keys, parts, strict=True)}
-
-    invalid = [False]
-
-    def perturb(x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        p = params[int(rng.integers(len(params)))]
-        sign = 1 if rng.random() < 0.5 else -1
-        cand = _perturbed(unflat(x[0]), p, sign)
-        invalid[0] = cand is None
-        return x if cand is None else np.concatenate([cand[k].ravel() for k in keys])[None]
-
-    x0 = np.concatenate([values[k].ravel() for k in keys])
-    start_net, f_cur = score(values)
-    f_start = f_cur
-    temp = float(temperature) if temperature is not None else 0.1 * max(abs(f_cur), 1e-3)
-    # one annealing (learn.optimizers.Annealing) minimising -metric: T drops every
-    # ``per_temperature`` trials; sga is the same walk at T = 0, keeping strict improvements
-    sa = Annealing(x0, np.full(x0.size, -np.inf), np.full(x0.size, np.inf), seed,
-                   t0=temp if method == "anneal" else 0.0, alpha=cooling, perturb=perturb,
-                   max_steps=per_temperature, min_accepts=10**18,
-                   accept_ties=method == "anneal")  # fmt: skip
-    sa.tell(sa.ask(), np.array([-f_cur]))
-    current = np.empty(trials)
-    best = np.empty(trials)
-    tried = np.full(trials, np.nan)
-    accepted = 0
-    for t in range(trials):
-        X = sa.ask()
-        if invalid[0]:
-            g = np.inf  # not evaluated; rejected, but the trial counts in the schedule
-        else:
-            _, f = score(unflat(X[0]))
-            tried[t], g = f, -f
-        sa.tell(X, np.array([g]))
-        accepted += int(sa.last_accept[0])
-        current[t], best[t] = -sa.f[0], -sa.best_f
-        if progress is not None:
-            progress(t + 1, trials, -sa.best_f)
-    f_best = -sa.best_f
-    best_net = _network(network, unflat(sa.best_x)) if sa.best_f < -f_start else start_net
+    walk = anneal_values(
+        _start_values(network, creature), params, score, method, trials, seed, progress,
+        per_temperature, cooling, temperature,
+    )  # fmt: skip
+    f_start, f_best = walk.before, walk.after
+    start_net = _network(network, _start_values(network, creature))
+    best_net = _network(network, walk.values) if f_best > f_start else start_net
+    current, best, tried, accepted = walk.current, walk.best, walk.tried, walk.accepted
     info = dict(network.info)
     info.update(tuned=method, trials=trials, seed=seed, before=f_start, after=f_best)
     best_net = best_net.with_params(info=info)
