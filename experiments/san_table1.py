@@ -6,16 +6,14 @@ fine-tuning (phase 2: simulated annealing of the Fig. 8 parameters, weights kept
 ``--tune-top`` of them for ``--tune-trials`` evaluations each. Reported: the best random gait's
 speed, the best tuned speed, the paper's, and the fraction of random networks that are useful,
 both against the creature's absolute bar (``useful_speed_cm_s``: a quarter of Table 1's speed)
-and relative to the search's best (``zoetic.san.search.useful_mask``). Then the cart: its best
-kept gaits sorted into distinct modes by what the body does (rolls over, hops, direction,
-which link carries it).
+and relative to the search's best (``zoetic.san.search.useful_mask``). The gait modes (the
+cart's five) are ``experiments/san_gaits.py``.
 
-Writes docs/figures/san_table1.json, san_table1_ranking.png (every creature's ranking curve),
-and san_cart_gaits.json (+ san_cart_gaits.png, one still per distinct mode).
+Writes docs/figures/san_table1.json and san_table1_ranking.png (every creature's ranking
+curve).
 
 Run: python experiments/san_table1.py [--trials 200] [--seed 0] [--creatures cart,walker]
-     [--tune-top 2] [--tune-trials 250] [--workers 2] [--cart-trials 1000]
-     [--no-gaits | --only-gaits] [--gait-creatures cart,bouncer,walker] [--rankings-only]
+     [--tune-top 2] [--tune-trials 250] [--workers 2] [--rankings-only]
 """
 
 from __future__ import annotations
@@ -31,7 +29,6 @@ import numpy as np
 
 from zoetic.san import list_creatures, load_creature
 from zoetic.san.search import search, speed_cm_s, useful_mask, useful_threshold_cm_s
-from zoetic.san.show import replay
 from zoetic.san.tune import tune
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "figures"
@@ -115,86 +112,6 @@ def plot_rankings(results: dict, path: Path) -> None:
     plt.close(fig)
 
 
-def gait_features(creature, rollout) -> dict:
-    """Return what the body does over a replay: turns, height, contacts, direction."""
-    poses = np.asarray(rollout.poses)  # (R, L, 3): x, height, angle
-    ang = np.unwrap(poses[:, 0, 2])
-    turns = (ang[-1] - ang[0]) / (2 * np.pi)
-    touch = [i for i, s in enumerate(creature.sensors) if s.kind == "touch"]
-    on = np.asarray(rollout.sensors)[:, touch]
-    contact = on.mean(axis=0) if touch else np.zeros(0)
-    airborne = float(np.mean(~on.any(axis=1))) if touch else 0.0
-    return {
-        "turns": round(float(turns), 2),
-        "airborne": round(airborne, 2),
-        "direction": "+x" if rollout.distance >= 0 else "-x",
-        "contact": [round(float(v), 2) for v in contact],
-        "speed_cm_s": round(speed_cm_s(creature, rollout.metric, rollout.distance), 1),
-    }
-
-
-def gait_mode(f: dict, creature) -> str:
-    """Name a gait's mode from its features (coarse, by what one sees in the video)."""
-    if abs(f["turns"]) >= 1.0:
-        return "cartwheel (rolls over)"
-    if f["airborne"] >= 0.15:
-        return "hops"
-    touch = [s.target for s in creature.sensors if s.kind == "touch"]
-    if len(f["contact"]) and len(touch):
-        per_link: dict[str, float] = {}
-        for t, v in zip(touch, f["contact"], strict=True):
-            per_link[t] = max(per_link.get(t, 0.0), v)
-        mostly = sorted(per_link, key=per_link.get, reverse=True)
-        if len(mostly) > 1 and per_link[mostly[1]] < 0.3:
-            return f"drags on {mostly[0]}"
-        if len(mostly) > 1 and per_link[mostly[1]] >= 0.3 and per_link[mostly[0]] >= 0.3:
-            return "walks on both links"
-    return "shuffles"
-
-
-def cart_gaits(
-    trials: int, seed: int, keep: int = 20, workers: int = 2, name: str = "cart"
-) -> dict:
-    """Search ``name`` (the cart) with ``trials`` networks and sort its best ``keep`` into modes."""
-    c = load_creature(name)
-    res = search(c, trials=trials, seed=seed, workers=workers)
-    modes: dict[str, list] = {}
-    stills = []
-    for rank, i in enumerate(res.top(keep), start=1):
-        if res.fell[i] or res.speeds[i] < 0.25 * res.speeds[res.top(1)[0]]:
-            continue
-        ro = replay(res.networks[i], c, fps=20)
-        f = gait_features(c, ro)
-        mode = f"{gait_mode(f, c)}, {f['direction']}"
-        f.update(rank=rank, trial=int(i))
-        if mode not in modes:
-            stills.append((mode, res.networks[i], ro))
-        modes.setdefault(mode, []).append(f)
-    return {"trials": trials, "kept": keep, "modes": modes, "_stills": stills}
-
-
-def plot_stills(c, stills, path: Path) -> None:
-    """One row per distinct mode: the body drawn at a few instants, shifted along x."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from zoetic.san import draw
-
-    n = len(stills)
-    fig, axes = plt.subplots(n, 1, figsize=(8, 2.0 * n), dpi=100, squeeze=False)
-    for ax, (mode, _net, ro) in zip(axes[:, 0], stills, strict=True):
-        frames = list(draw.render_frames(c, ro, size=(480, 200)))
-        picks = np.linspace(len(frames) // 4, len(frames) - 1, 4).astype(int)
-        ax.imshow(np.concatenate([frames[k] for k in picks], axis=1))
-        ax.set_title(mode, fontsize=9)
-        ax.axis("off")
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--trials", type=int, default=200)
@@ -203,11 +120,7 @@ def main() -> None:
     ap.add_argument("--tune-top", type=int, default=2, help="tune this many of the best")
     ap.add_argument("--tune-trials", type=int, default=250, help="annealing evaluations each")
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--cart-trials", type=int, default=1000)
-    ap.add_argument("--no-gaits", action="store_true")
-    ap.add_argument("--only-gaits", action="store_true")
     ap.add_argument("--rankings-only", action="store_true", help="phase 1 and the ranking plot")
-    ap.add_argument("--gait-creatures", default="cart", help="whose kept gaits to sort")
     args = ap.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     names = [n for n in args.creatures.split(",") if n] or list_creatures()
@@ -216,28 +129,16 @@ def main() -> None:
                for n in names}  # fmt: skip
         plot_rankings(res, OUT / "san_table1_ranking.png")
         return
-    if not args.only_gaits:
-        rows, results = table(
-            names, args.trials, args.seed, args.tune_top, args.tune_trials, args.workers
-        )
-        path = OUT / "san_table1.json"
-        if args.creatures and path.exists():  # a partial run updates its creatures' rows
-            rows = {**json.loads(path.read_text()), **rows}
-            print("partial run: san_table1_ranking.png not redrawn")
-        else:
-            plot_rankings(results, OUT / "san_table1_ranking.png")
-        path.write_text(json.dumps(dict(sorted(rows.items())), indent=2) + "\n")
-    for name in [] if args.no_gaits else args.gait_creatures.split(","):
-        n = args.cart_trials if name == "cart" else args.trials
-        gaits = cart_gaits(n, args.seed, workers=args.workers, name=name)
-        stills = gaits.pop("_stills")
-        (OUT / f"san_{name}_gaits.json").write_text(json.dumps(gaits, indent=2) + "\n")
-        try:
-            if stills:
-                plot_stills(load_creature(name), stills, OUT / f"san_{name}_gaits.png")
-        except ImportError as exc:  # drawing is optional for the numbers
-            print(f"no stills: {exc}")
-        print(name, json.dumps({k: len(v) for k, v in gaits["modes"].items()}, indent=2))
+    rows, results = table(
+        names, args.trials, args.seed, args.tune_top, args.tune_trials, args.workers
+    )
+    path = OUT / "san_table1.json"
+    if args.creatures and path.exists():  # a partial run updates its creatures' rows
+        rows = {**json.loads(path.read_text()), **rows}
+        print("partial run: san_table1_ranking.png not redrawn")
+    else:
+        plot_rankings(results, OUT / "san_table1_ranking.png")
+    path.write_text(json.dumps(dict(sorted(rows.items())), indent=2) + "\n")
 
 
 if __name__ == "__main__":

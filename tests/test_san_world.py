@@ -213,10 +213,11 @@ def test_no_actuation_at_rest_has_no_drift(name):
 
 def test_a_mirror_symmetric_cart_cannot_move():
     """Crossed at the middle, the cart is mirror-symmetric: whatever it does, its centre of
-    mass stays put (the zoo's cart crosses off-centre for that reason)."""
-    sym = CART.replace("start = -0.048", "start = -0.06").replace("at = -0.048", "at = -0.06")
-    sym = sym.replace("at = 0.072", "at = 0.06")
-    assert sym.count("-0.06") == 4 and sym.count("at = 0.06") == 2
+    mass stays put (the zoo's cart is a T, L2 hinged by its end, for that reason)."""
+    l2 = 'name = "L2"\nshape = "capsule"\n'
+    sym = CART.replace(l2, l2 + "start = -0.06\n")
+    sym = sym.replace("at = 0.0\n", "at = -0.06\n").replace("at = 0.12\n", "at = 0.06\n")
+    assert sym.count("= -0.06") == 4 and sym.count("at = 0.06") == 2
     import tomllib
 
     from zoetic.san.creature_file import creature_from_dict

@@ -6,7 +6,8 @@ Each gait is replayed and described by a few features of the rollout (``gait_fea
   less than ``STILL_CM_S``);
 - ``log2_speed``: log2 of the speed (cm/s, floored at ``STILL_CM_S``);
 - ``turns``: how many whole turns the root link makes (net rotation / 2 pi, absolute):
-  rolling and cartwheels;
+  rolling and cartwheels; clustered as ``min(turns, ROLL_CAP)`` (1.5), so that a cartwheel
+  of 2 turns and one of 5 (a faster one) are the same mode;
 - ``airborne``: the fraction of the time no link touches the ground (hopping);
 - ``bounce``: the standard deviation of the centre of mass's height over the body's size
   (the sum of the link lengths): small hops against big hops;
@@ -17,11 +18,12 @@ Each gait is replayed and described by a few features of the rollout (``gait_fea
 
 **Distinct.** Every feature is divided by a stated scale (``SCALES``: the change one sees in
 a video: a whole change of direction, a factor of 2.8 in speed, half a turn, 15% more time
-in the air, ...), and two gaits belong to different modes when the average-linkage
-(``scipy.cluster.hierarchy``) distance between their groups exceeds ``THRESHOLD`` = 1.5
-scaled units. The scales are fixed rather than taken from the set's own spread, so that a
-set of near-identical gaits stays one mode and the meaning of "distinct" does not depend on
-what else was found.
+in the air, a bounce of 6% of the body's size, a link down 35% more of the time, ...), and
+two gaits belong to different modes when the average-linkage (``scipy.cluster.hierarchy``)
+distance between their groups exceeds ``THRESHOLD`` = 2 scaled units (a change of direction
+alone is 2 units, so a mode has one direction). The scales are fixed rather than taken from
+the set's own spread, so that a set of near-identical gaits stays one mode and the meaning
+of "distinct" does not depend on what else was found.
 """
 
 from __future__ import annotations
@@ -48,15 +50,16 @@ __all__ = [
 
 STILL_CM_S = 0.5  # slower than this, a gait has no direction
 CONTACT_CLEAR = 0.003  # m: a link this close to the ground touches it
-THRESHOLD = 1.5  # average-linkage distance (scaled units) from which modes are distinct
+ROLL_CAP = 1.5  # turns: more turns than this is the same rolling mode
+THRESHOLD = 2.0  # average-linkage distance (scaled units) from which modes are distinct
 SCALES = {  # one unit of each feature: a difference one can see in a video
     "direction": 1.0,
     "log2_speed": 1.5,
     "turns": 0.5,
     "airborne": 0.15,
-    "bounce": 0.03,
+    "bounce": 0.06,
     "contact": 0.35,
-    "periodicity": 0.4,
+    "periodicity": 0.5,
 }
 
 
@@ -149,7 +152,8 @@ def feature_matrix(features: list[dict]) -> tuple[np.ndarray, list[str]]:
     names += [f"contact_{n}" for n in links] + ["periodicity"]
     rows = []
     for f in features:
-        row = [f[k] / SCALES[k] for k in names[:5]]
+        row = [min(f[k], ROLL_CAP) if k == "turns" else f[k] for k in names[:5]]
+        row = [v / SCALES[k] for v, k in zip(row, names[:5], strict=True)]
         row += [f["contact"][n] / SCALES["contact"] for n in links]
         rows.append(row + [f["periodicity"] / SCALES["periodicity"]])
     return np.array(rows, dtype=float), names
@@ -178,7 +182,7 @@ def mode_label(f: dict) -> str:
     if f["turns"] >= 1.0:
         kind = f"cartwheels ({f['turns']:.1f} turns)"
     elif f["airborne"] >= 0.15:
-        kind = "big hops" if f["bounce"] >= 0.06 else "small hops"
+        kind = "big hops" if f["airborne"] >= 0.3 else "small hops"
     elif len(carried) >= 2:
         kind = "walks on " + "+".join(carried)
     elif len(carried) == 1:
