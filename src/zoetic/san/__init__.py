@@ -11,6 +11,10 @@ compiles the MuJoCo model once; ``World.run(policy, seconds=None, record_every=0
 ``step(sensors (S,) bool, dt) -> (A,) commands in [-2, 2]``.
 
 Drawing (``zoetic.san.draw``, imported on demand): ``draw_frame`` and ``render_frames``.
+
+Synthesis, imported on demand: ``search`` (phase 1, random SANs), ``tune`` (phase 2, Fig. 8
+parameters), ``gaits`` (kept gaits sorted into distinct modes), ``evolve`` (body and network
+together, section 6.3).
 """
 
 from zoetic.san.creature import (

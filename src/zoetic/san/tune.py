@@ -27,7 +27,10 @@ from zoetic.errors import ZoeticError
 from zoetic.learn.optimizers import Annealing
 from zoetic.san.network import TUNING_KEYS, Network, SanPolicy, check_fits
 
-__all__ = ["METHODS", "Param", "TuneResult", "WorldEvaluator", "tunable_parameters", "tune"]
+__all__ = [
+    "METHODS", "Param", "TuneResult", "Walk", "WorldEvaluator", "anneal_values",
+    "tunable_parameters", "tune",
+]
 
 METHODS = ("sga", "anneal")
 Evaluate = Callable[[Network, object], float]  # (network, tuned creature) -> metric
