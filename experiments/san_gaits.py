@@ -42,8 +42,9 @@ OUT = ROOT / "docs" / "figures"
 RUNS = ROOT / "runs" / "san_gaits"
 
 
-def _kind(label: str) -> str:
-    return label.split(",")[0].split(" (")[0]
+def _rel(path: str | None) -> str | None:
+    """Return ``path`` relative to the repository (the JSON is committed)."""
+    return None if path is None else str(Path(path).resolve().relative_to(ROOT))
 
 
 def _tune_mode(job: tuple) -> dict:
@@ -78,7 +79,7 @@ def modes(name: str, trials: int, keep: int, seed: int, workers: int, tune_trial
         "modes": [{"mode": m["mode"], "label": m["label"], "count": m["count"],
                    "best_cm_s": m["best"]["speed_cm_s"], "best_rank": m["best"]["rank"],
                    "turns": m["best"]["turns"], "airborne": m["best"]["airborne"],
-                   "periodicity": m["best"]["periodicity"], "clip": m.get("clip")}
+                   "periodicity": m["best"]["periodicity"], "clip": _rel(m.get("clip"))}
                   for m in doc["modes"]],
     }  # fmt: skip
     if tune_trials > 0:
@@ -132,7 +133,7 @@ def _evolve_job(job: tuple) -> dict:
     return {
         "creature": name, "trials": trials, "start_cm_s": cm(ev.before),
         "tuned_cm_s": cm(tuned.after), "evolved_cm_s": cm(ev.after),
-        "changes": changes(ev), "creature_file": summary["creature_file"],
+        "changes": changes(ev), "creature_file": _rel(summary["creature_file"]),
         "wall_s": round(ev.elapsed, 1),
     }  # fmt: skip
 
