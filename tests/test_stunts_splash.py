@@ -231,6 +231,9 @@ def test_the_camera_frames_body_ball_and_bar_all_along():
         assert (scr >= 0).all() and (scr[:, 0] <= size[0]).all() and (scr[:, 1] <= size[1]).all()
     # smooth: the camera's motion changes little from frame to frame (no jerks)
     assert np.abs(np.diff(targets, 2, axis=0)).max() < 0.05
+    # frames picked at repeated instants (a strip) are framed too
+    eyes, targets = stunt_camera(pts[[0, 5, 5, 5]], t[[0, 5, 5, 5]], size, fov, direction)
+    assert np.isfinite(eyes).all() and np.allclose(targets[1:], targets[1])
 
 
 def test_the_display_surface_is_a_closed_smooth_mesh_over_the_lattice(dolphin):

@@ -262,6 +262,10 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
         "apex_above_surface_m": round(apex, 3),
         "apex_body_lengths": round(apex / length, 3),
         "apex_time_s": round(float(rec.traj.times[int(com_y.argmax())]), 3),
+        # the paper's finding: dive deep first, then thrust upward (depth of the centre of
+        # mass at its lowest before the apex, m below the surface)
+        "deepest_before_apex_m": round(float(problem.level - com_y[: int(com_y.argmax()) + 1]
+                                             .min()), 3),  # fmt: skip
         "air_time_s": round(float(air.sum() * dt), 3),
         "most_nodes_out_of_water": round(float(np.mean(1 - s.in_water[lane], axis=1).max()), 3),
         "rotation_in_air_deg": round(float(np.degrees(rot)), 1),

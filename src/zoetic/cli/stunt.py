@@ -84,8 +84,11 @@ def stunt(
     problem, result, rec = found.problem, found.result, found.record
     make_dir(out)
     write_json(out / "macro.json", macro_document(problem, result.sequence, tr.task.source))
-    summary = found.summary() | {
-        "memory": str(memory), "seed": seed,
+    from zoetic.behavior.stunts import targets_met
+
+    summary = found.summary()
+    summary |= {
+        "targets": targets_met(tr.name, summary, tr), "memory": str(memory), "seed": seed,
         "history": [[n, round(f, 5)] for n, f in result.history],
     }  # fmt: skip
     write_json(out / "summary.json", summary)
@@ -130,7 +133,7 @@ def bench_stunts_cmd(
     tricks: str = typer.Option("leap,somersault,hurdle,ball-nose,ball-tail,bellyflop,clean-dive",
                                help="Comma-separated tricks."),  # fmt: skip
     method: str = typer.Option("anneal"),
-    budget: int = typer.Option(320, min=1, help="Plans per trick (the stunt's default: 3200)."),
+    budget: int = typer.Option(800, min=1, help="Plans per trick (zoetic stunt: 3200)."),
     seed: int = typer.Option(0),
     json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:

@@ -180,8 +180,9 @@ def stunt_camera(points: np.ndarray, times: np.ndarray, size: tuple[int, int], f
     hi = np.nanmax(np.where(np.isfinite(pts), pts, -np.inf), axis=1)
     ok = np.isfinite(lo).all(1) & np.isfinite(hi).all(1)
     lo[~ok], hi[~ok] = lo[ok][0] if ok.any() else 0.0, hi[ok][0] if ok.any() else 1.0
-    dt = float(np.median(np.diff(times))) if len(times) > 1 else 1.0
-    w = max(1, int(round(window / max(dt, 1e-9))))
+    steps = np.diff(times)
+    dt = float(np.median(steps[steps > 0])) if (steps > 0).any() else 1.0
+    w = min(len(times), max(1, int(round(window / dt))))
     lo = minimum_filter1d(lo, 2 * w + 1, axis=0, mode="nearest")
     hi = maximum_filter1d(hi, 2 * w + 1, axis=0, mode="nearest")
     centre = 0.5 * (lo + hi)
@@ -281,7 +282,10 @@ def stunt_frames(body, positions: np.ndarray, times: np.ndarray, medium, objects
         else:
             fixed_pts += [c - o.half_size, c + o.half_size]
     fp = np.asarray(fixed_pts).reshape(-1, 3)
-    frame_pts = np.concatenate([pos, bl, np.broadcast_to(fp, (len(times), *fp.shape))], axis=1)
+    radii = np.array([ball_objs[k].radius if k < len(ball_objs) else 0.15 for k in range(nb)])
+    ball_box = [bl + radii[:, None] * np.eye(3)[i] * sign for i in range(3) for sign in (-1, 1)]
+    frame_pts = np.concatenate([pos, *ball_box, np.broadcast_to(fp, (len(times), *fp.shape))],
+                               axis=1)  # fmt: skip
     az, el = np.radians(azimuth), np.radians(elevation)
     direction = np.array([-np.cos(el) * np.cos(az), np.sin(el), -np.cos(el) * np.sin(az)])
     eyes, targets = stunt_camera(frame_pts, times, size, fov, direction, level=level)
@@ -316,7 +320,12 @@ def stunt_frames(body, positions: np.ndarray, times: np.ndarray, medium, objects
                 ends = np.stack([c - d, c + d])
                 if o.axis == "y":  # a post stands on the pool's floor
                     ends[0, 1] = min(ends[0, 1], level - pool.depth)
-                for part in _segment_split(ends, level):
+                segments = [(ends, col)]
+                if o.axis != "y":  # a bar rests on two stands at its ends
+                    segments += [(np.stack([e, [e[0], level - pool.depth, e[2]]]), _POST_COLOR)
+                                 for e in ends]  # fmt: skip
+                parts = [(p, cl) for seg, cl in segments for p in _segment_split(seg, level)]
+                for part, col in parts:
                     scr, z = _project(part, eye, rot, focal, size)
                     if (z > 0.05).all():
                         tint = _water_tint(col[None], part.mean(0)[None], eye, medium)[0]
@@ -325,7 +334,7 @@ def stunt_frames(body, positions: np.ndarray, times: np.ndarray, medium, objects
                               tuple(np.clip(tint, 0, 255).astype(int)))  # fmt: skip
                         (above if part[:, 1].mean() >= level else below).append(it)
         for k in range(nb):
-            rad = ball_objs[k].radius if k < len(ball_objs) else 0.15
+            rad = radii[k]
             scr, z = _project(bl[r, k][None], eye, rot, focal, size)
             if z[0] > 0.05 + rad:
                 tint = _water_tint(_BALL_COLOR[None], bl[r, k][None], eye, medium)[0]
