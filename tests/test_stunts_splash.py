@@ -202,8 +202,11 @@ def test_bellyflop_and_clean_dive_are_tricks_that_push_the_splash_opposite_ways(
     weight = {n: next(t.weight for t in load_trick(n).task.terms if t.kind == "splash")
               for n in ("bellyflop", "clean-dive")}  # fmt: skip
     assert weight["bellyflop"] < 0 < weight["clean-dive"]  # maximise, minimise
-    assert splash_ratio({"splash_m3_s": 3.0}, {"splash_m3_s": 1.0}) == 3.0
-    assert splash_ratio({"splash_m3_s": 0.0}, {"splash_m3_s": 0.0}) == 0.0
+    out = {"most_nodes_out_of_water": 1.0}
+    assert splash_ratio(out | {"splash_m3_s": 3.0}, out | {"splash_m3_s": 1.0}) == 3.0
+    # only broke the surface from below (no leap): no re-entry to compare
+    under = {"most_nodes_out_of_water": 0.4, "splash_m3_s": 0.0}
+    assert splash_ratio(out | {"splash_m3_s": 0.04}, under) is None
 
 
 def test_hurdle_clearance_is_the_distance_to_the_bar():
@@ -274,5 +277,6 @@ def test_bench_stunts_judges_tricks_against_the_targets(tmp_path, capsys, repert
     assert out["ball-nose"]["success"] is False  # a resting dolphin strikes nothing
     assert out["ball-nose"]["ball_contact"] == "no"
     assert set(out["ball-nose"]["flags"]) == {"struck_by_nose", "off_support"}
-    assert out["splash_ratio_met"] is False and out["bellyflop"]["evaluations"] == 2
+    assert out["splash_ratio"] is None and out["splash_ratio_met"] is False
+    assert out["bellyflop"]["evaluations"] == 2
     assert out["all_wall_s"] >= out["bellyflop"]["wall_s"]

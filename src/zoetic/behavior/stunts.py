@@ -334,11 +334,13 @@ def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, boo
     return flags
 
 
-def splash_ratio(bellyflop: dict, clean_dive: dict) -> float:
-    """Return the bellyflop's splash measure over the clean dive's (inf for a splashless dive
-    after a bellyflop that splashed; 0 when neither splashed)."""
+def splash_ratio(bellyflop: dict, clean_dive: dict) -> float | None:
+    """Return the bellyflop's splash measure over the clean dive's, both ``measures``; None
+    unless both left the water wholly and the dive splashed at all (a body that only broke the
+    surface from below makes no re-entry to compare)."""
+    both = all(m["most_nodes_out_of_water"] >= 1.0 for m in (bellyflop, clean_dive))
     a, b = bellyflop["splash_m3_s"], clean_dive["splash_m3_s"]
-    return float(a / b) if b > 0 else (float("inf") if a > 0 else 0.0)
+    return float(a / b) if both and b > 0 else None
 
 
 def ball_parts(s: Signals, lane: int = 0) -> list[str]:
