@@ -95,15 +95,15 @@ def surface_crossings(body, positions: np.ndarray, times: np.ndarray, level: flo
     return Splash(t, pts, flux[rows, faces])
 
 
-def spray_particles(splash: Splash, level: float, gravity: float = 9.81, per_flux: float = 60.0,
+def spray_particles(splash: Splash, level: float, gravity: float = 9.81, per_flux: float = 150.0,
                     seed: int = 0):  # fmt: skip
     """Return a function of time t giving the spray drops (D, 3) in the air then: each
-    crossing throws round(per_flux x its area x normal speed) drops (at most 40) up and out
+    crossing throws round(per_flux x its area x normal speed) drops (at most 60) up and out
     at speeds that grow with it; they fly ballistically until they fall back in."""
     rng = np.random.default_rng(seed)
     t0, p0, v0 = [], [], []
     for t, p, f in zip(splash.times, splash.points, splash.flux, strict=True):
-        n = int(min(40, round(per_flux * f)))
+        n = int(min(60, round(per_flux * f)))
         if n == 0:
             continue
         up = (1.0 + 2.0 * min(1.0, f)) * rng.uniform(0.6, 1.4, n)
@@ -164,6 +164,19 @@ def subdivision(faces: np.ndarray, n_nodes: int, levels: int = 2) -> tuple[np.nd
                             ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])  # fmt: skip
         s = m @ s
     return s, f
+
+
+def countershading(body, sub: np.ndarray, faces: np.ndarray, color) -> np.ndarray:
+    """Return (F, 3) colours of the display surface's triangles: a dolphin's countershading,
+    the animal's colour darkened on its back, blending to a pale belly (by the height of each
+    triangle in the rest pose relative to the centre of mass)."""
+    rest = sub @ np.asarray(body.rest_pos, float)
+    com_y = float(body.mass @ body.rest_pos[:, 1] / body.total_mass)
+    y = rest[faces].mean(axis=1)[:, 1] - com_y
+    span = max(float(np.abs(y).max()), 1e-9)
+    t = np.clip(0.5 - 1.2 * y / span, 0.0, 1.0)[:, None]  # 0 on the back, 1 on the belly
+    base = np.asarray(color, float)[:3]
+    return (0.6 * base) * (1 - t) + np.array([232.0, 234, 238]) * t
 
 
 def stunt_camera(points: np.ndarray, times: np.ndarray, size: tuple[int, int], fov: float,
@@ -294,7 +307,7 @@ def stunt_frames(body, positions: np.ndarray, times: np.ndarray, medium, objects
     hi = np.max(np.where(fin[..., None], frame_pts, -np.inf), axis=(0, 1))
     quads, qcols, (px0, px1, pz0, pz1) = _pool_quads(lo, hi, pool, level, eyes[0])
     sub, faces = subdivision(body.faces, body.n_nodes)
-    mesh = _Mesh(faces, np.tile(np.asarray(body_color(body), float), (len(faces), 1)),
+    mesh = _Mesh(faces, countershading(body, sub, faces, body_color(body)),
                  np.ones(len(faces), bool))  # fmt: skip
     spray = spray_particles(surface_crossings(body, pos, times, level), level, medium.gravity)
     w, h = size
