@@ -180,7 +180,7 @@ def countershading(body, sub: np.ndarray, faces: np.ndarray, color) -> np.ndarra
 
 
 def stunt_camera(points: np.ndarray, times: np.ndarray, size: tuple[int, int], fov: float,
-                 direction: np.ndarray, window: float = 0.75, smoothing: float = 0.4,
+                 direction: np.ndarray, window: float = 0.5, smoothing: float = 0.4,
                  level: float = 0.0) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """Return (R, 3) eyes and targets of a camera that frames the whole stunt: at each record
     the bounding box of ``points`` (R, M, 3: body, balls, hurdle) over the surrounding
@@ -203,10 +203,11 @@ def stunt_camera(points: np.ndarray, times: np.ndarray, size: tuple[int, int], f
         centre = gaussian_filter1d(centre, max(smoothing / dt, 1e-3), axis=0, mode="nearest")
     half = 0.5 * (hi - lo).max(axis=0) + 0.15  # the largest box, plus a margin
     tan = np.tan(np.radians(fov) / 2)
-    aspect = size[0] / size[1]
-    across = np.array([1.0, 0.0, 1.0]) - np.abs(direction) * [1, 0, 1]  # the screen's width
-    width = float(np.linalg.norm(half * across))
-    dist = max(half[1] / tan, width / (aspect * tan)) + 0.5 * float(np.abs(half @ direction))
+    right = np.array([direction[2], 0.0, -direction[0]])
+    right /= max(float(np.linalg.norm(right)), 1e-9)
+    up = np.cross(direction, right)
+    width, height = float(half @ np.abs(right)), float(half @ np.abs(up))
+    dist = max(height / tan, width / (size[0] / size[1] * tan)) + 0.5 * half @ np.abs(direction)
     eye = centre + dist * direction
     eye[:, 1] = np.maximum(eye[:, 1], level + 0.15 * dist)  # above the water
     return eye, centre
