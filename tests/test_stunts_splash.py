@@ -226,17 +226,23 @@ def test_the_camera_frames_body_ball_and_bar_all_along():
     size, fov = (320, 180), 45.0
     direction = np.array([-0.3, 0.25, -0.92])
     direction /= np.linalg.norm(direction)
-    eyes, targets = stunt_camera(pts, t, size, fov, direction)
     focal = 0.5 * size[1] / np.tan(np.radians(fov) / 2)
-    for k in range(r):
-        scr, z = _project(pts[k], eyes[k], look_at(eyes[k], targets[k]), focal, size)
-        assert (z > 0).all()
-        assert (scr >= 0).all() and (scr[:, 0] <= size[0]).all() and (scr[:, 1] <= size[1]).all()
+
+    def all_in_view(pts, eyes, targets) -> bool:
+        for k in range(len(pts)):
+            scr, z = _project(pts[k], eyes[k], look_at(eyes[k], targets[k]), focal, size)
+            if not ((z > 0).all() and (scr >= 0).all() and (scr <= size).all()):
+                return False
+        return True
+
+    eyes, targets = stunt_camera(pts, t, size, fov, direction)
+    assert all_in_view(pts, eyes, targets)
     # smooth: the camera's motion changes little from frame to frame (no jerks)
     assert np.abs(np.diff(targets, 2, axis=0)).max() < 0.05
     # frames picked at repeated instants (a strip) are framed too
-    eyes, targets = stunt_camera(pts[[0, 5, 5, 5]], t[[0, 5, 5, 5]], size, fov, direction)
-    assert np.isfinite(eyes).all() and np.allclose(targets[1:], targets[1])
+    pick = [0, 5, 5, 40]
+    eyes, targets = stunt_camera(pts[pick], t[pick], size, fov, direction)
+    assert all_in_view(pts[pick], eyes, targets)
 
 
 def test_the_display_surface_is_a_closed_smooth_mesh_over_the_lattice(dolphin):
