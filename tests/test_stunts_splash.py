@@ -15,6 +15,7 @@ import pytest
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.behavior.stunts import (
     StuntProblem,
+    StuntRecord,
     cylinder_distance,
     list_tricks,
     load_trick,
@@ -26,7 +27,7 @@ from zoetic.behavior.stunts import (
 from zoetic.behavior.training import rest_abstraction
 from zoetic.bodies import load_animal
 from zoetic.cli import main
-from zoetic.physics import State, simulate
+from zoetic.physics import State, Trajectory, simulate
 from zoetic.physics.objects import Cylinder
 from zoetic.tasks.terms import PARTS, TERMS, BodyFrame, Signals, TermParams, body_parts
 from zoetic.viz.render3d import _project, look_at
@@ -286,3 +287,27 @@ def test_bench_stunts_judges_tricks_against_the_targets(tmp_path, capsys, repert
     assert out["splash_ratio"] is None and out["splash_ratio_met"] is False
     assert out["bellyflop"]["evaluations"] == 2
     assert out["all_wall_s"] >= out["bellyflop"]["wall_s"]
+
+
+def _record(body, pos, n_objects) -> StuntRecord:
+    r = pos.shape[1]
+    traj = Trajectory(np.arange(r) * 0.05, pos, State(pos[:, -1], np.zeros_like(pos[:, -1])),
+                      np.array([-1]), 0.005)  # fmt: skip
+    return StuntRecord(traj, np.zeros((1, r, body.n_actuators)), np.zeros((1, r), int),
+                       np.zeros((1, r, 0, 3)), np.array([False]),
+                       np.zeros((1, r, body.n_nodes, n_objects)))  # fmt: skip
+
+
+def test_a_hand_made_jump_over_the_hurdle_clears_it_and_a_low_one_does_not(dolphin,
+                                                                             repertoire):
+    problem = StuntProblem(dolphin, repertoire, load_trick("hurdle"))
+    x = np.linspace(-0.5, 4.5, 41)
+    rel = _turned(dolphin, 0.0)
+    for top, over in ((1.0, True), (0.35, False)):
+        y = top - 1.6 * (x - 2.0) ** 2 / 4.0  # an arc, its top at the bar (x = 2 m)
+        pos = (rel[None] + np.stack([x, y, 0 * x], 1)[:, None])[None]
+        m = measures(problem, _record(dolphin, pos, len(problem.trick.objects)))
+        assert m["bar_crossed"] is over and m["hurdle_touched"] is False
+        assert (m["hurdle_clearance_m"] > 0.4) is over
+        flags = targets_met("hurdle", m, problem.trick)
+        assert flags["over_bar"] is over and flags["no_contact"] and flags["leaves_water"]

@@ -297,7 +297,7 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
             ax = 0 if o.axis == "z" else 2
             c = o.center[ax]
             i = int(np.nanargmin(np.abs(s.com[lane, :, ax] - c)))
-            span = (np.nanmax(pos[:, :, ax].max(axis=1)) > c) & (pos[0, :, ax].max() < c)
+            span = (np.nanmax(pos[:, :, ax].min(axis=1)) > c) & (pos[0, :, ax].max() < c)
             crossed.append(bool(span and np.nanmin(pos[i, :, 1]) > o.center[1] + o.radius))
         out["bar_crossed"] = all(crossed)
         if rec.touch is not None:
@@ -311,8 +311,8 @@ LEAP_AIR_S, LEAP_APEX_BL, SOMERSAULT_DEG, SPLASH_RATIO = 0.4, 0.5, 360.0, 3.0
 
 def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, bool]:
     """Return the success flags of a built-in trick's measures (``measures``) against the
-    issue's targets; {} for a trick without targets (bellyflop and clean-dive are judged
-    together, ``splash_ratio``)."""
+    issue's targets; {} for a trick of another name. Bellyflop and clean-dive only need to
+    leave the water here: their target is the ratio of their splashes (``splash_ratio``)."""
     flags: dict[str, bool] = {}
     if name in ("leap", "hurdle", "somersault", "bellyflop", "clean-dive"):
         flags["leaves_water"] = bool(m["most_nodes_out_of_water"] >= 1.0)
