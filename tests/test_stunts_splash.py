@@ -189,6 +189,13 @@ def test_the_contact_record_names_the_nose_or_the_tail_that_struck_the_ball(dolp
     m = measures(problem, rec)
     assert m["ball_contact"] == "yes" and m["ball_parts"][0] == "nose"
     assert nose["ball_moved_by_nose"][0] > 0.2 and nose["ball_moved_by_tail"][0] == 0.0
+    jnp = pytest.importorskip("jax.numpy")  # one definition for NumPy and JAX
+    s = problem.signals(rec)
+    sj = Signals(jnp, s.frame, jnp.asarray(s.positions), jnp.asarray(s.activations), s.times,
+                 s.level, s.horizon, jnp.asarray(s.contacts), jnp.asarray(s.balls),
+                 jnp.asarray(s.ball_touch))  # fmt: skip
+    got = float(TERMS["ball_moved_by_nose"].fn(jnp, sj, TermParams())[0])
+    assert got == pytest.approx(nose["ball_moved_by_nose"][0], rel=1e-5)
     assert targets_met("ball-nose", m, problem.trick) == {"struck_by_nose": True,
                                                           "off_support": True}
     problem, rec, tail = _strike(dolphin, repertoire, tail_first=True)
