@@ -16,3 +16,4 @@ PY=".venv/bin/python"
 "$Z" bench gym --json | tail -n 1
 "$Z" bench vision --json | tail -n 1
 "$Z" bench aquarium --json | tail -n 1
+"$Z" bench stunts --json | tail -n 1

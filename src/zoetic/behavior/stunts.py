@@ -30,7 +30,7 @@ from zoetic.errors import TaskError, ZoeticError
 from zoetic.physics import Trajectory, get_medium
 from zoetic.physics.objects import Ball, Box, Cylinder
 from zoetic.tasks import TASK_DIR, Task, check_fits, parse_task, start_state
-from zoetic.tasks.terms import BodyFrame, Signals, evaluate_terms, term_names
+from zoetic.tasks.terms import PARTS, BodyFrame, Signals, evaluate_terms, term_names
 
 TRICK_DIR = TASK_DIR / "tricks"
 TRICK_KEYS = ("segments", "durations")
@@ -134,6 +134,7 @@ class StuntRecord:
     contacts: np.ndarray  # (B, R) node-object contacts since the previous record
     balls: np.ndarray  # (B, R, nb, 3)
     failed: np.ndarray  # (B,)
+    touch: np.ndarray | None = None  # (B, R, N, O) |impulse| (N s) each node got from each object
 
 
 class StuntProblem(MacroProblem):
@@ -185,17 +186,50 @@ class StuntProblem(MacroProblem):
         every = int(record_every or self.record_every)
         world = self.world(len(e))
         seconds = self.steps * dt
-        ro = rollout(world, tables, seconds, control_period=seconds, record_every=every)
-        traj = ro.trajectory(0)
-        rows = np.minimum(np.arange(traj.positions.shape[1]) * every, self.steps - 1)
-        return StuntRecord(traj, tables[:, rows], ro.contacts, ro.ball_positions,
-                           np.asarray(traj.failed))  # fmt: skip
+        if not world.objects:
+            ro = rollout(world, tables, seconds, control_period=seconds, record_every=every)
+            traj = ro.trajectory(0)
+            rows = np.minimum(np.arange(traj.positions.shape[1]) * every, self.steps - 1)
+            return StuntRecord(traj, tables[:, rows], ro.contacts, ro.ball_positions,
+                               np.asarray(traj.failed))  # fmt: skip
+        return self._record_contacts(world, tables, every)
+
+    def _record_contacts(self, world, tables: np.ndarray, every: int) -> StuntRecord:
+        """Step a World with objects record by record, keeping which node touched what."""
+        from zoetic.physics.simulate import State
+
+        b, n, o = world.batch, self.body.n_nodes, len(world.objects)
+        marks = list(range(0, self.steps, every)) + [self.steps]
+        r = len(marks)
+        pos, balls = np.empty((b, r, n, 3)), np.empty((b, r, len(world.balls), 3))
+        touch, count = np.zeros((b, r, n, o)), np.zeros((b, r), dtype=np.int64)
+        pos[:, 0], balls[:, 0] = world.positions(0), world.ball_positions
+        for k in range(1, r):
+            c = world.step((marks[k] - marks[k - 1]) * world.dt,
+                           tables[:, marks[k - 1]:marks[k]])  # fmt: skip
+            touch[:, k] = np.linalg.norm(c.impulse[0], axis=-1)
+            count[:, k] = c.count
+            pos[:, k], balls[:, k] = world.positions(0), world.ball_positions
+        failed = world.failed(0)
+        st = world.state
+        times = np.array(marks, float) * world.dt
+        traj = Trajectory(times=times, positions=pos,
+                          final=State(st.positions[0], st.velocities[0]),
+                          failed_step=st.failed_step[0], dt=world.dt)  # fmt: skip
+        rows = np.minimum(np.array(marks[:-1] + [self.steps - 1]), self.steps - 1)
+        return StuntRecord(traj, tables[:, rows], count, balls, failed, touch)
+
+    def ball_index(self) -> int | None:
+        """Return the index in the trick's objects of its first ball (None without one)."""
+        return next((i for i, ob in enumerate(self.trick.objects) if isinstance(ob, Ball)), None)
 
     def signals(self, rec: StuntRecord) -> Signals:
         """Return the terms' view of a batch of stunts."""
+        k = self.ball_index()
+        touch = None if rec.touch is None or k is None else rec.touch[..., k]
         return Signals(np, self.frame, rec.traj.positions, rec.activations, rec.traj.times,
                        self.level, self.task.horizon, rec.contacts.astype(float),
-                       rec.balls)  # fmt: skip
+                       rec.balls, touch)  # fmt: skip
 
     def terms(self, rec: StuntRecord) -> dict[str, np.ndarray]:
         """Return each style term's raw value (B,) by name."""
@@ -228,6 +262,10 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
         "apex_above_surface_m": round(apex, 3),
         "apex_body_lengths": round(apex / length, 3),
         "apex_time_s": round(float(rec.traj.times[int(com_y.argmax())]), 3),
+        # the paper's finding: dive deep first, then thrust upward (depth of the centre of
+        # mass at its lowest before the apex, m below the surface)
+        "deepest_before_apex_m": round(float(problem.level - com_y[: int(com_y.argmax()) + 1]
+                                             .min()), 3),  # fmt: skip
         "air_time_s": round(float(air.sum() * dt), 3),
         "most_nodes_out_of_water": round(float(np.mean(1 - s.in_water[lane], axis=1).max()), 3),
         "rotation_in_air_deg": round(float(np.degrees(rot)), 1),
@@ -235,11 +273,95 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
         "contacts": int(rec.contacts[lane].sum()),
         "body_length_m": round(length, 3),
     }
+    out["splash_m3_s"] = round(float(np.sum(s.entry_flux[lane])), 4)
+    out["entries_into_water"] = int(np.sum(np.diff(s.airborne[lane]) < 0))
     if rec.balls.shape[2]:
         b = rec.balls[lane, :, 0]
         out["ball_rise_m"] = round(float(b[:, 1].max() - b[0, 1]), 3)
         out["ball_moved_m"] = round(float(np.linalg.norm(b - b[0], axis=1).max()), 3)
+        parts = ball_parts(s, lane)
+        out["ball_contact"] = "yes" if parts else "no"
+        out["ball_parts"] = parts
+        out["ball_moved_by_nose_m"] = round(float(s.ball_moved_after("nose")[lane]), 3)
+        out["ball_moved_by_tail_m"] = round(float(s.ball_moved_after("tail")[lane]), 3)
+    bars = [(i, o) for i, o in enumerate(problem.trick.objects)
+            if isinstance(o, Cylinder) and o.axis != "y"]  # fmt: skip
+    if bars:
+        pos = rec.traj.positions[lane]
+        out["hurdle_clearance_m"] = round(min(float(np.nanmin(cylinder_distance(o, pos)))
+                                              for _, o in bars), 3)  # fmt: skip
+        # over the bar: the whole body passed from before it to beyond it, and where the
+        # centre of mass passed it, the body's lowest node was above the bar's top
+        crossed = []
+        for _, o in bars:
+            ax = 0 if o.axis == "z" else 2
+            c = o.center[ax]
+            i = int(np.nanargmin(np.abs(s.com[lane, :, ax] - c)))
+            span = (np.nanmax(pos[:, :, ax].min(axis=1)) > c) & (pos[0, :, ax].max() < c)
+            crossed.append(bool(span and np.nanmin(pos[i, :, 1]) > o.center[1] + o.radius))
+        out["bar_crossed"] = all(crossed)
+        if rec.touch is not None:
+            out["hurdle_touched"] = bool(any(rec.touch[lane, :, :, i].sum() > 0 for i, _ in bars))
     return out
+
+
+# the issue's targets, per built-in trick (bellyflop against clean-dive: ``splash_ratio``)
+LEAP_AIR_S, LEAP_APEX_BL, SOMERSAULT_DEG, SPLASH_RATIO = 0.4, 0.5, 360.0, 3.0
+
+
+def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, bool]:
+    """Return the success flags of a built-in trick's measures (``measures``) against the
+    issue's targets; {} for a trick of another name. Bellyflop and clean-dive only need to
+    leave the water here: their target is the ratio of their splashes (``splash_ratio``)."""
+    flags: dict[str, bool] = {}
+    if name in ("leap", "hurdle", "somersault", "bellyflop", "clean-dive"):
+        flags["leaves_water"] = bool(m["most_nodes_out_of_water"] >= 1.0)
+    if name == "leap":
+        flags["air_time"] = bool(m["air_time_s"] >= LEAP_AIR_S)
+        flags["apex"] = bool(m["apex_body_lengths"] >= LEAP_APEX_BL)
+    elif name == "somersault":
+        flags["rotation"] = bool(m["rotation_in_air_deg"] >= SOMERSAULT_DEG)
+    elif name == "hurdle":
+        flags["over_bar"] = bool(m.get("bar_crossed", False))
+        flags["no_contact"] = not m.get("hurdle_touched", True)
+    elif name in ("ball-nose", "ball-tail"):
+        part = "nose" if name == "ball-nose" else "tail"
+        radius = next((o.radius for o in (trick.objects if trick else ()) if isinstance(o, Ball)),
+                      0.0)  # fmt: skip
+        # off its support: the ball moved more than its radius after that part struck it
+        flags[f"struck_by_{part}"] = part in m.get("ball_parts", [])
+        flags["off_support"] = bool(m.get(f"ball_moved_by_{part}_m", 0.0) > radius)
+    return flags
+
+
+def splash_ratio(bellyflop: dict, clean_dive: dict) -> float | None:
+    """Return the bellyflop's splash measure over the clean dive's, both ``measures``; None
+    unless both left the water wholly and the dive splashed at all (a body that only broke the
+    surface from below makes no re-entry to compare)."""
+    both = all(m["most_nodes_out_of_water"] >= 1.0 for m in (bellyflop, clean_dive))
+    a, b = bellyflop["splash_m3_s"], clean_dive["splash_m3_s"]
+    return float(a / b) if both and b > 0 else None
+
+
+def ball_parts(s: Signals, lane: int = 0) -> list[str]:
+    """Return the body parts that touched the first ball, in the order of their first touch."""
+    first = {}
+    for part in PARTS:
+        hit = np.flatnonzero(s.part_touch(part)[lane] > 0)
+        if hit.size:
+            first[part] = int(hit[0])
+    return sorted(first, key=lambda p: (first[p], PARTS.index(p)))
+
+
+def cylinder_distance(c: Cylinder, points: np.ndarray) -> np.ndarray:
+    """Return the distance (...,) from points (..., 3) to the surface of a fixed cylinder
+    (negative inside): how far a body passed from a hurdle's bar."""
+    ax = "xyz".index(c.axis)
+    d = np.asarray(points, float) - np.asarray(c.center, float)
+    along = np.abs(d[..., ax]) - 0.5 * c.length
+    radial = np.sqrt(np.sum(np.delete(d, ax, axis=-1) ** 2, axis=-1)) - c.radius
+    out = np.hypot(np.maximum(radial, 0.0), np.maximum(along, 0.0))
+    return np.where((radial < 0) & (along < 0), np.maximum(radial, along), out)
 
 
 def macro_document(problem: StuntProblem, sequence: SequenceController, trick_source: str) -> dict:
@@ -318,6 +440,8 @@ def score_series(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict
         "nodes out of water": np.mean(1.0 - s.in_water[lane], axis=1),
         "body angle (deg)": np.degrees(s.body_angle[lane]),
         "contacts (cumulative)": np.cumsum(rec.contacts[lane]),
+        "splash (cumulative, m^3/s)": np.concatenate(
+            [[0.0], np.cumsum(s.entry_flux[lane].sum(axis=1))]),
     }
     if rec.balls.shape[2]:
         out["ball height (m)"] = rec.balls[lane, :, 0, 1]

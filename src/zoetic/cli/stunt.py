@@ -17,7 +17,7 @@ console = Console()
 def write_replay(body, path: Path, seconds: float | None, out: Path, video: bool,
                  fps: int) -> dict:  # fmt: skip
     """Replay a stunt's macro.json; write trajectory.npz, score.png, video.mp4 into out."""
-    from zoetic.behavior.stunts import load_macro, object_markers, replay
+    from zoetic.behavior.stunts import load_macro, replay
     from zoetic.io import make_dir
     from zoetic.runs import save_trajectory
 
@@ -28,11 +28,11 @@ def write_replay(body, path: Path, seconds: float | None, out: Path, video: bool
     com = traj.com(body)[0]
     files = {"trajectory": str(out / "trajectory.npz")}
     if video:
-        from zoetic.viz.render3d import render_video
+        from zoetic.viz.stunts import render_stunt_video
 
-        files["video"] = str(render_video(
-            body, traj.positions[0], traj.times, body.medium, out / "video.mp4", fps=fps,
-            markers=object_markers(info["objects"], balls), marker_colors=(240, 200, 40)))
+        files["video"] = str(render_stunt_video(
+            body, traj.positions[0], traj.times, body.medium, out / "video.mp4",
+            info["objects"], balls, fps=fps))
     return {"animal": body.name, "seconds": round(float(traj.times[-1]), 3),
             "apex_y_m": round(float(com[:, 1].max()), 3), **files}  # fmt: skip
 
@@ -42,7 +42,8 @@ def stunt(
     animal: str = typer.Argument(..., help="Zoo animal name or animal .toml file."),
     memory: Path = typer.Option(..., help="Repertoire directory (zoetic repertoire train)."),
     trick: str = typer.Option("leap", help="A built-in trick (leap, hurdle, somersault, "
-                              "ball-nose, ball-tail) or a trick .toml file."),  # fmt: skip
+                              "ball-nose, ball-tail, bellyflop, clean-dive) or a trick .toml "
+                              "file."),  # fmt: skip
     method: str = typer.Option("anneal", help="anneal (simulated annealing) or ga (genetic)."),
     budget: int = typer.Option(3200, min=1, max=10_000_000,
                               help="Plans (stunt simulations) to evaluate."),  # fmt: skip
@@ -82,8 +83,11 @@ def stunt(
     problem, result, rec = found.problem, found.result, found.record
     make_dir(out)
     write_json(out / "macro.json", macro_document(problem, result.sequence, tr.task.source))
-    summary = found.summary() | {
-        "memory": str(memory), "seed": seed,
+    from zoetic.behavior.stunts import targets_met
+
+    summary = found.summary()
+    summary |= {
+        "targets": targets_met(tr.name, summary, tr), "memory": str(memory), "seed": seed,
         "history": [[n, round(f, 5)] for n, f in result.history],
     }  # fmt: skip
     write_json(out / "summary.json", summary)
@@ -95,20 +99,25 @@ def stunt(
                      f"{got['apex_above_surface_m']:.2f} m, {got['air_time_s']:.2f} s in air, "
                      f"{got['rotation_in_air_deg']:.0f} deg in air")  # fmt: skip
     if video:
-        from zoetic.behavior.stunts import object_markers
-        from zoetic.viz.render3d import render_video
+        from zoetic.viz.stunts import render_stunt_video
 
-        render_video(body, rec.traj.positions[0], rec.traj.times, body.medium,
-                     out / "video.mp4", fps=fps,
-                     markers=object_markers(tr.objects, rec.balls[0]),
-                     marker_colors=(240, 200, 40))  # fmt: skip
+        render_stunt_video(body, rec.traj.positions[0], rec.traj.times, body.medium,
+                           out / "video.mp4", tr.objects, rec.balls[0], fps=fps,
+                           title=f"{body.name} {tr.name}")  # fmt: skip
     console.print(
         f"{tr.name} ({method}, {result.evaluations} plans, {result.wall:.1f} s): "
         f"E = {summary['E']:.4f}; apex {got['apex_above_surface_m']:.3f} m above the surface "
         f"({got['apex_body_lengths']:.2f} body lengths), {got['air_time_s']:.2f} s wholly in "
         f"the air, {got['rotation_in_air_deg']:.0f} deg rotation in the air, "
-        f"{got['contacts']} contacts"
+        f"{got['contacts']} contacts, splash {got['splash_m3_s']:.3f} m^3/s"
     )
+    if "ball_contact" in got:
+        console.print(f"ball contact: {got['ball_contact']}"
+                      + (f" ({', '.join(got['ball_parts'])})" if got["ball_parts"] else ""))
+    if "hurdle_clearance_m" in got:
+        console.print(f"hurdle: clearance {got['hurdle_clearance_m']:.3f} m, "
+                      f"{'over' if got['bar_crossed'] else 'not over'} the bar, "
+                      f"{'touched' if got.get('hurdle_touched') else 'not touched'}")
     played = [f"{p['entry']} {p['duration_s']:.2f} s" for p in summary["plan"] if p["played"]]
     console.print("plan: " + ", ".join(played))
     console.print(f"wrote {out}/ (macro.json, summary.json, score.png"
@@ -117,26 +126,53 @@ def stunt(
 
 @bench_app.command("stunts")
 def bench_stunts_cmd(
-    memory: Path = typer.Option(..., help="The dolphin's repertoire (zoetic repertoire train)."),
+    memory: Path = typer.Option(None, help="The dolphin's repertoire (zoetic repertoire train); "
+                                "default: trained once into runs/bench/dolphin-memory."),
     animal: str = typer.Option("dolphin"),
-    tricks: str = typer.Option("leap,somersault,hurdle,ball-nose,ball-tail",
+    tricks: str = typer.Option("leap,somersault,hurdle,ball-nose,ball-tail,bellyflop,clean-dive",
                                help="Comma-separated tricks."),  # fmt: skip
     method: str = typer.Option("anneal"),
-    budget: int = typer.Option(3200, min=1),
+    budget: int = typer.Option(800, min=1, help="Plans per trick (zoetic stunt: 3200)."),
     seed: int = typer.Option(0),
     json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
-    """Each trick discovered with the defaults: wall time, evaluations and what it achieved."""
+    """Each trick discovered: its success flags against the issue's targets, what it achieved,
+    evaluations and wall time (target: each trick in <= 5 minutes on 2 cores)."""
     from zoetic.behavior.repertoire import Repertoire
-    from zoetic.behavior.stunts import discover, load_trick
+    from zoetic.behavior.stunts import (
+        SPLASH_RATIO,
+        discover,
+        load_trick,
+        splash_ratio,
+        targets_met,
+    )
     from zoetic.bodies import load_animal
 
     body = load_animal(animal)
+    if memory is None:
+        memory = Path("runs/bench") / f"{body.name}-memory"
+        if not (memory / "repertoire.json").exists():
+            from zoetic.behavior.training import train_repertoire
+
+            train_repertoire(animal, memory, seed=seed)
     rep = Repertoire.load(memory, body)
     out: dict = {"animal": body.name, "method": method, "budget": budget, "seed": seed}
     keep = ("apex_above_surface_m", "apex_body_lengths", "air_time_s", "rotation_in_air_deg",
-            "contacts", "ball_rise_m", "E", "evaluations", "wall_s")  # fmt: skip
+            "ball_contact", "ball_parts", "hurdle_clearance_m", "splash_m3_s", "evaluations",
+            "wall_s")  # fmt: skip
+    full = {}
     for name in [t.strip() for t in tricks.split(",") if t.strip()]:
-        s = discover(body, rep, load_trick(name), method, budget, seed).summary()
-        out[name] = {k: s[k] for k in keep if k in s}
+        tr = load_trick(name)
+        s = full[name] = discover(body, rep, tr, method, budget, seed).summary()
+        flags = targets_met(name, s, tr)
+        out[name] = {"success": bool(flags) and all(flags.values()), "flags": flags,
+                     **{k: s[k] for k in keep if k in s}}  # fmt: skip
+    if "bellyflop" in out and "clean-dive" in out:
+        ratio = splash_ratio(full["bellyflop"], full["clean-dive"])
+        out["splash_ratio"] = None if ratio is None else round(ratio, 2)
+        out["splash_ratio_met"] = ratio is not None and ratio >= SPLASH_RATIO
+    out["all_wall_s"] = round(sum(v["wall_s"] for v in out.values()
+                                  if isinstance(v, dict) and "wall_s" in v), 1)  # fmt: skip
+    out["each_within_5_min"] = all(v["wall_s"] <= 300 for v in out.values()
+                                   if isinstance(v, dict) and "wall_s" in v)  # fmt: skip
     _emit(out, json)

@@ -11,6 +11,7 @@ is what task files name; a conformance test runs every entry through both module
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
@@ -21,16 +22,23 @@ import numpy as np
 from zoetic.bodies import Body
 
 EPS = 1e-12  # guard on lengths (as the objective always used)
+# body parts, front to back, that a contact record names (``BodyFrame.parts``)
+PARTS = ("nose", "head", "belly", "back", "tail")
+NOSE_SPAN, HEAD_SPAN, TAIL_SPAN = 0.12, 0.3, 0.25  # fractions of the body length
 
 
 @dataclass(frozen=True)
 class BodyFrame:
-    """The constant arrays terms need from a body: mass weights, head, mirror pairs."""
+    """The constant arrays terms need from a body: mass weights, head, mirror pairs, the
+    water panels (for the splash) and which part of the body each node belongs to."""
 
     weights: np.ndarray  # (N,) mass fractions
     head: int
     left: np.ndarray  # (P,) nodes on the left (z > 0) that have a mirror node
     right: np.ndarray  # (P,) their mirror nodes
+    panels: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 4), int))
+    panel_weights: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 4)))
+    parts: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, int))  # (N,)
 
     @classmethod
     def of(cls, body: Body) -> BodyFrame:
@@ -39,7 +47,32 @@ class BodyFrame:
         left = np.array([n for n in range(body.n_nodes)
                          if body.node_mirror[n] >= 0 and z[n] > 1e-9], dtype=int)  # fmt: skip
         right = body.node_mirror[left].astype(int) if left.size else np.zeros(0, int)
-        return cls(body.mass / body.total_mass, int(body.head), left, right)
+        return cls(body.mass / body.total_mass, int(body.head), left, right,
+                   np.asarray(body.panels, int), np.asarray(body.panel_weights, float),
+                   body_parts(body))  # fmt: skip
+
+    def part_mask(self, part: str) -> np.ndarray:
+        """Return (N,) 1.0 on the nodes of a part (one of ``PARTS``), else 0.0."""
+        return (self.parts == PARTS.index(part)).astype(float)
+
+
+def body_parts(body: Body) -> np.ndarray:
+    """Return (N,) the index in ``PARTS`` of each node's body part, from the rest pose: along
+    the axis from the centre of mass to the head, the front 12% of the length is the nose, the
+    rest of the front 30% the head, the rear 25% the tail (flukes); between them the nodes
+    below the centre of mass are the belly, those above the back."""
+    rest = np.asarray(body.rest_pos, float)
+    com = body.mass @ rest / body.total_mass
+    axis = rest[body.head] - com
+    axis /= np.linalg.norm(axis) + EPS
+    s = (rest - com) @ axis
+    front, length = s.max(), s.max() - s.min() + EPS
+    parts = np.where(rest[:, 1] < com[1], PARTS.index("belly"), PARTS.index("back"))
+    parts = np.where(s <= s.min() + TAIL_SPAN * length, PARTS.index("tail"), parts)
+    parts = np.where(s >= front - HEAD_SPAN * length, PARTS.index("head"), parts)
+    parts = np.where(s >= front - NOSE_SPAN * length, PARTS.index("nose"), parts)
+    parts[body.head] = PARTS.index("nose")
+    return parts.astype(int)
 
 
 def _xz(v):
@@ -55,7 +88,7 @@ class Signals:
     """What a batch of recordings shows, derived lazily with one array module ``xp``."""
 
     def __init__(self, xp, frame: BodyFrame, positions, activations, times, level: float,
-                 horizon: float, contacts=None, balls=None):  # fmt: skip
+                 horizon: float, contacts=None, balls=None, ball_touch=None):  # fmt: skip
         self.xp = xp
         self.frame = frame
         self.positions = positions  # (K, R, N, 3)
@@ -68,6 +101,10 @@ class Signals:
         k, r = positions.shape[:2]
         self.contacts = xp.zeros((k, r)) if contacts is None else contacts
         self.balls = xp.zeros((k, r, 0, 3)) if balls is None else balls
+        # (K, R, N): each node's contact with the first ball (impulse, N s) since the previous
+        # record; zeros without one
+        n = positions.shape[2]
+        self.ball_touch = xp.zeros((k, r, n)) if ball_touch is None else ball_touch
 
     @cached_property
     def com(self):
@@ -134,6 +171,58 @@ class Signals:
     def in_water(self):
         """1.0 where a node is under the water level, else 0.0, (K, R, N)."""
         return self.xp.where(self.positions[..., 1] < self.level, 1.0, 0.0)
+
+    @cached_property
+    def face_centres(self):
+        """Centres of the water panels (K, R, P, 3)."""
+        pos = self.positions[:, :, self.frame.panels]  # (K, R, P, 4, 3)
+        return self.xp.einsum("krpqd,pq->krpd", pos, self.xp.asarray(self.frame.panel_weights))
+
+    @cached_property
+    def face_normals(self):
+        """Panel normals (K, R, P, 3) whose length is twice the panel's area."""
+        pos = self.positions[:, :, self.frame.panels]
+        return self.xp.cross(pos[..., 2, :] - pos[..., 0, :], pos[..., 3, :] - pos[..., 1, :])
+
+    @cached_property
+    def crossing_flux(self):
+        """The surface crossings of the panels (K, R-1, P), m^3/s: where a panel's centre
+        crosses the water surface between two records, its area times its speed along its
+        outward normal there when it leads the motion (a face slapping the water flat moves a
+        lot of water, one slicing in edge-on little, a trailing face none), positive going
+        in, negative coming out; 0 where it does not cross."""
+        xp = self.xp
+        c = self.face_centres
+        y = c[..., 1]
+        above = y >= self.level
+        down = above[:, :-1] & ~above[:, 1:]
+        up = ~above[:, :-1] & above[:, 1:]
+        dt = self.times[1] - self.times[0] if len(self.times) > 1 else 1.0
+        v = (c[:, 1:] - c[:, :-1]) / dt
+        n = 0.5 * (self.face_normals[:, :-1] + self.face_normals[:, 1:])
+        flux = 0.5 * xp.maximum(xp.sum(n * v, axis=-1), 0.0)
+        return xp.where(down, flux, xp.where(up, -flux, 0.0))
+
+    @cached_property
+    def entry_flux(self):
+        """The splash of each panel going into the water (K, R-1, P), m^3/s (see
+        ``crossing_flux``)."""
+        return self.xp.maximum(self.crossing_flux, 0.0)
+
+    def part_touch(self, part: str):
+        """Contact of a body part with the first ball (K, R), N s, since the previous record."""
+        return self.xp.sum(self.ball_touch * self.xp.asarray(self.frame.part_mask(part)), axis=2)
+
+    def ball_moved_after(self, part: str):
+        """Greatest distance (K,), m, of the first ball from its start at or after that part's
+        first contact with it (0 without a ball or without such a contact)."""
+        xp = self.xp
+        if self.balls.shape[2] == 0:
+            return xp.zeros(self.positions.shape[0])
+        touched = xp.cumsum(self.part_touch(part), axis=1) > 0
+        d = self.balls[:, :, 0] - self.balls[:, :1, 0]
+        dist = xp.sqrt(xp.sum(d * d, axis=-1) + EPS)
+        return xp.max(xp.where(touched, dist, 0.0), axis=1)
 
     @cached_property
     def displacement_xz(self):
@@ -305,6 +394,25 @@ def ball_head_distance(xp, s: Signals, p: TermParams):
         return xp.zeros(s.positions.shape[0])
     d = s.head - s.balls[:, :, 0]
     return xp.min(xp.sqrt(xp.sum(d * d, axis=-1) + EPS), axis=1)
+
+
+@term("splash measure on re-entry (m^3/s): the area times the normal speed of every leading "
+      "face crossing the surface downward, summed; large for a bellyflop, small for a clean "
+      "dive")
+def splash(xp, s: Signals, p: TermParams):
+    return xp.sum(s.entry_flux, axis=(1, 2))
+
+
+@term("greatest distance (m) the first ball moved from its start at or after the nose first "
+      "touched it: a ball the nose bounced off its support (0 without a nose contact)")
+def ball_moved_by_nose(xp, s: Signals, p: TermParams):
+    return s.ball_moved_after("nose")
+
+
+@term("greatest distance (m) the first ball moved from its start at or after the tail (flukes) "
+      "first touched it (0 without a tail contact)")
+def ball_moved_by_tail(xp, s: Signals, p: TermParams):
+    return s.ball_moved_after("tail")
 
 
 def evaluate_terms(xp, s: Signals, terms) -> list:

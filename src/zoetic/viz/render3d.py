@@ -268,8 +268,9 @@ def _mesh(bodies: Sequence[Body], colors) -> _Mesh:
     return _Mesh(np.concatenate(faces), np.concatenate(color), np.concatenate(closed))
 
 
-def _face_items(pos, mesh: _Mesh, eye, rot, focal, size, medium) -> list[tuple]:
-    """Return (depth, kind 0, flat screen coords, RGB) items for the visible triangles."""
+def _face_items(pos, mesh: _Mesh, eye, rot, focal, size, medium, side: int = 0) -> list[tuple]:
+    """Return (depth, kind 0, flat screen coords, RGB) items for the visible triangles; with
+    ``side`` 1 only their parts above a finite water surface, -1 only those below."""
     scr, z = _project(pos, eye, rot, focal, size)
     tri = pos[mesh.faces]
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
@@ -288,13 +289,15 @@ def _face_items(pos, mesh: _Mesh, eye, rot, focal, size, medium) -> list[tuple]:
         ty = tri[:, :, 1] - level
         straddle = keep & (ty.min(axis=1) < 0) & (ty.max(axis=1) > 0)
     tinted = _water_tint(col, cen, eye, medium)
+    if side and abs(level) < 1e8:
+        keep = keep & (straddle | ((cen[:, 1] >= level) == (side > 0)))
     idx = np.flatnonzero(keep & ~straddle)
     coords = scr[mesh.faces[idx]].reshape(len(idx), 6).tolist()
     rgb = np.clip(tinted[idx], 0, 255).astype(int).tolist()
     items = [(d, 0, c, tuple(k)) for d, c, k in zip(depth[idx].tolist(), coords, rgb, strict=True)]
     for f in np.flatnonzero(straddle):
-        for part in _split(tri[f], level):
-            if len(part) < 3:
+        for k, part in enumerate(_split(tri[f], level)):
+            if len(part) < 3 or (side and (k == 0) != (side > 0)):
                 continue
             pc = _water_tint(col[f][None], part.mean(axis=0)[None], eye, medium)[0]
             flat = _project(part, eye, rot, focal, size)[0].ravel().tolist()

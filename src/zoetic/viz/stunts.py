@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -41,3 +42,396 @@ def plot_score(
     if title:
         axes[0].set_title(title, fontsize=9)
     return save_figure(fig, path)
+
+
+# ---------------------------------------------------------------- the stunt's video
+
+_BALL_COLOR = np.array([236.0, 70, 60])
+_POST_COLOR = np.array([222.0, 214, 196])
+_BAR_COLOR = np.array([250.0, 196, 40])
+_TILE_COLORS = (np.array([206.0, 226, 232]), np.array([180.0, 208, 220]))
+_COPING = np.array([236.0, 232, 222])
+_WATER_SHEET = (64, 160, 200, 70)  # RGBA of the surface drawn over what is under it
+_SPRAY = np.array([236.0, 246, 255])
+
+
+@dataclass(frozen=True)
+class Pool:
+    """The pool drawn around a stunt (display only: the physics has open water).
+
+    depth: its floor below the surface (m); margin: the end walls beyond the stunt's extent
+    along x, and the far wall beyond it along z (m); rim: the walls' height above the water."""
+
+    depth: float = 4.0
+    margin: float = 2.0
+    rim: float = 0.3
+
+
+@dataclass(frozen=True)
+class Splash:
+    """Spray launched where body faces crossed the surface: time (s), point (3,), and the
+    crossing's area x normal speed (m^3/s; going in or coming out)."""
+
+    times: np.ndarray  # (E,)
+    points: np.ndarray  # (E, 3)
+    flux: np.ndarray  # (E,)
+
+
+def surface_crossings(body, positions: np.ndarray, times: np.ndarray, level: float) -> Splash:
+    """Return the faces' surface crossings of one recorded motion (R, N, 3) as spray sources
+    (the splash measure's own per-face crossings, ``Signals.crossing_flux``)."""
+    from zoetic.tasks.terms import BodyFrame, Signals
+
+    pos = np.asarray(positions, float)[None]
+    r = pos.shape[1]
+    s = Signals(np, BodyFrame.of(body), pos, np.zeros((1, r, 0)), np.asarray(times, float),
+                level, 1.0)  # fmt: skip
+    flux = np.abs(np.nan_to_num(s.crossing_flux[0]))  # (R-1, P)
+    rows, faces = np.nonzero(flux > 0)
+    c = s.face_centres[0]
+    pts = 0.5 * (c[rows, faces] + c[rows + 1, faces])
+    pts[:, 1] = level
+    t = 0.5 * (np.asarray(times)[rows] + np.asarray(times)[rows + 1])
+    return Splash(t, pts, flux[rows, faces])
+
+
+def spray_particles(splash: Splash, level: float, gravity: float = 9.81, per_flux: float = 150.0,
+                    seed: int = 0):  # fmt: skip
+    """Return a function of time t giving the spray drops (D, 3) in the air then: each
+    crossing throws round(per_flux x its area x normal speed) drops (at most 60) up and out
+    at speeds that grow with it; they fly ballistically until they fall back in."""
+    rng = np.random.default_rng(seed)
+    t0, p0, v0 = [], [], []
+    for t, p, f in zip(splash.times, splash.points, splash.flux, strict=True):
+        n = int(min(60, round(per_flux * f)))
+        if n == 0:
+            continue
+        up = (1.0 + 2.0 * min(1.0, f)) * rng.uniform(0.6, 1.4, n)
+        side = 0.5 * up[:, None] * rng.normal(0.0, 0.6, (n, 2))
+        t0.append(np.full(n, t))
+        p0.append(p + rng.normal(0.0, 0.05, (n, 3)) * [1, 0, 1])
+        v0.append(np.stack([side[:, 0], up, side[:, 1]], axis=1))
+    if not t0:
+        return lambda t: np.zeros((0, 3))
+    t0a, p0a, v0a = np.concatenate(t0), np.concatenate(p0), np.concatenate(v0)
+
+    def at(t: float) -> np.ndarray:
+        dt = t - t0a
+        p = p0a + v0a * dt[:, None]
+        p[:, 1] -= 0.5 * gravity * dt**2
+        return p[(dt >= 0) & (p[:, 1] >= level)]
+
+    return at
+
+
+def subdivision(faces: np.ndarray, n_nodes: int, levels: int = 2) -> tuple[np.ndarray, np.ndarray]:
+    """Return (S, faces') of ``levels`` Loop subdivisions of a triangle mesh: the display
+    surface's vertices are S @ nodes (a fixed linear map, so each frame costs one product)
+    and its triangles faces'. Vertices on an open edge keep their place."""
+    s = np.eye(n_nodes)
+    f = np.asarray(faces, int)
+    for _ in range(levels):
+        n = s.shape[0]
+        e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+        opp = np.concatenate([f[:, 2], f[:, 0], f[:, 1]])
+        edges, inv = np.unique(e, axis=0, return_inverse=True)
+        inv = inv.reshape(-1)
+        m = np.zeros((n + len(edges), n))
+        nbr = [set() for _ in range(n)]
+        boundary = np.zeros(n, bool)
+        for k, (a, b) in enumerate(edges):
+            nbr[a].add(b)
+            nbr[b].add(a)
+            others = opp[inv == k]
+            if len(others) == 2:
+                m[n + k, [a, b]] = 3 / 8
+                m[n + k, others] += 1 / 8
+            else:
+                m[n + k, [a, b]] = 1 / 2
+                boundary[[a, b]] = True
+        for v in range(n):
+            k = len(nbr[v])
+            if boundary[v] or k == 0:
+                m[v, v] = 1.0
+                continue
+            beta = 3 / (8 * k) if k > 3 else 3 / 16
+            m[v, v] = 1 - k * beta
+            m[v, list(nbr[v])] = beta
+        mid = n + inv.reshape(3, -1).T  # (F, 3): edge points of (01, 12, 20)
+        a, b, c = f.T
+        ab, bc, ca = mid.T
+        f = np.concatenate([np.stack(x, 1) for x in
+                            ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])  # fmt: skip
+        s = m @ s
+    return s, f
+
+
+def countershading(body, sub: np.ndarray, faces: np.ndarray, color) -> np.ndarray:
+    """Return (F, 3) colours of the display surface's triangles: a dolphin's countershading,
+    the animal's colour darkened on its back, blending to a pale belly (by the height of each
+    triangle in the rest pose relative to the centre of mass)."""
+    rest = sub @ np.asarray(body.rest_pos, float)
+    com_y = float(body.mass @ body.rest_pos[:, 1] / body.total_mass)
+    y = rest[faces].mean(axis=1)[:, 1] - com_y
+    span = max(float(np.abs(y).max()), 1e-9)
+    t = np.clip(0.5 - 1.2 * y / span, 0.0, 1.0)[:, None]  # 0 on the back, 1 on the belly
+    base = np.asarray(color, float)[:3]
+    return (0.6 * base) * (1 - t) + np.array([232.0, 234, 238]) * t
+
+
+def stunt_camera(points: np.ndarray, times: np.ndarray, size: tuple[int, int], fov: float,
+                 direction: np.ndarray, window: float = 0.5, smoothing: float = 0.4,
+                 level: float = 0.0) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Return (R, 3) eyes and targets of a camera that frames the whole stunt: at each record
+    the bounding box of ``points`` (R, M, 3: body, balls, hurdle) over the surrounding
+    ``window`` s, its centre smoothed over ``smoothing`` s, seen from ``direction`` (unit, from
+    the target to the eye) at one distance that fits the largest such box."""
+    from scipy.ndimage import gaussian_filter1d, maximum_filter1d, minimum_filter1d
+
+    pts = np.asarray(points, float)
+    lo = np.nanmin(np.where(np.isfinite(pts), pts, np.inf), axis=1)
+    hi = np.nanmax(np.where(np.isfinite(pts), pts, -np.inf), axis=1)
+    ok = np.isfinite(lo).all(1) & np.isfinite(hi).all(1)
+    lo[~ok], hi[~ok] = lo[ok][0] if ok.any() else 0.0, hi[ok][0] if ok.any() else 1.0
+    steps = np.diff(times)
+    dt = float(np.median(steps[steps > 0])) if (steps > 0).any() else 1.0
+    w = min(len(times), max(1, int(round(window / dt))))
+    lo = minimum_filter1d(lo, 2 * w + 1, axis=0, mode="nearest")
+    hi = maximum_filter1d(hi, 2 * w + 1, axis=0, mode="nearest")
+    centre = 0.5 * (lo + hi)
+    if len(times) > 1:
+        centre = gaussian_filter1d(centre, max(smoothing / dt, 1e-3), axis=0, mode="nearest")
+    half = 0.5 * (hi - lo).max(axis=0) + 0.15  # the largest box, plus a margin
+    tan = np.tan(np.radians(fov) / 2)
+    right = np.array([direction[2], 0.0, -direction[0]])
+    right /= max(float(np.linalg.norm(right)), 1e-9)
+    up = np.cross(direction, right)
+    width, height = float(half @ np.abs(right)), float(half @ np.abs(up))
+    dist = max(height / tan, width / (size[0] / size[1] * tan)) + 0.5 * half @ np.abs(direction)
+    eye = centre + dist * direction
+    eye[:, 1] = np.maximum(eye[:, 1], level + 0.15 * dist)  # above the water
+    return eye, centre
+
+
+def _quad_items(quads, colors, eye, rot, focal, size, medium) -> list[tuple]:
+    """Painter items for flat polygons (k, 3) split at the water surface, tinted below it."""
+    from zoetic.viz.render3d import _project, _split, _water_tint
+
+    level = medium.water_level
+    items = []
+    for q, col in zip(quads, colors, strict=True):
+        for part in _split(np.asarray(q, float), level):
+            if len(part) < 3:
+                continue
+            _, z = _project(part, eye, rot, focal, size)
+            if (z <= 0.05).any():
+                continue
+            c = _water_tint(np.asarray(col, float)[None], part.mean(0)[None], eye, medium)[0]
+            flat = _project(part, eye, rot, focal, size)[0].ravel().tolist()
+            items.append((float(z.max()), 0, flat, tuple(np.clip(c, 0, 255).astype(int))))
+    return items
+
+
+def _pool_quads(lo: np.ndarray, hi: np.ndarray, pool: Pool, level: float, eye: np.ndarray):
+    """The pool's far and end walls as tiled bands (quads, colours), the near side left open."""
+    x0, x1 = lo[0] - pool.margin, hi[0] + pool.margin
+    zfar = hi[2] + pool.margin if eye[2] < 0.5 * (lo[2] + hi[2]) else lo[2] - pool.margin
+    znear = 2 * (0.5 * (lo[2] + hi[2])) - zfar
+    bottom, top = level - pool.depth, level + pool.rim
+    quads, colors = [], []
+    bands = np.arange(bottom, level, 0.5).tolist() + [level, top]
+    for k, (y0, y1) in enumerate(zip(bands[:-1], bands[1:], strict=True)):
+        col = _COPING if y0 >= level else _TILE_COLORS[k % 2]
+        quads.append([[x0, y0, zfar], [x1, y0, zfar], [x1, y1, zfar], [x0, y1, zfar]])
+        colors.append(col)
+        for x in (x0, x1):
+            quads.append([[x, y0, znear], [x, y0, zfar], [x, y1, zfar], [x, y1, znear]])
+            colors.append(0.9 * col)
+    return quads, colors, (x0, x1, min(zfar, znear), max(zfar, znear))
+
+
+def stunt_frames(body, positions: np.ndarray, times: np.ndarray, medium, objects=(),
+                 balls: np.ndarray | None = None, size: tuple[int, int] = (640, 360),
+                 pool: Pool | None = None, title: str = "", azimuth: float = 75.0,
+                 elevation: float = 14.0, fov: float = 45.0):  # fmt: skip
+    """Yield (H, W, 3) uint8 frames of a stunt: the dolphin as a smooth shaded surface over its
+    lattice, the pool (floor, walls, a translucent tinted surface), the trick's ball, post and
+    bar, and spray where the body crosses the surface; the camera frames the whole stunt.
+
+    positions (R, N, 3) and balls (R, K, 3) at ``times`` (R,); objects: the trick's objects."""
+    from PIL import Image, ImageDraw
+
+    from zoetic.physics.media import get_medium
+    from zoetic.physics.objects import Ball, Box, Cylinder
+    from zoetic.viz.render3d import (
+        _TEXT,
+        _draw_buoy,
+        _face_items,
+        _font,
+        _Mesh,
+        _project,
+        _water_tint,
+        background,
+        body_color,
+        look_at,
+    )
+
+    medium = get_medium(medium)
+    pool = pool or Pool()
+    level = medium.water_level if abs(medium.water_level) < 1e8 else 0.0
+    times = np.asarray(times, float)
+    pos = np.asarray(positions, float)
+    nb = 0 if balls is None else np.asarray(balls).shape[1]
+    bl = np.zeros((len(times), 0, 3)) if balls is None else np.asarray(balls, float)
+    ball_objs = [o for o in objects if isinstance(o, Ball)]
+    fixed = [o for o in objects if isinstance(o, Cylinder | Box)]
+    fixed_pts = []
+    for o in fixed:
+        c = np.asarray(o.center, float)
+        if isinstance(o, Cylinder):
+            d = np.zeros(3)
+            d["xyz".index(o.axis)] = 0.5 * o.length
+            top = c + d
+            fixed_pts += [top, c - d] if o.axis != "y" else [top]
+        else:
+            fixed_pts += [c - o.half_size, c + o.half_size]
+    fp = np.asarray(fixed_pts).reshape(-1, 3)
+    radii = np.array([ball_objs[k].radius if k < len(ball_objs) else 0.15 for k in range(nb)])
+    ball_box = [bl + radii[:, None] * np.eye(3)[i] * sign for i in range(3) for sign in (-1, 1)]
+    frame_pts = np.concatenate([pos, *ball_box, np.broadcast_to(fp, (len(times), *fp.shape))],
+                               axis=1)  # fmt: skip
+    az, el = np.radians(azimuth), np.radians(elevation)
+    direction = np.array([-np.cos(el) * np.cos(az), np.sin(el), -np.cos(el) * np.sin(az)])
+    eyes, targets = stunt_camera(frame_pts, times, size, fov, direction, level=level)
+    fin = np.isfinite(frame_pts).all(axis=2)
+    lo = np.min(np.where(fin[..., None], frame_pts, np.inf), axis=(0, 1))
+    hi = np.max(np.where(fin[..., None], frame_pts, -np.inf), axis=(0, 1))
+    quads, qcols, (px0, px1, pz0, pz1) = _pool_quads(lo, hi, pool, level, eyes[0])
+    sub, faces = subdivision(body.faces, body.n_nodes)
+    mesh = _Mesh(faces, countershading(body, sub, faces, body_color(body)),
+                 np.ones(len(faces), bool))  # fmt: skip
+    spray = spray_particles(surface_crossings(body, pos, times, level), level, medium.gravity)
+    w, h = size
+    focal = 0.5 * h / np.tan(np.radians(fov) / 2)
+    xs = ((np.arange(w) + 0.5 - w / 2) / focal).astype(np.float32)
+    ys = ((h / 2 - np.arange(h) - 0.5) / focal).astype(np.float32)
+    font = _font(max(10, h // 22))
+    sheet = [[px0, level, pz0], [px1, level, pz0], [px1, level, pz1], [px0, level, pz1]]
+    for r in range(len(times)):
+        eye, rot = eyes[r], look_at(eyes[r], targets[r])
+        img = Image.fromarray(background(medium, eye, rot, xs, ys, level - pool.depth))
+        verts = sub @ np.nan_to_num(pos[r])
+        below, above = [], []
+        for q, c in zip(quads, qcols, strict=True):
+            for it in _quad_items([q], [c], eye, rot, focal, size, medium):
+                (above if np.mean(np.asarray(q)[:, 1]) >= level else below).append(it)
+        for o in fixed:
+            c = np.asarray(o.center, float)
+            if isinstance(o, Cylinder):
+                d = np.zeros(3)
+                d["xyz".index(o.axis)] = 0.5 * o.length
+                col = _BAR_COLOR if o.axis != "y" else _POST_COLOR
+                ends = np.stack([c - d, c + d])
+                if o.axis == "y":  # a post stands on the pool's floor
+                    ends[0, 1] = min(ends[0, 1], level - pool.depth)
+                segments = [(ends, col)]
+                if o.axis != "y":  # a bar rests on two stands at its ends
+                    segments += [(np.stack([e, [e[0], level - pool.depth, e[2]]]), _POST_COLOR)
+                                 for e in ends]  # fmt: skip
+                parts = [(p, cl) for seg, cl in segments for p in _segment_split(seg, level)]
+                for part, col in parts:
+                    scr, z = _project(part, eye, rot, focal, size)
+                    if (z > 0.05).all():
+                        tint = _water_tint(col[None], part.mean(0)[None], eye, medium)[0]
+                        wpx = max(2.0, 2 * focal * o.radius / z.mean())
+                        it = (float(z.mean()), 2, (scr.ravel().tolist(), wpx),
+                              tuple(np.clip(tint, 0, 255).astype(int)))  # fmt: skip
+                        (above if part[:, 1].mean() >= level else below).append(it)
+        for k in range(nb):
+            rad = radii[k]
+            scr, z = _project(bl[r, k][None], eye, rot, focal, size)
+            if z[0] > 0.05 + rad:
+                tint = _water_tint(_BALL_COLOR[None], bl[r, k][None], eye, medium)[0]
+                it = (float(z[0]), 1, (scr[0, 0], scr[0, 1], focal * rad / z[0]), tint)
+                (above if bl[r, k, 1] >= level else below).append(it)
+        below += _face_items(verts, mesh, eye, rot, focal, size, medium, side=-1)
+        above += _face_items(verts, mesh, eye, rot, focal, size, medium, side=1)
+        for p in spray(times[r]):
+            scr, z = _project(p[None], eye, rot, focal, size)
+            if z[0] > 0.05:
+                above.append((float(z[0]), 3, (scr[0, 0], scr[0, 1],
+                                               max(1.5, focal * 0.025 / z[0])), _SPRAY))
+        _paint(ImageDraw.Draw(img), below, _draw_buoy)
+        layer = Image.new("RGBA", img.size, (0, 0, 0, 0))
+        scr, z = _project(np.asarray(sheet, float), eye, rot, focal, size)
+        if (z > 0.05).all():
+            ImageDraw.Draw(layer).polygon(scr.ravel().tolist(), fill=_WATER_SHEET)
+        img = Image.alpha_composite(img.convert("RGBA"), layer).convert("RGB")
+        draw = ImageDraw.Draw(img)
+        _paint(draw, above, _draw_buoy)
+        label = f"t = {times[r]:.2f} s" + (f"   {title}" if title else "")
+        draw.text((8, 6), label, font=font, **_TEXT)
+        yield np.array(img)
+
+
+def _segment_split(ends: np.ndarray, level: float) -> list[np.ndarray]:
+    """Return a segment (2, 3) as its parts above and below y = level."""
+    a, b = ends
+    sa, sb = a[1] - level, b[1] - level
+    if sa * sb >= 0:
+        return [ends]
+    p = a + (b - a) * (sa / (sa - sb))
+    return [np.stack([a, p]), np.stack([p, b])]
+
+
+def _paint(draw, items: list[tuple], draw_ball) -> None:
+    """Draw painter items far to near: 0 polygons, 1 balls, 2 thick segments, 3 drops."""
+    for _, kind, geom, col in sorted(items, key=lambda it: -it[0]):
+        if kind == 0:
+            draw.polygon(geom, fill=col, outline=col)
+        elif kind == 1:
+            draw_ball(draw, *geom, np.asarray(col, float))
+        elif kind == 2:
+            draw.line(geom[0], fill=col, width=int(round(geom[1])))
+        else:
+            x, y, rr = geom
+            c = tuple(int(v) for v in col)
+            draw.ellipse((x - rr, y - rr, x + rr, y + rr), fill=c)
+
+
+def render_stunt_video(body, positions: np.ndarray, times: np.ndarray, medium,
+                       path: str | Path, objects=(), balls: np.ndarray | None = None,
+                       fps: float = 30, **kw) -> Path:  # fmt: skip
+    """Write the stunt's video (``stunt_frames`` at ``fps``) to an MP4; returns the path."""
+    from zoetic.viz.render3d import resample
+    from zoetic.viz.video import write_mp4
+
+    times = np.asarray(times, float)
+    arrays = [np.asarray(positions, float)]
+    if balls is not None and np.asarray(balls).shape[1]:
+        arrays.append(np.asarray(balls, float))
+    t_new, res = resample(arrays, times, fps)
+    bl = res[1] if len(res) > 1 else None
+    return write_mp4(stunt_frames(body, res[0], t_new, medium, objects, bl, **kw), path, fps)
+
+
+def frame_strip(frames: Sequence[np.ndarray], path: str | Path, labels: Sequence[str] = ()) -> Path:
+    """Write frames side by side (a strip like Plate 5 (a)-(d)) with optional labels; returns
+    the path."""
+    import io
+
+    from PIL import Image, ImageDraw
+
+    from zoetic.io import atomic_write_bytes
+    from zoetic.viz.render3d import _TEXT, _font
+
+    h, w = frames[0].shape[:2]
+    strip = Image.new("RGB", (w * len(frames), h))
+    draw = ImageDraw.Draw(strip)
+    for k, f in enumerate(frames):
+        strip.paste(Image.fromarray(np.asarray(f, np.uint8)), (k * w, 0))
+        if k < len(labels):
+            draw.text((k * w + 8, h - 24), labels[k], font=_font(max(10, h // 22)), **_TEXT)
+    buf = io.BytesIO()
+    strip.save(buf, format="PNG")
+    return atomic_write_bytes(path, buf.getvalue())
