@@ -245,8 +245,30 @@ def shark() -> dict:
     )
 
 
-def dolphin() -> dict:
+# The dolphin (issue 10): the fish lattice on its side, re-massed, re-strengthened and with a
+# drag coefficient per face group (docs/animals.md, "The dolphin"): mass units of each ring and
+# of each fluke tip; a factor on each spring kind's stiffness; the face law's coefficient
+# (a factor on the medium's) per group of faces; the built-in stroke frequency.
+DOLPHIN = {
+    "rings": [6.6, 9.0, 6.6, 3.3, 3.3],
+    "tip_mass": 0.5,
+    "k_scale": {"cross": 1.0, "muscle": 1.0, "structural": 1.0, "fin": 1.0},
+    "drag": {"head": 1.0, "trunk": 1.0, "peduncle": 1.0, "flukes": 1.0},
+    "wave_hz": FISH_WAVE_HZ,
+    "dt": 0.005,
+}
+
+
+def dolphin(**params) -> dict:
+    par = {**DOLPHIN, **params}
     lat, rings = fish_lattice(rotate_on_side=True)
+    for ring, units in zip(rings, par["rings"], strict=True):
+        for i in ring:
+            lat.nodes[i]["mass"] = round(units * FISH_M, 6)
+    for nd in lat.nodes[-2:]:
+        nd["mass"] = round(par["tip_mass"] * FISH_M, 6)
+    for s in lat.springs:
+        s["stiffness"] = round(s["stiffness"] * par["k_scale"][s["kind"]], 4)
     doc_acts = []
     for seg in ("front", "middle", "back"):  # left muscles now lie on the back (dorsal)
         doc_acts.append({"name": f"{seg}_dorsal", "kind": "muscle", "side": "center"})
@@ -284,23 +306,32 @@ def dolphin() -> dict:
         phases[f"{seg}_ventral"] = round(FISH_WAVE_LAG * i + 0.5, 3)
     lat.damp_springs(10.0)
     print(f"dolphin omega_max = {lat.omega_max():7.1f} rad/s")
-    return lat.doc(
+    doc = lat.doc(
         name="dolphin",
         description=(
             "Heaviside's dolphin: the shark lattice on its side (muscles flap the tail up and "
             "down) with two pectoral fins; lives below a free surface and flies above it."
         ),
         medium="sea",
-        dt=0.005,
+        dt=par["dt"],
         start_offset=[0.0, -1.0, 0.0],
         head="nose",
         forward=[1.0, 0.0, 0.0],
         defaults={"node_damping": 0.05, "spring_damping": 0.0},
         actuators=doc_acts,
         fins=fins,
-        wave={"frequency": FISH_WAVE_HZ, "amplitude": 1.0, "offset": 0.0, "phases": phases},
+        wave={"frequency": par["wave_hz"], "amplitude": 1.0, "offset": 0.0, "phases": phases},
         eyes=FISH_EYES,
     )
+    # faces in fish_lattice's order: 4 nose triangles and 4 quads ring 1 -> 2 face forward
+    # (the head), 4 quads ring 2 -> 3 (the trunk) and 8 quads ring 3 -> 5 (the tail stock)
+    # face backward: they meet the water only moving sideways; the last 4 are the flukes
+    groups = ["head"] * 8 + ["trunk"] * 4 + ["peduncle"] * 8 + ["flukes"] * 4
+    assert len(groups) == len(doc["faces"])
+    for face, group in zip(doc["faces"], groups, strict=True):
+        if par["drag"][group] != 1.0:
+            face["drag"] = par["drag"][group]
+    return doc
 
 
 # ----------------------------------------------------------------------------- snake
