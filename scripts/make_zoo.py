@@ -251,11 +251,12 @@ def shark() -> dict:
 # (a factor on the medium's) per group of faces; the built-in stroke frequency.
 DOLPHIN = {
     "rings": [6.6, 9.0, 6.6, 3.3, 3.3],
-    "tip_mass": 0.5,
-    "k_scale": {"cross": 1.0, "muscle": 1.0, "structural": 1.0, "fin": 1.0},
-    "drag": {"head": 1.0, "trunk": 1.0, "peduncle": 1.0, "flukes": 1.0},
-    "wave_hz": FISH_WAVE_HZ,
-    "dt": 0.005,
+    "tip_mass": 1.5,
+    "k_scale": {"cross": 3.0, "muscle": 3.0, "structural": 3.0, "fin": 9.0},
+    "drag": {"head": 0.12, "trunk": 1.0, "peduncle": 0.3, "flukes": 2.0, "edges": 0.12},
+    "wave_hz": 4.0,
+    "dt": 0.003,
+    "scale": 1.635,
 }
 
 
@@ -267,8 +268,12 @@ def dolphin(**params) -> dict:
             lat.nodes[i]["mass"] = round(units * FISH_M, 6)
     for nd in lat.nodes[-2:]:
         nd["mass"] = round(par["tip_mass"] * FISH_M, 6)
+    sc = par["scale"]  # geometric similarity: lengths x sc, masses and stiffnesses x sc^3
+    for nd in lat.nodes:
+        nd["pos"] = [round(p * sc, 6) for p in nd["pos"]]
+        nd["mass"] = round(nd["mass"] * sc**3, 6)
     for s in lat.springs:
-        s["stiffness"] = round(s["stiffness"] * par["k_scale"][s["kind"]], 4)
+        s["stiffness"] = round(s["stiffness"] * par["k_scale"][s["kind"]] * sc**3, 4)
     doc_acts = []
     for seg in ("front", "middle", "back"):  # left muscles now lie on the back (dorsal)
         doc_acts.append({"name": f"{seg}_dorsal", "kind": "muscle", "side": "center"})
@@ -296,7 +301,7 @@ def dolphin(**params) -> dict:
                 "nodes": [names[i] for i in ids],
                 "forward": ["nose", names[tail_of[0]]],
                 "span": [names[span[0]], names[span[1]]],
-                "area": 0.02,
+                "area": round(0.02 * sc**2, 6),
                 "angle_range": [-0.5, 0.5],
             }
         )
@@ -325,8 +330,9 @@ def dolphin(**params) -> dict:
     )
     # faces in fish_lattice's order: 4 nose triangles and 4 quads ring 1 -> 2 face forward
     # (the head), 4 quads ring 2 -> 3 (the trunk) and 8 quads ring 3 -> 5 (the tail stock)
-    # face backward: they meet the water only moving sideways; the last 4 are the flukes
-    groups = ["head"] * 8 + ["trunk"] * 4 + ["peduncle"] * 8 + ["flukes"] * 4
+    # face backward: they meet the water only moving sideways; then the flukes' two sides and
+    # their two leading edges (the triangles from the tail stock out to the fluke tips)
+    groups = ["head"] * 8 + ["trunk"] * 4 + ["peduncle"] * 8 + ["flukes"] * 2 + ["edges"] * 2
     assert len(groups) == len(doc["faces"])
     for face, group in zip(doc["faces"], groups, strict=True):
         if par["drag"][group] != 1.0:
