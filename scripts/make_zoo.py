@@ -255,7 +255,7 @@ DOLPHIN = {
     "k_scale": {"cross": 3.0, "muscle": 3.0, "structural": 3.0, "fin": 9.0},
     "drag": {"head": 0.12, "trunk": 1.0, "peduncle": 0.3, "flukes": 2.0, "edges": 0.12},
     "wave_hz": 4.0,
-    "dt": 0.003,
+    "dt": 0.0025,
     "scale": 1.635,
 }
 
