@@ -314,8 +314,9 @@ def dolphin(**params) -> dict:
     doc = lat.doc(
         name="dolphin",
         description=(
-            "Heaviside's dolphin: the shark lattice on its side (muscles flap the tail up and "
-            "down) with two pectoral fins; lives below a free surface and flies above it."
+            "Heaviside's dolphin (1.70 m, 52 kg): the fish lattice scaled up and turned on its "
+            "side (muscles flap the tail up and down), streamlined head, hydrofoil flukes and "
+            "two pectoral fins; lives below a free surface and flies above it."
         ),
         medium="sea",
         dt=par["dt"],
