@@ -245,8 +245,35 @@ def shark() -> dict:
     )
 
 
-def dolphin() -> dict:
+# The dolphin (issue 10): the fish lattice on its side, re-massed, re-strengthened and with a
+# drag coefficient per face group (docs/animals.md, "The dolphin"): mass units of each ring and
+# of each fluke tip; a factor on each spring kind's stiffness; the face law's coefficient
+# (a factor on the medium's) per group of faces; the built-in stroke frequency.
+DOLPHIN = {
+    "rings": [6.6, 9.0, 6.6, 3.3, 3.3],
+    "tip_mass": 1.5,
+    "k_scale": {"cross": 3.0, "muscle": 3.0, "structural": 3.0, "fin": 9.0},
+    "drag": {"head": 0.12, "trunk": 1.0, "peduncle": 0.3, "flukes": 2.0, "edges": 0.12},
+    "wave_hz": 4.0,
+    "dt": 0.0025,
+    "scale": 1.635,
+}
+
+
+def dolphin(**params) -> dict:
+    par = {**DOLPHIN, **params}
     lat, rings = fish_lattice(rotate_on_side=True)
+    for ring, units in zip(rings, par["rings"], strict=True):
+        for i in ring:
+            lat.nodes[i]["mass"] = round(units * FISH_M, 6)
+    for nd in lat.nodes[-2:]:
+        nd["mass"] = round(par["tip_mass"] * FISH_M, 6)
+    sc = par["scale"]  # geometric similarity: lengths x sc, masses and stiffnesses x sc^3
+    for nd in lat.nodes:
+        nd["pos"] = [round(p * sc, 6) for p in nd["pos"]]
+        nd["mass"] = round(nd["mass"] * sc**3, 6)
+    for s in lat.springs:
+        s["stiffness"] = round(s["stiffness"] * par["k_scale"][s["kind"]] * sc**3, 4)
     doc_acts = []
     for seg in ("front", "middle", "back"):  # left muscles now lie on the back (dorsal)
         doc_acts.append({"name": f"{seg}_dorsal", "kind": "muscle", "side": "center"})
@@ -274,7 +301,7 @@ def dolphin() -> dict:
                 "nodes": [names[i] for i in ids],
                 "forward": ["nose", names[tail_of[0]]],
                 "span": [names[span[0]], names[span[1]]],
-                "area": 0.02,
+                "area": round(0.02 * sc**2, 6),
                 "angle_range": [-0.5, 0.5],
             }
         )
@@ -284,23 +311,34 @@ def dolphin() -> dict:
         phases[f"{seg}_ventral"] = round(FISH_WAVE_LAG * i + 0.5, 3)
     lat.damp_springs(10.0)
     print(f"dolphin omega_max = {lat.omega_max():7.1f} rad/s")
-    return lat.doc(
+    doc = lat.doc(
         name="dolphin",
         description=(
-            "Heaviside's dolphin: the shark lattice on its side (muscles flap the tail up and "
-            "down) with two pectoral fins; lives below a free surface and flies above it."
+            "Heaviside's dolphin (1.70 m, 52 kg): the fish lattice scaled up and turned on its "
+            "side (muscles flap the tail up and down), streamlined head, hydrofoil flukes and "
+            "two pectoral fins; lives below a free surface and flies above it."
         ),
         medium="sea",
-        dt=0.005,
+        dt=par["dt"],
         start_offset=[0.0, -1.0, 0.0],
         head="nose",
         forward=[1.0, 0.0, 0.0],
         defaults={"node_damping": 0.05, "spring_damping": 0.0},
         actuators=doc_acts,
         fins=fins,
-        wave={"frequency": FISH_WAVE_HZ, "amplitude": 1.0, "offset": 0.0, "phases": phases},
+        wave={"frequency": par["wave_hz"], "amplitude": 1.0, "offset": 0.0, "phases": phases},
         eyes=FISH_EYES,
     )
+    # faces in fish_lattice's order: 4 nose triangles and 4 quads ring 1 -> 2 face forward
+    # (the head), 4 quads ring 2 -> 3 (the trunk) and 8 quads ring 3 -> 5 (the tail stock)
+    # face backward: they meet the water only moving sideways; then the flukes' two sides and
+    # their two leading edges (the triangles from the tail stock out to the fluke tips)
+    groups = ["head"] * 8 + ["trunk"] * 4 + ["peduncle"] * 8 + ["flukes"] * 2 + ["edges"] * 2
+    assert len(groups) == len(doc["faces"])
+    for face, group in zip(doc["faces"], groups, strict=True):
+        if par["drag"][group] != 1.0:
+            face["drag"] = par["drag"][group]
+    return doc
 
 
 # ----------------------------------------------------------------------------- snake

@@ -188,3 +188,16 @@ def test_a_bad_eyes_entry_is_refused_naming_the_file_and_entry(change, match):
     doc = _shark_doc()
     doc["eyes"].update(change)
     _expect(doc, match)
+
+
+def test_a_face_may_declare_its_own_drag_coefficient():
+    doc = _shark_doc()
+    doc["faces"][5]["drag"] = 0.25
+    body = compile_body(parse_animal(doc, source="ok.toml"))
+    assert body.panel_drag[5] == 0.25
+    assert np.all(np.delete(body.panel_drag, 5) == 1.0)  # the default: the medium's own
+    doc["faces"][5]["drag"] = -1.0
+    _expect(doc, r"faces\[5\]: drag must be at least 0")
+    doc["faces"][5]["drag"] = 1.0
+    doc["faces"][5]["drgg"] = 2.0
+    _expect(doc, r"faces\[5\].*drgg")

@@ -207,3 +207,19 @@ def test_parallel_annealing_chains_and_frequency_controllers(tmp_path, short_tas
     assert run.log.batches[1:] == [8] * (len(run.log.batches) - 1)
     assert run.setup.optimizer.best_f < run.log.E[0]
     assert run.best_controller().kind == "frequency"
+
+
+def test_a_task_that_requires_fins_learns_them_and_others_hold_them_level():
+    # a dolphin cannot bend left or right: its turn task requires fins, so it banks on them
+    from zoetic.learn.run import build
+
+    body = load_animal("dolphin")
+    fins = [k for k, kind in enumerate(body.actuator_kind) if kind == "fin"]
+    turn = build(LearnConfig(animal="dolphin", task="turn-left-swimming", budget=10))
+    ahead = build(LearnConfig(animal="dolphin", task="move-forward", budget=10))
+    assert set(fins) <= set(turn.objective.free) and len(turn.objective.held) == 0
+    assert set(ahead.objective.held) == set(fins)
+    x = turn.optimizer.x0[None]
+    assert turn.objective.dimension == ahead.objective.dimension + len(fins) * 5
+    tables = turn.objective.tables(x + 0.1 * np.arange(x.size))  # fins move with the params
+    assert np.ptp(tables[0][:, fins]) > 0.01

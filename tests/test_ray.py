@@ -154,7 +154,7 @@ def test_stunt_search_on_ray_matches_in_process(local_ray, tmp_path, monkeypatch
     rep.save(tmp_path / "memory")
     (tmp_path / "hop.toml").write_text(
         'name = "hop"\nrequires = ["surface"]\nhorizon = 0.3\nrecord_hz = 20.0\n'
-        "[start]\ndepth = 0.5\npitch = 0.6\nspeed = 1.5\n"
+        "[start]\ndepth = 0.3\npitch = 0.6\nspeed = 1.5\n"
         "[trick]\nsegments = 2\ndurations = [0.1, 0.3]\n"
         '[[terms]]\nkind = "apex_above_surface"\nweight = -1.0\n')  # fmt: skip
     here = discover(dolphin, rep, load_trick(tmp_path / "hop.toml"), "anneal", budget=32, seed=1)

@@ -145,7 +145,8 @@ def test_a_ball_struck_from_below_rises_and_the_terms_see_contact(dolphin, reper
     the ball rises); at rest beside it, the ball stays."""
     doc = {
         "name": "strike", "horizon": 0.6, "record_hz": 50.0, "requires": ["surface"],
-        "start": {"position": [0.0, 0.0, 0.0], "depth": 0.9, "pitch": math.pi / 2,
+        "start": {"position": [0.0, 0.0, 0.0], "pitch": math.pi / 2,
+                  "depth": 0.87 * float(np.ptp(dolphin.rest_pos[:, 0])),  # nose under the ball
                   "speed": 4.0},
         "objects": [{"kind": "ball", "radius": 0.2, "mass": 0.3, "position": [0.0, 0.2, 0.0]}],
         "terms": [{"kind": "ball_rise", "weight": -1.0}, {"kind": "contact_count"},

@@ -43,6 +43,7 @@ class Body:
     faces: np.ndarray  # (F, 3) int triangles, counter-clockwise seen from outside (drawing)
     panels: np.ndarray  # (P, 4) int: the file's faces for the water (a triangle repeats c)
     panel_weights: np.ndarray  # (P, 4): each node's share of its panel (1/3 or 1/4, 0 pad)
+    panel_drag: np.ndarray  # (P,): each panel's drag coefficient, a factor on the medium's
     fin_nodes: np.ndarray  # (K, 4) int, padded with -1
     fin_forward: np.ndarray  # (K, 2) int: forward axis = x[0] - x[1]
     fin_span: np.ndarray  # (K, 2) int: span axis = x[0] - x[1]
@@ -239,6 +240,7 @@ def compile_body(spec: AnimalSpec) -> Body:
         faces=_frozen(_triangulate(spec.faces), np.int64),
         panels=_frozen(_panels(spec.faces)[0], np.int64),
         panel_weights=_frozen(_panels(spec.faces)[1], np.float64),
+        panel_drag=_frozen(spec.face_drag or np.ones(len(spec.faces)), np.float64),
         fin_nodes=_frozen(fin_nodes, np.int64),
         fin_forward=_frozen([f.forward for f in spec.fins], np.int64).reshape(kf, 2),
         fin_span=_frozen([f.span for f in spec.fins], np.int64).reshape(kf, 2),

@@ -90,6 +90,8 @@ class AnimalSpec:
     actuators: tuple[ActuatorSpec, ...]
     faces: tuple[tuple[int, ...], ...]
     fins: tuple[FinSpec, ...] = ()
+    # each face's drag coefficient, a factor on the medium's water coefficient (default 1)
+    face_drag: tuple[float, ...] | None = None
     wave: WaveSpec | None = None
     start_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
     eyes: EyesSpec | None = None
@@ -262,12 +264,13 @@ def parse_animal(doc: dict[str, Any], source: str = "<memory>") -> AnimalSpec:
             SpringSpec(a, b, stiffness, damping, length, kind, actuator, max_short, contracted)
         )
 
-    faces = []
+    faces, face_drag = [], []
     for k, raw in enumerate(top.tables("faces", LIMITS.springs)):
         t = Table(raw, f"{source}: faces[{k}]", BodyError)
         refs = _node_refs(t, "nodes", index, n, count=(3, 4))
         if len(set(refs)) != len(refs):
             raise t.fail("a face repeats a node")
+        face_drag.append(t.number("drag", 1.0, lo=0.0, hi=10.0))
         t.finish()
         faces.append(refs)
 
@@ -342,6 +345,7 @@ def parse_animal(doc: dict[str, Any], source: str = "<memory>") -> AnimalSpec:
         springs=tuple(springs),
         actuators=tuple(actuators),
         faces=tuple(faces),
+        face_drag=tuple(face_drag),
         fins=tuple(fins),
         wave=wave,
         eyes=eyes,

@@ -97,7 +97,11 @@ def build(config: LearnConfig, task: Task | None = None) -> Setup:
         )
     if m != task.nodes:
         task = parse_task({**task.to_dict(), "nodes": m}, task.source)
-    objective = Objective(task, body, template, config.medium, coupling=config.coupling)
+    # a task that requires fins learns them with the gait (a dolphin turns by banking on its
+    # pectoral fins); others hold them level (``Objective``)
+    fins = "free" if any("fins" in r.split("|") for r in task.requires) else "held"
+    objective = Objective(task, body, template, config.medium, coupling=config.coupling,
+                          fins=fins)  # fmt: skip
     lo, hi = objective.bounds()
     rng = np.random.default_rng(config.seed)
     x0 = rng.uniform(lo, hi)

@@ -46,6 +46,7 @@ class JaxBody(NamedTuple):
     muscle: jax.Array  # 1 where the spring is a muscle, else 0
     panels: jax.Array
     panel_weights: jax.Array
+    panel_drag: jax.Array  # each panel's coefficient, a factor on the medium's
     panel_mass_dt: jax.Array  # the panel's own mass divided by dt
     fin_nodes: jax.Array  # -1 mapped to 0, see fin_mask
     fin_mask: jax.Array
@@ -79,6 +80,7 @@ def jax_body(body: Body, dt: float) -> JaxBody:
         muscle=(body.spring_actuator >= 0).astype(f),
         panels=body.panels.astype(i),
         panel_weights=w.astype(f),
+        panel_drag=body.panel_drag.astype(f),
         panel_mass_dt=mf_dt.astype(f),
         fin_nodes=fin_nodes.astype(i),
         fin_mask=mask.astype(f),
@@ -128,7 +130,7 @@ def _water(m: JaxBody, x: jax.Array, v: jax.Array, level: float, drag: float) ->
     vm = jnp.einsum("pkd,pk->pd", v[m.panels], w)
     q = jnp.maximum(jnp.sum(nrm * vm, axis=-1), 0.0)
     vv = jnp.sum(vm * vm, axis=-1)
-    lim = jnp.minimum(0.5 * drag * _safe_sqrt(nn * vv), m.panel_mass_dt)
+    lim = jnp.minimum(0.5 * drag * m.panel_drag * _safe_sqrt(nn * vv), m.panel_mass_dt)
     wet = jnp.einsum("pk,pk->p", p[..., 1], w) < level
     mag = jnp.where(wet, q / nn * lim, 0.0)
     fp = -(w * mag[:, None])[..., None] * nrm[:, None, :]  # (P, 4, 3)

@@ -121,11 +121,12 @@ def _springs(
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, panels, pw, level, drag, dt):
+def _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, panels, pw, pdrag, level, drag, dt):
     """Hydrodynamic reaction on each surface panel (Tu & Terzopoulos): it opposes the normal
-    velocity of a panel moving outward, -drag * A * |v| * (n.v) * n, shared by its nodes."""
-    half_drag = HALF * drag
+    velocity of a panel moving outward, -c * drag * A * |v| * (n.v) * n, shared by its nodes
+    (c = ``pdrag``, the panel's own coefficient)."""
     for f in range(panels.shape[0]):
+        half_drag = HALF * drag * pdrag[f]
         i0 = panels[f, 0]
         i1 = panels[f, 1]
         i2 = panels[f, 2]
@@ -303,7 +304,7 @@ def _advance(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, ndamp, h, nodes):
 @njit(cache=True, fastmath=FM, parallel=True)
 def simulate_chunks(
     pos0, vel0, act, dt, record_every, chunk, vmax,
-    mass, ndamp, sa, sb, stiff, sdamp, relaxed, shorten, scol, panels, pw,
+    mass, ndamp, sa, sb, stiff, sdamp, relaxed, shorten, scol, panels, pw, pdrag,
     fin_nodes, fin_fwd, fin_span, fin_area, fin_angle, fin_act, front, back, rest_pos, med,
     rec, final_pos, final_vel, failed_step, slow_idx, fast_idx, substeps, slow_nodes, fast_nodes,
 ):  # fmt: skip
@@ -363,7 +364,9 @@ def simulate_chunks(
                 mass, sa, sb, stiff, sdamp, relaxed, shorten, scol, med, slow_idx,
             )  # fmt: skip
             if water_on:
-                _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, panels, pw, level, drag, dt)
+                _water(
+                    x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, panels, pw, pdrag, level, drag, dt
+                )  # fmt: skip
                 if fin_nodes.shape[0] > 0:
                     _fins(
                         x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb, mass, fin_nodes,

@@ -66,7 +66,8 @@ def _water(body: Body, x, v, med: Medium, dt: float) -> np.ndarray:
     speed = np.linalg.norm(vm, axis=-1)
     wet = np.einsum("bpk,pk->bp", x[:, idx, 1], w) < med.water_level
     mf = np.einsum("pk,pk->p", body.mass[idx], w) / w[:, 0]
-    mag = np.minimum(med.water_drag * 0.5 * twice_area * speed * vn, mf * vn / dt) * wet
+    c = med.water_drag * body.panel_drag
+    mag = np.minimum(c * 0.5 * twice_area * speed * vn, mf * vn / dt) * wet
     out = np.zeros_like(x)
     for k in range(4):
         out += _scatter(body.n_nodes, idx[:, k], -(mag * w[:, k])[..., None] * nhat)

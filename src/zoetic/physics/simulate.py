@@ -239,7 +239,7 @@ def _kernel_arrays(body: Body) -> tuple:
         body.mass.astype(f32), body.node_damping.astype(f32), body.spring_a, body.spring_b,
         body.stiffness.astype(f32), body.spring_damping.astype(f32), body.relaxed.astype(f32),
         shorten, scol, body.panels,
-        body.panel_weights.astype(f32), body.fin_nodes,
+        body.panel_weights.astype(f32), body.panel_drag.astype(f32), body.fin_nodes,
         body.fin_forward, body.fin_span, body.fin_area.astype(f32),
         body.fin_angle.astype(f32), body.fin_actuator, body.axis_front, body.axis_back,
         body.rest_pos.astype(f32),
