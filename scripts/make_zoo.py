@@ -381,6 +381,8 @@ def snake() -> dict:
 
 
 # ----------------------------------------------------------------------------- ray
+# The ray's numbers (docs/animals.md, "Strength of the ray", gives each one's reason and the
+# measurements behind it); ray(**changes) builds a variant, as experiments/ray_strength.py does.
 RAY = {
     "k_s": 250.0,  # N/m, structural and cross springs
     "k_m": 800.0,  # N/m, muscles
@@ -388,13 +390,12 @@ RAY = {
     "k_root": None,  # the wing root's cross springs (box node to mid-wing)
     "k_thick": 500.0,  # the wing's thickness at mid-span (upper to lower mid-wing node)
     "k_wing": None,  # the rest of the wing
-    "tail_sides": False,
     "rear": 0.5,  # stiffness factor of the passive springs of the wings' rear half
     "rear_groups": ("wing",),  # the groups the rear factor applies to
     "mass": 1.5,  # kg in all
     "wing_mass": None,  # fraction of the mass in the 24 wing nodes (None: even)
     "tip_share": 1.0,  # a wing tip node's mass relative to a mid-wing node's
-    "node_damping": 0.005,
+    "node_damping": 0.005,  # N s/m per node: skin friction, which the face law lacks
     "zeta": 10.0,  # spring damping per kg of the lighter end (s^-1)
     "thick": 0.025,  # half-thickness of the body box (m)
     "mid_thick": 0.012,  # half-thickness of the wing at mid-span (m)
@@ -531,11 +532,6 @@ def ray(**over) -> dict:
             sheet_face([nose, row[0][p], row[0][p + 1]], top)
         for p in range(1, 4):
             sheet_face([tail, row[-1][p], row[-1][p + 1]], top)
-    if par["tail_sides"]:  # close the tail cone: its two sides face left and right
-        last = stations[-1]
-        for S, sign in (("L", 1.0), ("R", -1.0)):
-            ids = [tail, last["T" + S], last["B" + S]]
-            lat.face(ids, x[ids].mean(axis=0) - np.array([0, 0, sign]))
     lat.damp_springs(par["zeta"])
     print(f"ray     omega_max = {lat.omega_max():7.1f} rad/s")
     return lat.doc(
