@@ -419,16 +419,48 @@ def snake() -> dict:
 
 
 # ----------------------------------------------------------------------------- ray
-def ray() -> dict:
+# The ray's numbers (docs/animals.md, "Strength of the ray", gives each one's reason and the
+# measurements behind it); ray(**changes) builds a variant, as experiments/ray_strength.py does.
+RAY = {
+    "k_s": 250.0,  # N/m, structural and cross springs
+    "k_m": 800.0,  # N/m, muscles
+    "k_body": None,  # per-group passive stiffness (None: k_s): body box, nose, tail
+    "k_root": None,  # the wing root's cross springs (box node to mid-wing)
+    "k_thick": 500.0,  # the wing's thickness at mid-span (upper to lower mid-wing node)
+    "k_wing": None,  # the rest of the wing
+    "rear": 0.5,  # stiffness factor of the passive springs of the wings' rear half
+    "rear_groups": ("wing",),  # the groups the rear factor applies to
+    "mass": 1.5,  # kg in all
+    "wing_mass": None,  # fraction of the mass in the 24 wing nodes (None: even)
+    "tip_share": 1.0,  # a wing tip node's mass relative to a mid-wing node's
+    "node_damping": 0.005,  # N s/m per node: skin friction, which the face law lacks
+    "zeta": 10.0,  # spring damping per kg of the lighter end (s^-1)
+    "thick": 0.025,  # half-thickness of the body box (m)
+    "mid_thick": 0.012,  # half-thickness of the wing at mid-span (m)
+    "frequency": 2.0,  # the built-in flap (Hz)
+    "lag": 0.5,  # cycles between the elevators and the depressors of the built-in flap
+    "dt": 0.005,
+}
+
+
+def ray(**over) -> dict:
+    par = {**RAY, **over}
     xs = [-0.08, -0.16, -0.24, -0.32]
     spans = [0.16, 0.26, 0.26, 0.16]
-    body_half, thick, mid_thick = 0.04, 0.025, 0.012
-    k_s, k_m = 250.0, 220.0
+    body_half, thick, mid_thick = 0.04, par["thick"], par["mid_thick"]
+    k_s, k_m = par["k_s"], par["k_m"]
     lat = Lattice()
     names = ["tipR", "midTR", "TR", "TL", "midTL", "tipL"]
     rows_top, rows_bot, stations = [], [], []
     n_nodes = 2 + 10 * len(xs)
-    m = 1.5 / n_nodes
+    m = par["mass"] / n_nodes
+    if par["wing_mass"] is not None:
+        mw = par["mass"] * par["wing_mass"]
+        m = (par["mass"] - mw) / 18
+        m_mid = mw / (16 + 8 * par["tip_share"])
+        m_tip = m_mid * par["tip_share"]
+    else:
+        m_mid = m_tip = m
     nose = lat.node("nose", [0.0, 0.0, 0.0], m)
     for k, (x, s) in enumerate(zip(xs, spans, strict=True)):
         st = {
@@ -436,12 +468,12 @@ def ray() -> dict:
             "TR": lat.node(f"s{k}_TR", [x, thick, -body_half], m),
             "BL": lat.node(f"s{k}_BL", [x, -thick, body_half], m),
             "BR": lat.node(f"s{k}_BR", [x, -thick, -body_half], m),
-            "midTL": lat.node(f"s{k}_midTL", [x, mid_thick, s / 2], m),
-            "midTR": lat.node(f"s{k}_midTR", [x, mid_thick, -s / 2], m),
-            "midBL": lat.node(f"s{k}_midBL", [x, -mid_thick, s / 2], m),
-            "midBR": lat.node(f"s{k}_midBR", [x, -mid_thick, -s / 2], m),
-            "tipL": lat.node(f"s{k}_tipL", [x, 0.0, s], m),
-            "tipR": lat.node(f"s{k}_tipR", [x, 0.0, -s], m),
+            "midTL": lat.node(f"s{k}_midTL", [x, mid_thick, s / 2], m_mid),
+            "midTR": lat.node(f"s{k}_midTR", [x, mid_thick, -s / 2], m_mid),
+            "midBL": lat.node(f"s{k}_midBL", [x, -mid_thick, s / 2], m_mid),
+            "midBR": lat.node(f"s{k}_midBR", [x, -mid_thick, -s / 2], m_mid),
+            "tipL": lat.node(f"s{k}_tipL", [x, 0.0, s], m_tip),
+            "tipR": lat.node(f"s{k}_tipR", [x, 0.0, -s], m_tip),
         }
         stations.append(st)
         rows_top.append([st[n] for n in names])
@@ -497,13 +529,30 @@ def ray() -> dict:
         lat.spring(nose, rows_bot[0][p], k_s, "structural")
     for n in ("TL", "TR", "BL", "BR"):
         lat.spring(tail, stations[-1][n], k_s, "structural")
+    # passive stiffness by group
+    def group(a: str, b: str) -> str:
+        wing = [("mid" in v or "tip" in v) for v in (a, b)]
+        if not any(wing):
+            return "body"
+        if all("mid" in v for v in (a, b)) and a[:2] == b[:2]:
+            return "thick"
+        if not all(wing) and a[:2] == b[:2] and "tip" not in a + b:
+            return "root"
+        return "wing"
+
+    for s in lat.springs:
+        if "actuator" not in s:
+            k = par["k_" + group(*s["nodes"])]
+            if k is not None:
+                s["stiffness"] = round(k, 4)
     # the rear half of each wing is softer, so a flapping wing twists and pushes water back
     wing_rear = {lat.nodes[i]["name"] for st in stations[2:]
                  for key, i in st.items() if key.startswith(("mid", "tip"))}  # fmt: skip
     for s in lat.springs:
         if "actuator" not in s and any(v in wing_rear for v in s["nodes"]):
             if all(v in wing_rear or v.startswith(("s2_", "s3_")) for v in s["nodes"]):
-                s["stiffness"] = round(s["stiffness"] * 0.5, 4)
+                if group(*s["nodes"]) in par["rear_groups"]:
+                    s["stiffness"] = round(s["stiffness"] * par["rear"], 4)
     # faces: top (normal up) and bottom (normal down) sheets, nose and tail fans
     up, down = np.array([0, -1.0, 0]), np.array([0, 1.0, 0])
     x = lat.pos()
@@ -521,7 +570,7 @@ def ray() -> dict:
             sheet_face([nose, row[0][p], row[0][p + 1]], top)
         for p in range(1, 4):
             sheet_face([tail, row[-1][p], row[-1][p + 1]], top)
-    lat.damp_springs(10.0)
+    lat.damp_springs(par["zeta"])
     print(f"ray     omega_max = {lat.omega_max():7.1f} rad/s")
     return lat.doc(
         name="ray",
@@ -530,20 +579,20 @@ def ray() -> dict:
             "muscles per side, 4 actuators."
         ),
         medium="water",
-        dt=0.005,
+        dt=par["dt"],
         head="nose",
         forward=[1.0, 0.0, 0.0],
-        defaults={"node_damping": 0.02, "spring_damping": 0.0},
+        defaults={"node_damping": par["node_damping"], "spring_damping": 0.0},
         actuators=acts,
         wave={
-            "frequency": 2.0,
+            "frequency": par["frequency"],
             "amplitude": 1.0,
             "offset": 0.0,
             "phases": {
                 "elevator_left": 0.0,
                 "elevator_right": 0.0,
-                "depressor_left": 0.5,
-                "depressor_right": 0.5,
+                "depressor_left": par["lag"],
+                "depressor_right": par["lag"],
             },
         },
     )
