@@ -129,4 +129,4 @@ def test_turn_radius_is_the_arc_through_the_start_and_end_of_the_turn():
     assert turn_radius(com, np.pi / 2, 0.5) == pytest.approx(4.0)  # body lengths of 0.5 m
     assert turn_radius(com, -np.pi / 2, 1.0) == pytest.approx(2.0)  # either direction
     assert turn_radius(com[:1].repeat(5, 0), np.pi / 2, 1.0) == 0.0  # on the spot
-    assert turn_radius(com, 0.0, 1.0) is None
+    assert turn_radius(com, np.radians(0.5), 1.0) is None  # not a turn

@@ -58,10 +58,10 @@ def turn_radius(com: np.ndarray, turned: float, length: float) -> float | None:
     ``turned`` radians between the first and last centre-of-mass positions ``com`` (R, 3).
 
     A chord c of an arc of angle a has radius c / (2 sin(a / 2)); the heading change is capped
-    at 180 degrees. None when the heading did not change.
+    at 180 degrees. None when the heading changed by less than a degree (no turn to speak of).
     """
     a = min(abs(float(turned)), np.pi)
-    if a < 1e-6:
+    if a < np.radians(1.0):
         return None
     chord = float(np.linalg.norm((com[-1] - com[0])[[0, 2]]))
     return round(chord / (2.0 * float(np.sin(a / 2.0))) / length, 3)
