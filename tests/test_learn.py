@@ -223,3 +223,37 @@ def test_a_task_that_requires_fins_learns_them_and_others_hold_them_level():
     assert turn.objective.dimension == ahead.objective.dimension + len(fins) * 5
     tables = turn.objective.tables(x + 0.1 * np.arange(x.size))  # fins move with the params
     assert np.ptp(tables[0][:, fins]) > 0.01
+
+
+def test_wave_coupling_plays_each_right_actuator_as_its_left_mirror_half_a_stroke_later():
+    from zoetic.control import frequency_domain
+
+    body = load_animal("shark")
+    task = parse_task({**load_task("swim-straight").to_dict(), "horizon": 1.0, "nodes": 5})
+    tmpl = frequency_domain(body, 5, task.horizon, base=body.wave_frequency)
+    free = Objective(task, body, tmpl)
+    obj = Objective(task, body, tmpl, coupling="wave")
+    assert obj.dimension * 2 == free.dimension  # fins held, one parameter set per muscle pair
+    x = np.random.default_rng(0).uniform(*obj.bounds())
+    ctrl = obj.controller(x)
+    t = np.linspace(0.0, 1.0, 57)
+    half = 0.5 / body.wave_frequency  # the shark's wave: right phases = left + 0.5
+    for k, side in enumerate(body.actuator_side):
+        j = body.actuator_mirror[k]
+        if side == "right" and body.actuator_kind[k] == "muscle":
+            assert np.allclose(ctrl.raw(t)[:, k], ctrl.raw(t - half)[:, j])
+    with pytest.raises(Exception, match="periodic"):
+        Objective(task, body, time_domain(body, 5, task.horizon), coupling="wave")
+
+
+def test_auto_defaults_couple_straight_gaits_and_free_the_fins_for_turns():
+    from zoetic.learn.run import build
+
+    body = load_animal("shark")
+    straight = build(LearnConfig(animal="shark", task="swim-straight", budget=1))
+    assert straight.objective.coupling == "wave" and straight.objective.held.size == 2
+    turn = build(LearnConfig(animal="shark", task="quick-turn-left", budget=1))
+    assert turn.objective.coupling == "none" and turn.objective.held.size == 0
+    assert turn.objective.dimension == body.n_actuators * 5
+    timed = build(LearnConfig(animal="shark", task="swim-straight", controller="time", budget=1))
+    assert timed.objective.coupling == "none"  # a time-domain signal cannot be delayed exactly

@@ -119,3 +119,14 @@ def test_a_steered_wave_biases_the_muscles_and_tilts_the_fins():
     np.testing.assert_allclose(turned[:, ~muscle], plain[:, ~muscle] + 0.1)
     weak = steered_wave(shark, t, amplitude=0.5)
     assert np.ptp(weak[:, muscle], axis=0).max() < 0.6 * np.ptp(plain[:, muscle], axis=0).max()
+
+
+def test_turn_radius_is_the_arc_through_the_start_and_end_of_the_turn():
+    from zoetic.behavior.skills import turn_radius
+
+    a = np.linspace(0.0, np.pi / 2, 20)  # a quarter circle of radius 2 m, centre at z = 2
+    com = np.stack([2 * np.sin(a), np.zeros_like(a), 2 - 2 * np.cos(a)], axis=1)
+    assert turn_radius(com, np.pi / 2, 0.5) == pytest.approx(4.0)  # body lengths of 0.5 m
+    assert turn_radius(com, -np.pi / 2, 1.0) == pytest.approx(2.0)  # either direction
+    assert turn_radius(com[:1].repeat(5, 0), np.pi / 2, 1.0) == 0.0  # on the spot
+    assert turn_radius(com, np.radians(0.5), 1.0) is None  # not a turn

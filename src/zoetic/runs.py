@@ -181,7 +181,8 @@ MAX_BUDGET = 10_000_000  # evaluations of one learning run
 CHOICES = {  # the controller kinds are left to learn.run.build, which names its own
     "interp": ("linear", "bspline"),
     "evaluator": ("batch", "process", "ray"),
-    "coupling": ("none", "antiphase"),
+    "coupling": ("auto", "none", "wave", "antiphase"),
+    "fins": ("auto", "held", "free"),
     "medium": ("ground", "water", "sea", "vacuum"),
 }
 BOUNDS = {"budget": (1, MAX_BUDGET), "nodes": (2, 100_000), "popsize": (2, 100_000),

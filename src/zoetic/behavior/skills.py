@@ -5,9 +5,9 @@
 ``zoetic learn`` and score the learned controller and the hand-made one (the animal's wave,
 bent for turns: ``tracking.handmade_repertoire``) on the same task, from rest, with the same
 figures: the task's E, speed in body lengths per second, the heading change, the time to
-turn 90 degrees, and for going straight the speed sustained when played for 10 s; for an
-animal with fins, the go-straight gait's depth change with the fins up and down, and in the
-sea its burst toward the surface from 2 m depth.
+turn 90 degrees and the turning radius, and for going straight the speed sustained when
+played for 10 s; for an animal with fins, the go-straight gait's depth change with the fins
+up and down, and in the sea its burst toward the surface from 2 m depth.
 """
 
 from __future__ import annotations
@@ -45,9 +45,26 @@ def skill_figures(body: Body, ctrl: Controller, task: Task) -> dict:
         "heading_deg": round(float(np.degrees(turned[-1])), 1),
         "t90_s": None if past.size == 0 else round(float(tr.times[past[0]]), 2),
     }
-    if not any(t.kind == "heading_change" for t in task.terms):
+    if any(t.kind == "heading_change" for t in task.terms):
+        end = int(past[0]) if past.size else len(turned) - 1
+        out["turn_radius_bl"] = turn_radius(com[: end + 1], turned[end], body_length(body))
+    else:
         out["sustained_bl_s"] = sustained_speed(body, ctrl)
     return out
+
+
+def turn_radius(com: np.ndarray, turned: float, length: float) -> float | None:
+    """Return the radius (body lengths) of the circular arc that turns the heading by
+    ``turned`` radians between the first and last centre-of-mass positions ``com`` (R, 3).
+
+    A chord c of an arc of angle a has radius c / (2 sin(a / 2)); the heading change is capped
+    at 180 degrees. None when the heading changed by less than a degree (no turn to speak of).
+    """
+    a = min(abs(float(turned)), np.pi)
+    if a < np.radians(1.0):
+        return None
+    chord = float(np.linalg.norm((com[-1] - com[0])[[0, 2]]))
+    return round(chord / (2.0 * float(np.sin(a / 2.0))) / length, 3)
 
 
 def sustained_speed(body: Body, ctrl: Controller, seconds: float = SUSTAINED_SECONDS) -> float:

@@ -95,7 +95,13 @@ def learn(
         None, help="Ray cluster for --evaluator ray, e.g. 10.0.0.1:6379 (default: RAY_ADDRESS, "
         "else a local Ray)."
     ),
-    coupling: str = typer.Option("none", help="none, or antiphase: right side = 1 - left."),
+    coupling: str = typer.Option(
+        "auto", help="auto (wave for a task that prefers neither side, else none), none, wave "
+        "(right = left, later by the animal's wave lag) or antiphase (right = 1 - left)."
+    ),
+    fins: str = typer.Option(
+        "auto", help="auto (learned for turns, else held level), held or free."
+    ),
     out: Path = typer.Option(None, help="Run directory (default runs/<animal>-<task>)."),
     resume: Path = typer.Option(None, help="Continue the run in this directory."),
     video: bool = typer.Option(True, help="Write video.mp4 of the best controller."),
@@ -125,7 +131,7 @@ def learn(
         config = LearnConfig(
             animal=animal, task=task, optimizer=optimizer, budget=budget, seed=seed,
             controller=controller, nodes=nodes, interp=interp, popsize=popsize, chains=chains,
-            evaluator=evaluator, coupling=coupling, frequency=frequency,
+            evaluator=evaluator, coupling=coupling, fins=fins, frequency=frequency,
         )  # fmt: skip
         from zoetic.runs import check_learn_config, check_learn_size, check_learnable
 

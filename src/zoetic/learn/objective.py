@@ -89,6 +89,7 @@ class Objective:
         start: State | None = None,
         coupling: str = "none",
         fins: str = "held",
+        harmonic_bound: float | None = None,
     ):
         self.task = task
         self.body = body
@@ -107,6 +108,9 @@ class Objective:
         m = self._basis.shape[1]
         self.full_shape = (body.n_actuators, m)
         self.coupling = coupling
+        # bound on a frequency-domain controller's non-constant amplitudes (None: the
+        # template's own, 0.5)
+        self.harmonic_bound = harmonic_bound
         # pectoral fins are not learned with the gait (the fish model's separate pitch/roll
         # controllers drive them): held level, as the built-in wave holds them, unless "free"
         if fins not in ("held", "free"):
@@ -116,6 +120,11 @@ class Objective:
         self._one = np.linalg.lstsq(self._basis, np.ones(self.steps), rcond=None)[0]
         if coupling == "none":
             self.free = np.setdiff1d(np.arange(body.n_actuators), self.held)
+        elif coupling == "wave":
+            # a straight gait is mirror-symmetric: each right actuator does what its left
+            # mirror does, later by the lag the animal's own wave puts between them (half a
+            # stroke for the shark: one parameter set per pair instead of two)
+            self.free, self._shift = self._wave_pairs(times)
         elif coupling == "antiphase":
             # the paper's Fig. 6 set-up: one signal per segment, the right side 1 - left
             if not body.is_mirror_symmetric:
@@ -129,8 +138,33 @@ class Objective:
                 dtype=int,
             )
         else:
-            raise ZoeticError(f"unknown coupling {coupling!r} (none or antiphase)")
+            raise ZoeticError(f"unknown coupling {coupling!r} (none, wave or antiphase)")
         self.shape = (len(self.free), m)
+
+    def _wave_pairs(self, times: np.ndarray) -> tuple[np.ndarray, dict]:
+        """Return the free actuators and, per right actuator, (its left mirror, S (M, M)) with
+        right coefficients = S @ left ones: the left signal delayed by the wave's lag."""
+        body = self.body
+        mirror = np.asarray(body.actuator_mirror)
+        pairs = [(k, int(mirror[k])) for k, side in enumerate(body.actuator_side)
+                 if side == "right" and 0 <= mirror[k] != k and k not in self.held]  # fmt: skip
+        if not pairs:
+            raise ZoeticError(f"the {body.name} has no mirror pairs to couple")
+        phase = np.nan_to_num(np.asarray(body.wave_phase, float))
+        shift = {}
+        for k, j in pairs:
+            lag = (phase[k] - phase[j]) / body.wave_frequency  # s
+            delayed = self.template.design_matrix(times - lag)
+            S = np.linalg.lstsq(self._basis, delayed, rcond=None)[0]
+            if not np.allclose(self._basis @ S, delayed, atol=1e-6):
+                raise ZoeticError(
+                    f"coupling 'wave' needs a periodic (frequency-domain) controller: a "
+                    f"{self.template.kind} controller delayed by {lag:g} s is another signal"
+                )
+            shift[k] = (j, S.T)
+        free = np.array([k for k in range(body.n_actuators)
+                         if k not in shift and k not in self.held], dtype=int)  # fmt: skip
+        return free, shift
 
     @property
     def dimension(self) -> int:
@@ -139,6 +173,10 @@ class Objective:
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Return the (lower, upper) bounds of the free parameters."""
         lo, hi = (b.reshape(self.full_shape)[self.free].ravel() for b in self.template.bounds())
+        if self.harmonic_bound is not None and self.template.kind == "frequency":
+            omega = np.tile(np.asarray(self.template.omega), self.shape[0])
+            lo = np.where(omega == 0, lo, -self.harmonic_bound)
+            hi = np.where(omega == 0, hi, self.harmonic_bound)
         return lo, hi
 
     def free_params(self, full: np.ndarray) -> np.ndarray:
@@ -154,6 +192,10 @@ class Objective:
         coef[:, self.free] = free
         for k in self.held:  # level: the wave's held activation (the angle 0)
             coef[:, k] = self._one * np.nan_to_num(self.body.wave_held[k], nan=0.5)
+        if self.coupling == "wave":
+            index = {k: i for i, k in enumerate(self.free)}
+            for k, (j, st) in self._shift.items():
+                coef[:, k] = free[:, index[j]] @ st
         if self.coupling == "antiphase":
             mirror = self.body.actuator_mirror
             for k in self.free:

@@ -37,6 +37,17 @@ from zoetic.tasks import Task, check_fits, load_task, parse_task
 # horizon; CMA-ES asks for populations of 32, which the batched kernel simulates at once.
 PERIODIC_NODES = 5
 CMAES_POPSIZE = 32
+# the periodic controller's harmonic amplitudes may reach 1, not only the Fourier basis's 0.5:
+# at 0.5 the learned turns and gaits sat on the bounds (a harmonic of amplitude 0.5 cannot
+# swing a muscle across its whole range off a constant that is not 0.5); measured on the
+# shark's quick turn, 90 -> 110 degrees in 1.5 s
+PERIODIC_AMPLITUDE = 1.0
+# terms that prefer neither side: a task made only of these is mirror-symmetric, and its gait
+# is learned mirror-symmetric ("auto" coupling -> "wave": half the parameters, and a gait that
+# does not roll or veer once it is played past its horizon)
+SYMMETRIC_TERMS = frozenset({"distance_along_heading", "lateral_deviation", "depth_keeping",
+                             "roll_keeping", "final_pitch", "pitch_change", "speed_deviation",
+                             "mean_speed", "effort", "max_height"})  # fmt: skip
 
 
 @dataclass
@@ -54,7 +65,8 @@ class LearnConfig:
     popsize: int | None = None
     chains: int = 1
     evaluator: str = "batch"
-    coupling: str = "none"
+    coupling: str = "auto"  # auto: "wave" for a mirror-symmetric task, else "none"
+    fins: str = "auto"  # auto: "free" (learned) for a task that turns the heading, else "held"
     medium: str | None = None
     frequency: float | None = None  # periodic controller's base frequency, Hz (animal's wave)
     extra: dict = field(default_factory=dict)
@@ -97,16 +109,14 @@ def build(config: LearnConfig, task: Task | None = None) -> Setup:
         )
     if m != task.nodes:
         task = parse_task({**task.to_dict(), "nodes": m}, task.source)
-    # a task that requires fins learns them with the gait (a dolphin turns by banking on its
-    # pectoral fins); others hold them level (``Objective``)
-    fins = "free" if any("fins" in r.split("|") for r in task.requires) else "held"
-    objective = Objective(task, body, template, config.medium, coupling=config.coupling,
-                          fins=fins)  # fmt: skip
+    coupling, fins = resolve_coupling(config, task, body), resolve_fins(config, task)
+    objective = Objective(task, body, template, config.medium, coupling=coupling, fins=fins,
+                          harmonic_bound=PERIODIC_AMPLITUDE if periodic else None)  # fmt: skip
     lo, hi = objective.bounds()
     rng = np.random.default_rng(config.seed)
     x0 = rng.uniform(lo, hi)
     if config.controller != "time":  # random small amplitudes about a mid-level constant
-        x0 = np.clip(x0 * 0.5 + np.where(hi == 1.0, 0.25, 0.0), lo, hi)
+        x0 = np.clip(x0 * 0.5 + np.where(lo == 0.0, 0.25, 0.0), lo, hi)  # constants: lo 0
     options = {}
     if config.optimizer == "cmaes":
         options["popsize"] = config.popsize or CMAES_POPSIZE
@@ -115,6 +125,32 @@ def build(config: LearnConfig, task: Task | None = None) -> Setup:
     options |= config.extra.get("optimizer", {})
     opt = make_optimizer(config.optimizer, x0, lo, hi, config.seed, config.budget, **options)
     return Setup(config, task, objective, opt, template)
+
+
+def resolve_coupling(config: LearnConfig, task: Task, body) -> str:
+    """Return the coupling "auto" stands for: "wave" (right = left, later by the wave's lag)
+    when the task prefers neither side, the body has mirror pairs and the controller is
+    periodic; "none" otherwise."""
+    if config.coupling != "auto":
+        return config.coupling
+    mirror = np.asarray(body.actuator_mirror)
+    pairs = any(side == "right" and 0 <= mirror[k] != k and kind != "fin"
+                for k, (side, kind) in enumerate(zip(body.actuator_side, body.actuator_kind,
+                                                     strict=True)))  # fmt: skip
+    symmetric = all(t.kind in SYMMETRIC_TERMS for t in task.terms)
+    return "wave" if symmetric and pairs and config.controller != "time" else "none"
+
+
+def resolve_fins(config: LearnConfig, task: Task) -> str:
+    """Return the fins mode "auto" stands for: learned ("free") when the task turns the heading
+    (the fish banks into a turn with its pectoral fins) or requires fins (a dolphin cannot bend
+    sideways and turns or pitches on them), held level otherwise (an open-loop fin signal would
+    pitch a straight swimmer away from its course)."""
+    if config.fins != "auto":
+        return config.fins
+    turns = any(t.kind == "heading_change" for t in task.terms)
+    needs = any("fins" in r.split("|") for r in task.requires)
+    return "free" if turns or needs else "held"
 
 
 @dataclass
