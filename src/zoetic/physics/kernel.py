@@ -45,6 +45,11 @@ _llvm.set_option("", "-vectorize-memory-check-threshold=512")
 # on its place in the batch: 0.3 m apart for a snake after 3 s. Dropping them cost nothing.
 FM = {"nsz", "arcp", "contract"}
 
+# error_model="numpy" on the entry points (every helper is inlined into them): with Python's
+# error model each float division checks for zero and may raise, an early exit that keeps LLVM
+# from vectorising a loop with two or more divisions (the fins ran scalar: 46 against 5 ns a
+# lane-step). Every divisor here is a mass, the step, or a length plus TINY, never zero.
+
 # The kernel works in single precision: twice the SIMD lanes of double, and the papers'
 # models need no more. Every literal goes through F so that nothing promotes to float64.
 F = np.float32
@@ -178,12 +183,37 @@ def _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, panels, pw, level, drag, d
 
 
 @njit(cache=True, fastmath=FM, inline="always")
+def _cos_sin(a):
+    """Return cos(a) and sin(a) for a float32 angle, from polynomials of the half angle
+    (Taylor to the 13th power, error below float32 rounding for |a| <= pi after the
+    reduction): unlike math.cos, which is a call to libm, the lane loop vectorises."""
+    r = a - np.floor(a * INV_TWO_PI + HALF) * TWO_PI  # |r| <= pi
+    h = r * HALF
+    h2 = h * h
+    s = h * (ONE + h2 * (S3 + h2 * (S5 + h2 * (S7 + h2 * (S9 + h2 * (S11 + h2 * S13))))))
+    c = ONE + h2 * (C2 + h2 * (C4 + h2 * (C6 + h2 * (C8 + h2 * (C10 + h2 * C12)))))
+    return c * c - s * s, F(2.0) * s * c
+
+
+INV_TWO_PI = F(1.0 / (2.0 * math.pi))
+TWO_PI = F(2.0 * math.pi)
+S3, S5, S7, S9, S11, S13 = (F((-1) ** k / math.factorial(2 * k + 1)) for k in range(1, 7))
+C2, C4, C6, C8, C10, C12 = (F((-1) ** k / math.factorial(2 * k)) for k in range(1, 7))
+
+
+@njit(cache=True, fastmath=FM, inline="always")
 def _fins(
-    x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
+    x, y, z, vx, vy, vz, fx, fy, fz, tmp, act, t, b0, nb,
     mass, fin_nodes, fin_fwd, fin_span, fin_area, fin_angle, fin_act, level, drag, dt,
 ):  # fmt: skip
-    """Pectoral fins: flat plates at a controlled angle to the body, pushed on by the water."""
+    """Pectoral fins: flat plates at a controlled angle to the body, pushed on by the water.
+
+    ``tmp`` (>= 3, nb) is scratch: each fin's force per lane is found first and only then
+    added to its nodes, so that the lane loop stores into three rows rather than twelve
+    that may alias what it reads (LLVM then vectorises it)."""
     for k in range(fin_nodes.shape[0]):
+        # a fin's 1-4 nodes as four slots (padding repeats the first node with weight 0), so
+        # that the lane loop has no inner loop and vectorises
         cnt = 0
         mf = ZERO
         for q in range(4):
@@ -191,10 +221,19 @@ def _fins(
                 cnt += 1
                 mf += mass[fin_nodes[k, q]]
         share = ONE / F(cnt)
+        i0 = fin_nodes[k, 0]
+        i1 = fin_nodes[k, 1] if cnt > 1 else i0
+        i2 = fin_nodes[k, 2] if cnt > 2 else i0
+        i3 = fin_nodes[k, 3] if cnt > 3 else i0
+        w1 = share if cnt > 1 else ZERO
+        w2 = share if cnt > 2 else ZERO
+        w3 = share if cnt > 3 else ZERO
         fa, fb = fin_fwd[k, 0], fin_fwd[k, 1]
         sa_, sb_ = fin_span[k, 0], fin_span[k, 1]
         lo = fin_angle[k, 0]
         hi = fin_angle[k, 1]
+        col = fin_act[k]
+        area = fin_area[k]
         for b in range(nb):
             ax = x[fa, b] - x[fb, b]
             ay = y[fa, b] - y[fb, b]
@@ -218,33 +257,29 @@ def _fins(
             ux = ay * sz - az * sy
             uy = az * sx - ax * sz
             uz = ax * sy - ay * sx
-            ang = lo + act[t, fin_act[k], b0 + b] * (hi - lo)
-            ca = math.cos(ang)
-            sn = math.sin(ang)
+            ca, sn = _cos_sin(lo + act[t, col, b0 + b] * (hi - lo))
             nx = ca * ux + sn * ax
             ny = ca * uy + sn * ay
             nz = ca * uz + sn * az
-            mvx = ZERO
-            mvy = ZERO
-            mvz = ZERO
-            cy = ZERO
-            for q in range(cnt):
-                i = fin_nodes[k, q]
-                mvx += vx[i, b] * share
-                mvy += vy[i, b] * share
-                mvz += vz[i, b] * share
-                cy += y[i, b] * share
+            mvx = share * vx[i0, b] + w1 * vx[i1, b] + w2 * vx[i2, b] + w3 * vx[i3, b]
+            mvy = share * vy[i0, b] + w1 * vy[i1, b] + w2 * vy[i2, b] + w3 * vy[i3, b]
+            mvz = share * vz[i0, b] + w1 * vz[i1, b] + w2 * vz[i2, b] + w3 * vz[i3, b]
+            cy = share * y[i0, b] + w1 * y[i1, b] + w2 * y[i2, b] + w3 * y[i3, b]
             vn = nx * mvx + ny * mvy + nz * mvz
             speed = math.sqrt(mvx * mvx + mvy * mvy + mvz * mvz)
             sub = ONE if cy < level else ZERO
-            mag = drag * fin_area[k] * speed * vn
+            mag = drag * area * speed * vn
             cap = mf * abs(vn) / dt
             mag = max(min(mag, cap), -cap) * sub * share
-            for q in range(cnt):
-                i = fin_nodes[k, q]
-                fx[i, b] -= mag * nx
-                fy[i, b] -= mag * ny
-                fz[i, b] -= mag * nz
+            tmp[0, b] = mag * nx
+            tmp[1, b] = mag * ny
+            tmp[2, b] = mag * nz
+        for q in range(cnt):
+            i = fin_nodes[k, q]
+            for b in range(nb):
+                fx[i, b] -= tmp[0, b]
+                fy[i, b] -= tmp[1, b]
+                fz[i, b] -= tmp[2, b]
 
 
 @njit(cache=True, fastmath=FM, inline="always")
@@ -354,7 +389,7 @@ def _chunk_steps(
             _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, panels, pw, level, drag, dt)
             if fin_nodes.shape[0] > 0:
                 _fins(
-                    x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb, mass, fin_nodes,
+                    x, y, z, vx, vy, vz, fx, fy, fz, gx, act, t, b0, nb, mass, fin_nodes,
                     fin_fwd, fin_span, fin_area, fin_angle, fin_act, level, drag, dt,
                 )  # fmt: skip
         if floor_on:
@@ -413,7 +448,7 @@ def _chunk_steps(
             final_vel[i, 2, b0 + b] = np.nan if dead else vz[i, b]
 
 
-@njit(cache=True, fastmath=FM, parallel=True)
+@njit(cache=True, fastmath=FM, parallel=True, error_model="numpy")
 def simulate_chunks(
     pos0, vel0, act, dt, record_every, chunk, vmax,
     mass, ndamp, sa, sb, stiff, sdamp, relaxed, shorten, scol, panels, pw,
@@ -436,7 +471,14 @@ def simulate_chunks(
     for c in prange(n_chunks):
         b0 = c * chunk
         nb = min(chunk, n_lanes - b0)
-        s = np.empty((12, n_nodes, nb), dtype=np.float32)
+        s = (
+            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+        )  # fmt: skip
         _chunk_steps(
             s, pos0, vel0, act, dt, record_every, vmax, b0, nb, body, med, rec, final_pos,
             final_vel, failed_step, multirate,
@@ -534,7 +576,7 @@ def make_stepper(pos, vel, fs, failed, dt, chunk, vmax, body_arrays, med, split)
     )  # fmt: skip
 
 
-@njit(cache=True, fastmath=FM, parallel=True)
+@njit(cache=True, fastmath=FM, parallel=True, error_model="numpy")
 def advance(st, table, t0, t1, base):
     """Step the Stepper's lanes in place through rows t0 .. t1 of ``table`` (T, A, B); a lane
     that blows up is marked in ``st.failed`` at step ``base`` plus its step in the call."""
@@ -569,7 +611,7 @@ def serial(fn):
     copy = pytypes.FunctionType(py.__code__, py.__globals__, name, py.__defaults__,
                                 py.__closure__)  # fmt: skip
     copy.__qualname__ = name
-    return njit(cache=True, fastmath=FM)(copy)
+    return njit(cache=True, fastmath=FM, error_model="numpy")(copy)
 
 
 def advance_entry(parallel: bool):
