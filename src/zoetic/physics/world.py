@@ -170,18 +170,17 @@ class Contacts:
         return -sum(i[:, :, index].sum(axis=1) for i in self.impulse)
 
 
-def _kernels() -> tuple:
-    """Return the stateful kernel's entry points, threaded and serial (compiled, or loaded
-    from numba's cache, once per process)."""
-    global _KERNELS
-    if _KERNELS is None:
+def _kernel(parallel: bool):
+    """Return the stateful kernel's entry point, threaded or serial (compiled, or loaded from
+    numba's cache, once per process and only when first needed)."""
+    if parallel not in _KERNELS:
         from zoetic.physics.kernel import advance_entry
 
-        _KERNELS = (advance_entry(True), advance_entry(False))
-    return _KERNELS
+        _KERNELS[parallel] = advance_entry(parallel)
+    return _KERNELS[parallel]
 
 
-_KERNELS: tuple | None = None
+_KERNELS: dict = {}
 
 
 @njit(cache=True)
@@ -288,9 +287,8 @@ class World:
         self._no_contacts = Contacts(
             tuple(np.zeros((self.batch, b.n_nodes, 0, 3)) for b in self.bodies), ()
         )
-        self._parallel, self._serial = _kernels()
-        if self.batch <= 8:
-            self._parallel = self._serial
+        self._serial = _kernel(False)
+        self._parallel = _kernel(True) if self.batch > 8 else self._serial
         self._chunk = chunk_size(self.batch)
         # one stepper per animal: its state views, body arrays and scratch, stepped in place
         self._steppers = [
