@@ -5,14 +5,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 Z=".venv/bin/zoetic"
-PY=".venv/bin/python"
 [ -x "$Z" ] || { echo "no .venv: run ./run.sh test (or ./run.sh demo) first" >&2; exit 2; }
 "$Z" bench simulate --json | tail -n 1
 "$Z" bench learn --json | tail -n 1
 "$Z" bench skills --json | tail -n 1
 "$Z" bench san --json | tail -n 1
 "$Z" bench ray --json 2>/dev/null | tail -n 1
-"$PY" bench/jax_sim.py
+"$Z" bench jax --json | tail -n 1
 "$Z" bench gym --json | tail -n 1
 "$Z" bench vision --json | tail -n 1
 "$Z" bench aquarium --json | tail -n 1

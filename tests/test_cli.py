@@ -96,9 +96,19 @@ def test_console_script_runs_and_bench_prints_json(tmp_path):
     result = json.loads(proc.stdout)
     for key in ("animal", "dt", "sim_seconds_per_second_single",
                 "sim_seconds_per_second_batched", "numpy_reference_sim_seconds_per_second",
-                "speedup_vs_numpy", "cores"):  # fmt: skip
+                "speedup_vs_numpy", "cores", "closed_loop_overhead",
+                "closed_loop_overhead_wall", "closed_loop_over_simulate_wall"):  # fmt: skip
         assert key in result
     assert result["speedup_vs_numpy"] > 1
+    assert result["closed_loop_overhead"] > 0.5
+
+
+def test_every_benchmark_is_a_bench_subcommand(capsys):
+    assert main(["bench", "--help"]) == 0
+    out = capsys.readouterr().out
+    for name in ("simulate", "jax", "learn", "skills", "san", "ray", "gym", "vision", "aquarium",
+                 "stunts"):  # fmt: skip
+        assert f" {name} " in out, name
 
 
 def test_learn_cli_and_tasks(tmp_path, capsys):

@@ -20,7 +20,7 @@ LAYERS = {
     "tasks": 5,
     "learn": 6,
     "perception": 7, "behavior": 7,
-    "viz": 8, "web": 8, "gym": 8, "cli": 8,
+    "viz": 8, "web": 8, "gym": 8, "cli": 8, "bench": 8,
 }  # fmt: skip
 TOP = 8
 SAN = "san"  # its own slice: may import anything below behavior, and viz; only the top imports it
@@ -34,13 +34,7 @@ def _unit(path: Path, root: Path) -> str:
     return rel.parts[0] if len(rel.parts) > 1 else rel.stem
 
 
-def _is_bench(path: Path) -> bool:
-    return path.stem == "bench" or path.stem.endswith("_bench")
-
-
 def _level(unit: str, path: Path | None = None) -> int:
-    if path is not None and _is_bench(path):
-        return TOP  # benchmark drivers sit with the CLI that runs them, wherever they live
     if unit in TOP_FILES:
         return TOP
     return LAYERS[unit]
@@ -119,6 +113,8 @@ def test_the_checker_catches_upward_imports_and_stray_matplotlib(tmp_path):
         "behavior/ok.py": "from zoetic.learn.optimizers import Annealing\n",
         "san/bad.py": "from zoetic.behavior.macro import search\n",
         "physics/bench.py": "from zoetic.control import wave_controller\n",
+        "learn/timing.py": "def f():\n    from zoetic.bench.simulate import bench_simulate\n",
+        "bench/fine.py": "from zoetic.behavior.skills import skill_figures\n",
         "viz/fine.py": "import matplotlib\n",
         "cli/fine.py": "from zoetic.runs import finish_run\nfrom zoetic.san import tune\n",
         "behavior/up.py": "from zoetic.runs import finish_run\nfrom zoetic.san import tune\n",
@@ -133,4 +129,7 @@ def test_the_checker_catches_upward_imports_and_stray_matplotlib(tmp_path):
     assert "bad.py:1: san imports zoetic.behavior.macro" in found
     assert "up.py:1: behavior imports zoetic.runs (the top level)" in found
     assert "up.py:2: behavior imports zoetic.san (only the top imports san)" in found
-    assert "ok.py" not in found and "fine.py" not in found and "bench.py" not in found
+    # benchmarks live in zoetic.bench, the top layer: a driver left below is checked as such
+    assert "bench.py:1: physics (layer 2) imports zoetic.control" in found
+    assert "timing.py:2: learn (layer 6) imports zoetic.bench.simulate (layer 8)" in found
+    assert "ok.py" not in found and "fine.py" not in found

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from zoetic.behavior.skills import skill_figures
+from zoetic.bench.skills import skill_figures
 from zoetic.bodies import ZOO_DIR, load_animal
 from zoetic.learn.objective import heading_angles
 from zoetic.learn.run import LearnConfig, build
@@ -79,8 +79,8 @@ def test_a_users_own_animal_file_learns_with_a_built_in_task(tmp_path):
 
 
 def test_depth_change_with_the_fins_and_the_dolphins_burst_are_reported():
-    from zoetic.behavior.skills import burst, depth_change
     from zoetic.behavior.tracking import handmade_repertoire
+    from zoetic.bench.skills import burst, depth_change
 
     shark = load_animal("shark")
     gait = handmade_repertoire(shark).controllers["go-straight"]
@@ -94,7 +94,7 @@ def test_depth_change_with_the_fins_and_the_dolphins_burst_are_reported():
 
 
 def test_the_skills_bench_compares_every_entry_of_the_dolphins_plan_with_a_hand_made_one():
-    from zoetic.behavior.skills import bench_skills
+    from zoetic.bench.skills import bench_skills
 
     got = bench_skills(["dolphin"], budget=32)["dolphin"]
     assert set(got) == {"move-forward", "turn-down", "turn-up", "turn-left"}

@@ -98,6 +98,6 @@ def bench_aquarium_cmd(
     json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
     """Realtime factor of a tank with oracle perception, against its physics alone."""
-    from zoetic.behavior.aquarium.bench import bench_aquarium
+    from zoetic.bench.aquarium import bench_aquarium
 
     _emit(bench_aquarium(fishes, food, obstacles, seconds, seed), json)

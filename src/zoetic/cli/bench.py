@@ -28,7 +28,7 @@ def bench_gym_cmd(
     json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
     """Env steps per second: the native vector env against SyncVectorEnv, same actions."""
-    from zoetic.gym.bench import bench_gym
+    from zoetic.bench.gym import bench_gym
 
     _emit(bench_gym(env_id, num_envs, steps), json)
 
@@ -39,6 +39,26 @@ def bench_vision_cmd(
     json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
     """Animat vision: retina frames/s (2 eyes x 4 levels) and the whole pursuit loop's."""
-    from zoetic.perception.bench import bench_vision
+    from zoetic.bench.vision import bench_vision
 
     _emit(bench_vision(frames), json)
+
+
+@bench_app.command("jax")
+def bench_jax_cmd(
+    animal: str = typer.Option("shark", help="A built-in animal."),
+    batch: int = typer.Option(256, min=1, help="Candidates simulated together."),
+    seconds: float = typer.Option(10.0, min=0.01, help="Simulated seconds per candidate."),
+    repeats: int = typer.Option(2, min=1, help="Timed runs; the best counts."),
+    numba: bool = typer.Option(False, "--numba", help="Also run the Numba kernel's bench."),
+    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """The JAX backend on whatever device JAX sees: sim-s/s of a batch, compile time apart."""
+    from zoetic.bench.jax_sim import benchmark
+
+    out = {"jax": benchmark(animal, seconds, batch, repeats)}
+    if numba:
+        from zoetic.bench.simulate import bench_simulate
+
+        out["numba"] = bench_simulate(animal, seconds, batch, repeats)
+    _emit(out, json)

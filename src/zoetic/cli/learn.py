@@ -185,7 +185,7 @@ def bench_learn_cmd(
     json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
     """Annealing's wall time for the paper's budget, and how fast CMA-ES/gradient match it."""
-    from zoetic.learn.bench import bench_learn
+    from zoetic.bench.learn import bench_learn
 
     _emit(bench_learn(budget), json)
 
@@ -198,6 +198,6 @@ def bench_skills_cmd(
     json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
     """Learn each basic skill with defaults; print it beside the hand-made entry, and the time."""
-    from zoetic.behavior.skills import bench_skills
+    from zoetic.bench.skills import bench_skills
 
     _emit(bench_skills(animal or None, budget, seed), json)

@@ -67,6 +67,6 @@ def bench_simulate_cmd(
     json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
     """Simulated seconds per second: one candidate, a batch on all cores, and NumPy."""
-    from zoetic.physics.bench import bench_simulate
+    from zoetic.bench.simulate import bench_simulate
 
     _emit(bench_simulate(animal, seconds, batch), json)
