@@ -2,13 +2,15 @@
 
 avoid (static obstacles and other fishes), eat, mate, leave, wander, escape, school and the
 predator's hunt. Each is a small pure function of the fish's own kinematics (``Me``) and what it
-perceives (``Around``); the tank turns the demand into muscle activations (``locomotion``).
-Directions are steered in the horizontal plane (the lattice fishes have no fins to pitch).
+perceives (``Around``); the tank turns the demand into muscle activations (``locomotion``:
+the calibrated swim / turn / pitch motor controllers). Directions are steered in the
+horizontal plane; ``keep_depth`` pitches the fins to hold a fish at its target's depth (or
+its layer), since a turning lattice fish drifts up or down.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -17,7 +19,10 @@ from zoetic.behavior.aquarium.perception import obstacle_distance
 
 LOOKAHEAD = 10.0  # s of travel (at least 3 m) probed ahead for an imminent collision
 CLEARANCE = 0.5  # m: a probe nearer than this to an obstacle means a collision is imminent
-TURN_RADIUS = 1.9  # m: the circle the built-in wave turns at full amplitude (measured)
+TURN_RADIUS = 1.9  # m: default radius of a fish's sharpest turn (the brain gives its own)
+DEPTH_GAIN = 1.0  # rad of climb per m of depth error (capped at MAX_CLIMB)
+MAX_CLIMB = 0.4  # rad: the steepest climb or dive asked for
+PITCH_GAIN = 2.0  # rad of fin pitch per rad of climb-angle error
 FISH_CLEARANCE = 0.8  # m between centres ahead that triggers avoid-fish
 
 
@@ -31,6 +36,8 @@ class Me:
     velocity: np.ndarray
     cruise: float
     top: float
+    radius: float = TURN_RADIUS  # m: the sharpest turn's radius
+    layer: float = 0.0  # m: the height the fish keeps when it has no target
 
 
 @dataclass(frozen=True)
@@ -66,15 +73,22 @@ def bearing(forward: np.ndarray, direction: np.ndarray) -> float:
 
 
 def steer(me: Me, direction: np.ndarray, speed: float) -> Demand:
-    """Return the demand to swim along ``direction`` at ``speed`` (faster while turning hard:
-    measured on the shark, amplitude 1 with bias 0.5 turns 0.14 rad/s, amplitude 0.6 only
-    0.09 rad/s)."""
+    """Return the demand to swim along ``direction`` at ``speed`` (the turn motor controller
+    beats harder by itself when the turn needs it)."""
     d = _flat(direction)
     if np.linalg.norm(d) < 1e-9:
         return Demand(speed, 0.0)
-    turn = bearing(me.forward, d)
-    # the wave turns a fish only as fast as water flows past it: beat harder to turn
-    return Demand(max(speed, me.top * min(1.0, abs(turn) / 0.5)), turn)
+    return Demand(speed, bearing(me.forward, d))
+
+
+def keep_depth(me: Me, demand: Demand, height: float | None = None) -> Demand:
+    """Return the demand with the fins pitched to bring the fish to ``height`` m (default its
+    layer): a climb angle proportional to the depth error (at most ``MAX_CLIMB``), the fins
+    pitched by the difference between it and the body's climb angle."""
+    y = me.layer if height is None else float(height)
+    climb = float(np.clip(DEPTH_GAIN * (y - me.com[1]), -MAX_CLIMB, MAX_CLIMB))
+    now = float(np.arcsin(np.clip(me.forward[1], -1.0, 1.0)))
+    return replace(demand, pitch=PITCH_GAIN * (climb - now))
 
 
 def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int = 0
@@ -152,7 +166,7 @@ def go_to(me: Me, around: Around, rng: np.random.Generator, lead: float = 0.0,
     dist = float(np.linalg.norm(_flat(aim - me.nose)))
     speed = me.top if dist > 2.0 else max(me.cruise * 0.6, me.top * dist / 2.0)
     beta = abs(bearing(me.forward, _flat(aim - me.nose)))
-    if beta < np.pi / 2 and dist < 2 * TURN_RADIUS * np.sin(beta):
+    if beta < np.pi / 2 and dist < 2 * me.radius * np.sin(beta):
         # inside the turning circle: swim on to gain room instead of circling the target
         return Demand(me.cruise, 0.0)
     return steer(me, aim - me.nose, speed)

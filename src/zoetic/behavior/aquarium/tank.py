@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from zoetic.behavior.aquarium.locomotion import WaveLocomotion
+from zoetic.behavior.aquarium.locomotion import MotorLocomotion
 from zoetic.behavior.aquarium.perception import obstacle_distance, perceive
 from zoetic.behavior.aquarium.routines import (
     Around,
@@ -25,6 +25,7 @@ from zoetic.behavior.aquarium.routines import (
     collision_ahead,
     escape,
     go_to,
+    keep_depth,
     leave,
     school,
     wander,
@@ -227,7 +228,10 @@ class FishBrain:
     def __init__(self, species: Species, body: Body, hunted_by: frozenset[str]) -> None:
         self.species, self.body, self.hunted_by = species, body, hunted_by
         m = species.motor
-        self.locomotion = WaveLocomotion(body, m.frequency, m.max_speed)
+        self.locomotion = MotorLocomotion(body, m.frequency)
+        self.top = min(m.max_speed, self.locomotion.top_speed)
+        self.cruise = min(m.cruise_speed, self.top)
+        self.radius = self.locomotion.turn_radius
         self.constants = species.fear_constants()
         self.alive = True
         self.avoid_side = 0
@@ -322,6 +326,7 @@ class FishBrain:
             demand = leave(me, around)
         else:
             demand = wander(me, around, self.rng)
+        demand = keep_depth(me, demand, None if around.target is None else around.target[1])
         self.thought = Thought(drives.hunger, drives.libido, drives.fear, intention, target)
         return self.locomotion.activations(demand, period.times)[None]
 
@@ -422,9 +427,8 @@ def live(tank: Tank, seconds: float | None = None,
         left = ~world.food_eaten[0]
         pc = perceive(nose, fwd, com, alive, food_pos, left, kind, center, size, va, vr, sr)
         rows = []
-        for i, (f, b) in enumerate(zip(fishes, brains, strict=True)):
-            me = Me(com[i], nose[i], fwd[i], vel[i], f.species.motor.cruise_speed,
-                    f.species.motor.max_speed)  # fmt: skip
+        for i, b in enumerate(brains):
+            me = Me(com[i], nose[i], fwd[i], vel[i], b.cruise, b.top, b.radius)
             others = com[np.isfinite(pc.fish[i])]
             prefer = b.avoid_side if b.thought.intention == "avoid" else 0
             hit, away = collision_ahead(me, kind, center, size, others, prefer)
