@@ -215,33 +215,39 @@ class WaveMotor:
         least at ``amplitude``: the smallest bias whose rate turns it in time; a wave too weak
         to turn that fast beats harder (up to amplitude 1), beyond that the sharpest turn."""
         need = abs(angle) / max(seconds, 1e-9)
-        amp = float(np.clip(amplitude, WAVE_AMPLITUDES[0], 1.0))
-        top = np.array([np.interp(amp, WAVE_AMPLITUDES, self.rates[:, -1])])
-        if need > top[0]:
+        amp = min(max(float(amplitude), float(WAVE_AMPLITUDES[0])), 1.0)
+        reach = self.rates[:, -1]
+        if need > float(np.interp(amp, WAVE_AMPLITUDES, reach)):
             # the smallest amplitude whose sharpest turn is fast enough (or full amplitude)
-            reach = self.rates[:, -1]
             ok = np.flatnonzero(reach >= need)
             amp = max(amp, float(WAVE_AMPLITUDES[ok[0]]) if len(ok) else 1.0)
-        row = np.array([np.interp(amp, WAVE_AMPLITUDES, self.rates[:, j])
-                        for j in range(len(WAVE_BIASES))])  # fmt: skip
+        k = int(np.clip(np.searchsorted(WAVE_AMPLITUDES, amp) - 1, 0, len(WAVE_AMPLITUDES) - 2))
+        w = (amp - WAVE_AMPLITUDES[k]) / (WAVE_AMPLITUDES[k + 1] - WAVE_AMPLITUDES[k])
+        row = (1 - w) * self.rates[k] + w * self.rates[k + 1]
         bias = float(np.interp(need, row, WAVE_BIASES)) if row[-1] > row[0] else 0.0
-        return amp, float(np.sign(angle)) * bias
+        return amp, bias if angle >= 0 else -bias
+
+    def fins(self, pitch: float) -> float:
+        """Return what to add to the fins' held (level) activation to pitch them ``pitch`` rad
+        (``fin_activation`` of the angle less that of level; 0 without fins)."""
+        rows = self.body.fin_angle
+        if not len(rows):
+            return 0.0
+        out = 0.0
+        for lo, hi in rows.tolist():
+            if hi != lo:
+                out += min(max((pitch - lo) / (hi - lo), 0.0), 1.0)
+                out -= min(max(-lo / (hi - lo), 0.0), 1.0)
+        return out / len(rows)
 
     def activations(self, times: np.ndarray, speed: float, turn: float = 0.0,
                     pitch: float = 0.0, seconds: float = 1.0) -> np.ndarray:  # fmt: skip
         """Return activations (T, A): swim at ``speed`` m/s while turning ``turn`` rad in
-        ``seconds`` s, fins pitched ``pitch`` rad (nose up positive; ``fin_activation``)."""
+        ``seconds`` s, fins pitched ``pitch`` rad (nose up positive)."""
         from zoetic.control import steered_wave
 
         amp, bias = self.turn(turn, seconds, self.swim(speed))
-        fins = 0.0
-        if len(self.body.fin_actuator):
-            # steered_wave adds ``fins`` to the held level; fin_activation gives the level of
-            # an angle, so add its difference from the level angle
-            now = fin_activation(self.body, float(pitch))
-            level = fin_activation(self.body, 0.0)
-            fins = float(np.mean([now[k] - level[k] for k in now]))
-        return steered_wave(self.body, times, amp, bias, fins, self.frequency)
+        return steered_wave(self.body, times, amp, bias, self.fins(pitch), self.frequency)
 
     def summary(self) -> dict:
         """Return the calibration tables (speeds in m/s, turning rates in deg/s)."""

@@ -11,7 +11,9 @@ def bench_aquarium(fishes: int = 10, food: int = 15, obstacles: int = 5, seconds
                    seed: int = 0) -> dict:  # fmt: skip
     """Return the realtime factor of the oracle-perception tank (brains, perception and
     physics together, no video), its physics-only share, and the run's outcome figures."""
-    cfg = TankConfig(fishes=fishes, food=food, obstacles=obstacles, seconds=seconds, seed=seed)
+    # no video: positions recorded once a brain period (the CLI records 20 frames a second)
+    cfg = TankConfig(fishes=fishes, food=food, obstacles=obstacles, seconds=seconds, seed=seed,
+                     record_period=0.1)  # fmt: skip
     live(build_tank(TankConfig(fishes=2, food=1, obstacles=1, seconds=0.2)))  # compile, warm
     tank = build_tank(cfg)
     life = live(tank)

@@ -91,13 +91,17 @@ def keep_depth(me: Me, demand: Demand, height: float | None = None) -> Demand:
     return replace(demand, pitch=PITCH_GAIN * (climb - now))
 
 
-def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int = 0
-                    ) -> tuple[bool, np.ndarray | None]:  # fmt: skip
+def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int = 0,
+                    target: float | None = None) -> tuple[bool, np.ndarray | None]:  # fmt: skip
     """Return (imminent?, the unit way out): probes along the heading up to LOOKAHEAD s of
     travel against the obstacles (clearance CLEARANCE m) and other fishes' centres ahead.
-    prefer: +1 (left) or -1 (right) keeps the side an avoidance already turns to."""
+    prefer: +1 (left) or -1 (right) keeps the side an avoidance already turns to; target:
+    the distance (m) to a food particle the fish is about to eat: obstacles beyond it are
+    left for after the meal (food lies near rocks)."""
     speed = max(float(np.linalg.norm(me.velocity)), me.cruise)
     reach = max(3.0, LOOKAHEAD * speed)
+    if target is not None and np.isfinite(target):
+        reach = min(reach, max(target, 0.5 * CLEARANCE))
     f = _unit(_flat(me.forward))
     if len(kind):
         probes = me.nose + np.linspace(0.0, reach, 8)[:, None] * f

@@ -260,12 +260,18 @@ class FishBrain:
         """Record a mating at time t."""
         self.mind = mind_mated(self.mind, t)
 
+    def _kinds(self, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Return (same species, hunters, prey) masks over the tank's fishes (cached)."""
+        if getattr(self, "_names", None) != names:
+            arr = np.array(names)
+            self._names = names
+            self._masks = (arr == self.species.name, np.isin(arr, list(self.hunted_by)),
+                           np.isin(arr, list(self.species.prey)))  # fmt: skip
+        return self._masks
+
     def _situation(self, v: View) -> tuple[Situation, np.ndarray, np.ndarray, np.ndarray]:
         sp = self.species
-        names = np.array(v.fish_species)
-        same = names == sp.name
-        hunters = np.isin(names, list(self.hunted_by))
-        prey = np.isin(names, list(sp.prey))
+        same, hunters, prey = self._kinds(v.fish_species)
         d = v.fish_distance
         pred_d = d[hunters & np.isfinite(d)]
         mates = np.where(same, d, np.inf)
@@ -431,7 +437,10 @@ def live(tank: Tank, seconds: float | None = None,
             me = Me(com[i], nose[i], fwd[i], vel[i], b.cruise, b.top, b.radius)
             others = com[np.isfinite(pc.fish[i])]
             prefer = b.avoid_side if b.thought.intention == "avoid" else 0
-            hit, away = collision_ahead(me, kind, center, size, others, prefer)
+            th = b.thought
+            meal = (pc.food[i, th.target] if th.intention == "eat" and th.target is not None
+                    else None)  # fmt: skip
+            hit, away = collision_ahead(me, kind, center, size, others, prefer, meal)
             if hit and away is not None:
                 b.avoid_side = 1 if float(np.cross(fwd[i], away)[1]) < 0 else -1
             view = View(me, pc.fish[i], com, fwd, vel, names, pc.food[i], food_pos,
