@@ -118,9 +118,10 @@ def test_cli_aquarium_writes_its_files(tmp_path):
     assert set(summary["events"]) == {"eat", "catch", "escape", "mate", "collision"}
 
 
-def test_cli_aquarium_refuses_vision_and_bad_counts_cleanly(tmp_path, capsys):
-    assert main(["aquarium", "--perception", "vision", "--out", str(tmp_path / "a")]) == 2
-    assert "not yet available" in capsys.readouterr().err
+def test_cli_aquarium_refuses_unknown_perception_and_bad_counts_cleanly(tmp_path, capsys):
+    assert main(["aquarium", "--perception", "sonar", "--out", str(tmp_path / "a")]) == 2
+    err = capsys.readouterr().err
+    assert "oracle, vision" in err and "sonar" in err and "Traceback" not in err
     assert main(["aquarium", "--fishes", "2", "--predators", "3",
                  "--out", str(tmp_path / "b")]) == 2  # fmt: skip
 

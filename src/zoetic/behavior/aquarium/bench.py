@@ -8,13 +8,15 @@ from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live, summariz
 
 
 def bench_aquarium(fishes: int = 10, food: int = 15, obstacles: int = 5, seconds: float = 60.0,
-                   seed: int = 0) -> dict:  # fmt: skip
-    """Return the realtime factor of the oracle-perception tank (brains, perception and
-    physics together, no video), its physics-only share, and the run's outcome figures."""
+                   seed: int = 0, perception: str = "oracle") -> dict:  # fmt: skip
+    """Return the realtime factor of the tank (brains, perception and physics together, no
+    video; ``perception`` oracle, or vision for the first predator), the same world's
+    physics alone, and the run's outcome figures."""
     # no video: positions recorded once a brain period (the CLI records 20 frames a second)
     cfg = TankConfig(fishes=fishes, food=food, obstacles=obstacles, seconds=seconds, seed=seed,
-                     record_period=0.1)  # fmt: skip
-    live(build_tank(TankConfig(fishes=2, food=1, obstacles=1, seconds=0.2)))  # compile, warm
+                     record_period=0.1, perception=perception)  # fmt: skip
+    warm = TankConfig(fishes=2, food=1, obstacles=1, seconds=0.2, perception=perception)
+    live(build_tank(warm))  # compile, calibrate the motor controllers
     tank = build_tank(cfg)
     life = live(tank)
     s = summarize(tank, life)
@@ -26,7 +28,8 @@ def bench_aquarium(fishes: int = 10, food: int = 15, obstacles: int = 5, seconds
         bare.world.step(steps * bare.world.dt, None)
     physics = time.perf_counter() - t0
     return {
-        "scene": f"{fishes} fishes, {food} food, {obstacles} obstacles, {seconds:g} s, oracle",
+        "scene": f"{fishes} fishes, {food} food, {obstacles} obstacles, {seconds:g} s",
+        "perception": perception if perception == "oracle" else f"{perception} (one predator)",
         "realtime_factor": s["realtime_factor"],
         "wall_seconds": s["wall_seconds"],
         "physics_only_realtime_factor": seconds / physics if physics > 0 else None,

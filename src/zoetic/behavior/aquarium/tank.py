@@ -49,6 +49,8 @@ from zoetic.physics.objects import Box, Cylinder, Food, pack_statics
 from zoetic.physics.world import Animal, World
 
 WALL = 0.25  # m: half thickness of the tank's walls
+PERCEPTIONS = ("oracle", "vision")
+NEAR = 2.5  # m between centres within which fishes may catch, touch or mate (1 m bodies)
 APART = 1.0  # s: a touch counts as a new collision after this long apart
 HEIGHT = 2.0  # m: half height of the walls, rocks and seaweed (all span the fishes' layer)
 
@@ -72,6 +74,7 @@ class TankConfig:
     prey_species: str = "minnow"
     predator_species: str = "shark"
     food_radius: float = 0.25
+    perception: str = "oracle"  # or "vision": the first predator sees with animat vision
 
     def size(self) -> float:
         """Return the half width of the tank (m)."""
@@ -114,6 +117,12 @@ def _check(cfg: TankConfig) -> None:
         raise SimulationError("at most 60 fishes, 500 food particles and 60 obstacles")
     if not 0 < cfg.seconds <= 3600:
         raise SimulationError(f"--seconds must be in (0, 3600], got {cfg.seconds:g}")
+    if cfg.perception not in PERCEPTIONS:
+        raise SimulationError(
+            f"perception must be one of {', '.join(PERCEPTIONS)}, got {cfg.perception!r}"
+        )
+    if cfg.perception == "vision" and cfg.predators < 1:
+        raise SimulationError("--perception vision gives a predator eyes: need --predators >= 1")
     if not 0 < cfg.control_period <= 1.0 or not 0 < cfg.record_period <= cfg.control_period:
         raise SimulationError("need 0 < record period <= control period <= 1 s")
 
@@ -352,6 +361,7 @@ class Life:
     drives: np.ndarray  # (K, n, 3) hunger, libido, fear
     intentions: np.ndarray  # (K, n) index into INTENTIONS
     alive: np.ndarray  # (K, n) bool
+    targets: np.ndarray  # (K, n) the focused target's index (fish, food particle; -1: none)
     events: list[tuple[float, str, str, str]] = field(default_factory=list)
     wall_seconds: float = 0.0
     deepest: float = 0.0  # m: the deepest any node went into an obstacle (0 if none)
@@ -380,6 +390,20 @@ def _kinematics(world: World, fishes: list[Fish], cw: list[np.ndarray]):
     return pos, np.array(com), np.array(fwd), np.array(cv), np.array(nose)
 
 
+def _eyes(tank: Tank):
+    """Return animat-vision eyes for the tank's first predator (``aquarium.vision``)."""
+    from zoetic.behavior.aquarium.vision import FishEyes
+
+    a = next(i for i, f in enumerate(tank.fishes) if f.species.predator)
+    me = tank.fishes[a]
+    prey = next((f for f in tank.fishes if f.species.name in me.species.prey), None)
+    prey_body, prey_color = (prey.body, prey.species.color) if prey else (me.body, me.species.color)
+    colors = [np.array(f.species.color) / 255.0 for f in tank.fishes]
+    rng, extent = me.species.senses.view_range, 2 * tank.config.size()
+    return FishEyes.build(a, me.body, colors, prey_body, np.array(prey_color) / 255.0, rng,
+                          -HEIGHT, extent)  # fmt: skip
+
+
 def live(tank: Tank, seconds: float | None = None,
          progress: Callable[[float], None] | None = None) -> Life:  # fmt: skip
     """Run the tank for ``seconds`` (default the config's) and return what happened."""
@@ -402,13 +426,14 @@ def live(tank: Tank, seconds: float | None = None,
     dt = world.dt
     t_start = time.perf_counter()
     times, positions, foods, eaten = [], [[] for _ in fishes], [], []
-    b_times, drive_rec, intents, alive_rec = [], [], [], []
+    b_times, drive_rec, intents, alive_rec, target_rec = [], [], [], [], []
     events: list[tuple[float, str, str, str]] = []
     touching = np.full((n, len(world.objects)), -np.inf)  # when each pair last touched
     fish_touch = np.full((n, n), -np.inf)
     in_fear = np.zeros(n, bool)
     deepest = 0.0
     static_obj = [i for i, o in enumerate(world.objects) if isinstance(o, Box | Cylinder)]
+    eyes = _eyes(tank) if cfg.perception == "vision" else None
 
     def record(pos):
         times.append(world.time)
@@ -432,6 +457,17 @@ def live(tank: Tank, seconds: float | None = None,
         food_pos = world.food_positions[0]
         left = ~world.food_eaten[0]
         pc = perceive(nose, fwd, com, alive, food_pos, left, kind, center, size, va, vr, sr)
+        seen_com = {}
+        if eyes is not None and alive[eyes.animal]:
+            a = eyes.animal
+            prey = [j for j in range(n) if alive[j] and j != a
+                    and fishes[j].species.name in fishes[a].species.prey]  # fmt: skip
+            sight = eyes.see(world, np.array(prey, int))
+            pc.fish[a, prey] = np.inf  # prey only as the eyes see it
+            seen_com[a] = com.copy()
+            if sight is not None:
+                pc.fish[a, sight.fish] = sight.distance
+                seen_com[a][sight.fish] = sight.point
         rows = []
         for i, b in enumerate(brains):
             me = Me(com[i], nose[i], fwd[i], vel[i], b.cruise, b.top, b.radius)
@@ -443,7 +479,7 @@ def live(tank: Tank, seconds: float | None = None,
             hit, away = collision_ahead(me, kind, center, size, others, prefer, meal)
             if hit and away is not None:
                 b.avoid_side = 1 if float(np.cross(fwd[i], away)[1]) < 0 else -1
-            view = View(me, pc.fish[i], com, fwd, vel, names, pc.food[i], food_pos,
+            view = View(me, pc.fish[i], seen_com.get(i, com), fwd, vel, names, pc.food[i], food_pos,
                         pc.obstacles[i], hit, away)  # fmt: skip
             rows.append(b.act({"view": view, "time": np.array([t])}, period))
         th = [b.thought for b in brains]
@@ -451,6 +487,7 @@ def live(tank: Tank, seconds: float | None = None,
         drive_rec.append([(x.hunger, x.libido, x.fear) for x in th])
         intents.append([INTENTIONS.index(x.intention) for x in th])
         alive_rec.append(alive)
+        target_rec.append([-1 if x.target is None else x.target for x in th])
         # fear episodes that end with the fish alive are escapes
         for i, x in enumerate(th):
             afraid = alive[i] and x.intention in ("escape", "school")
@@ -491,36 +528,36 @@ def live(tank: Tank, seconds: float | None = None,
         pos, com, fwd, vel, nose = _kinematics(world, fishes, cw)
         t1 = world.time
         # catches, matings, fish-fish collisions
-        for i, f in enumerate(fishes):
-            if not brains[i].alive:
+        dcoms = np.linalg.norm(com[:, None] - com[None], axis=-1)
+        for i, j2 in zip(*np.nonzero(dcoms < NEAR), strict=True):
+            i, j2 = int(i), int(j2)
+            f, g = fishes[i], fishes[j2]
+            if j2 == i or not brains[i].alive or not brains[j2].alive:
                 continue
-            for j2, g in enumerate(fishes):
-                if j2 == i or not brains[j2].alive:
+            dcom = float(dcoms[i, j2])
+            if g.species.name in f.species.prey and brains[i].thought.intention == "hunt":
+                reach = np.linalg.norm(pos[j2] - nose[i], axis=1).min()
+                if reach < f.species.motor.catch_radius:
+                    brains[j2].alive = False
+                    brains[i].ate(t1, 3.0)
+                    events.append((t1, f.name, "catch", g.name))
                     continue
-                dcom = float(np.linalg.norm(com[i] - com[j2]))
-                if g.species.name in f.species.prey and brains[i].thought.intention == "hunt":
-                    reach = np.linalg.norm(pos[j2] - nose[i], axis=1).min()
-                    if reach < f.species.motor.catch_radius:
-                        brains[j2].alive = False
-                        brains[i].ate(t1, 3.0)
-                        events.append((t1, f.name, "catch", g.name))
-                        continue
-                if j2 < i:
-                    continue
-                if dcom < 1.5:
-                    gap = np.linalg.norm(pos[i][:, None] - pos[j2][None], axis=-1).min()
-                    touch = gap < 2 * world.node_radius
-                    if touch and t1 - fish_touch[i, j2] > APART:
-                        events.append((t1, f.name, "collision", g.name))
-                    if touch:
-                        fish_touch[i, j2] = t1
-                if (f.species.name == g.species.name and dcom < 1.5
-                        and "mate" in (brains[i].thought.intention, brains[j2].thought.intention)
-                        and brains[i].willing(t1) and brains[j2].willing(t1)):  # fmt: skip
-                    brains[i].mated(t1)
-                    brains[j2].mated(t1)
-                    events.append((t1, f.name, "mate", g.name))
-                    events.append((t1, g.name, "mate", f.name))
+            if j2 < i:
+                continue
+            if dcom < 1.5:
+                gap = np.linalg.norm(pos[i][:, None] - pos[j2][None], axis=-1).min()
+                touch = gap < 2 * world.node_radius
+                if touch and t1 - fish_touch[i, j2] > APART:
+                    events.append((t1, f.name, "collision", g.name))
+                if touch:
+                    fish_touch[i, j2] = t1
+            if (f.species.name == g.species.name and dcom < 1.5
+                    and "mate" in (brains[i].thought.intention, brains[j2].thought.intention)
+                    and brains[i].willing(t1) and brains[j2].willing(t1)):  # fmt: skip
+                brains[i].mated(t1)
+                brains[j2].mated(t1)
+                events.append((t1, f.name, "mate", g.name))
+                events.append((t1, g.name, "mate", f.name))
         if progress is not None:
             progress(t1)
     return Life(
@@ -528,7 +565,8 @@ def live(tank: Tank, seconds: float | None = None,
         food=np.stack(foods), eaten=np.stack(eaten), brain_times=np.array(b_times),
         drives=np.array(drive_rec, float).reshape(-1, n, 3),
         intentions=np.array(intents, int).reshape(-1, n),
-        alive=np.array(alive_rec, bool).reshape(-1, n), events=events,
+        alive=np.array(alive_rec, bool).reshape(-1, n),
+        targets=np.array(target_rec, int).reshape(-1, n), events=events,
         wall_seconds=time.perf_counter() - t_start, deepest=deepest,
     )  # fmt: skip
 
@@ -548,6 +586,7 @@ def summarize(tank: Tank, life: Life) -> dict:
         "obstacles": len(tank.static_names) - 4,
         "seconds": sim,
         "seed": tank.config.seed,
+        "perception": tank.config.perception,
         "tank_half_size_m": tank.config.size(),
         "events": counts,
         "collisions_with_obstacles": obstacle_hits,
