@@ -249,6 +249,18 @@ class WaveMotor:
         amp, bias = self.turn(turn, seconds, self.swim(speed))
         return steered_wave(self.body, times, amp, bias, self.fins(pitch), self.frequency)
 
+    def activations_many(self, times: np.ndarray, speeds, turns, pitches,
+                         seconds: float = 1.0) -> np.ndarray:  # fmt: skip
+        """Return activations (D, T, A) of ``activations`` for D (speed, turn, pitch) demands
+        at once: one ``steered_wave`` evaluation broadcast over the demands."""
+        from zoetic.control import steered_wave
+
+        ab = [self.turn(t, seconds, self.swim(v)) for v, t in zip(speeds, turns, strict=True)]
+        amp = np.array([a for a, _ in ab])[:, None, None]
+        bias = np.array([b for _, b in ab])[:, None, None]
+        fins = np.array([self.fins(p) for p in pitches])[:, None, None]
+        return steered_wave(self.body, times, amp, bias, fins, self.frequency)
+
     def summary(self) -> dict:
         """Return the calibration tables (speeds in m/s, turning rates in deg/s)."""
         return {

@@ -62,5 +62,11 @@ class MotorLocomotion:
 
     def activations(self, demand: Demand, times: np.ndarray) -> np.ndarray:
         """Return activations (T, A): swim(speed) turning by demand.turn, fins at the pitch."""
-        pitch = float(np.clip(demand.pitch, -MAX_PITCH, MAX_PITCH))
-        return self.motor.activations(times, demand.speed, demand.turn, pitch, self.turn_seconds)
+        return self.activations_many([demand], times)[0]
+
+    def activations_many(self, demands: list[Demand], times: np.ndarray) -> np.ndarray:
+        """Return activations (D, T, A) for several demands at once (one wave evaluation)."""
+        return self.motor.activations_many(
+            times, [d.speed for d in demands], [d.turn for d in demands],
+            [min(max(d.pitch, -MAX_PITCH), MAX_PITCH) for d in demands], self.turn_seconds,
+        )  # fmt: skip

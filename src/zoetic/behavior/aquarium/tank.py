@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from zoetic.behavior.aquarium.locomotion import MotorLocomotion
+from zoetic.behavior.aquarium.locomotion import Demand, MotorLocomotion
 from zoetic.behavior.aquarium.perception import obstacle_distance, perceive
 from zoetic.behavior.aquarium.routines import (
     Around,
@@ -301,8 +301,15 @@ class FishBrain:
 
     def act(self, observation: Mapping, period: Period) -> np.ndarray:
         """Return activations (1, T, A) for the period from the fish's percept."""
-        if not self.alive:
+        demand = self.decide(observation, period)
+        if demand is None:
             return np.zeros((1, period.steps, self.body.n_actuators))
+        return self.locomotion.activations(demand, period.times)[None]
+
+    def decide(self, observation: Mapping, period: Period) -> Demand | None:
+        """Return the motor demand for the period from the fish's percept (None: dead)."""
+        if not self.alive:
+            return None
         v: View = observation["view"]
         sp = self.species
         sit, same, hunters, prey_d = self._situation(v)
@@ -343,7 +350,7 @@ class FishBrain:
             demand = wander(me, around, self.rng)
         demand = keep_depth(me, demand, None if around.target is None else around.target[1])
         self.thought = Thought(drives.hunger, drives.libido, drives.fear, intention, target)
-        return self.locomotion.activations(demand, period.times)[None]
+        return demand
 
 
 # ============================================================================ living
@@ -388,6 +395,25 @@ def _kinematics(world: World, fishes: list[Fish], cw: list[np.ndarray]):
         fwd.append(fr / (np.linalg.norm(fr) + 1e-12))
         nose.append(p[f.body.head])
     return pos, np.array(com), np.array(fwd), np.array(cv), np.array(nose)
+
+
+def _activations(brains: list[FishBrain], demands: list[Demand | None],
+                 period: Period) -> list[np.ndarray]:  # fmt: skip
+    """Return each fish's activations (1, T, A) for its demand (zeros when dead): fishes that
+    share a motor (body and wave frequency) in one batched call."""
+    rows: list[np.ndarray] = [np.empty(0)] * len(brains)
+    groups: dict[int, list[int]] = {}
+    for i, (b, d) in enumerate(zip(brains, demands, strict=True)):
+        if d is None:
+            rows[i] = np.zeros((1, period.steps, b.body.n_actuators))
+        else:
+            groups.setdefault(id(b.locomotion.motor), []).append(i)
+    for idx in groups.values():
+        acts = brains[idx[0]].locomotion.activations_many([demands[i] for i in idx],
+                                                          period.times)  # fmt: skip
+        for k, i in enumerate(idx):
+            rows[i] = acts[k : k + 1]
+    return rows
 
 
 def _eyes(tank: Tank):
@@ -468,7 +494,7 @@ def live(tank: Tank, seconds: float | None = None,
             if sight is not None:
                 pc.fish[a, sight.fish] = sight.distance
                 seen_com[a][sight.fish] = sight.point
-        rows = []
+        demands: list[Demand | None] = []
         for i, b in enumerate(brains):
             me = Me(com[i], nose[i], fwd[i], vel[i], b.cruise, b.top, b.radius)
             others = com[np.isfinite(pc.fish[i])]
@@ -481,7 +507,8 @@ def live(tank: Tank, seconds: float | None = None,
                 b.avoid_side = 1 if float(np.cross(fwd[i], away)[1]) < 0 else -1
             view = View(me, pc.fish[i], seen_com.get(i, com), fwd, vel, names, pc.food[i], food_pos,
                         pc.obstacles[i], hit, away)  # fmt: skip
-            rows.append(b.act({"view": view, "time": np.array([t])}, period))
+            demands.append(b.decide({"view": view, "time": np.array([t])}, period))
+        rows = _activations(brains, demands, period)
         th = [b.thought for b in brains]
         b_times.append(t)
         drive_rec.append([(x.hunger, x.libido, x.fear) for x in th])
