@@ -18,6 +18,7 @@ from zoetic.behavior.aquarium.locomotion import Demand
 from zoetic.behavior.aquarium.perception import obstacle_distance
 
 LOOKAHEAD = 10.0  # s of travel (at least 3 m) probed ahead for an imminent collision
+PROBES = 8  # points probed along the heading
 CLEARANCE = 0.5  # m: a probe nearer than this to an obstacle means a collision is imminent
 TURN_RADIUS = 1.9  # m: default radius of a fish's sharpest turn (the brain gives its own)
 DEPTH_GAIN = 1.0  # rad of climb per m of depth error (capped at MAX_CLIMB)
@@ -92,21 +93,36 @@ def keep_depth(me: Me, demand: Demand, height: float | None = None) -> Demand:
     return replace(demand, pitch=PITCH_GAIN * (climb - now))
 
 
-def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int = 0,
-                    target: float | None = None) -> tuple[bool, np.ndarray | None]:  # fmt: skip
-    """Return (imminent?, the unit way out): probes along the heading up to LOOKAHEAD s of
-    travel against the obstacles (clearance CLEARANCE m) and other fishes' centres ahead.
-    prefer: +1 (left) or -1 (right) keeps the side an avoidance already turns to; target:
-    the distance (m) to a food particle the fish is about to eat: obstacles beyond it are
-    left for after the meal (food lies near rocks)."""
+def probe_reach(me: Me, target: float | None = None) -> float:
+    """Return how far ahead (m) a fish probes for obstacles: LOOKAHEAD s of travel (at least
+    3 m), or only as far as a food particle it is about to eat (``target`` m away: obstacles
+    beyond it are left for after the meal, since food lies near rocks)."""
     speed = max(float(np.linalg.norm(me.velocity)), me.cruise)
     reach = max(3.0, LOOKAHEAD * speed)
     if target is not None and np.isfinite(target):
         reach = min(reach, max(target, 0.5 * CLEARANCE))
+    return reach
+
+
+def probes_ahead(me: Me, reach: float) -> np.ndarray:
+    """Return the PROBES points (PROBES, 3) along the heading from the nose up to ``reach`` m."""
+    f = _unit(_flat(me.forward))
+    return me.nose + np.linspace(0.0, reach, PROBES)[:, None] * f
+
+
+def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int = 0,
+                    target: float | None = None, ahead: np.ndarray | None = None
+                    ) -> tuple[bool, np.ndarray | None]:  # fmt: skip
+    """Return (imminent?, the unit way out): probes along the heading (``probes_ahead`` up to
+    ``probe_reach``) against the obstacles (clearance CLEARANCE m) and other fishes' centres
+    ahead. prefer: +1 (left) or -1 (right) keeps the side an avoidance already turns to;
+    target: the distance (m) to a food particle the fish is about to eat; ahead: the probes'
+    obstacle distances (PROBES, S) when already computed (the tank does all fishes at once)."""
+    reach = probe_reach(me, target)
     f = _unit(_flat(me.forward))
     if len(kind):
-        probes = me.nose + np.linspace(0.0, reach, 8)[:, None] * f
-        d = obstacle_distance(probes, kind, center, size)  # (8, S)
+        d = obstacle_distance(probes_ahead(me, reach), kind, center, size) if ahead is None \
+            else ahead  # fmt: skip
         k, s = np.unravel_index(np.argmin(d), d.shape)
         if d[k, s] < CLEARANCE:
             side = np.array([-f[2], 0.0, f[0]])  # the fish's left

@@ -27,6 +27,8 @@ from zoetic.behavior.aquarium.routines import (
     go_to,
     keep_depth,
     leave,
+    probe_reach,
+    probes_ahead,
     school,
     wander,
 )
@@ -495,14 +497,22 @@ def live(tank: Tank, seconds: float | None = None,
                 pc.fish[a, sight.fish] = sight.distance
                 seen_com[a][sight.fish] = sight.point
         demands: list[Demand | None] = []
+        mes, meals = [], []
         for i, b in enumerate(brains):
-            me = Me(com[i], nose[i], fwd[i], vel[i], b.cruise, b.top, b.radius)
+            mes.append(Me(com[i], nose[i], fwd[i], vel[i], b.cruise, b.top, b.radius))
+            th = b.thought
+            meals.append(pc.food[i, th.target] if th.intention == "eat" and th.target is not None
+                         else None)  # fmt: skip
+        # every fish's probes ahead against the obstacles in one call
+        ahead = obstacle_distance(np.stack([probes_ahead(m, probe_reach(m, q))
+                                            for m, q in zip(mes, meals, strict=True)]),
+                                  kind, center, size)  # fmt: skip
+        for i, b in enumerate(brains):
+            me = mes[i]
             others = com[np.isfinite(pc.fish[i])]
             prefer = b.avoid_side if b.thought.intention == "avoid" else 0
-            th = b.thought
-            meal = (pc.food[i, th.target] if th.intention == "eat" and th.target is not None
-                    else None)  # fmt: skip
-            hit, away = collision_ahead(me, kind, center, size, others, prefer, meal)
+            hit, away = collision_ahead(me, kind, center, size, others, prefer, meals[i],
+                                        ahead[i])  # fmt: skip
             if hit and away is not None:
                 b.avoid_side = 1 if float(np.cross(fwd[i], away)[1]) < 0 else -1
             view = View(me, pc.fish[i], seen_com.get(i, com), fwd, vel, names, pc.food[i], food_pos,
