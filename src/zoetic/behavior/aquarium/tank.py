@@ -76,6 +76,7 @@ class TankConfig:
     prey_species: str = "minnow"
     predator_species: str = "shark"
     food_radius: float = 0.25
+    food_margin: float = 3.0  # m from the walls food is dropped: 1.5 turning radii of a fish
     perception: str = "oracle"  # or "vision": the first predator sees with animat vision
 
     def size(self) -> float:
@@ -188,7 +189,7 @@ def build_tank(cfg: TankConfig) -> Tank:
         animals.append(Animal(body, tuple(p - com0), yaw, tuple(v0)))
         fishes.append(Fish(f"{spec.name}_{i}", spec, body))
     foods = [
-        Food(tuple(_place(rng, half, lambda p: free(p, 0.6), 1.5)), cfg.food_radius)
+        Food(tuple(_place(rng, half, lambda p: free(p, 0.6), cfg.food_margin)), cfg.food_radius)
         for _ in range(cfg.food)
     ]
     world = World([*animals, *statics, *foods], medium="water", current=cfg.current)
