@@ -181,6 +181,20 @@ def test_a_big_batch_in_one_long_slice_takes_the_threaded_kernel_and_agrees():
     np.testing.assert_allclose(world.positions(0), simulate(body, table).final.positions, atol=1e-5)
 
 
+def test_many_lanes_in_short_slices_step_chunk_by_chunk_in_place_and_agree():
+    body = load_animal("shark")
+    batch, steps = 20, 40  # short slices take the one-thread kernel through 3 chunks of 8
+    rng = np.random.default_rng(2)
+    table = np.repeat(rng.random((batch, steps // 10, body.n_actuators)), 10, axis=1)
+    world = World([body], batch=batch)
+    assert world._chunk < batch
+    before = world.state
+    _slices(world, table, period=0.02)
+    np.testing.assert_allclose(world.positions(0), simulate(body, table).final.positions, atol=1e-5)
+    # the state taken before is a value: stepping in place did not change it
+    np.testing.assert_allclose(before.positions[0], world.initial_state().positions[0], atol=1e-6)
+
+
 def test_a_blow_up_is_reported_with_its_step_and_spares_the_other_lanes():
     body = load_animal("shark")
     steps = 60

@@ -24,10 +24,13 @@ figure therefore scales with the host's SIMD width (twice on AVX-512).
 from __future__ import annotations
 
 import math
+import types as pytypes
 
 import llvmlite.binding as _llvm
 import numpy as np
-from numba import njit, prange
+from numba import njit, prange, types
+from numba.experimental import structref
+from numba.extending import typeof_impl
 
 # The inner loops read and write many node rows that LLVM cannot prove distinct; with the
 # default limit of 8 runtime alias checks it gives up on vectorising the water-face loop.
@@ -41,6 +44,11 @@ _llvm.set_option("", "-vectorize-memory-check-threshold=512")
 # "reassoc" only in code loaded from the on-disk cache), so a candidate's result would depend
 # on its place in the batch: 0.3 m apart for a snake after 3 s. Dropping them cost nothing.
 FM = {"nsz", "arcp", "contract"}
+
+# error_model="numpy" on the entry points (every helper is inlined into them): with Python's
+# error model each float division checks for zero and may raise, an early exit that keeps LLVM
+# from vectorising a loop with two or more divisions (the fins ran scalar: 46 against 5 ns a
+# lane-step). Every divisor here is a mass, the step, or a length plus TINY, never zero.
 
 # The kernel works in single precision: twice the SIMD lanes of double, and the papers'
 # models need no more. Every literal goes through F so that nothing promotes to float64.
@@ -175,12 +183,37 @@ def _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, panels, pw, level, drag, d
 
 
 @njit(cache=True, fastmath=FM, inline="always")
+def _cos_sin(a):
+    """Return cos(a) and sin(a) for a float32 angle, from polynomials of the half angle
+    (Taylor to the 13th power, error below float32 rounding for |a| <= pi after the
+    reduction): unlike math.cos, which is a call to libm, the lane loop vectorises."""
+    r = a - np.floor(a * INV_TWO_PI + HALF) * TWO_PI  # |r| <= pi
+    h = r * HALF
+    h2 = h * h
+    s = h * (ONE + h2 * (S3 + h2 * (S5 + h2 * (S7 + h2 * (S9 + h2 * (S11 + h2 * S13))))))
+    c = ONE + h2 * (C2 + h2 * (C4 + h2 * (C6 + h2 * (C8 + h2 * (C10 + h2 * C12)))))
+    return c * c - s * s, F(2.0) * s * c
+
+
+INV_TWO_PI = F(1.0 / (2.0 * math.pi))
+TWO_PI = F(2.0 * math.pi)
+S3, S5, S7, S9, S11, S13 = (F((-1) ** k / math.factorial(2 * k + 1)) for k in range(1, 7))
+C2, C4, C6, C8, C10, C12 = (F((-1) ** k / math.factorial(2 * k)) for k in range(1, 7))
+
+
+@njit(cache=True, fastmath=FM, inline="always")
 def _fins(
-    x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
+    x, y, z, vx, vy, vz, fx, fy, fz, tmp, act, t, b0, nb,
     mass, fin_nodes, fin_fwd, fin_span, fin_area, fin_angle, fin_act, level, drag, dt,
 ):  # fmt: skip
-    """Pectoral fins: flat plates at a controlled angle to the body, pushed on by the water."""
+    """Pectoral fins: flat plates at a controlled angle to the body, pushed on by the water.
+
+    ``tmp`` (>= 3, nb) is scratch: each fin's force per lane is found first and only then
+    added to its nodes, so that the lane loop stores into three rows rather than twelve
+    that may alias what it reads (LLVM then vectorises it)."""
     for k in range(fin_nodes.shape[0]):
+        # a fin's 1-4 nodes as four slots (padding repeats the first node with weight 0), so
+        # that the lane loop has no inner loop and vectorises
         cnt = 0
         mf = ZERO
         for q in range(4):
@@ -188,10 +221,19 @@ def _fins(
                 cnt += 1
                 mf += mass[fin_nodes[k, q]]
         share = ONE / F(cnt)
+        i0 = fin_nodes[k, 0]
+        i1 = fin_nodes[k, 1] if cnt > 1 else i0
+        i2 = fin_nodes[k, 2] if cnt > 2 else i0
+        i3 = fin_nodes[k, 3] if cnt > 3 else i0
+        w1 = share if cnt > 1 else ZERO
+        w2 = share if cnt > 2 else ZERO
+        w3 = share if cnt > 3 else ZERO
         fa, fb = fin_fwd[k, 0], fin_fwd[k, 1]
         sa_, sb_ = fin_span[k, 0], fin_span[k, 1]
         lo = fin_angle[k, 0]
         hi = fin_angle[k, 1]
+        col = fin_act[k]
+        area = fin_area[k]
         for b in range(nb):
             ax = x[fa, b] - x[fb, b]
             ay = y[fa, b] - y[fb, b]
@@ -215,33 +257,29 @@ def _fins(
             ux = ay * sz - az * sy
             uy = az * sx - ax * sz
             uz = ax * sy - ay * sx
-            ang = lo + act[t, fin_act[k], b0 + b] * (hi - lo)
-            ca = math.cos(ang)
-            sn = math.sin(ang)
+            ca, sn = _cos_sin(lo + act[t, col, b0 + b] * (hi - lo))
             nx = ca * ux + sn * ax
             ny = ca * uy + sn * ay
             nz = ca * uz + sn * az
-            mvx = ZERO
-            mvy = ZERO
-            mvz = ZERO
-            cy = ZERO
-            for q in range(cnt):
-                i = fin_nodes[k, q]
-                mvx += vx[i, b] * share
-                mvy += vy[i, b] * share
-                mvz += vz[i, b] * share
-                cy += y[i, b] * share
+            mvx = share * vx[i0, b] + w1 * vx[i1, b] + w2 * vx[i2, b] + w3 * vx[i3, b]
+            mvy = share * vy[i0, b] + w1 * vy[i1, b] + w2 * vy[i2, b] + w3 * vy[i3, b]
+            mvz = share * vz[i0, b] + w1 * vz[i1, b] + w2 * vz[i2, b] + w3 * vz[i3, b]
+            cy = share * y[i0, b] + w1 * y[i1, b] + w2 * y[i2, b] + w3 * y[i3, b]
             vn = nx * mvx + ny * mvy + nz * mvz
             speed = math.sqrt(mvx * mvx + mvy * mvy + mvz * mvz)
             sub = ONE if cy < level else ZERO
-            mag = drag * fin_area[k] * speed * vn
+            mag = drag * area * speed * vn
             cap = mf * abs(vn) / dt
             mag = max(min(mag, cap), -cap) * sub * share
-            for q in range(cnt):
-                i = fin_nodes[k, q]
-                fx[i, b] -= mag * nx
-                fy[i, b] -= mag * ny
-                fz[i, b] -= mag * nz
+            tmp[0, b] = mag * nx
+            tmp[1, b] = mag * ny
+            tmp[2, b] = mag * nz
+        for q in range(cnt):
+            i = fin_nodes[k, q]
+            for b in range(nb):
+                fx[i, b] -= tmp[0, b]
+                fy[i, b] -= tmp[1, b]
+                fz[i, b] -= tmp[2, b]
 
 
 @njit(cache=True, fastmath=FM, inline="always")
@@ -300,7 +338,117 @@ def _advance(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, ndamp, h, nodes):
             z[i, b] += h * vz[i, b]
 
 
-@njit(cache=True, fastmath=FM, parallel=True)
+@njit(cache=True, fastmath=FM, inline="always")
+def _chunk_steps(
+    s, pos0, vel0, act, dt, record_every, vmax, b0, nb, body, med, rec, final_pos, final_vel,
+    failed_step, multirate,
+):  # fmt: skip
+    """Step lanes b0 .. b0 + nb through all rows of ``act`` in the scratch s (12, nodes, >= nb):
+    load them from pos0/vel0, record every ``record_every`` steps (never if 0), store the
+    final state (NaN for failed lanes) in final_pos/final_vel. ``body``: the body's arrays as
+    ``simulate_chunks`` takes them, ``multirate``: the split's five (as few arguments as
+    possible: Python passes more than 30 as *args, which numba cannot inline)."""
+    x, y, z, vx, vy, vz, fx, fy, fz, gx, gy, gz = (
+        s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9], s[10], s[11]
+    )  # fmt: skip
+    (mass, ndamp, sa, sb, stiff, sdamp, relaxed, shorten, scol, panels, pw, fin_nodes, fin_fwd,
+     fin_span, fin_area, fin_angle, fin_act, front, back, rest_pos) = body  # fmt: skip
+    slow_idx, fast_idx, substeps, slow_nodes, fast_nodes = multirate
+    n_nodes = mass.shape[0]
+    n_steps = act.shape[0]
+    floor_on = med[FLOOR] > ZERO
+    water_on = med[DRAG] > 0.0 and med[LEVEL] > -1e8
+    level = med[LEVEL]
+    drag = med[DRAG]
+    hsub = dt / F(max(substeps, 1))
+    for i in range(n_nodes):
+        for b in range(nb):
+            x[i, b] = pos0[i, 0, b0 + b]
+            y[i, b] = pos0[i, 1, b0 + b]
+            z[i, b] = pos0[i, 2, b0 + b]
+            vx[i, b] = vel0[i, 0, b0 + b]
+            vy[i, b] = vel0[i, 1, b0 + b]
+            vz[i, b] = vel0[i, 2, b0 + b]
+    r = 0
+    for t in range(n_steps + 1):
+        if record_every > 0 and t % record_every == 0:
+            for i in range(n_nodes):
+                for b in range(nb):
+                    dead = failed_step[b0 + b] >= 0
+                    rec[r, i, 0, b0 + b] = np.nan if dead else x[i, b]
+                    rec[r, i, 1, b0 + b] = np.nan if dead else y[i, b]
+                    rec[r, i, 2, b0 + b] = np.nan if dead else z[i, b]
+            r += 1
+        if t == n_steps:
+            break
+        _forces(
+            x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
+            mass, sa, sb, stiff, sdamp, relaxed, shorten, scol, med, slow_idx,
+        )  # fmt: skip
+        if water_on:
+            _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, panels, pw, level, drag, dt)
+            if fin_nodes.shape[0] > 0:
+                _fins(
+                    x, y, z, vx, vy, vz, fx, fy, fz, gx, act, t, b0, nb, mass, fin_nodes,
+                    fin_fwd, fin_span, fin_area, fin_angle, fin_act, level, drag, dt,
+                )  # fmt: skip
+        if floor_on:
+            _ground(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, front, back, med, dt)
+        if fast_idx.shape[0] == 0:
+            _advance(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, ndamp, dt, slow_nodes)
+        else:
+            # impulse (RESPA) order: the slow forces kick the velocity once, then the
+            # stiff springs drive sub-steps; holding the slow forces over the sub-steps
+            # instead is not symplectic and grows energy (det of the step map > 1)
+            # (nodes no fast spring touches step once, exactly as without a split)
+            _advance(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, ndamp, dt, slow_nodes)
+            for q in range(fast_nodes.shape[0]):
+                i = fast_nodes[q]
+                hm = dt / mass[i]
+                for b in range(nb):
+                    vx[i, b] += hm * fx[i, b]
+                    vy[i, b] += hm * fy[i, b]
+                    vz[i, b] += hm * fz[i, b]
+            for _sub in range(substeps):
+                for q in range(fast_nodes.shape[0]):
+                    i = fast_nodes[q]
+                    for b in range(nb):
+                        gx[i, b] = ZERO
+                        gy[i, b] = ZERO
+                        gz[i, b] = ZERO
+                _springs(
+                    x, y, z, vx, vy, vz, gx, gy, gz, act, t, b0, nb,
+                    sa, sb, stiff, sdamp, relaxed, shorten, scol, fast_idx,
+                )  # fmt: skip
+                _advance(x, y, z, vx, vy, vz, gx, gy, gz, nb, mass, ndamp, hsub, fast_nodes)
+        if t % 8 == 7 or t == n_steps - 1:
+            for b in range(nb):
+                worst = ZERO
+                for i in range(n_nodes):
+                    s2 = vx[i, b] * vx[i, b] + vy[i, b] * vy[i, b] + vz[i, b] * vz[i, b]
+                    worst = s2 if s2 > worst else worst
+                if not (worst < vmax * vmax) and failed_step[b0 + b] < 0:
+                    failed_step[b0 + b] = t + 1
+                if failed_step[b0 + b] >= 0:
+                    for i in range(n_nodes):
+                        x[i, b] = rest_pos[i, 0]
+                        y[i, b] = rest_pos[i, 1]
+                        z[i, b] = rest_pos[i, 2]
+                        vx[i, b] = ZERO
+                        vy[i, b] = ZERO
+                        vz[i, b] = ZERO
+    for i in range(n_nodes):
+        for b in range(nb):
+            dead = failed_step[b0 + b] >= 0
+            final_pos[i, 0, b0 + b] = np.nan if dead else x[i, b]
+            final_pos[i, 1, b0 + b] = np.nan if dead else y[i, b]
+            final_pos[i, 2, b0 + b] = np.nan if dead else z[i, b]
+            final_vel[i, 0, b0 + b] = np.nan if dead else vx[i, b]
+            final_vel[i, 1, b0 + b] = np.nan if dead else vy[i, b]
+            final_vel[i, 2, b0 + b] = np.nan if dead else vz[i, b]
+
+
+@njit(cache=True, fastmath=FM, parallel=True, error_model="numpy")
 def simulate_chunks(
     pos0, vel0, act, dt, record_every, chunk, vmax,
     mass, ndamp, sa, sb, stiff, sdamp, relaxed, shorten, scol, panels, pw,
@@ -316,110 +464,170 @@ def simulate_chunks(
     """
     n_nodes = mass.shape[0]
     n_lanes = pos0.shape[2]
-    n_steps = act.shape[0]
     n_chunks = (n_lanes + chunk - 1) // chunk
-    floor_on = med[FLOOR] > ZERO
-    water_on = med[DRAG] > 0.0 and med[LEVEL] > -1e8
-    level = med[LEVEL]
-    drag = med[DRAG]
-    hsub = dt / F(max(substeps, 1))
+    body = (mass, ndamp, sa, sb, stiff, sdamp, relaxed, shorten, scol, panels, pw, fin_nodes,
+            fin_fwd, fin_span, fin_area, fin_angle, fin_act, front, back, rest_pos)  # fmt: skip
+    multirate = (slow_idx, fast_idx, substeps, slow_nodes, fast_nodes)
     for c in prange(n_chunks):
         b0 = c * chunk
         nb = min(chunk, n_lanes - b0)
-        x = np.empty((n_nodes, nb), dtype=np.float32)
-        y = np.empty((n_nodes, nb), dtype=np.float32)
-        z = np.empty((n_nodes, nb), dtype=np.float32)
-        vx = np.empty((n_nodes, nb), dtype=np.float32)
-        vy = np.empty((n_nodes, nb), dtype=np.float32)
-        vz = np.empty((n_nodes, nb), dtype=np.float32)
-        fx = np.empty((n_nodes, nb), dtype=np.float32)
-        fy = np.empty((n_nodes, nb), dtype=np.float32)
-        fz = np.empty((n_nodes, nb), dtype=np.float32)
-        gx = np.empty((n_nodes, nb), dtype=np.float32)
-        gy = np.empty((n_nodes, nb), dtype=np.float32)
-        gz = np.empty((n_nodes, nb), dtype=np.float32)
-        for i in range(n_nodes):
-            for b in range(nb):
-                x[i, b] = pos0[i, 0, b0 + b]
-                y[i, b] = pos0[i, 1, b0 + b]
-                z[i, b] = pos0[i, 2, b0 + b]
-                vx[i, b] = vel0[i, 0, b0 + b]
-                vy[i, b] = vel0[i, 1, b0 + b]
-                vz[i, b] = vel0[i, 2, b0 + b]
-        r = 0
-        for t in range(n_steps + 1):
-            if t % record_every == 0:
-                for i in range(n_nodes):
-                    for b in range(nb):
-                        dead = failed_step[b0 + b] >= 0
-                        rec[r, i, 0, b0 + b] = np.nan if dead else x[i, b]
-                        rec[r, i, 1, b0 + b] = np.nan if dead else y[i, b]
-                        rec[r, i, 2, b0 + b] = np.nan if dead else z[i, b]
-                r += 1
-            if t == n_steps:
-                break
-            _forces(
-                x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb,
-                mass, sa, sb, stiff, sdamp, relaxed, shorten, scol, med, slow_idx,
-            )  # fmt: skip
-            if water_on:
-                _water(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, panels, pw, level, drag, dt)
-                if fin_nodes.shape[0] > 0:
-                    _fins(
-                        x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb, mass, fin_nodes,
-                        fin_fwd, fin_span, fin_area, fin_angle, fin_act, level, drag, dt,
-                    )  # fmt: skip
-            if floor_on:
-                _ground(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, front, back, med, dt)
-            if fast_idx.shape[0] == 0:
-                _advance(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, ndamp, dt, slow_nodes)
-            else:
-                # impulse (RESPA) order: the slow forces kick the velocity once, then the
-                # stiff springs drive sub-steps; holding the slow forces over the sub-steps
-                # instead is not symplectic and grows energy (det of the step map > 1)
-                # (nodes no fast spring touches step once, exactly as without a split)
-                _advance(x, y, z, vx, vy, vz, fx, fy, fz, nb, mass, ndamp, dt, slow_nodes)
-                for q in range(fast_nodes.shape[0]):
-                    i = fast_nodes[q]
-                    hm = dt / mass[i]
-                    for b in range(nb):
-                        vx[i, b] += hm * fx[i, b]
-                        vy[i, b] += hm * fy[i, b]
-                        vz[i, b] += hm * fz[i, b]
-                for _sub in range(substeps):
-                    for q in range(fast_nodes.shape[0]):
-                        i = fast_nodes[q]
-                        for b in range(nb):
-                            gx[i, b] = ZERO
-                            gy[i, b] = ZERO
-                            gz[i, b] = ZERO
-                    _springs(
-                        x, y, z, vx, vy, vz, gx, gy, gz, act, t, b0, nb,
-                        sa, sb, stiff, sdamp, relaxed, shorten, scol, fast_idx,
-                    )  # fmt: skip
-                    _advance(x, y, z, vx, vy, vz, gx, gy, gz, nb, mass, ndamp, hsub, fast_nodes)
-            if t % 8 == 7 or t == n_steps - 1:
-                for b in range(nb):
-                    worst = ZERO
-                    for i in range(n_nodes):
-                        s2 = vx[i, b] * vx[i, b] + vy[i, b] * vy[i, b] + vz[i, b] * vz[i, b]
-                        worst = s2 if s2 > worst else worst
-                    if not (worst < vmax * vmax) and failed_step[b0 + b] < 0:
-                        failed_step[b0 + b] = t + 1
-                    if failed_step[b0 + b] >= 0:
-                        for i in range(n_nodes):
-                            x[i, b] = rest_pos[i, 0]
-                            y[i, b] = rest_pos[i, 1]
-                            z[i, b] = rest_pos[i, 2]
-                            vx[i, b] = ZERO
-                            vy[i, b] = ZERO
-                            vz[i, b] = ZERO
-        for i in range(n_nodes):
-            for b in range(nb):
-                dead = failed_step[b0 + b] >= 0
-                final_pos[i, 0, b0 + b] = np.nan if dead else x[i, b]
-                final_pos[i, 1, b0 + b] = np.nan if dead else y[i, b]
-                final_pos[i, 2, b0 + b] = np.nan if dead else z[i, b]
-                final_vel[i, 0, b0 + b] = np.nan if dead else vx[i, b]
-                final_vel[i, 1, b0 + b] = np.nan if dead else vy[i, b]
-                final_vel[i, 2, b0 + b] = np.nan if dead else vz[i, b]
+        s = (
+            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+        )  # fmt: skip
+        _chunk_steps(
+            s, pos0, vel0, act, dt, record_every, vmax, b0, nb, body, med, rec, final_pos,
+            final_vel, failed_step, multirate,
+        )  # fmt: skip
+
+
+# ---- a stateful entry point: one animal's lanes stepped in place, slice after slice ----------
+# A call through the dispatcher pays for typing and unboxing each argument (about 60 ns an
+# array); ``simulate_chunks`` takes 37 of them, and allocates its scratch on every call: about
+# 5 us a call, against about 15 us of work in a 1/30 s slice of one shark. A Stepper holds all
+# of it (the body's arrays, the state, preallocated scratch) in one struct that crosses into
+# compiled code as one pointer, so a slice costs its steps and well under a microsecond more.
+
+_F1 = types.Array(types.float32, 1, "C")
+_F2 = types.Array(types.float32, 2, "C")
+_F3 = types.Array(types.float32, 3, "C")
+_F4 = types.Array(types.float32, 4, "C")
+_I1 = types.Array(types.int64, 1, "C")
+_I2 = types.Array(types.int64, 2, "C")
+# the fields in the order of ``simulate_chunks``'s arguments, plus the state and scratch
+STEPPER_FIELDS = (
+    ("pos", _F3), ("vel", _F3), ("dt", types.float32), ("chunk", types.int64),
+    ("vmax", types.float32), ("mass", _F1), ("ndamp", _F1), ("sa", _I1), ("sb", _I1),
+    ("stiff", _F1), ("sdamp", _F1), ("relaxed", _F1), ("shorten", _F1), ("scol", _I1),
+    ("panels", _I2), ("pw", _F2), ("fin_nodes", _I2), ("fin_fwd", _I2), ("fin_span", _I2),
+    ("fin_area", _F1), ("fin_angle", _F2), ("fin_act", _I1), ("front", _I1), ("back", _I1),
+    ("rest_pos", _F2), ("med", _F1), ("fs", _I1), ("failed", _I1), ("slow_idx", _I1),
+    ("fast_idx", _I1), ("substeps", types.int64), ("slow_nodes", _I1), ("fast_nodes", _I1),
+    ("scratch", _F4),
+)  # fmt: skip
+
+
+@structref.register
+class StepperType(types.StructRef):
+    """Numba type of a Stepper."""
+
+
+class Stepper(structref.StructRefProxy):
+    """One animal's lanes and everything the kernel needs to step them in place.
+
+    pos, vel: (N, 3, B) float32 state, stepped in place (the World's own arrays); fs: (B,)
+    the kernel's failure marks (>= 0 a dead lane); failed: (B,) the step each lane blew up
+    at (-1 if not), kept by ``advance``; scratch: (chunks, 12, N, chunk) float32.
+    """
+
+
+structref.define_boxing(StepperType, Stepper)
+
+
+@typeof_impl.register(Stepper)
+def _typeof_stepper(val, c):
+    # the generic typeof tries the buffer protocol first, and its exception costs more than
+    # the rest of a call
+    return val._type
+
+_STEPPER = StepperType(list(STEPPER_FIELDS))
+
+
+@njit(cache=True)
+def _new_stepper(
+    pos, vel, dt, chunk, vmax, mass, ndamp, sa, sb, stiff, sdamp, relaxed, shorten, scol,
+    panels, pw, fin_nodes, fin_fwd, fin_span, fin_area, fin_angle, fin_act, front, back,
+    rest_pos, med, fs, failed, slow_idx, fast_idx, substeps, slow_nodes, fast_nodes, scratch,
+):  # fmt: skip
+    st = structref.new(_STEPPER)
+    st.pos, st.vel, st.dt, st.chunk, st.vmax = pos, vel, dt, chunk, vmax
+    st.mass, st.ndamp, st.sa, st.sb, st.stiff = mass, ndamp, sa, sb, stiff
+    st.sdamp, st.relaxed, st.shorten, st.scol, st.panels = sdamp, relaxed, shorten, scol, panels
+    st.pw, st.fin_nodes, st.fin_fwd, st.fin_span = pw, fin_nodes, fin_fwd, fin_span
+    st.fin_area, st.fin_angle, st.fin_act, st.front = fin_area, fin_angle, fin_act, front
+    st.back, st.rest_pos, st.med, st.fs, st.failed = back, rest_pos, med, fs, failed
+    st.slow_idx, st.fast_idx, st.substeps = slow_idx, fast_idx, substeps
+    st.slow_nodes, st.fast_nodes, st.scratch = slow_nodes, fast_nodes, scratch
+    return st
+
+
+def make_stepper(pos, vel, fs, failed, dt, chunk, vmax, body_arrays, med, split) -> Stepper:
+    """Return a Stepper over the state arrays pos/vel (N, 3, B), fs and failed (B,) (all
+    stepped in place, so they must be C-contiguous float32 / int64), for a body's
+    ``_kernel_arrays``, the medium's array and its ``multirate.split``."""
+    f32, i64 = np.float32, np.int64
+    kinds = [f for _, f in STEPPER_FIELDS[5:26]]
+    arrays = [
+        np.array(a, dtype=f32 if k.dtype == types.float32 else i64, order="C", copy=True)
+        for a, k in zip((*body_arrays, med), kinds, strict=True)
+    ]
+    slow, fast, substeps, slow_nodes, fast_nodes = (
+        np.array(a, dtype=i64, copy=True) if isinstance(a, np.ndarray) else int(a) for a in split
+    )
+    n, _, batch = pos.shape
+    scratch = np.zeros(((batch + chunk - 1) // chunk, 12, n, chunk), dtype=f32)
+    return _new_stepper(
+        pos, vel, f32(dt), int(chunk), f32(vmax), *arrays, fs, failed, slow, fast, substeps,
+        slow_nodes, fast_nodes, scratch,
+    )  # fmt: skip
+
+
+@njit(cache=True, fastmath=FM, parallel=True, error_model="numpy")
+def advance(st, table, t0, t1, base):
+    """Step the Stepper's lanes in place through rows t0 .. t1 of ``table`` (T, A, B); a lane
+    that blows up is marked in ``st.failed`` at step ``base`` plus its step in the call."""
+    act = table[t0:t1]
+    pos, vel, fs, failed, scratch = st.pos, st.vel, st.fs, st.failed, st.scratch
+    body = (st.mass, st.ndamp, st.sa, st.sb, st.stiff, st.sdamp, st.relaxed, st.shorten,
+            st.scol, st.panels, st.pw, st.fin_nodes, st.fin_fwd, st.fin_span, st.fin_area,
+            st.fin_angle, st.fin_act, st.front, st.back, st.rest_pos)  # fmt: skip
+    multirate = (st.slow_idx, st.fast_idx, st.substeps, st.slow_nodes, st.fast_nodes)
+    dt, chunk, vmax, med = st.dt, st.chunk, st.vmax, st.med
+    n_lanes = pos.shape[2]
+    no_rec = scratch[:0]  # record_every 0: nothing is recorded
+    for c in prange(scratch.shape[0]):
+        b0 = c * chunk
+        nb = min(chunk, n_lanes - b0)
+        _chunk_steps(
+            scratch[c], pos, vel, act, dt, 0, vmax, b0, nb, body, med, no_rec, pos, vel, fs,
+            multirate,
+        )  # fmt: skip
+    for b in range(n_lanes):
+        if failed[b] < 0 and fs[b] >= 0:
+            failed[b] = base + fs[b]
+
+
+def serial(fn):
+    """Return ``fn`` (an njit(parallel=True) function of this module) compiled for one thread
+    (its ``prange`` runs as ``range``): no thread-pool launch, which costs more than a short
+    slice of one animal. A copy under its own name, so that its on-disk cache entry is apart
+    from the parallel one's (numba keys the cache by the function's qualified name)."""
+    py = fn.py_func
+    name = f"{py.__name__}_serial"
+    copy = pytypes.FunctionType(py.__code__, py.__globals__, name, py.__defaults__,
+                                py.__closure__)  # fmt: skip
+    copy.__qualname__ = name
+    return njit(cache=True, fastmath=FM, error_model="numpy")(copy)
+
+
+def advance_entry(parallel: bool):
+    """Return ``advance`` (threaded or serial) compiled for a Stepper and a float32 table, as
+    its compiled entry point: calling that skips the dispatcher's typing of each argument
+    (about 0.6 us of a 2 us call, which matters in 1/30 s slices of one animal). The
+    arguments must then have exactly those types: (Stepper, float32 (T, A, B) C array, int,
+    int, int)."""
+    fn = advance if parallel else _serial_advance()
+    return fn.compile((_STEPPER, _F3, types.int64, types.int64, types.int64))
+
+
+_SERIAL_ADVANCE = []
+
+
+def _serial_advance():
+    if not _SERIAL_ADVANCE:
+        _SERIAL_ADVANCE.append(serial(advance))
+    return _SERIAL_ADVANCE[0]

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import io
 import math
-import types
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,6 +25,7 @@ from numba import njit
 from zoetic.bodies import Body
 from zoetic.errors import SimulationError
 from zoetic.physics.contacts import balls_step, near, node_contacts
+from zoetic.physics.kernel import make_stepper
 from zoetic.physics.media import Medium, get_medium
 from zoetic.physics.multirate import split
 from zoetic.physics.objects import Ball, Box, Cylinder, Food, pack_balls, pack_statics
@@ -170,33 +170,18 @@ class Contacts:
         return -sum(i[:, :, index].sum(axis=1) for i in self.impulse)
 
 
-_SERIAL = None
+def _kernels() -> tuple:
+    """Return the stateful kernel's entry points, threaded and serial (compiled, or loaded
+    from numba's cache, once per process)."""
+    global _KERNELS
+    if _KERNELS is None:
+        from zoetic.physics.kernel import advance_entry
+
+        _KERNELS = (advance_entry(True), advance_entry(False))
+    return _KERNELS
 
 
-def serial_kernel():
-    """Return the animal kernel compiled for one thread: the same source as
-    ``kernel.simulate_chunks`` (its ``prange`` runs as ``range``), without the thread-pool
-    launch that would cost more than a short slice of one animal."""
-    global _SERIAL
-    if _SERIAL is None:
-        from numba import njit
-
-        from zoetic.physics import kernel
-
-        py = kernel.simulate_chunks.py_func
-        # a copy under its own name, so that its on-disk cache entry is apart from the
-        # parallel one's (numba keys the cache by the function's qualified name)
-        fn = types.FunctionType(py.__code__, py.__globals__, "simulate_chunks_serial",
-                                py.__defaults__, py.__closure__)  # fmt: skip
-        fn.__qualname__ = "simulate_chunks_serial"
-        _SERIAL = njit(cache=True, fastmath=kernel.FM)(fn)
-    return _SERIAL
-
-
-def _parallel_kernel():
-    from zoetic.physics.kernel import simulate_chunks
-
-    return simulate_chunks
+_KERNELS: tuple | None = None
 
 
 @njit(cache=True)
@@ -214,14 +199,6 @@ def fill_table(u, out) -> bool:
                     return False
                 out[t, k, b] = min(max(x, 0.0), 1.0)
     return True
-
-
-@njit(cache=True)
-def merge_failed(failed, fs, base) -> None:
-    """Record lanes the kernel found blowing up during a call that began at step ``base``."""
-    for b in range(failed.shape[0]):
-        if failed[b] < 0 and fs[b] >= 0:
-            failed[b] = base + fs[b]
 
 
 class World:
@@ -295,7 +272,6 @@ class World:
         self._karr = [_kernel_arrays(b) for b in self.bodies]
         # the multirate split of each body at this dt (stiff springs sub-stepped), as simulate
         self._splits = [tuple(split(b, self.dt)) for b in self.bodies]
-        self._rec = [np.empty((2, b.n_nodes, 3, self.batch), dtype=F32) for b in self.bodies]
         # the kernel's own failure marks, one array per animal: >= 0 marks a dead lane
         self._fs = [-np.ones(self.batch, dtype=np.int64) for _ in self.bodies]
         self._failed = [-np.ones(self.batch, dtype=np.int64) for _ in self.bodies]
@@ -309,14 +285,20 @@ class World:
         self._views = [(self._pos[o0:o1], self._vel[o0:o1])
                        for o0, o1 in zip(self._off[:-1], self._off[1:], strict=True)]  # fmt: skip
         self._lone = len(self.animals) == 1
-        self._dt32 = F32(self.dt)
-        self._vmax32 = F32(VMAX)
         self._no_contacts = Contacts(
             tuple(np.zeros((self.batch, b.n_nodes, 0, 3)) for b in self.bodies), ()
         )
-        self._serial = serial_kernel()
-        self._parallel = _parallel_kernel() if self.batch > 8 else self._serial
+        self._parallel, self._serial = _kernels()
+        if self.batch <= 8:
+            self._parallel = self._serial
         self._chunk = chunk_size(self.batch)
+        # one stepper per animal: its state views, body arrays and scratch, stepped in place
+        self._steppers = [
+            make_stepper(p, v, fs, failed, self.dt, self._chunk, VMAX, karr, self._med32, sp)
+            for (p, v), fs, failed, karr, sp in zip(
+                self._views, self._fs, self._failed, self._karr, self._splits, strict=True
+            )
+        ]
         self.restore(self.initial_state())
 
     # ---- state as a value -------------------------------------------------------------
@@ -490,14 +472,9 @@ class World:
 
     def _animals_run(self, tables, t0: int, t1: int) -> None:
         kernel = self._parallel if self.batch * (t1 - t0) >= PARALLEL_FROM else self._serial
-        dt32, chunk, vmax32, med32 = self._dt32, self._chunk, self._vmax32, self._med32
-        for (p, v), karr, sp, rec, fs, failed, table in zip(
-            self._views, self._karr, self._splits, self._rec, self._fs, self._failed, tables,
-            strict=False,
-        ):
-            rows = table[t0:t1] if t0 or t1 < len(table) else table
-            kernel(p, v, rows, dt32, t1 - t0, chunk, vmax32, *karr, med32, rec, p, v, fs, *sp)
-            merge_failed(failed, fs, self._n + t0)
+        base = self._n + t0
+        for stepper, table in zip(self._steppers, tables, strict=False):
+            kernel(stepper, table, t0, t1, base)
 
     def step(self, seconds: float, activations=None) -> Contacts:
         """Advance the world by ``seconds`` (rounded to whole time steps) and return the
@@ -512,6 +489,11 @@ class World:
             raise SimulationError(f"cannot step back in time ({seconds} s)")
         if self._lone and type(activations) is np.ndarray:
             tables = [self._table(0, activations, steps)]
+            if not self.objects:  # one animal alone: the shortest path (closed-loop slices)
+                kernel = self._parallel if self.batch * steps >= PARALLEL_FROM else self._serial
+                kernel(self._steppers[0], tables[0], 0, steps, self._n)
+                self._n += steps
+                return self._no_contacts
         else:
             acts = self._per_animal(activations)
             tables = [self._table(a, u, steps) for a, u in enumerate(acts)]
