@@ -591,11 +591,13 @@ class World:
         during the slice (relative to the particle) came within its radius."""
         f0 = self._food.copy()
         self._food += self.current * steps * self.dt
+        if not heads_before:
+            return
         radius = np.array([f.radius for f in self.foods])
-        for h0, h1 in zip(heads_before, self._heads(), strict=True):
-            a = h0[:, None, :] - f0  # (B, F, 3) head relative to the food, before and after
-            b = h1[:, None, :] - self._food
-            d = b - a
-            s = np.clip(-(a * d).sum(-1) / ((d * d).sum(-1) + 1e-12), 0.0, 1.0)
-            closest = np.linalg.norm(a + s[..., None] * d, axis=-1)
-            self._eaten |= np.isfinite(closest) & (closest < radius)
+        # (animals, B, F, 3): each head relative to the food, before and after
+        a = np.stack(heads_before)[:, :, None, :] - f0
+        b = np.stack(self._heads())[:, :, None, :] - self._food
+        d = b - a
+        s = np.clip(-(a * d).sum(-1) / ((d * d).sum(-1) + 1e-12), 0.0, 1.0)
+        closest = np.linalg.norm(a + s[..., None] * d, axis=-1)
+        self._eaten |= (np.isfinite(closest) & (closest < radius)).any(axis=0)

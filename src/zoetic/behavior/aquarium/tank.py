@@ -537,7 +537,8 @@ def live(tank: Tank, seconds: float | None = None,
         while j < steps:
             m = min(steps - j, rec_steps - (world.step_count % rec_steps))
             before = world.food_eaten[0]
-            heads = np.array([world.positions(a)[0][fishes[a].body.head] for a in range(n)])
+            heads = nose if j == 0 else np.array([world.positions(a)[0][fishes[a].body.head]
+                                                  for a in range(n)])  # fmt: skip
             contacts = world.step(m * dt, [r[:, j:j + m] for r in rows])
             j += m
             new = world.food_eaten[0] & ~before
