@@ -285,18 +285,21 @@ class FishBrain:
         sp = self.species
         same, hunters, prey = self._kinds(v.fish_species)
         d = v.fish_distance
-        pred_d = d[hunters & np.isfinite(d)]
-        mates = np.where(same, d, np.inf)
         prey_d = np.where(prey, d, np.inf)
-        crowd = int((d < sp.habits.personal_space).sum())
+        # a handful of fishes: plain Python over lists beats numpy's per-call overhead
+        dl = d.tolist()
+        seen = [math.isfinite(x) for x in dl]
+        ps = sp.habits.personal_space
         sit = Situation(
             collision=v.collision,
-            predator_distances=tuple(float(x) for x in pred_d),
+            predator_distances=tuple(x for x, h, s in zip(dl, hunters.tolist(), seen,
+                                                          strict=True) if h and s),
             food_distance=float(v.food_distance.min()) if len(v.food_distance) else np.inf,
-            mate_distance=float(mates.min()) if len(mates) else np.inf,
+            mate_distance=min((x for x, s in zip(dl, same.tolist(), strict=True) if s),
+                              default=np.inf),
             prey_distance=float(prey_d.min()) if len(prey_d) else np.inf,
-            crowded=crowd > sp.habits.crowd,
-            alone=not np.isfinite(d).any(),
+            crowded=sum(x < ps for x in dl) > sp.habits.crowd,
+            alone=not any(seen),
             near_obstacle=bool(len(v.obstacle_distance))
             and float(v.obstacle_distance.min()) < sp.habits.personal_space,
         )
@@ -551,7 +554,8 @@ def live(tank: Tank, seconds: float | None = None,
                     brains[i].ate(world.time)
                     events.append((world.time, fishes[i].name, "eat", f"food_{q}"))
             if contacts.impulse and contacts.impulse[0].shape[2]:
-                now = contacts.touching[0]
+                # contacts.touching[0] for the one lane, without stacking every animal's
+                now = np.array([(i[0] != 0.0).any(axis=(0, 2)) for i in contacts.impulse])
                 for i, o in zip(*np.nonzero(now), strict=True):
                     if o in static_obj and world.time - touching[i, o] > APART:
                         events.append((world.time, fishes[i].name, "collision",
