@@ -11,7 +11,7 @@ its layer), since a turning lattice fish drifts up or down.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -92,7 +92,7 @@ def keep_depth(me: Me, demand: Demand, height: float | None = None) -> Demand:
     y = me.layer if height is None else float(height)
     climb = min(max(float(DEPTH_GAIN * (y - me.com[1])), -MAX_CLIMB), MAX_CLIMB)
     now = float(np.arcsin(min(max(float(me.forward[1]), -1.0), 1.0)))
-    return replace(demand, pitch=PITCH_GAIN * (climb - now))
+    return Demand(demand.speed, demand.turn, PITCH_GAIN * (climb - now))
 
 
 def probe_reach(me: Me, target: float | None = None) -> float:
@@ -127,8 +127,7 @@ def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int 
     if len(kind):
         d = obstacle_distance(probes_ahead(me, reach), kind, center, size) if ahead is None \
             else ahead  # fmt: skip
-        k, s = np.unravel_index(np.argmin(d), d.shape)
-        if d[k, s] < CLEARANCE:
+        if d.min() < CLEARANCE:
             side = np.array([-f[2], 0.0, f[0]])  # the fish's left
             if prefer:
                 return True, side * prefer

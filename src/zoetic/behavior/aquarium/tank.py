@@ -292,11 +292,13 @@ class FishBrain:
         ps = sp.habits.personal_space
         sit = Situation(
             collision=v.collision,
-            predator_distances=tuple(x for x, h, s in zip(dl, hunters.tolist(), seen,
-                                                          strict=True) if h and s),
+            predator_distances=tuple(
+                x for x, h, s in zip(dl, hunters.tolist(), seen, strict=True) if h and s
+            ),
             food_distance=float(v.food_distance.min()) if len(v.food_distance) else np.inf,
-            mate_distance=min((x for x, s in zip(dl, same.tolist(), strict=True) if s),
-                              default=np.inf),
+            mate_distance=min(
+                (x for x, s in zip(dl, same.tolist(), strict=True) if s), default=np.inf
+            ),
             prey_distance=float(prey_d.min()) if len(prey_d) else np.inf,
             crowded=sum(x < ps for x in dl) > sp.habits.crowd,
             alone=not any(seen),
