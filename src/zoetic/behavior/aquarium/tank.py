@@ -400,7 +400,7 @@ def _kinematics(world: World, fishes: list[Fish], cw: list[np.ndarray]):
         com.append(w @ p)
         cv.append(w @ v)
         fr = c @ p
-        fwd.append(fr / (np.linalg.norm(fr) + 1e-12))
+        fwd.append(fr / (math.sqrt(fr @ fr) + 1e-12))  # np.linalg.norm's formula
         nose.append(p[f.body.head])
     return pos, np.array(com), np.array(fwd), np.array(cv), np.array(nose)
 
