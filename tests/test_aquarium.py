@@ -118,9 +118,10 @@ def test_cli_aquarium_writes_its_files(tmp_path):
     assert set(summary["events"]) == {"eat", "catch", "escape", "mate", "collision"}
 
 
-def test_cli_aquarium_refuses_vision_and_bad_counts_cleanly(tmp_path, capsys):
-    assert main(["aquarium", "--perception", "vision", "--out", str(tmp_path / "a")]) == 2
-    assert "not yet available" in capsys.readouterr().err
+def test_cli_aquarium_refuses_unknown_perception_and_bad_counts_cleanly(tmp_path, capsys):
+    assert main(["aquarium", "--perception", "sonar", "--out", str(tmp_path / "a")]) == 2
+    err = capsys.readouterr().err
+    assert "oracle, vision" in err and "sonar" in err and "Traceback" not in err
     assert main(["aquarium", "--fishes", "2", "--predators", "3",
                  "--out", str(tmp_path / "b")]) == 2  # fmt: skip
 
@@ -140,3 +141,17 @@ def test_a_fish_that_just_mated_is_not_willing_again_until_its_libido_returns():
     assert b.willing(30.0 + 20.0)
     b.thought = Thought(0.3, 0.9, 0.9, "escape", None)
     assert not b.willing(60.0)  # a fleeing fish does not court
+
+
+def test_go_to_swims_on_while_the_target_is_inside_the_turning_circle_even_behind():
+    from zoetic.behavior.aquarium.routines import Around, Me, go_to
+
+    me = Me(np.zeros(3), np.array([0.5, 0.0, 0.0]), np.array([1.0, 0.0, 0.0]), np.zeros(3),
+            0.2, 0.4, radius=2.0)  # fmt: skip
+    rng = np.random.default_rng(0)
+    near_behind = go_to(me, Around(target=np.array([0.0, 0.0, 1.5])), rng)
+    assert near_behind.turn == 0.0  # circling would never reach it: gain room first
+    far_behind = go_to(me, Around(target=np.array([-6.0, 0.0, 0.5])), rng)
+    assert abs(far_behind.turn) > 2.5  # outside the circle: turn round to it
+    ahead_left = go_to(me, Around(target=np.array([4.0, 0.0, 1.0])), rng)
+    assert 0.0 < ahead_left.turn < 0.5

@@ -122,7 +122,7 @@ def test_a_steered_wave_biases_the_muscles_and_tilts_the_fins():
 
 
 def test_turn_radius_is_the_arc_through_the_start_and_end_of_the_turn():
-    from zoetic.behavior.skills import turn_radius
+    from zoetic.bench.skills import turn_radius
 
     a = np.linspace(0.0, np.pi / 2, 20)  # a quarter circle of radius 2 m, centre at z = 2
     com = np.stack([2 * np.sin(a), np.zeros_like(a), 2 - 2 * np.cos(a)], axis=1)

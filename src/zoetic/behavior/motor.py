@@ -141,3 +141,132 @@ def motor_repertoire(motor: MotorControllers, speeds=(), turns=(), pitches=()) -
     for p in pitches:
         rep.add(f"pitch-{p:g}", motor.pitch(p), period, source="motor")
     return rep
+
+
+# ============================================================ the built-in motor controllers
+# Without a learned repertoire: the body's own travelling wave (``control.steered_wave``), its
+# swing scaled by an amplitude and a left/right bias added to the muscles, calibrated once per
+# body and frequency so that swim(speed) and turn(angle) mean what they say.
+
+WAVE_AMPLITUDES = np.array([0.2, 0.4, 0.6, 0.8, 1.0])
+WAVE_BIASES = np.array([0.0, 0.1, 0.2, 0.3, 0.4, 0.5])
+WAVE_SETTLE = 2.0  # s from rest before the speed and turning rate are measured
+WAVE_MEASURE = 3.0  # s over which they are measured
+_WAVE_CACHE: dict[tuple, WaveMotor] = {}
+
+
+@dataclass(frozen=True)
+class WaveMotor:
+    """swim / turn / pitch for one body from its own steered wave, calibrated (``calibrate``).
+
+    speeds (K,): m/s of the straight wave at each of ``WAVE_AMPLITUDES``; rates (K, J):
+    rad/s (left positive) of the wave at each amplitude with each of ``WAVE_BIASES`` (the
+    rate at a negative bias is the mirror image).
+    """
+
+    body: Body
+    frequency: float
+    speeds: np.ndarray
+    rates: np.ndarray
+
+    @classmethod
+    def calibrate(cls, body: Body, frequency: float | None = None) -> WaveMotor:
+        """Measure the wave's speed per amplitude and turning rate per (amplitude, bias) in one
+        batched run from rest (settled ``WAVE_SETTLE`` s, measured over ``WAVE_MEASURE`` s);
+        cached per body and frequency for the process."""
+        freq = float(frequency or body.wave_frequency)
+        key = (body.name, body.n_nodes, body.n_actuators, round(float(body.dt), 9), freq)
+        if key in _WAVE_CACHE:
+            return _WAVE_CACHE[key]
+        from zoetic.control import steered_wave
+
+        steps = int(round((WAVE_SETTLE + WAVE_MEASURE) / body.dt))
+        times = np.arange(steps) * body.dt
+        grid = [(a, b) for a in WAVE_AMPLITUDES for b in WAVE_BIASES]
+        acts = np.stack([steered_wave(body, times, a, b, 0.0, freq) for a, b in grid])
+        every = max(1, int(round(0.05 / body.dt)))
+        tr = simulate(body, acts, record_every=every)
+        t = np.arange(tr.positions.shape[1]) * every * body.dt
+        sel = t >= WAVE_SETTLE
+        com = tr.com(body)[:, sel][..., [0, 2]]
+        heading = heading_angles(body, tr.positions)[:, sel]
+        span = t[sel][-1] - t[sel][0]
+        shape = (len(WAVE_AMPLITUDES), len(WAVE_BIASES))
+        speed = (np.linalg.norm(np.diff(com, axis=1), axis=-1).sum(1) / span).reshape(shape)
+        rate = ((heading[:, -1] - heading[:, 0]) / span).reshape(shape)
+        rate = np.maximum.accumulate(np.maximum(rate - rate[:, :1], 0.0), axis=1)
+        motor = cls(body, freq, speed[:, 0].copy(), rate)
+        _WAVE_CACHE[key] = motor
+        return motor
+
+    @property
+    def top_speed(self) -> float:
+        """Return the fastest straight speed (m/s) the wave reaches."""
+        return float(self.speeds.max())
+
+    def swim(self, speed: float) -> float:
+        """Return the amplitude that swims ``speed`` m/s (clipped to the calibrated range)."""
+        order = np.argsort(self.speeds)
+        return float(np.interp(speed, self.speeds[order], WAVE_AMPLITUDES[order]))
+
+    def turn(self, angle: float, seconds: float = 1.0, amplitude: float = 1.0
+             ) -> tuple[float, float]:  # fmt: skip
+        """Return (amplitude, bias) turning ``angle`` rad (left positive) in ``seconds`` s at
+        least at ``amplitude``: the smallest bias whose rate turns it in time; a wave too weak
+        to turn that fast beats harder (up to amplitude 1), beyond that the sharpest turn."""
+        need = abs(angle) / max(seconds, 1e-9)
+        amp = min(max(float(amplitude), float(WAVE_AMPLITUDES[0])), 1.0)
+        reach = self.rates[:, -1]
+        if need > float(np.interp(amp, WAVE_AMPLITUDES, reach)):
+            # the smallest amplitude whose sharpest turn is fast enough (or full amplitude)
+            ok = np.flatnonzero(reach >= need)
+            amp = max(amp, float(WAVE_AMPLITUDES[ok[0]]) if len(ok) else 1.0)
+        k = int(np.clip(np.searchsorted(WAVE_AMPLITUDES, amp) - 1, 0, len(WAVE_AMPLITUDES) - 2))
+        w = (amp - WAVE_AMPLITUDES[k]) / (WAVE_AMPLITUDES[k + 1] - WAVE_AMPLITUDES[k])
+        row = (1 - w) * self.rates[k] + w * self.rates[k + 1]
+        bias = float(np.interp(need, row, WAVE_BIASES)) if row[-1] > row[0] else 0.0
+        return amp, bias if angle >= 0 else -bias
+
+    def fins(self, pitch: float) -> float:
+        """Return what to add to the fins' held (level) activation to pitch them ``pitch`` rad
+        (``fin_activation`` of the angle less that of level; 0 without fins)."""
+        rows = self.body.fin_angle
+        if not len(rows):
+            return 0.0
+        out = 0.0
+        for lo, hi in rows.tolist():
+            if hi != lo:
+                out += min(max((pitch - lo) / (hi - lo), 0.0), 1.0)
+                out -= min(max(-lo / (hi - lo), 0.0), 1.0)
+        return out / len(rows)
+
+    def activations(self, times: np.ndarray, speed: float, turn: float = 0.0,
+                    pitch: float = 0.0, seconds: float = 1.0) -> np.ndarray:  # fmt: skip
+        """Return activations (T, A): swim at ``speed`` m/s while turning ``turn`` rad in
+        ``seconds`` s, fins pitched ``pitch`` rad (nose up positive)."""
+        from zoetic.control import steered_wave
+
+        amp, bias = self.turn(turn, seconds, self.swim(speed))
+        return steered_wave(self.body, times, amp, bias, self.fins(pitch), self.frequency)
+
+    def activations_many(self, times: np.ndarray, speeds, turns, pitches,
+                         seconds: float = 1.0) -> np.ndarray:  # fmt: skip
+        """Return activations (D, T, A) of ``activations`` for D (speed, turn, pitch) demands
+        at once: one ``steered_wave`` evaluation broadcast over the demands."""
+        from zoetic.control import steered_wave
+
+        ab = [self.turn(t, seconds, self.swim(v)) for v, t in zip(speeds, turns, strict=True)]
+        amp = np.array([a for a, _ in ab])[:, None, None]
+        bias = np.array([b for _, b in ab])[:, None, None]
+        fins = np.array([self.fins(p) for p in pitches])[:, None, None]
+        return steered_wave(self.body, times, amp, bias, fins, self.frequency)
+
+    def summary(self) -> dict:
+        """Return the calibration tables (speeds in m/s, turning rates in deg/s)."""
+        return {
+            "frequency_hz": self.frequency,
+            "amplitudes": WAVE_AMPLITUDES.tolist(),
+            "biases": WAVE_BIASES.tolist(),
+            "speed_m_s": self.speeds.round(3).tolist(),
+            "turn_deg_s": np.degrees(self.rates).round(1).tolist(),
+        }

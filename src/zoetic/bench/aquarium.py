@@ -8,26 +8,36 @@ from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live, summariz
 
 
 def bench_aquarium(fishes: int = 10, food: int = 15, obstacles: int = 5, seconds: float = 60.0,
-                   seed: int = 0) -> dict:  # fmt: skip
-    """Return the realtime factor of the oracle-perception tank (brains, perception and
-    physics together, no video), its physics-only share, and the run's outcome figures."""
-    cfg = TankConfig(fishes=fishes, food=food, obstacles=obstacles, seconds=seconds, seed=seed)
-    live(build_tank(TankConfig(fishes=2, food=1, obstacles=1, seconds=0.2)))  # compile, warm
+                   seed: int = 0, perception: str = "oracle") -> dict:  # fmt: skip
+    """Return the realtime factor of the tank (brains, perception and physics together, no
+    video; ``perception`` oracle, or vision for the first predator), the same world's
+    physics alone, and the run's outcome figures."""
+    # no video: positions recorded once a brain period (the CLI records 20 frames a second)
+    cfg = TankConfig(fishes=fishes, food=food, obstacles=obstacles, seconds=seconds, seed=seed,
+                     record_period=0.1, perception=perception)  # fmt: skip
+    warm = TankConfig(fishes=2, food=1, obstacles=1, seconds=0.2, perception=perception)
+    live(build_tank(warm))  # compile, calibrate the motor controllers
     tank = build_tank(cfg)
+    c0 = time.process_time()
     life = live(tank)
+    cpu = time.process_time() - c0
     s = summarize(tank, life)
     # the same world stepped with the same number of calls and no brains: the physics share
     bare = build_tank(cfg)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     steps = bare.world.steps_for(cfg.record_period)
     for _ in range(int(round(seconds / cfg.record_period))):
         bare.world.step(steps * bare.world.dt, None)
-    physics = time.perf_counter() - t0
+    physics, physics_cpu = time.perf_counter() - t0, time.process_time() - c0
     return {
-        "scene": f"{fishes} fishes, {food} food, {obstacles} obstacles, {seconds:g} s, oracle",
+        "scene": f"{fishes} fishes, {food} food, {obstacles} obstacles, {seconds:g} s",
+        "perception": perception if perception == "oracle" else f"{perception} (one predator)",
         "realtime_factor": s["realtime_factor"],
         "wall_seconds": s["wall_seconds"],
         "physics_only_realtime_factor": seconds / physics if physics > 0 else None,
+        # CPU time of this process: what a busy machine's other work does not count against
+        "cpu_realtime_factor": seconds / cpu if cpu > 0 else None,
+        "physics_only_cpu_realtime_factor": seconds / physics_cpu if physics_cpu > 0 else None,
         "events": s["events"],
         "food_eaten_fraction": s["food_eaten_fraction"],
         "collisions_with_obstacles": s["collisions_with_obstacles"],

@@ -505,7 +505,11 @@ class World:
         t = 0
         while t < steps:
             t1 = steps if not self._solids else min(steps, t + MAX_SLICE)
-            if self._solids and self._any_near((t1 - t) * self.dt):
+            if self._solids and not len(self.balls) and len(self.animals) > 1:
+                # no balls couple the animals: only those near a fixed shape step one step at
+                # a time with contacts, the others the whole slice in one kernel call
+                self._slice_apart(tables, t, t1, impulse)
+            elif self._solids and self._any_near((t1 - t) * self.dt):
                 for s in range(t, t1):
                     self._contact_step(tables, s, impulse)
             else:
@@ -529,6 +533,32 @@ class World:
                     self._bpar, self._skind, self._scenter, self._ssize, horizon):  # fmt: skip
                 return True
         return False
+
+    def _near(self, a: int, horizon: float) -> bool:
+        o0, o1 = self._off[a], self._off[a + 1]
+        return bool(near(self._pos[o0:o1], self._vel[o0:o1], self.node_radius, self._bpos,
+                         self._bvel, self._bpar, self._skind, self._scenter, self._ssize,
+                         horizon))  # fmt: skip
+
+    def _slice_apart(self, tables, t: int, t1: int, impulse) -> None:
+        """Step steps t..t1 of animals that nothing couples (no balls): each near a fixed
+        shape one step at a time with its contacts, each other one in one kernel call."""
+        kernel = self._parallel if self.batch * (t1 - t) >= PARALLEL_FROM else self._serial
+        one = self._parallel if self.batch >= PARALLEL_FROM else self._serial
+        base = self._n + t
+        for a, (stepper, table) in enumerate(zip(self._steppers, tables, strict=False)):
+            if not self._near(a, (t1 - t) * self.dt):
+                kernel(stepper, table, t, t1, base)
+                continue
+            o0, o1 = self._off[a], self._off[a + 1]
+            pos, vel, mass = self._pos[o0:o1], self._vel[o0:o1], self._mass[a]
+            for s in range(t, t1):
+                node_contacts(
+                    pos, vel, mass, self.node_radius, self._bpos, self._bvel, self._bpar,
+                    self._skind, self._scenter, self._ssize, self._ball_obj, self._static_obj,
+                    self.dt, self._w, self._zeta, self._mu, self._bforce, impulse[a],
+                )  # fmt: skip
+                one(stepper, table, s, s + 1, self._n + s)
 
     def _balls(self, steps: int) -> None:
         balls_step(
@@ -559,11 +589,13 @@ class World:
         during the slice (relative to the particle) came within its radius."""
         f0 = self._food.copy()
         self._food += self.current * steps * self.dt
+        if not heads_before:
+            return
         radius = np.array([f.radius for f in self.foods])
-        for h0, h1 in zip(heads_before, self._heads(), strict=True):
-            a = h0[:, None, :] - f0  # (B, F, 3) head relative to the food, before and after
-            b = h1[:, None, :] - self._food
-            d = b - a
-            s = np.clip(-(a * d).sum(-1) / ((d * d).sum(-1) + 1e-12), 0.0, 1.0)
-            closest = np.linalg.norm(a + s[..., None] * d, axis=-1)
-            self._eaten |= np.isfinite(closest) & (closest < radius)
+        # (animals, B, F, 3): each head relative to the food, before and after
+        a = np.stack(heads_before)[:, :, None, :] - f0
+        b = np.stack(self._heads())[:, :, None, :] - self._food
+        d = b - a
+        s = np.clip(-(a * d).sum(-1) / ((d * d).sum(-1) + 1e-12), 0.0, 1.0)
+        closest = np.linalg.norm(a + s[..., None] * d, axis=-1)
+        self._eaten |= (np.isfinite(closest) & (closest < radius)).any(axis=0)

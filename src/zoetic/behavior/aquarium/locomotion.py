@@ -1,10 +1,11 @@
 """The motor layer of the aquarium: motor demands (speed, turn, pitch) in, muscle activations out.
 
-``Locomotion`` is the small interface the behaviour routines call; ``WaveLocomotion`` is the
-built-in motor skill: the body's own travelling wave (``control.wave_controller``), its swing
-scaled by the demanded speed and a left/right bias added to the muscles by the demanded turn
-(left muscles shortened more turn the fish left). The parameterised swim(speed)/turn(angle)
-controllers of ``behavior.motor`` can replace it behind the same interface.
+``Locomotion`` is the small interface the behaviour routines' demands go through;
+``MotorLocomotion`` is the built-in motor skill: the parameterised controllers of
+``behavior.motor.WaveMotor`` (swim at a speed, turn by an angle, pitch with the fins), the
+body's own steered wave calibrated once per body and frequency, so that a demanded speed is
+the speed swum and a demanded turn the angle turned (in ``TURN_SECONDS``, or as fast as the
+body can).
 """
 
 from __future__ import annotations
@@ -14,8 +15,11 @@ from typing import Protocol
 
 import numpy as np
 
+from zoetic.behavior.motor import WaveMotor
 from zoetic.bodies import Body
-from zoetic.control import steered_wave
+
+TURN_SECONDS = 1.0  # s a demanded heading change is to take (the routines re-aim every period)
+MAX_PITCH = 0.5  # rad: the largest fin pitch a routine may ask for
 
 
 @dataclass(frozen=True)
@@ -36,25 +40,33 @@ class Locomotion(Protocol):
         ...
 
 
-class WaveLocomotion:
-    """The built-in motor skill: a travelling wave, amplitude for speed, a bias for turning.
+class MotorLocomotion:
+    """The built-in motor skill: ``WaveMotor.calibrate(body, frequency)``'s swim, turn and
+    pitch controllers (``turn_seconds``: the time a demanded turn is to take)."""
 
-    max_speed: speed (m/s) at full amplitude; turn_gain: bias per radian of turn wanted;
-    max_bias: the largest bias; min_amplitude: the wave never stops (a fish keeps steerage).
-    Fins (if the body has any) take their held level + pitch / pi (``control.steered_wave``).
-    """
-
-    def __init__(self, body: Body, frequency: float | None = None, max_speed: float = 0.36,
-                 turn_gain: float = 1.0, max_bias: float = 0.5,
-                 min_amplitude: float = 0.45) -> None:  # fmt: skip
+    def __init__(self, body: Body, frequency: float | None = None,
+                 turn_seconds: float = TURN_SECONDS) -> None:  # fmt: skip
         self.body = body
-        self.frequency = float(frequency or body.wave_frequency)
-        self.max_speed = float(max_speed)
-        self.turn_gain, self.max_bias, self.min_amplitude = turn_gain, max_bias, min_amplitude
+        self.motor = WaveMotor.calibrate(body, frequency)
+        self.turn_seconds = float(turn_seconds)
+
+    @property
+    def top_speed(self) -> float:
+        """Return the fastest the calibrated wave swims (m/s)."""
+        return self.motor.top_speed
+
+    @property
+    def turn_radius(self) -> float:
+        """Return the radius (m) of the sharpest turn at full amplitude."""
+        return float(self.motor.speeds[-1] / max(self.motor.rates[-1, -1], 1e-6))
 
     def activations(self, demand: Demand, times: np.ndarray) -> np.ndarray:
-        """Return activations (T, A): the wave at the demanded amplitude plus the turn bias."""
-        amp = float(np.clip(demand.speed / self.max_speed, self.min_amplitude, 1.0))
-        bias = float(np.clip(self.turn_gain * demand.turn, -self.max_bias, self.max_bias))
-        fins = float(np.clip(demand.pitch, -1.5, 1.5)) / np.pi
-        return steered_wave(self.body, times, amp, bias, fins, self.frequency)
+        """Return activations (T, A): swim(speed) turning by demand.turn, fins at the pitch."""
+        return self.activations_many([demand], times)[0]
+
+    def activations_many(self, demands: list[Demand], times: np.ndarray) -> np.ndarray:
+        """Return activations (D, T, A) for several demands at once (one wave evaluation)."""
+        return self.motor.activations_many(
+            times, [d.speed for d in demands], [d.turn for d in demands],
+            [min(max(d.pitch, -MAX_PITCH), MAX_PITCH) for d in demands], self.turn_seconds,
+        )  # fmt: skip

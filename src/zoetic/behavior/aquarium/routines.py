@@ -2,12 +2,15 @@
 
 avoid (static obstacles and other fishes), eat, mate, leave, wander, escape, school and the
 predator's hunt. Each is a small pure function of the fish's own kinematics (``Me``) and what it
-perceives (``Around``); the tank turns the demand into muscle activations (``locomotion``).
-Directions are steered in the horizontal plane (the lattice fishes have no fins to pitch).
+perceives (``Around``); the tank turns the demand into muscle activations (``locomotion``:
+the calibrated swim / turn / pitch motor controllers). Directions are steered in the
+horizontal plane; ``keep_depth`` pitches the fins to hold a fish at its target's depth (or
+its layer), since a turning lattice fish drifts up or down.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -16,8 +19,14 @@ from zoetic.behavior.aquarium.locomotion import Demand
 from zoetic.behavior.aquarium.perception import obstacle_distance
 
 LOOKAHEAD = 10.0  # s of travel (at least 3 m) probed ahead for an imminent collision
+PROBES = 8  # points probed along the heading
+_STEPS = np.arange(PROBES, dtype=float)
 CLEARANCE = 0.5  # m: a probe nearer than this to an obstacle means a collision is imminent
-TURN_RADIUS = 1.9  # m: the circle the built-in wave turns at full amplitude (measured)
+TURN_RADIUS = 1.9  # m: default radius of a fish's sharpest turn (the brain gives its own)
+DEPTH_GAIN = 1.0  # rad of climb per m of depth error (capped at MAX_CLIMB)
+MAX_CLIMB = 0.4  # rad: the steepest climb or dive asked for
+PITCH_GAIN = 2.0  # rad of fin pitch per rad of climb-angle error
+ROOM = 1.0  # the turning circle a fish keeps clear of a target, in turn radii
 FISH_CLEARANCE = 0.8  # m between centres ahead that triggers avoid-fish
 
 
@@ -31,6 +40,8 @@ class Me:
     velocity: np.ndarray
     cruise: float
     top: float
+    radius: float = TURN_RADIUS  # m: the sharpest turn's radius
+    layer: float = 0.0  # m: the height the fish keeps when it has no target
 
 
 @dataclass(frozen=True)
@@ -55,7 +66,7 @@ def _flat(v: np.ndarray) -> np.ndarray:
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
-    n = np.linalg.norm(v)
+    n = math.sqrt(v @ v)  # np.linalg.norm's own formula, without its overhead
     return v / n if n > 1e-9 else np.zeros_like(v)
 
 
@@ -66,30 +77,57 @@ def bearing(forward: np.ndarray, direction: np.ndarray) -> float:
 
 
 def steer(me: Me, direction: np.ndarray, speed: float) -> Demand:
-    """Return the demand to swim along ``direction`` at ``speed`` (faster while turning hard:
-    measured on the shark, amplitude 1 with bias 0.5 turns 0.14 rad/s, amplitude 0.6 only
-    0.09 rad/s)."""
+    """Return the demand to swim along ``direction`` at ``speed`` (the turn motor controller
+    beats harder by itself when the turn needs it)."""
     d = _flat(direction)
     if np.linalg.norm(d) < 1e-9:
         return Demand(speed, 0.0)
-    turn = bearing(me.forward, d)
-    # the wave turns a fish only as fast as water flows past it: beat harder to turn
-    return Demand(max(speed, me.top * min(1.0, abs(turn) / 0.5)), turn)
+    return Demand(speed, bearing(me.forward, d))
 
 
-def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int = 0
-                    ) -> tuple[bool, np.ndarray | None]:  # fmt: skip
-    """Return (imminent?, the unit way out): probes along the heading up to LOOKAHEAD s of
-    travel against the obstacles (clearance CLEARANCE m) and other fishes' centres ahead.
-    prefer: +1 (left) or -1 (right) keeps the side an avoidance already turns to."""
-    speed = max(float(np.linalg.norm(me.velocity)), me.cruise)
+def keep_depth(me: Me, demand: Demand, height: float | None = None) -> Demand:
+    """Return the demand with the fins pitched to bring the fish to ``height`` m (default its
+    layer): a climb angle proportional to the depth error (at most ``MAX_CLIMB``), the fins
+    pitched by the difference between it and the body's climb angle."""
+    y = me.layer if height is None else float(height)
+    climb = min(max(float(DEPTH_GAIN * (y - me.com[1])), -MAX_CLIMB), MAX_CLIMB)
+    now = float(np.arcsin(min(max(float(me.forward[1]), -1.0), 1.0)))
+    return Demand(demand.speed, demand.turn, PITCH_GAIN * (climb - now))
+
+
+def probe_reach(me: Me, target: float | None = None) -> float:
+    """Return how far ahead (m) a fish probes for obstacles: LOOKAHEAD s of travel (at least
+    3 m), or only as far as a food particle it is about to eat (``target`` m away: obstacles
+    beyond it are left for after the meal, since food lies near rocks)."""
+    speed = max(math.sqrt(me.velocity @ me.velocity), me.cruise)
     reach = max(3.0, LOOKAHEAD * speed)
+    if target is not None and np.isfinite(target):
+        reach = min(reach, max(target, 0.5 * CLEARANCE))
+    return reach
+
+
+def probes_ahead(me: Me, reach: float) -> np.ndarray:
+    """Return the PROBES points (PROBES, 3) along the heading from the nose up to ``reach`` m."""
+    f = _unit(_flat(me.forward))
+    along = _STEPS * (reach / (PROBES - 1))  # np.linspace(0, reach, PROBES)'s own formula
+    along[-1] = reach
+    return me.nose + along[:, None] * f
+
+
+def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int = 0,
+                    target: float | None = None, ahead: np.ndarray | None = None
+                    ) -> tuple[bool, np.ndarray | None]:  # fmt: skip
+    """Return (imminent?, the unit way out): probes along the heading (``probes_ahead`` up to
+    ``probe_reach``) against the obstacles (clearance CLEARANCE m) and other fishes' centres
+    ahead. prefer: +1 (left) or -1 (right) keeps the side an avoidance already turns to;
+    target: the distance (m) to a food particle the fish is about to eat; ahead: the probes'
+    obstacle distances (PROBES, S) when already computed (the tank does all fishes at once)."""
+    reach = probe_reach(me, target)
     f = _unit(_flat(me.forward))
     if len(kind):
-        probes = me.nose + np.linspace(0.0, reach, 8)[:, None] * f
-        d = obstacle_distance(probes, kind, center, size)  # (8, S)
-        k, s = np.unravel_index(np.argmin(d), d.shape)
-        if d[k, s] < CLEARANCE:
+        d = obstacle_distance(probes_ahead(me, reach), kind, center, size) if ahead is None \
+            else ahead  # fmt: skip
+        if d.min() < CLEARANCE:
             side = np.array([-f[2], 0.0, f[0]])  # the fish's left
             if prefer:
                 return True, side * prefer
@@ -152,9 +190,10 @@ def go_to(me: Me, around: Around, rng: np.random.Generator, lead: float = 0.0,
     dist = float(np.linalg.norm(_flat(aim - me.nose)))
     speed = me.top if dist > 2.0 else max(me.cruise * 0.6, me.top * dist / 2.0)
     beta = abs(bearing(me.forward, _flat(aim - me.nose)))
-    if beta < np.pi / 2 and dist < 2 * TURN_RADIUS * np.sin(beta):
-        # inside the turning circle: swim on to gain room instead of circling the target
-        return Demand(me.cruise, 0.0)
+    if dist < 2 * ROOM * me.radius * np.sin(beta):
+        # inside the turning circle on the target's side (ahead or behind): swim on to gain
+        # room instead of circling the target for ever
+        return Demand(speed, 0.0)
     return steer(me, aim - me.nose, speed)
 
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from zoetic.behavior.aquarium.locomotion import WaveLocomotion
+from zoetic.behavior.aquarium.locomotion import Demand, MotorLocomotion
 from zoetic.behavior.aquarium.perception import obstacle_distance, perceive
 from zoetic.behavior.aquarium.routines import (
     Around,
@@ -25,7 +25,10 @@ from zoetic.behavior.aquarium.routines import (
     collision_ahead,
     escape,
     go_to,
+    keep_depth,
     leave,
+    probe_reach,
+    probes_ahead,
     school,
     wander,
 )
@@ -48,6 +51,8 @@ from zoetic.physics.objects import Box, Cylinder, Food, pack_statics
 from zoetic.physics.world import Animal, World
 
 WALL = 0.25  # m: half thickness of the tank's walls
+PERCEPTIONS = ("oracle", "vision")
+NEAR = 2.5  # m between centres within which fishes may catch, touch or mate (1 m bodies)
 APART = 1.0  # s: a touch counts as a new collision after this long apart
 HEIGHT = 2.0  # m: half height of the walls, rocks and seaweed (all span the fishes' layer)
 
@@ -71,6 +76,8 @@ class TankConfig:
     prey_species: str = "minnow"
     predator_species: str = "shark"
     food_radius: float = 0.25
+    food_margin: float = 3.0  # m from the walls food is dropped: 1.5 turning radii of a fish
+    perception: str = "oracle"  # or "vision": the first predator sees with animat vision
 
     def size(self) -> float:
         """Return the half width of the tank (m)."""
@@ -113,6 +120,12 @@ def _check(cfg: TankConfig) -> None:
         raise SimulationError("at most 60 fishes, 500 food particles and 60 obstacles")
     if not 0 < cfg.seconds <= 3600:
         raise SimulationError(f"--seconds must be in (0, 3600], got {cfg.seconds:g}")
+    if cfg.perception not in PERCEPTIONS:
+        raise SimulationError(
+            f"perception must be one of {', '.join(PERCEPTIONS)}, got {cfg.perception!r}"
+        )
+    if cfg.perception == "vision" and cfg.predators < 1:
+        raise SimulationError("--perception vision gives a predator eyes: need --predators >= 1")
     if not 0 < cfg.control_period <= 1.0 or not 0 < cfg.record_period <= cfg.control_period:
         raise SimulationError("need 0 < record period <= control period <= 1 s")
 
@@ -176,7 +189,7 @@ def build_tank(cfg: TankConfig) -> Tank:
         animals.append(Animal(body, tuple(p - com0), yaw, tuple(v0)))
         fishes.append(Fish(f"{spec.name}_{i}", spec, body))
     foods = [
-        Food(tuple(_place(rng, half, lambda p: free(p, 0.6), 1.5)), cfg.food_radius)
+        Food(tuple(_place(rng, half, lambda p: free(p, 0.6), cfg.food_margin)), cfg.food_radius)
         for _ in range(cfg.food)
     ]
     world = World([*animals, *statics, *foods], medium="water", current=cfg.current)
@@ -227,7 +240,10 @@ class FishBrain:
     def __init__(self, species: Species, body: Body, hunted_by: frozenset[str]) -> None:
         self.species, self.body, self.hunted_by = species, body, hunted_by
         m = species.motor
-        self.locomotion = WaveLocomotion(body, m.frequency, m.max_speed)
+        self.locomotion = MotorLocomotion(body, m.frequency)
+        self.top = min(m.max_speed, self.locomotion.top_speed)
+        self.cruise = min(m.cruise_speed, self.top)
+        self.radius = self.locomotion.turn_radius
         self.constants = species.fear_constants()
         self.alive = True
         self.avoid_side = 0
@@ -256,25 +272,36 @@ class FishBrain:
         """Record a mating at time t."""
         self.mind = mind_mated(self.mind, t)
 
+    def _kinds(self, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Return (same species, hunters, prey) masks over the tank's fishes (cached)."""
+        if getattr(self, "_names", None) != names:
+            arr = np.array(names)
+            self._names = names
+            self._masks = (arr == self.species.name, np.isin(arr, list(self.hunted_by)),
+                           np.isin(arr, list(self.species.prey)))  # fmt: skip
+        return self._masks
+
     def _situation(self, v: View) -> tuple[Situation, np.ndarray, np.ndarray, np.ndarray]:
         sp = self.species
-        names = np.array(v.fish_species)
-        same = names == sp.name
-        hunters = np.isin(names, list(self.hunted_by))
-        prey = np.isin(names, list(sp.prey))
+        same, hunters, prey = self._kinds(v.fish_species)
         d = v.fish_distance
-        pred_d = d[hunters & np.isfinite(d)]
-        mates = np.where(same, d, np.inf)
         prey_d = np.where(prey, d, np.inf)
-        crowd = int((d < sp.habits.personal_space).sum())
+        # a handful of fishes: plain Python over lists beats numpy's per-call overhead
+        dl = d.tolist()
+        seen = [math.isfinite(x) for x in dl]
+        ps = sp.habits.personal_space
         sit = Situation(
             collision=v.collision,
-            predator_distances=tuple(float(x) for x in pred_d),
+            predator_distances=tuple(
+                x for x, h, s in zip(dl, hunters.tolist(), seen, strict=True) if h and s
+            ),
             food_distance=float(v.food_distance.min()) if len(v.food_distance) else np.inf,
-            mate_distance=float(mates.min()) if len(mates) else np.inf,
+            mate_distance=min(
+                (x for x, s in zip(dl, same.tolist(), strict=True) if s), default=np.inf
+            ),
             prey_distance=float(prey_d.min()) if len(prey_d) else np.inf,
-            crowded=crowd > sp.habits.crowd,
-            alone=not np.isfinite(d).any(),
+            crowded=sum(x < ps for x in dl) > sp.habits.crowd,
+            alone=not any(seen),
             near_obstacle=bool(len(v.obstacle_distance))
             and float(v.obstacle_distance.min()) < sp.habits.personal_space,
         )
@@ -282,8 +309,15 @@ class FishBrain:
 
     def act(self, observation: Mapping, period: Period) -> np.ndarray:
         """Return activations (1, T, A) for the period from the fish's percept."""
-        if not self.alive:
+        demand = self.decide(observation, period)
+        if demand is None:
             return np.zeros((1, period.steps, self.body.n_actuators))
+        return self.locomotion.activations(demand, period.times)[None]
+
+    def decide(self, observation: Mapping, period: Period) -> Demand | None:
+        """Return the motor demand for the period from the fish's percept (None: dead)."""
+        if not self.alive:
+            return None
         v: View = observation["view"]
         sp = self.species
         sit, same, hunters, prey_d = self._situation(v)
@@ -322,8 +356,9 @@ class FishBrain:
             demand = leave(me, around)
         else:
             demand = wander(me, around, self.rng)
+        demand = keep_depth(me, demand, None if around.target is None else around.target[1])
         self.thought = Thought(drives.hunger, drives.libido, drives.fear, intention, target)
-        return self.locomotion.activations(demand, period.times)[None]
+        return demand
 
 
 # ============================================================================ living
@@ -341,6 +376,7 @@ class Life:
     drives: np.ndarray  # (K, n, 3) hunger, libido, fear
     intentions: np.ndarray  # (K, n) index into INTENTIONS
     alive: np.ndarray  # (K, n) bool
+    targets: np.ndarray  # (K, n) the focused target's index (fish, food particle; -1: none)
     events: list[tuple[float, str, str, str]] = field(default_factory=list)
     wall_seconds: float = 0.0
     deepest: float = 0.0  # m: the deepest any node went into an obstacle (0 if none)
@@ -364,9 +400,42 @@ def _kinematics(world: World, fishes: list[Fish], cw: list[np.ndarray]):
         com.append(w @ p)
         cv.append(w @ v)
         fr = c @ p
-        fwd.append(fr / (np.linalg.norm(fr) + 1e-12))
+        fwd.append(fr / (math.sqrt(fr @ fr) + 1e-12))  # np.linalg.norm's formula
         nose.append(p[f.body.head])
     return pos, np.array(com), np.array(fwd), np.array(cv), np.array(nose)
+
+
+def _activations(brains: list[FishBrain], demands: list[Demand | None],
+                 period: Period) -> list[np.ndarray]:  # fmt: skip
+    """Return each fish's activations (1, T, A) for its demand (zeros when dead): fishes that
+    share a motor (body and wave frequency) in one batched call."""
+    rows: list[np.ndarray] = [np.empty(0)] * len(brains)
+    groups: dict[int, list[int]] = {}
+    for i, (b, d) in enumerate(zip(brains, demands, strict=True)):
+        if d is None:
+            rows[i] = np.zeros((1, period.steps, b.body.n_actuators))
+        else:
+            groups.setdefault(id(b.locomotion.motor), []).append(i)
+    for idx in groups.values():
+        acts = brains[idx[0]].locomotion.activations_many([demands[i] for i in idx],
+                                                          period.times)  # fmt: skip
+        for k, i in enumerate(idx):
+            rows[i] = acts[k : k + 1]
+    return rows
+
+
+def _eyes(tank: Tank):
+    """Return animat-vision eyes for the tank's first predator (``aquarium.vision``)."""
+    from zoetic.behavior.aquarium.vision import FishEyes
+
+    a = next(i for i, f in enumerate(tank.fishes) if f.species.predator)
+    me = tank.fishes[a]
+    prey = next((f for f in tank.fishes if f.species.name in me.species.prey), None)
+    prey_body, prey_color = (prey.body, prey.species.color) if prey else (me.body, me.species.color)
+    colors = [np.array(f.species.color) / 255.0 for f in tank.fishes]
+    rng, extent = me.species.senses.view_range, 2 * tank.config.size()
+    return FishEyes.build(a, me.body, colors, prey_body, np.array(prey_color) / 255.0, rng,
+                          -HEIGHT, extent)  # fmt: skip
 
 
 def live(tank: Tank, seconds: float | None = None,
@@ -391,13 +460,14 @@ def live(tank: Tank, seconds: float | None = None,
     dt = world.dt
     t_start = time.perf_counter()
     times, positions, foods, eaten = [], [[] for _ in fishes], [], []
-    b_times, drive_rec, intents, alive_rec = [], [], [], []
+    b_times, drive_rec, intents, alive_rec, target_rec = [], [], [], [], []
     events: list[tuple[float, str, str, str]] = []
     touching = np.full((n, len(world.objects)), -np.inf)  # when each pair last touched
     fish_touch = np.full((n, n), -np.inf)
     in_fear = np.zeros(n, bool)
     deepest = 0.0
     static_obj = [i for i, o in enumerate(world.objects) if isinstance(o, Box | Cylinder)]
+    eyes = _eyes(tank) if cfg.perception == "vision" else None
 
     def record(pos):
         times.append(world.time)
@@ -421,23 +491,46 @@ def live(tank: Tank, seconds: float | None = None,
         food_pos = world.food_positions[0]
         left = ~world.food_eaten[0]
         pc = perceive(nose, fwd, com, alive, food_pos, left, kind, center, size, va, vr, sr)
-        rows = []
-        for i, (f, b) in enumerate(zip(fishes, brains, strict=True)):
-            me = Me(com[i], nose[i], fwd[i], vel[i], f.species.motor.cruise_speed,
-                    f.species.motor.max_speed)  # fmt: skip
+        seen_com = {}
+        if eyes is not None and alive[eyes.animal]:
+            a = eyes.animal
+            prey = [j for j in range(n) if alive[j] and j != a
+                    and fishes[j].species.name in fishes[a].species.prey]  # fmt: skip
+            sight = eyes.see(world, np.array(prey, int))
+            pc.fish[a, prey] = np.inf  # prey only as the eyes see it
+            seen_com[a] = com.copy()
+            if sight is not None:
+                pc.fish[a, sight.fish] = sight.distance
+                seen_com[a][sight.fish] = sight.point
+        demands: list[Demand | None] = []
+        mes, meals = [], []
+        for i, b in enumerate(brains):
+            mes.append(Me(com[i], nose[i], fwd[i], vel[i], b.cruise, b.top, b.radius))
+            th = b.thought
+            meals.append(pc.food[i, th.target] if th.intention == "eat" and th.target is not None
+                         else None)  # fmt: skip
+        # every fish's probes ahead against the obstacles in one call
+        ahead = obstacle_distance(np.stack([probes_ahead(m, probe_reach(m, q))
+                                            for m, q in zip(mes, meals, strict=True)]),
+                                  kind, center, size)  # fmt: skip
+        for i, b in enumerate(brains):
+            me = mes[i]
             others = com[np.isfinite(pc.fish[i])]
             prefer = b.avoid_side if b.thought.intention == "avoid" else 0
-            hit, away = collision_ahead(me, kind, center, size, others, prefer)
+            hit, away = collision_ahead(me, kind, center, size, others, prefer, meals[i],
+                                        ahead[i])  # fmt: skip
             if hit and away is not None:
                 b.avoid_side = 1 if float(np.cross(fwd[i], away)[1]) < 0 else -1
-            view = View(me, pc.fish[i], com, fwd, vel, names, pc.food[i], food_pos,
+            view = View(me, pc.fish[i], seen_com.get(i, com), fwd, vel, names, pc.food[i], food_pos,
                         pc.obstacles[i], hit, away)  # fmt: skip
-            rows.append(b.act({"view": view, "time": np.array([t])}, period))
+            demands.append(b.decide({"view": view, "time": np.array([t])}, period))
+        rows = _activations(brains, demands, period)
         th = [b.thought for b in brains]
         b_times.append(t)
         drive_rec.append([(x.hunger, x.libido, x.fear) for x in th])
         intents.append([INTENTIONS.index(x.intention) for x in th])
         alive_rec.append(alive)
+        target_rec.append([-1 if x.target is None else x.target for x in th])
         # fear episodes that end with the fish alive are escapes
         for i, x in enumerate(th):
             afraid = alive[i] and x.intention in ("escape", "school")
@@ -449,7 +542,8 @@ def live(tank: Tank, seconds: float | None = None,
         while j < steps:
             m = min(steps - j, rec_steps - (world.step_count % rec_steps))
             before = world.food_eaten[0]
-            heads = np.array([world.positions(a)[0][fishes[a].body.head] for a in range(n)])
+            heads = nose if j == 0 else np.array([world.positions(a)[0][fishes[a].body.head]
+                                                  for a in range(n)])  # fmt: skip
             contacts = world.step(m * dt, [r[:, j:j + m] for r in rows])
             j += m
             new = world.food_eaten[0] & ~before
@@ -462,7 +556,8 @@ def live(tank: Tank, seconds: float | None = None,
                     brains[i].ate(world.time)
                     events.append((world.time, fishes[i].name, "eat", f"food_{q}"))
             if contacts.impulse and contacts.impulse[0].shape[2]:
-                now = contacts.touching[0]
+                # contacts.touching[0] for the one lane, without stacking every animal's
+                now = np.array([(i[0] != 0.0).any(axis=(0, 2)) for i in contacts.impulse])
                 for i, o in zip(*np.nonzero(now), strict=True):
                     if o in static_obj and world.time - touching[i, o] > APART:
                         events.append((world.time, fishes[i].name, "collision",
@@ -478,36 +573,36 @@ def live(tank: Tank, seconds: float | None = None,
         pos, com, fwd, vel, nose = _kinematics(world, fishes, cw)
         t1 = world.time
         # catches, matings, fish-fish collisions
-        for i, f in enumerate(fishes):
-            if not brains[i].alive:
+        dcoms = np.linalg.norm(com[:, None] - com[None], axis=-1)
+        for i, j2 in zip(*np.nonzero(dcoms < NEAR), strict=True):
+            i, j2 = int(i), int(j2)
+            f, g = fishes[i], fishes[j2]
+            if j2 == i or not brains[i].alive or not brains[j2].alive:
                 continue
-            for j2, g in enumerate(fishes):
-                if j2 == i or not brains[j2].alive:
+            dcom = float(dcoms[i, j2])
+            if g.species.name in f.species.prey and brains[i].thought.intention == "hunt":
+                reach = np.linalg.norm(pos[j2] - nose[i], axis=1).min()
+                if reach < f.species.motor.catch_radius:
+                    brains[j2].alive = False
+                    brains[i].ate(t1, 3.0)
+                    events.append((t1, f.name, "catch", g.name))
                     continue
-                dcom = float(np.linalg.norm(com[i] - com[j2]))
-                if g.species.name in f.species.prey and brains[i].thought.intention == "hunt":
-                    reach = np.linalg.norm(pos[j2] - nose[i], axis=1).min()
-                    if reach < f.species.motor.catch_radius:
-                        brains[j2].alive = False
-                        brains[i].ate(t1, 3.0)
-                        events.append((t1, f.name, "catch", g.name))
-                        continue
-                if j2 < i:
-                    continue
-                if dcom < 1.5:
-                    gap = np.linalg.norm(pos[i][:, None] - pos[j2][None], axis=-1).min()
-                    touch = gap < 2 * world.node_radius
-                    if touch and t1 - fish_touch[i, j2] > APART:
-                        events.append((t1, f.name, "collision", g.name))
-                    if touch:
-                        fish_touch[i, j2] = t1
-                if (f.species.name == g.species.name and dcom < 1.5
-                        and "mate" in (brains[i].thought.intention, brains[j2].thought.intention)
-                        and brains[i].willing(t1) and brains[j2].willing(t1)):  # fmt: skip
-                    brains[i].mated(t1)
-                    brains[j2].mated(t1)
-                    events.append((t1, f.name, "mate", g.name))
-                    events.append((t1, g.name, "mate", f.name))
+            if j2 < i:
+                continue
+            if dcom < 1.5:
+                gap = np.linalg.norm(pos[i][:, None] - pos[j2][None], axis=-1).min()
+                touch = gap < 2 * world.node_radius
+                if touch and t1 - fish_touch[i, j2] > APART:
+                    events.append((t1, f.name, "collision", g.name))
+                if touch:
+                    fish_touch[i, j2] = t1
+            if (f.species.name == g.species.name and dcom < 1.5
+                    and "mate" in (brains[i].thought.intention, brains[j2].thought.intention)
+                    and brains[i].willing(t1) and brains[j2].willing(t1)):  # fmt: skip
+                brains[i].mated(t1)
+                brains[j2].mated(t1)
+                events.append((t1, f.name, "mate", g.name))
+                events.append((t1, g.name, "mate", f.name))
         if progress is not None:
             progress(t1)
     return Life(
@@ -515,7 +610,8 @@ def live(tank: Tank, seconds: float | None = None,
         food=np.stack(foods), eaten=np.stack(eaten), brain_times=np.array(b_times),
         drives=np.array(drive_rec, float).reshape(-1, n, 3),
         intentions=np.array(intents, int).reshape(-1, n),
-        alive=np.array(alive_rec, bool).reshape(-1, n), events=events,
+        alive=np.array(alive_rec, bool).reshape(-1, n),
+        targets=np.array(target_rec, int).reshape(-1, n), events=events,
         wall_seconds=time.perf_counter() - t_start, deepest=deepest,
     )  # fmt: skip
 
@@ -535,6 +631,7 @@ def summarize(tank: Tank, life: Life) -> dict:
         "obstacles": len(tank.static_names) - 4,
         "seconds": sim,
         "seed": tank.config.seed,
+        "perception": tank.config.perception,
         "tank_half_size_m": tank.config.size(),
         "events": counts,
         "collisions_with_obstacles": obstacle_hits,
