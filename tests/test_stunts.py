@@ -83,7 +83,10 @@ def test_every_built_in_trick_parses_and_fits_the_dolphin(dolphin):
     hurdle, ball = load_trick("hurdle"), load_trick("ball-nose")
     bar = hurdle.objects[0]
     assert isinstance(bar, Cylinder) and bar.axis == "z"
-    assert bar.center[1] == pytest.approx(0.3 * 1.04, abs=0.01)  # 0.3 body lengths up
+    from zoetic.behavior.tracking import body_length
+
+    # 0.3 body lengths up (the bar's top: its centre plus its radius)
+    assert bar.center[1] + bar.radius == pytest.approx(0.3 * body_length(dolphin), abs=0.02)
     assert {type(o) for o in ball.objects} == {Ball, Cylinder}
     assert not fits(load_trick("leap").task, load_animal("shark"))  # no surface to leave
 

@@ -138,41 +138,8 @@ def bench_stunts_cmd(
 ) -> None:
     """Each trick discovered: its success flags against the issue's targets, what it achieved,
     evaluations and wall time (target: each trick in <= 5 minutes on 2 cores)."""
-    from zoetic.behavior.repertoire import Repertoire
-    from zoetic.behavior.stunts import (
-        SPLASH_RATIO,
-        discover,
-        load_trick,
-        splash_ratio,
-        targets_met,
-    )
-    from zoetic.bodies import load_animal
+    from zoetic.bench.stunts import bench_stunts
 
-    body = load_animal(animal)
-    if memory is None:
-        memory = Path("runs/bench") / f"{body.name}-memory"
-        if not (memory / "repertoire.json").exists():
-            from zoetic.behavior.training import train_repertoire
-
-            train_repertoire(animal, memory, seed=seed)
-    rep = Repertoire.load(memory, body)
-    out: dict = {"animal": body.name, "method": method, "budget": budget, "seed": seed}
-    keep = ("apex_above_surface_m", "apex_body_lengths", "air_time_s", "rotation_in_air_deg",
-            "ball_contact", "ball_parts", "hurdle_clearance_m", "splash_m3_s", "evaluations",
-            "wall_s")  # fmt: skip
-    full = {}
-    for name in [t.strip() for t in tricks.split(",") if t.strip()]:
-        tr = load_trick(name)
-        s = full[name] = discover(body, rep, tr, method, budget, seed).summary()
-        flags = targets_met(name, s, tr)
-        out[name] = {"success": bool(flags) and all(flags.values()), "flags": flags,
-                     **{k: s[k] for k in keep if k in s}}  # fmt: skip
-    if "bellyflop" in out and "clean-dive" in out:
-        ratio = splash_ratio(full["bellyflop"], full["clean-dive"])
-        out["splash_ratio"] = None if ratio is None else round(ratio, 2)
-        out["splash_ratio_met"] = ratio is not None and ratio >= SPLASH_RATIO
-    out["all_wall_s"] = round(sum(v["wall_s"] for v in out.values()
-                                  if isinstance(v, dict) and "wall_s" in v), 1)  # fmt: skip
-    out["each_within_5_min"] = all(v["wall_s"] <= 300 for v in out.values()
-                                   if isinstance(v, dict) and "wall_s" in v)  # fmt: skip
+    out = bench_stunts(animal, memory, [t.strip() for t in tricks.split(",") if t.strip()],
+                       method, budget, seed)  # fmt: skip
     _emit(out, json)

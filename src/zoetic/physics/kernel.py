@@ -506,8 +506,9 @@ STEPPER_FIELDS = (
     ("pos", _F3), ("vel", _F3), ("dt", types.float32), ("chunk", types.int64),
     ("vmax", types.float32), ("mass", _F1), ("ndamp", _F1), ("sa", _I1), ("sb", _I1),
     ("stiff", _F1), ("sdamp", _F1), ("relaxed", _F1), ("shorten", _F1), ("scol", _I1),
-    ("panels", _I2), ("pw", _F2), ("pdrag", _F1), ("fin_nodes", _I2), ("fin_fwd", _I2), ("fin_span", _I2),
-    ("fin_area", _F1), ("fin_angle", _F2), ("fin_act", _I1), ("front", _I1), ("back", _I1),
+    ("panels", _I2), ("pw", _F2), ("pdrag", _F1), ("fin_nodes", _I2), ("fin_fwd", _I2),
+    ("fin_span", _I2), ("fin_area", _F1), ("fin_angle", _F2), ("fin_act", _I1), ("front", _I1),
+    ("back", _I1),
     ("rest_pos", _F2), ("med", _F1), ("fs", _I1), ("failed", _I1), ("slow_idx", _I1),
     ("fast_idx", _I1), ("substeps", types.int64), ("slow_nodes", _I1), ("fast_nodes", _I1),
 )  # fmt: skip

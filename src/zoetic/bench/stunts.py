@@ -1,0 +1,55 @@
+"""Each dolphin trick discovered with default settings, judged against the stunt targets.
+
+``zoetic bench stunts`` runs this: for every trick, the plan search's result, its success
+flags against the issue's targets (a leap 0.4 s out of the water and 0.5 body lengths up, a
+full somersault, a cleared bar, a nose-struck ball, a bellyflop splashing 3x a clean dive),
+what it achieved, evaluations and wall time (target: each trick in <= 5 minutes on 2 cores).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def bench_stunts(animal: str, memory: Path | None, tricks: list[str], method: str,
+                 budget: int, seed: int) -> dict:  # fmt: skip
+    """Discover each trick (training the animal's repertoire once into runs/bench when no
+    memory is given) and return the figures as one JSON-ready dict."""
+    from zoetic.behavior.repertoire import Repertoire
+    from zoetic.behavior.stunts import (
+        SPLASH_RATIO,
+        discover,
+        load_trick,
+        splash_ratio,
+        targets_met,
+    )
+    from zoetic.bodies import load_animal
+
+    body = load_animal(animal)
+    if memory is None:
+        memory = Path("runs/bench") / f"{body.name}-memory"
+        if not (memory / "repertoire.json").exists():
+            from zoetic.behavior.training import train_repertoire
+
+            train_repertoire(animal, memory, seed=seed)
+    rep = Repertoire.load(memory, body)
+    out: dict = {"animal": body.name, "method": method, "budget": budget, "seed": seed}
+    keep = ("apex_above_surface_m", "apex_body_lengths", "air_time_s", "rotation_in_air_deg",
+            "ball_contact", "ball_parts", "hurdle_clearance_m", "splash_m3_s", "evaluations",
+            "wall_s")  # fmt: skip
+    full = {}
+    for name in tricks:
+        tr = load_trick(name)
+        s = full[name] = discover(body, rep, tr, method, budget, seed).summary()
+        flags = targets_met(name, s, tr)
+        out[name] = {"success": bool(flags) and all(flags.values()), "flags": flags,
+                     **{k: s[k] for k in keep if k in s}}  # fmt: skip
+    if "bellyflop" in out and "clean-dive" in out:
+        ratio = splash_ratio(full["bellyflop"], full["clean-dive"])
+        out["splash_ratio"] = None if ratio is None else round(ratio, 2)
+        out["splash_ratio_met"] = ratio is not None and ratio >= SPLASH_RATIO
+    out["all_wall_s"] = round(sum(v["wall_s"] for v in out.values()
+                                  if isinstance(v, dict) and "wall_s" in v), 2)  # fmt: skip
+    out["each_within_5_min"] = all(v["wall_s"] <= 300 for v in out.values()
+                                   if isinstance(v, dict) and "wall_s" in v)  # fmt: skip
+    return out
