@@ -16,6 +16,6 @@ def bench_ray_cmd(
     json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
     """Seconds per generation on a local Ray against in-process batches, side by side."""
-    from zoetic.learn.ray_eval import bench_ray
+    from zoetic.bench.ray import bench_ray
 
     _emit(bench_ray(animal, "swim-straight", population, generations, actors), json)

@@ -286,6 +286,6 @@ def bench_san_cmd(
     json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
     """Wall time of a phase-1 search (random SANs x the creature's seconds, all cores)."""
-    from zoetic.san.search import bench_search
+    from zoetic.bench.san import bench_search
 
     _emit(bench_search(creature, trials, workers), json)

@@ -359,33 +359,3 @@ def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -
         summary["videos"] = str(out / "videos")
     write_json(out / "summary.json", summary)
     return summary
-
-
-def bench_search(creature: str = "walker", trials: int = 200, workers: int | None = None) -> dict:
-    """Time a phase-1 search of ``trials`` random SANs on all cores; returns the figures."""
-    from zoetic.san import load_creature
-
-    c = load_creature(creature)
-    t0 = time.perf_counter()
-    _init_worker(c, "flat", 0, c.seconds)  # one compile, timed apart
-    compile_s = time.perf_counter() - t0
-    net = random_network(c, np.random.default_rng(0))
-    t0 = time.perf_counter()
-    _evaluate_one(net)
-    one = time.perf_counter() - t0
-    _WORKER.clear()
-    result = search(c, trials=trials, seed=0, workers=workers)
-    steps = trials * round(c.seconds / c.dt)
-    return {
-        f"{c.name}_{trials}_trials_seconds": round(result.elapsed, 3),
-        "steps_per_second": round(steps / result.elapsed),
-        "simulated_seconds_per_second": round(trials * c.seconds / result.elapsed, 1),
-        "workers": result.workers,
-        "trials": trials,
-        "seconds_per_trial": c.seconds,
-        "physics_dt": c.dt,
-        "control_dt": c.control_dt,
-        "compile_seconds": round(compile_s, 4),
-        "one_trial_seconds_in_process": round(one, 4),
-        "best_metric": round(float(np.max(result.metrics)), 4),
-    }
