@@ -13,8 +13,7 @@ A few minutes on 2 cores:
 
 ``--launch SPEED`` starts every trick from a launch instead of its own start (SPEED m/s along
 a body pitched ``--launch-pitch`` rad nose up, ``--launch-depth`` m down): a check of the
-whole pipeline (terms, search, records, video) on a body that flies, for as long as the zoo's
-dolphin cannot leave the water by its own strength.
+whole pipeline (terms, search, records, video) on a body that flies whatever its strength.
 """
 
 from __future__ import annotations

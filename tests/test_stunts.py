@@ -218,3 +218,13 @@ def test_a_tiny_stunt_search_improves_on_its_first_plans(dolphin, repertoire):
     assert result.scores["cost"] == pytest.approx(result.history[-1][1])  # replays its best
     others = problem.evaluate(*problem.random(np.random.default_rng(1), 4))["cost"]
     assert result.scores["cost"] <= np.median(others)
+
+
+def test_final_height_is_zero_only_once_the_whole_body_is_back_in_the_water(dolphin):
+    """A leap still in the air at the end pays its highest node's height; one whose nose alone
+    has re-entered still pays; one wholly back under water pays nothing."""
+    top = float(np.max(dolphin.rest_pos[:, 1]) - dolphin.mass @ dolphin.rest_pos[:, 1]
+                / dolphin.total_mass)  # fmt: skip
+    for end, want in ((1.0, 1.0 + top), (-0.1, top - 0.1), (-1.0, 0.0)):
+        s = _signals(dolphin, _lifted(dolphin, np.array([-2.0, 1.5, end])))
+        assert _term("final_height", s) == pytest.approx(want, abs=1e-9)

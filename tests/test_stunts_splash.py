@@ -318,12 +318,12 @@ def _record(body, pos, n_objects) -> StuntRecord:
 def test_a_hand_made_jump_over_the_hurdle_clears_it_and_a_low_one_does_not(dolphin,
                                                                              repertoire):
     problem = StuntProblem(dolphin, repertoire, load_trick("hurdle"))
-    x = np.linspace(-0.5, 4.5, 41)
     rel = _turned(dolphin, 0.0)
     bar = problem.trick.objects[0]
-    bar_top = bar.center[1] + bar.radius
+    bar_x, bar_top = bar.center[0], bar.center[1] + bar.radius
+    x = np.linspace(bar_x - 2.5, bar_x + 2.5, 41)
     for top, over in ((bar_top + 0.7, True), (bar_top + 0.04, False)):
-        y = top - 1.6 * (x - 2.0) ** 2 / 4.0  # an arc, its top at the bar (x = 2 m)
+        y = top - 1.6 * (x - bar_x) ** 2 / 4.0  # an arc, its top at the bar
         pos = (rel[None] + np.stack([x, y, 0 * x], 1)[:, None])[None]
         m = measures(problem, _record(dolphin, pos, len(problem.trick.objects)))
         assert m["bar_crossed"] is over and m["hurdle_touched"] is False

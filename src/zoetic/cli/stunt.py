@@ -132,7 +132,7 @@ def bench_stunts_cmd(
     tricks: str = typer.Option("leap,somersault,hurdle,ball-nose,ball-tail,bellyflop,clean-dive",
                                help="Comma-separated tricks."),  # fmt: skip
     method: str = typer.Option("anneal"),
-    budget: int = typer.Option(800, min=1, help="Plans per trick (zoetic stunt: 3200)."),
+    budget: int = typer.Option(3200, min=1, help="Plans per trick (as zoetic stunt)."),
     seed: int = typer.Option(0),
     json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:

@@ -353,6 +353,12 @@ def clear_fraction(xp, s: Signals, p: TermParams):
     return xp.max(xp.mean(1.0 - s.in_water, axis=2), axis=1)
 
 
+@term("height (m) of the body's highest node above the water surface at the end (0 once the "
+      "whole body is back in the water): a leap that has re-entered")
+def final_height(xp, s: Signals, p: TermParams):
+    return xp.maximum(xp.max(s.positions[:, -1, :, 1], axis=1) - s.level, 0.0)
+
+
 @term("rotation (rad, unsigned) of the body in its vertical plane while wholly out of the "
       "water: somersaults")
 def flight_rotation(xp, s: Signals, p: TermParams):
