@@ -102,3 +102,22 @@ def test_cli_refuses_bad_predator_skills_with_exit_2(tmp_path, capsys):
                  "--predator-skills", str(tmp_path / "none"), "--out", str(tmp_path / "o")])
     assert code == 2
     assert "not a directory" in capsys.readouterr().err
+
+
+def test_the_turn_weight_grows_with_the_angle_and_skips_wrong_way_blends(skills):
+    from zoetic.behavior.motor import WEIGHTS
+
+    body = load_animal("shark")
+    loco = LearnedLocomotion(body, learned_motor(body, skills))
+    motor = loco.motor
+    rates = motor.rates.copy()
+    try:  # a learned table that turns the wrong way at small weights
+        motor.rates = np.array([-4.5, -20.6, -0.4, -7.2, 26.5, 38.3])
+        w = [loco.turn_weight(np.radians(a)) for a in (2.0, 10.0, 20.0, 40.0, 90.0)]
+        assert np.all(np.diff(w) >= 0) and w[-1] == 1.0
+        assert w[0] == WEIGHTS[2]  # never near the blend at 0.2 that turns right at 20 deg/s
+        assert w[2] == WEIGHTS[4]  # 20 deg/s: past 0.6, which turns right of go-straight
+        assert WEIGHTS[4] < w[3] < WEIGHTS[5]  # 40 deg/s: interpolated between 0.8 and 1.0
+        assert loco.turn_weight(np.radians(-20.0)) == w[2]  # right turns mirror left ones
+    finally:
+        motor.rates = rates

@@ -16,7 +16,7 @@ from typing import Protocol
 
 import numpy as np
 
-from zoetic.behavior.motor import MotorControllers, WaveMotor, fin_activation
+from zoetic.behavior.motor import WEIGHTS, MotorControllers, WaveMotor, blend, fin_activation
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.bodies import Body
 from zoetic.control.abstract import AbstractController
@@ -109,7 +109,9 @@ class LearnedLocomotion:
         """Return the blended controller meeting the demand (turn first, else swim; fins at
         the pitch when the body has fins)."""
         if abs(demand.turn) > TURN_DEADBAND:
-            gait, _ = self.motor.turn(float(np.degrees(demand.turn)), self.turn_seconds)
+            c = self.motor.rep.controllers
+            side = "sharp-turn-left" if demand.turn > 0 else "sharp-turn-right"
+            gait = blend(c["go-straight"], c[side], self.turn_weight(demand.turn))
         else:
             gait = self.motor.swim(demand.speed)
         pitch = min(max(demand.pitch, -MAX_PITCH), MAX_PITCH)
@@ -120,6 +122,31 @@ class LearnedLocomotion:
             offset[k], amp[k] = a, 0.0
         return AbstractController(gait.animal, gait.actuators, offset, gait.freq, amp,
                                   gait.phase, gait.period)  # fmt: skip
+
+    def turn_weight(self, angle: float) -> float:
+        """Return the blend weight of go-straight and the sharp turn that turns ``angle`` rad
+        in ``turn_seconds`` (the sharp turn itself beyond its rate).
+
+        A learned repertoire's blends need not turn monotonically with the weight (the
+        calibration of a trained shark: -4.5, -20.6, -0.4, -7.2, 26.5, 38.3 deg/s), so only the
+        weights that turn left of go-straight faster than every smaller weight are used (right
+        turns mirror left ones): between two such neighbours the weight is interpolated; where
+        a wrong-way weight lies between them, the faster one is taken, which turns more than
+        asked (the routines re-aim every period) but never the wrong way.
+        """
+        extra = self.motor.rates - self.motor.rates[0]
+        need = abs(float(np.degrees(angle))) / self.turn_seconds
+        records = [0]
+        for k in range(1, len(extra)):
+            if extra[k] > extra[records[-1]]:
+                records.append(k)
+        for a, b in zip(records, records[1:], strict=False):
+            if need <= extra[b]:
+                if b - a > 1:
+                    return float(WEIGHTS[b])
+                f = (need - extra[a]) / (extra[b] - extra[a])
+                return float(WEIGHTS[a] + max(f, 0.0) * (WEIGHTS[b] - WEIGHTS[a]))
+        return float(WEIGHTS[records[-1]]) if len(records) > 1 else 1.0
 
     def activations(self, demand: Demand, times: np.ndarray) -> np.ndarray:
         """Return activations (T, A) of the demand's controller at the (absolute) times."""
