@@ -8,14 +8,17 @@ from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live, summariz
 
 
 def bench_aquarium(fishes: int = 10, food: int = 15, obstacles: int = 5, seconds: float = 60.0,
-                   seed: int = 0, perception: str = "oracle") -> dict:  # fmt: skip
+                   seed: int = 0, perception: str = "oracle",
+                   predator_skills: str | None = None) -> dict:  # fmt: skip
     """Return the realtime factor of the tank (brains, perception and physics together, no
     video; ``perception`` oracle, or vision for the first predator), the same world's
     physics alone, and the run's outcome figures."""
     # no video: positions recorded once a brain period (the CLI records 20 frames a second)
     cfg = TankConfig(fishes=fishes, food=food, obstacles=obstacles, seconds=seconds, seed=seed,
-                     record_period=0.1, perception=perception)  # fmt: skip
-    warm = TankConfig(fishes=2, food=1, obstacles=1, seconds=0.2, perception=perception)
+                     record_period=0.1, perception=perception,
+                     predator_skills=predator_skills)  # fmt: skip
+    warm = TankConfig(fishes=2, food=1, obstacles=1, seconds=0.2, perception=perception,
+                      predator_skills=predator_skills)
     live(build_tank(warm))  # compile, calibrate the motor controllers
     tank = build_tank(cfg)
     c0 = time.process_time()
@@ -32,6 +35,7 @@ def bench_aquarium(fishes: int = 10, food: int = 15, obstacles: int = 5, seconds
     return {
         "scene": f"{fishes} fishes, {food} food, {obstacles} obstacles, {seconds:g} s",
         "perception": perception if perception == "oracle" else f"{perception} (one predator)",
+        "predator_skills": predator_skills or "built-in",
         "realtime_factor": s["realtime_factor"],
         "wall_seconds": s["wall_seconds"],
         "physics_only_realtime_factor": seconds / physics if physics > 0 else None,

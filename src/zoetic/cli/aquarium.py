@@ -27,6 +27,9 @@ def aquarium(
         "animat vision: rendered eyes, colour recognition, gaze; the rest use the oracle)."),
     prey: str = typer.Option("minnow", help="Prey species: a built-in name or a .toml file."),
     predator: str = typer.Option("shark", help="Predator species: a name or a .toml file."),
+    predator_skills: Path = typer.Option(
+        None, "--predator-skills", help="A learned repertoire's directory (zoetic repertoire "
+        "train) the predator swims by instead of its species' motor skills."),
     video: bool = typer.Option(True, help="Write video.mp4."),
     labels: bool = typer.Option(True, help="Label each fish with its intention in the video."),
     control_period: float = typer.Option(0.1, help="Brain period (s)."),
@@ -47,7 +50,9 @@ def aquarium(
     cfg = TankConfig(fishes=fishes, predators=predators, food=food, obstacles=obstacles,
                      seconds=seconds, seed=seed, prey_species=prey, predator_species=predator,
                      control_period=control_period, perception=perception,
-                     record_period=min(0.05, control_period))  # fmt: skip
+                     record_period=min(0.05, control_period),
+                     predator_skills=None if predator_skills is None else str(predator_skills),
+                     )  # fmt: skip
     tank = build_tank(cfg)
     with console.status("the fishes live...") as status:
         life = live(tank, progress=lambda t: status.update(f"t = {t:.1f} s"))
@@ -90,10 +95,13 @@ def bench_aquarium_cmd(
     seconds: float = typer.Option(60.0, min=0.5),
     seed: int = typer.Option(0),
     perception: str = typer.Option("oracle", help="oracle, or vision for the first predator."),
+    predator_skills: Path = typer.Option(
+        None, "--predator-skills", help="A learned repertoire's directory for the predator."),
     json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
     """Realtime factor of a tank (oracle perception, or animat vision for one predator),
     against its physics alone."""
     from zoetic.bench.aquarium import bench_aquarium
 
-    _emit(bench_aquarium(fishes, food, obstacles, seconds, seed, perception), json)
+    skills = None if predator_skills is None else str(predator_skills)
+    _emit(bench_aquarium(fishes, food, obstacles, seconds, seed, perception, skills), json)

@@ -20,7 +20,9 @@ from zoetic.io import Table, is_path, load_toml, suggest, write_toml
 SPECIES_DIR = Path(__file__).parent / "species"
 HABIT_WORDS = ("company", "crowd", "obstacles")
 COWARD_FEAR = 2.5  # a coward fears from 2.5 times as far (the re-implementation's 500 vs 200)
-MOTOR_SKILLS = ("built-in",)
+BUILT_IN = "built-in"  # the calibrated steered wave (``locomotion.MotorLocomotion``)
+# a learned repertoire's entries the motor controllers blend (``behavior.motor.MotorControllers``)
+SKILL_ENTRIES = ("do-nothing", "go-straight", "sharp-turn-left", "sharp-turn-right")
 
 
 class SpeciesError(ZoeticError):
@@ -67,9 +69,10 @@ class Senses:
 
 @dataclass(frozen=True)
 class Motor:
-    """Motor skills: which controllers, cruising and top speed (m/s), a predator's catch radius."""
+    """Motor skills: which controllers ("built-in" or a learned repertoire's directory),
+    cruising and top speed (m/s), a predator's catch radius."""
 
-    skills: str = "built-in"
+    skills: str = BUILT_IN
     frequency: float | None = None  # Hz of the wave; None: the body's own stroke frequency
     cruise_speed: float = 0.25
     max_speed: float = 0.5
@@ -200,7 +203,7 @@ def parse_species(doc: dict[str, Any], source: str = "<memory>") -> Species:
     mo = top.table("motor")
     mo.where = f"{source}: [motor]"
     motor = Motor(
-        mo.string("skills", "built-in", choices=MOTOR_SKILLS),
+        mo.string("skills", BUILT_IN),
         mo.number("frequency", None, positive=True, hi=20.0),
         mo.number("cruise_speed", 0.25, positive=True, hi=20.0),
         mo.number("max_speed", 0.5, positive=True, hi=20.0),
@@ -236,4 +239,54 @@ def load_species(name_or_path: str | Path) -> Species:
     spec = parse_species(load_toml(path, "species file", SpeciesError), str(path))
     if is_path(spec.body) and not Path(spec.body).is_absolute():
         spec = Species(**{**spec.__dict__, "body": str(path.parent / spec.body)})
+    if spec.motor.skills != BUILT_IN:
+        skills = Path(spec.motor.skills).expanduser()
+        if not skills.is_absolute():
+            skills = path.parent / skills
+        spec = with_skills(spec, skills)
     return spec
+
+
+def with_skills(spec: Species, skills: str | Path) -> Species:
+    """Return the species with its motor skills replaced: ``"built-in"`` or a learned
+    repertoire's directory, checked (``check_skills``)."""
+    if str(skills) == BUILT_IN:
+        return replace(spec, motor=replace(spec.motor, skills=BUILT_IN))
+    spec = replace(spec, motor=replace(spec.motor, skills=str(skills)))
+    check_skills(spec)
+    return spec
+
+
+def check_skills(spec: Species) -> None:
+    """Refuse (SpeciesError naming the file and the entry) a learned repertoire the fish cannot
+    swim by: a missing directory, one that is not a repertoire, one for another body, or one
+    lacking an entry the motor controllers blend (``SKILL_ENTRIES``) or whose entries are not
+    abstracted (sums of cosines, which blend)."""
+    from zoetic.behavior.repertoire import Repertoire
+    from zoetic.bodies import load_animal
+    from zoetic.control.abstract import AbstractController
+
+    where = f"{spec.source}: [motor] skills"
+    directory = Path(spec.motor.skills)
+    if not directory.is_dir():
+        raise SpeciesError(
+            f"{where}: {str(directory)!r} is not a directory; give {BUILT_IN!r} or a learned "
+            "repertoire's directory (zoetic repertoire train ANIMAL --out DIR makes one)"
+        )
+    body = load_animal(spec.body)
+    try:
+        rep = Repertoire.load(directory, body)
+    except ZoeticError as exc:
+        raise SpeciesError(f"{where}: {exc}") from None
+    missing = [n for n in SKILL_ENTRIES if n not in rep.controllers]
+    if missing:
+        raise SpeciesError(
+            f"{where}: the repertoire in {directory} lacks the entries {', '.join(missing)} "
+            f"that the motor controllers blend (it has {', '.join(rep.names) or 'none'})"
+        )
+    odd = [n for n in SKILL_ENTRIES if not isinstance(rep.controllers[n], AbstractController)]
+    if odd:
+        raise SpeciesError(
+            f"{where}: the entries {', '.join(odd)} in {directory} are not abstracted "
+            "controllers (sums of cosines), so they cannot be blended"
+        )

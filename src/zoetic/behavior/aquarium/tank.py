@@ -16,7 +16,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from zoetic.behavior.aquarium.locomotion import Demand, MotorLocomotion
+from zoetic.behavior.aquarium.locomotion import (
+    Demand,
+    LearnedLocomotion,
+    MotorLocomotion,
+    learned_motor,
+)
 from zoetic.behavior.aquarium.perception import obstacle_distance, perceive
 from zoetic.behavior.aquarium.routines import (
     Around,
@@ -32,7 +37,13 @@ from zoetic.behavior.aquarium.routines import (
     school,
     wander,
 )
-from zoetic.behavior.aquarium.species import Species, SpeciesError, load_species
+from zoetic.behavior.aquarium.species import (
+    BUILT_IN,
+    Species,
+    SpeciesError,
+    load_species,
+    with_skills,
+)
 from zoetic.behavior.mind import (
     INTENTIONS,
     MindState,
@@ -78,6 +89,7 @@ class TankConfig:
     food_radius: float = 0.25
     food_margin: float = 3.0  # m from the walls food is dropped: 1.5 turning radii of a fish
     perception: str = "oracle"  # or "vision": the first predator sees with animat vision
+    predator_skills: str | None = None  # a learned repertoire's directory for the predator
 
     def size(self) -> float:
         """Return the half width of the tank (m)."""
@@ -149,6 +161,8 @@ def build_tank(cfg: TankConfig) -> Tank:
     prey, pred = load_species(cfg.prey_species), load_species(cfg.predator_species)
     if not pred.predator:
         raise SpeciesError(f"{pred.source}: species {pred.name!r} is not a predator")
+    if cfg.predator_skills is not None:
+        pred = with_skills(pred, cfg.predator_skills)
     statics: list[Box | Cylinder] = []
     for sx, sz in ((1, 0), (-1, 0), (0, 1), (0, -1)):
         c = (sx * (half + WALL), 0.0, sz * (half + WALL))
@@ -240,7 +254,11 @@ class FishBrain:
     def __init__(self, species: Species, body: Body, hunted_by: frozenset[str]) -> None:
         self.species, self.body, self.hunted_by = species, body, hunted_by
         m = species.motor
-        self.locomotion = MotorLocomotion(body, m.frequency)
+        self.locomotion: MotorLocomotion | LearnedLocomotion
+        if m.skills == BUILT_IN:
+            self.locomotion = MotorLocomotion(body, m.frequency)
+        else:  # a learned repertoire (checked when the species was read)
+            self.locomotion = LearnedLocomotion(body, learned_motor(body, m.skills))
         self.top = min(m.max_speed, self.locomotion.top_speed)
         self.cruise = min(m.cruise_speed, self.top)
         self.radius = self.locomotion.turn_radius

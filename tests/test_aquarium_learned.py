@@ -1,0 +1,123 @@
+"""Learned motor skills in the aquarium: a species file names a repertoire directory, the
+fish swims by ``MotorControllers`` blended from it, and bad references are refused."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from zoetic.behavior.aquarium.locomotion import Demand, LearnedLocomotion, learned_motor
+from zoetic.behavior.aquarium.species import SpeciesError, load_species
+from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live
+from zoetic.behavior.tracking import handmade_repertoire
+from zoetic.bodies import load_animal
+from zoetic.learn.objective import heading_angles
+from zoetic.physics import simulate
+
+
+@pytest.fixture(scope="module")
+def skills(tmp_path_factory):
+    """A small repertoire for the shark (hand-made entries, no training) saved to disk."""
+    d = tmp_path_factory.mktemp("memory") / "shark"
+    handmade_repertoire(load_animal("shark")).save(d)
+    return d
+
+
+def _species_file(tmp_path, skills_value: str):
+    text = open(load_species("shark").source).read()
+    assert 'skills = "built-in"' in text
+    path = tmp_path / "shark.toml"
+    path.write_text(text.replace('skills = "built-in"', f"skills = {json.dumps(skills_value)}"))
+    return path
+
+
+def test_a_species_naming_a_repertoire_loads_relative_to_its_file(tmp_path, skills):
+    import shutil
+
+    shutil.copytree(skills, tmp_path / "mem")
+    spec = load_species(_species_file(tmp_path, "mem"))
+    assert spec.motor.skills == str(tmp_path / "mem")
+    absolute = load_species(_species_file(tmp_path, str(skills)))
+    assert absolute.motor.skills == str(skills)
+
+
+def _swim(loco: LearnedLocomotion, demand: Demand, seconds: float):
+    body = loco.body
+    steps = int(round(seconds / body.dt))
+    act = loco.activations(demand, np.arange(steps) * body.dt)
+    tr = simulate(body, act[None], record_every=10)
+    return tr.com(body)[0], heading_angles(body, tr.positions)[0]
+
+
+def test_a_fish_driven_by_learned_skills_swims_forward_and_turns_the_side_asked(skills):
+    body = load_animal("shark")
+    loco = LearnedLocomotion(body, learned_motor(body, skills))
+    assert learned_motor(body, skills) is loco.motor  # calibrated once per body and directory
+    assert loco.top_speed > 0.2 and loco.turn_radius > 0
+    com, head = _swim(loco, Demand(0.3), 4.0)
+    forward = np.array([np.cos(head[0]), np.sin(head[0])])
+    assert (com[-1, [0, 2]] - com[0, [0, 2]]) @ forward > 0.5  # m, ahead of where it started
+    straight = head[-1] - head[0]
+    _, left = _swim(loco, Demand(0.3, turn=0.6), 4.0)
+    _, right = _swim(loco, Demand(0.3, turn=-0.6), 4.0)
+    assert left[-1] - left[0] > straight + np.radians(8.0)
+    assert right[-1] - right[0] < straight - np.radians(8.0)
+
+
+def test_a_tank_predator_lives_on_learned_skills(skills):
+    cfg = TankConfig(fishes=2, food=1, obstacles=0, seconds=0.6, predator_skills=str(skills))
+    tank = build_tank(cfg)
+    pred = next(f for f in tank.fishes if f.species.predator)
+    assert pred.species.motor.skills == str(skills)
+    life = live(tank)
+    assert np.all(np.isfinite(life.positions))
+
+
+def test_bad_skills_references_are_refused_naming_the_file(tmp_path, skills):
+    missing = _species_file(tmp_path, "nowhere")
+    with pytest.raises(SpeciesError, match=r"\[motor\] skills.*not a directory") as err:
+        load_species(missing)
+    assert str(missing) in str(err.value)
+    # a repertoire for another body
+    other = tmp_path / "minnow-mem"
+    handmade_repertoire(load_animal("dolphin")).save(other)
+    with pytest.raises(SpeciesError, match="not the shark"):
+        load_species(_species_file(tmp_path, str(other)))
+    # one lacking the go-straight entry
+    lacking = tmp_path / "lacking"
+    rep = handmade_repertoire(load_animal("shark"))
+    for name in ("go-straight",):
+        del rep.controllers[name], rep.durations[name], rep.info[name]
+    rep.save(lacking)
+    with pytest.raises(SpeciesError, match="lacks the entries go-straight"):
+        load_species(_species_file(tmp_path, str(lacking)))
+
+
+def test_cli_refuses_bad_predator_skills_with_exit_2(tmp_path, capsys):
+    from zoetic.cli import main
+
+    code = main(["aquarium", "--fishes", "2", "--seconds", "0.2", "--no-video",
+                 "--predator-skills", str(tmp_path / "none"), "--out", str(tmp_path / "o")])
+    assert code == 2
+    assert "not a directory" in capsys.readouterr().err
+
+
+def test_the_turn_weight_grows_with_the_angle_and_skips_wrong_way_blends(skills):
+    from zoetic.behavior.motor import WEIGHTS
+
+    body = load_animal("shark")
+    loco = LearnedLocomotion(body, learned_motor(body, skills))
+    motor = loco.motor
+    rates = motor.rates.copy()
+    try:  # a learned table that turns the wrong way at small weights
+        motor.rates = np.array([-4.5, -20.6, -0.4, -7.2, 26.5, 38.3])
+        w = [loco.turn_weight(np.radians(a)) for a in (2.0, 10.0, 20.0, 40.0, 90.0)]
+        assert np.all(np.diff(w) >= 0) and w[-1] == 1.0
+        assert w[0] == WEIGHTS[2]  # never near the blend at 0.2 that turns right at 20 deg/s
+        assert w[2] == WEIGHTS[4]  # 20 deg/s: past 0.6, which turns right of go-straight
+        assert WEIGHTS[4] < w[3] < WEIGHTS[5]  # 40 deg/s: interpolated between 0.8 and 1.0
+        assert loco.turn_weight(np.radians(-20.0)) == w[2]  # right turns mirror left ones
+    finally:
+        motor.rates = rates
