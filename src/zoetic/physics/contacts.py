@@ -89,6 +89,20 @@ def _penalty(pen, vx, vy, vz, nx, ny, nz, m, w, zeta, mu, dt):
     return fn * nx - s * tx, fn * ny - s * ty, fn * nz - s * tz
 
 
+@njit(cache=True, inline="always")
+def _shape_force(s, skind, scenter, ssize, px, py, pz, radius, vx, vy, vz, m, w, zeta, mu, dt):
+    """Contact force of fixed shape ``s`` on a sphere of ``radius`` at p moving at v (zero
+    when they do not touch): one definition for the nodes and the balls."""
+    d, nx, ny, nz = _sdf(
+        skind[s], scenter[s, 0], scenter[s, 1], scenter[s, 2],
+        ssize[s, 0], ssize[s, 1], ssize[s, 2], px, py, pz,
+    )  # fmt: skip
+    pen = radius - d
+    if pen <= 0.0:
+        return 0.0, 0.0, 0.0
+    return _penalty(pen, vx, vy, vz, nx, ny, nz, m, w, zeta, mu, dt)
+
+
 @njit(cache=True)
 def node_contacts(
     pos, vel, mass, radius, bpos, bvel, bpar, skind, scenter, ssize,
@@ -136,16 +150,12 @@ def node_contacts(
                 fys += fy
                 fzs += fz
             for s in range(skind.shape[0]):
-                d, nx, ny, nz = _sdf(
-                    skind[s], scenter[s, 0], scenter[s, 1], scenter[s, 2],
-                    ssize[s, 0], ssize[s, 1], ssize[s, 2], px, py, pz,
+                fx, fy, fz = _shape_force(
+                    s, skind, scenter, ssize, px, py, pz, radius, vel[i, 0, b], vel[i, 1, b],
+                    vel[i, 2, b], m, w, zeta, mu, dt,
                 )  # fmt: skip
-                pen = radius - d
-                if pen <= 0.0:
+                if fx == 0.0 and fy == 0.0 and fz == 0.0:
                     continue
-                fx, fy, fz = _penalty(
-                    pen, vel[i, 0, b], vel[i, 1, b], vel[i, 2, b], nx, ny, nz, m, w, zeta, mu, dt
-                )
                 o = static_obj[s]
                 impulse[i, o, 0, b] += dt * fx
                 impulse[i, o, 1, b] += dt * fy
@@ -194,16 +204,12 @@ def balls_step(
                         fy += cy
                         fz += cz
                 for s in range(skind.shape[0]):
-                    d, nx, ny, nz = _sdf(
-                        skind[s], scenter[s, 0], scenter[s, 1], scenter[s, 2],
-                        ssize[s, 0], ssize[s, 1], ssize[s, 2], x, y, z,
+                    cx, cy, cz = _shape_force(
+                        s, skind, scenter, ssize, x, y, z, r, vx, vy, vz, mb, w, zeta, mu, dt
                     )  # fmt: skip
-                    pen = r - d
-                    if pen > 0.0:
-                        cx, cy, cz = _penalty(pen, vx, vy, vz, nx, ny, nz, mb, w, zeta, mu, dt)
-                        fx += cx
-                        fy += cy
-                        fz += cz
+                    fx += cx
+                    fy += cy
+                    fz += cz
                 vx += dt * fx / mb
                 vy += dt * fy / mb
                 vz += dt * fz / mb

@@ -451,6 +451,21 @@ def _chunk_steps(
             final_vel[i, 2, b0 + b] = np.nan if dead else vz[i, b]
 
 
+@njit(cache=True, inline="always")
+def _scratch(n_nodes, nb):
+    """Twelve fresh (nodes, nb) float32 arrays for one chunk's state and forces: separate
+    allocations, not views of one block, so that LLVM knows they do not alias (one block
+    measured 1.3x slower a step, one lane)."""
+    return (
+        np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+        np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+        np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+        np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+        np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+        np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
+    )  # fmt: skip
+
+
 @njit(cache=True, fastmath=FM, parallel=True, error_model="numpy")
 def simulate_chunks(
     pos0, vel0, act, dt, record_every, chunk, vmax,
@@ -475,14 +490,7 @@ def simulate_chunks(
     for c in prange(n_chunks):
         b0 = c * chunk
         nb = min(chunk, n_lanes - b0)
-        s = (
-            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
-            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
-            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
-            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
-            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
-            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
-        )  # fmt: skip
+        s = _scratch(n_nodes, nb)
         _chunk_steps(
             s, pos0, vel0, act, dt, record_every, vmax, b0, nb, body, med, rec, final_pos,
             final_vel, failed_step, multirate,
@@ -595,16 +603,7 @@ def advance(st, table, t0, t1, base):
     for c in prange((n_lanes + chunk - 1) // chunk):
         b0 = c * chunk
         nb = min(chunk, n_lanes - b0)
-        # twelve fresh arrays, not views of one block kept in the Stepper: LLVM then knows
-        # that they do not alias (one block measured 1.3x slower a step, one lane)
-        s = (
-            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
-            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
-            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
-            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
-            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
-            np.empty((n_nodes, nb), dtype=np.float32), np.empty((n_nodes, nb), dtype=np.float32),
-        )  # fmt: skip
+        s = _scratch(n_nodes, nb)  # fresh arrays, not a block kept in the Stepper
         _chunk_steps(
             s, pos, vel, act, dt, 0, vmax, b0, nb, body, med, no_rec, pos, vel, fs,
             multirate,
