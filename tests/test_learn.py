@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from conftest import write_short_task
 from zoetic.bodies import load_animal
 from zoetic.control import rest_controller, time_domain, wave_controller
 from zoetic.errors import RunDirError, TaskError
@@ -13,22 +14,10 @@ from zoetic.learn.optimizers import make_optimizer
 from zoetic.learn.run import LearnConfig, Run
 from zoetic.tasks import list_tasks, load_task, parse_task
 
-SHORT = """
-name = "short-swim"
-requires = ["water"]
-horizon = 1.0
-nodes = 5
-[[terms]]
-kind = "distance_along_heading"
-weight = -1.0
-"""
-
 
 @pytest.fixture
 def short_task(tmp_path):
-    path = tmp_path / "short-swim.toml"
-    path.write_text(SHORT)
-    return path
+    return write_short_task(tmp_path, horizon=1.0, nodes=5)
 
 
 def test_control_energy_matches_section_4_2():

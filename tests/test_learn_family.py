@@ -13,6 +13,7 @@ import time
 import numpy as np
 import pytest
 
+from conftest import write_short_task
 from zoetic.errors import RunDirError
 from zoetic.learn.optimizers import OPTIMIZERS, make_optimizer
 from zoetic.learn.run import (
@@ -92,22 +93,9 @@ def test_cmaes_state_survives_a_cma_release_that_cannot_read_the_pickle():
     assert again.best_f <= opt.best_f
 
 
-SHORT = """
-name = "short-swim"
-requires = ["water"]
-horizon = 0.5
-nodes = 4
-[[terms]]
-kind = "distance_along_heading"
-weight = -1.0
-"""
-
-
 @pytest.fixture
 def short_task(tmp_path):
-    path = tmp_path / "short-swim.toml"
-    path.write_text(SHORT)
-    return path
+    return write_short_task(tmp_path, horizon=0.5, nodes=4)
 
 
 def _config(task, optimizer="cmaes", budget=50):
