@@ -66,6 +66,7 @@ def merge(parts: list[Evaluation]) -> Evaluation:
         cat([p.E_v for p in parts]),
         {k: cat([p.terms[k] for p in parts]) for k in parts[0].terms},
         cat([p.failed for p in parts]),
+        None if parts[0].per_start is None else cat([p.per_start for p in parts]),
     )
 
 

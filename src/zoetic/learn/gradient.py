@@ -245,7 +245,7 @@ def jax_objective(objective: Objective) -> Callable:
     """Return ``p -> (E, (E_u, E_v))`` in JAX for a free parameter vector p.
 
     The same terms (``tasks.terms``) as the NumPy objective, on the same records, from the
-    same start state, through the JAX simulator.
+    same start states (the mean over them), through the JAX simulator.
     """
     from zoetic.learn.objective import control_energy_xp
 
@@ -254,8 +254,9 @@ def jax_objective(objective: Objective) -> Callable:
     basis = jnp.asarray(objective._basis, F32)  # (T, M)
     node_basis = jnp.asarray(objective._node_basis, F32)
     shape = objective.full_shape
-    x0 = jnp.asarray(objective.start.positions[0], F32)
-    v0 = jnp.asarray(objective.start.velocities[0], F32)
+    starts = [(jnp.asarray(x, F32), jnp.asarray(v, F32))
+              for x, v in zip(objective.starts.positions, objective.starts.velocities,
+                              strict=True)]  # fmt: skip
     roll = rollout_fn(body, objective.medium, objective.dt, objective.record_every)
     frame = BodyFrame.of(body)
     n_rec = objective.steps // objective.record_every + 1
@@ -266,10 +267,13 @@ def jax_objective(objective: Objective) -> Callable:
     def evaluate(p):
         coef = jnp.reshape(L @ p + c, shape)
         act = jnp.clip(basis @ coef.T, 0.0, 1.0)
-        rec, _, _ = roll(x0, v0, act)
-        s = Signals(jnp, frame, rec[None], act[rows][None], times, level, task.horizon)
-        values = evaluate_terms(jnp, s, task.terms)
-        e_v = sum(t.weight * v[0] for t, v in zip(task.terms, values, strict=True))
+        e_v = 0.0
+        for x0, v0 in starts:  # the mean over the task's starts, as the NumPy objective
+            rec, _, _ = roll(x0, v0, act)
+            s = Signals(jnp, frame, rec[None], act[rows][None], times, level, task.horizon)
+            values = evaluate_terms(jnp, s, task.terms)
+            e_v = e_v + sum(t.weight * v[0] for t, v in zip(task.terms, values, strict=True))
+        e_v = e_v / len(starts)
         u = jnp.einsum("jm,am->aj", node_basis, coef)[None]
         e_u = control_energy_xp(jnp, u, objective.h, task.nu1, task.nu2)[0]
         return task.mu1 * e_u + task.mu2 * e_v, (e_u, e_v)

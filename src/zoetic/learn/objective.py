@@ -7,6 +7,11 @@ with h the time between nodal parameters (a frequency-domain controller is sampl
 M node times). E_v is a weighted sum of named terms (``zoetic.tasks.terms.TERMS``), which see
 the motion recorded at the task's ``record_hz``.
 A candidate whose simulation blew up scores +inf and is counted, never raised.
+
+A task with several starts (``[[starts]]``) plays each candidate from every start, all in one
+batched kernel call (candidate k from start s is lane k * S + s), scores each rollout with the
+same terms relative to its own start, and takes the mean over the starts: E = mu1 * E_u +
+mu2 * mean_s E_v(s). A candidate that blows up from any start scores +inf.
 """
 
 from __future__ import annotations
@@ -19,7 +24,7 @@ from zoetic.bodies import Body
 from zoetic.control import Controller
 from zoetic.errors import ZoeticError
 from zoetic.physics import Medium, State, get_medium, simulate
-from zoetic.tasks import Task, start_state
+from zoetic.tasks import Task, start_states
 from zoetic.tasks.terms import BodyFrame, Signals, evaluate_terms, term_names
 
 
@@ -72,8 +77,9 @@ class Evaluation:
     E: np.ndarray
     E_u: np.ndarray
     E_v: np.ndarray
-    terms: dict
+    terms: dict  # each term's value (K,), the mean over the starts
     failed: np.ndarray
+    per_start: np.ndarray | None = None  # E (K, S) from each start; None for a single start
 
 
 class Objective:
@@ -98,7 +104,8 @@ class Objective:
         self.dt = float(dt or body.dt)
         self.steps = int(round(task.horizon / self.dt))
         self.record_every = max(1, int(round(1.0 / (task.record_hz * self.dt))))
-        self.start = start if start is not None else start_state(task, body, self.medium)
+        # the start states, one per row (S, N, 3): the task's starts, or the one given
+        self.starts = start if start is not None else start_states(task, body, self.medium)
         self.frame = BodyFrame.of(body)
         times = np.arange(self.steps) * self.dt
         self._basis = template.design_matrix(times)  # (T, M): activations are linear in params
@@ -167,6 +174,19 @@ class Objective:
         return free, shift
 
     @property
+    def start(self) -> State:
+        """The first start state (batch 1); setting it makes it the only start."""
+        return State(self.starts.positions[:1], self.starts.velocities[:1])
+
+    @start.setter
+    def start(self, state: State) -> None:
+        self.starts = state
+
+    @property
+    def n_starts(self) -> int:
+        return int(self.starts.positions.shape[0])
+
+    @property
     def dimension(self) -> int:
         return int(np.prod(self.shape))
 
@@ -219,16 +239,19 @@ class Objective:
         return control_energy(u, self.h, self.task.nu1, self.task.nu2)
 
     def simulate(self, params: np.ndarray):
-        """Return the Trajectory of each parameter vector over the task's horizon."""
-        return self._run(self.tables(params))
+        """Return the Trajectory of each parameter vector over the task's horizon, from each
+        start: K * S rollouts, candidate k from start s at k * S + s."""
+        return self._run(self._lanes(self.tables(params)))
 
-    def _run(self, tables: np.ndarray):
-        k = tables.shape[0]
-        start = self.start
-        state = State(
-            np.repeat(start.positions[:1], k, axis=0), np.repeat(start.velocities[:1], k, axis=0)
-        )
-        return simulate(self.body, tables, self.medium, self.dt, state, self.record_every)
+    def _lanes(self, tables: np.ndarray) -> np.ndarray:
+        """Return the tables (K * S, T, A) of every candidate's rollout from every start."""
+        s = self.n_starts
+        return tables if s == 1 else np.repeat(tables, s, axis=0)
+
+    def _run(self, lanes: np.ndarray):
+        reps = (lanes.shape[0] // self.n_starts, 1, 1)
+        state = State(np.tile(self.starts.positions, reps), np.tile(self.starts.velocities, reps))
+        return simulate(self.body, lanes, self.medium, self.dt, state, self.record_every)
 
     def record_rows(self, n_records: int) -> np.ndarray:
         """Return the activation-table rows applied at each recorded instant, (R,)."""
@@ -237,19 +260,28 @@ class Objective:
     def evaluate(self, params: np.ndarray) -> Evaluation:
         """Return the Evaluation of a batch of parameter vectors (K, dim)."""
         params = np.atleast_2d(params)
-        tables = self.tables(params)
-        traj = self._run(tables)
-        acts = tables[:, self.record_rows(traj.positions.shape[1])]
+        lanes = self._lanes(self.tables(params))
+        traj = self._run(lanes)  # one kernel call for every candidate from every start
+        acts = lanes[:, self.record_rows(traj.positions.shape[1])]
         s = signals(self.task, self.body, traj.positions, acts, self.record_every * self.dt,
                     self.medium, frame=self.frame)  # fmt: skip
         values = evaluate_terms(np, s, self.task.terms)
-        terms = dict(zip(term_names(self.task.terms), values, strict=True))
         e_v = sum(t.weight * v for t, v in zip(self.task.terms, values, strict=True))
         e_u = self.control_cost(params)
-        e = self.task.mu1 * e_u + self.task.mu2 * e_v
+        n = self.n_starts
+        e = self.task.mu1 * (e_u if n == 1 else np.repeat(e_u, n)) + self.task.mu2 * e_v
         failed = traj.failed | ~np.isfinite(e)
         e = np.where(failed, np.inf, e)
-        return Evaluation(e, e_u, np.where(failed, np.inf, e_v), terms, failed)
+        if n == 1:
+            terms = dict(zip(term_names(self.task.terms), values, strict=True))
+            return Evaluation(e, e_u, np.where(failed, np.inf, e_v), terms, failed)
+        k = params.shape[0]
+        per, failed = e.reshape(k, n), failed.reshape(k, n).any(axis=1)
+        terms = {name: v.reshape(k, n).mean(axis=1)
+                 for name, v in zip(term_names(self.task.terms), values, strict=True)}  # fmt: skip
+        e_v = np.where(failed, np.inf, e_v.reshape(k, n).mean(axis=1))
+        return Evaluation(np.where(failed, np.inf, per.mean(axis=1)), e_u, e_v, terms, failed,
+                          per)  # fmt: skip
 
     def __call__(self, params: np.ndarray) -> np.ndarray:
         """Return E (K,) for a batch of parameter vectors."""

@@ -5,14 +5,22 @@ medium must have, e.g. ``["water"]``; ``"a|b"`` accepts either), ``horizon`` (s)
 (controller parameters per actuator), ``mu1``/``mu2``/``nu1``/``nu2`` (the objective's weights),
 ``record_hz`` (how often terms see the motion), an optional ``[start]`` table (``position``
 [x, y, z] m of the centre of mass, ``depth`` m below the water surface, ``heading`` and
-``pitch`` rad, ``speed`` m/s along the heading) and ``[[terms]]`` entries (``kind`` from
-``zoetic.tasks.terms.TERMS``, ``weight``, ``target``, ``goal``). Keys are checked strictly.
+``pitch`` rad, ``speed`` m/s along the heading or ``"cruise"``, and an optional ``name``) or,
+instead, ``[[starts]]``: several such tables, each rollout of a candidate played from every one
+of them (its objective is the mean of its E over the starts), and ``[[terms]]`` entries
+(``kind`` from ``zoetic.tasks.terms.TERMS``, ``weight``, ``target``, ``goal``). Keys are
+checked strictly.
+
+``speed = "cruise"`` is a swimming (or crawling) start at the speed the animal's own wave
+sustains: the centre of mass's mean speed over the second half of ``CRUISE_SECONDS`` of the
+wave played from rest at that start's place (``cruise_speed``), so one task file gives each
+animal a start at a speed it actually swims.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -38,8 +46,11 @@ CAPABILITIES = {
     "mirror": "it is left-right symmetric (mirrored turns)",
 }
 TOP_KEYS = ("name", "description", "requires", "horizon", "nodes", "mu1", "mu2", "nu1", "nu2",
-            "record_hz", "start", "terms")  # fmt: skip
-START_KEYS = ("position", "depth", "heading", "pitch", "speed")
+            "record_hz", "start", "starts", "terms")  # fmt: skip
+START_KEYS = ("name", "position", "depth", "heading", "pitch", "speed")
+CRUISE = "cruise"  # a start speed: the animal's own wave's sustained speed (cruise_speed)
+CRUISE_SECONDS = 6.0  # s of the wave played to measure it (the speed of the second half)
+MAX_STARTS = 16
 TERM_KEYS = ("kind", "weight", "target", "goal")
 
 
@@ -59,11 +70,14 @@ class Start:
     depth: float | None = None  # m below the water surface (sets the height)
     heading: float = 0.0  # rad, left turns (toward +z) positive
     pitch: float = 0.0  # rad, nose up positive
-    speed: float = 0.0  # m/s along the start heading
+    speed: float | str = 0.0  # m/s along the start heading, or CRUISE
+    name: str = ""  # how reports name it ("rest", "swimming"); "" for an unnamed start
 
     def to_dict(self) -> dict:
         """Return the non-default entries as a TOML-able dict."""
         d = {"heading": self.heading, "pitch": self.pitch, "speed": self.speed}
+        if self.name:
+            d["name"] = self.name
         if self.position is not None:
             d["position"] = list(self.position)
         if self.depth is not None:
@@ -86,8 +100,19 @@ class Task:
     nu2: float
     terms: tuple[Term, ...]
     source: str = "<memory>"
-    start: Start = field(default_factory=Start)
+    starts: tuple[Start, ...] = (Start(),)
     record_hz: float = 20.0
+
+    @property
+    def start(self) -> Start:
+        """The first start (the only one of a single-start task)."""
+        return self.starts[0]
+
+    def start_names(self) -> list[str]:
+        """Return a name per start: its own, else "rest" / "swimming" by its speed, made
+        unique with its index where two would read the same."""
+        names = [s.name or ("rest" if s.speed == 0 else "swimming") for s in self.starts]
+        return [n if names.count(n) == 1 else f"{n}{k}" for k, n in enumerate(names)]
 
     def to_dict(self) -> dict:
         """Return the task as a TOML-able dict (for a run's config.toml)."""
@@ -95,7 +120,8 @@ class Task:
             "name": self.name, "description": self.description, "requires": list(self.requires),
             "horizon": self.horizon, "nodes": self.nodes, "mu1": self.mu1, "mu2": self.mu2,
             "nu1": self.nu1, "nu2": self.nu2, "record_hz": self.record_hz,
-            "start": self.start.to_dict(),
+            **({"start": self.start.to_dict()} if len(self.starts) == 1
+               else {"starts": [st.to_dict() for st in self.starts]}),
             "terms": [
                 {"kind": t.kind, "weight": t.weight, "target": t.target, "goal": list(t.goal)}
                 for t in self.terms
@@ -127,14 +153,43 @@ def _vec3(d: dict, key: str, where: str, default=None):
     return tuple(_num({"v": g}, "v", f"{where}: '{key}'") for g in v)
 
 
-def _parse_start(raw, where: str) -> Start:
+def _parse_start(raw, w: str) -> Start:
+    """Return the Start a [start] table (or one [[starts]] entry, ``w`` naming it) holds."""
     if not isinstance(raw, dict):
-        raise TaskError(f"{where}: [start] must be a table")
-    _check_keys(raw, START_KEYS, f"{where}: start")
-    w = f"{where}: start"
+        raise TaskError(f"{w} must be a table")
+    _check_keys(raw, START_KEYS, w)
     depth = None if raw.get("depth") is None else _num(raw, "depth", w)
+    speed = raw.get("speed", 0.0)
+    if not (isinstance(speed, str) and speed == CRUISE):
+        if isinstance(speed, str):
+            raise TaskError(f"{w}: 'speed' must be m/s or {CRUISE!r} (the animal's own wave's "
+                            f"sustained speed), got {speed!r}")  # fmt: skip
+        speed = _num(raw, "speed", w, 0.0)
+    name = raw.get("name", "")
+    if not isinstance(name, str):
+        raise TaskError(f"{w}: 'name' must be text, got {name!r}")
     return Start(_vec3(raw, "position", w), depth, _num(raw, "heading", w, 0.0),
-                 _num(raw, "pitch", w, 0.0), _num(raw, "speed", w, 0.0))  # fmt: skip
+                 _num(raw, "pitch", w, 0.0), speed, name)  # fmt: skip
+
+
+def _parse_starts(doc: dict, where: str) -> tuple[Start, ...]:
+    """Return the task's starts: its [start] table, or its [[starts]] entries, or rest."""
+    if "start" in doc and "starts" in doc:
+        raise TaskError(f"{where}: give one [start] table or [[starts]] entries, not both")
+    if "starts" not in doc:
+        return (_parse_start(doc.get("start", {}), f"{where}: start"),)
+    raw = doc["starts"]
+    if not isinstance(raw, list) or not raw:
+        raise TaskError(f"{where}: 'starts' must be one or more [[starts]] tables, got {raw!r}")
+    if len(raw) > MAX_STARTS:
+        raise TaskError(f"{where}: {len(raw)} [[starts]] entries; at most {MAX_STARTS}")
+    starts = tuple(_parse_start(r, f"{where}: starts[{k}]") for k, r in enumerate(raw))
+    names = [s.name for s in starts if s.name]
+    for k, s in enumerate(starts):
+        if s.name and names.count(s.name) > 1:
+            raise TaskError(f"{where}: starts[{k}]: the name {s.name!r} is given to "
+                            f"{names.count(s.name)} starts; each needs its own")  # fmt: skip
+    return starts
 
 
 def _parse_requires(raw, where: str) -> tuple[str, ...]:
@@ -185,7 +240,7 @@ def parse_task(doc: dict, source: str = "<memory>") -> Task:
         nu2=_num(doc, "nu2", where, 0.0),
         terms=tuple(terms),
         source=source,
-        start=_parse_start(doc.get("start", {}), where),
+        starts=_parse_starts(doc, where),
         record_hz=record_hz,
     )
 
@@ -256,12 +311,14 @@ def check_fits(task: Task, body: Body, medium: Medium | str | None = None) -> No
         )
 
 
-def start_state(task: Task, body: Body, medium: Medium | str | None = None) -> State:
-    """Return the task's start state for a body (batch 1): placed, turned, pitched, moving."""
+def start_state(task: Task, body: Body, medium: Medium | str | None = None,
+                index: int = 0) -> State:
+    """Return one of the task's start states for a body (batch 1; default the first): placed,
+    turned, pitched, moving."""
     from zoetic.physics import State, get_medium, rest_state
     from zoetic.physics.media import FAR
 
-    st = task.start
+    st = task.starts[index]
     base = rest_state(body, 1)
     if st == Start():
         return base
@@ -282,5 +339,47 @@ def start_state(task: Task, body: Body, medium: Medium | str | None = None) -> S
         target[1] = level - st.depth
     new = (pos - com) @ rot.T + target
     fwd = rot @ np.asarray(body.forward, float)
-    vel = np.broadcast_to(st.speed * fwd, new.shape)
+    speed = st.speed
+    if speed == CRUISE:
+        still = State(new[None].copy(), np.zeros((1, *new.shape)))
+        speed = cruise_speed(body, medium, still)
+    vel = np.broadcast_to(float(speed) * fwd, new.shape)
     return State(new[None].copy(), np.array(vel)[None].copy())
+
+
+def start_states(task: Task, body: Body, medium: Medium | str | None = None) -> State:
+    """Return all the task's start states for a body, one per batch row (S, N, 3)."""
+    from zoetic.physics import State
+
+    each = [start_state(task, body, medium, k) for k in range(len(task.starts))]
+    return State(np.concatenate([s.positions for s in each]),
+                 np.concatenate([s.velocities for s in each]))  # fmt: skip
+
+
+_CRUISE: dict = {}  # (id(body), medium, start bytes) -> (body, m/s)
+
+
+def cruise_speed(body: Body, medium: Medium | str | None = None, start: State | None = None,
+                 seconds: float = CRUISE_SECONDS) -> float:
+    """Return the speed (m/s) the animal's own wave sustains: the centre of mass's top-view
+    displacement over the second half of ``seconds`` of the wave played from ``start`` (default:
+    rest). Measured once per body, medium and start (one simulation), then remembered."""
+    from zoetic.control import wave_controller
+    from zoetic.physics import get_medium, rest_state, simulate
+
+    med = get_medium(medium or body.medium)
+    start = start if start is not None else rest_state(body, 1)
+    key = (id(body), med.name, start.positions.tobytes(), float(seconds))
+    hit = _CRUISE.get(key)
+    if hit is not None and hit[0] is body:
+        return hit[1]
+    steps = int(round(seconds / body.dt))
+    every = max(1, steps // 40)
+    tr = simulate(body, wave_controller(body).table(steps, body.dt)[None], med, body.dt,
+                  start, every)  # fmt: skip
+    com = tr.com(body)[0]
+    half = com.shape[0] // 2
+    dist = float(np.linalg.norm((com[-1] - com[half])[[0, 2]]))
+    v = dist / float(tr.times[-1] - tr.times[half]) if not tr.failed[0] else 0.0
+    _CRUISE[key] = (body, v)
+    return v
