@@ -3,11 +3,15 @@
 ``zoetic bench skills`` runs this: for every animal and every entry of its basic training
 (go straight, sharp and wide left turns), learn the entry's task with the defaults of
 ``zoetic learn`` and score the learned controller and the hand-made one (the animal's wave,
-bent for turns: ``tracking.handmade_repertoire``) on the same task, from rest, with the same
-figures: the task's E, speed in body lengths per second, the heading change, the time to
-turn 90 degrees and the turning radius, and for going straight the speed sustained when
-played for 10 s; for an animal with fins, the go-straight gait's depth change with the fins
-up and down, and in the sea its burst toward the surface from 2 m depth.
+bent for turns: ``tracking.handmade_repertoire``) on the same task, from each of the task's
+starts (``learned``/``hand_made`` from the first, rest; ``learned_<name>``/``hand_made_<name>``
+from each other start, e.g. ``learned_cruising``), with the same figures: the task's E, speed
+in body lengths per second, the heading change, the time to turn 90 degrees and the turning
+radius, and for going straight the speed sustained when played for 10 s from that start;
+``learned_beats_hand_made`` holds when the learned E is at most the hand-made one from every
+start; ``starts`` gives each start's speed (m/s); for an animal with fins, the go-straight
+gait's depth change with the fins up and down, and in the sea its burst toward the surface
+from 2 m depth (both from rest).
 """
 
 from __future__ import annotations
@@ -21,17 +25,19 @@ from zoetic.behavior.training import plan_for
 from zoetic.bodies import Body, list_animals, load_animal
 from zoetic.control import Controller
 from zoetic.learn.objective import heading_angles, motion_terms
-from zoetic.physics import rest_state, simulate
-from zoetic.tasks import Task
+from zoetic.physics import State, rest_state, simulate
+from zoetic.tasks import Task, start_state
 
 SUSTAINED_SECONDS = 10.0
 
 
-def skill_figures(body: Body, ctrl: Controller, task: Task) -> dict:
-    """Return the figures of one controller on one task, played from rest."""
+def skill_figures(body: Body, ctrl: Controller, task: Task, start: int = 0) -> dict:
+    """Return the figures of one controller on one task, played from one of its starts (the
+    first by default)."""
     steps = int(round(task.horizon / body.dt))
     every = max(1, int(round(0.05 / body.dt)))
-    tr = simulate(body, ctrl.table(steps, body.dt), record_every=every)
+    state = start_state(task, body, index=start)
+    tr = simulate(body, ctrl.table(steps, body.dt), state=state, record_every=every)
     terms = motion_terms(task, body, tr.positions, task.horizon)
     e = float(sum(t.weight * terms[t.kind][0] for t in task.terms))
     heading = heading_angles(body, tr.positions)[0]
@@ -49,7 +55,7 @@ def skill_figures(body: Body, ctrl: Controller, task: Task) -> dict:
         end = int(past[0]) if past.size else len(turned) - 1
         out["turn_radius_bl"] = turn_radius(com[: end + 1], turned[end], body_length(body))
     else:
-        out["sustained_bl_s"] = sustained_speed(body, ctrl)
+        out["sustained_bl_s"] = sustained_speed(body, ctrl, state=state)
     return out
 
 
@@ -67,10 +73,13 @@ def turn_radius(com: np.ndarray, turned: float, length: float) -> float | None:
     return round(chord / (2.0 * float(np.sin(a / 2.0))) / length, 3)
 
 
-def sustained_speed(body: Body, ctrl: Controller, seconds: float = SUSTAINED_SECONDS) -> float:
-    """Return the speed (body lengths/s) over the second half of ``seconds`` played from rest."""
+def sustained_speed(body: Body, ctrl: Controller, seconds: float = SUSTAINED_SECONDS,
+                    state: State | None = None) -> float:
+    """Return the speed (body lengths/s) over the second half of ``seconds`` played from
+    ``state`` (default: rest)."""
     steps = int(round(seconds / body.dt))
-    tr = simulate(body, ctrl.table(steps, body.dt), record_every=max(1, steps // 20))
+    tr = simulate(body, ctrl.table(steps, body.dt), state=state,
+                  record_every=max(1, steps // 20))  # fmt: skip
     com = tr.com(body)[0]
     half = com.shape[0] // 2
     dist = np.linalg.norm((com[-1] - com[half])[[0, 2]])
@@ -132,6 +141,15 @@ def burst(body: Body, ctrl: Controller, depth: float = 2.0, seconds: float = 4.0
     }
 
 
+def start_speeds(body: Body, task: Task) -> dict:
+    """Return each start's name and speed (m/s), as the rollouts start."""
+    out = {}
+    for k, name in enumerate(task.start_names()):
+        v = start_state(task, body, index=k).velocities[0]
+        out[name] = round(float(np.linalg.norm(v.mean(axis=0))), 3)
+    return out
+
+
 def learn_skill(animal: str, task: Task, seed: int = 0, budget: int | None = None):
     """Return (controller, wall seconds) learned with the defaults of ``zoetic learn``."""
     from zoetic.learn.run import LearnConfig, build
@@ -170,18 +188,21 @@ def bench_skills(animals=None, budget: int | None = None, seed: int = 0) -> dict
         skills = {}
         for entry in plan_for(body):
             ctrl, wall = learn_skill(name, entry.task, seed, budget)
-            learned = skill_figures(body, ctrl, entry.task)
             hand_name = (entry.name if entry.name in hand.controllers
                          else HAND_MADE_FOR.get(entry.name, "go-straight"))  # fmt: skip
-            made = skill_figures(body, hand.controllers[hand_name], entry.task)
-            skills[entry.name] = {
-                "task": entry.task.name,
-                "learned": learned,
-                "hand_made": made,
-                "hand_made_entry": hand_name,
-                "learned_beats_hand_made": learned["E"] <= made["E"],
-                "learn_wall_s": round(wall, 2),
-            }
+            made = hand.controllers[hand_name]
+            names = entry.task.start_names()
+            skill: dict = {"task": entry.task.name, "starts": start_speeds(body, entry.task)}
+            beats = []
+            for k, start in enumerate(names):
+                tag = "" if k == 0 else f"_{start}"
+                skill[f"learned{tag}"] = skill_figures(body, ctrl, entry.task, k)
+                skill[f"hand_made{tag}"] = skill_figures(body, made, entry.task, k)
+                beats.append(skill[f"learned{tag}"]["E"] <= skill[f"hand_made{tag}"]["E"])
+            # on the task's E from every start
+            skills[entry.name] = skill | {"hand_made_entry": hand_name,
+                                          "learned_beats_hand_made": all(beats),
+                                          "learn_wall_s": round(wall, 2)}  # fmt: skip
             if hand_name == "go-straight" and entry.name in ("go-straight", "move-forward"):
                 # the gait with the fins: depth change, burst
                 for key, fn in (("depth_change", depth_change), ("burst", burst)):

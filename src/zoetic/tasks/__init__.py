@@ -184,9 +184,9 @@ def _parse_starts(doc: dict, where: str) -> tuple[Start, ...]:
     if len(raw) > MAX_STARTS:
         raise TaskError(f"{where}: {len(raw)} [[starts]] entries; at most {MAX_STARTS}")
     starts = tuple(_parse_start(r, f"{where}: starts[{k}]") for k, r in enumerate(raw))
-    names = [s.name for s in starts if s.name]
+    names = [s.name for s in starts]
     for k, s in enumerate(starts):
-        if s.name and names.count(s.name) > 1:
+        if s.name and s.name in names[:k]:
             raise TaskError(f"{where}: starts[{k}]: the name {s.name!r} is given to "
                             f"{names.count(s.name)} starts; each needs its own")  # fmt: skip
     return starts
