@@ -31,8 +31,11 @@ PLAN = (
     ("wide-turn-left", {"ground": "wide-turn-left", "water": "wide-turn-left"}),
 )
 # an animal with a water surface above it (the dolphin): the five basic motor tasks of the
-# paper's section 3.2 (turn-right is the mirror of turn-left); forward from rest, turns from a
-# swimming start
+# paper's section 3.2 (turn-right is the mirror of turn-left)
+# Every task of both plans is learned from rest and from a start at the animal's own cruising
+# speed (its [[starts]]: "rest" and "cruising", speed = "cruise"; a ground animal's cruising
+# start is a crawling one): a candidate's E is the mean over the two, so an entry does what it
+# promises whether it is switched on from rest or mid-swim.
 SURFACE_PLAN = (
     ("move-forward", "move-forward"),
     ("turn-down", "turn-down"),
