@@ -117,3 +117,13 @@ def test_basic_training_learns_every_entry_from_rest_and_a_cruising_start():
             assert task.start_names() == ["rest", "cruising"], (name, entry.name)
             speeds = np.linalg.norm(start_states(task, body).velocities[:, 0], axis=1)
             assert speeds[0] == 0.0 and speeds[1] > 0.1, (name, entry.name, speeds)
+
+
+def test_the_jax_objective_takes_the_same_mean_over_the_starts(objectives):
+    from zoetic.learn.gradient import jax_objective
+
+    both, each, X = objectives
+    e, _ = jax_objective(both)(X[0].astype(np.float32))
+    mean = (each[0](X[:1])[0] + each[1](X[:1])[0]) / 2
+    assert float(e) == pytest.approx(mean, rel=2e-3, abs=2e-4)
+    assert abs(mean - each[0](X[:1])[0]) > 1e-2  # the second start counts
