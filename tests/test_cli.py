@@ -113,7 +113,8 @@ def test_every_benchmark_is_a_bench_subcommand(capsys):
 
 def test_learn_cli_and_tasks(tmp_path, capsys):
     assert main(["tasks"]) == 0
-    assert "swim-straight" in capsys.readouterr().out
+    listing = capsys.readouterr().out
+    assert "swim-straight" in listing and "from rest and cruising" in listing
     out = tmp_path / "run"
     code = main(["learn", "shark", "--optimizer", "cmaes", "--budget", "40", "--popsize", "8",
                  "--out", str(out), "--no-video"])  # fmt: skip

@@ -17,14 +17,14 @@ console = Console()
 
 @app.command()
 def tasks() -> None:
-    """List the built-in tasks, one line each."""
+    """List the built-in tasks, one line each: requirements, horizon, starts, description."""
     from zoetic.tasks import list_tasks, load_task
 
     for name in list_tasks():
         t = load_task(name)
         console.print(
             f"[bold]{name:16s}[/] {', '.join(t.requires) or '-':28s} {t.horizon:4.1f} s  "
-            f"{t.description}"
+            f"from {' and '.join(t.start_names()):17s} {t.description}"
         )
 
 
