@@ -12,13 +12,14 @@ of them (its objective is the mean of its E over the starts), and ``[[terms]]`` 
 checked strictly.
 
 ``speed = "cruise"`` is a swimming (or crawling) start at the speed the animal's own wave
-sustains: the centre of mass's mean speed over the second half of ``CRUISE_SECONDS`` of the
-wave played from rest at that start's place (``cruise_speed``), so one task file gives each
-animal a start at a speed it actually swims.
+sustains: the centre of mass's top-view displacement over the second half of
+``CRUISE_SECONDS`` of the wave played from rest at that start's place, over that time
+(``cruise_speed``), so one task file gives each animal a start at a speed it actually swims.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -320,7 +321,7 @@ def start_state(task: Task, body: Body, medium: Medium | str | None = None,
 
     st = task.starts[index]
     base = rest_state(body, 1)
-    if st == Start():
+    if dataclasses.replace(st, name="") == Start():  # rest where the body starts
         return base
     w = body.mass / body.total_mass
     pos = base.positions[0]
