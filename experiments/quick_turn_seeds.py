@@ -6,7 +6,10 @@ shark's sharp-turn entry) with the defaults of ``zoetic learn`` for seed 0 only.
 it for several seeds, each exactly as the bench does (``bench.skills.learn_skill``), and
 measures it with the bench's own figures (``bench.skills.skill_figures``: heading recorded
 every 0.05 s, t90 the first record past 90 degrees, the radius of the arc up to there).
-Prints one JSON line per seed and a summary; about 5 s a seed on 2 cores.
+Beside the bench's figures, ``relaxed_deg``: the heading 1 s after the turn, played from rest
+and then relaxed (every muscle at 0, fins level). A turn that only curls the head toward the
+target at the last instant unwinds there; a real one keeps (or adds to) its heading.
+Prints one JSON line per seed and a summary; about 5-10 s a seed on 2 cores.
 
     python experiments/quick_turn_seeds.py [--seeds 0-4] [--task quick-turn-left]
 """
@@ -19,7 +22,10 @@ import json
 import numpy as np
 
 from zoetic.bench.skills import learn_skill, skill_figures
-from zoetic.bodies import load_animal
+from zoetic.bodies import Body, load_animal
+from zoetic.control import Controller, rest_controller
+from zoetic.learn.objective import heading_angles
+from zoetic.physics import simulate
 from zoetic.tasks import load_task
 
 T90_TARGET_S = 1.5  # issue 10: 90 degrees within 1.5 s
@@ -34,6 +40,17 @@ def parse_seeds(text: str) -> list[int]:
     return [int(s) for s in text.split(",")]
 
 
+def relaxed_heading(body: Body, ctrl: Controller, horizon: float, after: float = 1.0) -> float:
+    """Return the heading change (degrees) ``after`` s past the turn's horizon, played from
+    rest with the learned controller and then relaxed."""
+    steps, rest = int(round(horizon / body.dt)), int(round(after / body.dt))
+    table = np.concatenate([ctrl.table(steps, body.dt),
+                            rest_controller(body).table(rest, body.dt)])  # fmt: skip
+    tr = simulate(body, table, record_every=max(1, int(round(0.05 / body.dt))))
+    heading = heading_angles(body, tr.positions)[0]
+    return round(float(np.degrees(heading[-1] - heading[0])), 1)
+
+
 def sweep(animal: str, task_name: str, seeds: list[int], budget: int | None = None) -> dict:
     """Return the figures of the learned turn for each seed and a summary."""
     body = load_animal(animal)
@@ -43,7 +60,8 @@ def sweep(animal: str, task_name: str, seeds: list[int], budget: int | None = No
         ctrl, wall = learn_skill(animal, task, seed, budget)
         fig = skill_figures(body, ctrl, task)
         row = {"seed": seed, "t90_s": fig["t90_s"], "heading_deg": fig["heading_deg"],
-               "turn_radius_bl": fig.get("turn_radius_bl"), "E": fig["E"],
+               "turn_radius_bl": fig.get("turn_radius_bl"),
+               "relaxed_deg": relaxed_heading(body, ctrl, task.horizon), "E": fig["E"],
                "learn_wall_s": round(wall, 2)}  # fmt: skip
         rows.append(row)
         print(json.dumps(row), flush=True)
