@@ -45,6 +45,7 @@ import numpy as np
 
 from zoetic.bodies import load_animal
 from zoetic.control import wave_controller
+from zoetic.io import write_json
 from zoetic.learn.optimizers import Optimizer
 from zoetic.learn.run import LearnConfig, build
 from zoetic.physics import simulate
@@ -110,8 +111,10 @@ def lockstep(objective, optimizers: list[Optimizer], budget: int) -> list[np.nda
     return [np.asarray(c, float) for c in curves]
 
 
-def run_summary(curves: list[np.ndarray], best_any: float) -> dict:
-    """Return per-seed figures of the runs of one setting and their mean."""
+def run_summary(curves: list[np.ndarray], best_any: float, temps: list[float] | None = None,
+                alpha: float | None = None) -> dict:  # fmt: skip
+    """Return per-seed figures of the runs of one setting and their mean (``temps``: each
+    annealing's final temperature, ``alpha`` its cooling rate)."""
     finals, starts, near, close = [], [], [], []
     for e in curves:
         best = best_so_far(e)
@@ -120,7 +123,7 @@ def run_summary(curves: list[np.ndarray], best_any: float) -> dict:
         near.append(int(np.argmax(best <= best[-1] + 0.05 * (best[0] - best[-1]))) + 1)
         hit = np.flatnonzero(best <= best_any + 0.01)
         close.append(int(hit[0]) + 1 if hit.size else None)
-    return {
+    out = {
         "final_E": [round(f, 4) for f in finals],
         "mean_final_E": round(float(np.mean(finals)), 4),
         "sd_final_E": round(float(np.std(finals)), 4),
@@ -129,6 +132,10 @@ def run_summary(curves: list[np.ndarray], best_any: float) -> dict:
         "evaluations_to_within_0.01_of_best_any": close,
         "evaluations": [len(e) for e in curves],
     }
+    if temps is not None and alpha is not None:
+        out["final_T"] = [round(t, 4) for t in temps]
+        out["temperature_drops"] = [int(round(np.log(t / 0.5) / np.log(alpha))) for t in temps]
+    return out
 
 
 def make_runs(controller: str, seeds: list[int], alphas: list[float], simplex: bool, base: dict,
@@ -199,6 +206,7 @@ def main() -> None:
                     "T0": 0.5, "budget": args.budget, "seeds": seeds}  # fmt: skip
     print(report, flush=True)
     curves: dict = {}  # (controller, optimizer, alpha) -> [E per evaluation, one per seed]
+    temps: dict = {}  # (controller, alpha) -> [final temperature, one per seed]
     for controller in ("time", "frequency"):
         alphas = set()
         if "a" in panels:
@@ -215,8 +223,10 @@ def main() -> None:
         wall = time.perf_counter() - t0
         report[f"{controller}_wall_s"] = round(wall, 1)
         print(f"{controller} domain: {len(runs)} runs in lockstep, {wall:.0f} s", flush=True)
-        for (optimizer, alpha, _), e in zip(keys, got, strict=True):
+        for (optimizer, alpha, _), e, opt in zip(keys, got, runs, strict=True):
             curves.setdefault((controller, optimizer, alpha), []).append(e)
+            if optimizer == "anneal":
+                temps.setdefault((controller, alpha), []).append(float(opt.T))
     best_any = {c: min(float(best_so_far(e)[-1]) for k, es in curves.items() if k[0] == c
                        for e in es) for c in {k[0] for k in curves}}  # fmt: skip
 
@@ -229,7 +239,8 @@ def main() -> None:
             for optimizer in ("anneal", "simplex"):
                 alpha = PAPER_ALPHA if optimizer == "anneal" else None
                 runs = curves[(controller, optimizer, alpha)]
-                a[label(optimizer, controller)] = run_summary(runs, best_any[controller])
+                a[label(optimizer, controller)] = run_summary(
+                    runs, best_any[controller], temps.get((controller, alpha)), alpha)
                 a[label(optimizer, controller)]["paper_final_E"] = PAPER_A[
                     label(optimizer, controller)]
                 print(label(optimizer, controller), a[label(optimizer, controller)], flush=True)
@@ -251,7 +262,8 @@ def main() -> None:
         rows = {}
         for alpha in COOLING_RATES:
             rows[f"alpha {alpha}"] = run_summary(curves[(controller, "anneal", alpha)],
-                                                 best_any[controller])  # fmt: skip
+                                                 best_any[controller],
+                                                 temps[(controller, alpha)], alpha)  # fmt: skip
             print(f"({panel}) {controller}, alpha {alpha}", rows[f"alpha {alpha}"], flush=True)
         report[panel] = rows
         means = {k: v["mean_final_E"] for k, v in rows.items()}
@@ -262,7 +274,21 @@ def main() -> None:
     if cooling_panels:
         plot_learning_seeds(cooling_panels, OUT / "fig6_cooling.png",
                             title=f"cooling rates, T0 = 0.5, NM = {3 * m}")  # fmt: skip
-    (OUT / "fig6.json").write_text(json.dumps(report, indent=2) + "\n")
+    write_json(OUT / "fig6.json", merged(OUT / "fig6.json", report))
+
+
+SETUP_KEYS = ("nodes", "goal_m", "E_units", "T0", "budget", "seeds")
+
+
+def merged(path: Path, report: dict) -> dict:
+    """Return ``report`` with the panels of an earlier report at ``path`` that this run did not
+    redo, when that report had the same set-up (``--panels b,c`` keeps panel a's numbers)."""
+    if not path.exists():
+        return report
+    old = json.loads(path.read_text())
+    if any(old.get(k) != report.get(k) for k in SETUP_KEYS):
+        return report
+    return {**old, **report}
 
 
 if __name__ == "__main__":
