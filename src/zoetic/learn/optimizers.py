@@ -116,7 +116,7 @@ class Annealing(Optimizer):
                  min_accepts: int | None = None, relative: bool = False,
                  rng: np.random.Generator | None = None, accept_ties: bool = True):  # fmt: skip
         if not 0.0 <= float(t0) < np.inf:
-            raise ZoeticError(f"annealing: the start temperature t0 must be >= 0, got {t0}")
+            raise ZoeticError(f"annealing: the start temperature t0 must be finite, >= 0: {t0}")
         if not 0.0 < float(alpha) <= 1.0:
             raise ZoeticError(f"annealing: the cooling rate alpha must be in (0, 1], got {alpha}")
         starts = np.atleast_2d(np.asarray(x0, dtype=np.float64))
