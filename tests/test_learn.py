@@ -8,10 +8,10 @@ import pytest
 from conftest import write_short_task
 from zoetic.bodies import load_animal
 from zoetic.control import rest_controller, time_domain, wave_controller
-from zoetic.errors import RunDirError, TaskError
+from zoetic.errors import RunDirError, TaskError, ZoeticError
 from zoetic.learn.objective import Objective, control_energy
 from zoetic.learn.optimizers import make_optimizer
-from zoetic.learn.run import LearnConfig, Run
+from zoetic.learn.run import LearnConfig, Run, build
 from zoetic.tasks import list_tasks, load_task, parse_task
 
 
@@ -104,6 +104,22 @@ def test_annealing_follows_the_papers_schedule():
         opt.tell(X, np.array([-1.0]))
         X = opt.ask()
     assert opt.T == pytest.approx(0.45)
+
+
+@pytest.mark.parametrize("alpha", [0.8, 0.85])
+def test_annealing_cooling_rate_is_a_setting(alpha, tmp_path, short_task):
+    # Fig. 6(b-c) varies alpha in T <- alpha T; it reaches the annealer through a run's config
+    config = LearnConfig(animal="shark", task=str(short_task), optimizer="anneal", budget=4,
+                         extra={"optimizer": {"alpha": alpha}})  # fmt: skip
+    opt = build(config).optimizer
+    assert opt.alpha == alpha and opt.T == 0.5
+    for _ in range(opt.min_accepts + 1):  # NM accepted (downhill) moves: one drop
+        X = opt.ask()
+        opt.tell(X, np.array([-float(opt.evaluations)]))
+    assert opt.T == pytest.approx(0.5 * alpha)
+    with pytest.raises(ZoeticError, match="cooling rate alpha"):
+        make_optimizer("anneal", np.zeros(2), np.zeros(2), np.ones(2), seed=0, budget=9,
+                       alpha=1.2)  # fmt: skip
 
 
 def _learn(out, task, optimizer, budget=60, stop_at=None):

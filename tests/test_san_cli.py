@@ -121,6 +121,8 @@ def test_bench_san_prints_json(capsys):
     assert code == 0
     out = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert out["cart_4_trials_seconds"] > 0 and out["steps_per_second"] > 0
+    # set-up and one trial timed apart in this process (san.search.time_one_trial)
+    assert out["compile_seconds"] > 0 and out["one_trial_seconds_in_process"] > 0
 
 
 def test_unknown_method_terrain_or_creature_exit_2(capsys):

@@ -85,6 +85,33 @@ def test_terms_measure_what_they_say_on_rigid_motions():
     assert heading_angles(body, pos)[0, -1] == pytest.approx(theta)
 
 
+def test_heading_shortfall_rewards_reaching_the_heading_early():
+    body = load_animal("shark")
+    rest = body.rest_pos
+    com = body.mass @ rest / body.total_mass
+
+    def turned(angle: float) -> np.ndarray:
+        c, s = math.cos(angle), math.sin(angle)
+        return (rest - com) @ np.array([[c, 0, -s], [0, 1, 0], [s, 0, c]]).T + com
+
+    early, late = [0.0, 0.2, 0.4, 0.4, 0.4], [0.0, 0.1, 0.2, 0.3, 0.4]  # rad, left
+    pos = np.stack([[turned(a) for a in early], [turned(a) for a in late],
+                    [turned(-a) for a in early]])  # fmt: skip
+    terms = [{"kind": "heading_shortfall", "target": 0.4},
+             {"kind": "heading_shortfall", "target": -0.4, "weight": 1.0},
+             {"kind": "heading_change", "target": 0.4}]  # fmt: skip
+    got = evaluate_terms(np, signals(parse_task(_task(terms=terms)), body, pos, None, 0.05),
+                         parse_task(_task(terms=terms)).terms)  # fmt: skip
+    left, right, final = (np.asarray(g) for g in got)
+    # mean over the records of the squared shortfall: (0.4^2 + 0.2^2) / 5 for the early turn
+    assert left[0] == pytest.approx((0.16 + 0.04) / 5)
+    assert left[1] == pytest.approx((0.16 + 0.09 + 0.04 + 0.01) / 5)
+    assert final[0] == pytest.approx(0.0, abs=1e-12) and final[1] == pytest.approx(0, abs=1e-12)
+    assert right[2] == pytest.approx(left[0])  # a right turn toward a negative target
+    wrong_way = (0.4**2 + 0.6**2 + 3 * 0.8**2) / 5  # turning right while 0.4 left is wanted
+    assert left[2] == pytest.approx(wrong_way) and right[0] == pytest.approx(wrong_way)
+
+
 def test_start_state_places_turns_pitches_and_launches_the_body():
     body = load_animal("dolphin")
     task = parse_task(_task(start={"position": [1.0, 0.0, 2.0], "depth": 0.5, "heading": 0.5,

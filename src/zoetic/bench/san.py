@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from zoetic.san.network import random_network
-from zoetic.san.search import _WORKER, _evaluate_one, _init_worker, search
+from zoetic.san.search import search, time_one_trial
 
 
 def bench_search(creature: str = "walker", trials: int = 200, workers: int | None = None) -> dict:
@@ -15,14 +13,8 @@ def bench_search(creature: str = "walker", trials: int = 200, workers: int | Non
     from zoetic.san import load_creature
 
     c = load_creature(creature)
-    t0 = time.perf_counter()
-    _init_worker(c, "flat", 0, c.seconds)  # one compile, timed apart
-    compile_s = time.perf_counter() - t0
     net = random_network(c, np.random.default_rng(0))
-    t0 = time.perf_counter()
-    _evaluate_one(net)
-    one = time.perf_counter() - t0
-    _WORKER.clear()
+    compile_s, one = time_one_trial(c, net, "flat", 0, c.seconds)  # one compile, timed apart
     result = search(c, trials=trials, seed=0, workers=workers)
     steps = trials * round(c.seconds / c.dt)
     return {

@@ -94,11 +94,12 @@ class Optimizer:
 class Annealing(Optimizer):
     """Simulated annealing as the paper's footnote gives it; the one annealing of zoetic.
 
-    T0 = 0.5 and T <- alpha T; the temperature drops after at most 10NM steps or at least NM
-    accepted moves; every parameter is perturbed at each step, uniformly by at most ``step``
-    (10%) of its admissible range, a bound that stays fixed over the run. With ``chains`` > 1,
-    that many independent chains share the schedule and are evaluated as one batch (``x0``
-    may give each chain its own start, (chains, n)).
+    T0 = 0.5 and T <- alpha T (``t0``, ``alpha``: the paper's usual cooling rate is 0.9, its
+    Fig. 6(b-c) also runs 0.8 and 0.85); the temperature drops after at most 10NM steps or at
+    least NM accepted moves; every parameter is perturbed at each step, uniformly by at most
+    ``step`` (10%) of its admissible range, a bound that stays fixed over the run. With
+    ``chains`` > 1, that many independent chains share the schedule and are evaluated as one
+    batch (``x0`` may give each chain its own start, (chains, n)).
 
     Other search spaces (macro-controller plans, SAN tuning) keep this acceptance rule and
     schedule and change only what they must: ``perturb(x (chains, n), rng) -> proposals``
@@ -114,6 +115,10 @@ class Annealing(Optimizer):
                  chains=1, perturb: Callable | None = None, max_steps: int | None = None,
                  min_accepts: int | None = None, relative: bool = False,
                  rng: np.random.Generator | None = None, accept_ties: bool = True):  # fmt: skip
+        if not 0.0 <= float(t0) < np.inf:
+            raise ZoeticError(f"annealing: the start temperature t0 must be finite, >= 0: {t0}")
+        if not 0.0 < float(alpha) <= 1.0:
+            raise ZoeticError(f"annealing: the cooling rate alpha must be in (0, 1], got {alpha}")
         starts = np.atleast_2d(np.asarray(x0, dtype=np.float64))
         super().__init__(starts[0], lower, upper, seed)
         self.rng = rng if rng is not None else np.random.default_rng(self.seed)

@@ -289,9 +289,9 @@ def write_modes(
         else:
             from concurrent.futures import ProcessPoolExecutor
 
-            from zoetic.san.search import _pool_context
+            from zoetic.san.search import pool_context
 
-            with ProcessPoolExecutor(max_workers=n, mp_context=_pool_context()) as pool:
+            with ProcessPoolExecutor(max_workers=n, mp_context=pool_context()) as pool:
                 list(pool.map(_clip_job, jobs))
     doc = {
         "creature": creature.name,

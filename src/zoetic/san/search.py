@@ -20,7 +20,8 @@ import numpy as np
 
 from zoetic.san.network import Network, SanPolicy, random_network
 
-__all__ = ["Outcome", "SearchResult", "evaluate_networks", "search", "speed_cm_s"]
+__all__ = ["Outcome", "SearchResult", "evaluate_networks", "pool_context", "search",
+           "speed_cm_s", "time_one_trial"]
 
 Progress = Callable[[int, int, float], None]  # (done, total, best metric so far)
 TERRAINS = ("flat", "rough")
@@ -121,10 +122,29 @@ class _Trials:
         return [_evaluate_one(net) for net in networks]
 
 
+def time_one_trial(creature, network: Network, terrain: str = "flat", seed: int = 0,
+                   seconds: float | None = None) -> tuple[float, float]:  # fmt: skip
+    """Return (seconds to set up a worker, seconds for one trial of ``network``), both in this
+    process and exactly as a search's worker does them. Setting up builds the World (its first
+    use compiles the simulator); no worker state is left behind."""
+    seconds = float(creature.seconds if seconds is None else seconds)
+    try:
+        t0 = time.perf_counter()
+        _init_worker(creature, terrain, seed, seconds)
+        setup = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        _evaluate_one(network)
+        return setup, time.perf_counter() - t0
+    finally:
+        _WORKER.clear()
+
+
 # --- driver -------------------------------------------------------------------------------
 
 
-def _pool_context():
+def pool_context():
+    """Return the multiprocessing context the search's worker pools use (fork where there is
+    one: workers inherit the loaded modules)."""
     methods = mp.get_all_start_methods()
     return mp.get_context("fork" if "fork" in methods else methods[0])
 
@@ -188,7 +208,7 @@ def evaluate_networks(
     done = 0
     with ProcessPoolExecutor(
         max_workers=workers,
-        mp_context=_pool_context(),
+        mp_context=pool_context(),
         initializer=_init_worker,
         initargs=(creature, terrain, seed, seconds),
     ) as pool:
@@ -333,7 +353,7 @@ def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -
         if workers == 1:
             videos = [_video_job(job) for job in jobs]
         else:
-            with ProcessPoolExecutor(max_workers=workers, mp_context=_pool_context()) as pool:
+            with ProcessPoolExecutor(max_workers=workers, mp_context=pool_context()) as pool:
                 videos = list(pool.map(_video_job, jobs))
     use = useful_mask(result)
     bar = getattr(c, "useful_speed", None)  # the creature's absolute bar (cm/s)

@@ -269,6 +269,14 @@ def term(doc: str) -> Callable[[TermFn], TermFn]:
     return register
 
 
+@term("mean over the motion of the squared shortfall of the heading change from 'target' "
+      "(rad^2, 0 once past it): reaching a heading early, not only at the end")
+def heading_shortfall(xp, s: Signals, p: TermParams):
+    sign = 1.0 if p.target >= 0 else -1.0
+    turned = s.heading - s.heading[:, :1]
+    return xp.mean(xp.maximum(sign * (p.target - turned), 0.0) ** 2, axis=1)
+
+
 @term("metres the centre of mass travelled along the start heading")
 def distance_along_heading(xp, s: Signals, p: TermParams):
     return s.along

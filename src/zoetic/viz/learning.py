@@ -39,6 +39,50 @@ def plot_learning(curves: dict[str, np.ndarray], path: Path, title: str = "") ->
     return save_figure(fig, path, dpi=110)
 
 
+def best_so_far(e: np.ndarray) -> np.ndarray:
+    """Return the lowest finite E up to each evaluation (+inf before the first finite one)."""
+    e = np.asarray(e, float)
+    return np.minimum.accumulate(np.where(np.isfinite(e), e, np.inf))
+
+
+def plot_learning_seeds(panels: dict[str, dict[str, list[np.ndarray]]], path: Path,
+                        title: str = "") -> Path:  # fmt: skip
+    """Plot, in one panel per entry of ``panels``, the best-so-far E against evaluations of
+    several runs per label (one per seed): the median as a line, the range as a band.
+
+    ``panels`` maps a panel title to {label: [E of every evaluation, one array per seed]}.
+    Runs of one label may differ in length (a simplex that stopped early); each is held at its
+    last best value to the longest.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.0), squeeze=False,
+                             sharey=True)  # fmt: skip
+    for ax, (name, curves) in zip(axes[0], panels.items(), strict=True):
+        for label, runs in curves.items():
+            best = [best_so_far(e) for e in runs]
+            n = max(len(b) for b in best)
+            stack = np.stack([np.pad(b, (0, n - len(b)), mode="edge") for b in best])
+            stack = np.where(np.isfinite(stack), stack, np.nan)
+            x = np.arange(1, n + 1)
+            line = ax.plot(x, np.nanmedian(stack, axis=0), lw=1.5,
+                           label=f"{label} ({len(runs)} seeds)")[0]  # fmt: skip
+            if len(runs) > 1:
+                ax.fill_between(x, np.nanmin(stack, axis=0), np.nanmax(stack, axis=0),
+                                color=line.get_color(), alpha=0.15, lw=0)  # fmt: skip
+        ax.set_xlabel("evaluations")
+        ax.set_title(name, fontsize=10)
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    axes[0, 0].set_ylabel("best E so far (median, range over seeds)")
+    if title:
+        fig.suptitle(title, fontsize=11)
+    return save_figure(fig, path, dpi=110)
+
+
 def plot_controller(
     times: np.ndarray,
     u: np.ndarray,
