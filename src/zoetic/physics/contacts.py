@@ -1,28 +1,35 @@
 """Numba kernels for a world's passive objects: animal-object contacts and the balls' motion.
 
-Two contact models, each where it is stable and honest about energy:
+Two contact models, each chosen so that a contact never hands out more energy than it took:
 
-* **Nodes against fixed shapes** (a rock, a wall, the hurdle's bar, a post) are penalty
-  forces whose stiffness comes from the node's mass and the time step: k = m w^2 and damping
-  2 zeta m w with w = pi / (contact_steps dt), so a contact lasts about ``contact_steps``
-  steps and stays stable whatever the masses. A fixed shape absorbs its side.
 * **Balls** (against nodes, fixed shapes and the floor) are resolved at the velocity level,
-  with impulses: each step, every contact the ball has (the nodes of an animal that overlap
-  it and the shapes it rests on) is solved together by projected Gauss-Seidel so that no
-  pair approaches any more and each pair that was closing faster than ``REST_SPEED`` now
-  separates at ``RESTITUTION`` times its approach speed. Why not penalties: a ball is light
-  (a 0.3 kg beach ball against a 52 kg dolphin) and a penalty spring scaled to its reduced
-  mass is soft for the body, so a body that squeezes the ball against its post sinks deep
-  into it, and the spring stores the body's energy and hands it to the ball: a leap knocked
-  the ball ~28 m high, more than twice the body's speed. Penalties also add their stiffness
-  when several nodes press on the ball at once. With impulses, each pair's impulse takes
-  energy (1 - e^2 of the pair's normal kinetic energy), a ball pinned between a post and a
-  node stays pinned while the node is pushed back, and overlaps are removed by a separation
-  speed of at most ``CORRECTION_SPEED``; the ball leaves at most at (1 + e) M / (M + m)
-  times the striking speed (plus that correction).
+  by impulses. Each step, a ball's contacts (the nodes of an animal that overlap it, the
+  shapes it touches) are solved together by projected Gauss-Seidel (``solve``): no pair
+  approaches any more, a pair that closed faster than ``REST_SPEED`` separates at e times its
+  approach speed, with e the restitution of a spring-damper of the world's damping ratio
+  (``restitution``: 0.37 at 0.3), and an overlap is removed over about ``contact_steps``
+  steps at no more than ``CORRECTION_SPEED``. Each pair's impulse takes 1 - e^2 of the pair's
+  normal kinetic energy, so a struck ball leaves at most at (1 + e) M / (M + m) times the
+  striking speed, plus the correction speed, whatever pins it.
+  Why not penalties (as before): a penalty spring sized to the ball's reduced mass is soft
+  for the body behind the node, so a body that squeezed the 0.3 kg beach ball against its
+  post sank into it and the spring stored the body's energy and handed it to the ball. The
+  stiffnesses of several nodes on one ball also added up. A leap knocked the ball ~28 m
+  high. In a constructed squeeze (``tests/test_contacts.py``), the ball left at 7.2 times
+  the body's speed; with impulses at 1.29 (the bound is 1 + e = 1.37).
+* **Nodes against fixed shapes** (a rock, a wall, the hurdle's bar, the post) stay penalty
+  forces, because a node is held by the stiff springs of its body. An impulse would stop
+  the node alone, and the springs would pull it on through the wall. The stiffness comes
+  from the node's mass and the time step: k = m w^2 and damping 2 zeta m w with
+  w = pi / (contact_steps dt), so a contact lasts about ``contact_steps`` steps and stays
+  stable whatever the masses. The push never makes a node separate faster than
+  ``SEPARATION_SPEED``. A heavy body drives a node deep into a thin post, and the nearest
+  face can then flip (the post's top instead of its side). Uncapped, the stored spring shot
+  the nose node out at 17 m/s, and on into the ball.
 
 Friction is Coulomb in both models, capped so that it can at most stop the sliding in one step.
-Every force acts on both sides (node and ball get equal and opposite impulses).
+Every force acts on both sides (node and ball get equal and opposite impulses); a fixed shape
+absorbs its side.
 
 Layouts follow the animal kernel: node arrays (N, 3, B) float32, balls (K, 3, B) float64.
 """
@@ -111,8 +118,8 @@ def _penalty(pen, vx, vy, vz, nx, ny, nz, m, w, zeta, mu, dt):
 
 @njit(cache=True, inline="always")
 def _shape_force(s, skind, scenter, ssize, px, py, pz, radius, vx, vy, vz, m, w, zeta, mu, dt):
-    """Contact force of fixed shape ``s`` on a sphere of ``radius`` at p moving at v (zero
-    when they do not touch): one definition for the nodes and the balls."""
+    """Penalty force of fixed shape ``s`` on a node (a sphere of ``radius`` at p moving at v;
+    zero when they do not touch)."""
     d, nx, ny, nz = _sdf(
         skind[s], scenter[s, 0], scenter[s, 1], scenter[s, 2],
         ssize[s, 0], ssize[s, 1], ssize[s, 2], px, py, pz,
@@ -258,15 +265,16 @@ def node_contacts(
     pos, vel, mass, radius, bpos, bvel, bpar, skind, scenter, ssize,
     ball_obj, static_obj, dt, w, zeta, mu, bforce, impulse,
 ):  # fmt: skip
-    """Apply one step's contact impulses between an animal's nodes and the objects.
+    """Apply one step's contacts between an animal's nodes and the objects.
 
     Each ball is solved with the nodes that overlap it and the fixed shapes it touches
-    (``solve``); its velocity change adds to ``bforce`` (K, 3, B) as the force that makes it
-    over one step (applied by ``balls_step``). Then each node is solved against the fixed
-    shapes it overlaps. Node velocities change in place; each node's impulse from each object
-    accumulates in ``impulse`` (N, O, 3, B) at the object's index ``*_obj``. w = pi /
-    (contact_steps dt): an overlap is removed over about contact_steps steps; zeta: the
-    damping ratio that sets the restitution (``restitution``).
+    (``solve``, impulses); its velocity change adds to ``bforce`` (K, 3, B) as the force that
+    makes it over one step (applied by ``balls_step``). Then each fixed shape a node overlaps
+    pushes it with a penalty force (v += dt F / m). Node velocities change in place; each
+    node's impulse from each object accumulates in ``impulse`` (N, O, 3, B) at the object's
+    index ``*_obj``. w = pi / (contact_steps dt): the penalty's frequency, and a ball's
+    overlap is removed over about contact_steps steps; zeta: the penalty's damping ratio,
+    which also sets the balls' restitution (``restitution``).
     """
     n_nodes = pos.shape[0]
     e = restitution(zeta)
