@@ -472,15 +472,6 @@ def ball_tail_distance(xp, s: Signals, p: TermParams):
     return xp.min(s.part_ball_distance("tail"), axis=1)
 
 
-@term("closest approach (m) of the tail (flukes) to the first ball's centre, plus 0.5 m for "
-      "each radian of half a somersault (pi about the left-right axis, in flight) still to turn "
-      "at that instant (the whole half turn while in the water): how near a tail swung over "
-      "in a somersault came to the ball (0 without a ball)")
-def tail_reach_in_somersault(xp, s: Signals, p: TermParams):
-    short = xp.maximum(np.pi - xp.abs(s.flight_pitch) * s.airborne, 0.0)
-    return xp.min(s.part_ball_distance("tail") + 0.5 * short, axis=1)
-
-
 def evaluate_terms(xp, s: Signals, terms) -> list:
     """Return each task term's raw value (K,) in order, for ``Term``-like items."""
     return [TERMS[t.kind].fn(xp, s, TermParams(t.target, t.goal)) for t in terms]
