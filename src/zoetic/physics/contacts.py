@@ -217,7 +217,7 @@ def solve(
         rows[j, 6] = 1.0 / (1.0 / mc + rows[j, 4])
         rows[j, 7] = 0.0
         rows[j, 8], rows[j, 9], rows[j, 10] = 0.0, 0.0, 0.0
-    for _ in range(SWEEPS):
+    for _ in range(1 if c == 1 else SWEEPS):  # one contact: solved in one sweep
         for j in range(c):
             nx, ny, nz = rows[j, 1], rows[j, 2], rows[j, 3]
             rx = ux - rows[j, 13]
