@@ -45,6 +45,29 @@ def test_a_somersault_turns_about_the_left_right_axis_and_a_spin_does_not(dolphi
     assert _term("flight_pitch_rotation", spin) == pytest.approx(0.0, abs=1e-6)
 
 
+def _somersault_flags(s: Signals) -> dict[str, bool]:
+    deg = {k: float(np.degrees(_term(t, s))) for k, t in
+           (("rotation_in_air_deg", "flight_rotation"),
+            ("pitch_rotation_in_air_deg", "flight_pitch_rotation"))}  # fmt: skip
+    return targets_met("somersault", {"most_nodes_out_of_water": 1.0} | deg)
+
+
+def test_the_somersault_flag_wants_a_full_turn_about_the_left_right_axis(dolphin):
+    n = 41
+    # half a spin about the vertical reads as half a turn in the start's plane and none about
+    # the left-right axis; the old search's best (587 deg in that plane, ~50 deg about the
+    # left-right axis) is no somersault
+    spin = _signals(dolphin, _spun(dolphin, n, np.pi))
+    assert _somersault_flags(spin) == {"leaves_water": True, "rotation": False}
+    old = {"most_nodes_out_of_water": 1.0, "rotation_in_air_deg": 587.0,
+           "pitch_rotation_in_air_deg": 50.0}  # fmt: skip
+    assert targets_met("somersault", old) == {"leaves_water": True, "rotation": False}
+    flip = _signals(dolphin, _lifted(dolphin, np.full(n, 2.0), np.linspace(0, 2.1 * np.pi, n)))
+    assert _somersault_flags(flip) == {"leaves_water": True, "rotation": True}
+    short = _signals(dolphin, _lifted(dolphin, np.full(n, 2.0), np.linspace(0, 1.9 * np.pi, n)))
+    assert not _somersault_flags(short)["rotation"]
+
+
 def test_the_tail_strike_counts_the_somersault_done_when_it_touches_in_the_air(dolphin):
     n = 41
     turn = np.linspace(0, 2 * np.pi, n)

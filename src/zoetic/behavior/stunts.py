@@ -339,7 +339,8 @@ def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, boo
         flags["air_time"] = bool(m["air_time_s"] >= LEAP_AIR_S)
         flags["apex"] = bool(m["apex_body_lengths"] >= LEAP_APEX_BL)
     elif name == "somersault":
-        flags["rotation"] = bool(m["rotation_in_air_deg"] >= SOMERSAULT_DEG)
+        # a full turn about the body's own left-right axis (a spin about the vertical is none)
+        flags["rotation"] = bool(m["pitch_rotation_in_air_deg"] >= SOMERSAULT_DEG)
     elif name == "hurdle":
         flags["over_bar"] = bool(m.get("bar_crossed", False))
         flags["no_contact"] = not m.get("hurdle_touched", True)
