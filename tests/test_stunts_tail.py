@@ -45,6 +45,25 @@ def test_a_somersault_turns_about_the_left_right_axis_and_a_spin_does_not(dolphi
     assert _term("flight_pitch_rotation", spin) == pytest.approx(0.0, abs=1e-6)
 
 
+def test_the_somersault_spin_rate_is_the_turn_over_the_time_in_the_air(dolphin):
+    n = 41  # records 0.05 s apart; aloft from record 10 to 30 (1 s), turning 2 pi meanwhile
+    heights = np.full(n, -2.0)
+    heights[10:31] = 2.0
+    angles = np.clip((np.arange(n) - 10) / 20, 0.0, 1.0) * 2 * np.pi
+    flip = _signals(dolphin, _lifted(dolphin, heights, angles))
+    assert _term("flight_pitch_rate", flip) == pytest.approx(2 * np.pi / 1.0, rel=1e-6)
+    # the same turn in a flight half as long: twice the spin
+    short = np.full(n, -2.0)
+    short[10:21] = 2.0
+    quick = np.clip((np.arange(n) - 10) / 10, 0.0, 1.0) * 2 * np.pi
+    fast = _signals(dolphin, _lifted(dolphin, short, quick))
+    assert _term("flight_pitch_rate", fast) == pytest.approx(4 * np.pi, rel=1e-6)
+    under = _signals(dolphin, _lifted(dolphin, np.full(n, -2.0), angles))
+    assert _term("flight_pitch_rate", under) == 0.0
+    spin = _signals(dolphin, _spun(dolphin, n, np.pi))
+    assert _term("flight_pitch_rate", spin) == pytest.approx(0.0, abs=1e-6)
+
+
 def _somersault_flags(s: Signals) -> dict[str, bool]:
     deg = {k: float(np.degrees(_term(t, s))) for k, t in
            (("rotation_in_air_deg", "flight_rotation"),

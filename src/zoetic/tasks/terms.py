@@ -467,6 +467,17 @@ def flight_pitch_rotation(xp, s: Signals, p: TermParams):
     return xp.max(xp.abs(s.flight_pitch), axis=1)
 
 
+@term("mean angular velocity (rad/s) about the body's own left-right axis in flight: the "
+      "rotation ``flight_pitch_rotation`` over the time wholly out of the water (0 if never "
+      "out for two records): a somersault's spin")
+def flight_pitch_rate(xp, s: Signals, p: TermParams):
+    if s.airborne.shape[1] < 2:
+        return xp.zeros(s.airborne.shape[0])
+    both = s.airborne[:, 1:] * s.airborne[:, :-1]
+    seconds = xp.sum(both, axis=1) * (s.times[1] - s.times[0])
+    return xp.max(xp.abs(s.flight_pitch), axis=1) / xp.maximum(seconds, EPS)
+
+
 @term("closest approach (m) of the tail (flukes) to the first ball's centre (0 without a ball)")
 def ball_tail_distance(xp, s: Signals, p: TermParams):
     return xp.min(s.part_ball_distance("tail"), axis=1)
