@@ -77,10 +77,11 @@ def main() -> None:
     rep = Repertoire.load(args.memory, body)
     make_dir(args.out)
     rows = [
-        "| trick | apex m (body lengths) | s out of water | rotation in air deg | ball contact "
-        "(part) | hurdle clearance m | splash m^3/s | deepest before apex m | plan (entry s) "
-        "| evaluations | wall s | targets met |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| trick | apex m (body lengths) | s out of water | rotation in air deg (about the "
+        "left-right axis) | ball contact (part) | striker -> ball m/s | hurdle clearance m "
+        "| splash m^3/s | deepest before apex m | plan (entry s) | evaluations | wall s "
+        "| targets met |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     summaries = {}
     for name in list_tricks():
@@ -98,13 +99,16 @@ def main() -> None:
         plan = ", ".join(f"{p['entry']} {p['duration_s']:.2f}" for p in s["plan"] if p["played"])
         ball = "-" if "ball_contact" not in s else (
             s["ball_contact"] + (f" ({', '.join(s['ball_parts'])})" if s["ball_parts"] else ""))
+        speeds = ("-" if "ball_speed_m_s" not in s else
+                  f"{s['striker_speed_m_s']:.1f} -> {s['ball_speed_m_s']:.1f}")
         hurdle = "-" if "hurdle_clearance_m" not in s else (
             f"{s['hurdle_clearance_m']:.2f}" + (" touched" if s.get("hurdle_touched") else ""))
         met = ("-" if not flags else
                ", ".join(f"{k} {'yes' if v else 'no'}" for k, v in flags.items()))
         rows.append(
             f"| {name} | {s['apex_above_surface_m']:.2f} ({s['apex_body_lengths']:.2f}) "
-            f"| {s['air_time_s']:.2f} | {s['rotation_in_air_deg']:.0f} | {ball} | {hurdle} "
+            f"| {s['air_time_s']:.2f} | {s['rotation_in_air_deg']:.0f} "
+            f"({s['pitch_rotation_in_air_deg']:.0f}) | {ball} | {speeds} | {hurdle} "
             f"| {s['splash_m3_s']:.3f} | {s['deepest_before_apex_m']:.2f} | {plan} "
             f"| {s['evaluations']} | {s['wall_s']:.0f} | {met} |"
         )

@@ -30,7 +30,15 @@ from zoetic.errors import TaskError, ZoeticError
 from zoetic.physics import Trajectory, get_medium
 from zoetic.physics.objects import Ball, Box, Cylinder
 from zoetic.tasks import TASK_DIR, Task, check_fits, parse_task, start_state
-from zoetic.tasks.terms import PARTS, BodyFrame, Signals, evaluate_terms, term_names
+from zoetic.tasks.terms import (
+    PARTS,
+    BodyFrame,
+    Signals,
+    evaluate_terms,
+    flight_pitch_rotation,
+    tail_strike_rotation,
+    term_names,
+)
 
 TRICK_DIR = TASK_DIR / "tricks"
 TRICK_KEYS = ("segments", "durations")
@@ -270,6 +278,10 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
         "most_nodes_out_of_water": round(float(np.mean(1 - s.in_water[lane], axis=1).max()), 3),
         "rotation_in_air_deg": round(float(np.degrees(rot)), 1),
         "rotations_in_air": round(rot / (2 * np.pi), 3),
+        # the somersault part of it: about the body's own left-right axis (a spin about the
+        # vertical, or a body turned sideways to the start's plane, counts above, not here)
+        "pitch_rotation_in_air_deg": round(float(np.degrees(
+            flight_pitch_rotation(np, s, None)[lane])), 1),  # fmt: skip
         "contacts": int(rec.contacts[lane].sum()),
         "body_length_m": round(length, 3),
     }
@@ -284,6 +296,12 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
         out["ball_parts"] = parts
         out["ball_moved_by_nose_m"] = round(float(s.ball_moved_after("nose")[lane]), 3)
         out["ball_moved_by_tail_m"] = round(float(s.ball_moved_after("tail")[lane]), 3)
+        # the tail's strike during a somersault: rotation in flight when it struck (0: never
+        # while the whole body was out of the water) and how close the tail came
+        turned = tail_strike_rotation(np, s, None)[lane]
+        out["tail_strike_rotation_deg"] = round(float(np.degrees(turned)), 1)
+        out["ball_tail_distance_m"] = round(float(s.part_ball_distance("tail")[lane].min()), 3)
+        out |= strike_speeds(rec, s.ball_touch[lane], lane)
     bars = [(i, o) for i, o in enumerate(problem.trick.objects)
             if isinstance(o, Cylinder) and o.axis != "y"]  # fmt: skip
     if bars:
@@ -307,6 +325,7 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
 
 # the issue's targets, per built-in trick (bellyflop against clean-dive: ``splash_ratio``)
 LEAP_AIR_S, LEAP_APEX_BL, SOMERSAULT_DEG, SPLASH_RATIO = 0.4, 0.5, 360.0, 3.0
+TAIL_STRIKE_DEG = 180.0  # ball-tail: the tail strikes in flight after half a turn at least
 
 
 def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, bool]:
@@ -320,7 +339,8 @@ def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, boo
         flags["air_time"] = bool(m["air_time_s"] >= LEAP_AIR_S)
         flags["apex"] = bool(m["apex_body_lengths"] >= LEAP_APEX_BL)
     elif name == "somersault":
-        flags["rotation"] = bool(m["rotation_in_air_deg"] >= SOMERSAULT_DEG)
+        # a full turn about the body's own left-right axis (a spin about the vertical is none)
+        flags["rotation"] = bool(m["pitch_rotation_in_air_deg"] >= SOMERSAULT_DEG)
     elif name == "hurdle":
         flags["over_bar"] = bool(m.get("bar_crossed", False))
         flags["no_contact"] = not m.get("hurdle_touched", True)
@@ -331,7 +351,27 @@ def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, boo
         # off its support: the ball moved more than its radius after that part struck it
         flags[f"struck_by_{part}"] = part in m.get("ball_parts", [])
         flags["off_support"] = bool(m.get(f"ball_moved_by_{part}_m", 0.0) > radius)
+        if part == "tail":  # during a somersault: out of the water, half a turn or more done
+            flags["in_somersault"] = bool(m.get("tail_strike_rotation_deg", 0.0)
+                                          >= TAIL_STRIKE_DEG)  # fmt: skip
     return flags
+
+
+def strike_speeds(rec: StuntRecord, touch: np.ndarray, lane: int = 0) -> dict:
+    """Return the fastest node that touched the first ball (at the records where it touched)
+    and the ball's top speed from then on, m/s, from the recorded positions; {} if nothing
+    touched it. touch: (R, N) the nodes' contact with the ball since the previous record."""
+    t = rec.traj.times
+    hit = np.flatnonzero(touch.sum(axis=1) > 0)
+    if hit.size == 0 or len(t) < 2:
+        return {}
+    dt = np.diff(t)[:, None]
+    nodes = np.linalg.norm(np.diff(rec.traj.positions[lane], axis=0), axis=-1) / dt  # (R-1, N)
+    ball = np.linalg.norm(np.diff(rec.balls[lane, :, 0], axis=0), axis=-1) / dt[:, 0]
+    rows = hit[hit > 0]
+    striker = max((float(nodes[r - 1][touch[r] > 0].max()) for r in rows), default=0.0)
+    return {"striker_speed_m_s": round(striker, 2),
+            "ball_speed_m_s": round(float(ball[max(int(hit[0]) - 1, 0):].max()), 2)}
 
 
 def splash_ratio(bellyflop: dict, clean_dive: dict) -> float | None:

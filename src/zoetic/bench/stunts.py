@@ -2,7 +2,8 @@
 
 ``zoetic bench stunts`` runs this: for every trick, the plan search's result, its success
 flags against the issue's targets (a leap 0.4 s out of the water and 0.5 body lengths up, a
-full somersault, a cleared bar, a nose-struck ball, a bellyflop splashing 3x a clean dive),
+full somersault, a cleared bar, a nose-struck ball, a tail strike in flight after half a
+somersault, a bellyflop splashing 3x a clean dive),
 what it achieved, evaluations and wall time (target: each trick in <= 5 minutes on 2 cores).
 """
 
@@ -35,8 +36,9 @@ def bench_stunts(animal: str, memory: Path | None, tricks: list[str], method: st
     rep = Repertoire.load(memory, body)
     out: dict = {"animal": body.name, "method": method, "budget": budget, "seed": seed}
     keep = ("apex_above_surface_m", "apex_body_lengths", "air_time_s", "rotation_in_air_deg",
-            "ball_contact", "ball_parts", "hurdle_clearance_m", "splash_m3_s", "evaluations",
-            "wall_s")  # fmt: skip
+            "pitch_rotation_in_air_deg", "ball_contact", "ball_parts", "tail_strike_rotation_deg",
+            "ball_tail_distance_m", "striker_speed_m_s", "ball_speed_m_s", "hurdle_clearance_m",
+            "splash_m3_s", "evaluations", "wall_s")  # fmt: skip
     full = {}
     for name in tricks:
         tr = load_trick(name)

@@ -225,6 +225,37 @@ class Signals:
         return xp.max(xp.where(touched, dist, 0.0), axis=1)
 
     @cached_property
+    def flight_pitch(self):
+        """Signed rotation (K, R), rad, of the body about its own left-right axis (a
+        somersault's axis) while wholly out of the water, up to each record: the sum of the
+        head's turns about the centre of mass around that axis between records. Unlike
+        ``body_angle``, which is read in the start's vertical plane, a spin about the
+        vertical or a body turned sideways adds nothing. Zeros without mirror pairs."""
+        xp = self.xp
+        k, r = self.positions.shape[:2]
+        if self.frame.left.size == 0 or r < 2:
+            return xp.zeros((k, r))
+        pos = self.positions
+        lat = xp.mean(pos[:, :, self.frame.left] - pos[:, :, self.frame.right], axis=2)
+        lat = lat / (xp.sqrt(xp.sum(lat * lat, axis=-1, keepdims=True)) + EPS)
+        d = self.head - self.com
+        a, b = d[:, :-1], d[:, 1:]
+        turn = xp.arctan2(xp.sum(xp.cross(a, b) * lat[:, :-1], axis=-1), xp.sum(a * b, axis=-1))
+        both = self.airborne[:, 1:] * self.airborne[:, :-1]
+        turned = xp.cumsum(turn * both, axis=1)
+        return xp.concatenate([xp.zeros_like(turned[:, :1]), turned], axis=1)
+
+    def part_ball_distance(self, part: str):
+        """Closest approach (K, R), m, of a body part's nodes to the first ball's centre
+        (zeros without a ball)."""
+        xp = self.xp
+        if self.balls.shape[2] == 0:
+            return xp.zeros(self.positions.shape[:2])
+        nodes = np.flatnonzero(self.frame.part_mask(part))
+        d = self.positions[:, :, nodes] - self.balls[:, :, :1]
+        return xp.min(xp.sqrt(xp.sum(d * d, axis=-1) + EPS), axis=2)
+
+    @cached_property
     def displacement_xz(self):
         """Top-view displacement of the centre of mass, start to end, (K, 2)."""
         d = self.com[:, -1] - self.com[:, 0]
@@ -427,6 +458,37 @@ def ball_moved_by_nose(xp, s: Signals, p: TermParams):
       "first touched it (0 without a tail contact)")
 def ball_moved_by_tail(xp, s: Signals, p: TermParams):
     return s.ball_moved_after("tail")
+
+
+@term("greatest somersault rotation (rad, about the body's own left-right axis, in flight; "
+      "``Signals.flight_pitch``) at which the tail (flukes) touches the first ball while the "
+      "whole body is out of the water (0 if it never does): the tail's strike in a somersault")
+def tail_strike_rotation(xp, s: Signals, p: TermParams):
+    struck = (s.part_touch("tail") > 0) & (s.airborne > 0)
+    return xp.max(xp.where(struck, xp.abs(s.flight_pitch), 0.0), axis=1)
+
+
+@term("rotation (rad, unsigned) about the body's own left-right axis while wholly out of the "
+      "water (``Signals.flight_pitch``): somersaults, without the spins ``flight_rotation`` "
+      "also counts")
+def flight_pitch_rotation(xp, s: Signals, p: TermParams):
+    return xp.max(xp.abs(s.flight_pitch), axis=1)
+
+
+@term("mean angular velocity (rad/s) about the body's own left-right axis in flight: the "
+      "rotation ``flight_pitch_rotation`` over the time wholly out of the water (0 if never "
+      "out for two records): a somersault's spin")
+def flight_pitch_rate(xp, s: Signals, p: TermParams):
+    if s.airborne.shape[1] < 2:
+        return xp.zeros(s.airborne.shape[0])
+    both = s.airborne[:, 1:] * s.airborne[:, :-1]
+    seconds = xp.sum(both, axis=1) * (s.times[1] - s.times[0])
+    return xp.max(xp.abs(s.flight_pitch), axis=1) / xp.maximum(seconds, EPS)
+
+
+@term("closest approach (m) of the tail (flukes) to the first ball's centre (0 without a ball)")
+def ball_tail_distance(xp, s: Signals, p: TermParams):
+    return xp.min(s.part_ball_distance("tail"), axis=1)
 
 
 def evaluate_terms(xp, s: Signals, terms) -> list:
