@@ -330,3 +330,12 @@ def test_a_hand_made_jump_over_the_hurdle_clears_it_and_a_low_one_does_not(dolph
         assert (m["hurdle_clearance_m"] > 0.2) is over
         flags = targets_met("hurdle", m, problem.trick)
         assert flags["over_bar"] is over and flags["no_contact"] and flags["leaves_water"]
+
+
+def test_the_drawn_pool_floor_stays_below_a_dive_from_a_deep_start():
+    from zoetic.viz.stunts import Pool, deep_enough
+
+    assert deep_enough(Pool(), 2.0).depth == 4.0  # a shallow stunt keeps the default floor
+    deeper = deep_enough(Pool(), 4.6)
+    assert deeper.depth == pytest.approx(5.6)  # 1 m of room under the deepest point
+    assert deeper.margin == Pool().margin and deeper.rim == Pool().rim

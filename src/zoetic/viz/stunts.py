@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -65,6 +65,12 @@ class Pool:
     depth: float = 4.0
     margin: float = 2.0
     rim: float = 0.3
+
+
+def deep_enough(pool: Pool, deepest: float, room: float = 1.0) -> Pool:
+    """Return the pool with its floor at least ``room`` m below the deepest point drawn
+    (``deepest``: m below the surface), so a dive from a deep start stays above the floor."""
+    return replace(pool, depth=max(pool.depth, deepest + room))
 
 
 @dataclass(frozen=True)
@@ -277,10 +283,10 @@ def stunt_frames(body, positions: np.ndarray, times: np.ndarray, medium, objects
     )
 
     medium = get_medium(medium)
-    pool = pool or Pool()
     level = medium.water_level if abs(medium.water_level) < 1e8 else 0.0
     times = np.asarray(times, float)
     pos = np.asarray(positions, float)
+    pool = pool or deep_enough(Pool(), level - float(pos[..., 1].min()))
     nb = 0 if balls is None else np.asarray(balls).shape[1]
     bl = np.zeros((len(times), 0, 3)) if balls is None else np.asarray(balls, float)
     ball_objs = [o for o in objects if isinstance(o, Ball)]
