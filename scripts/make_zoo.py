@@ -257,7 +257,46 @@ DOLPHIN = {
     "wave_hz": 4.0,
     "dt": 0.0025,
     "scale": 1.635,
+    "dorsal": None,  # no dorsal fin (DORSAL_FIN below was tried: it did not fix the drift)
 }
+
+
+# A dorsal fin, tried and not adopted (docs/animals.md, "The dorsal fin (tried, not kept)"):
+# build it with dolphin(dorsal=DORSAL_FIN), as experiments/dolphin_yaw.py does. A thin
+# triangular plate on the back's midline from ring 2 back to ring 3, its tip swept back;
+# positions (x, height) in fish length units before scaling; mass (kg, taken off ring 2);
+# its springs' stiffness (N/m, after scaling); the plate's face coefficient.
+DORSAL_FIN = {
+    "front": (-10.0, 3.0),  # on the back at ring 2 (0.65 m behind the nose, 38 % of L)
+    "back": (-15.0, 2.0),  # on the back at ring 3 (0.98 m, 58 % of L)
+    "tip": (-14.2, 5.4),  # 0.93 m back, 0.21 m above the back: 0.035 m^2 per side
+    "mass": 0.6,  # kg: 0.035 m^2 x 1.7 cm mean thickness x 1000 kg/m^3
+    "k": 20000.0,  # N/m: omega_max stays at the body's 847 rad/s (30000 and 0.8 kg: 888)
+    "drag": 2.5,  # lift slope of a wing of aspect ratio 1.3: 2 pi AR / (AR + 2) per rad
+}
+
+
+def dorsal_fin(lat: Lattice, rings: list[list[int]], par: dict, sc: float) -> None:
+    """Add the dolphin's dorsal fin: two nodes on the back's midline (at rings 2 and 3) and a
+    tip above them, each held by stiff springs to the top and bottom nodes of rings 2 and 3,
+    and the plate as two one-sided triangles (one facing each side, so that sideways motion
+    either way meets it; the face law only pushes on a face moving outward)."""
+    fin = par["dorsal"]
+    m = fin["mass"] / 3
+    for i in rings[1]:  # the fin's mass comes off ring 2: the total stays the same
+        lat.nodes[i]["mass"] = round(lat.nodes[i]["mass"] - fin["mass"] / 4, 6)
+    ids = []
+    for name in ("front", "back", "tip"):
+        x, y = fin[name][0] * FISH_L * sc, fin[name][1] * FISH_L * sc
+        ids.append(lat.node(f"dorsal_{name}", [x, y, 0.0], m))
+    for a in ids:  # each to all 8 nodes of rings 2 and 3: held in every direction
+        for b in rings[1] + rings[2]:
+            lat.spring(a, b, fin["k"], "fin")
+    for a, b in ((0, 1), (0, 2), (1, 2)):
+        lat.spring(ids[a], ids[b], fin["k"], "fin")
+    names = [lat.nodes[i]["name"] for i in ids]
+    lat.faces.append(names)
+    lat.faces.append(list(reversed(names)))
 
 
 def dolphin(**params) -> dict:
@@ -274,6 +313,8 @@ def dolphin(**params) -> dict:
         nd["mass"] = round(nd["mass"] * sc**3, 6)
     for s in lat.springs:
         s["stiffness"] = round(s["stiffness"] * par["k_scale"][s["kind"]] * sc**3, 4)
+    if par["dorsal"]:
+        dorsal_fin(lat, rings, par, sc)
     doc_acts = []
     for seg in ("front", "middle", "back"):  # left muscles now lie on the back (dorsal)
         doc_acts.append({"name": f"{seg}_dorsal", "kind": "muscle", "side": "center"})
@@ -334,10 +375,12 @@ def dolphin(**params) -> dict:
     # face backward: they meet the water only moving sideways; then the flukes' two sides and
     # their two leading edges (the triangles from the tail stock out to the fluke tips)
     groups = ["head"] * 8 + ["trunk"] * 4 + ["peduncle"] * 8 + ["flukes"] * 2 + ["edges"] * 2
+    groups += ["dorsal"] * (2 if par["dorsal"] else 0)  # the dorsal fin's two sides
     assert len(groups) == len(doc["faces"])
     for face, group in zip(doc["faces"], groups, strict=True):
-        if par["drag"][group] != 1.0:
-            face["drag"] = par["drag"][group]
+        coef = par["dorsal"]["drag"] if group == "dorsal" else par["drag"][group]
+        if coef != 1.0:
+            face["drag"] = coef
     return doc
 
 
