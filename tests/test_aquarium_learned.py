@@ -101,7 +101,10 @@ def test_cli_refuses_bad_predator_skills_with_exit_2(tmp_path, capsys):
     code = main(["aquarium", "--fishes", "2", "--seconds", "0.2", "--no-video",
                  "--predator-skills", str(tmp_path / "none"), "--out", str(tmp_path / "o")])
     assert code == 2
-    assert "not a directory" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "not a directory" in err
+    # the message names the option and its value, not the built-in species file
+    assert f"--predator-skills '{tmp_path / 'none'}'" in err and "shark.toml" not in err
 
 
 def test_the_turn_weight_grows_with_the_angle_and_skips_wrong_way_blends(skills):
