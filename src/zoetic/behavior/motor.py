@@ -270,3 +270,153 @@ class WaveMotor:
             "speed_m_s": self.speeds.round(3).tolist(),
             "turn_deg_s": np.degrees(self.rates).round(1).tolist(),
         }
+
+
+# ============================================================ learned motor controllers
+# With a learned repertoire, as the artificial fish's motor controllers: swim(speed) plays the
+# blend (1 - a) do-nothing + a go-straight (a blend of abstracted entries is linear in their
+# signals before the clip to [0, 1]); turn(angle) plays the learned sharp turn of that side from
+# its own start, at ``LEARNED_STRENGTH`` blended with the swim gait, for as long as it takes to
+# turn the angle (the turn was learned as a manoeuvre from its start; played on as a periodic
+# gait it hardly turns; at full strength, repeated, it can fold the zoo shark's tail fin forward
+# through its peduncle for good, and the fish then swims backwards); pitch holds the fins.
+# Calibrated once per body and repertoire: the speed of each swim weight, and the angle each
+# side's sharp turn has turned when stopped after each of a few durations.
+
+LEARNED_SWIM = np.array([0.05, 0.1, 0.2, 0.35, 0.5, 1.0])  # swim weights a
+LEARNED_TURN = np.array([0.1, 0.2, 0.3, 0.4, 0.5, 0.75, 1.0, 1.5])  # s the sharp turn is played
+LEARNED_SETTLE = 2.0  # s of swimming (at ``LEARNED_CRUISE``) before a turn, or the measure
+LEARNED_AFTER = 1.5  # s of swimming after a turn (the new heading is measured over the last 1 s)
+LEARNED_CRUISE = 0.1  # the swim weight the turns are calibrated from
+LEARNED_STRENGTH = 0.7  # the sharp turn's share of a turn's blend (the swim gait the rest)
+LEARNED_BASES = ("do-nothing", "go-straight", "sharp-turn-left", "sharp-turn-right")
+_LEARNED_MOTOR_CACHE: dict[tuple, LearnedMotor] = {}
+
+
+@dataclass(frozen=True)
+class LearnedMotor:
+    """swim / turn / pitch for one body from a learned repertoire's do-nothing, go-straight
+    and sharp turns, calibrated (``calibrate``).
+
+    speeds (S,): m/s of the swim gait at each of ``LEARNED_SWIM``; turned (2, D): rad the sharp
+    turn left (row 0, positive) and right (row 1, negative) has turned when played for each of
+    ``LEARNED_TURN`` s from a cruise (made monotonic: a longer turn never turns less).
+    """
+
+    body: Body
+    bases: tuple[AbstractController, ...]  # the entries of LEARNED_BASES, in that order
+    speeds: np.ndarray
+    turned: np.ndarray
+
+    @classmethod
+    def calibrate(cls, body: Body, rep: Repertoire) -> LearnedMotor:
+        """Measure the swim gaits' speeds and the sharp turns' angles in one batched run from
+        rest; cached per body and repertoire for the process."""
+        missing = [n for n in LEARNED_BASES if n not in rep.controllers]
+        if missing:
+            raise ZoeticError(f"motor controllers need the entries {missing} in the repertoire")
+        bases = tuple(rep.controllers[n] for n in LEARNED_BASES)
+        key = (body.name, body.n_nodes, body.n_actuators, round(float(body.dt), 9),
+               tuple(np.concatenate([c.offset, c.freq.ravel(), c.amp.ravel(),
+                                     c.phase.ravel()]).tobytes() for c in bases))  # fmt: skip
+        if key in _LEARNED_MOTOR_CACHE:
+            return _LEARNED_MOTOR_CACHE[key]
+        motor = cls(body, bases, np.zeros(len(LEARNED_SWIM)), np.zeros((2, len(LEARNED_TURN))))
+        total = LEARNED_SETTLE + LEARNED_TURN[-1] + LEARNED_AFTER
+        times = np.arange(int(round(total / body.dt))) * body.dt
+        rows = [motor.swim_signal(times, a, 0.0) for a in LEARNED_SWIM]
+        for side in (0, 1):
+            for d in LEARNED_TURN:
+                u = motor.swim_signal(times, LEARNED_CRUISE, 0.0)
+                on = (times >= LEARNED_SETTLE) & (times < LEARNED_SETTLE + d)
+                u[on] = motor.turn_signal(times[on] - LEARNED_SETTLE, times[on], side,
+                                          LEARNED_CRUISE, 0.0)  # fmt: skip
+                rows.append(u)
+        every = max(1, int(round(0.05 / body.dt)))
+        tr = simulate(body, np.stack(rows), record_every=every)
+        t = np.arange(tr.positions.shape[1]) * every * body.dt
+        com = tr.com(body)[..., [0, 2]]
+        n = len(LEARNED_SWIM)
+        sel = t >= LEARNED_SETTLE
+        span = t[sel][-1] - t[sel][0]
+        speed = np.linalg.norm(np.diff(com[:n, sel], axis=1), axis=-1).sum(1) / span
+        rec = every * body.dt
+        k, k_s = int(round(LEARNED_SETTLE / rec)), int(round(1.0 / rec))
+
+        def travel(r, k0, k1):  # direction of travel (rad, yaw: left positive) of row r
+            d = com[n + r, k1] - com[n + r, k0]
+            return np.arctan2(d[1], d[0])
+
+        turned = np.zeros(2 * len(LEARNED_TURN))
+        for r, d in enumerate(np.tile(LEARNED_TURN, 2)):
+            e = min(int(round((LEARNED_SETTLE + d + LEARNED_AFTER) / rec)), len(t) - 1)
+            turned[r] = np.angle(np.exp(1j * (travel(r, e - k_s, e) - travel(r, k - k_s, k))))
+        turned = turned.reshape(2, len(LEARNED_TURN))
+        turned[0] = np.maximum.accumulate(np.maximum(turned[0], 0.0))
+        turned[1] = np.minimum.accumulate(np.minimum(turned[1], 0.0))
+        motor = cls(body, bases, speed, turned)
+        _LEARNED_MOTOR_CACHE[key] = motor
+        return motor
+
+    @property
+    def top_speed(self) -> float:
+        """Return the fastest straight speed (m/s) the swim gait reaches."""
+        return float(self.speeds.max())
+
+    @property
+    def turn_radius(self) -> float:
+        """Return the radius (m) of the sharp turn from a cruise: cruise speed over the
+        slower side's mean rate over its whole duration."""
+        rate = float(np.abs(self.turned[:, -1]).min()) / float(LEARNED_TURN[-1])
+        cruise = float(np.interp(LEARNED_CRUISE, LEARNED_SWIM, self.speeds))
+        return cruise / max(rate, 1e-6)
+
+    def swim(self, speed: float) -> float:
+        """Return the swim weight that swims ``speed`` m/s (clipped to the calibrated range;
+        below the smallest weight's speed, scaled down towards rest)."""
+        lo = float(self.speeds[0])
+        if speed < lo:
+            return float(LEARNED_SWIM[0] * max(speed, 0.0) / max(lo, 1e-9))
+        top = int(np.argmax(self.speeds))
+        sp, w = self.speeds[: top + 1], LEARNED_SWIM[: top + 1]
+        order = np.argsort(sp)
+        return float(np.interp(speed, sp[order], w[order]))
+
+    def turn(self, angle: float) -> tuple[int, float]:
+        """Return (side, seconds): play sharp-turn-left (0) or -right (1) for that long from its
+        start to turn ``angle`` rad (left positive); the whole turn when it turns less."""
+        side = 0 if angle >= 0 else 1
+        x = np.concatenate([[0.0], np.abs(self.turned[side])])
+        y = np.concatenate([[0.0], LEARNED_TURN])
+        keep = np.concatenate([[True], np.diff(x) > 0])  # interp needs increasing angles
+        return side, float(np.interp(abs(angle), x[keep], y[keep]))
+
+    def swim_signal(self, times: np.ndarray, a: float, pitch: float) -> np.ndarray:
+        """Return activations (T, A) of the swim gait of weight ``a``, fins at ``pitch``."""
+        u = (1 - a) * self.bases[0].raw(times) + a * self.bases[1].raw(times)
+        return self._fins(u, pitch)
+
+    def turn_signal(self, since: np.ndarray, times: np.ndarray, side: int, a: float,
+                    pitch: float) -> np.ndarray:  # fmt: skip
+        """Return activations (T, A) of a turn of ``side`` (0 left, 1 right): the sharp turn at
+        ``since`` s from its start, ``LEARNED_STRENGTH`` of it, on the swim gait of weight
+        ``a`` at ``times``; fins at ``pitch``."""
+        w = LEARNED_STRENGTH
+        u = w * self.bases[2 + side].raw(since) + (1 - w) * (
+            (1 - a) * self.bases[0].raw(times) + a * self.bases[1].raw(times))
+        return self._fins(u, pitch)
+
+    def _fins(self, u: np.ndarray, pitch: float) -> np.ndarray:
+        for k, act in fin_activation(self.body, float(pitch)).items():
+            u[:, k] = act
+        return np.clip(u, 0.0, 1.0)
+
+    def summary(self) -> dict:
+        """Return the calibration tables (speeds in m/s, angles turned in degrees)."""
+        return {
+            "swim_weights": LEARNED_SWIM.tolist(),
+            "speed_m_s": self.speeds.round(3).tolist(),
+            "turn_seconds": LEARNED_TURN.tolist(),
+            "turned_left_deg": np.degrees(self.turned[0]).round(1).tolist(),
+            "turned_right_deg": np.degrees(self.turned[1]).round(1).tolist(),
+        }

@@ -164,7 +164,8 @@ def build_tank(cfg: TankConfig) -> Tank:
     if not pred.predator:
         raise SpeciesError(f"{pred.source}: species {pred.name!r} is not a predator")
     if cfg.predator_skills is not None:
-        pred = with_skills(pred, cfg.predator_skills)
+        pred = with_skills(pred, cfg.predator_skills,
+                           f"--predator-skills {str(cfg.predator_skills)!r}")
     statics: list[Box | Cylinder] = []
     for sx, sz in ((1, 0), (-1, 0), (0, 1), (0, -1)):
         c = (sx * (half + WALL), 0.0, sz * (half + WALL))
@@ -277,6 +278,8 @@ class FishBrain:
                                             self.species.mind.hunger_rate)  # fmt: skip
         self.alive = True
         self.thought = Thought(0.0, 0.0, 0.0, self.mind.intention, None)
+        if isinstance(self.locomotion, LearnedLocomotion):
+            self.locomotion.turning = None
 
     def willing(self, t: float) -> bool:
         """Return True when the fish would mate at time t: its libido (which a mating resets)
@@ -436,6 +439,8 @@ def _activations(brains: list[FishBrain], demands: list[Demand | None],
     for i, (b, d) in enumerate(zip(brains, demands, strict=True)):
         if d is None:
             rows[i] = np.zeros((1, period.steps, b.body.n_actuators))
+        elif isinstance(b.locomotion, LearnedLocomotion):  # each fish its own turn under way
+            rows[i] = b.locomotion.activations(d, period.times)[None]
         else:
             groups.setdefault(id(b.locomotion.motor), []).append(i)
     for idx in groups.values():
