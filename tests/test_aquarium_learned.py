@@ -112,8 +112,7 @@ def test_cli_refuses_bad_predator_skills_with_exit_2(tmp_path, capsys):
 
 
 def test_a_learned_turn_plays_the_sharp_turn_from_its_start(skills):
-    from zoetic.behavior.aquarium.locomotion import TURN_MIN
-    from zoetic.behavior.motor import LEARNED_TURN
+    from zoetic.behavior.aquarium.locomotion import TURN_BURST, TURN_MIN
 
     body = load_animal("shark")
     motor = learned_motor(body, skills)
@@ -130,7 +129,7 @@ def test_a_learned_turn_plays_the_sharp_turn_from_its_start(skills):
     out = loco.activations(Demand(0.3, turn=1.5), 10.0 + t)
     assert loco.turning is not None and loco.turning[0] == 0
     np.testing.assert_allclose(out, sharp)
-    assert loco.turning[2] <= LEARNED_TURN[-1]
+    assert loco.turning[2] <= TURN_BURST
     # it ends when asked to turn the other way, and a small turn swims on
     loco.activations(Demand(0.3, turn=-2 * TURN_MIN), 10.1 + t)
     assert loco.turning is not None and loco.turning[0] == 1

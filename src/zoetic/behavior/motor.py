@@ -276,10 +276,9 @@ class WaveMotor:
 # With a learned repertoire, as the artificial fish's motor controllers: swim(speed) plays the
 # blend (1 - a) do-nothing + a go-straight (a blend of abstracted entries is linear in their
 # signals before the clip to [0, 1]); turn(angle) plays the learned sharp turn of that side from
-# its own start, at ``LEARNED_STRENGTH`` blended with the swim gait, for as long as it takes to
-# turn the angle (the turn was learned as a manoeuvre from its start; played on as a periodic
-# gait it hardly turns; at full strength, repeated, it can fold the zoo shark's tail fin forward
-# through its peduncle for good, and the fish then swims backwards); pitch holds the fins.
+# its own start (``LEARNED_STRENGTH`` of it on the swim gait) for as long as it takes to turn
+# the angle (the turn was learned as a manoeuvre from its start; played on as a periodic gait
+# it hardly turns); pitch holds the fins.
 # Calibrated once per body and repertoire: the speed of each swim weight, and the angle each
 # side's sharp turn has turned when stopped after each of a few durations.
 
@@ -288,7 +287,7 @@ LEARNED_TURN = np.array([0.1, 0.2, 0.3, 0.4, 0.5, 0.75, 1.0, 1.5])  # s the shar
 LEARNED_SETTLE = 2.0  # s of swimming (at ``LEARNED_CRUISE``) before a turn, or the measure
 LEARNED_AFTER = 1.5  # s of swimming after a turn (the new heading is measured over the last 1 s)
 LEARNED_CRUISE = 0.1  # the swim weight the turns are calibrated from
-LEARNED_STRENGTH = 0.7  # the sharp turn's share of a turn's blend (the swim gait the rest)
+LEARNED_STRENGTH = 1.0  # the sharp turn's share of a turn's blend (the swim gait the rest)
 LEARNED_BASES = ("do-nothing", "go-straight", "sharp-turn-left", "sharp-turn-right")
 _LEARNED_MOTOR_CACHE: dict[tuple, LearnedMotor] = {}
 

@@ -14,6 +14,7 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from zoetic.behavior.motor import LEARNED_BASES
 from zoetic.errors import ZoeticError
 from zoetic.io import Table, is_path, load_toml, suggest, write_toml
 
@@ -21,8 +22,8 @@ SPECIES_DIR = Path(__file__).parent / "species"
 HABIT_WORDS = ("company", "crowd", "obstacles")
 COWARD_FEAR = 2.5  # a coward fears from 2.5 times as far (the re-implementation's 500 vs 200)
 BUILT_IN = "built-in"  # the calibrated steered wave (``locomotion.MotorLocomotion``)
-# a learned repertoire's entries the motor controllers blend (``behavior.motor.MotorControllers``)
-SKILL_ENTRIES = ("do-nothing", "go-straight", "sharp-turn-left", "sharp-turn-right")
+# a learned repertoire's entries the motor controllers play (``behavior.motor.LearnedMotor``)
+SKILL_ENTRIES = LEARNED_BASES
 
 
 class SpeciesError(ZoeticError):
