@@ -34,15 +34,17 @@ STRETCH = 1.5  # how much longer than at rest a surface edge may get (the broad 
 
 
 def surface_reach(body: Body) -> float:
-    """Return the longest edge of the body's surface triangles at rest, times ``STRETCH``: a
-    point within r of the surface lies within r + this of one of its nodes."""
+    """Return how far a point of the body's surface may lie from the nearest of its nodes: the
+    longest edge of its triangles at rest, stretched by ``STRETCH``, over sqrt(3) (no point of
+    a triangle lies farther than that from all three corners). A point within r of the surface
+    lies within r + this of one of its nodes."""
     f = np.asarray(body.faces, dtype=np.int64)
     if not len(f):
         return 0.0
     p = body.rest_pos
     edges = np.concatenate([p[f[:, 1]] - p[f[:, 0]], p[f[:, 2]] - p[f[:, 1]],
                             p[f[:, 0]] - p[f[:, 2]]])  # fmt: skip
-    return float(np.sqrt((edges**2).sum(1)).max() * STRETCH)
+    return float(np.sqrt((edges**2).sum(1)).max() * STRETCH / np.sqrt(3.0))
 
 
 @njit(cache=True, inline="always")

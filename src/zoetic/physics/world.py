@@ -39,6 +39,7 @@ F32 = np.float32
 # which is slow on a busy host): 64 gym lanes x 10 steps run faster on one thread
 PARALLEL_FROM = 8192
 MAX_SLICE = 20  # steps between reach checks while objects are about
+SUB_SLICE = 5  # steps between the checks of animals that may touch one another
 
 
 @dataclass(frozen=True)
@@ -550,14 +551,14 @@ class World:
 
     def _close_pairs(self, horizon: float) -> list[tuple[int, int]]:
         """Return the pairs of animals that may touch within ``horizon`` s (broad phase)."""
-        out = []
-        views = self._views
-        for a in range(len(self.animals)):
-            for c in range(a + 1, len(self.animals)):
-                reach = max(self._reach[a], self._reach[c]) + self.node_radius
-                if close(views[a][0], views[a][1], views[c][0], views[c][1], reach, horizon):
-                    out.append((a, c))
-        return out
+        n = len(self.animals)
+        return [(a, c) for a in range(n) for c in range(a + 1, n) if self._close(a, c, horizon)]
+
+    def _close(self, a: int, c: int, horizon: float) -> bool:
+        """Return True if animals a and c may touch within ``horizon`` s (``bodycontact.close``)."""
+        reach = max(self._reach[a], self._reach[c]) + self.node_radius
+        (pa, va), (pc, vc) = self._views[a], self._views[c]
+        return bool(close(pa, va, pc, vc, reach, horizon))
 
     def _pair(self, a: int, c: int, between: np.ndarray) -> None:
         """One step's contact impulses between animals a and c (recorded in ``between``)."""
@@ -608,19 +609,30 @@ class World:
         if not busy:
             return
         near_shape = [a for a in busy if self._solids and self._near(a, (t1 - t) * self.dt)]
-        for s in range(t, t1):
-            for a, c in pairs:
-                self._pair(a, c, between)
-            for a in near_shape:
-                o0, o1 = self._off[a], self._off[a + 1]
-                node_contacts(
-                    self._pos[o0:o1], self._vel[o0:o1], self._mass[a], self.node_radius,
-                    self._bpos, self._bvel, self._bpar, self._skind, self._scenter, self._ssize,
-                    self._ball_obj, self._static_obj, self.dt, self._w, self._zeta, self._mu,
-                    self._bforce, impulse[a],
-                )  # fmt: skip
+        # the pairs checked again every SUB_SLICE steps: an animal of a pair not close now
+        # takes the sub-slice in one kernel call
+        s = t
+        while s < t1:
+            s1 = min(t1, s + SUB_SLICE)
+            now = [p for p in pairs if self._close(*p, (s1 - s) * self.dt)]
+            tight = sorted({a for p in now for a in p} | set(near_shape))
             for a in busy:
-                one(self._steppers[a], tables[a], s, s + 1, self._n + s)
+                if a not in tight:
+                    kernel(self._steppers[a], tables[a], s, s1, self._n + s)
+            for u in range(s, s1):
+                for a, c in now:
+                    self._pair(a, c, between)
+                for a in near_shape:
+                    o0, o1 = self._off[a], self._off[a + 1]
+                    node_contacts(
+                        self._pos[o0:o1], self._vel[o0:o1], self._mass[a], self.node_radius,
+                        self._bpos, self._bvel, self._bpar, self._skind, self._scenter,
+                        self._ssize, self._ball_obj, self._static_obj, self.dt, self._w,
+                        self._zeta, self._mu, self._bforce, impulse[a],
+                    )  # fmt: skip
+                for a in tight:
+                    one(self._steppers[a], tables[a], u, u + 1, self._n + u)
+            s = s1
 
     def _balls(self, steps: int) -> None:
         balls_step(
