@@ -13,7 +13,9 @@ entry a repertoire (and so greedy tracking) can use (``motor_repertoire``).
 
 from __future__ import annotations
 
+from bisect import bisect_left, bisect_right
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -153,6 +155,17 @@ WAVE_BIASES = np.array([0.0, 0.1, 0.2, 0.3, 0.4, 0.5])
 WAVE_SETTLE = 2.0  # s from rest before the speed and turning rate are measured
 WAVE_MEASURE = 3.0  # s over which they are measured
 _WAVE_CACHE: dict[tuple, WaveMotor] = {}
+_AMPS, _BIASES = WAVE_AMPLITUDES.tolist(), WAVE_BIASES.tolist()
+
+
+def _interp(x: float, xp: list, fp: list) -> float:
+    """Return ``np.interp(x, xp, fp)`` for a float and short lists (xp non-decreasing)."""
+    if x <= xp[0]:
+        return fp[0]
+    if x >= xp[-1]:
+        return fp[-1]
+    j = bisect_right(xp, x) - 1  # xp[j] <= x < xp[j + 1]
+    return (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j]) * (x - xp[j]) + fp[j]
 
 
 @dataclass(frozen=True)
@@ -204,10 +217,18 @@ class WaveMotor:
         """Return the fastest straight speed (m/s) the wave reaches."""
         return float(self.speeds.max())
 
+    @cached_property
+    def _tables(self) -> tuple[list, list, list, list]:
+        """The tables as Python lists (the per-demand scalar work skips numpy's overhead):
+        speeds sorted, their amplitudes, the sharpest turn per amplitude, the rate rows."""
+        order = np.argsort(self.speeds)
+        return (self.speeds[order].tolist(), WAVE_AMPLITUDES[order].tolist(),
+                self.rates[:, -1].tolist(), self.rates.tolist())  # fmt: skip
+
     def swim(self, speed: float) -> float:
         """Return the amplitude that swims ``speed`` m/s (clipped to the calibrated range)."""
-        order = np.argsort(self.speeds)
-        return float(np.interp(speed, self.speeds[order], WAVE_AMPLITUDES[order]))
+        speeds, amps = self._tables[0], self._tables[1]
+        return _interp(float(speed), speeds, amps)
 
     def turn(self, angle: float, seconds: float = 1.0, amplitude: float = 1.0
              ) -> tuple[float, float]:  # fmt: skip
@@ -215,16 +236,17 @@ class WaveMotor:
         least at ``amplitude``: the smallest bias whose rate turns it in time; a wave too weak
         to turn that fast beats harder (up to amplitude 1), beyond that the sharpest turn."""
         need = abs(angle) / max(seconds, 1e-9)
-        amp = min(max(float(amplitude), float(WAVE_AMPLITUDES[0])), 1.0)
-        reach = self.rates[:, -1]
-        if need > float(np.interp(amp, WAVE_AMPLITUDES, reach)):
+        amps, biases = _AMPS, _BIASES
+        amp = min(max(float(amplitude), amps[0]), 1.0)
+        reach, rates = self._tables[2], self._tables[3]
+        if need > _interp(amp, amps, reach):
             # the smallest amplitude whose sharpest turn is fast enough (or full amplitude)
-            ok = np.flatnonzero(reach >= need)
-            amp = max(amp, float(WAVE_AMPLITUDES[ok[0]]) if len(ok) else 1.0)
-        k = int(np.clip(np.searchsorted(WAVE_AMPLITUDES, amp) - 1, 0, len(WAVE_AMPLITUDES) - 2))
-        w = (amp - WAVE_AMPLITUDES[k]) / (WAVE_AMPLITUDES[k + 1] - WAVE_AMPLITUDES[k])
-        row = (1 - w) * self.rates[k] + w * self.rates[k + 1]
-        bias = float(np.interp(need, row, WAVE_BIASES)) if row[-1] > row[0] else 0.0
+            ok = [a for a, r in zip(amps, reach, strict=True) if r >= need]
+            amp = max(amp, ok[0] if ok else 1.0)
+        k = min(max(bisect_left(amps, amp) - 1, 0), len(amps) - 2)
+        w = (amp - amps[k]) / (amps[k + 1] - amps[k])
+        row = [(1 - w) * a + w * b for a, b in zip(rates[k], rates[k + 1], strict=True)]
+        bias = _interp(need, row, biases) if row[-1] > row[0] else 0.0
         return amp, bias if angle >= 0 else -bias
 
     def fins(self, pitch: float) -> float:

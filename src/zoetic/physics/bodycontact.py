@@ -154,19 +154,30 @@ def _box(pos, b, pad):
 @njit(cache=True)
 def close(pa, va, pb, vb, reach, horizon) -> bool:
     """Return True if, in some lane, two nodes of the animals at pa and pb (velocities va, vb)
-    are within ``reach`` m plus how far both can travel in ``horizon`` s."""
+    are within ``reach`` m plus how far they can close in ``horizon`` s at their present
+    speeds: at most (max |va - u| + max |vb - u|) horizon for any u, here the nodes' mean
+    velocity (two fishes swimming side by side close only as fast as they wag)."""
+    na, nb = pa.shape[0], pb.shape[0]
     for b in range(pa.shape[2]):
+        ux = uy = uz = 0.0
+        for i in range(na):
+            ux, uy, uz = ux + va[i, 0, b], uy + va[i, 1, b], uz + va[i, 2, b]
+        for j in range(nb):
+            ux, uy, uz = ux + vb[j, 0, b], uy + vb[j, 1, b], uz + vb[j, 2, b]
+        ux, uy, uz = ux / (na + nb), uy / (na + nb), uz / (na + nb)
         sa = 0.0
-        for i in range(pa.shape[0]):
-            sa = max(sa, va[i, 0, b] ** 2 + va[i, 1, b] ** 2 + va[i, 2, b] ** 2)
+        for i in range(na):
+            sa = max(sa, (va[i, 0, b] - ux) ** 2 + (va[i, 1, b] - uy) ** 2
+                     + (va[i, 2, b] - uz) ** 2)  # fmt: skip
         sb = 0.0
-        for j in range(pb.shape[0]):
-            sb = max(sb, vb[j, 0, b] ** 2 + vb[j, 1, b] ** 2 + vb[j, 2, b] ** 2)
+        for j in range(nb):
+            sb = max(sb, (vb[j, 0, b] - ux) ** 2 + (vb[j, 1, b] - uy) ** 2
+                     + (vb[j, 2, b] - uz) ** 2)  # fmt: skip
         r = reach + (math.sqrt(sa) + math.sqrt(sb)) * horizon
         r2 = r * r
-        for i in range(pa.shape[0]):
+        for i in range(na):
             x, y, z = pa[i, 0, b], pa[i, 1, b], pa[i, 2, b]
-            for j in range(pb.shape[0]):
+            for j in range(nb):
                 dx, dy, dz = x - pb[j, 0, b], y - pb[j, 1, b], z - pb[j, 2, b]
                 if dx * dx + dy * dy + dz * dz < r2:
                     return True

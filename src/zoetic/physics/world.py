@@ -298,6 +298,7 @@ class World:
         self._faces = [np.ascontiguousarray(b.faces, dtype=np.int64) for b in self.bodies]
         self._touchy &= all(len(f) for f in self._faces)
         self._reach = [surface_reach(b) for b in self.bodies]
+        self._pair_buf = np.zeros((2, self.batch))
         self._no_contacts = Contacts(
             tuple(np.zeros((self.batch, b.n_nodes, 0, 3)) for b in self.bodies), ()
         )
@@ -562,7 +563,8 @@ class World:
 
     def _pair(self, a: int, c: int, between: np.ndarray) -> None:
         """One step's contact impulses between animals a and c (recorded in ``between``)."""
-        buf = np.zeros((2, self.batch))
+        buf = self._pair_buf
+        buf[:] = 0.0
         (pa, va), (pc, vc) = self._views[a], self._views[c]
         pair_contacts(pa, va, self._mass[a], self._faces[a], pc, vc, self._mass[c],
                       self._faces[c], self.node_radius, self.dt, self._w_body, self._zeta, buf)
