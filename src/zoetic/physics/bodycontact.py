@@ -151,12 +151,25 @@ def _box(pos, b, pad):
     return lx - pad, ly - pad, lz - pad, hx + pad, hy + pad, hz + pad
 
 
+@njit(cache=True, inline="always")
+def _any_in_box(p, q, b, pad) -> bool:
+    """Return True if some node of p lies in the bounding box of q's nodes padded by pad."""
+    lx, ly, lz, hx, hy, hz = _box(q, b, pad)
+    for i in range(p.shape[0]):
+        x, y, z = p[i, 0, b], p[i, 1, b], p[i, 2, b]
+        if lx <= x <= hx and ly <= y <= hy and lz <= z <= hz:
+            return True
+    return False
+
+
 @njit(cache=True)
-def close(pa, va, pb, vb, reach, horizon) -> bool:
-    """Return True if, in some lane, two nodes of the animals at pa and pb (velocities va, vb)
-    are within ``reach`` m plus how far they can close in ``horizon`` s at their present
-    speeds: at most (max |va - u| + max |vb - u|) horizon for any u, here the nodes' mean
-    velocity (two fishes swimming side by side close only as fast as they wag)."""
+def close(pa, va, pb, vb, reach, skin, horizon) -> bool:
+    """Return True if, in some lane, the animals at pa and pb (velocities va, vb) may touch
+    within ``horizon`` s at their present speeds. They close at most (max |va - u| +
+    max |vb - u|) m/s for any u, here the nodes' mean velocity (two fishes swimming side by
+    side close only as fast as they wag). Both must hold: a node of one within ``skin`` (plus
+    that travel) of the other's bounding box, which holds its surface; and two nodes within
+    ``reach`` (plus the travel)."""
     na, nb = pa.shape[0], pb.shape[0]
     for b in range(pa.shape[2]):
         ux = uy = uz = 0.0
@@ -173,7 +186,10 @@ def close(pa, va, pb, vb, reach, horizon) -> bool:
         for j in range(nb):
             sb = max(sb, (vb[j, 0, b] - ux) ** 2 + (vb[j, 1, b] - uy) ** 2
                      + (vb[j, 2, b] - uz) ** 2)  # fmt: skip
-        r = reach + (math.sqrt(sa) + math.sqrt(sb)) * horizon
+        travel = (math.sqrt(sa) + math.sqrt(sb)) * horizon
+        if not (_any_in_box(pa, pb, b, skin + travel) or _any_in_box(pb, pa, b, skin + travel)):
+            continue
+        r = reach + travel
         r2 = r * r
         for i in range(na):
             x, y, z = pa[i, 0, b], pa[i, 1, b], pa[i, 2, b]

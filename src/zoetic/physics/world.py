@@ -559,7 +559,7 @@ class World:
         """Return True if animals a and c may touch within ``horizon`` s (``bodycontact.close``)."""
         reach = max(self._reach[a], self._reach[c]) + self.node_radius
         (pa, va), (pc, vc) = self._views[a], self._views[c]
-        return bool(close(pa, va, pc, vc, reach, horizon))
+        return bool(close(pa, va, pc, vc, reach, self.node_radius, horizon))
 
     def _pair(self, a: int, c: int, between: np.ndarray) -> None:
         """One step's contact impulses between animals a and c (recorded in ``between``)."""
