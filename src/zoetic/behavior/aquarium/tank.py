@@ -611,7 +611,7 @@ def live(tank: Tank, seconds: float | None = None,
                 deepest_fish = max(deepest_fish, _fish_depth(fishes, pos, extent))
         pos, com, fwd, vel, nose = _kinematics(world, fishes, cw)
         t1 = world.time
-        # catches, matings, fish-fish collisions
+        # catches and matings (fish-fish touches come from the world's contacts above)
         dcoms = np.linalg.norm(com[:, None] - com[None], axis=-1)
         for i, j2 in zip(*np.nonzero(dcoms < NEAR), strict=True):
             i, j2 = int(i), int(j2)
