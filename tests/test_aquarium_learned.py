@@ -112,7 +112,7 @@ def test_cli_refuses_bad_predator_skills_with_exit_2(tmp_path, capsys):
 
 
 def test_a_learned_turn_plays_the_sharp_turn_from_its_start(skills):
-    from zoetic.behavior.aquarium.locomotion import TURN_BURST, TURN_MIN
+    from zoetic.behavior.aquarium.locomotion import TURN_BURST, TURN_MIN, TURN_REST
 
     body = load_animal("shark")
     motor = learned_motor(body, skills)
@@ -130,10 +130,14 @@ def test_a_learned_turn_plays_the_sharp_turn_from_its_start(skills):
     assert loco.turning is not None and loco.turning[0] == 0
     np.testing.assert_allclose(out, sharp)
     assert loco.turning[2] <= TURN_BURST
-    # it ends when asked to turn the other way, and a small turn swims on
-    loco.activations(Demand(0.3, turn=-2 * TURN_MIN), 10.1 + t)
+    # it ends when asked to turn the other way; that turn waits TURN_REST s of swimming
+    swim = loco.activations(Demand(0.3, turn=-2 * TURN_MIN), 10.1 + t)
+    assert loco.turning is None
+    np.testing.assert_allclose(swim, motor.swim_signal(10.1 + t, motor.swim(0.3), 0.0))
+    loco.activations(Demand(0.3, turn=-2 * TURN_MIN), 10.1 + TURN_REST + t)
     assert loco.turning is not None and loco.turning[0] == 1
     loco.turning = None
+    # a small turn swims on
     straight = loco.activations(Demand(0.3, turn=TURN_MIN / 2), 11.0 + t)
     assert loco.turning is None
     np.testing.assert_allclose(straight, motor.swim_signal(11.0 + t, motor.swim(0.3), 0.0))

@@ -81,6 +81,10 @@ TURN_MIN = 0.1  # rad: a smaller demanded turn swims on (the next period correct
 # turn at 0.7 with the swim did not fold it in 8 trials but rolled the fish over, and it ate
 # 13-20 % of the food (seeds 0-2) against 40 % and 67 % (seeds 0, 1) with the bursts.
 TURN_BURST = 0.3
+# s of swimming before a turn to the other side may start. In the tank the folds came when a
+# burst one way was cut short by a turn the other way (a fish bent hard to one side starting
+# the other side's sharp turn at once).
+TURN_REST = 0.3
 
 
 class LearnedLocomotion:
@@ -90,7 +94,8 @@ class LearnedLocomotion:
     turn of at least ``TURN_MIN`` rad starts the turn of that side (``LearnedMotor.turn_signal``:
     the learned sharp turn from its own start), played for as long as the calibration says it
     takes to turn the angle (at least one control period, at most ``TURN_BURST``), then back to
-    the swim; a demand to turn the other way ends it at once. Fins hold the pitch. Same
+    the swim; a demand to turn the other way ends it at once, and a turn the other way starts
+    only after ``TURN_REST`` s of swimming. Fins hold the pitch. Same
     interface as ``MotorLocomotion``; the state is the turn under way, so each fish has its own
     (``motor`` is shared by the fishes of one body and repertoire).
     """
@@ -99,6 +104,7 @@ class LearnedLocomotion:
         self.body = body
         self.motor = motor
         self.turning: tuple[int, float, float] | None = None  # side, start s, duration s
+        self.last: tuple[int, float] = (0, -np.inf)  # the last turn's side and end (s)
 
     @property
     def top_speed(self) -> float:
@@ -119,8 +125,11 @@ class LearnedLocomotion:
             other_way = demand.turn < -TURN_MIN if side == 0 else demand.turn > TURN_MIN
             if t0 - start >= duration - 1e-9 or other_way:
                 self.turning = None
+                self.last = (side, min(t0, start + duration))
         if self.turning is None and abs(demand.turn) >= TURN_MIN:
             side, duration = self.motor.turn(demand.turn)
+            if side != self.last[0] and t0 - self.last[1] < TURN_REST - 1e-9:
+                return self.motor.swim_signal(times, self.motor.swim(demand.speed), pitch)
             duration = min(max(duration, float(times[-1] - t0) + self.body.dt), TURN_BURST)
             self.turning = (side, t0, duration)
         if self.turning is None:

@@ -279,7 +279,7 @@ class FishBrain:
         self.alive = True
         self.thought = Thought(0.0, 0.0, 0.0, self.mind.intention, None)
         if isinstance(self.locomotion, LearnedLocomotion):
-            self.locomotion.turning = None
+            self.locomotion.turning, self.locomotion.last = None, (0, -np.inf)
 
     def willing(self, t: float) -> bool:
         """Return True when the fish would mate at time t: its libido (which a mating resets)
