@@ -143,16 +143,16 @@ def test_a_fish_that_just_mated_is_not_willing_again_until_its_libido_returns():
     assert not b.willing(60.0)  # a fleeing fish does not court
 
 
-def test_go_to_swims_on_while_the_target_is_inside_the_turning_circle_even_behind():
+def test_go_to_turns_towards_a_target_even_inside_the_turning_circle():
     from zoetic.behavior.aquarium.routines import Around, Me, go_to
 
     me = Me(np.zeros(3), np.array([0.5, 0.0, 0.0]), np.array([1.0, 0.0, 0.0]), np.zeros(3),
             0.2, 0.4, radius=2.0)  # fmt: skip
     rng = np.random.default_rng(0)
-    near_behind = go_to(me, Around(target=np.array([0.0, 0.0, 1.5])), rng)
-    assert near_behind.turn == 0.0  # circling would never reach it: gain room first
-    far_behind = go_to(me, Around(target=np.array([-6.0, 0.0, 0.5])), rng)
-    assert abs(far_behind.turn) > 2.5  # outside the circle: turn round to it
+    beside = go_to(me, Around(target=np.array([1.0, 0.0, 1.5])), rng)
+    assert beside.turn > 1.0  # inside the circle on the left: turn left to it, not swim on
+    near_behind = go_to(me, Around(target=np.array([0.0, 0.0, -1.5])), rng)
+    assert near_behind.turn < -1.5
     ahead_left = go_to(me, Around(target=np.array([4.0, 0.0, 1.0])), rng)
     assert 0.0 < ahead_left.turn < 0.5
 

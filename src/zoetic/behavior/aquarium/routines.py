@@ -26,7 +26,6 @@ TURN_RADIUS = 1.9  # m: default radius of a fish's sharpest turn (the brain give
 DEPTH_GAIN = 1.0  # rad of climb per m of depth error (capped at MAX_CLIMB)
 MAX_CLIMB = 0.4  # rad: the steepest climb or dive asked for
 PITCH_GAIN = 2.0  # rad of fin pitch per rad of climb-angle error
-ROOM = 1.0  # the turning circle a fish keeps clear of a target, in turn radii
 FISH_CLEARANCE = 0.8  # m between centres ahead that triggers avoid-fish
 
 
@@ -189,11 +188,10 @@ def go_to(me: Me, around: Around, rng: np.random.Generator, lead: float = 0.0,
         aim = aim + beside * _unit(off)
     dist = float(np.linalg.norm(_flat(aim - me.nose)))
     speed = me.top if dist > 2.0 else max(me.cruise * 0.6, me.top * dist / 2.0)
-    beta = abs(bearing(me.forward, _flat(aim - me.nose)))
-    if dist < 2 * ROOM * me.radius * np.sin(beta):
-        # inside the turning circle on the target's side (ahead or behind): swim on to gain
-        # room instead of circling the target for ever
-        return Demand(speed, 0.0)
+    # always turn towards the target, even one inside the turning circle: swimming on to gain
+    # room first costs a fish that turns 90 degrees in 7 s a 15 s detour (and its target
+    # to the focuser, or to another fish), while the turn at the slower approach speed is
+    # tighter and the target drifts (docs/aquarium.md, "Why the fishes foraged badly")
     return steer(me, aim - me.nose, speed)
 
 
