@@ -200,6 +200,25 @@ def close(pa, va, pb, vb, reach, skin, horizon) -> bool:
     return False
 
 
+
+@njit(cache=True)
+def close_pairs(pos, vel, off, reach, skin, horizon) -> np.ndarray:
+    """Return the pairs (P, 2) of animals that may touch within ``horizon`` s (``close`` for
+    every pair in one call): nodes of all animals stacked in pos, vel (N, 3, B), animal a's
+    rows off[a]:off[a + 1], its surface reach (m) reach[a]."""
+    n = off.shape[0] - 1
+    out = np.empty((n * (n - 1) // 2, 2), np.int64)
+    k = 0
+    for a in range(n):
+        pa, va = pos[off[a]:off[a + 1]], vel[off[a]:off[a + 1]]
+        for c in range(a + 1, n):
+            r = max(reach[a], reach[c]) + skin
+            if close(pa, va, pos[off[c]:off[c + 1]], vel[off[c]:off[c + 1]], r, skin,
+                     horizon):  # fmt: skip
+                out[k, 0], out[k, 1] = a, c
+                k += 1
+    return out[:k]
+
 @njit(cache=True)
 def _push(pa, va, ma, pb, vb, mb, fb, radius, w, zeta, fa_out, fb_out, load, b):
     """Add to fa_out / fb_out (N, 3) the forces between the nodes of a and the skin of b in

@@ -26,7 +26,13 @@ from numba import njit
 
 from zoetic.bodies import Body
 from zoetic.errors import SimulationError
-from zoetic.physics.bodycontact import CONTACT_STEPS, close, pair_contacts, surface_reach
+from zoetic.physics.bodycontact import (
+    CONTACT_STEPS,
+    close,
+    close_pairs,
+    pair_contacts,
+    surface_reach,
+)
 from zoetic.physics.contacts import balls_step, near, node_contacts
 from zoetic.physics.kernel import make_stepper
 from zoetic.physics.media import Medium, get_medium
@@ -298,6 +304,7 @@ class World:
         self._faces = [np.ascontiguousarray(b.faces, dtype=np.int64) for b in self.bodies]
         self._touchy &= all(len(f) for f in self._faces)
         self._reach = [surface_reach(b) for b in self.bodies]
+        self._reach_arr = np.array(self._reach, float)
         self._pair_buf = np.zeros((2, self.batch))
         self._no_contacts = Contacts(
             tuple(np.zeros((self.batch, b.n_nodes, 0, 3)) for b in self.bodies), ()
@@ -552,8 +559,9 @@ class World:
 
     def _close_pairs(self, horizon: float) -> list[tuple[int, int]]:
         """Return the pairs of animals that may touch within ``horizon`` s (broad phase)."""
-        n = len(self.animals)
-        return [(a, c) for a in range(n) for c in range(a + 1, n) if self._close(a, c, horizon)]
+        found = close_pairs(self._pos, self._vel, self._off, self._reach_arr, self.node_radius,
+                            horizon)  # every pair in one kernel call, ``_close`` for each
+        return [(int(a), int(c)) for a, c in found]
 
     def _close(self, a: int, c: int, horizon: float) -> bool:
         """Return True if animals a and c may touch within ``horizon`` s (``bodycontact.close``)."""

@@ -551,7 +551,8 @@ def live(tank: Tank, seconds: float | None = None,
             hit, away = collision_ahead(me, kind, center, size, others, prefer, meals[i],
                                         ahead[i])  # fmt: skip
             if hit and away is not None:
-                b.avoid_side = 1 if float(np.cross(fwd[i], away)[1]) < 0 else -1
+                # the vertical component of fwd x away: which side the way out lies on
+                b.avoid_side = 1 if fwd[i][2] * away[0] - fwd[i][0] * away[2] < 0 else -1
             view = View(me, pc.fish[i], seen_com.get(i, com), fwd, vel, names, pc.food[i], food_pos,
                         pc.obstacles[i], hit, away)  # fmt: skip
             demands.append(b.decide({"view": view, "time": np.array([t])}, period))
