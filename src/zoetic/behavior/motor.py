@@ -48,7 +48,8 @@ def fin_activation(body: Body, angle: float) -> np.ndarray:
     out = {}
     for k, act in enumerate(body.fin_actuator):
         lo, hi = body.fin_angle[k]
-        out[int(act)] = float(np.clip((angle - lo) / (hi - lo), 0.0, 1.0)) if hi != lo else 0.0
+        # np.clip's result for a scalar, without its per-call overhead
+        out[int(act)] = min(max(float((angle - lo) / (hi - lo)), 0.0), 1.0) if hi != lo else 0.0
     return out
 
 
