@@ -60,3 +60,23 @@ def test_deepest_measures_a_node_inside_the_surface():
     probe = np.vstack([inside, inside + [0.0, 1.0, 0.0]])
     assert deepest(probe, body.rest_pos, body.faces) == pytest.approx(0.12, abs=0.01)
     assert deepest(probe[1:], body.rest_pos, body.faces) == 0.0
+
+
+def test_close_pairs_finds_the_pairs_close_finds_one_by_one():
+    from zoetic.physics.bodycontact import close, close_pairs
+
+    rng = np.random.default_rng(3)
+    sizes = [5, 7, 4, 6]
+    off = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    centres = np.array([[0.0, 0, 0], [0.5, 0, 0], [5.0, 0, 0], [5.4, 0.2, 0]])
+    pos = np.concatenate([c + 0.2 * rng.normal(size=(n, 3))
+                          for c, n in zip(centres, sizes, strict=True)])  # fmt: skip
+    pos = np.ascontiguousarray(pos[:, :, None])
+    vel = np.ascontiguousarray(0.1 * rng.normal(size=pos.shape))
+    reach = np.array([0.1, 0.2, 0.1, 0.15])
+    found = [tuple(p) for p in close_pairs(pos, vel, off, reach, 0.03, 0.1).tolist()]
+    one_by_one = [(a, c) for a in range(4) for c in range(a + 1, 4)
+                  if close(pos[off[a]:off[a + 1]], vel[off[a]:off[a + 1]], pos[off[c]:off[c + 1]],
+                           vel[off[c]:off[c + 1]], max(reach[a], reach[c]) + 0.03, 0.03, 0.1)]
+    assert found == one_by_one
+    assert (0, 1) in found and (0, 2) not in found  # near pairs only
