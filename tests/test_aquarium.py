@@ -143,15 +143,41 @@ def test_a_fish_that_just_mated_is_not_willing_again_until_its_libido_returns():
     assert not b.willing(60.0)  # a fleeing fish does not court
 
 
-def test_go_to_swims_on_while_the_target_is_inside_the_turning_circle_even_behind():
+def test_go_to_turns_towards_a_target_even_inside_the_turning_circle():
     from zoetic.behavior.aquarium.routines import Around, Me, go_to
 
     me = Me(np.zeros(3), np.array([0.5, 0.0, 0.0]), np.array([1.0, 0.0, 0.0]), np.zeros(3),
             0.2, 0.4, radius=2.0)  # fmt: skip
     rng = np.random.default_rng(0)
-    near_behind = go_to(me, Around(target=np.array([0.0, 0.0, 1.5])), rng)
-    assert near_behind.turn == 0.0  # circling would never reach it: gain room first
-    far_behind = go_to(me, Around(target=np.array([-6.0, 0.0, 0.5])), rng)
-    assert abs(far_behind.turn) > 2.5  # outside the circle: turn round to it
+    beside = go_to(me, Around(target=np.array([1.0, 0.0, 1.5])), rng)
+    assert beside.turn > 1.0  # inside the circle on the left: turn left to it, not swim on
+    near_behind = go_to(me, Around(target=np.array([0.0, 0.0, -1.5])), rng)
+    assert near_behind.turn < -1.5
     ahead_left = go_to(me, Around(target=np.array([4.0, 0.0, 1.0])), rng)
     assert 0.0 < ahead_left.turn < 0.5
+
+
+@pytest.mark.parametrize("contact", [True, False])
+def test_fishes_driven_nose_to_nose_do_not_pass_through_each_other(contact):
+    from dataclasses import replace
+
+    from zoetic.physics.world import placed_pose
+
+    cfg = TankConfig(fishes=2, predators=0, food=0, obstacles=0, seconds=1.5, seed=0,
+                     fish_contact=contact)  # fmt: skip
+    tank = build_tank(cfg)
+    world, body = tank.world, tank.fishes[0].body
+    # two minnows 0.3 m apart nose to nose, 0.1 m aside, closing at 2 m/s
+    a = placed_pose(body, (0.0, 0.0, 0.0), 0.0)
+    b = placed_pose(body, (1.3, 0.0, 0.1), np.pi)
+    state = world.state
+    vel = (np.full_like(state.velocities[0], 0.0) + [1.0, 0.0, 0.0],
+           np.full_like(state.velocities[1], 0.0) + [-1.0, 0.0, 0.0])
+    world.restore(replace(state, positions=(a[None], b[None]), velocities=vel))
+    life = live(tank)
+    touches = [e for e in life.events if e[2] == "collision"]
+    if contact:
+        assert life.deepest_fish < 0.02
+        assert touches and touches[0][3] == tank.fishes[1].name  # the other fish is named
+    else:
+        assert life.deepest_fish > 0.03 and not touches

@@ -1,5 +1,6 @@
 """Learned motor skills in the aquarium: a species file names a repertoire directory, the
-fish swims by ``MotorControllers`` blended from it, and bad references are refused."""
+fish swims by ``LearnedMotor`` (swim blends, the sharp turns played from their start), and bad
+references are refused."""
 
 from __future__ import annotations
 
@@ -44,9 +45,12 @@ def test_a_species_naming_a_repertoire_loads_relative_to_its_file(tmp_path, skil
 
 
 def _swim(loco: LearnedLocomotion, demand: Demand, seconds: float):
+    """Drive the fish as the tank does: one demand a 0.1 s control period."""
     body = loco.body
-    steps = int(round(seconds / body.dt))
-    act = loco.activations(demand, np.arange(steps) * body.dt)
+    per = int(round(0.1 / body.dt))
+    steps = int(round(seconds / body.dt)) // per * per
+    t = np.arange(steps) * body.dt
+    act = np.concatenate([loco.activations(demand, t[k : k + per]) for k in range(0, steps, per)])
     tr = simulate(body, act[None], record_every=10)
     return tr.com(body)[0], heading_angles(body, tr.positions)[0]
 
@@ -60,8 +64,8 @@ def test_a_fish_driven_by_learned_skills_swims_forward_and_turns_the_side_asked(
     forward = np.array([np.cos(head[0]), np.sin(head[0])])
     assert (com[-1, [0, 2]] - com[0, [0, 2]]) @ forward > 0.5  # m, ahead of where it started
     straight = head[-1] - head[0]
-    _, left = _swim(loco, Demand(0.3, turn=0.6), 4.0)
-    _, right = _swim(loco, Demand(0.3, turn=-0.6), 4.0)
+    _, left = _swim(LearnedLocomotion(body, loco.motor), Demand(0.3, turn=0.6), 4.0)
+    _, right = _swim(LearnedLocomotion(body, loco.motor), Demand(0.3, turn=-0.6), 4.0)
     assert left[-1] - left[0] > straight + np.radians(8.0)
     assert right[-1] - right[0] < straight - np.radians(8.0)
 
@@ -101,23 +105,39 @@ def test_cli_refuses_bad_predator_skills_with_exit_2(tmp_path, capsys):
     code = main(["aquarium", "--fishes", "2", "--seconds", "0.2", "--no-video",
                  "--predator-skills", str(tmp_path / "none"), "--out", str(tmp_path / "o")])
     assert code == 2
-    assert "not a directory" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "not a directory" in err
+    # the message names the option and its value, not the built-in species file
+    assert f"--predator-skills '{tmp_path / 'none'}'" in err and "shark.toml" not in err
 
 
-def test_the_turn_weight_grows_with_the_angle_and_skips_wrong_way_blends(skills):
-    from zoetic.behavior.motor import WEIGHTS
+def test_a_learned_turn_plays_the_sharp_turn_from_its_start(skills):
+    from zoetic.behavior.aquarium.locomotion import TURN_BURST, TURN_MIN, TURN_REST
 
     body = load_animal("shark")
-    loco = LearnedLocomotion(body, learned_motor(body, skills))
-    motor = loco.motor
-    rates = motor.rates.copy()
-    try:  # a learned table that turns the wrong way at small weights
-        motor.rates = np.array([-4.5, -20.6, -0.4, -7.2, 26.5, 38.3])
-        w = [loco.turn_weight(np.radians(a)) for a in (2.0, 10.0, 20.0, 40.0, 90.0)]
-        assert np.all(np.diff(w) >= 0) and w[-1] == 1.0
-        assert w[0] == WEIGHTS[2]  # never near the blend at 0.2 that turns right at 20 deg/s
-        assert w[2] == WEIGHTS[4]  # 20 deg/s: past 0.6, which turns right of go-straight
-        assert WEIGHTS[4] < w[3] < WEIGHTS[5]  # 40 deg/s: interpolated between 0.8 and 1.0
-        assert loco.turn_weight(np.radians(-20.0)) == w[2]  # right turns mirror left ones
-    finally:
-        motor.rates = rates
+    motor = learned_motor(body, skills)
+    # the calibration: a longer sharp turn turns further, left positive, right negative
+    assert np.all(np.diff(motor.turned[0]) >= 0) and motor.turned[0, -1] > 0
+    assert np.all(np.diff(motor.turned[1]) <= 0) and motor.turned[1, -1] < 0
+    small, large = motor.turn(0.1), motor.turn(0.5)
+    assert small[0] == large[0] == 0 and motor.turn(-0.3)[0] == 1
+    assert small[1] <= large[1]
+    loco = LearnedLocomotion(body, motor)
+    t = np.arange(20) * body.dt
+    sharp = motor.turn_signal(t, 10.0 + t, 0, motor.swim(0.3), 0.0)
+    # a big left turn starts the sharp turn at its own time 0, whatever the clock says
+    out = loco.activations(Demand(0.3, turn=1.5), 10.0 + t)
+    assert loco.turning is not None and loco.turning[0] == 0
+    np.testing.assert_allclose(out, sharp)
+    assert loco.turning[2] <= TURN_BURST
+    # it ends when asked to turn the other way; that turn waits TURN_REST s of swimming
+    swim = loco.activations(Demand(0.3, turn=-2 * TURN_MIN), 10.1 + t)
+    assert loco.turning is None
+    np.testing.assert_allclose(swim, motor.swim_signal(10.1 + t, motor.swim(0.3), 0.0))
+    loco.activations(Demand(0.3, turn=-2 * TURN_MIN), 10.1 + TURN_REST + t)
+    assert loco.turning is not None and loco.turning[0] == 1
+    loco.turning = None
+    # a small turn swims on
+    straight = loco.activations(Demand(0.3, turn=TURN_MIN / 2), 11.0 + t)
+    assert loco.turning is None
+    np.testing.assert_allclose(straight, motor.swim_signal(11.0 + t, motor.swim(0.3), 0.0))

@@ -13,7 +13,9 @@ entry a repertoire (and so greedy tracking) can use (``motor_repertoire``).
 
 from __future__ import annotations
 
+from bisect import bisect_left, bisect_right
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -46,7 +48,8 @@ def fin_activation(body: Body, angle: float) -> np.ndarray:
     out = {}
     for k, act in enumerate(body.fin_actuator):
         lo, hi = body.fin_angle[k]
-        out[int(act)] = float(np.clip((angle - lo) / (hi - lo), 0.0, 1.0)) if hi != lo else 0.0
+        # np.clip's result for a scalar, without its per-call overhead
+        out[int(act)] = min(max(float((angle - lo) / (hi - lo)), 0.0), 1.0) if hi != lo else 0.0
     return out
 
 
@@ -153,6 +156,17 @@ WAVE_BIASES = np.array([0.0, 0.1, 0.2, 0.3, 0.4, 0.5])
 WAVE_SETTLE = 2.0  # s from rest before the speed and turning rate are measured
 WAVE_MEASURE = 3.0  # s over which they are measured
 _WAVE_CACHE: dict[tuple, WaveMotor] = {}
+_AMPS, _BIASES = WAVE_AMPLITUDES.tolist(), WAVE_BIASES.tolist()
+
+
+def _interp(x: float, xp: list, fp: list) -> float:
+    """Return ``np.interp(x, xp, fp)`` for a float and short lists (xp non-decreasing)."""
+    if x <= xp[0]:
+        return fp[0]
+    if x >= xp[-1]:
+        return fp[-1]
+    j = bisect_right(xp, x) - 1  # xp[j] <= x < xp[j + 1]
+    return (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j]) * (x - xp[j]) + fp[j]
 
 
 @dataclass(frozen=True)
@@ -204,10 +218,18 @@ class WaveMotor:
         """Return the fastest straight speed (m/s) the wave reaches."""
         return float(self.speeds.max())
 
+    @cached_property
+    def _tables(self) -> tuple[list, list, list, list]:
+        """The tables as Python lists (the per-demand scalar work skips numpy's overhead):
+        speeds sorted, their amplitudes, the sharpest turn per amplitude, the rate rows."""
+        order = np.argsort(self.speeds)
+        return (self.speeds[order].tolist(), WAVE_AMPLITUDES[order].tolist(),
+                self.rates[:, -1].tolist(), self.rates.tolist())  # fmt: skip
+
     def swim(self, speed: float) -> float:
         """Return the amplitude that swims ``speed`` m/s (clipped to the calibrated range)."""
-        order = np.argsort(self.speeds)
-        return float(np.interp(speed, self.speeds[order], WAVE_AMPLITUDES[order]))
+        speeds, amps = self._tables[0], self._tables[1]
+        return _interp(float(speed), speeds, amps)
 
     def turn(self, angle: float, seconds: float = 1.0, amplitude: float = 1.0
              ) -> tuple[float, float]:  # fmt: skip
@@ -215,16 +237,17 @@ class WaveMotor:
         least at ``amplitude``: the smallest bias whose rate turns it in time; a wave too weak
         to turn that fast beats harder (up to amplitude 1), beyond that the sharpest turn."""
         need = abs(angle) / max(seconds, 1e-9)
-        amp = min(max(float(amplitude), float(WAVE_AMPLITUDES[0])), 1.0)
-        reach = self.rates[:, -1]
-        if need > float(np.interp(amp, WAVE_AMPLITUDES, reach)):
+        amps, biases = _AMPS, _BIASES
+        amp = min(max(float(amplitude), amps[0]), 1.0)
+        reach, rates = self._tables[2], self._tables[3]
+        if need > _interp(amp, amps, reach):
             # the smallest amplitude whose sharpest turn is fast enough (or full amplitude)
-            ok = np.flatnonzero(reach >= need)
-            amp = max(amp, float(WAVE_AMPLITUDES[ok[0]]) if len(ok) else 1.0)
-        k = int(np.clip(np.searchsorted(WAVE_AMPLITUDES, amp) - 1, 0, len(WAVE_AMPLITUDES) - 2))
-        w = (amp - WAVE_AMPLITUDES[k]) / (WAVE_AMPLITUDES[k + 1] - WAVE_AMPLITUDES[k])
-        row = (1 - w) * self.rates[k] + w * self.rates[k + 1]
-        bias = float(np.interp(need, row, WAVE_BIASES)) if row[-1] > row[0] else 0.0
+            ok = [a for a, r in zip(amps, reach, strict=True) if r >= need]
+            amp = max(amp, ok[0] if ok else 1.0)
+        k = min(max(bisect_left(amps, amp) - 1, 0), len(amps) - 2)
+        w = (amp - amps[k]) / (amps[k + 1] - amps[k])
+        row = [(1 - w) * a + w * b for a, b in zip(rates[k], rates[k + 1], strict=True)]
+        bias = _interp(need, row, biases) if row[-1] > row[0] else 0.0
         return amp, bias if angle >= 0 else -bias
 
     def fins(self, pitch: float) -> float:
@@ -269,4 +292,153 @@ class WaveMotor:
             "biases": WAVE_BIASES.tolist(),
             "speed_m_s": self.speeds.round(3).tolist(),
             "turn_deg_s": np.degrees(self.rates).round(1).tolist(),
+        }
+
+
+# ============================================================ learned motor controllers
+# With a learned repertoire, as the artificial fish's motor controllers: swim(speed) plays the
+# blend (1 - a) do-nothing + a go-straight (a blend of abstracted entries is linear in their
+# signals before the clip to [0, 1]); turn(angle) plays the learned sharp turn of that side from
+# its own start (``LEARNED_STRENGTH`` of it on the swim gait) for as long as it takes to turn
+# the angle (the turn was learned as a manoeuvre from its start; played on as a periodic gait
+# it hardly turns); pitch holds the fins.
+# Calibrated once per body and repertoire: the speed of each swim weight, and the angle each
+# side's sharp turn has turned when stopped after each of a few durations.
+
+LEARNED_SWIM = np.array([0.05, 0.1, 0.2, 0.35, 0.5, 1.0])  # swim weights a
+LEARNED_TURN = np.array([0.1, 0.2, 0.3, 0.4, 0.5, 0.75, 1.0, 1.5])  # s the sharp turn is played
+LEARNED_SETTLE = 2.0  # s of swimming (at ``LEARNED_CRUISE``) before a turn, or the measure
+LEARNED_AFTER = 1.5  # s of swimming after a turn (the new heading is measured over the last 1 s)
+LEARNED_CRUISE = 0.1  # the swim weight the turns are calibrated from
+LEARNED_STRENGTH = 1.0  # the sharp turn's share of a turn's blend (the swim gait the rest)
+LEARNED_BASES = ("do-nothing", "go-straight", "sharp-turn-left", "sharp-turn-right")
+_LEARNED_MOTOR_CACHE: dict[tuple, LearnedMotor] = {}
+
+
+@dataclass(frozen=True)
+class LearnedMotor:
+    """swim / turn / pitch for one body from a learned repertoire's do-nothing, go-straight
+    and sharp turns, calibrated (``calibrate``).
+
+    speeds (S,): m/s of the swim gait at each of ``LEARNED_SWIM``; turned (2, D): rad the sharp
+    turn left (row 0, positive) and right (row 1, negative) has turned when played for each of
+    ``LEARNED_TURN`` s from a cruise (made monotonic: a longer turn never turns less).
+    """
+
+    body: Body
+    bases: tuple[AbstractController, ...]  # the entries of LEARNED_BASES, in that order
+    speeds: np.ndarray
+    turned: np.ndarray
+
+    @classmethod
+    def calibrate(cls, body: Body, rep: Repertoire) -> LearnedMotor:
+        """Measure the swim gaits' speeds and the sharp turns' angles in one batched run from
+        rest; cached per body and repertoire for the process."""
+        missing = [n for n in LEARNED_BASES if n not in rep.controllers]
+        if missing:
+            raise ZoeticError(f"motor controllers need the entries {missing} in the repertoire")
+        bases = tuple(rep.controllers[n] for n in LEARNED_BASES)
+        key = (body.name, body.n_nodes, body.n_actuators, round(float(body.dt), 9),
+               tuple(np.concatenate([c.offset, c.freq.ravel(), c.amp.ravel(),
+                                     c.phase.ravel()]).tobytes() for c in bases))  # fmt: skip
+        if key in _LEARNED_MOTOR_CACHE:
+            return _LEARNED_MOTOR_CACHE[key]
+        motor = cls(body, bases, np.zeros(len(LEARNED_SWIM)), np.zeros((2, len(LEARNED_TURN))))
+        total = LEARNED_SETTLE + LEARNED_TURN[-1] + LEARNED_AFTER
+        times = np.arange(int(round(total / body.dt))) * body.dt
+        rows = [motor.swim_signal(times, a, 0.0) for a in LEARNED_SWIM]
+        for side in (0, 1):
+            for d in LEARNED_TURN:
+                u = motor.swim_signal(times, LEARNED_CRUISE, 0.0)
+                on = (times >= LEARNED_SETTLE) & (times < LEARNED_SETTLE + d)
+                u[on] = motor.turn_signal(times[on] - LEARNED_SETTLE, times[on], side,
+                                          LEARNED_CRUISE, 0.0)  # fmt: skip
+                rows.append(u)
+        every = max(1, int(round(0.05 / body.dt)))
+        tr = simulate(body, np.stack(rows), record_every=every)
+        t = np.arange(tr.positions.shape[1]) * every * body.dt
+        com = tr.com(body)[..., [0, 2]]
+        n = len(LEARNED_SWIM)
+        sel = t >= LEARNED_SETTLE
+        span = t[sel][-1] - t[sel][0]
+        speed = np.linalg.norm(np.diff(com[:n, sel], axis=1), axis=-1).sum(1) / span
+        rec = every * body.dt
+        k, k_s = int(round(LEARNED_SETTLE / rec)), int(round(1.0 / rec))
+
+        def travel(r, k0, k1):  # direction of travel (rad, yaw: left positive) of row r
+            d = com[n + r, k1] - com[n + r, k0]
+            return np.arctan2(d[1], d[0])
+
+        turned = np.zeros(2 * len(LEARNED_TURN))
+        for r, d in enumerate(np.tile(LEARNED_TURN, 2)):
+            e = min(int(round((LEARNED_SETTLE + d + LEARNED_AFTER) / rec)), len(t) - 1)
+            turned[r] = np.angle(np.exp(1j * (travel(r, e - k_s, e) - travel(r, k - k_s, k))))
+        turned = turned.reshape(2, len(LEARNED_TURN))
+        turned[0] = np.maximum.accumulate(np.maximum(turned[0], 0.0))
+        turned[1] = np.minimum.accumulate(np.minimum(turned[1], 0.0))
+        motor = cls(body, bases, speed, turned)
+        _LEARNED_MOTOR_CACHE[key] = motor
+        return motor
+
+    @property
+    def top_speed(self) -> float:
+        """Return the fastest straight speed (m/s) the swim gait reaches."""
+        return float(self.speeds.max())
+
+    @property
+    def turn_radius(self) -> float:
+        """Return the radius (m) of the sharp turn from a cruise: cruise speed over the
+        slower side's mean rate over its whole duration."""
+        rate = float(np.abs(self.turned[:, -1]).min()) / float(LEARNED_TURN[-1])
+        cruise = float(np.interp(LEARNED_CRUISE, LEARNED_SWIM, self.speeds))
+        return cruise / max(rate, 1e-6)
+
+    def swim(self, speed: float) -> float:
+        """Return the swim weight that swims ``speed`` m/s (clipped to the calibrated range;
+        below the smallest weight's speed, scaled down towards rest)."""
+        lo = float(self.speeds[0])
+        if speed < lo:
+            return float(LEARNED_SWIM[0] * max(speed, 0.0) / max(lo, 1e-9))
+        top = int(np.argmax(self.speeds))
+        sp, w = self.speeds[: top + 1], LEARNED_SWIM[: top + 1]
+        order = np.argsort(sp)
+        return float(np.interp(speed, sp[order], w[order]))
+
+    def turn(self, angle: float) -> tuple[int, float]:
+        """Return (side, seconds): play sharp-turn-left (0) or -right (1) for that long from its
+        start to turn ``angle`` rad (left positive); the whole turn when it turns less."""
+        side = 0 if angle >= 0 else 1
+        x = np.concatenate([[0.0], np.abs(self.turned[side])])
+        y = np.concatenate([[0.0], LEARNED_TURN])
+        keep = np.concatenate([[True], np.diff(x) > 0])  # interp needs increasing angles
+        return side, float(np.interp(abs(angle), x[keep], y[keep]))
+
+    def swim_signal(self, times: np.ndarray, a: float, pitch: float) -> np.ndarray:
+        """Return activations (T, A) of the swim gait of weight ``a``, fins at ``pitch``."""
+        u = (1 - a) * self.bases[0].raw(times) + a * self.bases[1].raw(times)
+        return self._fins(u, pitch)
+
+    def turn_signal(self, since: np.ndarray, times: np.ndarray, side: int, a: float,
+                    pitch: float) -> np.ndarray:  # fmt: skip
+        """Return activations (T, A) of a turn of ``side`` (0 left, 1 right): the sharp turn at
+        ``since`` s from its start, ``LEARNED_STRENGTH`` of it, on the swim gait of weight
+        ``a`` at ``times``; fins at ``pitch``."""
+        w = LEARNED_STRENGTH
+        u = w * self.bases[2 + side].raw(since) + (1 - w) * (
+            (1 - a) * self.bases[0].raw(times) + a * self.bases[1].raw(times))
+        return self._fins(u, pitch)
+
+    def _fins(self, u: np.ndarray, pitch: float) -> np.ndarray:
+        for k, act in fin_activation(self.body, float(pitch)).items():
+            u[:, k] = act
+        return np.clip(u, 0.0, 1.0)
+
+    def summary(self) -> dict:
+        """Return the calibration tables (speeds in m/s, angles turned in degrees)."""
+        return {
+            "swim_weights": LEARNED_SWIM.tolist(),
+            "speed_m_s": self.speeds.round(3).tolist(),
+            "turn_seconds": LEARNED_TURN.tolist(),
+            "turned_left_deg": np.degrees(self.turned[0]).round(1).tolist(),
+            "turned_right_deg": np.degrees(self.turned[1]).round(1).tolist(),
         }

@@ -46,5 +46,7 @@ def bench_aquarium(fishes: int = 10, food: int = 15, obstacles: int = 5, seconds
         "food_eaten_fraction": s["food_eaten_fraction"],
         "collisions_with_obstacles": s["collisions_with_obstacles"],
         "deepest_into_obstacle_m": s["deepest_into_obstacle_m"],
+        "collisions_between_fishes": s["collisions_between_fishes"],
+        "deepest_into_fish_m": s["deepest_into_fish_m"],
         "survivors": s["survivors"],
     }

@@ -82,7 +82,9 @@ def aquarium(
         f"(x{summary['realtime_factor']:.1f} real time); events: "
         + ", ".join(f"{k} {v}" for k, v in ev.items())
         + f"; food eaten {100 * summary['food_eaten_fraction']:.0f} %; survivors "
-        f"{summary['survivors']}/{summary['fishes']}"
+        f"{summary['survivors']}/{summary['fishes']}; deepest into a rock "
+        f"{summary['deepest_into_obstacle_m']:.3f} m, into a fish "
+        f"{summary['deepest_into_fish_m']:.3f} m"
     )
     console.print(f"wrote {out}/events.csv, mind.png, summary.json" + (", video.mp4" * video))
 

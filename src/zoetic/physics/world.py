@@ -4,11 +4,13 @@
 of the scene. ``world.step(seconds, activations)`` advances them all with the batched animal
 kernel (the same compiled code as ``physics.simulate``, so a lone animal stepped in slices
 follows the open-loop trajectory) and moves the objects; animal-object contacts are penalty
-forces (see ``physics.contacts``) and each step() returns their record. ``world.state`` is a
+forces (see ``physics.contacts``), and so are animal-animal ones (a node against the other's
+skin, ``physics.bodycontact``); each step() returns their record. ``world.state`` is a
 frozen value that can be copied, saved and restored, so a planner can look ahead from "now".
 
-Contacts are resolved every time step, but only while some node is within reach of an object;
-far from everything the animals run whole slices through the kernel at full speed.
+Contacts are resolved every time step, but only while some node is within reach of an object
+or of another animal; far from everything the animals run whole slices through the kernel at
+full speed.
 """
 
 from __future__ import annotations
@@ -24,6 +26,13 @@ from numba import njit
 
 from zoetic.bodies import Body
 from zoetic.errors import SimulationError
+from zoetic.physics.bodycontact import (
+    CONTACT_STEPS,
+    close,
+    close_pairs,
+    pair_contacts,
+    surface_reach,
+)
 from zoetic.physics.contacts import balls_step, near, node_contacts
 from zoetic.physics.kernel import make_stepper
 from zoetic.physics.media import Medium, get_medium
@@ -36,6 +45,7 @@ F32 = np.float32
 # which is slow on a busy host): 64 gym lanes x 10 steps run faster on one thread
 PARALLEL_FROM = 8192
 MAX_SLICE = 20  # steps between reach checks while objects are about
+SUB_SLICE = 5  # steps between the checks of animals that may touch one another
 
 
 @dataclass(frozen=True)
@@ -146,11 +156,13 @@ class Contacts:
 
     impulse: per animal (B, N, O, 3), the impulse each node got from each object
     (objects indexed as in ``World.objects``; food and fixed shapes included, food never
-    pushes). An object received minus the sum over nodes.
+    pushes). An object received minus the sum over nodes. between: (B, A, A) the normal
+    impulse animal i got from animal j's skin (None: no animal touched another).
     """
 
     impulse: tuple[np.ndarray, ...]
     objects: tuple[str, ...] = field(default=())
+    between: np.ndarray | None = None
 
     @property
     def touching(self) -> np.ndarray:
@@ -206,7 +218,8 @@ class World:
     members: Bodies (placed at their start offset), ``Animal`` placements, and ``Ball``,
     ``Box``, ``Cylinder`` and ``Food`` objects, in any order. medium: a Medium or a name
     (default the first animal's). dt: default the smallest of the animals' own. current:
-    water velocity (m/s) that carries food and drags balls.
+    water velocity (m/s) that carries food and drags balls. animal_contact: animals push
+    each other apart when they touch (``physics.bodycontact``; default True).
     """
 
     def __init__(
@@ -220,6 +233,7 @@ class World:
         contact_steps: int = 4,
         damping_ratio: float = 0.3,
         friction: float = 0.5,
+        animal_contact: bool = True,
     ) -> None:
         self.animals: list[Animal] = []
         self.objects: list[Ball | Box | Cylinder | Food] = []
@@ -245,6 +259,7 @@ class World:
         self.current = np.asarray(current, float).reshape(3)
         self.node_radius = float(node_radius)
         self._w = np.pi / (contact_steps * self.dt)
+        self._w_body = np.pi / (CONTACT_STEPS * self.dt)
         self._zeta = float(damping_ratio)
         self._mu = float(friction)
         self._med32 = self.medium.as_array().astype(F32)
@@ -284,6 +299,13 @@ class World:
         self._views = [(self._pos[o0:o1], self._vel[o0:o1])
                        for o0, o1 in zip(self._off[:-1], self._off[1:], strict=True)]  # fmt: skip
         self._lone = len(self.animals) == 1
+        # animal-animal contact: each body's skin triangles and the broad phase's reach
+        self._touchy = bool(animal_contact) and len(self.animals) > 1
+        self._faces = [np.ascontiguousarray(b.faces, dtype=np.int64) for b in self.bodies]
+        self._touchy &= all(len(f) for f in self._faces)
+        self._reach = [surface_reach(b) for b in self.bodies]
+        self._reach_arr = np.array(self._reach, float)
+        self._pair_buf = np.zeros((2, self.batch))
         self._no_contacts = Contacts(
             tuple(np.zeros((self.batch, b.n_nodes, 0, 3)) for b in self.bodies), ()
         )
@@ -495,17 +517,25 @@ class World:
         else:
             acts = self._per_animal(activations)
             tables = [self._table(a, u, steps) for a, u in enumerate(acts)]
-        if not self.objects:  # the lone-animal fast path: nothing to touch, nothing to eat
+        if not self.objects and not self._touchy:  # nothing to touch, nothing to eat
             self._animals_run(tables, 0, steps)
             self._n += steps
             return self._no_contacts
         heads = self._heads() if len(self.foods) else []
         n_obj = len(self.objects)
         impulse = [np.zeros((b.n_nodes, n_obj, 3, self.batch)) for b in self.bodies]
+        n_an = len(self.animals)
+        between = np.zeros((self.batch, n_an, n_an)) if self._touchy else None
         t = 0
         while t < steps:
-            t1 = steps if not self._solids else min(steps, t + MAX_SLICE)
-            if self._solids and not len(self.balls) and len(self.animals) > 1:
+            t1 = steps if not (self._solids or self._touchy) else min(steps, t + MAX_SLICE)
+            pairs = self._close_pairs((t1 - t) * self.dt) if self._touchy else []
+            if pairs and len(self.balls):  # balls couple everything: all in lockstep
+                for s in range(t, t1):
+                    self._contact_step(tables, s, impulse, pairs, between)
+            elif pairs:
+                self._slice_apart(tables, t, t1, impulse, pairs, between)
+            elif self._solids and not len(self.balls) and len(self.animals) > 1:
                 # no balls couple the animals: only those near a fixed shape step one step at
                 # a time with contacts, the others the whole slice in one kernel call
                 self._slice_apart(tables, t, t1, impulse)
@@ -524,7 +554,30 @@ class World:
         return Contacts(
             tuple(i.transpose(3, 0, 1, 2) for i in impulse),
             tuple(o.name for o in self.objects),
+            between if between is not None and between.any() else None,
         )
+
+    def _close_pairs(self, horizon: float) -> list[tuple[int, int]]:
+        """Return the pairs of animals that may touch within ``horizon`` s (broad phase)."""
+        found = close_pairs(self._pos, self._vel, self._off, self._reach_arr, self.node_radius,
+                            horizon)  # every pair in one kernel call, ``_close`` for each
+        return [(int(a), int(c)) for a, c in found]
+
+    def _close(self, a: int, c: int, horizon: float) -> bool:
+        """Return True if animals a and c may touch within ``horizon`` s (``bodycontact.close``)."""
+        reach = max(self._reach[a], self._reach[c]) + self.node_radius
+        (pa, va), (pc, vc) = self._views[a], self._views[c]
+        return bool(close(pa, va, pc, vc, reach, self.node_radius, horizon))
+
+    def _pair(self, a: int, c: int, between: np.ndarray) -> None:
+        """One step's contact impulses between animals a and c (recorded in ``between``)."""
+        buf = self._pair_buf
+        buf[:] = 0.0
+        (pa, va), (pc, vc) = self._views[a], self._views[c]
+        pair_contacts(pa, va, self._mass[a], self._faces[a], pc, vc, self._mass[c],
+                      self._faces[c], self.node_radius, self.dt, self._w_body, self._zeta, buf)
+        between[:, a, c] += buf[0]
+        between[:, c, a] += buf[1]
 
     def _any_near(self, horizon: float) -> bool:
         for a in range(len(self.animals)):
@@ -540,13 +593,17 @@ class World:
                          self._bvel, self._bpar, self._skind, self._scenter, self._ssize,
                          horizon))  # fmt: skip
 
-    def _slice_apart(self, tables, t: int, t1: int, impulse) -> None:
-        """Step steps t..t1 of animals that nothing couples (no balls): each near a fixed
-        shape one step at a time with its contacts, each other one in one kernel call."""
+    def _slice_apart(self, tables, t: int, t1: int, impulse, pairs=(), between=None) -> None:
+        """Step steps t..t1 of animals that no balls couple: each near a fixed shape one step
+        at a time with its contacts, each other one in one kernel call; the animals of
+        ``pairs`` (that may touch one another) in lockstep, one step at a time."""
         kernel = self._parallel if self.batch * (t1 - t) >= PARALLEL_FROM else self._serial
         one = self._parallel if self.batch >= PARALLEL_FROM else self._serial
         base = self._n + t
+        busy = sorted({a for p in pairs for a in p})
         for a, (stepper, table) in enumerate(zip(self._steppers, tables, strict=False)):
+            if a in busy:
+                continue
             if not self._near(a, (t1 - t) * self.dt):
                 kernel(stepper, table, t, t1, base)
                 continue
@@ -559,6 +616,33 @@ class World:
                     self.dt, self._w, self._zeta, self._mu, self._bforce, impulse[a],
                 )  # fmt: skip
                 one(stepper, table, s, s + 1, self._n + s)
+        if not busy:
+            return
+        near_shape = [a for a in busy if self._solids and self._near(a, (t1 - t) * self.dt)]
+        # the pairs checked again every SUB_SLICE steps: an animal of a pair not close now
+        # takes the sub-slice in one kernel call
+        s = t
+        while s < t1:
+            s1 = min(t1, s + SUB_SLICE)
+            now = [p for p in pairs if self._close(*p, (s1 - s) * self.dt)]
+            tight = sorted({a for p in now for a in p} | set(near_shape))
+            for a in busy:
+                if a not in tight:
+                    kernel(self._steppers[a], tables[a], s, s1, self._n + s)
+            for u in range(s, s1):
+                for a, c in now:
+                    self._pair(a, c, between)
+                for a in near_shape:
+                    o0, o1 = self._off[a], self._off[a + 1]
+                    node_contacts(
+                        self._pos[o0:o1], self._vel[o0:o1], self._mass[a], self.node_radius,
+                        self._bpos, self._bvel, self._bpar, self._skind, self._scenter,
+                        self._ssize, self._ball_obj, self._static_obj, self.dt, self._w,
+                        self._zeta, self._mu, self._bforce, impulse[a],
+                    )  # fmt: skip
+                for a in tight:
+                    one(self._steppers[a], tables[a], u, u + 1, self._n + u)
+            s = s1
 
     def _balls(self, steps: int) -> None:
         balls_step(
@@ -566,8 +650,10 @@ class World:
             self._skind, self._scenter, self._ssize, self.dt, steps, self._w, self._zeta, self._mu,
         )  # fmt: skip
 
-    def _contact_step(self, tables, s: int, impulse) -> None:
+    def _contact_step(self, tables, s: int, impulse, pairs=(), between=None) -> None:
         self._bforce[:] = 0.0
+        for a, c in pairs:
+            self._pair(a, c, between)
         for a in range(len(self.animals)):
             o0, o1 = self._off[a], self._off[a + 1]
             node_contacts(

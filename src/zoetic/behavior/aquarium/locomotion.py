@@ -16,10 +16,9 @@ from typing import Protocol
 
 import numpy as np
 
-from zoetic.behavior.motor import WEIGHTS, MotorControllers, WaveMotor, blend, fin_activation
+from zoetic.behavior.motor import LearnedMotor, WaveMotor
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.bodies import Body
-from zoetic.control.abstract import AbstractController
 
 TURN_SECONDS = 1.0  # s a demanded heading change is to take (the routines re-aim every period)
 MAX_PITCH = 0.5  # rad: the largest fin pitch a routine may ask for
@@ -75,97 +74,88 @@ class MotorLocomotion:
         )  # fmt: skip
 
 
-TURN_DEADBAND = 0.02  # rad: a smaller demanded turn swims straight (the blend's rate is ~0 there)
+TURN_MIN = 0.1  # rad: a smaller demanded turn swims on (the next period corrects it)
+# s: the longest a learned turn is played at once. The zoo shark's learned sharp turn, played
+# for 0.75 s or more (or repeated), can fold its tail fin forward through the peduncle for
+# good, and the fish then swims backwards; 0.3 s bursts fold it far less often. Blending the
+# turn at 0.7 with the swim did not fold it in 8 trials but rolled the fish over, and it ate
+# 13-20 % of the food (seeds 0-2) against 40 % and 67 % (seeds 0, 1) with the bursts.
+TURN_BURST = 0.3
+# s of swimming before a turn to the other side may start. In the tank the folds came when a
+# burst one way was cut short by a turn the other way (a fish bent hard to one side starting
+# the other side's sharp turn at once).
+TURN_REST = 0.3
 
 
 class LearnedLocomotion:
-    """A learned motor skill: ``behavior.motor.MotorControllers`` calibrated on a repertoire
-    (swim(speed) blends do-nothing and go-straight; turn(angle) blends go-straight and the sharp
-    turn of that side; pitch holds the fins at the angle's activation on top of the gait).
+    """A learned motor skill: ``behavior.motor.LearnedMotor`` calibrated on a repertoire.
 
-    Same interface as ``MotorLocomotion``; ``motor`` is the MotorControllers (fishes sharing
-    one are batched by the tank).
+    swim(speed) plays the blend of do-nothing and go-straight that swims the speed; a demanded
+    turn of at least ``TURN_MIN`` rad starts the turn of that side (``LearnedMotor.turn_signal``:
+    the learned sharp turn from its own start), played for as long as the calibration says it
+    takes to turn the angle (at least one control period, at most ``TURN_BURST``), then back to
+    the swim; a demand to turn the other way ends it at once, and a turn the other way starts
+    only after ``TURN_REST`` s of swimming. Fins hold the pitch. Same
+    interface as ``MotorLocomotion``; the state is the turn under way, so each fish has its own
+    (``motor`` is shared by the fishes of one body and repertoire).
     """
 
-    def __init__(self, body: Body, motor: MotorControllers,
-                 turn_seconds: float = TURN_SECONDS) -> None:  # fmt: skip
+    def __init__(self, body: Body, motor: LearnedMotor) -> None:
         self.body = body
         self.motor = motor
-        self.turn_seconds = float(turn_seconds)
-        self.has_fins = len(body.fin_actuator) > 0
+        self.turning: tuple[int, float, float] | None = None  # side, start s, duration s
+        self.last: tuple[int, float] = (0, -np.inf)  # the last turn's side and end (s)
 
     @property
     def top_speed(self) -> float:
         """Return the fastest the learned swim reaches (m/s)."""
-        return float(self.motor.speeds.max())
+        return self.motor.top_speed
 
     @property
     def turn_radius(self) -> float:
-        """Return the radius (m) of the sharpest learned turn."""
-        rate = float(np.radians(np.abs(self.motor.rates).max()))
-        return float(self.motor.speeds[-1] / max(rate, 1e-6))
-
-    def controller(self, demand: Demand) -> AbstractController:
-        """Return the blended controller meeting the demand (turn first, else swim; fins at
-        the pitch when the body has fins)."""
-        if abs(demand.turn) > TURN_DEADBAND:
-            c = self.motor.rep.controllers
-            side = "sharp-turn-left" if demand.turn > 0 else "sharp-turn-right"
-            gait = blend(c["go-straight"], c[side], self.turn_weight(demand.turn))
-        else:
-            gait = self.motor.swim(demand.speed)
-        pitch = min(max(demand.pitch, -MAX_PITCH), MAX_PITCH)
-        if not self.has_fins or pitch == 0.0:
-            return gait
-        offset, amp = gait.offset.copy(), gait.amp.copy()
-        for k, a in fin_activation(self.body, pitch).items():
-            offset[k], amp[k] = a, 0.0
-        return AbstractController(gait.animal, gait.actuators, offset, gait.freq, amp,
-                                  gait.phase, gait.period)  # fmt: skip
-
-    def turn_weight(self, angle: float) -> float:
-        """Return the blend weight of go-straight and the sharp turn that turns ``angle`` rad
-        in ``turn_seconds`` (the sharp turn itself beyond its rate).
-
-        A learned repertoire's blends need not turn monotonically with the weight (the
-        calibration of a trained shark: -4.5, -20.6, -0.4, -7.2, 26.5, 38.3 deg/s), so only the
-        weights that turn left of go-straight faster than every smaller weight are used (right
-        turns mirror left ones): between two such neighbours the weight is interpolated; where
-        a wrong-way weight lies between them, the faster one is taken, which turns more than
-        asked (the routines re-aim every period) but never the wrong way.
-        """
-        extra = self.motor.rates - self.motor.rates[0]
-        need = abs(float(np.degrees(angle))) / self.turn_seconds
-        records = [0]
-        for k in range(1, len(extra)):
-            if extra[k] > extra[records[-1]]:
-                records.append(k)
-        for a, b in zip(records, records[1:], strict=False):
-            if need <= extra[b]:
-                if b - a > 1:
-                    return float(WEIGHTS[b])
-                f = (need - extra[a]) / (extra[b] - extra[a])
-                return float(WEIGHTS[a] + max(f, 0.0) * (WEIGHTS[b] - WEIGHTS[a]))
-        return float(WEIGHTS[records[-1]]) if len(records) > 1 else 1.0
+        """Return the radius (m) of the sharp turn from a cruise."""
+        return self.motor.turn_radius
 
     def activations(self, demand: Demand, times: np.ndarray) -> np.ndarray:
-        """Return activations (T, A) of the demand's controller at the (absolute) times."""
-        return self.controller(demand).sample(times)
+        """Return activations (T, A) for the demand over the control period at ``times`` (s)."""
+        t0 = float(times[0])
+        pitch = min(max(demand.pitch, -MAX_PITCH), MAX_PITCH)
+        if self.turning is not None:
+            side, start, duration = self.turning
+            other_way = demand.turn < -TURN_MIN if side == 0 else demand.turn > TURN_MIN
+            if t0 - start >= duration - 1e-9 or other_way:
+                self.turning = None
+                self.last = (side, min(t0, start + duration))
+        if self.turning is None and abs(demand.turn) >= TURN_MIN:
+            side, duration = self.motor.turn(demand.turn)
+            if side != self.last[0] and t0 - self.last[1] < TURN_REST - 1e-9:
+                return self.motor.swim_signal(times, self.motor.swim(demand.speed), pitch)
+            duration = min(max(duration, float(times[-1] - t0) + self.body.dt), TURN_BURST)
+            self.turning = (side, t0, duration)
+        if self.turning is None:
+            return self.motor.swim_signal(times, self.motor.swim(demand.speed), pitch)
+        side, start, duration = self.turning
+        a = self.motor.swim(demand.speed)
+        out = self.motor.turn_signal(times - start, times, side, a, pitch)
+        after = times - start >= duration
+        if after.any():
+            out[after] = self.motor.swim_signal(times[after], a, pitch)
+        return out
 
     def activations_many(self, demands: list[Demand], times: np.ndarray) -> np.ndarray:
-        """Return activations (D, T, A) for several demands."""
+        """Return activations (D, T, A) for several demands (one fish's state: use one)."""
         return np.stack([self.activations(d, times) for d in demands])
 
 
-_LEARNED_CACHE: dict[tuple, MotorControllers] = {}
+_LEARNED_CACHE: dict[tuple, LearnedMotor] = {}
 
 
-def learned_motor(body: Body, directory: str | Path) -> MotorControllers:
-    """Return ``MotorControllers.calibrate`` on the repertoire in ``directory`` (checked
-    against the body), cached per body and directory for the process (a tank of one species
+def learned_motor(body: Body, directory: str | Path) -> LearnedMotor:
+    """Return ``LearnedMotor.calibrate`` on the repertoire in ``directory`` (checked against
+    the body), cached per body and directory for the process (a tank of one species
     calibrates once)."""
     where = str(Path(directory).resolve())
     key = (body.name, body.n_nodes, body.n_actuators, round(float(body.dt), 9), where)
     if key not in _LEARNED_CACHE:
-        _LEARNED_CACHE[key] = MotorControllers.calibrate(body, Repertoire.load(directory, body))
+        _LEARNED_CACHE[key] = LearnedMotor.calibrate(body, Repertoire.load(directory, body))
     return _LEARNED_CACHE[key]

@@ -26,7 +26,6 @@ TURN_RADIUS = 1.9  # m: default radius of a fish's sharpest turn (the brain give
 DEPTH_GAIN = 1.0  # rad of climb per m of depth error (capped at MAX_CLIMB)
 MAX_CLIMB = 0.4  # rad: the steepest climb or dive asked for
 PITCH_GAIN = 2.0  # rad of fin pitch per rad of climb-angle error
-ROOM = 1.0  # the turning circle a fish keeps clear of a target, in turn radii
 FISH_CLEARANCE = 0.8  # m between centres ahead that triggers avoid-fish
 
 
@@ -80,7 +79,7 @@ def steer(me: Me, direction: np.ndarray, speed: float) -> Demand:
     """Return the demand to swim along ``direction`` at ``speed`` (the turn motor controller
     beats harder by itself when the turn needs it)."""
     d = _flat(direction)
-    if np.linalg.norm(d) < 1e-9:
+    if math.sqrt(d @ d) < 1e-9:
         return Demand(speed, 0.0)
     return Demand(speed, bearing(me.forward, d))
 
@@ -140,8 +139,9 @@ def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int 
                 room.append(float(obstacle_distance(pts, kind, center, size).min()))
             return True, side if room[0] >= room[1] else -side
     if len(others):
-        rel = _flat(others - me.com)
-        dist = np.linalg.norm(rel, axis=1)
+        rel = others - me.com
+        rel[:, 1] = 0.0
+        dist = np.sqrt((rel * rel).sum(axis=1))  # np.linalg.norm's formula, without its overhead
         ahead = (rel @ f) > 0.3 * dist
         close = ahead & (dist < FISH_CLEARANCE)
         if close.any():
@@ -187,13 +187,13 @@ def go_to(me: Me, around: Around, rng: np.random.Generator, lead: float = 0.0,
     if beside:
         off = _flat(me.com - aim)
         aim = aim + beside * _unit(off)
-    dist = float(np.linalg.norm(_flat(aim - me.nose)))
+    to = _flat(aim - me.nose)
+    dist = math.sqrt(to @ to)
     speed = me.top if dist > 2.0 else max(me.cruise * 0.6, me.top * dist / 2.0)
-    beta = abs(bearing(me.forward, _flat(aim - me.nose)))
-    if dist < 2 * ROOM * me.radius * np.sin(beta):
-        # inside the turning circle on the target's side (ahead or behind): swim on to gain
-        # room instead of circling the target for ever
-        return Demand(speed, 0.0)
+    # always turn towards the target, even one inside the turning circle: swimming on to gain
+    # room first costs a fish that turns 90 degrees in 7 s a 15 s detour (and its target
+    # to the focuser, or to another fish), while the turn at the slower approach speed is
+    # tighter and the target drifts (docs/aquarium.md, "Why the fishes foraged badly")
     return steer(me, aim - me.nose, speed)
 
 

@@ -14,6 +14,7 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from zoetic.behavior.motor import LEARNED_BASES
 from zoetic.errors import ZoeticError
 from zoetic.io import Table, is_path, load_toml, suggest, write_toml
 
@@ -21,8 +22,8 @@ SPECIES_DIR = Path(__file__).parent / "species"
 HABIT_WORDS = ("company", "crowd", "obstacles")
 COWARD_FEAR = 2.5  # a coward fears from 2.5 times as far (the re-implementation's 500 vs 200)
 BUILT_IN = "built-in"  # the calibrated steered wave (``locomotion.MotorLocomotion``)
-# a learned repertoire's entries the motor controllers blend (``behavior.motor.MotorControllers``)
-SKILL_ENTRIES = ("do-nothing", "go-straight", "sharp-turn-left", "sharp-turn-right")
+# a learned repertoire's entries the motor controllers play (``behavior.motor.LearnedMotor``)
+SKILL_ENTRIES = LEARNED_BASES
 
 
 class SpeciesError(ZoeticError):
@@ -247,26 +248,27 @@ def load_species(name_or_path: str | Path) -> Species:
     return spec
 
 
-def with_skills(spec: Species, skills: str | Path) -> Species:
+def with_skills(spec: Species, skills: str | Path, where: str | None = None) -> Species:
     """Return the species with its motor skills replaced: ``"built-in"`` or a learned
-    repertoire's directory, checked (``check_skills``)."""
+    repertoire's directory, checked (``check_skills``); ``where`` names where the value came
+    from in an error (default the species file's ``[motor] skills``)."""
     if str(skills) == BUILT_IN:
         return replace(spec, motor=replace(spec.motor, skills=BUILT_IN))
     spec = replace(spec, motor=replace(spec.motor, skills=str(skills)))
-    check_skills(spec)
+    check_skills(spec, where)
     return spec
 
 
-def check_skills(spec: Species) -> None:
-    """Refuse (SpeciesError naming the file and the entry) a learned repertoire the fish cannot
-    swim by: a missing directory, one that is not a repertoire, one for another body, or one
-    lacking an entry the motor controllers blend (``SKILL_ENTRIES``) or whose entries are not
-    abstracted (sums of cosines, which blend)."""
+def check_skills(spec: Species, where: str | None = None) -> None:
+    """Refuse (SpeciesError naming the file and the entry, or ``where``) a learned repertoire
+    the fish cannot swim by: a missing directory, one that is not a repertoire, one for another
+    body, or one lacking an entry the motor controllers play (``SKILL_ENTRIES``) or whose
+    entries are not abstracted (sums of cosines, which blend)."""
     from zoetic.behavior.repertoire import Repertoire
     from zoetic.bodies import load_animal
     from zoetic.control.abstract import AbstractController
 
-    where = f"{spec.source}: [motor] skills"
+    where = where or f"{spec.source}: [motor] skills"
     directory = Path(spec.motor.skills)
     if not directory.is_dir():
         raise SpeciesError(

@@ -58,6 +58,7 @@ from zoetic.behavior.mind import mated as mind_mated
 from zoetic.bodies import Body, load_animal
 from zoetic.control.policy import Period
 from zoetic.errors import SimulationError
+from zoetic.physics.bodycontact import deepest as deepest_into
 from zoetic.physics.objects import Box, Cylinder, Food, pack_statics
 from zoetic.physics.world import Animal, World
 
@@ -90,6 +91,7 @@ class TankConfig:
     food_margin: float = 3.0  # m from the walls food is dropped: 1.5 turning radii of a fish
     perception: str = "oracle"  # or "vision": the first predator sees with animat vision
     predator_skills: str | None = None  # a learned repertoire's directory for the predator
+    fish_contact: bool = True  # fishes push each other apart (``physics.bodycontact``)
 
     def size(self) -> float:
         """Return the half width of the tank (m)."""
@@ -162,7 +164,8 @@ def build_tank(cfg: TankConfig) -> Tank:
     if not pred.predator:
         raise SpeciesError(f"{pred.source}: species {pred.name!r} is not a predator")
     if cfg.predator_skills is not None:
-        pred = with_skills(pred, cfg.predator_skills)
+        pred = with_skills(pred, cfg.predator_skills,
+                           f"--predator-skills {str(cfg.predator_skills)!r}")
     statics: list[Box | Cylinder] = []
     for sx, sz in ((1, 0), (-1, 0), (0, 1), (0, -1)):
         c = (sx * (half + WALL), 0.0, sz * (half + WALL))
@@ -206,7 +209,8 @@ def build_tank(cfg: TankConfig) -> Tank:
         Food(tuple(_place(rng, half, lambda p: free(p, 0.6), cfg.food_margin)), cfg.food_radius)
         for _ in range(cfg.food)
     ]
-    world = World([*animals, *statics, *foods], medium="water", current=cfg.current)
+    world = World([*animals, *statics, *foods], medium="water", current=cfg.current,
+                  animal_contact=cfg.fish_contact)
     names = [s.name for s in statics]
     return Tank(cfg, world, fishes, kind, center, size, names)
 
@@ -274,6 +278,8 @@ class FishBrain:
                                             self.species.mind.hunger_rate)  # fmt: skip
         self.alive = True
         self.thought = Thought(0.0, 0.0, 0.0, self.mind.intention, None)
+        if isinstance(self.locomotion, LearnedLocomotion):
+            self.locomotion.turning, self.locomotion.last = None, (0, -np.inf)
 
     def willing(self, t: float) -> bool:
         """Return True when the fish would mate at time t: its libido (which a mating resets)
@@ -398,6 +404,7 @@ class Life:
     events: list[tuple[float, str, str, str]] = field(default_factory=list)
     wall_seconds: float = 0.0
     deepest: float = 0.0  # m: the deepest any node went into an obstacle (0 if none)
+    deepest_fish: float = 0.0  # m: the deepest any node went inside another fish (0 if none)
 
 
 def heading_weights(body: Body) -> np.ndarray:
@@ -432,6 +439,8 @@ def _activations(brains: list[FishBrain], demands: list[Demand | None],
     for i, (b, d) in enumerate(zip(brains, demands, strict=True)):
         if d is None:
             rows[i] = np.zeros((1, period.steps, b.body.n_actuators))
+        elif isinstance(b.locomotion, LearnedLocomotion):  # each fish its own turn under way
+            rows[i] = b.locomotion.activations(d, period.times)[None]
         else:
             groups.setdefault(id(b.locomotion.motor), []).append(i)
     for idx in groups.values():
@@ -484,6 +493,10 @@ def live(tank: Tank, seconds: float | None = None,
     fish_touch = np.full((n, n), -np.inf)
     in_fear = np.zeros(n, bool)
     deepest = 0.0
+    deepest_fish = 0.0
+    # how far a fish's nodes reach from its centre (the bounding sphere of the deepest test)
+    extent = np.array([1.25 * np.linalg.norm(f.body.rest_pos - f.body.mass @ f.body.rest_pos
+                                            / f.body.total_mass, axis=1).max() for f in fishes])
     static_obj = [i for i, o in enumerate(world.objects) if isinstance(o, Box | Cylinder)]
     eyes = _eyes(tank) if cfg.perception == "vision" else None
 
@@ -538,7 +551,8 @@ def live(tank: Tank, seconds: float | None = None,
             hit, away = collision_ahead(me, kind, center, size, others, prefer, meals[i],
                                         ahead[i])  # fmt: skip
             if hit and away is not None:
-                b.avoid_side = 1 if float(np.cross(fwd[i], away)[1]) < 0 else -1
+                # the vertical component of fwd x away: which side the way out lies on
+                b.avoid_side = 1 if fwd[i][2] * away[0] - fwd[i][0] * away[2] < 0 else -1
             view = View(me, pc.fish[i], seen_com.get(i, com), fwd, vel, names, pc.food[i], food_pos,
                         pc.obstacles[i], hit, away)  # fmt: skip
             demands.append(b.decide({"view": view, "time": np.array([t])}, period))
@@ -573,6 +587,13 @@ def live(tank: Tank, seconds: float | None = None,
                     i = int(np.argmin(d))
                     brains[i].ate(world.time)
                     events.append((world.time, fishes[i].name, "eat", f"food_{q}"))
+            if contacts.between is not None:  # fish against fish (the world's skin contact)
+                hit = contacts.between[0] + contacts.between[0].T
+                for i, j2 in zip(*np.nonzero(np.triu(hit > 0.0, 1)), strict=True):
+                    if world.time - fish_touch[i, j2] > APART:
+                        events.append((world.time, fishes[i].name, "collision",
+                                       fishes[j2].name))  # fmt: skip
+                    fish_touch[i, j2] = world.time
             if contacts.impulse and contacts.impulse[0].shape[2]:
                 # contacts.touching[0] for the one lane, without stacking every animal's
                 now = np.array([(i[0] != 0.0).any(axis=(0, 2)) for i in contacts.impulse])
@@ -588,9 +609,10 @@ def live(tank: Tank, seconds: float | None = None,
                     allpos = np.concatenate(pos)
                     deepest = max(deepest, float(-obstacle_distance(allpos, kind, center,
                                                                     size).min()))  # fmt: skip
+                deepest_fish = max(deepest_fish, _fish_depth(fishes, pos, extent))
         pos, com, fwd, vel, nose = _kinematics(world, fishes, cw)
         t1 = world.time
-        # catches, matings, fish-fish collisions
+        # catches and matings (fish-fish touches come from the world's contacts above)
         dcoms = np.linalg.norm(com[:, None] - com[None], axis=-1)
         for i, j2 in zip(*np.nonzero(dcoms < NEAR), strict=True):
             i, j2 = int(i), int(j2)
@@ -607,13 +629,6 @@ def live(tank: Tank, seconds: float | None = None,
                     continue
             if j2 < i:
                 continue
-            if dcom < 1.5:
-                gap = np.linalg.norm(pos[i][:, None] - pos[j2][None], axis=-1).min()
-                touch = gap < 2 * world.node_radius
-                if touch and t1 - fish_touch[i, j2] > APART:
-                    events.append((t1, f.name, "collision", g.name))
-                if touch:
-                    fish_touch[i, j2] = t1
             if (f.species.name == g.species.name and dcom < 1.5
                     and "mate" in (brains[i].thought.intention, brains[j2].thought.intention)
                     and brains[i].willing(t1) and brains[j2].willing(t1)):  # fmt: skip
@@ -630,8 +645,21 @@ def live(tank: Tank, seconds: float | None = None,
         intentions=np.array(intents, int).reshape(-1, n),
         alive=np.array(alive_rec, bool).reshape(-1, n),
         targets=np.array(target_rec, int).reshape(-1, n), events=events,
-        wall_seconds=time.perf_counter() - t_start, deepest=deepest,
+        wall_seconds=time.perf_counter() - t_start, deepest=deepest, deepest_fish=deepest_fish,
     )  # fmt: skip
+
+
+def _fish_depth(fishes: list[Fish], pos: list[np.ndarray], extent: np.ndarray) -> float:
+    """Return how deep (m) the deepest node of any fish lies inside another fish's closed
+    surface (``physics.bodycontact.deepest``), over the pairs whose bounding spheres meet."""
+    com = np.array([f.body.mass @ p / f.body.total_mass for f, p in zip(fishes, pos,
+                                                                       strict=True)])  # fmt: skip
+    d = np.linalg.norm(com[:, None] - com[None], axis=-1)
+    out = 0.0
+    for i, j in zip(*np.nonzero(np.triu(d < extent[:, None] + extent[None], 1)), strict=True):
+        out = max(out, deepest_into(pos[i], pos[j], fishes[j].body.faces),
+                  deepest_into(pos[j], pos[i], fishes[i].body.faces))
+    return out
 
 
 def summarize(tank: Tank, life: Life) -> dict:
@@ -656,6 +684,8 @@ def summarize(tank: Tank, life: Life) -> dict:
         "food_eaten_fraction": float(life.eaten[-1].mean()) if life.eaten.size else 0.0,
         "survivors": int(life.alive[-1].sum()) if life.alive.size else len(tank.fishes),
         "deepest_into_obstacle_m": life.deepest,
+        "collisions_between_fishes": counts["collision"] - obstacle_hits,
+        "deepest_into_fish_m": life.deepest_fish,
         "intention_share": share,
         "wall_seconds": life.wall_seconds,
         "realtime_factor": sim / life.wall_seconds if life.wall_seconds > 0 else None,

@@ -1,0 +1,82 @@
+"""Animal-animal contact (physics.bodycontact): two sharks driven into each other."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from zoetic.bodies import load_animal
+from zoetic.physics.bodycontact import deepest
+from zoetic.physics.world import Animal, World
+
+
+def _kinetic(world: World, body) -> float:
+    return sum(0.5 * float((body.mass[:, None] * world.velocities(a)[0] ** 2).sum())
+               for a in range(2))  # fmt: skip
+
+
+def _collide(contact: bool, side: float, speed: float = 1.0):
+    """Two passive sharks nose to nose in a vacuum, closing at 2 x ``speed`` m/s, offset
+    ``side`` m sideways; return (deepest node inside the other m, kinetic energies J (0 first),
+    impulse recorded between them, the first shark's final x velocity)."""
+    body = load_animal("shark")
+    a = Animal(body, (0.0, 0.0, 0.0), 0.0, (speed, 0.0, 0.0))
+    b = Animal(body, (1.3, 0.0, side), np.pi, (-speed, 0.0, 0.0))
+    world = World([a, b], medium="vacuum", animal_contact=contact)
+    energy, deep, between = [_kinetic(world, body)], 0.0, 0.0
+    for _ in range(80):
+        c = world.step(0.01, None)
+        if c.between is not None:
+            between += float(c.between.sum())
+        pa, pb = world.positions(0)[0], world.positions(1)[0]
+        deep = max(deep, deepest(pa, pb, body.faces), deepest(pb, pa, body.faces))
+        energy.append(_kinetic(world, body))
+    vx = float(body.mass @ world.velocities(0)[0][:, 0] / body.total_mass)
+    return deep, np.array(energy), between, vx
+
+
+def test_without_contact_the_bodies_pass_through_each_other():
+    deep, _, between, vx = _collide(False, 0.1)
+    assert deep > 0.04  # the measure sees a node well inside the other body
+    assert between == 0.0
+    assert vx > 0.7  # and the shark swims on
+
+
+@pytest.mark.parametrize("side", [0.0, 0.1, 0.2])
+def test_contact_keeps_bodies_apart_without_adding_energy(side):
+    deep, energy, between, vx = _collide(True, side)
+    assert deep < 0.015  # at most 1.5 cm past the other's skin, closing at 2 m/s
+    assert between > 0.0  # the world recorded the contact
+    # the contact never raised the kinetic energy (the pair starts at rest shape, so there is
+    # no stored elastic energy to release) and, dissipative, took some away
+    assert energy.max() <= energy[0] * (1 + 1e-4)
+    assert energy[-1] < 0.9 * energy[0]
+    assert vx < 0.9  # the first shark was slowed or turned back
+
+
+def test_deepest_measures_a_node_inside_the_surface():
+    body = load_animal("shark")
+    inside = body.rest_pos[5:9].mean(axis=0)  # the middle of the thickest cross-section
+    probe = np.vstack([inside, inside + [0.0, 1.0, 0.0]])
+    assert deepest(probe, body.rest_pos, body.faces) == pytest.approx(0.12, abs=0.01)
+    assert deepest(probe[1:], body.rest_pos, body.faces) == 0.0
+
+
+def test_close_pairs_finds_the_pairs_close_finds_one_by_one():
+    from zoetic.physics.bodycontact import close, close_pairs
+
+    rng = np.random.default_rng(3)
+    sizes = [5, 7, 4, 6]
+    off = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    centres = np.array([[0.0, 0, 0], [0.5, 0, 0], [5.0, 0, 0], [5.4, 0.2, 0]])
+    pos = np.concatenate([c + 0.2 * rng.normal(size=(n, 3))
+                          for c, n in zip(centres, sizes, strict=True)])  # fmt: skip
+    pos = np.ascontiguousarray(pos[:, :, None])
+    vel = np.ascontiguousarray(0.1 * rng.normal(size=pos.shape))
+    reach = np.array([0.1, 0.2, 0.1, 0.15])
+    found = [tuple(p) for p in close_pairs(pos, vel, off, reach, 0.03, 0.1).tolist()]
+    one_by_one = [(a, c) for a in range(4) for c in range(a + 1, 4)
+                  if close(pos[off[a]:off[a + 1]], vel[off[a]:off[a + 1]], pos[off[c]:off[c + 1]],
+                           vel[off[c]:off[c + 1]], max(reach[a], reach[c]) + 0.03, 0.03, 0.1)]
+    assert found == one_by_one
+    assert (0, 1) in found and (0, 2) not in found  # near pairs only
