@@ -3,9 +3,10 @@
 ``World([shark, Ball(...), Box(...)], medium="sea", batch=B)`` holds B copies (candidates)
 of the scene. ``world.step(seconds, activations)`` advances them all with the batched animal
 kernel (the same compiled code as ``physics.simulate``, so a lone animal stepped in slices
-follows the open-loop trajectory) and moves the objects; animal-object contacts are penalty
-forces (see ``physics.contacts``), and so are animal-animal ones (a node against the other's
-skin, ``physics.bodycontact``); each step() returns their record. ``world.state`` is a
+follows the open-loop trajectory) and moves the objects; a node against a fixed shape feels a
+penalty force, a ball is resolved by impulses with restitution below one (``physics.contacts``),
+and animals push each other with dissipative penalties (a node against the other's skin,
+``physics.bodycontact``); each step() returns their record. ``world.state`` is a
 frozen value that can be copied, saved and restored, so a planner can look ahead from "now".
 
 Contacts are resolved every time step, but only while some node is within reach of an object
