@@ -61,6 +61,40 @@ def test_training_again_resumes_without_learning_more(trained):
     assert (trained / "runs" / "go-straight" / "history.csv").read_text() == before
 
 
+def test_an_entry_learned_for_an_older_task_is_not_resumed(tmp_path, capsys):
+    import shutil
+
+    from zoetic.io import read_toml, write_toml
+
+    out = tmp_path / "m"
+    assert main(["repertoire", "train", "shark", "--out", str(out), "--budget", "12"]) == 0
+    stale = tmp_path / "stale"
+    shutil.copytree(out, stale)
+    cfg = stale / "runs" / "sharp-turn-left" / "config.toml"
+    doc = read_toml(cfg)
+    doc["task"]["terms"][0]["target"] = 1.0  # as if learned before the task file changed
+    write_toml(cfg, doc)
+    capsys.readouterr()
+    assert main(["repertoire", "train", "shark", "--out", str(stale), "--budget", "12"]) == 2
+    err = capsys.readouterr().err
+    assert "config.toml" in err and "quick-turn-left" in err and "fresh --out" in err
+
+
+def test_the_plan_digest_changes_with_the_body_or_a_task(tmp_path):
+    import shutil
+
+    from zoetic.behavior.training import plan_digest
+    from zoetic.bodies import ZOO_DIR
+
+    assert plan_digest("shark") == plan_digest("shark")
+    assert plan_digest("shark") != plan_digest("ray")
+    mine = tmp_path / "shark.toml"
+    shutil.copy(ZOO_DIR / "shark.toml", mine)
+    copy_digest = plan_digest(str(mine))
+    mine.write_text(mine.read_text().replace("name = \"shark\"", "name = \"shark2\"", 1))
+    assert plan_digest(str(mine)) != copy_digest
+
+
 def test_repertoire_round_trip(tmp_path, shark):
     rep = handmade_repertoire(shark)
     rep.add("extra", rep.controllers["go-straight"], 2.5, note="kept", kept=0.9)

@@ -9,6 +9,8 @@ every entry, so an interrupted training keeps what it finished and picks up wher
 
 from __future__ import annotations
 
+import hashlib
+import json
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -99,6 +101,31 @@ def abstraction_report(
     }
 
 
+def _plain(task: Task) -> str:
+    """The task as text, less ``nodes`` (a run's own setting, kept in its config)."""
+    d = {k: v for k, v in task.to_dict().items() if k != "nodes"}
+    return json.dumps(d, sort_keys=True, default=str)
+
+
+def check_same_task(run_dir: Path, learned: Task, now: Task) -> None:
+    """Refuse to resume an entry whose task has changed since it was learned (a zoetic update
+    or an edited task file): its controller would not do what the entry now promises."""
+    if _plain(learned) != _plain(now):
+        raise RunDirError(
+            f"{run_dir / 'config.toml'}: entry learned for an earlier version of task "
+            f"'{now.name}'; train into a fresh --out (or delete {run_dir}) to learn it again")
+
+
+def plan_digest(animal: str | Path) -> str:
+    """Return a short digest of what the basic training of ``animal`` learns: its body and
+    its plan's tasks (a cache of trained repertoires keyed by it goes stale with either)."""
+    body = load_animal(animal)
+    h = hashlib.sha256(Path(body.source).read_bytes())
+    for e in plan_for(body):
+        h.update(f"|{e.name}|{_plain(e.task)}".encode())
+    return h.hexdigest()[:10]
+
+
 def train_repertoire(
     animal: str | Path,
     out: str | Path,
@@ -128,6 +155,7 @@ def train_repertoire(
         run_dir = out / "runs" / entry.name
         if (run_dir / "config.toml").exists():
             run = Run.resume(run_dir)
+            check_same_task(run_dir, run.setup.task, entry.task)
         else:
             config = LearnConfig(animal=str(animal), task=entry.task.name, optimizer=optimizer,
                                  budget=budget, seed=seed + k, nodes=nodes,

@@ -14,8 +14,8 @@ from pathlib import Path
 
 def bench_stunts(animal: str, memory: Path | None, tricks: list[str], method: str,
                  budget: int, seed: int) -> dict:  # fmt: skip
-    """Discover each trick (training the animal's repertoire once into runs/bench when no
-    memory is given) and return the figures as one JSON-ready dict."""
+    """Discover each trick (training the animal's repertoire once into runs/bench, keyed by
+    its body and plan, when no memory is given) and return the figures as one JSON dict."""
     from zoetic.behavior.repertoire import Repertoire
     from zoetic.behavior.stunts import (
         SPLASH_RATIO,
@@ -27,11 +27,11 @@ def bench_stunts(animal: str, memory: Path | None, tricks: list[str], method: st
     from zoetic.bodies import load_animal
 
     body = load_animal(animal)
-    if memory is None:
-        memory = Path("runs/bench") / f"{body.name}-memory"
-        if not (memory / "repertoire.json").exists():
-            from zoetic.behavior.training import train_repertoire
+    if memory is None:  # keyed by the body and its training tasks, so an update retrains
+        from zoetic.behavior.training import plan_digest, train_repertoire
 
+        memory = Path("runs/bench") / f"{body.name}-memory-{plan_digest(animal)}"
+        if not (memory / "repertoire.json").exists():
             train_repertoire(animal, memory, seed=seed)
     rep = Repertoire.load(memory, body)
     out: dict = {"animal": body.name, "method": method, "budget": budget, "seed": seed}

@@ -128,7 +128,8 @@ def stunt(
 @bench_app.command("stunts")
 def bench_stunts_cmd(
     memory: Path = typer.Option(None, help="The dolphin's repertoire (zoetic repertoire train); "
-                                "default: trained once into runs/bench/dolphin-memory."),
+                                "default: trained once into runs/bench/dolphin-memory-<digest>, "
+                                "keyed by the body and its training tasks."),
     animal: str = typer.Option("dolphin"),
     tricks: str = typer.Option("leap,somersault,hurdle,ball-nose,ball-tail,bellyflop,clean-dive",
                                help="Comma-separated tricks."),  # fmt: skip
