@@ -114,3 +114,15 @@ def test_the_tail_strike_counts_the_somersault_done_when_it_touches_in_the_air(d
     assert flags == {"struck_by_tail": True, "off_support": True, "in_somersault": True}
     early = targets_met("ball-tail", base | {"tail_strike_rotation_deg": 120.0}, trick)
     assert not early["in_somersault"]
+
+
+def test_a_dive_still_in_the_air_at_the_end_is_not_a_clean_dive():
+    from zoetic.behavior.stunts import splash_ratio, targets_met
+
+    landed = {"most_nodes_out_of_water": 1.0, "final_height_m": 0.0, "splash_m3_s": 1.0}
+    flying = dict(landed, final_height_m=0.54, splash_m3_s=0.0)  # its splash is yet to come
+    assert targets_met("clean-dive", landed) == {"leaves_water": True, "back_in_water": True}
+    assert targets_met("clean-dive", flying)["back_in_water"] is False
+    belly = dict(landed, splash_m3_s=4.0)
+    assert splash_ratio(belly, landed) == 4.0
+    assert splash_ratio(belly, dict(flying, splash_m3_s=0.5)) is None

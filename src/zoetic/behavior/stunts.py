@@ -287,6 +287,9 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
     }
     out["splash_m3_s"] = round(float(np.sum(s.entry_flux[lane])), 4)
     out["entries_into_water"] = int(np.sum(np.diff(s.airborne[lane]) < 0))
+    # how far the highest node is still above the surface at the end (0: the body is back in)
+    out["final_height_m"] = round(float(max(rec.traj.positions[lane, -1, :, 1].max()
+                                            - problem.level, 0.0)), 3)  # fmt: skip
     if rec.balls.shape[2]:
         b = rec.balls[lane, :, 0]
         out["ball_rise_m"] = round(float(b[:, 1].max() - b[0, 1]), 3)
@@ -325,19 +328,23 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
 
 # the issue's targets, per built-in trick (bellyflop against clean-dive: ``splash_ratio``)
 LEAP_AIR_S, LEAP_APEX_BL, SOMERSAULT_DEG, SPLASH_RATIO = 0.4, 0.5, 360.0, 3.0
+BUDGET = 9600  # plans a trick search tries by default (about a minute a trick on 2 cores)
 TAIL_STRIKE_DEG = 180.0  # ball-tail: the tail strikes in flight after half a turn at least
 
 
 def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, bool]:
     """Return the success flags of a built-in trick's measures (``measures``) against the
-    issue's targets; {} for a trick of another name. Bellyflop and clean-dive only need to
-    leave the water here: their target is the ratio of their splashes (``splash_ratio``)."""
+    issue's targets; {} for a trick of another name. Bellyflop and clean-dive need to leave
+    the water and be wholly back in it by the end (a splash not yet made is not small); their
+    target is the ratio of their splashes (``splash_ratio``)."""
     flags: dict[str, bool] = {}
     if name in ("leap", "hurdle", "somersault", "bellyflop", "clean-dive"):
         flags["leaves_water"] = bool(m["most_nodes_out_of_water"] >= 1.0)
     if name == "leap":
         flags["air_time"] = bool(m["air_time_s"] >= LEAP_AIR_S)
         flags["apex"] = bool(m["apex_body_lengths"] >= LEAP_APEX_BL)
+    elif name in ("bellyflop", "clean-dive"):
+        flags["back_in_water"] = bool(m.get("final_height_m", 1.0) == 0.0)
     elif name == "somersault":
         # a full turn about the body's own left-right axis (a spin about the vertical is none)
         flags["rotation"] = bool(m["pitch_rotation_in_air_deg"] >= SOMERSAULT_DEG)
@@ -377,8 +384,9 @@ def strike_speeds(rec: StuntRecord, touch: np.ndarray, lane: int = 0) -> dict:
 def splash_ratio(bellyflop: dict, clean_dive: dict) -> float | None:
     """Return the bellyflop's splash measure over the clean dive's, both ``measures``; None
     unless both left the water wholly and the dive splashed at all (a body that only broke the
-    surface from below makes no re-entry to compare)."""
-    both = all(m["most_nodes_out_of_water"] >= 1.0 for m in (bellyflop, clean_dive))
+    surface from below, or one still in the air at the end, makes no re-entry to compare)."""
+    both = all(m["most_nodes_out_of_water"] >= 1.0 and m.get("final_height_m", 0.0) == 0.0
+               for m in (bellyflop, clean_dive))  # fmt: skip
     a, b = bellyflop["splash_m3_s"], clean_dive["splash_m3_s"]
     return float(a / b) if both and b > 0 else None
 
@@ -535,7 +543,7 @@ class Stunt:
 
 
 def discover(body: Body, repertoire: Repertoire, trick: Trick, method: str = "anneal",
-             budget: int = 3200, seed: int = 0, segments: int | None = None,
+             budget: int = BUDGET, seed: int = 0, segments: int | None = None,
              progress=None, evaluator: str = "batch") -> Stunt:  # fmt: skip
     """Return the best stunt ``method`` (anneal: 16 chains; ga: 32 a generation) finds for the
     trick within ``budget`` plan evaluations.

@@ -45,8 +45,8 @@ def stunt(
                               "ball-nose, ball-tail, bellyflop, clean-dive) or a trick .toml "
                               "file."),  # fmt: skip
     method: str = typer.Option("anneal", help="anneal (simulated annealing) or ga (genetic)."),
-    budget: int = typer.Option(3200, min=1, max=10_000_000,
-                              help="Plans (stunt simulations) to evaluate."),  # fmt: skip
+    budget: int = typer.Option(None, min=1, max=10_000_000,
+                              help="Plans (stunt simulations) to evaluate (default 9600)."),
     seed: int = typer.Option(0, help="Random seed: same seed, same result."),
     segments: int = typer.Option(None, min=1, help="Entries in a plan (default: the trick's)."),
     out: Path = typer.Option(Path("runs/stunt"), help="Run directory to write."),
@@ -63,7 +63,13 @@ def stunt(
 
         os.environ["RAY_ADDRESS"] = ray_address
     from zoetic.behavior.repertoire import Repertoire
-    from zoetic.behavior.stunts import discover, load_trick, macro_document, score_series
+    from zoetic.behavior.stunts import (
+        BUDGET,
+        discover,
+        load_trick,
+        macro_document,
+        score_series,
+    )
     from zoetic.bodies import load_animal
     from zoetic.io import check_out_dir, make_dir, write_json
     from zoetic.viz.stunts import plot_score
@@ -72,6 +78,7 @@ def stunt(
     body = load_animal(animal)
     rep = Repertoire.load(memory, body)
     tr = load_trick(trick)
+    budget = budget or BUDGET
     with _progress(budget, "plans") as bar:
         tid = bar.add_task(f"{body.name} {tr.name} ({method})", total=budget, info="")
 
@@ -134,14 +141,15 @@ def bench_stunts_cmd(
     tricks: str = typer.Option("leap,somersault,hurdle,ball-nose,ball-tail,bellyflop,clean-dive",
                                help="Comma-separated tricks."),  # fmt: skip
     method: str = typer.Option("anneal"),
-    budget: int = typer.Option(3200, min=1, help="Plans per trick (as zoetic stunt)."),
+    budget: int = typer.Option(None, min=1, help="Plans per trick (default: as zoetic stunt)."),
     seed: int = typer.Option(0),
     json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
     """Each trick discovered: its success flags against the issue's targets, what it achieved,
     evaluations and wall time (target: each trick in <= 5 minutes on 2 cores)."""
+    from zoetic.behavior.stunts import BUDGET
     from zoetic.bench.stunts import bench_stunts
 
     out = bench_stunts(animal, memory, [t.strip() for t in tricks.split(",") if t.strip()],
-                       method, budget, seed)  # fmt: skip
+                       method, budget or BUDGET, seed)  # fmt: skip
     _emit(out, json)
