@@ -139,6 +139,10 @@ def test_bar_crossing_height_is_read_where_the_body_passes_the_bar(dolphin):
     s = _signals(dolphin, pos)
     assert _term("bar_crossing_height", s, goal=(2.0, 0.31, 0.0)) == pytest.approx(0.29)
     assert _term("bar_crossing_height", s, goal=(4.0, 0.31, 0.0)) == pytest.approx(-1.31)
+    # a leap that ends at its apex 1 m before the bar scores its shortfall, not its height
+    short = _signals(dolphin, pos[:, :3])
+    assert _term("bar_crossing_height", short, goal=(2.0, 0.31, 0.0)) == pytest.approx(0.29)
+    assert _term("bar_crossing_height", short, goal=(3.0, 0.31, 0.0)) == pytest.approx(-1.0)
     counts = _signals(dolphin, pos, contacts=np.array([[0.0, 2.0, 3.0, 0.0, 0.0]]))
     assert _term("contact_count", counts) == 5.0 and _term("contact_count", s) == 0.0
 

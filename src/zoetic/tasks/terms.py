@@ -413,10 +413,14 @@ def apex_pitch(xp, s: Signals, p: TermParams):
 
 
 @term("height (m) of the centre of mass above goal[1] where it passes closest to x = goal[0] "
-      "(world m): clearing a hurdle bar")
+      "(world m): clearing a hurdle bar; a body that never reaches the bar scores at most 0 "
+      "less the metres it stayed short (a leap before the bar is no hurdle)")
 def bar_crossing_height(xp, s: Signals, p: TermParams):
-    i = xp.argmin(xp.abs(s.com[:, :, 0] - p.goal[0]), axis=1)[:, None]
-    return xp.take_along_axis(s.com[:, :, 1], i, axis=1)[:, 0] - p.goal[1]
+    x = s.com[:, :, 0]
+    i = xp.argmin(xp.abs(x - p.goal[0]), axis=1)[:, None]
+    h = xp.take_along_axis(s.com[:, :, 1], i, axis=1)[:, 0] - p.goal[1]
+    short = xp.maximum(p.goal[0] - xp.max(x, axis=1), 0.0)
+    return xp.where(short > 0, xp.minimum(h, 0.0) - short, h)
 
 
 @term("node-object contacts over the motion (node-steps touching a ball, hurdle or post; "
