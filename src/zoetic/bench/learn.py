@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -9,8 +10,11 @@ import numpy as np
 from zoetic.learn.run import LearnConfig, build
 
 
-def _learn_until(config: LearnConfig, target: float | None, max_seconds: float) -> dict:
-    setup = build(config)
+def learn_until(config: LearnConfig, target: float | None = None,
+                max_seconds: float = math.inf, task=None):  # fmt: skip
+    """Learn ``config`` (its task, or ``task``) until its budget, E <= target or max_seconds of
+    wall, the kernel compiled outside the clock; return (setup, figures)."""
+    setup = build(config, task)
     opt, obj = setup.optimizer, setup.objective
     obj.evaluate(opt.x0[None])  # compile and warm the kernel outside the clock
     t0 = time.perf_counter()
@@ -26,11 +30,12 @@ def _learn_until(config: LearnConfig, target: float | None, max_seconds: float) 
             break
         if elapsed > max_seconds:
             break
+    seconds = time.perf_counter() - t0
     close = getattr(opt, "close", None)
     if close:
         close()
-    return {
-        "seconds": round(time.perf_counter() - t0, 3),
+    return setup, {
+        "seconds": round(seconds, 3),
         "final_E": round(float(opt.best_f), 4),
         "evaluations": opt.evaluations,
         "seconds_to_match": None if reached is None else round(reached, 3),
@@ -66,7 +71,7 @@ def bench_gradient(base: dict, target: float, max_seconds: float) -> dict:
 def bench_learn(budget: int = 3500, seed: int = 0, max_seconds: float = 60.0) -> dict:
     """Return annealing's wall time and final E, and the others' time to reach that E."""
     base = dict(animal="shark", task="swim-straight", controller="time", nodes=15, seed=seed)
-    anneal = _learn_until(LearnConfig(optimizer="anneal", budget=budget, **base), None, 1e9)
+    _, anneal = learn_until(LearnConfig(optimizer="anneal", budget=budget, **base))
     target = anneal["final_E"]
     out = {
         "task": "shark swim-straight, M = 15, 6 actuators (NM = 90), 4 s horizon",
@@ -76,7 +81,7 @@ def bench_learn(budget: int = 3500, seed: int = 0, max_seconds: float = 60.0) ->
         "paper_anneal_seconds": 3600,
     }
     out["speedup_vs_paper"] = round(3600 / max(anneal["seconds"], 1e-9), 1)
-    cm = _learn_until(
+    _, cm = learn_until(
         LearnConfig(optimizer="cmaes", budget=100 * budget, popsize=24, **base), target,
         max_seconds,
     )  # fmt: skip

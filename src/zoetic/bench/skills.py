@@ -16,8 +16,6 @@ from 2 m depth (both from rest).
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from zoetic.behavior.tracking import body_length, handmade_repertoire
@@ -152,25 +150,14 @@ def start_speeds(body: Body, task: Task) -> dict:
 
 def learn_skill(animal: str, task: Task, seed: int = 0, budget: int | None = None):
     """Return (controller, wall seconds) learned with the defaults of ``zoetic learn``."""
-    from zoetic.learn.run import LearnConfig, build
+    from zoetic.bench.learn import learn_until
+    from zoetic.learn.run import LearnConfig
 
     config = LearnConfig(animal=animal, task=task.name, seed=seed)
     if budget:
         config.budget = budget
-    setup = build(config, task)
-    opt, obj = setup.optimizer, setup.objective
-    obj.evaluate(opt.x0[None])  # compile and warm the kernel outside the clock
-    t0 = time.perf_counter()
-    while opt.evaluations < config.budget and not opt.done():
-        X = opt.ask()
-        if len(X) == 0:
-            break
-        opt.tell(X, obj(X))
-    wall = time.perf_counter() - t0
-    close = getattr(opt, "close", None)
-    if close:
-        close()
-    return obj.controller(opt.best_x), wall
+    setup, figures = learn_until(config, task=task)
+    return setup.objective.controller(setup.optimizer.best_x), figures["seconds"]
 
 
 # the hand-made entry an entry of another training plan is compared with; any other entry
