@@ -4,6 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
+from zoetic.bodies import load_animal
+
 
 def write_short_task(folder: Path, horizon: float, nodes: int) -> Path:
     """Write a short swim-forward task file (water, one distance term) and return its path:
@@ -15,3 +19,9 @@ def write_short_task(folder: Path, horizon: float, nodes: int) -> Path:
         '[[terms]]\nkind = "distance_along_heading"\nweight = -1.0\n'
     )
     return path
+
+
+@pytest.fixture(scope="session")
+def dolphin():
+    """The zoo dolphin, loaded once for the stunt and contact tests."""
+    return load_animal("dolphin")

@@ -9,7 +9,6 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from zoetic.bodies import load_animal
 from zoetic.physics.contacts import CORRECTION_SPEED, restitution
 from zoetic.physics.media import Medium
 from zoetic.physics.objects import Ball, Box, Cylinder
@@ -18,11 +17,6 @@ from zoetic.physics.world import Animal, World
 AIR = Medium("air", gravity=9.81)
 VACUUM = Medium("still", gravity=0.0)
 R, M = 0.25, 0.3  # the stunts' beach ball
-
-
-@pytest.fixture(scope="module")
-def dolphin():
-    return load_animal("dolphin")
 
 
 def _drop(body, support, medium, height):

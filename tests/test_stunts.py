@@ -29,11 +29,6 @@ from zoetic.tasks import fits
 from zoetic.tasks.terms import TERMS, BodyFrame, Signals, TermParams
 
 
-@pytest.fixture(scope="module")
-def dolphin():
-    return load_animal("dolphin")
-
-
 def _beat(body) -> AbstractController:
     """A 2 Hz tail beat as a one-mode abstract controller (the zoo's wave phases)."""
     a = len(body.actuator_names)

@@ -25,7 +25,6 @@ from zoetic.behavior.stunts import (
     targets_met,
 )
 from zoetic.behavior.training import rest_abstraction
-from zoetic.bodies import load_animal
 from zoetic.cli import main
 from zoetic.physics import State, Trajectory, simulate
 from zoetic.physics.objects import Cylinder
@@ -39,11 +38,6 @@ from zoetic.viz.stunts import (
     subdivision,
     surface_crossings,
 )
-
-
-@pytest.fixture(scope="module")
-def dolphin():
-    return load_animal("dolphin")
 
 
 @pytest.fixture(scope="module")

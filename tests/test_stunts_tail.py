@@ -11,13 +11,7 @@ import pytest
 
 from test_stunts import _lifted, _signals, _term
 from zoetic.behavior.stunts import TAIL_STRIKE_DEG, load_trick, targets_met
-from zoetic.bodies import load_animal
 from zoetic.tasks.terms import BodyFrame, Signals
-
-
-@pytest.fixture(scope="module")
-def dolphin():
-    return load_animal("dolphin")
 
 
 def _spun(body, n, angle, height=2.0) -> np.ndarray:
