@@ -608,14 +608,8 @@ class World:
             if not self._near(a, (t1 - t) * self.dt):
                 kernel(stepper, table, t, t1, base)
                 continue
-            o0, o1 = self._off[a], self._off[a + 1]
-            pos, vel, mass = self._pos[o0:o1], self._vel[o0:o1], self._mass[a]
             for s in range(t, t1):
-                node_contacts(
-                    pos, vel, mass, self.node_radius, self._bpos, self._bvel, self._bpar,
-                    self._skind, self._scenter, self._ssize, self._ball_obj, self._static_obj,
-                    self.dt, self._w, self._zeta, self._mu, self._bforce, impulse[a],
-                )  # fmt: skip
+                self._node_contacts(a, impulse)
                 one(stepper, table, s, s + 1, self._n + s)
         if not busy:
             return
@@ -634,16 +628,20 @@ class World:
                 for a, c in now:
                     self._pair(a, c, between)
                 for a in near_shape:
-                    o0, o1 = self._off[a], self._off[a + 1]
-                    node_contacts(
-                        self._pos[o0:o1], self._vel[o0:o1], self._mass[a], self.node_radius,
-                        self._bpos, self._bvel, self._bpar, self._skind, self._scenter,
-                        self._ssize, self._ball_obj, self._static_obj, self.dt, self._w,
-                        self._zeta, self._mu, self._bforce, impulse[a],
-                    )  # fmt: skip
+                    self._node_contacts(a, impulse)
                 for a in tight:
                     one(self._steppers[a], tables[a], u, u + 1, self._n + u)
             s = s1
+
+    def _node_contacts(self, a: int, impulse) -> None:
+        """One step's contacts of animal a's nodes with the objects (``contacts.node_contacts``;
+        impulses recorded in ``impulse[a]``, the balls' reactions in ``_bforce``)."""
+        o0, o1 = self._off[a], self._off[a + 1]
+        node_contacts(
+            self._pos[o0:o1], self._vel[o0:o1], self._mass[a], self.node_radius, self._bpos,
+            self._bvel, self._bpar, self._skind, self._scenter, self._ssize, self._ball_obj,
+            self._static_obj, self.dt, self._w, self._zeta, self._mu, self._bforce, impulse[a],
+        )  # fmt: skip
 
     def _balls(self, steps: int) -> None:
         balls_step(
@@ -656,13 +654,7 @@ class World:
         for a, c in pairs:
             self._pair(a, c, between)
         for a in range(len(self.animals)):
-            o0, o1 = self._off[a], self._off[a + 1]
-            node_contacts(
-                self._pos[o0:o1], self._vel[o0:o1], self._mass[a], self.node_radius,
-                self._bpos, self._bvel, self._bpar, self._skind, self._scenter, self._ssize,
-                self._ball_obj, self._static_obj, self.dt, self._w, self._zeta, self._mu,
-                self._bforce, impulse[a],
-            )  # fmt: skip
+            self._node_contacts(a, impulse)
         self._animals_run(tables, s, s + 1)
         if len(self.balls):
             self._balls(1)
