@@ -5,12 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
-from rich.console import Console
 
 from zoetic.cli import app
-from zoetic.cli.bench import _emit, bench_app
-
-console = Console()
+from zoetic.cli.bench import bench_app
+from zoetic.cli.output import console, emit
 
 
 @app.command()
@@ -106,4 +104,4 @@ def bench_aquarium_cmd(
     from zoetic.bench.aquarium import bench_aquarium
 
     skills = None if predator_skills is None else str(predator_skills)
-    _emit(bench_aquarium(fishes, food, obstacles, seconds, seed, perception, skills), json)
+    emit(bench_aquarium(fishes, food, obstacles, seconds, seed, perception, skills), json)

@@ -2,22 +2,13 @@
 
 from __future__ import annotations
 
-import json
-
 import typer
 
 from zoetic.cli import app
+from zoetic.cli.output import emit
 
 bench_app = typer.Typer(help="Benchmarks; figures are ratios measured side by side.")
 app.add_typer(bench_app, name="bench")
-
-
-def _emit(result: dict, as_json: bool) -> None:
-    if as_json:
-        print(json.dumps(result))
-    else:
-        for key, value in result.items():
-            print(f"{key:40s} {value}")
 
 
 @bench_app.command("gym")
@@ -30,7 +21,7 @@ def bench_gym_cmd(
     """Env steps per second: the native vector env against SyncVectorEnv, same actions."""
     from zoetic.bench.gym import bench_gym
 
-    _emit(bench_gym(env_id, num_envs, steps), json)
+    emit(bench_gym(env_id, num_envs, steps), json)
 
 
 @bench_app.command("vision")
@@ -41,7 +32,7 @@ def bench_vision_cmd(
     """Animat vision: retina frames/s (2 eyes x 4 levels) and the whole pursuit loop's."""
     from zoetic.bench.vision import bench_vision
 
-    _emit(bench_vision(frames), json)
+    emit(bench_vision(frames), json)
 
 
 @bench_app.command("jax")
@@ -61,4 +52,4 @@ def bench_jax_cmd(
         from zoetic.bench.simulate import bench_simulate
 
         out["numba"] = bench_simulate(animal, seconds, batch, repeats)
-    _emit(out, json)
+    emit(out, json)

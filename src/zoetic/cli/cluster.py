@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import typer
 
-from zoetic.cli.bench import _emit, bench_app
+from zoetic.cli.bench import bench_app
+from zoetic.cli.output import emit
 
 
 @bench_app.command("ray")
@@ -18,4 +19,4 @@ def bench_ray_cmd(
     """Seconds per generation on a local Ray against in-process batches, side by side."""
     from zoetic.bench.ray import bench_ray
 
-    _emit(bench_ray(animal, "swim-straight", population, generations, actors), json)
+    emit(bench_ray(animal, "swim-straight", population, generations, actors), json)

@@ -5,14 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
-from rich.console import Console
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from zoetic.cli import app
-from zoetic.cli.bench import _emit, bench_app
+from zoetic.cli.bench import bench_app
+from zoetic.cli.output import console, emit, progress_bar
 from zoetic.io import check_out_dir
-
-console = Console()
 
 
 @app.command()
@@ -28,24 +25,16 @@ def tasks() -> None:
         )
 
 
-def _progress_bar() -> Progress:
-    return Progress(
-        TextColumn("[bold]{task.description}"),
-        BarColumn(bar_width=16),
-        TextColumn("{task.completed:>5.0f}/{task.total:.0f}"),
-        TextColumn("E {task.fields[best]}"),
-        TextColumn("{task.fields[status]}"),
-        TextColumn("{task.fields[rate]}/s"),
-        TimeElapsedColumn(),
-        console=console,
-        transient=False,
-    )
+def learn_bar():
+    """The learning bar: evaluations, best E, status and evaluations per second."""
+    return progress_bar("E {task.fields[best]}", "{task.fields[status]}",
+                        "{task.fields[rate]}/s", width=16)
 
 
 def run_with_progress(run, label: str, every_s: float = 2.0) -> None:
     """Learn to the run's budget with a Rich progress bar; Ctrl-C leaves a resumable run."""
     budget = run.setup.config.budget
-    with _progress_bar() as bar:
+    with learn_bar() as bar:
         tid = bar.add_task(label, total=budget, completed=run.evaluations, best="-", status="",
                            rate="-")  # fmt: skip
         start_evals = run.evaluations
@@ -187,7 +176,7 @@ def bench_learn_cmd(
     """Annealing's wall time for the paper's budget, and how fast CMA-ES/gradient match it."""
     from zoetic.bench.learn import bench_learn
 
-    _emit(bench_learn(budget), json)
+    emit(bench_learn(budget), json)
 
 
 @bench_app.command("skills")
@@ -200,4 +189,4 @@ def bench_skills_cmd(
     """Learn each basic skill with defaults; print it beside the hand-made entry, and the time."""
     from zoetic.bench.skills import bench_skills
 
-    _emit(bench_skills(animal or None, budget, seed), json)
+    emit(bench_skills(animal or None, budget, seed), json)

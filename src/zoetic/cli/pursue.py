@@ -5,12 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
-from rich.console import Console
 
 from zoetic.cli import app
+from zoetic.cli.output import console
 from zoetic.io import make_dir, write_json
-
-console = Console()
 
 
 @app.command()

@@ -6,13 +6,12 @@ import json
 from pathlib import Path
 
 import typer
-from rich.console import Console
 from rich.table import Table
 
 from zoetic.cli import app
-from zoetic.cli.learn import _progress_bar
+from zoetic.cli.learn import learn_bar
+from zoetic.cli.output import console
 
-console = Console()
 repertoire_app = typer.Typer(help="Basic training: learn, abstract and keep a repertoire.",
                              no_args_is_help=True)  # fmt: skip
 app.add_typer(repertoire_app, name="repertoire")
@@ -72,7 +71,7 @@ def train_cmd(
 
     check_learnable(animal)
     out = check_out_dir(out or Path("memory") / Path(animal).stem)
-    with _progress_bar() as bar:
+    with learn_bar() as bar:
         state: dict = {}
 
         def on_entry(name: str, run) -> None:

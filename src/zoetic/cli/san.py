@@ -5,13 +5,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
-from rich.console import Console
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import Progress
 
 from zoetic.cli import app
-from zoetic.cli.bench import _emit, bench_app
+from zoetic.cli.bench import bench_app
+from zoetic.cli.output import console, emit, progress_bar
 
-console = Console()
 san_app = typer.Typer(
     help="Sensor-actuator networks (van de Panne & Fiume 93): search, tune, show.",
     no_args_is_help=True,
@@ -20,15 +19,7 @@ app.add_typer(san_app, name="san")
 
 
 def _bar(label: str, total: int) -> tuple[Progress, object]:
-    bar = Progress(
-        TextColumn("[bold]{task.description}"),
-        BarColumn(bar_width=20),
-        TextColumn("{task.completed:>5.0f}/{task.total:.0f}"),
-        TextColumn("best {task.fields[best]}"),
-        TimeElapsedColumn(),
-        console=console,
-        transient=False,
-    )
+    bar = progress_bar("best {task.fields[best]}")
     tid = bar.add_task(label, total=total, best="-")
     return bar, tid
 
@@ -288,4 +279,4 @@ def bench_san_cmd(
     """Wall time of a phase-1 search (random SANs x the creature's seconds, all cores)."""
     from zoetic.bench.san import bench_search
 
-    _emit(bench_search(creature, trials, workers), json)
+    emit(bench_search(creature, trials, workers), json)

@@ -5,13 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
-from rich.console import Console
 from rich.table import Table
 
 from zoetic.cli import app
-from zoetic.cli.bench import _emit, bench_app
-
-console = Console()
+from zoetic.cli.bench import bench_app
+from zoetic.cli.output import console, emit
 
 
 @app.command()
@@ -69,4 +67,4 @@ def bench_simulate_cmd(
     """Simulated seconds per second: one candidate, a batch on all cores, and NumPy."""
     from zoetic.bench.simulate import bench_simulate
 
-    _emit(bench_simulate(animal, seconds, batch), json)
+    emit(bench_simulate(animal, seconds, batch), json)

@@ -5,13 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
-from rich.console import Console
 
 from zoetic.cli import app
-from zoetic.cli.bench import _emit, bench_app
-from zoetic.cli.track import _progress
-
-console = Console()
+from zoetic.cli.bench import bench_app
+from zoetic.cli.output import console, emit
+from zoetic.cli.track import track_bar
 
 
 def write_replay(body, path: Path, seconds: float | None, out: Path, video: bool,
@@ -79,7 +77,7 @@ def stunt(
     rep = Repertoire.load(memory, body)
     tr = load_trick(trick)
     budget = budget or BUDGET
-    with _progress(budget, "plans") as bar:
+    with track_bar("plans") as bar:
         tid = bar.add_task(f"{body.name} {tr.name} ({method})", total=budget, info="")
 
         def update(opt) -> None:
@@ -152,4 +150,4 @@ def bench_stunts_cmd(
 
     out = bench_stunts(animal, memory, [t.strip() for t in tricks.split(",") if t.strip()],
                        method, budget or BUDGET, seed)  # fmt: skip
-    _emit(out, json)
+    emit(out, json)

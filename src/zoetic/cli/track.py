@@ -6,18 +6,21 @@ from pathlib import Path
 
 import numpy as np
 import typer
-from rich.console import Console
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from zoetic.cli import app
+from zoetic.cli.output import console, progress_bar
 from zoetic.io import make_dir
-
-console = Console()
 
 PLANE = (
     "Points are x,z (m) in the horizontal plane: the animal starts at the origin facing +x "
     "and +z is its left."
 )
+
+
+def track_bar(unit: str):
+    """The tracking and planning bar: count in ``unit`` and an info column."""
+    return progress_bar("{task.fields[info]}",
+                        count="{task.completed:>6.0f}/{task.total:.0f} " + unit)
 
 
 def _setup(animal: str, memory: Path):
@@ -27,17 +30,6 @@ def _setup(animal: str, memory: Path):
 
     body = load_animal(animal)
     return body, Repertoire.load(memory, body)
-
-
-def _progress(total: float, unit: str) -> Progress:
-    return Progress(
-        TextColumn("[bold]{task.description}"),
-        BarColumn(bar_width=20),
-        TextColumn("{task.completed:>6.0f}/{task.total:.0f} " + unit),
-        TextColumn("{task.fields[info]}"),
-        TimeElapsedColumn(),
-        console=console,
-    )
 
 
 def _buoys(points_xz: np.ndarray, depth: float) -> np.ndarray:
@@ -81,7 +73,7 @@ def track(
     body, rep = _setup(animal, memory)
     config = TrackConfig(interval=interval, radius=radius, time_limit=time_limit,
                          turn_radius=turn_radius)  # fmt: skip
-    with _progress(time_limit, "s") as bar:
+    with track_bar("s") as bar:
         tid = bar.add_task(f"{body.name} tracks", total=time_limit, info="")
 
         def update(t: float, reached: int) -> None:
@@ -161,7 +153,7 @@ def macro(
     body, rep = _setup(animal, memory)
     task = ReachTask(tuple(g), tuple(map(tuple, obs)), horizon)
     problem = MacroProblem(body, rep, task, segments=segments)
-    with _progress(budget, "plans") as bar:
+    with track_bar("plans") as bar:
         tid = bar.add_task(f"{body.name} {method}", total=budget, info="")
 
         def update(opt) -> None:

@@ -5,11 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
-from rich.console import Console
 
 from zoetic.cli import app
-
-console = Console()
+from zoetic.cli.output import console
 
 
 @app.command()
