@@ -7,7 +7,7 @@ import time
 import numpy as np
 
 from zoetic.learn.evaluate import BatchEvaluator
-from zoetic.learn.ray_eval import RayEvaluator, _ray
+from zoetic.learn.ray_eval import RayEvaluator, import_ray
 
 
 def bench_ray(
@@ -26,7 +26,7 @@ def bench_ray(
     lo, hi = obj.bounds()
     rng = np.random.default_rng(0)
     gens = [rng.uniform(lo, hi, (population, len(lo))) for _ in range(generations)]
-    ray = _ray()
+    ray = import_ray()
     started = not ray.is_initialized()
     if started:
         ray.init(num_cpus=actors or cores(), log_to_driver=False, include_dashboard=False,

@@ -24,7 +24,7 @@ from zoetic.learn.evaluate import merge
 from zoetic.learn.objective import Evaluation, Objective
 
 
-def _ray():
+def import_ray():
     try:
         import ray
     except ImportError:
@@ -83,7 +83,7 @@ class RayPool:
         self._started_ray = False
 
     def _start(self) -> None:
-        ray = _ray()
+        ray = import_ray()
         if not ray.is_initialized():
             try:
                 ray.init(address=self.address, log_to_driver=False, include_dashboard=False,
@@ -99,14 +99,14 @@ class RayPool:
 
     def pids(self) -> list[int]:
         """Return the process ids of the actors (a test kills one)."""
-        return _ray().get([a.pid.remote() for a in self._actors])
+        return import_ray().get([a.pid.remote() for a in self._actors])
 
     def map(self, job, items, on_part: Callable[[int, object], None] | None = None) -> list:
         """Return ``job.evaluate`` of consecutive sub-batches of ``items``, in their order.
 
         ``on_part(start, result)`` is called as each sub-batch comes back (any order).
         """
-        ray = _ray()
+        ray = import_ray()
         if not self._actors:
             self._start()
         if self._job is not job:
@@ -152,7 +152,7 @@ class RayPool:
         """Stop the actors (and the local Ray this evaluator started)."""
         if not self._actors:
             return
-        ray = _ray()
+        ray = import_ray()
         for a in self._actors:
             ray.kill(a)
         self._actors, self._job, self._ref = [], None, None
