@@ -25,6 +25,7 @@ from zoetic.learn.objective import Evaluation, Objective
 
 
 def import_ray():
+    """Return the ray module, or raise a ZoeticError that says how to install it."""
     try:
         import ray
     except ImportError:
