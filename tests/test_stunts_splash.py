@@ -29,7 +29,7 @@ from zoetic.cli import main
 from zoetic.physics import State, Trajectory, simulate
 from zoetic.physics.objects import Cylinder
 from zoetic.tasks.terms import PARTS, TERMS, BodyFrame, Signals, TermParams, body_parts
-from zoetic.viz.render3d import _project, look_at
+from zoetic.viz.render3d import look_at, project_points
 from zoetic.viz.stunts import (
     Splash,
     spray_particles,
@@ -242,7 +242,7 @@ def test_the_camera_frames_body_ball_and_bar_all_along():
 
     def all_in_view(pts, eyes, targets) -> bool:
         for k in range(len(pts)):
-            scr, z = _project(pts[k], eyes[k], look_at(eyes[k], targets[k]), focal, size)
+            scr, z = project_points(pts[k], eyes[k], look_at(eyes[k], targets[k]), focal, size)
             if not ((z > 0).all() and (scr >= 0).all() and (scr <= size).all()):
                 return False
         return True

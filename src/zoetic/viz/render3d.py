@@ -31,7 +31,7 @@ _WATER_UP, _WATER_DOWN = np.array([64.0, 136, 178]), np.array([14.0, 46, 82])
 _SEABED = (np.array([92.0, 120, 118]), np.array([66.0, 96, 102]))
 _SURFACE = np.array([34.0, 104, 146])
 _SPACE_UP, _SPACE_DOWN = np.array([40.0, 44, 60]), np.array([12.0, 12, 20])
-_TEXT = {"fill": (255, 255, 255), "stroke_width": 2, "stroke_fill": (0, 0, 0)}
+TEXT_STYLE = {"fill": (255, 255, 255), "stroke_width": 2, "stroke_fill": (0, 0, 0)}
 _TILE, _SURFACE_TILE, _SEABED_DEPTH, _WATER_FOG, _AIR_FOG = 0.5, 2.0, 3.0, 4.0, 25.0
 
 
@@ -201,7 +201,7 @@ def background(
 # ---------------------------------------------------------------- animals and buoys
 
 
-def _project(pts: np.ndarray, eye, rot, focal: float, size) -> tuple[np.ndarray, np.ndarray]:
+def project_points(pts: np.ndarray, eye, rot, focal: float, size) -> tuple[np.ndarray, np.ndarray]:
     """Return screen coordinates (..., 2) and camera depths (...) of world points."""
     cam = (pts - eye) @ rot.T
     z = cam[..., 2]
@@ -212,7 +212,7 @@ def _project(pts: np.ndarray, eye, rot, focal: float, size) -> tuple[np.ndarray,
     return np.stack([sx, sy], axis=-1), z
 
 
-def _water_tint(col: np.ndarray, pts: np.ndarray, eye: np.ndarray, medium: Medium) -> np.ndarray:
+def water_tint(col: np.ndarray, pts: np.ndarray, eye: np.ndarray, medium: Medium) -> np.ndarray:
     """Return colours (K, 3) of points (K, 3) seen through water: fog and the surface."""
     level = medium.water_level
     if level < -1e8:
@@ -227,7 +227,7 @@ def _water_tint(col: np.ndarray, pts: np.ndarray, eye: np.ndarray, medium: Mediu
     return np.where(below[:, None], _lerp(col, _SURFACE, fresnel(d[:, 1] / dist)), col)
 
 
-def _split(poly: np.ndarray, level: float) -> tuple[np.ndarray, np.ndarray]:
+def split_at_level(poly: np.ndarray, level: float) -> tuple[np.ndarray, np.ndarray]:
     """Return the parts of a planar polygon (k, 3) above and below the plane y = level."""
     above, below = [], []
     for i in range(len(poly)):
@@ -242,7 +242,7 @@ def _split(poly: np.ndarray, level: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 @dataclass(frozen=True)
-class _Mesh:
+class SceneMesh:
     """All animals' triangles in one index space, with colours and closedness."""
 
     faces: np.ndarray  # (F, 3) into the concatenated nodes
@@ -256,7 +256,7 @@ def _closed(faces: np.ndarray) -> bool:
     return bool(np.all(counts == 2))
 
 
-def _mesh(bodies: Sequence[Body], colors) -> _Mesh:
+def _mesh(bodies: Sequence[Body], colors) -> SceneMesh:
     faces, color, closed, base = [], [], [], 0
     for i, body in enumerate(bodies):
         c = colors[i] if colors is not None else body_color(body)
@@ -265,13 +265,13 @@ def _mesh(bodies: Sequence[Body], colors) -> _Mesh:
         color.append(np.tile(np.asarray(c, float)[:3], (len(body.faces), 1)))
         closed.append(np.full(len(body.faces), _closed(np.asarray(body.faces))))
         base += body.n_nodes
-    return _Mesh(np.concatenate(faces), np.concatenate(color), np.concatenate(closed))
+    return SceneMesh(np.concatenate(faces), np.concatenate(color), np.concatenate(closed))
 
 
-def _face_items(pos, mesh: _Mesh, eye, rot, focal, size, medium, side: int = 0) -> list[tuple]:
+def face_items(pos, mesh: SceneMesh, eye, rot, focal, size, medium, side: int = 0) -> list[tuple]:
     """Return (depth, kind 0, flat screen coords, RGB) items for the visible triangles; with
     ``side`` 1 only their parts above a finite water surface, -1 only those below."""
-    scr, z = _project(pos, eye, rot, focal, size)
+    scr, z = project_points(pos, eye, rot, focal, size)
     tri = pos[mesh.faces]
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     n /= np.linalg.norm(n, axis=1, keepdims=True) + 1e-12
@@ -288,7 +288,7 @@ def _face_items(pos, mesh: _Mesh, eye, rot, focal, size, medium, side: int = 0) 
     if abs(level) < 1e8:
         ty = tri[:, :, 1] - level
         straddle = keep & (ty.min(axis=1) < 0) & (ty.max(axis=1) > 0)
-    tinted = _water_tint(col, cen, eye, medium)
+    tinted = water_tint(col, cen, eye, medium)
     if side and abs(level) < 1e8:
         keep = keep & (straddle | ((cen[:, 1] >= level) == (side > 0)))
     idx = np.flatnonzero(keep & ~straddle)
@@ -296,19 +296,19 @@ def _face_items(pos, mesh: _Mesh, eye, rot, focal, size, medium, side: int = 0) 
     rgb = np.clip(tinted[idx], 0, 255).astype(int).tolist()
     items = [(d, 0, c, tuple(k)) for d, c, k in zip(depth[idx].tolist(), coords, rgb, strict=True)]
     for f in np.flatnonzero(straddle):
-        for k, part in enumerate(_split(tri[f], level)):
+        for k, part in enumerate(split_at_level(tri[f], level)):
             if len(part) < 3 or (side and (k == 0) != (side > 0)):
                 continue
-            pc = _water_tint(col[f][None], part.mean(axis=0)[None], eye, medium)[0]
-            flat = _project(part, eye, rot, focal, size)[0].ravel().tolist()
+            pc = water_tint(col[f][None], part.mean(axis=0)[None], eye, medium)[0]
+            flat = project_points(part, eye, rot, focal, size)[0].ravel().tolist()
             items.append((depth[f], 0, flat, tuple(np.clip(pc, 0, 255).astype(int).tolist())))
     return items
 
 
 def _marker_items(markers, colors, radius, eye, rot, focal, size, medium) -> list[tuple]:
     """Return (depth, kind 1, (x, y, r), RGB) items for buoys in front of the camera."""
-    scr, z = _project(markers, eye, rot, focal, size)
-    col = _water_tint(colors, markers, eye, medium)
+    scr, z = project_points(markers, eye, rot, focal, size)
+    col = water_tint(colors, markers, eye, medium)
     return [
         (z[i], 1, (scr[i, 0], scr[i, 1], focal * radius / z[i]), col[i])
         for i in range(len(markers))
@@ -316,7 +316,7 @@ def _marker_items(markers, colors, radius, eye, rot, focal, size, medium) -> lis
     ]
 
 
-def _draw_buoy(draw: ImageDraw.ImageDraw, x: float, y: float, r: float, col: np.ndarray) -> None:
+def draw_buoy(draw: ImageDraw.ImageDraw, x: float, y: float, r: float, col: np.ndarray) -> None:
     r = max(r, 1.5)
     for k, (scale, off) in enumerate(((1.0, 0.0), (0.75, 0.15), (0.4, 0.35), (0.15, 0.45))):
         c = tuple(np.clip(col * (0.55 + 0.3 * k) + 40 * (k == 3), 0, 255).astype(int).tolist())
@@ -325,7 +325,7 @@ def _draw_buoy(draw: ImageDraw.ImageDraw, x: float, y: float, r: float, col: np.
 
 
 @lru_cache(maxsize=8)
-def _font(px: int) -> ImageFont.ImageFont | ImageFont.FreeTypeFont:
+def label_font(px: int) -> ImageFont.ImageFont | ImageFont.FreeTypeFont:
     return ImageFont.load_default(size=px)
 
 
@@ -409,13 +409,13 @@ def render_frames(
         mk = np.broadcast_to(mk.reshape(-1, 3), (len(times), *mk.reshape(-1, 3).shape))
     mk_col = None if mk is None else _marker_colors(marker_colors, mk.shape[1])
     radius = marker_radius or 0.12 * extent
-    font, small = _font(max(10, h // 22)), _font(max(9, h // 28))
+    font, small = label_font(max(10, h // 22)), label_font(max(9, h // 28))
     for r in range(len(times)):
         eye, rot = eyes[r], look_at(eyes[r], targets[r])
         img = Image.fromarray(background(medium, eye, rot, xs, ys, seabed))
         draw = ImageDraw.Draw(img)
         pos = np.concatenate([p[r] for p in positions])
-        items = _face_items(pos, mesh, eye, rot, focal, size, medium)
+        items = face_items(pos, mesh, eye, rot, focal, size, medium)
         if mk is not None and mk.shape[1]:
             items += _marker_items(mk[r], mk_col, radius, eye, rot, focal, size, medium)
         items.sort(key=lambda it: -it[0])
@@ -423,14 +423,14 @@ def render_frames(
             if kind == 0:
                 draw.polygon(geom, fill=col, outline=col)
             else:
-                _draw_buoy(draw, *geom, col)
+                draw_buoy(draw, *geom, col)
         for i, label in enumerate(labels or ()):
-            scr, z = _project(positions[i][r], eye, rot, focal, size)
+            scr, z = project_points(positions[i][r], eye, rot, focal, size)
             good = (z > 0.05) & np.isfinite(scr).all(axis=1)
             if good.any():
                 x, y = scr[good, 0].mean(), scr[good, 1].min() - 4
-                draw.text((x, y), str(label), font=small, anchor="md", **_TEXT)
-        draw.text((8, 6), f"t = {times[r]:.2f} s", font=font, **_TEXT)
+                draw.text((x, y), str(label), font=small, anchor="md", **TEXT_STYLE)
+        draw.text((8, 6), f"t = {times[r]:.2f} s", font=font, **TEXT_STYLE)
         yield np.array(img)
 
 

@@ -27,7 +27,7 @@ from zoetic.san.creature import Creature, Link
 
 __all__ = ["draw_frame", "link_outline", "plot_ranking", "plot_tuning", "render_frames"]
 
-_LINK_COLOURS = ("#4c72b0", "#dd8452", "#55a868", "#c44e52", "#8172b3", "#937860")
+LINK_COLOURS = ("#4c72b0", "#dd8452", "#55a868", "#c44e52", "#8172b3", "#937860")
 
 
 def link_outline(link: Link, pose: np.ndarray, n: int = 10) -> np.ndarray:
@@ -97,7 +97,7 @@ def draw_frame(ax, creature: Creature, rollout, i: int) -> None:
         ax.plot(f[: i + 1, 0], f[: i + 1, 1], color="#e377c2", lw=0.8, ls=":", zorder=2)
         ax.plot(*f[i], marker="*", ms=12, color="#e377c2", zorder=5)
     for k, outline in enumerate(outlines):
-        colour = _LINK_COLOURS[k % len(_LINK_COLOURS)]
+        colour = LINK_COLOURS[k % len(LINK_COLOURS)]
         ax.add_patch(Polygon(outline, closed=True, fc=colour, ec="k", lw=0.8, alpha=0.9, zorder=3))
     ax.set_title(
         f"{creature.name}   t = {rollout.times[i]:5.2f} s   x = {pose[0, 0]:+.2f} m",

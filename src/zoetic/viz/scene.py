@@ -215,7 +215,7 @@ def _from_san(run: Path, fps: float) -> Scene:
     from zoetic.san.network import load_with_creature
     from zoetic.san.search import speed_cm_s
     from zoetic.san.show import replay, resolve_network
-    from zoetic.viz.san import _LINK_COLOURS, link_outline
+    from zoetic.viz.san import LINK_COLOURS, link_outline
 
     file = resolve_network(run)
     net, c = load_with_creature(file)
@@ -239,7 +239,7 @@ def _from_san(run: Path, fps: float) -> Scene:
         x, p, ang = poses[:, li, 0], poses[:, li, 1], poses[:, li, 2]
         height = np.full_like(x, link.out_of_plane / 2 if not vertical else 0.0)
         tr = np.column_stack([x, p, np.zeros_like(x)] if vertical else [x, height, p])
-        colour = ImageColor.getrgb(_LINK_COLOURS[li % len(_LINK_COLOURS)])[:3]
+        colour = ImageColor.getrgb(LINK_COLOURS[li % len(LINK_COLOURS)])[:3]
         links.append(Rigid(link.name, colour, verts, faces,
                            tr.astype(np.float32), ang.astype(np.float32), axis))  # fmt: skip
         cx = x + np.cos(ang) * link.centre

@@ -221,19 +221,19 @@ def stunt_camera(points: np.ndarray, times: np.ndarray, size: tuple[int, int], f
 
 def _quad_items(quads, colors, eye, rot, focal, size, medium) -> list[tuple]:
     """Painter items for flat polygons (k, 3) split at the water surface, tinted below it."""
-    from zoetic.viz.render3d import _project, _split, _water_tint
+    from zoetic.viz.render3d import project_points, split_at_level, water_tint
 
     level = medium.water_level
     items = []
     for q, col in zip(quads, colors, strict=True):
-        for part in _split(np.asarray(q, float), level):
+        for part in split_at_level(np.asarray(q, float), level):
             if len(part) < 3:
                 continue
-            _, z = _project(part, eye, rot, focal, size)
+            _, z = project_points(part, eye, rot, focal, size)
             if (z <= 0.05).any():
                 continue
-            c = _water_tint(np.asarray(col, float)[None], part.mean(0)[None], eye, medium)[0]
-            flat = _project(part, eye, rot, focal, size)[0].ravel().tolist()
+            c = water_tint(np.asarray(col, float)[None], part.mean(0)[None], eye, medium)[0]
+            flat = project_points(part, eye, rot, focal, size)[0].ravel().tolist()
             items.append((float(z.max()), 0, flat, tuple(np.clip(c, 0, 255).astype(int))))
     return items
 
@@ -270,16 +270,16 @@ def stunt_frames(body, positions: np.ndarray, times: np.ndarray, medium, objects
     from zoetic.physics.media import get_medium
     from zoetic.physics.objects import Ball, Box, Cylinder
     from zoetic.viz.render3d import (
-        _TEXT,
-        _draw_buoy,
-        _face_items,
-        _font,
-        _Mesh,
-        _project,
-        _water_tint,
+        TEXT_STYLE,
+        SceneMesh,
         background,
         body_color,
+        draw_buoy,
+        face_items,
+        label_font,
         look_at,
+        project_points,
+        water_tint,
     )
 
     medium = get_medium(medium)
@@ -314,14 +314,14 @@ def stunt_frames(body, positions: np.ndarray, times: np.ndarray, medium, objects
     hi = np.max(np.where(fin[..., None], frame_pts, -np.inf), axis=(0, 1))
     quads, qcols, (px0, px1, pz0, pz1) = _pool_quads(lo, hi, pool, level, eyes[0])
     sub, faces = subdivision(body.faces, body.n_nodes)
-    mesh = _Mesh(faces, countershading(body, sub, faces, body_color(body)),
+    mesh = SceneMesh(faces, countershading(body, sub, faces, body_color(body)),
                  np.ones(len(faces), bool))  # fmt: skip
     spray = spray_particles(surface_crossings(body, pos, times, level), level, medium.gravity)
     w, h = size
     focal = 0.5 * h / np.tan(np.radians(fov) / 2)
     xs = ((np.arange(w) + 0.5 - w / 2) / focal).astype(np.float32)
     ys = ((h / 2 - np.arange(h) - 0.5) / focal).astype(np.float32)
-    font = _font(max(10, h // 22))
+    font = label_font(max(10, h // 22))
     sheet = [[px0, level, pz0], [px1, level, pz0], [px1, level, pz1], [px0, level, pz1]]
     for r in range(len(times)):
         eye, rot = eyes[r], look_at(eyes[r], targets[r])
@@ -346,37 +346,37 @@ def stunt_frames(body, positions: np.ndarray, times: np.ndarray, medium, objects
                                  for e in ends]  # fmt: skip
                 parts = [(p, cl) for seg, cl in segments for p in _segment_split(seg, level)]
                 for part, col in parts:
-                    scr, z = _project(part, eye, rot, focal, size)
+                    scr, z = project_points(part, eye, rot, focal, size)
                     if (z > 0.05).all():
-                        tint = _water_tint(col[None], part.mean(0)[None], eye, medium)[0]
+                        tint = water_tint(col[None], part.mean(0)[None], eye, medium)[0]
                         wpx = max(2.0, 2 * focal * o.radius / z.mean())
                         it = (float(z.mean()), 2, (scr.ravel().tolist(), wpx),
                               tuple(np.clip(tint, 0, 255).astype(int)))  # fmt: skip
                         (above if part[:, 1].mean() >= level else below).append(it)
         for k in range(nb):
             rad = radii[k]
-            scr, z = _project(bl[r, k][None], eye, rot, focal, size)
+            scr, z = project_points(bl[r, k][None], eye, rot, focal, size)
             if z[0] > 0.05 + rad:
-                tint = _water_tint(_BALL_COLOR[None], bl[r, k][None], eye, medium)[0]
+                tint = water_tint(_BALL_COLOR[None], bl[r, k][None], eye, medium)[0]
                 it = (float(z[0]), 1, (scr[0, 0], scr[0, 1], focal * rad / z[0]), tint)
                 (above if bl[r, k, 1] >= level else below).append(it)
-        below += _face_items(verts, mesh, eye, rot, focal, size, medium, side=-1)
-        above += _face_items(verts, mesh, eye, rot, focal, size, medium, side=1)
+        below += face_items(verts, mesh, eye, rot, focal, size, medium, side=-1)
+        above += face_items(verts, mesh, eye, rot, focal, size, medium, side=1)
         for p in spray(times[r]):
-            scr, z = _project(p[None], eye, rot, focal, size)
+            scr, z = project_points(p[None], eye, rot, focal, size)
             if z[0] > 0.05:
                 above.append((float(z[0]), 3, (scr[0, 0], scr[0, 1],
                                                max(1.5, focal * 0.025 / z[0])), _SPRAY))
-        _paint(ImageDraw.Draw(img), below, _draw_buoy)
+        _paint(ImageDraw.Draw(img), below, draw_buoy)
         layer = Image.new("RGBA", img.size, (0, 0, 0, 0))
-        scr, z = _project(np.asarray(sheet, float), eye, rot, focal, size)
+        scr, z = project_points(np.asarray(sheet, float), eye, rot, focal, size)
         if (z > 0.05).all():
             ImageDraw.Draw(layer).polygon(scr.ravel().tolist(), fill=_WATER_SHEET)
         img = Image.alpha_composite(img.convert("RGBA"), layer).convert("RGB")
         draw = ImageDraw.Draw(img)
-        _paint(draw, above, _draw_buoy)
+        _paint(draw, above, draw_buoy)
         label = f"t = {times[r]:.2f} s" + (f"   {title}" if title else "")
-        draw.text((8, 6), label, font=font, **_TEXT)
+        draw.text((8, 6), label, font=font, **TEXT_STYLE)
         yield np.array(img)
 
 
@@ -429,7 +429,7 @@ def frame_strip(frames: Sequence[np.ndarray], path: str | Path, labels: Sequence
     from PIL import Image, ImageDraw
 
     from zoetic.io import atomic_write_bytes
-    from zoetic.viz.render3d import _TEXT, _font
+    from zoetic.viz.render3d import TEXT_STYLE, label_font
 
     h, w = frames[0].shape[:2]
     strip = Image.new("RGB", (w * len(frames), h))
@@ -437,7 +437,8 @@ def frame_strip(frames: Sequence[np.ndarray], path: str | Path, labels: Sequence
     for k, f in enumerate(frames):
         strip.paste(Image.fromarray(np.asarray(f, np.uint8)), (k * w, 0))
         if k < len(labels):
-            draw.text((k * w + 8, h - 24), labels[k], font=_font(max(10, h // 22)), **_TEXT)
+            font = label_font(max(10, h // 22))
+            draw.text((k * w + 8, h - 24), labels[k], font=font, **TEXT_STYLE)
     buf = io.BytesIO()
     strip.save(buf, format="PNG")
     return atomic_write_bytes(path, buf.getvalue())
