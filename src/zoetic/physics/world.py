@@ -158,12 +158,15 @@ class Contacts:
     impulse: per animal (B, N, O, 3), the impulse each node got from each object
     (objects indexed as in ``World.objects``; food and fixed shapes included, food never
     pushes). An object received minus the sum over nodes. between: (B, A, A) the normal
-    impulse animal i got from animal j's skin (None: no animal touched another).
+    impulse animal i got from animal j's skin (None: no animal touched another). near: the
+    animals whose nodes were tested against the objects (every other animal's impulses are
+    zero; None: not known, any may be non-zero).
     """
 
     impulse: tuple[np.ndarray, ...]
     objects: tuple[str, ...] = field(default=())
     between: np.ndarray | None = None
+    near: tuple[int, ...] | None = None
 
     @property
     def touching(self) -> np.ndarray:
@@ -294,12 +297,16 @@ class World:
         self._bvel = np.zeros_like(self._bpos)
         self._bforce = np.zeros_like(self._bpos)
         self._food = np.zeros((self.batch, len(self.foods), 3))
+        self._food_radius = np.array([f.radius for f in self.foods], float)
         self._eaten = np.zeros((self.batch, len(self.foods)), dtype=bool)
         self._n = 0
         self._tables: dict[tuple[int, int], tuple[np.ndarray, tuple]] = {}
+        self._tested: set[int] = set()  # the animals whose node contacts a step computed
         self._views = [(self._pos[o0:o1], self._vel[o0:o1])
                        for o0, o1 in zip(self._off[:-1], self._off[1:], strict=True)]  # fmt: skip
         self._lone = len(self.animals) == 1
+        self._head_rows = np.array([o + b.head for o, b in zip(self._off[:-1], self.bodies,
+                                                              strict=True)], int)
         # animal-animal contact: each body's skin triangles and the broad phase's reach
         self._touchy = bool(animal_contact) and len(self.animals) > 1
         self._faces = [np.ascontiguousarray(b.faces, dtype=np.int64) for b in self.bodies]
@@ -399,6 +406,21 @@ class World:
         """Return the animal's node positions (B, N, 3) in m (a copy)."""
         o0, o1 = self._off[animal], self._off[animal + 1]
         return self._pos[o0:o1].transpose(2, 0, 1).astype(np.float64)
+
+    def node_positions(self, lane: int = 0) -> np.ndarray:
+        """Return every animal's node positions (N_total, 3) in m in one lane (a copy):
+        animal a's are rows ``offsets[a]:offsets[a + 1]`` (``positions(a)[lane]`` for all the
+        animals in one conversion)."""
+        return self._pos[:, :, lane].astype(np.float64)
+
+    def node_velocities(self, lane: int = 0) -> np.ndarray:
+        """Return every animal's node velocities (N_total, 3) in m/s in one lane (a copy)."""
+        return self._vel[:, :, lane].astype(np.float64)
+
+    @property
+    def offsets(self) -> np.ndarray:
+        """Return (animals + 1,) the first row of each animal in ``node_positions``."""
+        return self._off
 
     def velocities(self, animal: int = 0) -> np.ndarray:
         """Return the animal's node velocities (B, N, 3) in m/s (a copy)."""
@@ -522,9 +544,12 @@ class World:
             self._animals_run(tables, 0, steps)
             self._n += steps
             return self._no_contacts
-        heads = self._heads() if len(self.foods) else []
+        heads = self._heads() if len(self.foods) else None
         n_obj = len(self.objects)
-        impulse = [np.zeros((b.n_nodes, n_obj, 3, self.batch)) for b in self.bodies]
+        # one zeroed buffer for all the animals' impulses, each a view of its rows
+        whole = np.zeros((int(self._off[-1]), n_obj, 3, self.batch))
+        impulse = [whole[o0:o1] for o0, o1 in zip(self._off[:-1], self._off[1:], strict=True)]
+        self._tested = set()
         n_an = len(self.animals)
         between = np.zeros((self.batch, n_an, n_an)) if self._touchy else None
         t = 0
@@ -556,6 +581,7 @@ class World:
             tuple(i.transpose(3, 0, 1, 2) for i in impulse),
             tuple(o.name for o in self.objects),
             between if between is not None and between.any() else None,
+            tuple(sorted(self._tested)),
         )
 
     def _close_pairs(self, horizon: float) -> list[tuple[int, int]]:
@@ -636,6 +662,7 @@ class World:
     def _node_contacts(self, a: int, impulse) -> None:
         """One step's contacts of animal a's nodes with the objects (``contacts.node_contacts``;
         impulses recorded in ``impulse[a]``, the balls' reactions in ``_bforce``)."""
+        self._tested.add(a)
         o0, o1 = self._off[a], self._off[a + 1]
         node_contacts(
             self._pos[o0:o1], self._vel[o0:o1], self._mass[a], self.node_radius, self._bpos,
@@ -659,21 +686,21 @@ class World:
         if len(self.balls):
             self._balls(1)
 
-    def _heads(self) -> list[np.ndarray]:
-        return [self._pos[self._off[a] + b.head].T.astype(np.float64)
-                for a, b in enumerate(self.bodies)]  # fmt: skip
+    def _heads(self) -> np.ndarray:
+        """Return the animals' head nodes (animals, B, 3) in m."""
+        return self._pos[self._head_rows].transpose(0, 2, 1).astype(np.float64)
 
-    def _food_update(self, steps: int, heads_before: list[np.ndarray]) -> None:
+    def _food_update(self, steps: int, heads_before: np.ndarray | None) -> None:
         """Drift the food with the current; a food particle is eaten when a head's path
         during the slice (relative to the particle) came within its radius."""
         f0 = self._food.copy()
         self._food += self.current * steps * self.dt
-        if not heads_before:
+        if heads_before is None:
             return
-        radius = np.array([f.radius for f in self.foods])
+        radius = self._food_radius
         # (animals, B, F, 3): each head relative to the food, before and after
-        a = np.stack(heads_before)[:, :, None, :] - f0
-        b = np.stack(self._heads())[:, :, None, :] - self._food
+        a = heads_before[:, :, None, :] - f0
+        b = self._heads()[:, :, None, :] - self._food
         d = b - a
         s = np.clip(-(a * d).sum(-1) / ((d * d).sum(-1) + 1e-12), 0.0, 1.0)
         closest = np.linalg.norm(a + s[..., None] * d, axis=-1)

@@ -21,33 +21,103 @@ STEP = 0.25  # m between occlusion probes along a sight line
 
 
 @njit(cache=True)
+def _sdf1(p0, p1, p2, kind, center, size, s) -> float:
+    """Return the signed distance of the point (p0, p1, p2) to obstacle s."""
+    q0 = p0 - center[s, 0]
+    q1 = p1 - center[s, 1]
+    q2 = p2 - center[s, 2]
+    if kind[s] == 2:  # sphere
+        return math.sqrt(q0 * q0 + q1 * q1 + q2 * q2) - size[s, 0]
+    if kind[s] == 0:  # box: half sizes
+        e0 = abs(q0) - size[s, 0]
+        e1 = abs(q1) - size[s, 1]
+        e2 = abs(q2) - size[s, 2]
+        o = math.sqrt(max(e0, 0.0) ** 2 + max(e1, 0.0) ** 2 + max(e2, 0.0) ** 2)
+        return o + min(max(e0, max(e1, e2)), 0.0)
+    ax = int(size[s, 2])  # cylinder: radius, half length, axis
+    if ax == 0:
+        r, a = math.sqrt(q1 * q1 + q2 * q2), abs(q0)
+    elif ax == 1:
+        r, a = math.sqrt(q0 * q0 + q2 * q2), abs(q1)
+    else:
+        r, a = math.sqrt(q0 * q0 + q1 * q1), abs(q2)
+    e0 = r - size[s, 0]
+    e1 = a - size[s, 1]
+    return math.sqrt(max(e0, 0.0) ** 2 + max(e1, 0.0) ** 2) + min(max(e0, e1), 0.0)
+
+
+@njit(cache=True)
 def _sdf(p, kind, center, size, out) -> None:
     """Fill out (P, S) with the signed distances of points p (P, 3) to the obstacles."""
     for i in range(p.shape[0]):
         for s in range(kind.shape[0]):
-            q0 = p[i, 0] - center[s, 0]
-            q1 = p[i, 1] - center[s, 1]
-            q2 = p[i, 2] - center[s, 2]
-            if kind[s] == 2:  # sphere
-                out[i, s] = math.sqrt(q0 * q0 + q1 * q1 + q2 * q2) - size[s, 0]
-                continue
-            if kind[s] == 0:  # box: half sizes
-                e0 = abs(q0) - size[s, 0]
-                e1 = abs(q1) - size[s, 1]
-                e2 = abs(q2) - size[s, 2]
-                o = math.sqrt(max(e0, 0.0) ** 2 + max(e1, 0.0) ** 2 + max(e2, 0.0) ** 2)
-                out[i, s] = o + min(max(e0, max(e1, e2)), 0.0)
-                continue
-            ax = int(size[s, 2])  # cylinder: radius, half length, axis
-            if ax == 0:
-                r, a = math.sqrt(q1 * q1 + q2 * q2), abs(q0)
-            elif ax == 1:
-                r, a = math.sqrt(q0 * q0 + q2 * q2), abs(q1)
+            out[i, s] = _sdf1(p[i, 0], p[i, 1], p[i, 2], kind, center, size, s)
+
+
+@njit(cache=True)
+def _bounds(kind, center, size):
+    """Return (S, 3) lower and upper corners of boxes holding each obstacle (padded 1 mm)."""
+    lo = np.empty((kind.shape[0], 3))
+    hi = np.empty((kind.shape[0], 3))
+    for s in range(kind.shape[0]):
+        for c in range(3):
+            if kind[s] == 0:
+                h = size[s, c]
+            elif kind[s] == 2:
+                h = size[s, 0]
             else:
-                r, a = math.sqrt(q0 * q0 + q1 * q1), abs(q2)
-            e0 = r - size[s, 0]
-            e1 = a - size[s, 1]
-            out[i, s] = math.sqrt(max(e0, 0.0) ** 2 + max(e1, 0.0) ** 2) + min(max(e0, e1), 0.0)
+                h = size[s, 1] if c == int(size[s, 2]) else size[s, 0]
+            lo[s, c] = center[s, c] - h - 1e-3
+            hi[s, c] = center[s, c] + h + 1e-3
+    return lo, hi
+
+
+@njit(cache=True)
+def _blocked(eyes, targets, ii, jj, kind, center, size, step, out) -> None:
+    """Set out[ii[p], jj[p]] where the segment from eye ii[p] to target jj[p] passes inside an
+    obstacle at one of the k - 1 inner points i/k (k from the longest segment, as ``blocked``
+    documents). Only the obstacles whose bounding box meets the segment's are probed (no
+    point of the segment can lie inside the others); a segment stops at its first point
+    inside."""
+    longest = 0.0
+    for p in range(ii.shape[0]):
+        a0 = targets[jj[p], 0] - eyes[ii[p], 0]
+        a1 = targets[jj[p], 1] - eyes[ii[p], 1]
+        a2 = targets[jj[p], 2] - eyes[ii[p], 2]
+        longest = max(longest, math.sqrt(a0 * a0 + a1 * a1 + a2 * a2))
+    k = max(2, int(math.ceil(longest / step)))
+    lo, hi = _bounds(kind, center, size)
+    near = np.empty(kind.shape[0], np.int64)
+    for p in range(ii.shape[0]):
+        e, t = ii[p], jj[p]
+        m = 0
+        for s in range(kind.shape[0]):
+            apart = False
+            for c in range(3):
+                if (max(eyes[e, c], targets[t, c]) < lo[s, c]
+                        or min(eyes[e, c], targets[t, c]) > hi[s, c]):
+                    apart = True
+            if not apart:
+                near[m] = s
+                m += 1
+        if m == 0:
+            continue
+        s0 = targets[t, 0] - eyes[e, 0]
+        s1 = targets[t, 1] - eyes[e, 1]
+        s2 = targets[t, 2] - eyes[e, 2]
+        hit = False
+        for i in range(1, k):
+            u = i / k
+            x0 = eyes[e, 0] + u * s0
+            x1 = eyes[e, 1] + u * s1
+            x2 = eyes[e, 2] + u * s2
+            for q in range(m):
+                if _sdf1(x0, x1, x2, kind, center, size, near[q]) < 0.0:
+                    hit = True
+                    break
+            if hit:
+                break
+        out[e, t] = hit
 
 
 def obstacle_distance(points: np.ndarray, kind, center, size) -> np.ndarray:
@@ -74,11 +144,10 @@ def blocked(eyes: np.ndarray, targets: np.ndarray, kind, center, size,
     ii, jj = np.nonzero(np.ones((n, m), bool) if pairs is None else pairs)
     if len(ii) == 0:
         return out
-    seg = targets[jj] - eyes[ii]  # (P, 3)
-    k = max(2, int(np.ceil(np.linalg.norm(seg, axis=-1).max() / STEP)))
-    u = (np.arange(1, k) / k)[None, :, None]
-    pts = eyes[ii][:, None, :] + u * seg[:, None, :]  # (P, k-1, 3)
-    out[ii, jj] = (obstacle_distance(pts, kind, center, size) < 0).any(axis=(-1, -2))
+    # every pair's k - 1 points against every obstacle in one compiled loop (no (P, k, S) array)
+    _blocked(np.ascontiguousarray(eyes, float), np.ascontiguousarray(targets, float), ii, jj,
+             np.asarray(kind, np.int64), np.ascontiguousarray(center, float),
+             np.ascontiguousarray(size, float), STEP, out)  # fmt: skip
     return out
 
 
