@@ -191,11 +191,15 @@ def focus(distances, previous: int | None = None, keep_within: float = 1.25) -> 
     not perceived): the nearest, but the previous target is kept while it is perceived and
     no more than ``keep_within`` times farther than the nearest (no dithering)."""
     d = np.asarray(distances, dtype=float).reshape(-1)
-    if d.size == 0 or not np.isfinite(d).any():
+    if d.size == 0:
         return None
-    best = int(np.argmin(d))
-    if previous is not None and 0 <= previous < d.size and np.isfinite(d[previous]):
-        if d[previous] <= keep_within * d[best]:
+    best = int(d.argmin())
+    near = float(d[best])
+    if not math.isfinite(near):  # none perceived (the nearest is at infinity)
+        return None
+    if previous is not None and 0 <= previous < d.size:
+        x = float(d[previous])
+        if math.isfinite(x) and x <= keep_within * near:
             return previous
     return best
 

@@ -464,23 +464,23 @@ def heading_weights(body: Body) -> np.ndarray:
     return w * (r0 @ (m_inv @ body.forward))
 
 
-def _kinematics(world: World, fishes: list[Fish], cw: list[np.ndarray],
-                allpos: np.ndarray | None = None):
+def _kinematics(world: World, weights: list[np.ndarray], cw: list[np.ndarray],
+                heads: list[int], allpos: np.ndarray | None = None):
     """Return each fish's node positions, and (n, 3) centres, unit headings, centre velocities
-    and noses; ``allpos``: ``world.node_positions()`` when already taken this step."""
+    and noses; weights: each fish's node masses over its total; ``allpos``:
+    ``world.node_positions()`` when already taken this step."""
     allpos = world.node_positions(0) if allpos is None else allpos
     allvel = world.node_velocities(0)
-    off = world.offsets
+    off = world.offsets.tolist()
     com, fwd, cv, nose, pos = [], [], [], [], []
-    for a, (f, c) in enumerate(zip(fishes, cw, strict=True)):
+    for a, (w, c, h) in enumerate(zip(weights, cw, heads, strict=True)):
         p, v = allpos[off[a]:off[a + 1]], allvel[off[a]:off[a + 1]]
-        w = f.body.mass / f.body.total_mass
         pos.append(p)
         com.append(w @ p)
         cv.append(w @ v)
         fr = c @ p
         fwd.append(fr / (math.sqrt(fr @ fr) + 1e-12))  # np.linalg.norm's formula
-        nose.append(p[f.body.head])
+        nose.append(p[h])
     return pos, np.array(com), np.array(fwd), np.array(cv), np.array(nose)
 
 
@@ -573,7 +573,10 @@ def live(tank: Tank, seconds: float | None = None,
 
     off = world.offsets
     head_rows = np.array([off[a] + f.body.head for a, f in enumerate(fishes)])
-    pos, com, fwd, vel, nose = _kinematics(world, fishes, cw)
+    masses = [(f.body.mass, f.body.total_mass) for f in fishes]
+    weights = [m / total for m, total in masses]
+    heads_of = [f.body.head for f in fishes]
+    pos, com, fwd, vel, nose = _kinematics(world, weights, cw, heads_of)
     record(pos)
     recorded, allpos = -1, None
     end = world.step_count + world.steps_for(seconds)
@@ -692,9 +695,9 @@ def live(tank: Tank, seconds: float | None = None,
                 if len(kind):
                     deepest = max(deepest, float(-obstacle_distance(allpos, kind, center,
                                                                     size).min()))  # fmt: skip
-                deepest_fish = max(deepest_fish, _fish_depth(fishes, pos, extent))
+                deepest_fish = max(deepest_fish, _fish_depth(fishes, pos, extent, masses))
         pos, com, fwd, vel, nose = _kinematics(
-            world, fishes, cw, allpos if recorded == world.step_count else None)
+            world, weights, cw, heads_of, allpos if recorded == world.step_count else None)
         t1 = world.time
         # catches and matings (fish-fish touches come from the world's contacts above)
         dcoms = np.linalg.norm(com[:, None] - com[None], axis=-1)
@@ -733,11 +736,14 @@ def live(tank: Tank, seconds: float | None = None,
     )  # fmt: skip
 
 
-def _fish_depth(fishes: list[Fish], pos: list[np.ndarray], extent: np.ndarray) -> float:
+def _fish_depth(fishes: list[Fish], pos: list[np.ndarray], extent: np.ndarray,
+                masses: list[tuple[np.ndarray, float]] | None = None) -> float:
     """Return how deep (m) the deepest node of any fish lies inside another fish's closed
-    surface (``physics.bodycontact.deepest``), over the pairs whose bounding spheres meet."""
-    com = np.array([f.body.mass @ p / f.body.total_mass for f, p in zip(fishes, pos,
-                                                                       strict=True)])  # fmt: skip
+    surface (``physics.bodycontact.deepest``), over the pairs whose bounding spheres meet;
+    masses: each fish's node masses and total (default from the bodies)."""
+    if masses is None:
+        masses = [(f.body.mass, f.body.total_mass) for f in fishes]
+    com = np.array([m @ p / total for (m, total), p in zip(masses, pos, strict=True)])
     d = np.linalg.norm(com[:, None] - com[None], axis=-1)
     out = 0.0
     for i, j in zip(*np.nonzero(np.triu(d < extent[:, None] + extent[None], 1)), strict=True):
