@@ -202,10 +202,9 @@ def test_situations_of_all_fishes_equal_each_fishs_own():
 
 
 def test_world_reads_all_positions_at_once_and_names_the_animals_it_tested_for_contact():
+    from zoetic.behavior.aquarium.species import load_species
     from zoetic.bodies import load_animal
     from zoetic.physics.world import Animal, World
-
-    from zoetic.behavior.aquarium.species import load_species
 
     body = load_animal(load_species("minnow").body)
     com = body.mass @ body.rest_pos / body.total_mass
