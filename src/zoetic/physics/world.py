@@ -216,6 +216,33 @@ def fill_table(u, out) -> bool:
     return True
 
 
+@njit(cache=True)
+def eaten_on_path(h0, h1, f0, f1, radius, eaten) -> None:
+    """Mark eaten (B, F) the food particles (before f0, after f1: (B, F, 3)) that a head
+    (before h0, after h1: (animals, B, 3)) came within ``radius`` (F,) of during the slice:
+    the closest point of the head's path relative to the particle (a straight segment)."""
+    for b in range(f0.shape[0]):
+        for q in range(f0.shape[1]):
+            if eaten[b, q]:
+                continue
+            for a in range(h0.shape[0]):
+                a0 = h0[a, b, 0] - f0[b, q, 0]
+                a1 = h0[a, b, 1] - f0[b, q, 1]
+                a2 = h0[a, b, 2] - f0[b, q, 2]
+                d0 = (h1[a, b, 0] - f1[b, q, 0]) - a0
+                d1 = (h1[a, b, 1] - f1[b, q, 1]) - a1
+                d2 = (h1[a, b, 2] - f1[b, q, 2]) - a2
+                s = -(a0 * d0 + a1 * d1 + a2 * d2) / ((d0 * d0 + d1 * d1 + d2 * d2) + 1e-12)
+                s = min(max(s, 0.0), 1.0)
+                c0 = a0 + s * d0
+                c1 = a1 + s * d1
+                c2 = a2 + s * d2
+                closest = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+                if math.isfinite(closest) and closest < radius[q]:
+                    eaten[b, q] = True
+                    break
+
+
 class World:
     """Animals and passive objects in one medium, B copies stepped together.
 
@@ -697,11 +724,5 @@ class World:
         self._food += self.current * steps * self.dt
         if heads_before is None:
             return
-        radius = self._food_radius
-        # (animals, B, F, 3): each head relative to the food, before and after
-        a = heads_before[:, :, None, :] - f0
-        b = self._heads()[:, :, None, :] - self._food
-        d = b - a
-        s = np.clip(-(a * d).sum(-1) / ((d * d).sum(-1) + 1e-12), 0.0, 1.0)
-        closest = np.linalg.norm(a + s[..., None] * d, axis=-1)
-        self._eaten |= (np.isfinite(closest) & (closest < radius)).any(axis=0)
+        eaten_on_path(heads_before, self._heads(), f0, self._food, self._food_radius,
+                      self._eaten)
