@@ -243,6 +243,15 @@ def eaten_on_path(h0, h1, f0, f1, radius, eaten) -> None:
                     break
 
 
+@njit(cache=True)
+def near_each(pos, vel, off, radius, bpos, bvel, bpar, skind, scenter, ssize, horizon, out):
+    """Fill out (animals,) with ``contacts.near`` of each animal (rows off[a]:off[a + 1] of
+    pos and vel): could any of its nodes touch a ball or fixed shape within ``horizon`` s."""
+    for a in range(off.shape[0] - 1):
+        out[a] = near(pos[off[a]:off[a + 1]], vel[off[a]:off[a + 1]], radius, bpos, bvel, bpar,
+                      skind, scenter, ssize, horizon)  # fmt: skip
+
+
 class World:
     """Animals and passive objects in one medium, B copies stepped together.
 
@@ -309,7 +318,7 @@ class World:
         self._solids = len(self.balls) + len(self.statics) > 0
         # animal state: one (N_total, 3, B) float32 array; each animal a contiguous slice
         sizes = [b.n_nodes for b in self.bodies]
-        self._off = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
+        self._off = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
         n_tot = int(self._off[-1])
         self._pos = np.zeros((n_tot, 3, self.batch), dtype=F32)
         self._vel = np.zeros_like(self._pos)
@@ -332,6 +341,7 @@ class World:
         self._views = [(self._pos[o0:o1], self._vel[o0:o1])
                        for o0, o1 in zip(self._off[:-1], self._off[1:], strict=True)]  # fmt: skip
         self._lone = len(self.animals) == 1
+        self._near_buf = np.zeros(len(self.animals), bool)
         self._head_rows = np.array([o + b.head for o, b in zip(self._off[:-1], self.bodies,
                                                               strict=True)], int)
         # animal-animal contact: each body's skin triangles and the broad phase's reach
@@ -655,10 +665,15 @@ class World:
         one = self._parallel if self.batch >= PARALLEL_FROM else self._serial
         base = self._n + t
         busy = sorted({a for p in pairs for a in p})
+        # every animal's nearness to the objects in one call (``_near`` of each)
+        near_now = self._near_buf
+        near_each(self._pos, self._vel, self._off, self.node_radius, self._bpos, self._bvel,
+                  self._bpar, self._skind, self._scenter, self._ssize, (t1 - t) * self.dt,
+                  near_now)  # fmt: skip
         for a, (stepper, table) in enumerate(zip(self._steppers, tables, strict=False)):
             if a in busy:
                 continue
-            if not self._near(a, (t1 - t) * self.dt):
+            if not near_now[a]:
                 kernel(stepper, table, t, t1, base)
                 continue
             for s in range(t, t1):
@@ -666,7 +681,7 @@ class World:
                 one(stepper, table, s, s + 1, self._n + s)
         if not busy:
             return
-        near_shape = [a for a in busy if self._solids and self._near(a, (t1 - t) * self.dt)]
+        near_shape = [a for a in busy if self._solids and near_now[a]]
         # the pairs checked again every SUB_SLICE steps: an animal of a pair not close now
         # takes the sub-slice in one kernel call
         s = t
