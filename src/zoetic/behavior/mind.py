@@ -20,6 +20,7 @@ Pure functions over plain numbers and small arrays; constants in SI (see ``aquar
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -31,6 +32,13 @@ LEVEL = {"avoid": 0, "escape": 1, "school": 1, "eat": 2, "mate": 2, "hunt": 2,
 
 def ramp(s, q1: float, q2: float):
     """Return the stimulus ramp of s: 0 below q1, 1 above q2, (s - q1)/(2 q2 - q1 - s) between."""
+    if isinstance(s, float | int):  # one stimulus: plain floats, the same formula
+        s = float(s)
+        if s <= q1:
+            return 0.0
+        if s >= q2:
+            return 1.0
+        return (s - q1) / max(2 * q2 - q1 - s, 1e-12)
     s = np.asarray(s, dtype=float)
     mid = (s - q1) / np.maximum(2 * q2 - q1 - s, 1e-12)
     out = np.where(s <= q1, 0.0, np.where(s >= q2, 1.0, mid))
@@ -40,16 +48,19 @@ def ramp(s, q1: float, q2: float):
 def hunger(eaten: float, since_meal: float, p0: float, alpha: float = 1.0) -> float:
     """Return the hunger H in [0, 1] after ``since_meal`` s since a meal of ``eaten`` particles."""
     r = 1.0 - p0 * since_meal
-    return float(np.clip(1.0 - eaten * r / alpha, 0.0, 1.0))
+    return min(max(float(1.0 - eaten * r / alpha), 0.0), 1.0)
 
 
 def libido(since_mating: float, p1: float, h: float) -> float:
     """Return the libido L in [0, 1] after ``since_mating`` s at hunger ``h``."""
-    return float(np.clip(p1 * since_mating * (1.0 - h), 0.0, 1.0))
+    return min(max(float(p1 * since_mating * (1.0 - h)), 0.0), 1.0)
 
 
 def fear(distances, d0: float) -> float:
     """Return the fear F in [0, 1] of predators perceived at ``distances`` (m)."""
+    if isinstance(distances, tuple | list) and len(distances) < 8:
+        # a few predators: plain floats, summed in order as numpy sums fewer than 8
+        return float(min(sum(min(d0 / max(x, 1e-9), 1.0) for x in distances), 1.0))
     d = np.asarray(distances, dtype=float).reshape(-1)
     if d.size == 0:
         return 0.0
@@ -107,10 +118,31 @@ def drives(state: MindState, t: float, c, predator_distances=()) -> Drives:
     )  # fmt: skip
 
 
+def drives_many(eaten, meal_time, mating_time, t: float, p0, alpha, p1, d0, predators
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """Return hunger, libido and fear (n,) of n minds at time t in one step over arrays: the
+    minds' last meals (``eaten``, ``meal_time``) and matings (n,), their constants p0, alpha,
+    p1, D0 (n,) or scalars, and ``predators`` (n, m): the distances (m) of the predators each
+    perceives, inf for any other column. Equals ``drives`` of each mind with its perceived
+    predators in column order (the fear summed in that order)."""
+    eaten, meal_time = np.asarray(eaten, float), np.asarray(meal_time, float)
+    r = 1.0 - p0 * (t - meal_time)
+    h = np.minimum(np.maximum(1.0 - eaten * r / alpha, 0.0), 1.0)
+    lib = np.minimum(np.maximum(p1 * (t - np.asarray(mating_time, float)) * (1.0 - h), 0.0), 1.0)
+    d = np.asarray(predators, float).reshape(len(h), -1)
+    if d.shape[1] == 0:
+        return h, lib, np.zeros(len(h))
+    each = np.where(np.isfinite(d),
+                    np.minimum(np.asarray(d0, float).reshape(-1, 1) / np.maximum(d, 1e-9), 1.0),
+                    0.0)  # fmt: skip
+    # a running sum adds the terms one by one in column order, as ``fear`` adds a few
+    return h, lib, np.minimum(np.cumsum(each, axis=1)[:, -1], 1.0)
+
+
 def desire(drive: float, distance: float, q: tuple[float, float]) -> float:
     """Return a motive: the drive times (1 + the ramp of the stimulus 1/d of the nearest
     target), capped at 1 (a target in reach at most doubles an appetite)."""
-    s = 1.0 / distance if np.isfinite(distance) and distance > 0 else 0.0
+    s = 1.0 / distance if math.isfinite(distance) and distance > 0 else 0.0
     return min(1.0, drive * (1.0 + float(ramp(s, q[0], q[1]))))
 
 
@@ -159,20 +191,26 @@ def focus(distances, previous: int | None = None, keep_within: float = 1.25) -> 
     not perceived): the nearest, but the previous target is kept while it is perceived and
     no more than ``keep_within`` times farther than the nearest (no dithering)."""
     d = np.asarray(distances, dtype=float).reshape(-1)
-    if d.size == 0 or not np.isfinite(d).any():
+    if d.size == 0:
         return None
-    best = int(np.argmin(d))
-    if previous is not None and 0 <= previous < d.size and np.isfinite(d[previous]):
-        if d[previous] <= keep_within * d[best]:
+    best = int(d.argmin())
+    near = float(d[best])
+    if not math.isfinite(near):  # none perceived (the nearest is at infinity)
+        return None
+    if previous is not None and 0 <= previous < d.size:
+        x = float(d[previous])
+        if math.isfinite(x) and x <= keep_within * near:
             return previous
     return best
 
 
-def think(state: MindState, t: float, c, habits, sit: Situation, predator: bool = False
-          ) -> tuple[MindState, Drives]:  # fmt: skip
-    """Return the mind after one brain period at time t, and its drives: the intention the
-    priorities and persistence choose (the target is left to the focuser)."""
-    d = drives(state, t, c, sit.predator_distances)
+def think(state: MindState, t: float, c, habits, sit: Situation, predator: bool = False,
+          d: Drives | None = None) -> tuple[MindState, Drives]:  # fmt: skip
+    """Return the mind after one brain period at time t, and its drives (``d`` when given,
+    e.g. from ``drives_many``): the intention the priorities and persistence choose (the
+    target is left to the focuser)."""
+    if d is None:
+        d = drives(state, t, c, sit.predator_distances)
     cand = intend(d, sit, c, habits, predator, state.intention)
     chosen = persist(state.intention, state.since, cand, t, c.persistence)
     if chosen != state.intention:

@@ -158,12 +158,15 @@ class Contacts:
     impulse: per animal (B, N, O, 3), the impulse each node got from each object
     (objects indexed as in ``World.objects``; food and fixed shapes included, food never
     pushes). An object received minus the sum over nodes. between: (B, A, A) the normal
-    impulse animal i got from animal j's skin (None: no animal touched another).
+    impulse animal i got from animal j's skin (None: no animal touched another). near: the
+    animals whose nodes were tested against the objects (every other animal's impulses are
+    zero; None: not known, any may be non-zero).
     """
 
     impulse: tuple[np.ndarray, ...]
     objects: tuple[str, ...] = field(default=())
     between: np.ndarray | None = None
+    near: tuple[int, ...] | None = None
 
     @property
     def touching(self) -> np.ndarray:
@@ -211,6 +214,42 @@ def fill_table(u, out) -> bool:
                     return False
                 out[t, k, b] = min(max(x, 0.0), 1.0)
     return True
+
+
+@njit(cache=True)
+def eaten_on_path(h0, h1, f0, f1, radius, eaten) -> None:
+    """Mark eaten (B, F) the food particles (before f0, after f1: (B, F, 3)) that a head
+    (before h0, after h1: (animals, B, 3)) came within ``radius`` (F,) of during the slice:
+    the closest point of the head's path relative to the particle (a straight segment)."""
+    for b in range(f0.shape[0]):
+        for q in range(f0.shape[1]):
+            if eaten[b, q]:
+                continue
+            for a in range(h0.shape[0]):
+                a0 = h0[a, b, 0] - f0[b, q, 0]
+                a1 = h0[a, b, 1] - f0[b, q, 1]
+                a2 = h0[a, b, 2] - f0[b, q, 2]
+                d0 = (h1[a, b, 0] - f1[b, q, 0]) - a0
+                d1 = (h1[a, b, 1] - f1[b, q, 1]) - a1
+                d2 = (h1[a, b, 2] - f1[b, q, 2]) - a2
+                s = -(a0 * d0 + a1 * d1 + a2 * d2) / ((d0 * d0 + d1 * d1 + d2 * d2) + 1e-12)
+                s = min(max(s, 0.0), 1.0)
+                c0 = a0 + s * d0
+                c1 = a1 + s * d1
+                c2 = a2 + s * d2
+                closest = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+                if math.isfinite(closest) and closest < radius[q]:
+                    eaten[b, q] = True
+                    break
+
+
+@njit(cache=True)
+def near_each(pos, vel, off, radius, bpos, bvel, bpar, skind, scenter, ssize, horizon, out):
+    """Fill out (animals,) with ``contacts.near`` of each animal (rows off[a]:off[a + 1] of
+    pos and vel): could any of its nodes touch a ball or fixed shape within ``horizon`` s."""
+    for a in range(off.shape[0] - 1):
+        out[a] = near(pos[off[a]:off[a + 1]], vel[off[a]:off[a + 1]], radius, bpos, bvel, bpar,
+                      skind, scenter, ssize, horizon)  # fmt: skip
 
 
 class World:
@@ -279,7 +318,7 @@ class World:
         self._solids = len(self.balls) + len(self.statics) > 0
         # animal state: one (N_total, 3, B) float32 array; each animal a contiguous slice
         sizes = [b.n_nodes for b in self.bodies]
-        self._off = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
+        self._off = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
         n_tot = int(self._off[-1])
         self._pos = np.zeros((n_tot, 3, self.batch), dtype=F32)
         self._vel = np.zeros_like(self._pos)
@@ -294,12 +333,17 @@ class World:
         self._bvel = np.zeros_like(self._bpos)
         self._bforce = np.zeros_like(self._bpos)
         self._food = np.zeros((self.batch, len(self.foods), 3))
+        self._food_radius = np.array([f.radius for f in self.foods], float)
         self._eaten = np.zeros((self.batch, len(self.foods)), dtype=bool)
         self._n = 0
         self._tables: dict[tuple[int, int], tuple[np.ndarray, tuple]] = {}
+        self._tested: set[int] = set()  # the animals whose node contacts a step computed
         self._views = [(self._pos[o0:o1], self._vel[o0:o1])
                        for o0, o1 in zip(self._off[:-1], self._off[1:], strict=True)]  # fmt: skip
         self._lone = len(self.animals) == 1
+        self._near_buf = np.zeros(len(self.animals), bool)
+        self._head_rows = np.array([o + b.head for o, b in zip(self._off[:-1], self.bodies,
+                                                              strict=True)], int)
         # animal-animal contact: each body's skin triangles and the broad phase's reach
         self._touchy = bool(animal_contact) and len(self.animals) > 1
         self._faces = [np.ascontiguousarray(b.faces, dtype=np.int64) for b in self.bodies]
@@ -399,6 +443,21 @@ class World:
         """Return the animal's node positions (B, N, 3) in m (a copy)."""
         o0, o1 = self._off[animal], self._off[animal + 1]
         return self._pos[o0:o1].transpose(2, 0, 1).astype(np.float64)
+
+    def node_positions(self, lane: int = 0) -> np.ndarray:
+        """Return every animal's node positions (N_total, 3) in m in one lane (a copy):
+        animal a's are rows ``offsets[a]:offsets[a + 1]`` (``positions(a)[lane]`` for all the
+        animals in one conversion)."""
+        return self._pos[:, :, lane].astype(np.float64)
+
+    def node_velocities(self, lane: int = 0) -> np.ndarray:
+        """Return every animal's node velocities (N_total, 3) in m/s in one lane (a copy)."""
+        return self._vel[:, :, lane].astype(np.float64)
+
+    @property
+    def offsets(self) -> np.ndarray:
+        """Return (animals + 1,) the first row of each animal in ``node_positions``."""
+        return self._off
 
     def velocities(self, animal: int = 0) -> np.ndarray:
         """Return the animal's node velocities (B, N, 3) in m/s (a copy)."""
@@ -522,9 +581,12 @@ class World:
             self._animals_run(tables, 0, steps)
             self._n += steps
             return self._no_contacts
-        heads = self._heads() if len(self.foods) else []
+        heads = self._heads() if len(self.foods) else None
         n_obj = len(self.objects)
-        impulse = [np.zeros((b.n_nodes, n_obj, 3, self.batch)) for b in self.bodies]
+        # one zeroed buffer for all the animals' impulses, each a view of its rows
+        whole = np.zeros((int(self._off[-1]), n_obj, 3, self.batch))
+        impulse = [whole[o0:o1] for o0, o1 in zip(self._off[:-1], self._off[1:], strict=True)]
+        self._tested = set()
         n_an = len(self.animals)
         between = np.zeros((self.batch, n_an, n_an)) if self._touchy else None
         t = 0
@@ -556,6 +618,7 @@ class World:
             tuple(i.transpose(3, 0, 1, 2) for i in impulse),
             tuple(o.name for o in self.objects),
             between if between is not None and between.any() else None,
+            tuple(sorted(self._tested)),
         )
 
     def _close_pairs(self, horizon: float) -> list[tuple[int, int]]:
@@ -602,10 +665,15 @@ class World:
         one = self._parallel if self.batch >= PARALLEL_FROM else self._serial
         base = self._n + t
         busy = sorted({a for p in pairs for a in p})
+        # every animal's nearness to the objects in one call (``_near`` of each)
+        near_now = self._near_buf
+        near_each(self._pos, self._vel, self._off, self.node_radius, self._bpos, self._bvel,
+                  self._bpar, self._skind, self._scenter, self._ssize, (t1 - t) * self.dt,
+                  near_now)  # fmt: skip
         for a, (stepper, table) in enumerate(zip(self._steppers, tables, strict=False)):
             if a in busy:
                 continue
-            if not self._near(a, (t1 - t) * self.dt):
+            if not near_now[a]:
                 kernel(stepper, table, t, t1, base)
                 continue
             for s in range(t, t1):
@@ -613,7 +681,7 @@ class World:
                 one(stepper, table, s, s + 1, self._n + s)
         if not busy:
             return
-        near_shape = [a for a in busy if self._solids and self._near(a, (t1 - t) * self.dt)]
+        near_shape = [a for a in busy if self._solids and near_now[a]]
         # the pairs checked again every SUB_SLICE steps: an animal of a pair not close now
         # takes the sub-slice in one kernel call
         s = t
@@ -636,6 +704,7 @@ class World:
     def _node_contacts(self, a: int, impulse) -> None:
         """One step's contacts of animal a's nodes with the objects (``contacts.node_contacts``;
         impulses recorded in ``impulse[a]``, the balls' reactions in ``_bforce``)."""
+        self._tested.add(a)
         o0, o1 = self._off[a], self._off[a + 1]
         node_contacts(
             self._pos[o0:o1], self._vel[o0:o1], self._mass[a], self.node_radius, self._bpos,
@@ -659,22 +728,16 @@ class World:
         if len(self.balls):
             self._balls(1)
 
-    def _heads(self) -> list[np.ndarray]:
-        return [self._pos[self._off[a] + b.head].T.astype(np.float64)
-                for a, b in enumerate(self.bodies)]  # fmt: skip
+    def _heads(self) -> np.ndarray:
+        """Return the animals' head nodes (animals, B, 3) in m."""
+        return self._pos[self._head_rows].transpose(0, 2, 1).astype(np.float64)
 
-    def _food_update(self, steps: int, heads_before: list[np.ndarray]) -> None:
+    def _food_update(self, steps: int, heads_before: np.ndarray | None) -> None:
         """Drift the food with the current; a food particle is eaten when a head's path
         during the slice (relative to the particle) came within its radius."""
         f0 = self._food.copy()
         self._food += self.current * steps * self.dt
-        if not heads_before:
+        if heads_before is None:
             return
-        radius = np.array([f.radius for f in self.foods])
-        # (animals, B, F, 3): each head relative to the food, before and after
-        a = np.stack(heads_before)[:, :, None, :] - f0
-        b = np.stack(self._heads())[:, :, None, :] - self._food
-        d = b - a
-        s = np.clip(-(a * d).sum(-1) / ((d * d).sum(-1) + 1e-12), 0.0, 1.0)
-        closest = np.linalg.norm(a + s[..., None] * d, axis=-1)
-        self._eaten |= (np.isfinite(closest) & (closest < radius)).any(axis=0)
+        eaten_on_path(heads_before, self._heads(), f0, self._food, self._food_radius,
+                      self._eaten)

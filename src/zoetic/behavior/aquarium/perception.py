@@ -21,33 +21,107 @@ STEP = 0.25  # m between occlusion probes along a sight line
 
 
 @njit(cache=True)
+def _sdf1(p0, p1, p2, kind, center, size, s) -> float:
+    """Return the signed distance of the point (p0, p1, p2) to obstacle s."""
+    q0 = p0 - center[s, 0]
+    q1 = p1 - center[s, 1]
+    q2 = p2 - center[s, 2]
+    if kind[s] == 2:  # sphere
+        return math.sqrt(q0 * q0 + q1 * q1 + q2 * q2) - size[s, 0]
+    if kind[s] == 0:  # box: half sizes
+        e0 = abs(q0) - size[s, 0]
+        e1 = abs(q1) - size[s, 1]
+        e2 = abs(q2) - size[s, 2]
+        o = math.sqrt(max(e0, 0.0) ** 2 + max(e1, 0.0) ** 2 + max(e2, 0.0) ** 2)
+        return o + min(max(e0, max(e1, e2)), 0.0)
+    ax = int(size[s, 2])  # cylinder: radius, half length, axis
+    if ax == 0:
+        r, a = math.sqrt(q1 * q1 + q2 * q2), abs(q0)
+    elif ax == 1:
+        r, a = math.sqrt(q0 * q0 + q2 * q2), abs(q1)
+    else:
+        r, a = math.sqrt(q0 * q0 + q1 * q1), abs(q2)
+    e0 = r - size[s, 0]
+    e1 = a - size[s, 1]
+    return math.sqrt(max(e0, 0.0) ** 2 + max(e1, 0.0) ** 2) + min(max(e0, e1), 0.0)
+
+
+@njit(cache=True)
 def _sdf(p, kind, center, size, out) -> None:
     """Fill out (P, S) with the signed distances of points p (P, 3) to the obstacles."""
     for i in range(p.shape[0]):
         for s in range(kind.shape[0]):
-            q0 = p[i, 0] - center[s, 0]
-            q1 = p[i, 1] - center[s, 1]
-            q2 = p[i, 2] - center[s, 2]
-            if kind[s] == 2:  # sphere
-                out[i, s] = math.sqrt(q0 * q0 + q1 * q1 + q2 * q2) - size[s, 0]
-                continue
-            if kind[s] == 0:  # box: half sizes
-                e0 = abs(q0) - size[s, 0]
-                e1 = abs(q1) - size[s, 1]
-                e2 = abs(q2) - size[s, 2]
-                o = math.sqrt(max(e0, 0.0) ** 2 + max(e1, 0.0) ** 2 + max(e2, 0.0) ** 2)
-                out[i, s] = o + min(max(e0, max(e1, e2)), 0.0)
-                continue
-            ax = int(size[s, 2])  # cylinder: radius, half length, axis
-            if ax == 0:
-                r, a = math.sqrt(q1 * q1 + q2 * q2), abs(q0)
-            elif ax == 1:
-                r, a = math.sqrt(q0 * q0 + q2 * q2), abs(q1)
+            out[i, s] = _sdf1(p[i, 0], p[i, 1], p[i, 2], kind, center, size, s)
+
+
+@njit(cache=True)
+def _bounds(kind, center, size):
+    """Return (S, 3) lower and upper corners of boxes holding each obstacle (padded 1 mm)."""
+    lo = np.empty((kind.shape[0], 3))
+    hi = np.empty((kind.shape[0], 3))
+    for s in range(kind.shape[0]):
+        for c in range(3):
+            if kind[s] == 0:
+                h = size[s, c]
+            elif kind[s] == 2:
+                h = size[s, 0]
             else:
-                r, a = math.sqrt(q0 * q0 + q1 * q1), abs(q2)
-            e0 = r - size[s, 0]
-            e1 = a - size[s, 1]
-            out[i, s] = math.sqrt(max(e0, 0.0) ** 2 + max(e1, 0.0) ** 2) + min(max(e0, e1), 0.0)
+                h = size[s, 1] if c == int(size[s, 2]) else size[s, 0]
+            lo[s, c] = center[s, c] - h - 1e-3
+            hi[s, c] = center[s, c] + h + 1e-3
+    return lo, hi
+
+
+@njit(cache=True)
+def _blocked(eyes, targets, ask, kind, center, size, step, out) -> None:
+    """Set out[e, t] for the pairs asked (ask (n, m) bools) whose segment from eye e to target
+    t passes inside an obstacle at one of the k - 1 inner points i/k (k from the longest
+    segment asked, as ``blocked`` documents). Only the obstacles whose bounding box meets the
+    segment's are probed (no point of the segment can lie inside the others); a segment stops
+    at its first point inside."""
+    longest = 0.0
+    for e in range(ask.shape[0]):
+        for t in range(ask.shape[1]):
+            if ask[e, t]:
+                a0 = targets[t, 0] - eyes[e, 0]
+                a1 = targets[t, 1] - eyes[e, 1]
+                a2 = targets[t, 2] - eyes[e, 2]
+                longest = max(longest, math.sqrt(a0 * a0 + a1 * a1 + a2 * a2))
+    k = max(2, int(math.ceil(longest / step)))
+    lo, hi = _bounds(kind, center, size)
+    near = np.empty(kind.shape[0], np.int64)
+    for e in range(ask.shape[0]):
+        for t in range(ask.shape[1]):
+            if not ask[e, t]:
+                continue
+            m = 0
+            for s in range(kind.shape[0]):
+                apart = False
+                for c in range(3):
+                    if (max(eyes[e, c], targets[t, c]) < lo[s, c]
+                            or min(eyes[e, c], targets[t, c]) > hi[s, c]):
+                        apart = True
+                if not apart:
+                    near[m] = s
+                    m += 1
+            if m == 0:
+                continue
+            s0 = targets[t, 0] - eyes[e, 0]
+            s1 = targets[t, 1] - eyes[e, 1]
+            s2 = targets[t, 2] - eyes[e, 2]
+            hit = False
+            for i in range(1, k):
+                u = i / k
+                x0 = eyes[e, 0] + u * s0
+                x1 = eyes[e, 1] + u * s1
+                x2 = eyes[e, 2] + u * s2
+                for q in range(m):
+                    if _sdf1(x0, x1, x2, kind, center, size, near[q]) < 0.0:
+                        hit = True
+                        break
+                if hit:
+                    break
+            out[e, t] = hit
 
 
 def obstacle_distance(points: np.ndarray, kind, center, size) -> np.ndarray:
@@ -71,26 +145,41 @@ def blocked(eyes: np.ndarray, targets: np.ndarray, kind, center, size,
     out = np.zeros((n, m), bool)
     if len(kind) == 0 or n == 0 or m == 0:
         return out
-    ii, jj = np.nonzero(np.ones((n, m), bool) if pairs is None else pairs)
-    if len(ii) == 0:
-        return out
-    seg = targets[jj] - eyes[ii]  # (P, 3)
-    k = max(2, int(np.ceil(np.linalg.norm(seg, axis=-1).max() / STEP)))
-    u = (np.arange(1, k) / k)[None, :, None]
-    pts = eyes[ii][:, None, :] + u * seg[:, None, :]  # (P, k-1, 3)
-    out[ii, jj] = (obstacle_distance(pts, kind, center, size) < 0).any(axis=(-1, -2))
+    ask = np.ones((n, m), bool) if pairs is None else np.ascontiguousarray(pairs, bool)
+    # every pair's k - 1 points against the obstacles in one compiled loop
+    _blocked(np.ascontiguousarray(eyes, float), np.ascontiguousarray(targets, float), ask,
+             np.asarray(kind, np.int64), np.ascontiguousarray(center, float),
+             np.ascontiguousarray(size, float), STEP, out)  # fmt: skip
     return out
+
+
+@njit(cache=True)
+def _in_view(eyes, forwards, targets, cos_half, view_range, d, ok) -> None:
+    """Fill d (n, m) with the distances from the eyes to the targets and ok with whether each
+    lies within the eye's range and view cone (cos_half: the cosine of its half angle)."""
+    for i in range(eyes.shape[0]):
+        for j in range(targets.shape[0]):
+            r0 = targets[j, 0] - eyes[i, 0]
+            r1 = targets[j, 1] - eyes[i, 1]
+            r2 = targets[j, 2] - eyes[i, 2]
+            dist = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+            cos = (r0 * forwards[i, 0] + r1 * forwards[i, 1] + r2 * forwards[i, 2]) / max(
+                dist, 1e-9)
+            d[i, j] = dist
+            ok[i, j] = dist <= view_range[i] and cos >= cos_half[i]
 
 
 def in_view(eyes, forwards, targets, view_angle, view_range) -> tuple[np.ndarray, np.ndarray]:
     """Return (distances (n, m), visible (n, m)): within range and the view angle (degrees)."""
-    rel = targets[None, :, :] - eyes[:, None, :]
-    d = np.linalg.norm(rel, axis=-1)
-    cos = (rel * forwards[:, None, :]).sum(-1) / np.maximum(d, 1e-9)
-    half = np.radians(np.asarray(view_angle, float)) / 2
-    ok = (d <= np.asarray(view_range, float)[..., None] if np.ndim(view_range) else
-          d <= view_range)  # fmt: skip
-    return d, ok & (cos >= np.cos(half)[..., None] if np.ndim(half) else cos >= np.cos(half))
+    eyes = np.ascontiguousarray(eyes, float).reshape(-1, 3)
+    targets = np.ascontiguousarray(targets, float).reshape(-1, 3)
+    n, m = len(eyes), len(targets)
+    cos_half = np.broadcast_to(np.cos(np.radians(np.asarray(view_angle, float)) / 2), (n,))
+    rng = np.broadcast_to(np.asarray(view_range, float), (n,))
+    d, ok = np.empty((n, m)), np.empty((n, m), bool)
+    _in_view(eyes, np.ascontiguousarray(np.broadcast_to(forwards, (n, 3)), float), targets,
+             np.ascontiguousarray(cos_half), np.ascontiguousarray(rng), d, ok)  # fmt: skip
+    return d, ok
 
 
 @dataclass(frozen=True)
@@ -121,30 +210,59 @@ def perceive(
     fishes, the food left (F, 3) and the obstacles (packed as ``physics.objects.pack_statics``,
     spheres as kind 2); view_angle, view_range, smell_range are per fish (n,) or scalars."""
     n = len(eyes)
-    va = np.broadcast_to(np.asarray(view_angle, float), (n,))
+    cos_half = np.cos(np.radians(np.broadcast_to(np.asarray(view_angle, float), (n,))) / 2)
     vr = np.broadcast_to(np.asarray(view_range, float), (n,))
     sr = np.broadcast_to(np.asarray(smell_range, float), (n,))
-    df, vf = in_view(eyes, forwards, fish_centers, va, vr)
-    vf &= alive[None, :]
-    vf &= ~blocked(eyes, fish_centers, kind, center, size, vf)
-    np.fill_diagonal(vf, False)
     food = np.asarray(food, float).reshape(-1, 3)
-    if len(food):
-        dd, vd = in_view(eyes, forwards, food, va, vr)
-        vd &= np.asarray(food_left, bool)[None, :]
-        vd &= ~blocked(eyes, food, kind, center, size, vd)
-        vd |= dd <= sr[:, None]
-        vd &= np.asarray(food_left, bool)[None, :]
-    else:
-        dd = vd = np.zeros((n, 0), bool)
-    if len(kind):
-        do = obstacle_distance(eyes, kind, center, size)  # (n, S)
-        # the nearest surface point of each obstacle, seen from the eye
-        rel_ok = do <= vr[:, None]
-        to_c = np.asarray(center)[None] - eyes[:, None]
-        cos = (to_c * forwards[:, None]).sum(-1) / np.maximum(np.linalg.norm(to_c, axis=-1), 1e-9)
-        seen = rel_ok & ((cos >= np.cos(np.radians(va) / 2)[:, None]) | (do < 1.0))
-        obst = np.where(seen, do, np.inf)
-    else:
-        obst = np.zeros((n, 0))
-    return Percepts(np.where(vf, df, np.inf), np.where(vd, dd, np.inf), obst)
+    fish, food_d = np.empty((n, len(fish_centers))), np.empty((n, len(food)))
+    kind = np.asarray(kind, np.int64)
+    obst = np.empty((n, len(kind)))
+    _perceive(np.ascontiguousarray(eyes, float), np.ascontiguousarray(forwards, float),
+              np.ascontiguousarray(fish_centers, float), np.asarray(alive, bool), food,
+              np.asarray(food_left, bool).reshape(-1), kind,
+              np.ascontiguousarray(center, float).reshape(-1, 3),
+              np.ascontiguousarray(size, float).reshape(-1, 3), np.ascontiguousarray(cos_half),
+              np.ascontiguousarray(vr), np.ascontiguousarray(sr), STEP, fish, food_d,
+              obst)  # fmt: skip
+    return Percepts(fish, food_d, obst)
+
+
+@njit(cache=True)
+def _perceive(eyes, forwards, centers, alive, food, left, kind, center, size, cos_half, vr, sr,
+              step, fish, food_d, obst) -> None:  # fmt: skip
+    """``perceive`` compiled: fill fish (n, n), food_d (n, F) and obst (n, S) with the
+    distances perceived (inf where not)."""
+    n, m, f = eyes.shape[0], centers.shape[0], food.shape[0]
+    df, vf = np.empty((n, m)), np.empty((n, m), np.bool_)
+    _in_view(eyes, forwards, centers, cos_half, vr, df, vf)
+    for i in range(n):
+        for j in range(m):
+            vf[i, j] = vf[i, j] and alive[j]
+    hid = np.zeros((n, m), np.bool_)
+    _blocked(eyes, centers, vf, kind, center, size, step, hid)
+    for i in range(n):
+        for j in range(m):
+            fish[i, j] = df[i, j] if vf[i, j] and not hid[i, j] and i != j else np.inf
+    if f:
+        dd, vd = np.empty((n, f)), np.empty((n, f), np.bool_)
+        _in_view(eyes, forwards, food, cos_half, vr, dd, vd)
+        for i in range(n):
+            for j in range(f):
+                vd[i, j] = vd[i, j] and left[j]
+        hid = np.zeros((n, f), np.bool_)
+        _blocked(eyes, food, vd, kind, center, size, step, hid)
+        for i in range(n):
+            for j in range(f):
+                ok = (vd[i, j] and not hid[i, j]) or dd[i, j] <= sr[i]
+                food_d[i, j] = dd[i, j] if ok and left[j] else np.inf
+    for i in range(n):
+        for s in range(kind.shape[0]):
+            # the nearest surface point of each obstacle, seen from the eye
+            do = _sdf1(eyes[i, 0], eyes[i, 1], eyes[i, 2], kind, center, size, s)
+            c0 = center[s, 0] - eyes[i, 0]
+            c1 = center[s, 1] - eyes[i, 1]
+            c2 = center[s, 2] - eyes[i, 2]
+            cos = (c0 * forwards[i, 0] + c1 * forwards[i, 1] + c2 * forwards[i, 2]) / max(
+                math.sqrt(c0 * c0 + c1 * c1 + c2 * c2), 1e-9)
+            seen = do <= vr[i] and (cos >= cos_half[i] or do < 1.0)
+            obst[i, s] = do if seen else np.inf

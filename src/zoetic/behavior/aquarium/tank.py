@@ -46,10 +46,12 @@ from zoetic.behavior.aquarium.species import (
 )
 from zoetic.behavior.mind import (
     INTENTIONS,
+    Drives,
     MindState,
     Situation,
     ate,
     drives,
+    drives_many,
     focus,
     initial_mind,
     think,
@@ -338,18 +340,29 @@ class FishBrain:
             return np.zeros((1, period.steps, self.body.n_actuators))
         return self.locomotion.activations(demand, period.times)[None]
 
-    def decide(self, observation: Mapping, period: Period) -> Demand | None:
-        """Return the motor demand for the period from the fish's percept (None: dead)."""
+    def decide(self, observation: Mapping, period: Period, sit: Situation | None = None,
+               d: Drives | None = None) -> Demand | None:  # fmt: skip
+        """Return the motor demand for the period from the fish's percept (None: dead).
+        ``sit`` and ``d``: the situation and drives when already computed for all the fishes
+        at once (``situations``, ``mind.drives_many``); by default from the percept."""
         if not self.alive:
             return None
         v: View = observation["view"]
         sp = self.species
-        sit, same, hunters, prey_d = self._situation(v)
+        same, hunters, prey = self._kinds(v.fish_species)
+        if sit is None:
+            sit = self._situation(v)[0]
         self.mind, drives = think(self.mind, period.t0, self.constants, sp.habits, sit,
-                                  sp.predator)  # fmt: skip
+                                  sp.predator, d)  # fmt: skip
         intention = self.mind.intention
-        candidates = {"eat": v.food_distance, "mate": np.where(same, v.fish_distance, np.inf),
-                      "hunt": prey_d}.get(intention)  # fmt: skip
+        if intention == "eat":
+            candidates = v.food_distance
+        elif intention == "mate":
+            candidates = np.where(same, v.fish_distance, np.inf)
+        elif intention == "hunt":
+            candidates = np.where(prey, v.fish_distance, np.inf)
+        else:
+            candidates = None
         target = None if candidates is None else focus(candidates, self.mind.target)
         if target != self.mind.target:
             self.mind = replace(self.mind, target=target)
@@ -385,6 +398,41 @@ class FishBrain:
         return demand
 
 
+def situations(fish: np.ndarray, food: np.ndarray, obstacles: np.ndarray, same: np.ndarray,
+               hunters: np.ndarray, prey: np.ndarray, personal_space: np.ndarray,
+               crowd: np.ndarray, collision: np.ndarray) -> tuple[list[Situation], np.ndarray]:
+    """Return every fish's ``Situation`` from all the percepts at once, and (n, n) the
+    distances of the predators each perceives (inf elsewhere, for ``mind.drives_many``).
+
+    fish (n, n), food (n, F), obstacles (n, S): the distances perceived (inf: not perceived,
+    ``Percepts``); same, hunters, prey (n, n): row i the masks of ``FishBrain._kinds`` of fish
+    i; personal_space, crowd (n,): the habits; collision (n,) bools. Row by row the same
+    situations as ``FishBrain._situation`` of each fish's view."""
+    n = len(fish)
+    inf = np.full(n, np.inf)
+    seen = np.isfinite(fish)
+    predators = np.where(hunters, fish, np.inf)
+    food_near = food.min(axis=1) if food.shape[1] else inf
+    mate = np.where(same, fish, np.inf).min(axis=1) if n else inf
+    prey_near = np.where(prey, fish, np.inf).min(axis=1) if n else inf
+    crowded = ((fish < personal_space[:, None]).sum(axis=1) > crowd).tolist()
+    alone = (~seen.any(axis=1)).tolist()
+    near_obstacle = ((obstacles.min(axis=1) < personal_space).tolist() if obstacles.shape[1]
+                     else [False] * n)  # fmt: skip
+    near_predators: list[list[float]] = [[] for _ in range(n)]
+    ii, jj = np.nonzero(np.isfinite(predators))
+    for i, x in zip(ii.tolist(), predators[ii, jj].tolist(), strict=True):
+        near_predators[i].append(x)
+    out = [
+        Situation(bool(c), tuple(pd), f, m, q, bool(cr), bool(al), bool(no))
+        for c, pd, f, m, q, cr, al, no in zip(
+            collision, near_predators, food_near.tolist(), mate.tolist(), prey_near.tolist(),
+            crowded, alone, near_obstacle, strict=True,
+        )
+    ]
+    return out, predators
+
+
 # ============================================================================ living
 
 
@@ -416,17 +464,23 @@ def heading_weights(body: Body) -> np.ndarray:
     return w * (r0 @ (m_inv @ body.forward))
 
 
-def _kinematics(world: World, fishes: list[Fish], cw: list[np.ndarray]):
-    pos = [world.positions(a)[0] for a in range(len(fishes))]
-    vel = [world.velocities(a)[0] for a in range(len(fishes))]
-    com, fwd, cv, nose = [], [], [], []
-    for f, p, v, c in zip(fishes, pos, vel, cw, strict=True):
-        w = f.body.mass / f.body.total_mass
+def _kinematics(world: World, weights: list[np.ndarray], cw: list[np.ndarray],
+                heads: list[int], allpos: np.ndarray | None = None):
+    """Return each fish's node positions, and (n, 3) centres, unit headings, centre velocities
+    and noses; weights: each fish's node masses over its total; ``allpos``:
+    ``world.node_positions()`` when already taken this step."""
+    allpos = world.node_positions(0) if allpos is None else allpos
+    allvel = world.node_velocities(0)
+    off = world.offsets.tolist()
+    com, fwd, cv, nose, pos = [], [], [], [], []
+    for a, (w, c, h) in enumerate(zip(weights, cw, heads, strict=True)):
+        p, v = allpos[off[a]:off[a + 1]], allvel[off[a]:off[a + 1]]
+        pos.append(p)
         com.append(w @ p)
         cv.append(w @ v)
         fr = c @ p
         fwd.append(fr / (math.sqrt(fr @ fr) + 1e-12))  # np.linalg.norm's formula
-        nose.append(p[f.body.head])
+        nose.append(p[h])
     return pos, np.array(com), np.array(fwd), np.array(cv), np.array(nose)
 
 
@@ -484,6 +538,16 @@ def live(tank: Tank, seconds: float | None = None,
     vr = np.array([f.species.senses.view_range for f in fishes])
     sr = np.array([f.species.senses.smell_range for f in fishes])
     cw = [heading_weights(f.body) for f in fishes]
+    # each fish's kinds of fishes (rows: same species, hunters, prey), habits and constants
+    kinds = [b._kinds(names) for b in brains]
+    same, hunters, prey_of = (np.array([k[x] for k in kinds]) for x in range(3))
+    space = np.array([f.species.habits.personal_space for f in fishes], float)
+    crowd = np.array([f.species.habits.crowd for f in fishes])
+    consts = [b.constants for b in brains]
+    p0 = np.array([c.hunger_rate for c in consts], float)
+    alpha = np.array([c.alpha for c in consts], float)
+    p1 = np.array([c.libido_rate for c in consts], float)
+    d0 = np.array([c.fear_distance for c in consts], float)
     dt = world.dt
     t_start = time.perf_counter()
     times, positions, foods, eaten = [], [[] for _ in fishes], [], []
@@ -507,8 +571,14 @@ def live(tank: Tank, seconds: float | None = None,
         foods.append(world.food_positions[0])
         eaten.append(world.food_eaten[0])
 
-    pos, com, fwd, vel, nose = _kinematics(world, fishes, cw)
+    off = world.offsets
+    head_rows = np.array([off[a] + f.body.head for a, f in enumerate(fishes)])
+    masses = [(f.body.mass, f.body.total_mass) for f in fishes]
+    weights = [m / total for m, total in masses]
+    heads_of = [f.body.head for f in fishes]
+    pos, com, fwd, vel, nose = _kinematics(world, weights, cw, heads_of)
     record(pos)
+    recorded, allpos = -1, None
     end = world.step_count + world.steps_for(seconds)
     rec_steps = max(1, int(round(cfg.record_period / dt)))
     k = 0
@@ -544,6 +614,7 @@ def live(tank: Tank, seconds: float | None = None,
         ahead = obstacle_distance(np.stack([probes_ahead(m, probe_reach(m, q))
                                             for m, q in zip(mes, meals, strict=True)]),
                                   kind, center, size)  # fmt: skip
+        hits, aways = [], []
         for i, b in enumerate(brains):
             me = mes[i]
             others = com[np.isfinite(pc.fish[i])]
@@ -553,9 +624,21 @@ def live(tank: Tank, seconds: float | None = None,
             if hit and away is not None:
                 # the vertical component of fwd x away: which side the way out lies on
                 b.avoid_side = 1 if fwd[i][2] * away[0] - fwd[i][0] * away[2] < 0 else -1
-            view = View(me, pc.fish[i], seen_com.get(i, com), fwd, vel, names, pc.food[i], food_pos,
-                        pc.obstacles[i], hit, away)  # fmt: skip
-            demands.append(b.decide({"view": view, "time": np.array([t])}, period))
+            hits.append(hit)
+            aways.append(away)
+        # every fish's situation and drives in one step over arrays
+        sits, predators = situations(pc.fish, pc.food, pc.obstacles, same, hunters, prey_of,
+                                     space, crowd, hits)  # fmt: skip
+        mind_state = [b.mind for b in brains]
+        hunger, libido, fear = (x.tolist() for x in drives_many(
+            [m.eaten for m in mind_state], [m.meal_time for m in mind_state],
+            [m.mating_time for m in mind_state], t, p0, alpha, p1, d0, predators))  # fmt: skip
+        obs = {"time": np.array([t])}
+        for i, b in enumerate(brains):
+            view = View(mes[i], pc.fish[i], seen_com.get(i, com), fwd, vel, names, pc.food[i],
+                        food_pos, pc.obstacles[i], hits[i], aways[i])  # fmt: skip
+            demands.append(b.decide({**obs, "view": view}, period, sits[i],
+                                    Drives(hunger[i], libido[i], fear[i])))  # fmt: skip
         rows = _activations(brains, demands, period)
         th = [b.thought for b in brains]
         b_times.append(t)
@@ -574,8 +657,7 @@ def live(tank: Tank, seconds: float | None = None,
         while j < steps:
             m = min(steps - j, rec_steps - (world.step_count % rec_steps))
             before = world.food_eaten[0]
-            heads = nose if j == 0 else np.array([world.positions(a)[0][fishes[a].body.head]
-                                                  for a in range(n)])  # fmt: skip
+            heads = nose if j == 0 else world.node_positions(0)[head_rows]
             contacts = world.step(m * dt, [r[:, j:j + m] for r in rows])
             j += m
             new = world.food_eaten[0] & ~before
@@ -596,21 +678,26 @@ def live(tank: Tank, seconds: float | None = None,
                     fish_touch[i, j2] = world.time
             if contacts.impulse and contacts.impulse[0].shape[2]:
                 # contacts.touching[0] for the one lane, without stacking every animal's
-                now = np.array([(i[0] != 0.0).any(axis=(0, 2)) for i in contacts.impulse])
-                for i, o in zip(*np.nonzero(now), strict=True):
+                # (only the animals whose nodes were tested: the others' impulses are zero)
+                tested = range(n) if contacts.near is None else contacts.near
+                now = [(i, o) for i in tested
+                       for o in np.flatnonzero((contacts.impulse[i][0] != 0.0).any(axis=(0, 2)))]
+                for i, o in now:
                     if o in static_obj and world.time - touching[i, o] > APART:
                         events.append((world.time, fishes[i].name, "collision",
                                        world.objects[o].name))  # fmt: skip
                     touching[i, o] = world.time
             if world.step_count % rec_steps == 0 or world.step_count == end:
-                pos = [world.positions(a)[0] for a in range(n)]
+                allpos = world.node_positions(0)
+                pos = [allpos[o0:o1] for o0, o1 in zip(off[:-1], off[1:], strict=True)]
                 record(pos)
+                recorded = world.step_count
                 if len(kind):
-                    allpos = np.concatenate(pos)
                     deepest = max(deepest, float(-obstacle_distance(allpos, kind, center,
                                                                     size).min()))  # fmt: skip
-                deepest_fish = max(deepest_fish, _fish_depth(fishes, pos, extent))
-        pos, com, fwd, vel, nose = _kinematics(world, fishes, cw)
+                deepest_fish = max(deepest_fish, _fish_depth(fishes, pos, extent, masses))
+        pos, com, fwd, vel, nose = _kinematics(
+            world, weights, cw, heads_of, allpos if recorded == world.step_count else None)
         t1 = world.time
         # catches and matings (fish-fish touches come from the world's contacts above)
         dcoms = np.linalg.norm(com[:, None] - com[None], axis=-1)
@@ -649,11 +736,14 @@ def live(tank: Tank, seconds: float | None = None,
     )  # fmt: skip
 
 
-def _fish_depth(fishes: list[Fish], pos: list[np.ndarray], extent: np.ndarray) -> float:
+def _fish_depth(fishes: list[Fish], pos: list[np.ndarray], extent: np.ndarray,
+                masses: list[tuple[np.ndarray, float]] | None = None) -> float:
     """Return how deep (m) the deepest node of any fish lies inside another fish's closed
-    surface (``physics.bodycontact.deepest``), over the pairs whose bounding spheres meet."""
-    com = np.array([f.body.mass @ p / f.body.total_mass for f, p in zip(fishes, pos,
-                                                                       strict=True)])  # fmt: skip
+    surface (``physics.bodycontact.deepest``), over the pairs whose bounding spheres meet;
+    masses: each fish's node masses and total (default from the bodies)."""
+    if masses is None:
+        masses = [(f.body.mass, f.body.total_mass) for f in fishes]
+    com = np.array([m @ p / total for (m, total), p in zip(masses, pos, strict=True)])
     d = np.linalg.norm(com[:, None] - com[None], axis=-1)
     out = 0.0
     for i, j in zip(*np.nonzero(np.triu(d < extent[:, None] + extent[None], 1)), strict=True):
