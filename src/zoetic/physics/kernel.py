@@ -570,7 +570,7 @@ def _new_stepper(
 def make_stepper(pos, vel, fs, failed, dt, chunk, vmax, body_arrays, med, split) -> Stepper:
     """Return a Stepper over the state arrays pos/vel (N, 3, B), fs and failed (B,) (all
     stepped in place, so they must be C-contiguous float32 / int64), for a body's
-    ``_kernel_arrays``, the medium's array and its ``multirate.split``."""
+    ``kernel_arrays``, the medium's array and its ``multirate.split``."""
     f32, i64 = np.float32, np.int64
     kinds = [f for _, f in STEPPER_FIELDS[5:27]]
     arrays = [

@@ -227,7 +227,7 @@ def _check(body: Body, act: np.ndarray, state: State) -> None:
         )
 
 
-def _kernel_arrays(body: Body) -> tuple:
+def kernel_arrays(body: Body) -> tuple:
     """Return the body's arrays in the order and precision the kernel takes them."""
     f32 = np.float32
     muscle = body.spring_actuator >= 0
@@ -300,7 +300,7 @@ def simulate(
     final_pos = np.empty((n, 3, batch), dtype=f32)
     final_vel = np.empty((n, 3, batch), dtype=f32)
     failed_step = -np.ones(batch, dtype=np.int64)
-    k = _kernel_arrays(body)
+    k = kernel_arrays(body)
     sp = split(body, dt)
     simulate_chunks(
         pos0, vel0, act_t, f32(dt), record_every, chunk_size(batch), f32(VMAX), *k,

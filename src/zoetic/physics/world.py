@@ -39,7 +39,7 @@ from zoetic.physics.kernel import make_stepper
 from zoetic.physics.media import Medium, get_medium
 from zoetic.physics.multirate import split
 from zoetic.physics.objects import Ball, Box, Cylinder, Food, pack_balls, pack_statics
-from zoetic.physics.simulate import VMAX, _kernel_arrays, chunk_size
+from zoetic.physics.simulate import VMAX, chunk_size, kernel_arrays
 
 F32 = np.float32
 # lane-steps per kernel call from which the thread pool is worth its launch (and its barrier,
@@ -323,7 +323,7 @@ class World:
         self._pos = np.zeros((n_tot, 3, self.batch), dtype=F32)
         self._vel = np.zeros_like(self._pos)
         self._mass = [b.mass.astype(np.float64) for b in self.bodies]
-        self._karr = [_kernel_arrays(b) for b in self.bodies]
+        self._karr = [kernel_arrays(b) for b in self.bodies]
         # the multirate split of each body at this dt (stiff springs sub-stepped), as simulate
         self._splits = [tuple(split(b, self.dt)) for b in self.bodies]
         # the kernel's own failure marks, one array per animal: >= 0 marks a dead lane
