@@ -27,6 +27,7 @@ DEPTH_GAIN = 1.0  # rad of climb per m of depth error (capped at MAX_CLIMB)
 MAX_CLIMB = 0.4  # rad: the steepest climb or dive asked for
 PITCH_GAIN = 2.0  # rad of fin pitch per rad of climb-angle error
 FISH_CLEARANCE = 0.8  # m between centres ahead that triggers avoid-fish
+RADIUS_MARGIN = 1.1  # the turning circle a fish plans with, over its calibrated sharpest turn
 
 
 @dataclass(frozen=True)
@@ -173,6 +174,41 @@ def leave(me: Me, around: Around) -> Demand:
     if len(around.fish) == 0:
         return Demand(me.cruise, 0.0)
     return steer(me, me.com - around.fish.mean(axis=0), me.cruise)
+
+
+def turn_paths(me: Me, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the lengths (m) of the shortest ways from the nose to each point (P, 3) in the
+    horizontal plane for a fish that turns no tighter than ``me.radius`` (times
+    ``RADIUS_MARGIN``): a turn to the left, then straight on (left, (P,)), and the same turning
+    right first (right, (P,)). A point inside the left turning circle cannot be reached by a
+    left turn (inf): the fish would circle it."""
+    r = RADIUS_MARGIN * me.radius
+    f = _unit(_flat(me.forward))
+    side = np.array([-f[2], 0.0, f[0]])  # the fish's left
+    rel = np.atleast_2d(points) - me.nose
+    x, y = rel @ f, rel @ side
+    out = []
+    for sgn in (1.0, -1.0):  # left, then the mirror image for right
+        qx, qy = x, sgn * y - r  # the point from the turning circle's centre
+        rho = np.hypot(qx, qy)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            tangent = np.sqrt(np.maximum(rho * rho - r * r, 0.0))
+            # the arc turned before the tangent to the point; the fish starts at angle -pi/2
+            theta = np.arctan2(qy, qx) - np.arccos(np.minimum(r / np.maximum(rho, 1e-9), 1.0))
+        arc = np.mod(theta + np.pi / 2, 2 * np.pi)
+        out.append(np.where(rho >= r, r * arc + tangent, np.inf))
+    return out[0], out[1]
+
+
+def reach_cost(me: Me, points: np.ndarray, distances: np.ndarray) -> np.ndarray:
+    """Return how far (m) the fish must swim to reach each point (``turn_paths``' shorter
+    way), inf where ``distances`` is (not perceived): what a focuser weighs, so that a
+    particle ahead wins over a nearer one beside the fish that needs a loop."""
+    d = np.asarray(distances, float)
+    if not len(d) or not np.isfinite(d).any():
+        return d
+    left, right = turn_paths(me, points)
+    return np.where(np.isfinite(d), np.minimum(left, right), np.inf)
 
 
 def go_to(me: Me, around: Around, rng: np.random.Generator, lead: float = 0.0,
