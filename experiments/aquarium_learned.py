@@ -28,9 +28,11 @@ from zoetic.bodies import load_animal
 
 
 def species_file(out: Path, name: str, skills: str) -> Path:
-    """Write the built-in species ``name`` with ``[motor] skills = skills``."""
+    """Write the built-in species ``name`` with ``[motor] skills = skills`` (in a folder of
+    that name under ``out``)."""
     text = Path(load_species(name).source).read_text()
-    path = out / f"{name}.toml"
+    (out / skills).mkdir(parents=True, exist_ok=True)
+    path = out / skills / f"{name}.toml"
     path.write_text(re.sub(r'^skills = "[^"]*"', f"skills = {json.dumps(skills)}", text,
                            flags=re.M))  # fmt: skip
     return path

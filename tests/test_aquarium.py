@@ -190,7 +190,7 @@ def test_the_focuser_weighs_food_by_the_way_to_it_not_the_distance():
     me = Me(np.zeros(3), np.zeros(3), np.array([1.0, 0.0, 0.0]), np.zeros(3), 0.2, 0.4,
             radius=2.0)  # fmt: skip
     ahead, beside = np.array([4.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.5])
-    left, right = turn_paths(me, np.stack([ahead, beside]))
+    left, right = turn_paths(me, np.stack([ahead, beside]))  # rows: left, right first
     assert left[0] == pytest.approx(4.0) and right[0] == pytest.approx(4.0)
     # inside the left turning circle (radius 2.2 with the margin): no left turn reaches it,
     # the way round to the right is more than three quarters of a circle

@@ -28,6 +28,7 @@ MAX_CLIMB = 0.4  # rad: the steepest climb or dive asked for
 PITCH_GAIN = 2.0  # rad of fin pitch per rad of climb-angle error
 FISH_CLEARANCE = 0.8  # m between centres ahead that triggers avoid-fish
 ROOM_STEP = 0.4  # m between the probes of the room to either side (walls are 0.5 m thick)
+_SIN60 = math.sqrt(3) / 2
 RADIUS_MARGIN = 1.1  # the turning circle a fish plans with, over its calibrated sharpest turn
 
 
@@ -120,13 +121,16 @@ def side_room(me: Me, kind, center, size, reach: float) -> tuple[float, float]:
     to the right of the heading, probed every ``ROOM_STEP`` m or closer out to ``reach``
     (close enough that a 0.5 m thick wall is never stepped over)."""
     f = _unit(_flat(me.forward))
-    side = np.array([-f[2], 0.0, f[0]])  # the fish's left
-    c, sn = 0.5, np.sqrt(3) / 2
-    k = max(2, int(np.ceil((reach - 0.3) / ROOM_STEP)) + 1)
-    along = np.linspace(0.3, max(reach, 0.3), k)[:, None]
-    pts = np.concatenate([me.nose + along * (c * f + sgn * sn * side) for sgn in (1.0, -1.0)])
-    d = obstacle_distance(pts, kind, center, size).min(axis=-1)
-    return float(d[:k].min()), float(d[k:].min())
+    fx, fz = float(f[0]), float(f[2])
+    k = max(2, math.ceil((reach - 0.3) / ROOM_STEP) + 1)
+    along = np.linspace(0.3, max(reach, 0.3), k)
+    pts = np.empty((2, k, 3))
+    pts[:, :, 1] = me.nose[1]
+    for j, sgn in enumerate((1.0, -1.0)):  # the ray (cos 60, sin 60) to the left, then right
+        pts[j, :, 0] = me.nose[0] + along * (0.5 * fx - sgn * _SIN60 * fz)
+        pts[j, :, 2] = me.nose[2] + along * (0.5 * fz + sgn * _SIN60 * fx)
+    d = obstacle_distance(pts, kind, center, size).min(axis=(1, 2))
+    return float(d[0]), float(d[1])
 
 
 def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int = 0,
@@ -195,28 +199,30 @@ def leave(me: Me, around: Around) -> Demand:
     return steer(me, me.com - around.fish.mean(axis=0), me.cruise)
 
 
-def turn_paths(me: Me, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def turn_paths(me: Me, points: np.ndarray) -> np.ndarray:
     """Return the lengths (m) of the shortest ways from the nose to each point (P, 3) in the
     horizontal plane for a fish that turns no tighter than ``me.radius`` (times
-    ``RADIUS_MARGIN``): a turn to the left, then straight on (left, (P,)), and the same turning
-    right first (right, (P,)). A point inside the left turning circle cannot be reached by a
+    ``RADIUS_MARGIN``), as (2, P): a turn to the left, then straight on (row 0), and the same
+    turning right first (row 1). A point inside the left turning circle cannot be reached by a
     left turn (inf): the fish would circle it."""
     r = RADIUS_MARGIN * me.radius
-    f = _unit(_flat(me.forward))
-    side = np.array([-f[2], 0.0, f[0]])  # the fish's left
-    rel = np.atleast_2d(points) - me.nose
-    x, y = rel @ f, rel @ side
-    out = []
-    for sgn in (1.0, -1.0):  # left, then the mirror image for right
-        qx, qy = x, sgn * y - r  # the point from the turning circle's centre
-        rho = np.hypot(qx, qy)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            tangent = np.sqrt(np.maximum(rho * rho - r * r, 0.0))
-            # the arc turned before the tangent to the point; the fish starts at angle -pi/2
-            theta = np.arctan2(qy, qx) - np.arccos(np.minimum(r / np.maximum(rho, 1e-9), 1.0))
-        arc = np.mod(theta + np.pi / 2, 2 * np.pi)
-        out.append(np.where(rho >= r, r * arc + tangent, np.inf))
-    return out[0], out[1]
+    fx, fz = float(me.forward[0]), float(me.forward[2])
+    n = math.hypot(fx, fz) or 1.0
+    fx, fz = fx / n, fz / n
+    pts = np.atleast_2d(points)
+    dx, dz = (pts[:, 0] - me.nose[0]).tolist(), (pts[:, 2] - me.nose[2]).tolist()
+    out = [[math.inf] * len(dx), [math.inf] * len(dx)]
+    # a handful of points: plain Python over lists beats numpy's per-call overhead
+    for k in range(len(dx)):
+        x, y = dx[k] * fx + dz[k] * fz, dz[k] * fx - dx[k] * fz  # ahead, to the left
+        for j, qy in ((0, y - r), (1, -y - r)):  # from the left (right) circle's centre
+            rho = math.hypot(x, qy)
+            if rho >= r:
+                # the arc turned before the tangent to the point (the fish starts at -pi/2)
+                theta = math.atan2(qy, x) - math.acos(min(r / max(rho, 1e-9), 1.0))
+                arc = (theta + math.pi / 2) % (2 * math.pi)
+                out[j][k] = r * arc + math.sqrt(max(rho * rho - r * r, 0.0))
+    return np.array(out)
 
 
 def reach_cost(me: Me, points: np.ndarray, distances: np.ndarray) -> np.ndarray:
@@ -224,10 +230,12 @@ def reach_cost(me: Me, points: np.ndarray, distances: np.ndarray) -> np.ndarray:
     way), inf where ``distances`` is (not perceived): what a focuser weighs, so that a
     particle ahead wins over a nearer one beside the fish that needs a loop."""
     d = np.asarray(distances, float)
-    if not len(d) or not np.isfinite(d).any():
-        return d
-    left, right = turn_paths(me, points)
-    return np.where(np.isfinite(d), np.minimum(left, right), np.inf)
+    seen = np.flatnonzero(d < np.inf)
+    out = np.full(d.shape, np.inf)
+    if len(seen):
+        ways = turn_paths(me, np.asarray(points, float)[seen])
+        out[seen] = ways.min(axis=0)
+    return out
 
 
 def go_to(me: Me, around: Around, rng: np.random.Generator, lead: float = 0.0,

@@ -349,9 +349,9 @@ class FishBrain:
         self.mind, drives = think(self.mind, period.t0, self.constants, sp.habits, sit,
                                   sp.predator)  # fmt: skip
         intention = self.mind.intention
-        candidates = {"eat": reach_cost(v.me, v.food, v.food_distance),
-                      "mate": np.where(same, v.fish_distance, np.inf),
-                      "hunt": prey_d}.get(intention)  # fmt: skip
+        candidates = (reach_cost(v.me, v.food, v.food_distance) if intention == "eat" else
+                      {"mate": np.where(same, v.fish_distance, np.inf),
+                       "hunt": prey_d}.get(intention))  # fmt: skip
         target = None if candidates is None else focus(candidates, self.mind.target)
         if target != self.mind.target:
             self.mind = replace(self.mind, target=target)
