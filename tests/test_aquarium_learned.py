@@ -142,6 +142,15 @@ def test_a_learned_turn_plays_the_sharp_turn_from_its_start(skills):
     np.testing.assert_allclose(swim, motor.swim_signal(10.1 + t, motor.swim(0.3), 0.0))
     loco.activations(Demand(0.3, turn=-2 * TURN_MIN), 10.1 + TURN_REST + t)
     assert loco.turning is not None and loco.turning[0] == 1
+    # a turn to the same side, asked again and again, also waits TURN_REST s after the last
+    start, duration = loco.turning[1], loco.turning[2]
+    end = start + duration
+    loco.activations(Demand(0.3, turn=-1.5), end + t)
+    assert loco.turning is None and loco.last == (1, end)
+    loco.activations(Demand(0.3, turn=-1.5), end + TURN_REST / 2 + t)
+    assert loco.turning is None
+    loco.activations(Demand(0.3, turn=-1.5), end + TURN_REST + t)
+    assert loco.turning is not None and loco.turning[0] == 1
     loco.turning = None
     # a small turn swims on
     straight = loco.activations(Demand(0.3, turn=TURN_MIN / 2), 11.0 + t)
