@@ -1,7 +1,7 @@
 """How well the default tank's fishes forage, over seeds: food eaten, share of brain periods
 spent avoiding and eating, deepest penetrations (into obstacles, into fishes), CPU realtime
 factor. One JSON line a seed, then the means. About 3 s of CPU a seed:
-    python experiments/aquarium_forage.py [--seeds 0 1 2 3 4 5] [--seconds 60]
+    python experiments/aquarium_forage.py [--seeds 0 1 2 ... 9] [--seconds 60]
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ def run(seed: int, seconds: float) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4, 5])
+    ap.add_argument("--seeds", type=int, nargs="+", default=list(range(10)))
     ap.add_argument("--seconds", type=float, default=60.0)
     args = ap.parse_args()
     live(build_tank(TankConfig(fishes=2, food=1, obstacles=1, seconds=0.2)))  # compile

@@ -1,13 +1,13 @@
 """The aquarium with learned motor skills for every species, against the built-in wave.
 
-Trains the shark's basic repertoire (``zoetic repertoire train shark``, resumable; about 1.5
-minutes on 2 cores), writes species files for the minnow and the shark that name it
-(``[motor] skills``), and lives the default scene (10 fishes, 15 food, 5 obstacles, 60 s) on
-seeds 0-2 with learned skills and with the built-in wave, side by side; prints one JSON line a
-run (food eaten, events, deepest penetrations, CPU realtime factor) and the motor
-calibration. Also reports how many fishes ended with a folded tail (nose to tail-fin node
-under 0.9 of the rest length; see docs/aquarium.md, "Why the built-in wave stays the
-default"). About 10 minutes:
+Writes species files for the minnow and the shark with ``[motor] skills = "learned"`` (the
+shark lattice's repertoire shipped in ``behavior/aquarium/skills/shark``, trained by
+``scripts/train_aquarium_skills.py``) and lives the default scene (10 fishes, 15 food, 5
+obstacles, 60 s) on each seed with learned skills and with the built-in wave, side by side;
+prints one JSON line a run (food eaten, events, deepest penetrations, CPU realtime factor), the
+motor calibration, and the means. Also reports how many fishes ended with a folded tail (nose
+to tail-fin node under 0.9 of the rest length; see docs/aquarium.md, "Why the built-in wave
+stays the default"). About 5 s of CPU a run:
     python experiments/aquarium_learned.py [--out /tmp/aquarium_learned] [--seeds 0 1 2]
 """
 
@@ -15,24 +15,26 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
-import sys
+import re
 import time
 from pathlib import Path
 
 import numpy as np
 
 from zoetic.behavior.aquarium.locomotion import learned_motor
-from zoetic.behavior.aquarium.species import load_species
+from zoetic.behavior.aquarium.species import BUILT_IN, LEARNED, SKILLS_DIR, load_species
 from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live, summarize
 from zoetic.bodies import load_animal
 
 
-def species_file(out: Path, name: str, skills: Path) -> Path:
-    """Write the built-in species ``name`` with ``[motor] skills`` naming ``skills``."""
+def species_file(out: Path, name: str, skills: str) -> Path:
+    """Write the built-in species ``name`` with ``[motor] skills = skills`` (in a folder of
+    that name under ``out``)."""
     text = Path(load_species(name).source).read_text()
-    path = out / f"{name}.toml"
-    path.write_text(text.replace('skills = "built-in"', f"skills = {json.dumps(str(skills))}"))
+    (out / skills).mkdir(parents=True, exist_ok=True)
+    path = out / skills / f"{name}.toml"
+    path.write_text(re.sub(r'^skills = "[^"]*"', f"skills = {json.dumps(skills)}", text,
+                           flags=re.M))  # fmt: skip
     return path
 
 
@@ -46,17 +48,15 @@ def folded(body, positions: np.ndarray) -> bool:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("/tmp/aquarium_learned"))
-    ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    ap.add_argument("--seeds", type=int, nargs="+", default=list(range(10)))
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
-    rep = args.out / "shark"
-    if not (rep / "repertoire.json").is_file():
-        subprocess.run([sys.executable, "-m", "zoetic", "repertoire", "train", "shark",
-                        "--out", str(rep)], check=True)  # fmt: skip
-    print(json.dumps(learned_motor(load_animal("shark"), rep).summary()))
-    learned = (species_file(args.out, "minnow", rep), species_file(args.out, "shark", rep))
+    print(json.dumps(learned_motor(load_animal("shark"), SKILLS_DIR / "shark").summary()))
+    learned = tuple(species_file(args.out, n, LEARNED) for n in ("minnow", "shark"))
+    built_in = tuple(species_file(args.out, n, BUILT_IN) for n in ("minnow", "shark"))
+    rows: dict[str, list[dict]] = {"learned": [], "built-in": []}
     for seed in args.seeds:
-        for label, (prey, pred) in (("learned", learned), ("built-in", ("minnow", "shark"))):
+        for label, (prey, pred) in (("learned", learned), ("built-in", built_in)):
             tank = build_tank(TankConfig(seed=seed, record_period=0.1, prey_species=str(prey),
                                          predator_species=str(pred)))  # fmt: skip
             c0 = time.process_time()
@@ -65,12 +65,20 @@ def main() -> None:
             s = summarize(tank, life)
             folds = sum(folded(f.body, p) for f, p in zip(tank.fishes, life.positions,
                                                           strict=True))  # fmt: skip
-            print(json.dumps({
+            row = {
                 "seed": seed, "skills": label, "food_eaten_fraction": s["food_eaten_fraction"],
                 "events": s["events"], "deepest_into_obstacle_m": s["deepest_into_obstacle_m"],
                 "deepest_into_fish_m": s["deepest_into_fish_m"], "folded_tails": folds,
                 "cpu_realtime_factor": round(s["seconds"] / cpu, 1),
-            }), flush=True)  # fmt: skip
+            }  # fmt: skip
+            rows[label].append(row)
+            print(json.dumps(row), flush=True)
+    print(json.dumps({label: {
+        "food_eaten_mean": round(float(np.mean([r["food_eaten_fraction"] for r in rs])), 3),
+        "catches": sum(r["events"]["catch"] for r in rs),
+        "max_deepest_into_obstacle_m": max(r["deepest_into_obstacle_m"] for r in rs),
+        "max_deepest_into_fish_m": max(r["deepest_into_fish_m"] for r in rs),
+    } for label, rs in rows.items()}))  # fmt: skip
 
 
 if __name__ == "__main__":

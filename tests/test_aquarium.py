@@ -181,3 +181,35 @@ def test_fishes_driven_nose_to_nose_do_not_pass_through_each_other(contact):
         assert touches and touches[0][3] == tank.fishes[1].name  # the other fish is named
     else:
         assert life.deepest_fish > 0.03 and not touches
+
+
+def test_the_focuser_weighs_food_by_the_way_to_it_not_the_distance():
+    from zoetic.behavior.aquarium.routines import Me, reach_cost, turn_paths
+    from zoetic.behavior.mind import focus
+
+    me = Me(np.zeros(3), np.zeros(3), np.array([1.0, 0.0, 0.0]), np.zeros(3), 0.2, 0.4,
+            radius=2.0)  # fmt: skip
+    ahead, beside = np.array([4.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.5])
+    left, right = turn_paths(me, np.stack([ahead, beside]))  # rows: left, right first
+    assert left[0] == pytest.approx(4.0) and right[0] == pytest.approx(4.0)
+    # inside the left turning circle (radius 2.2 with the margin): no left turn reaches it,
+    # the way round to the right is more than three quarters of a circle
+    assert left[1] == np.inf and right[1] > 1.5 * np.pi * 2.2
+    cost = reach_cost(me, np.stack([ahead, beside]), np.array([4.0, 1.5]))
+    assert focus(cost) == 0 and focus(np.array([4.0, 1.5])) == 1
+    assert reach_cost(me, np.stack([ahead, beside]), np.array([np.inf, 1.5]))[0] == np.inf
+
+
+def test_a_way_out_of_another_fish_does_not_lead_into_a_wall():
+    from zoetic.behavior.aquarium.routines import Me, collision_ahead
+
+    kind, center, size = pack_statics([Box((0.0, 0.0, -3.25), (20.0, 2.0, 0.25), name="wall")])
+    # heading along the wall (at z = -3) 1.5 m from it; another fish ahead, a little to the
+    # left: away from it is right, into the wall
+    f = np.array([1.0, 0.0, 0.0])
+    me = Me(np.array([-0.5, 0.0, -1.5]), np.array([0.0, 0.0, -1.5]), f, 0.4 * f, 0.2, 0.4)
+    other = np.array([[0.2, 0.0, -1.3]])
+    hit, away = collision_ahead(me, kind, center, size, other)
+    assert hit and away[2] > 0.9  # left, away from the wall
+    hit, away = collision_ahead(me, np.zeros(0, int), np.zeros((0, 3)), np.zeros((0, 3)), other)
+    assert hit and away[2] < -0.9  # without the wall: away from the fish

@@ -5,12 +5,18 @@ references are refused."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from zoetic.behavior.aquarium.locomotion import Demand, LearnedLocomotion, learned_motor
-from zoetic.behavior.aquarium.species import SpeciesError, load_species
+from zoetic.behavior.aquarium.species import (
+    SKILLS_DIR,
+    SpeciesError,
+    load_species,
+    with_skills,
+)
 from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live
 from zoetic.behavior.tracking import handmade_repertoire
 from zoetic.bodies import load_animal
@@ -136,8 +142,38 @@ def test_a_learned_turn_plays_the_sharp_turn_from_its_start(skills):
     np.testing.assert_allclose(swim, motor.swim_signal(10.1 + t, motor.swim(0.3), 0.0))
     loco.activations(Demand(0.3, turn=-2 * TURN_MIN), 10.1 + TURN_REST + t)
     assert loco.turning is not None and loco.turning[0] == 1
+    # a turn to the same side, asked again and again, also waits TURN_REST s after the last
+    start, duration = loco.turning[1], loco.turning[2]
+    end = start + duration
+    loco.activations(Demand(0.3, turn=-1.5), end + t)
+    assert loco.turning is None and loco.last == (1, end)
+    loco.activations(Demand(0.3, turn=-1.5), end + TURN_REST / 2 + t)
+    assert loco.turning is None
+    loco.activations(Demand(0.3, turn=-1.5), end + TURN_REST + t)
+    assert loco.turning is not None and loco.turning[0] == 1
     loco.turning = None
     # a small turn swims on
     straight = loco.activations(Demand(0.3, turn=TURN_MIN / 2), 11.0 + t)
     assert loco.turning is None
     np.testing.assert_allclose(straight, motor.swim_signal(11.0 + t, motor.swim(0.3), 0.0))
+
+
+def test_learned_names_the_repertoire_shipped_for_the_body(tmp_path):
+    # both species swim with the shark lattice, so one shipped repertoire serves both
+    for name in ("minnow", "shark"):
+        text = open(load_species(name).source).read()
+        path = tmp_path / f"{name}.toml"
+        path.write_text(text.replace('skills = "built-in"', 'skills = "learned"'))
+        assert load_species(path).motor.skills == str(SKILLS_DIR / "shark")
+    # a body with no shipped repertoire is refused, naming where the value came from
+    snake = replace(load_species("minnow"), body="snake")
+    with pytest.raises(SpeciesError, match=r"--x.*no learned repertoire is shipped for body"):
+        with_skills(snake, "learned", "--x")
+
+
+def test_the_shipped_repertoire_swims_and_turns_sharply():
+    motor = learned_motor(load_animal("shark"), SKILLS_DIR / "shark")
+    assert motor.top_speed > 0.6  # m/s: faster than the species ask for
+    assert np.degrees(motor.turned[0, -1]) > 90 and np.degrees(motor.turned[1, -1]) < -90
+    size = sum(p.stat().st_size for p in (SKILLS_DIR / "shark").iterdir())
+    assert size < 64 * 1024  # the index and controller files only, not the training runs

@@ -35,7 +35,7 @@ def test_a_species_file_round_trips(tmp_path):
         (("hunger_rate = 0.01675", "hunger_rate = -1.0"), "hunger_rate must be at least 0"),
         (('dislikes = ["crowd"]', 'dislikes = ["crowds"]'), "did you mean 'crowd'"),
         (("fear_threshold = 0.5 ", "fear_threshold = 0.9 "), "panic_threshold"),
-        (('skills = "built-in"', 'skills = "learned"'), "skills"),
+        (('skills = "built-in"', 'skills = "learnd"'), "[motor] skills"),
     ],
 )
 def test_a_bad_species_file_is_refused_naming_the_file_and_entry(tmp_path, edit, message):

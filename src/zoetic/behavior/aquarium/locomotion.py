@@ -81,9 +81,13 @@ TURN_MIN = 0.1  # rad: a smaller demanded turn swims on (the next period correct
 # turn at 0.7 with the swim did not fold it in 8 trials but rolled the fish over, and it ate
 # 13-20 % of the food (seeds 0-2) against 40 % and 67 % (seeds 0, 1) with the bursts.
 TURN_BURST = 0.3
-# s of swimming before a turn to the other side may start. In the tank the folds came when a
-# burst one way was cut short by a turn the other way (a fish bent hard to one side starting
-# the other side's sharp turn at once).
+# s of swimming after a turn before the next may start, to either side. In the tank the folds
+# came when a burst one way was cut short by a turn the other way (a fish bent hard to one
+# side starting the other side's sharp turn at once). A burst restarted at once to the same
+# side plays the sharp turn's opening again and again: with the shipped repertoire a fish
+# asked to turn left every period turned 22 degrees right at 0.1 m/s over 8 s, and 162
+# degrees left with the rest; the all-learned tank ate 56 % of the food (seeds 0-9) with the
+# rest after either side's turn, 39 % with it after the other side's only.
 TURN_REST = 0.3
 
 
@@ -94,8 +98,8 @@ class LearnedLocomotion:
     turn of at least ``TURN_MIN`` rad starts the turn of that side (``LearnedMotor.turn_signal``:
     the learned sharp turn from its own start), played for as long as the calibration says it
     takes to turn the angle (at least one control period, at most ``TURN_BURST``), then back to
-    the swim; a demand to turn the other way ends it at once, and a turn the other way starts
-    only after ``TURN_REST`` s of swimming. Fins hold the pitch. Same
+    the swim; a demand to turn the other way ends it at once, and the next turn (either side)
+    starts only after ``TURN_REST`` s of swimming. Fins hold the pitch. Same
     interface as ``MotorLocomotion``; the state is the turn under way, so each fish has its own
     (``motor`` is shared by the fishes of one body and repertoire).
     """
@@ -128,7 +132,7 @@ class LearnedLocomotion:
                 self.last = (side, min(t0, start + duration))
         if self.turning is None and abs(demand.turn) >= TURN_MIN:
             side, duration = self.motor.turn(demand.turn)
-            if side != self.last[0] and t0 - self.last[1] < TURN_REST - 1e-9:
+            if t0 - self.last[1] < TURN_REST - 1e-9:
                 return self.motor.swim_signal(times, self.motor.swim(demand.speed), pitch)
             duration = min(max(duration, float(times[-1] - t0) + self.body.dt), TURN_BURST)
             self.turning = (side, t0, duration)

@@ -27,6 +27,9 @@ DEPTH_GAIN = 1.0  # rad of climb per m of depth error (capped at MAX_CLIMB)
 MAX_CLIMB = 0.4  # rad: the steepest climb or dive asked for
 PITCH_GAIN = 2.0  # rad of fin pitch per rad of climb-angle error
 FISH_CLEARANCE = 0.8  # m between centres ahead that triggers avoid-fish
+ROOM_STEP = 0.4  # m between the probes of the room to either side (walls are 0.5 m thick)
+_SIN60 = math.sqrt(3) / 2
+RADIUS_MARGIN = 1.1  # the turning circle a fish plans with, over its calibrated sharpest turn
 
 
 @dataclass(frozen=True)
@@ -113,31 +116,55 @@ def probes_ahead(me: Me, reach: float) -> np.ndarray:
     return me.nose + along[:, None] * f
 
 
+def side_room(me: Me, kind, center, size, reach: float) -> tuple[float, float]:
+    """Return the room (m, the nearest obstacle surface) along rays 60 degrees to the left and
+    to the right of the heading, probed every ``ROOM_STEP`` m or closer out to ``reach``
+    (close enough that a 0.5 m thick wall is never stepped over)."""
+    f = _unit(_flat(me.forward))
+    fx, fz = float(f[0]), float(f[2])
+    k = max(2, math.ceil((reach - 0.3) / ROOM_STEP) + 1)
+    along = np.linspace(0.3, max(reach, 0.3), k)
+    pts = np.empty((2, k, 3))
+    pts[:, :, 1] = me.nose[1]
+    for j, sgn in enumerate((1.0, -1.0)):  # the ray (cos 60, sin 60) to the left, then right
+        pts[j, :, 0] = me.nose[0] + along * (0.5 * fx - sgn * _SIN60 * fz)
+        pts[j, :, 2] = me.nose[2] + along * (0.5 * fz + sgn * _SIN60 * fx)
+    d = obstacle_distance(pts, kind, center, size).min(axis=(1, 2))
+    return float(d[0]), float(d[1])
+
+
 def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int = 0,
                     target: float | None = None, ahead: np.ndarray | None = None
                     ) -> tuple[bool, np.ndarray | None]:  # fmt: skip
     """Return (imminent?, the unit way out): probes along the heading (``probes_ahead`` up to
     ``probe_reach``) against the obstacles (clearance CLEARANCE m) and other fishes' centres
-    ahead. prefer: +1 (left) or -1 (right) keeps the side an avoidance already turns to;
+    ahead. prefer: +1 (left) or -1 (right) keeps the side an avoidance already turns to,
+    unless obstacles close that side and the other side is open; a way out of another fish's
+    path is also checked against the obstacles (it must not lead into a rock or a wall);
     target: the distance (m) to a food particle the fish is about to eat; ahead: the probes'
     obstacle distances (PROBES, S) when already computed (the tank does all fishes at once)."""
     reach = probe_reach(me, target)
     f = _unit(_flat(me.forward))
+    side = np.array([-f[2], 0.0, f[0]])  # the fish's left
+
+    def way_out(sgn: int) -> np.ndarray:
+        """The side sgn (+1 left), unless obstacles close it and the other side is open (with
+        both closed the side is kept: flipping between them would ram the fish into a corner)."""
+        if not len(kind):
+            return side * sgn
+        left, right = side_room(me, kind, center, size, reach)
+        mine, other = (left, right) if sgn > 0 else (right, left)
+        return side * (-sgn if mine < CLEARANCE <= other else sgn)
+
     if len(kind):
         d = obstacle_distance(probes_ahead(me, reach), kind, center, size) if ahead is None \
             else ahead  # fmt: skip
         if d.min() < CLEARANCE:
-            side = np.array([-f[2], 0.0, f[0]])  # the fish's left
             if prefer:
-                return True, side * prefer
-            # turn to the side with more room: probe 60 degrees to either side
-            c, sn = 0.5, np.sqrt(3) / 2
-            room = []
-            for sgn in (1.0, -1.0):
-                ray = c * f + sgn * sn * side
-                pts = me.nose + np.linspace(0.3, reach, 6)[:, None] * ray
-                room.append(float(obstacle_distance(pts, kind, center, size).min()))
-            return True, side if room[0] >= room[1] else -side
+                return True, way_out(prefer)
+            # turn to the side with more room
+            left, right = side_room(me, kind, center, size, reach)
+            return True, side if left >= right else -side
     if len(others):
         rel = others - me.com
         rel[:, 1] = 0.0
@@ -146,11 +173,8 @@ def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int 
         close = ahead & (dist < FISH_CLEARANCE)
         if close.any():
             j = int(np.argmin(np.where(close, dist, np.inf)))
-            side = np.array([-f[2], 0.0, f[0]])
-            away = -side if float(rel[j] @ side) > 0 else side
-            if prefer:
-                away = side * prefer
-            return True, away
+            sgn = prefer or (-1 if float(rel[j] @ side) > 0 else 1)
+            return True, way_out(sgn)
     return False, None
 
 
@@ -173,6 +197,45 @@ def leave(me: Me, around: Around) -> Demand:
     if len(around.fish) == 0:
         return Demand(me.cruise, 0.0)
     return steer(me, me.com - around.fish.mean(axis=0), me.cruise)
+
+
+def turn_paths(me: Me, points: np.ndarray) -> np.ndarray:
+    """Return the lengths (m) of the shortest ways from the nose to each point (P, 3) in the
+    horizontal plane for a fish that turns no tighter than ``me.radius`` (times
+    ``RADIUS_MARGIN``), as (2, P): a turn to the left, then straight on (row 0), and the same
+    turning right first (row 1). A point inside the left turning circle cannot be reached by a
+    left turn (inf): the fish would circle it."""
+    r = RADIUS_MARGIN * me.radius
+    fx, fz = float(me.forward[0]), float(me.forward[2])
+    n = math.hypot(fx, fz) or 1.0
+    fx, fz = fx / n, fz / n
+    pts = np.atleast_2d(points)
+    dx, dz = (pts[:, 0] - me.nose[0]).tolist(), (pts[:, 2] - me.nose[2]).tolist()
+    out = [[math.inf] * len(dx), [math.inf] * len(dx)]
+    # a handful of points: plain Python over lists beats numpy's per-call overhead
+    for k in range(len(dx)):
+        x, y = dx[k] * fx + dz[k] * fz, dz[k] * fx - dx[k] * fz  # ahead, to the left
+        for j, qy in ((0, y - r), (1, -y - r)):  # from the left (right) circle's centre
+            rho = math.hypot(x, qy)
+            if rho >= r:
+                # the arc turned before the tangent to the point (the fish starts at -pi/2)
+                theta = math.atan2(qy, x) - math.acos(min(r / max(rho, 1e-9), 1.0))
+                arc = (theta + math.pi / 2) % (2 * math.pi)
+                out[j][k] = r * arc + math.sqrt(max(rho * rho - r * r, 0.0))
+    return np.array(out)
+
+
+def reach_cost(me: Me, points: np.ndarray, distances: np.ndarray) -> np.ndarray:
+    """Return how far (m) the fish must swim to reach each point (``turn_paths``' shorter
+    way), inf where ``distances`` is (not perceived): what a focuser weighs, so that a
+    particle ahead wins over a nearer one beside the fish that needs a loop."""
+    d = np.asarray(distances, float)
+    seen = np.flatnonzero(d < np.inf)
+    out = np.full(d.shape, np.inf)
+    if len(seen):
+        ways = turn_paths(me, np.asarray(points, float)[seen])
+        out[seen] = ways.min(axis=0)
+    return out
 
 
 def go_to(me: Me, around: Around, rng: np.random.Generator, lead: float = 0.0,

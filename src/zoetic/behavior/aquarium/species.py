@@ -22,6 +22,10 @@ SPECIES_DIR = Path(__file__).parent / "species"
 HABIT_WORDS = ("company", "crowd", "obstacles")
 COWARD_FEAR = 2.5  # a coward fears from 2.5 times as far (the re-implementation's 500 vs 200)
 BUILT_IN = "built-in"  # the calibrated steered wave (``locomotion.MotorLocomotion``)
+# the learned repertoire shipped for the species' body: ``skills/<body>/``, trained by
+# scripts/train_aquarium_skills.py (``zoetic repertoire train <body>``, seed 0)
+LEARNED = "learned"
+SKILLS_DIR = Path(__file__).parent / "skills"
 # a learned repertoire's entries the motor controllers play (``behavior.motor.LearnedMotor``)
 SKILL_ENTRIES = LEARNED_BASES
 
@@ -70,7 +74,8 @@ class Senses:
 
 @dataclass(frozen=True)
 class Motor:
-    """Motor skills: which controllers ("built-in" or a learned repertoire's directory),
+    """Motor skills: which controllers ("built-in", "learned": the repertoire shipped for the
+    body, or a learned repertoire's directory),
     cruising and top speed (m/s), a predator's catch radius."""
 
     skills: str = BUILT_IN
@@ -240,23 +245,45 @@ def load_species(name_or_path: str | Path) -> Species:
     spec = parse_species(load_toml(path, "species file", SpeciesError), str(path))
     if is_path(spec.body) and not Path(spec.body).is_absolute():
         spec = Species(**{**spec.__dict__, "body": str(path.parent / spec.body)})
-    if spec.motor.skills != BUILT_IN:
+    if spec.motor.skills not in (BUILT_IN, LEARNED):
         skills = Path(spec.motor.skills).expanduser()
         if not skills.is_absolute():
             skills = path.parent / skills
         spec = with_skills(spec, skills)
+    elif spec.motor.skills == LEARNED:
+        spec = with_skills(spec, LEARNED)
     return spec
 
 
 def with_skills(spec: Species, skills: str | Path, where: str | None = None) -> Species:
-    """Return the species with its motor skills replaced: ``"built-in"`` or a learned
-    repertoire's directory, checked (``check_skills``); ``where`` names where the value came
-    from in an error (default the species file's ``[motor] skills``)."""
+    """Return the species with its motor skills replaced: ``"built-in"``, ``"learned"`` (the
+    repertoire shipped for its body, ``learned_skills``) or a learned repertoire's directory,
+    checked (``check_skills``); ``where`` names where the value came from in an error (default
+    the species file's ``[motor] skills``)."""
     if str(skills) == BUILT_IN:
         return replace(spec, motor=replace(spec.motor, skills=BUILT_IN))
+    if str(skills) == LEARNED:
+        skills = learned_skills(spec, where)
     spec = replace(spec, motor=replace(spec.motor, skills=str(skills)))
     check_skills(spec, where)
     return spec
+
+
+def learned_skills(spec: Species, where: str | None = None) -> Path:
+    """Return the directory of the learned repertoire shipped for the species' body
+    (``SKILLS_DIR``/<body>); SpeciesError when none is shipped for it."""
+    body = Path(spec.body).stem if is_path(spec.body) else spec.body
+    directory = SKILLS_DIR / body
+    if not (directory / "repertoire.json").is_file():
+        shipped = sorted(p.name for p in SKILLS_DIR.iterdir() if p.is_dir()) \
+            if SKILLS_DIR.is_dir() else []  # fmt: skip
+        where = where or f"{spec.source}: [motor] skills"
+        raise SpeciesError(
+            f"{where}: no learned repertoire is shipped for body {spec.body!r} (there are for "
+            f"{', '.join(shipped) or 'none'}); give {BUILT_IN!r} or a repertoire's directory "
+            "(zoetic repertoire train ANIMAL --out DIR makes one)"
+        )
+    return directory
 
 
 def check_skills(spec: Species, where: str | None = None) -> None:

@@ -34,6 +34,7 @@ from zoetic.behavior.aquarium.routines import (
     leave,
     probe_reach,
     probes_ahead,
+    reach_cost,
     school,
     wander,
 )
@@ -356,7 +357,7 @@ class FishBrain:
                                   sp.predator, d)  # fmt: skip
         intention = self.mind.intention
         if intention == "eat":
-            candidates = v.food_distance
+            candidates = reach_cost(v.me, v.food, v.food_distance)
         elif intention == "mate":
             candidates = np.where(same, v.fish_distance, np.inf)
         elif intention == "hunt":
