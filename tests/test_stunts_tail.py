@@ -11,7 +11,7 @@ import pytest
 
 from test_stunts import _lifted, _signals, _term
 from zoetic.behavior.stunts import TAIL_STRIKE_DEG, load_trick, targets_met
-from zoetic.tasks.terms import BodyFrame, Signals
+from zoetic.tasks.terms import TAIL_STRIKE_TURN, TERMS, BodyFrame, Signals, TermParams
 
 
 def _spun(body, n, angle, height=2.0) -> np.ndarray:
@@ -120,3 +120,32 @@ def test_a_dive_still_in_the_air_at_the_end_is_not_a_clean_dive():
     belly = dict(landed, splash_m3_s=4.0)
     assert splash_ratio(belly, landed) == 4.0
     assert splash_ratio(belly, dict(flying, splash_m3_s=0.5)) is None
+
+
+def test_the_tail_distance_counts_only_after_half_a_somersault_in_the_air(dolphin):
+    n = 41
+    turn = np.linspace(0, 2 * np.pi, n)  # records 0.05 s apart, aloft, a full turn
+    frame = BodyFrame.of(dolphin)
+    tail = np.flatnonzero(frame.part_mask("tail"))
+
+    def tail_distance(heights, ball_at, xp=np):
+        pos = _lifted(dolphin, heights, turn)
+        ball = np.broadcast_to(pos[0, ball_at, tail[0]], (1, n, 1, 3))  # where a fluke node is
+        s = Signals(xp, frame, xp.asarray(pos), xp.zeros((1, n, dolphin.n_actuators)),
+                    xp.asarray(np.arange(n) * 0.05), 0.0, n * 0.05, None, xp.asarray(ball))
+        return float(TERMS["ball_tail_distance"].fn(xp, s, TermParams())[0])
+
+    # the ball where the flukes pass three quarters of a turn in: the plain distance (0)
+    assert tail_distance(np.full(n, 2.0), 30) == pytest.approx(0.0, abs=1e-5)
+    # where they pass a quarter of a turn in: far off the swung tail later, and early it still
+    # has the rest of the half turn to swing (its arc about the centre of mass)
+    rel = dolphin.rest_pos - dolphin.mass @ dolphin.rest_pos / dolphin.total_mass
+    arm = float(np.linalg.norm(rel[tail], axis=1).mean())
+    early = tail_distance(np.full(n, 2.0), 10)
+    assert 0.5 < early <= arm * np.pi / 2 + 1e-9  # at most its arc from there
+    # in the water, every record has the whole half turn to go
+    assert tail_distance(np.full(n, -2.0), 30) == pytest.approx(arm * np.pi, rel=1e-6)
+    assert TAIL_STRIKE_DEG == pytest.approx(np.degrees(TAIL_STRIKE_TURN))
+    import jax.numpy as jnp  # the same formula in JAX
+
+    assert tail_distance(np.full(n, 2.0), 10, jnp) == pytest.approx(early, rel=1e-4)

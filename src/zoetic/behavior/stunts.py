@@ -32,6 +32,7 @@ from zoetic.physics.objects import Ball, Box, Cylinder
 from zoetic.tasks import TASK_DIR, Task, check_fits, parse_task, start_state
 from zoetic.tasks.terms import (
     PARTS,
+    TAIL_STRIKE_TURN,
     BodyFrame,
     Signals,
     evaluate_terms,
@@ -329,7 +330,7 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
 # the targets, per built-in trick (bellyflop against clean-dive: ``splash_ratio``)
 LEAP_AIR_S, LEAP_APEX_BL, SOMERSAULT_DEG, SPLASH_RATIO = 0.4, 0.5, 360.0, 3.0
 BUDGET = 9600  # plans a trick search tries by default (about a minute a trick on 2 cores)
-TAIL_STRIKE_DEG = 180.0  # ball-tail: the tail strikes in flight after half a turn at least
+TAIL_STRIKE_DEG = float(np.degrees(TAIL_STRIKE_TURN))  # ball-tail: a strike after half a turn
 
 
 def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, bool]:

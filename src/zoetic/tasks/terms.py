@@ -25,6 +25,7 @@ EPS = 1e-12  # guard on lengths (as the objective always used)
 # body parts, front to back, that a contact record names (``BodyFrame.parts``)
 PARTS = ("nose", "head", "belly", "back", "tail")
 NOSE_SPAN, HEAD_SPAN, TAIL_SPAN = 0.12, 0.3, 0.25  # fractions of the body length
+TAIL_STRIKE_TURN = np.pi  # rad of somersault in the air a tail strike must follow (ball-tail)
 
 
 @dataclass(frozen=True)
@@ -490,9 +491,20 @@ def flight_pitch_rate(xp, s: Signals, p: TermParams):
     return xp.max(xp.abs(s.flight_pitch), axis=1) / xp.maximum(seconds, EPS)
 
 
-@term("closest approach (m) of the tail (flukes) to the first ball's centre (0 without a ball)")
+@term("closest approach (m) of the tail (flukes) to the first ball's centre once the body has "
+      "turned half a somersault in the air (``TAIL_STRIKE_TURN``); before that, each record "
+      "counts its distance plus the arc the tail still has to swing (the turn still to do times "
+      "the tail's distance from the centre of mass; all of it while any node is in the water), "
+      "so that a strike late in the somersault scores best (0 without a ball)")
 def ball_tail_distance(xp, s: Signals, p: TermParams):
-    return xp.min(s.part_ball_distance("tail"), axis=1)
+    if s.balls.shape[2] == 0:
+        return xp.zeros(s.positions.shape[0])
+    tail = np.flatnonzero(s.frame.part_mask("tail"))
+    r = s.positions[:, :, tail] - s.com[:, :, None]
+    arm = xp.mean(xp.sqrt(xp.sum(r * r, axis=-1) + EPS), axis=2)  # (K, R) m
+    turned = xp.where(s.airborne > 0, xp.abs(s.flight_pitch), 0.0)
+    to_go = xp.maximum(TAIL_STRIKE_TURN - turned, 0.0)
+    return xp.min(s.part_ball_distance("tail") + arm * to_go, axis=1)
 
 
 def evaluate_terms(xp, s: Signals, terms) -> list:
