@@ -98,6 +98,11 @@ def test_the_tail_strike_counts_the_somersault_done_when_it_touches_in_the_air(d
     assert _term("tail_strike_rotation", strike(np.full(n, 2.0), 30)) == pytest.approx(
         turn[30], rel=1e-6)  # fmt: skip
     assert _term("tail_strike_rotation", strike(np.full(n, 2.0), 5)) == pytest.approx(turn[5])
+    # with a target, only a strike after that much somersault counts (ball-tail: half a turn)
+    half = float(np.radians(TAIL_STRIKE_DEG))
+    assert _term("tail_strike_rotation", strike(np.full(n, 2.0), 5), half) == 0.0
+    assert _term("tail_strike_rotation", strike(np.full(n, 2.0), 30), half) == pytest.approx(
+        turn[30], rel=1e-6)  # fmt: skip
     low = np.full(n, 2.0)
     low[28:33] = -2.0  # back in the water when it touches: no strike in flight
     assert _term("tail_strike_rotation", strike(low, 30)) == 0.0
@@ -149,3 +154,26 @@ def test_the_tail_distance_counts_only_after_half_a_somersault_in_the_air(dolphi
     import jax.numpy as jnp  # the same formula in JAX
 
     assert tail_distance(np.full(n, 2.0), 10, jnp) == pytest.approx(early, rel=1e-4)
+
+
+def test_only_a_tail_that_strikes_the_ball_first_knocks_it_off(dolphin):
+    n = 41
+    frame = BodyFrame.of(dolphin)
+    pos = _lifted(dolphin, np.full(n, 2.0), np.linspace(0, 2 * np.pi, n))
+    balls = np.zeros((1, n, 1, 3)) + [0.0, 5.0, 0.0]
+    balls[0, 21:, 0, 0] += np.arange(1, n - 20)  # the ball flies off after record 20
+
+    def touched(first: str, second: str) -> Signals:
+        touch = np.zeros((1, n, dolphin.n_nodes))
+        touch[0, 20, frame.part_mask(first) > 0] = 0.01
+        touch[0, 30, frame.part_mask(second) > 0] = 0.01
+        return Signals(np, frame, pos, np.zeros((1, n, dolphin.n_actuators)),
+                       np.arange(n) * 0.05, 0.0, n * 0.05, None, balls, touch)  # fmt: skip
+
+    struck = touched("tail", "belly")  # the flukes hit it off at record 20 (half a turn)
+    assert _term("ball_moved_by_tail", struck) == pytest.approx(n - 21, rel=1e-6)
+    assert _term("tail_strike_rotation", struck) == pytest.approx(np.pi, rel=1e-6)
+    late = touched("belly", "tail")  # the belly knocked it off; the tail touched it later
+    assert _term("ball_moved_by_tail", late) == 0.0
+    assert _term("tail_strike_rotation", late) == 0.0
+    assert _term("ball_moved_by_nose", late) == 0.0  # (the nose's term is unchanged)

@@ -35,6 +35,8 @@ from zoetic.tasks.terms import (
     TAIL_STRIKE_TURN,
     BodyFrame,
     Signals,
+    TermParams,
+    ball_moved_by_tail,
     evaluate_terms,
     flight_pitch_rotation,
     tail_strike_rotation,
@@ -299,10 +301,10 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
         out["ball_contact"] = "yes" if parts else "no"
         out["ball_parts"] = parts
         out["ball_moved_by_nose_m"] = round(float(s.ball_moved_after("nose")[lane]), 3)
-        out["ball_moved_by_tail_m"] = round(float(s.ball_moved_after("tail")[lane]), 3)
+        out["ball_moved_by_tail_m"] = round(float(ball_moved_by_tail(np, s, None)[lane]), 3)
         # the tail's strike during a somersault: rotation in flight when it struck (0: never
         # while the whole body was out of the water) and how close the tail came
-        turned = tail_strike_rotation(np, s, None)[lane]
+        turned = tail_strike_rotation(np, s, TermParams())[lane]
         out["tail_strike_rotation_deg"] = round(float(np.degrees(turned)), 1)
         out["ball_tail_distance_m"] = round(float(s.part_ball_distance("tail")[lane].min()), 3)
         out |= strike_speeds(rec, s.ball_touch[lane], lane)

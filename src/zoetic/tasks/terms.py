@@ -225,6 +225,15 @@ class Signals:
         dist = xp.sqrt(xp.sum(d * d, axis=-1) + EPS)
         return xp.max(xp.where(touched, dist, 0.0), axis=1)
 
+    def struck_first(self, part: str):
+        """1.0 (K, R) at the record of the first ball's first contact with the body where that
+        part is among those touching it (it struck the ball first, not after another part had
+        knocked it away), else 0.0."""
+        xp = self.xp
+        hit = xp.where(xp.sum(self.ball_touch, axis=2) > 0, 1.0, 0.0)
+        first = hit * (xp.cumsum(hit, axis=1) == 1.0)
+        return first * xp.where(self.part_touch(part) > 0, 1.0, 0.0)
+
     @cached_property
     def flight_pitch(self):
         """Signed rotation (K, R), rad, of the body about its own left-right axis (a
@@ -460,17 +469,20 @@ def ball_moved_by_nose(xp, s: Signals, p: TermParams):
 
 
 @term("greatest distance (m) the first ball moved from its start at or after the tail (flukes) "
-      "first touched it (0 without a tail contact)")
+      "first touched it, if the tail struck it first (``Signals.struck_first``; 0 without such "
+      "a contact, e.g. a ball another part had already knocked off its support)")
 def ball_moved_by_tail(xp, s: Signals, p: TermParams):
-    return s.ball_moved_after("tail")
+    return s.ball_moved_after("tail") * xp.max(s.struck_first("tail"), axis=1)
 
 
-@term("greatest somersault rotation (rad, about the body's own left-right axis, in flight; "
-      "``Signals.flight_pitch``) at which the tail (flukes) touches the first ball while the "
-      "whole body is out of the water (0 if it never does): the tail's strike in a somersault")
+@term("somersault rotation (rad, about the body's own left-right axis, in flight; "
+      "``Signals.flight_pitch``) at which the tail (flukes) struck the first ball, touching it "
+      "first (``Signals.struck_first``) while the whole body is out of the water, once it had "
+      "turned 'target' rad (0 if it never does): the tail's strike in a somersault")
 def tail_strike_rotation(xp, s: Signals, p: TermParams):
-    struck = (s.part_touch("tail") > 0) & (s.airborne > 0)
-    return xp.max(xp.where(struck, xp.abs(s.flight_pitch), 0.0), axis=1)
+    turned = xp.abs(s.flight_pitch)
+    struck = (s.struck_first("tail") > 0) & (s.airborne > 0) & (turned >= p.target)
+    return xp.max(xp.where(struck, turned, 0.0), axis=1)
 
 
 @term("rotation (rad, unsigned) about the body's own left-right axis while wholly out of the "
