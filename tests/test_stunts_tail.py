@@ -11,7 +11,7 @@ import pytest
 
 from test_stunts import _lifted, _signals, _term
 from zoetic.behavior.stunts import TAIL_STRIKE_DEG, load_trick, targets_met
-from zoetic.tasks.terms import BodyFrame, Signals
+from zoetic.tasks.terms import TAIL_STRIKE_TURN, TERMS, BodyFrame, Signals, TermParams
 
 
 def _spun(body, n, angle, height=2.0) -> np.ndarray:
@@ -98,6 +98,11 @@ def test_the_tail_strike_counts_the_somersault_done_when_it_touches_in_the_air(d
     assert _term("tail_strike_rotation", strike(np.full(n, 2.0), 30)) == pytest.approx(
         turn[30], rel=1e-6)  # fmt: skip
     assert _term("tail_strike_rotation", strike(np.full(n, 2.0), 5)) == pytest.approx(turn[5])
+    # with a target, only a strike after that much somersault counts (ball-tail: half a turn)
+    half = float(np.radians(TAIL_STRIKE_DEG))
+    assert _term("tail_strike_rotation", strike(np.full(n, 2.0), 5), half) == 0.0
+    assert _term("tail_strike_rotation", strike(np.full(n, 2.0), 30), half) == pytest.approx(
+        turn[30], rel=1e-6)  # fmt: skip
     low = np.full(n, 2.0)
     low[28:33] = -2.0  # back in the water when it touches: no strike in flight
     assert _term("tail_strike_rotation", strike(low, 30)) == 0.0
@@ -120,3 +125,55 @@ def test_a_dive_still_in_the_air_at_the_end_is_not_a_clean_dive():
     belly = dict(landed, splash_m3_s=4.0)
     assert splash_ratio(belly, landed) == 4.0
     assert splash_ratio(belly, dict(flying, splash_m3_s=0.5)) is None
+
+
+def test_the_tail_distance_counts_only_after_half_a_somersault_in_the_air(dolphin):
+    n = 41
+    turn = np.linspace(0, 2 * np.pi, n)  # records 0.05 s apart, aloft, a full turn
+    frame = BodyFrame.of(dolphin)
+    tail = np.flatnonzero(frame.part_mask("tail"))
+
+    def tail_distance(heights, ball_at, xp=np):
+        pos = _lifted(dolphin, heights, turn)
+        ball = np.broadcast_to(pos[0, ball_at, tail[0]], (1, n, 1, 3))  # where a fluke node is
+        s = Signals(xp, frame, xp.asarray(pos), xp.zeros((1, n, dolphin.n_actuators)),
+                    xp.asarray(np.arange(n) * 0.05), 0.0, n * 0.05, None, xp.asarray(ball))
+        return float(TERMS["ball_tail_distance"].fn(xp, s, TermParams())[0])
+
+    # the ball where the flukes pass three quarters of a turn in: the plain distance (0)
+    assert tail_distance(np.full(n, 2.0), 30) == pytest.approx(0.0, abs=1e-5)
+    # where they pass a quarter of a turn in: far off the swung tail later, and early it still
+    # has the rest of the half turn to swing (its arc about the centre of mass)
+    rel = dolphin.rest_pos - dolphin.mass @ dolphin.rest_pos / dolphin.total_mass
+    arm = float(np.linalg.norm(rel[tail], axis=1).mean())
+    early = tail_distance(np.full(n, 2.0), 10)
+    assert 0.5 < early <= arm * np.pi / 2 + 1e-9  # at most its arc from there
+    # in the water, every record has the whole half turn to go
+    assert tail_distance(np.full(n, -2.0), 30) == pytest.approx(arm * np.pi, rel=1e-6)
+    assert TAIL_STRIKE_DEG == pytest.approx(np.degrees(TAIL_STRIKE_TURN))
+    import jax.numpy as jnp  # the same formula in JAX
+
+    assert tail_distance(np.full(n, 2.0), 10, jnp) == pytest.approx(early, rel=1e-4)
+
+
+def test_only_a_tail_that_strikes_the_ball_first_knocks_it_off(dolphin):
+    n = 41
+    frame = BodyFrame.of(dolphin)
+    pos = _lifted(dolphin, np.full(n, 2.0), np.linspace(0, 2 * np.pi, n))
+    balls = np.zeros((1, n, 1, 3)) + [0.0, 5.0, 0.0]
+    balls[0, 21:, 0, 0] += np.arange(1, n - 20)  # the ball flies off after record 20
+
+    def touched(first: str, second: str) -> Signals:
+        touch = np.zeros((1, n, dolphin.n_nodes))
+        touch[0, 20, frame.part_mask(first) > 0] = 0.01
+        touch[0, 30, frame.part_mask(second) > 0] = 0.01
+        return Signals(np, frame, pos, np.zeros((1, n, dolphin.n_actuators)),
+                       np.arange(n) * 0.05, 0.0, n * 0.05, None, balls, touch)  # fmt: skip
+
+    struck = touched("tail", "belly")  # the flukes hit it off at record 20 (half a turn)
+    assert _term("ball_moved_by_tail", struck) == pytest.approx(n - 21, rel=1e-6)
+    assert _term("tail_strike_rotation", struck) == pytest.approx(np.pi, rel=1e-6)
+    late = touched("belly", "tail")  # the belly knocked it off; the tail touched it later
+    assert _term("ball_moved_by_tail", late) == 0.0
+    assert _term("tail_strike_rotation", late) == 0.0
+    assert _term("ball_moved_by_nose", late) == 0.0  # (the nose's term is unchanged)

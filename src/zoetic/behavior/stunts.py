@@ -32,8 +32,11 @@ from zoetic.physics.objects import Ball, Box, Cylinder
 from zoetic.tasks import TASK_DIR, Task, check_fits, parse_task, start_state
 from zoetic.tasks.terms import (
     PARTS,
+    TAIL_STRIKE_TURN,
     BodyFrame,
     Signals,
+    TermParams,
+    ball_moved_by_tail,
     evaluate_terms,
     flight_pitch_rotation,
     tail_strike_rotation,
@@ -298,10 +301,10 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
         out["ball_contact"] = "yes" if parts else "no"
         out["ball_parts"] = parts
         out["ball_moved_by_nose_m"] = round(float(s.ball_moved_after("nose")[lane]), 3)
-        out["ball_moved_by_tail_m"] = round(float(s.ball_moved_after("tail")[lane]), 3)
+        out["ball_moved_by_tail_m"] = round(float(ball_moved_by_tail(np, s, None)[lane]), 3)
         # the tail's strike during a somersault: rotation in flight when it struck (0: never
         # while the whole body was out of the water) and how close the tail came
-        turned = tail_strike_rotation(np, s, None)[lane]
+        turned = tail_strike_rotation(np, s, TermParams())[lane]
         out["tail_strike_rotation_deg"] = round(float(np.degrees(turned)), 1)
         out["ball_tail_distance_m"] = round(float(s.part_ball_distance("tail")[lane].min()), 3)
         out |= strike_speeds(rec, s.ball_touch[lane], lane)
@@ -329,7 +332,7 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
 # the targets, per built-in trick (bellyflop against clean-dive: ``splash_ratio``)
 LEAP_AIR_S, LEAP_APEX_BL, SOMERSAULT_DEG, SPLASH_RATIO = 0.4, 0.5, 360.0, 3.0
 BUDGET = 9600  # plans a trick search tries by default (about a minute a trick on 2 cores)
-TAIL_STRIKE_DEG = 180.0  # ball-tail: the tail strikes in flight after half a turn at least
+TAIL_STRIKE_DEG = float(np.degrees(TAIL_STRIKE_TURN))  # ball-tail: a strike after half a turn
 
 
 def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, bool]:

@@ -25,6 +25,7 @@ EPS = 1e-12  # guard on lengths (as the objective always used)
 # body parts, front to back, that a contact record names (``BodyFrame.parts``)
 PARTS = ("nose", "head", "belly", "back", "tail")
 NOSE_SPAN, HEAD_SPAN, TAIL_SPAN = 0.12, 0.3, 0.25  # fractions of the body length
+TAIL_STRIKE_TURN = np.pi  # rad of somersault in the air a tail strike must follow (ball-tail)
 
 
 @dataclass(frozen=True)
@@ -223,6 +224,15 @@ class Signals:
         d = self.balls[:, :, 0] - self.balls[:, :1, 0]
         dist = xp.sqrt(xp.sum(d * d, axis=-1) + EPS)
         return xp.max(xp.where(touched, dist, 0.0), axis=1)
+
+    def struck_first(self, part: str):
+        """1.0 (K, R) at the record of the first ball's first contact with the body where that
+        part is among those touching it (it struck the ball first, not after another part had
+        knocked it away), else 0.0."""
+        xp = self.xp
+        hit = xp.where(xp.sum(self.ball_touch, axis=2) > 0, 1.0, 0.0)
+        first = hit * (xp.cumsum(hit, axis=1) == 1.0)
+        return first * xp.where(self.part_touch(part) > 0, 1.0, 0.0)
 
     @cached_property
     def flight_pitch(self):
@@ -459,17 +469,20 @@ def ball_moved_by_nose(xp, s: Signals, p: TermParams):
 
 
 @term("greatest distance (m) the first ball moved from its start at or after the tail (flukes) "
-      "first touched it (0 without a tail contact)")
+      "first touched it, if the tail struck it first (``Signals.struck_first``; 0 without such "
+      "a contact, e.g. a ball another part had already knocked off its support)")
 def ball_moved_by_tail(xp, s: Signals, p: TermParams):
-    return s.ball_moved_after("tail")
+    return s.ball_moved_after("tail") * xp.max(s.struck_first("tail"), axis=1)
 
 
-@term("greatest somersault rotation (rad, about the body's own left-right axis, in flight; "
-      "``Signals.flight_pitch``) at which the tail (flukes) touches the first ball while the "
-      "whole body is out of the water (0 if it never does): the tail's strike in a somersault")
+@term("somersault rotation (rad, about the body's own left-right axis, in flight; "
+      "``Signals.flight_pitch``) at which the tail (flukes) struck the first ball, touching it "
+      "first (``Signals.struck_first``) while the whole body is out of the water, once it had "
+      "turned 'target' rad (0 if it never does): the tail's strike in a somersault")
 def tail_strike_rotation(xp, s: Signals, p: TermParams):
-    struck = (s.part_touch("tail") > 0) & (s.airborne > 0)
-    return xp.max(xp.where(struck, xp.abs(s.flight_pitch), 0.0), axis=1)
+    turned = xp.abs(s.flight_pitch)
+    struck = (s.struck_first("tail") > 0) & (s.airborne > 0) & (turned >= p.target)
+    return xp.max(xp.where(struck, turned, 0.0), axis=1)
 
 
 @term("rotation (rad, unsigned) about the body's own left-right axis while wholly out of the "
@@ -490,9 +503,20 @@ def flight_pitch_rate(xp, s: Signals, p: TermParams):
     return xp.max(xp.abs(s.flight_pitch), axis=1) / xp.maximum(seconds, EPS)
 
 
-@term("closest approach (m) of the tail (flukes) to the first ball's centre (0 without a ball)")
+@term("closest approach (m) of the tail (flukes) to the first ball's centre once the body has "
+      "turned half a somersault in the air (``TAIL_STRIKE_TURN``); before that, each record "
+      "counts its distance plus the arc the tail still has to swing (the turn still to do times "
+      "the tail's distance from the centre of mass; all of it while any node is in the water), "
+      "so that a strike late in the somersault scores best (0 without a ball)")
 def ball_tail_distance(xp, s: Signals, p: TermParams):
-    return xp.min(s.part_ball_distance("tail"), axis=1)
+    if s.balls.shape[2] == 0:
+        return xp.zeros(s.positions.shape[0])
+    tail = np.flatnonzero(s.frame.part_mask("tail"))
+    r = s.positions[:, :, tail] - s.com[:, :, None]
+    arm = xp.mean(xp.sqrt(xp.sum(r * r, axis=-1) + EPS), axis=2)  # (K, R) m
+    turned = xp.where(s.airborne > 0, xp.abs(s.flight_pitch), 0.0)
+    to_go = xp.maximum(TAIL_STRIKE_TURN - turned, 0.0)
+    return xp.min(s.part_ball_distance("tail") + arm * to_go, axis=1)
 
 
 def evaluate_terms(xp, s: Signals, terms) -> list:
