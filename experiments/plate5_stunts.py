@@ -8,8 +8,13 @@ clearance, splash measure, how deep it dived before the apex (the paper's findin
 then thrust upward), the plan (entries and durations), plan evaluations, wall time and the
 issue's targets met; then the bellyflop / clean-dive splash ratio. Writes the table, each
 trick's summary.json and a strip of four frames per trick (like Plate 5 (a)-(d)) into --out.
-A few minutes on 2 cores:
-    python experiments/plate5_stunts.py [--memory memory/dolphin] [--budget 3200] [--seed 0]
+About ten minutes on 2 idle cores (a minute or so a trick, plus the frames):
+    python experiments/plate5_stunts.py [--memory DIR] [--budget 9600] [--seed 0]
+        [--tricks leap,somersault]
+
+The repertoire defaults to the one ``zoetic bench stunts`` trains and keys by the body and its
+training tasks (runs/bench/dolphin-memory-<digest>), trained here if missing; the budget to
+``zoetic stunt``'s (``behavior.stunts.BUDGET``), so the table and the bench line agree.
 
 ``--launch SPEED`` starts every trick from a launch instead of its own start (SPEED m/s along
 a body pitched ``--launch-pitch`` rad nose up, ``--launch-depth`` m down): a check of the
@@ -26,6 +31,7 @@ import numpy as np
 
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.behavior.stunts import (
+    BUDGET,
     SPLASH_RATIO,
     discover,
     list_tricks,
@@ -34,7 +40,7 @@ from zoetic.behavior.stunts import (
     splash_ratio,
     targets_met,
 )
-from zoetic.behavior.training import train_repertoire
+from zoetic.behavior.training import plan_digest, train_repertoire
 from zoetic.bodies import load_animal
 from zoetic.io import atomic_write_bytes, make_dir, read_toml, write_json
 from zoetic.viz.stunts import frame_strip, stunt_frames
@@ -60,9 +66,11 @@ def strip_times(times: np.ndarray, com_y: np.ndarray, level: float) -> list[floa
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--memory", type=Path, default=Path("memory/dolphin"))
+    ap.add_argument("--memory", type=Path, default=None,
+                    help="default: runs/bench/dolphin-memory-<digest>, as zoetic bench stunts")
     ap.add_argument("--out", type=Path, default=Path("runs/plate5"))
-    ap.add_argument("--budget", type=int, default=3200)
+    ap.add_argument("--budget", type=int, default=BUDGET)
+    ap.add_argument("--tricks", default=None, help="comma-separated (default: all built in)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--method", default="anneal")
     ap.add_argument("--launch", type=float, default=None, help="start speed (m/s) for all")
@@ -70,6 +78,8 @@ def main() -> None:
     ap.add_argument("--launch-depth", type=float, default=0.8)
     args = ap.parse_args()
     body = load_animal("dolphin")
+    if args.memory is None:
+        args.memory = Path("runs/bench") / f"{body.name}-memory-{plan_digest('dolphin')}"
     if not (args.memory / "repertoire.json").exists():
         t0 = time.perf_counter()
         train_repertoire("dolphin", args.memory, seed=args.seed)
@@ -84,7 +94,9 @@ def main() -> None:
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     summaries = {}
-    for name in list_tricks():
+    names = list_tricks() if args.tricks is None else [
+        t.strip() for t in args.tricks.split(",") if t.strip()]
+    for name in names:
         trick = load_trick(name)
         if args.launch is not None:
             doc = read_toml(trick.task.source, what="trick file")

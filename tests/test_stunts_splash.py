@@ -333,3 +333,74 @@ def test_the_drawn_pool_floor_stays_below_a_dive_from_a_deep_start():
     deeper = deep_enough(Pool(), 4.6)
     assert deeper.depth == pytest.approx(5.6)  # 1 m of room under the deepest point
     assert deeper.margin == Pool().margin and deeper.rim == Pool().rim
+
+
+def _arc(body, rise: float, seconds: float = 4.0, hz: float = 40.0, cut: float | None = None):
+    """A rigid dolphin on a ballistic arc whose centre of mass rises from 1 m down to ``rise``
+    m above the surface and falls back, its nose along its velocity all the way (a clean
+    nose-first exit and entry); the motion stops at ``cut`` s if given (a body left hanging).
+    Returns positions (1, R, N, 3) at ``hz``."""
+    g, vx = 9.81, 3.0
+    vy0 = math.sqrt(2 * g * (rise + 1.0))
+    t = np.arange(int(round(seconds * hz)) + 1) / hz
+    tt = t if cut is None else np.minimum(t, cut)
+    y = -1.0 + vy0 * tt - 0.5 * g * tt**2
+    y = np.maximum(y, -3.0)  # under water it stops falling (drag; terms only read the crossing)
+    pitch = np.arctan2(vy0 - g * tt, vx)
+    pos = np.stack([_turned(body, p) + [vx * s, h, 0.0] for p, s, h in zip(pitch, tt, y,
+                                                                           strict=True)])
+    return pos[None]
+
+
+def _trick_cost(body, name: str, pos: np.ndarray, hz: float = 40.0) -> tuple[float, dict]:
+    trick = load_trick(name)
+    s = _signals(BodyFrame.of(body), pos, 1.0 / hz)
+    from zoetic.tasks.terms import evaluate_terms
+
+    vals = evaluate_terms(np, s, trick.task.terms)
+    return (float(sum(t.weight * v[0] for t, v in zip(trick.task.terms, vals, strict=True))),
+            {t.kind: float(v[0]) for t, v in zip(trick.task.terms, vals, strict=True)})
+
+
+def test_the_clean_dive_prefers_a_low_clean_slip_to_a_high_fast_entry(dolphin):
+    """The splash grows with the entry speed, so for the judges a leap that just clears the
+    water and slips back in nose first beats the same clean entry from a high leap (with the
+    old 1/m reward for height the high leap scored better and the search leapt 1.8 m)."""
+    low, high = _arc(dolphin, 0.5), _arc(dolphin, 2.0)
+    e_low, t_low = _trick_cost(dolphin, "clean-dive", low)
+    e_high, t_high = _trick_cost(dolphin, "clean-dive", high)
+    assert t_low["clear_fraction"] == t_high["clear_fraction"] == 1.0  # both leave the water
+    assert 0 < t_low["splash"] < t_high["splash"]
+    assert e_low < e_high
+
+
+def test_the_bellyflop_must_land_its_splash(dolphin):
+    """A bellyflop still in the air at the end has made no splash yet: the trick charges the
+    height left (its flag ``back_in_water`` fails), so the same leap landed scores better."""
+    landed = _arc(dolphin, 2.0, seconds=3.0)
+    hanging = _arc(dolphin, 2.0, seconds=3.0, cut=1.3)  # falling, 0.7 m above the water
+    e_landed, t_landed = _trick_cost(dolphin, "bellyflop", landed)
+    e_hanging, t_hanging = _trick_cost(dolphin, "bellyflop", hanging)
+    assert e_landed < e_hanging
+    assert t_hanging.get("final_height", 0.0) > 0.0 == t_landed["final_height"]
+
+
+def test_a_face_splashes_once_at_its_re_entry_not_each_time_it_beats_across_the_surface():
+    """The splash is the body hitting the water on re-entry: a face that leaves the water and
+    comes back counts once; beating up and down across the surface afterwards adds nothing
+    (a body wallowing at the surface for a second outscored a bellyflop when every downward
+    crossing counted); a face that never left the water makes no splash."""
+    splash = TERMS["splash"].fn
+    fall = 1.0 - 3.0 * np.arange(21) * 0.02  # from 1 m up, 3 m/s down to -0.2 m
+    beat = -0.2 + 0.3 * np.sin(np.arange(1, 41) * 0.5)  # then across the surface, 40 records
+    once = float(splash(np, _signals(*_plate(False, fall), 0.02), TermParams())[0])
+    wallow = _signals(*_plate(False, np.concatenate([fall, beat])), 0.02)
+    assert float(wallow.crossing_flux.clip(min=0).sum()) > 3 * once  # it crosses again and again
+    assert float(splash(np, wallow, TermParams())[0]) == pytest.approx(once, rel=1e-9)
+    # from under water: up and out, then back in (counted once), then beating
+    leap = np.concatenate([fall[::-1], fall, beat])
+    assert float(splash(np, _signals(*_plate(False, leap), 0.02), TermParams())[0]) == (
+        pytest.approx(once, rel=1e-9))
+    # never out: a face beating just under the surface only
+    under = _signals(*_plate(False, beat - 0.2), 0.02)
+    assert float(splash(np, under, TermParams())[0]) == 0.0

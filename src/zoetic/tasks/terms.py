@@ -206,9 +206,20 @@ class Signals:
 
     @cached_property
     def entry_flux(self):
-        """The splash of each panel going into the water (K, R-1, P), m^3/s (see
-        ``crossing_flux``)."""
-        return self.xp.maximum(self.crossing_flux, 0.0)
+        """The splash of each panel's re-entry (K, R-1, P), m^3/s: its ``crossing_flux`` at
+        its first downward crossing after it has been out of the water (above it at the start,
+        or crossed up since), 0 elsewhere. One plunge per face: a face that leaves the water
+        and comes back down hits it once; the same face beating across the surface
+        afterwards, or slapping it before it has been out, is no re-entry (counting those let
+        a body wallowing at the surface for a second outscore a bellyflop)."""
+        xp = self.xp
+        above = self.face_centres[..., 1] >= self.level  # (K, R, P)
+        up = xp.where(~above[:, :-1] & above[:, 1:], 1, 0)
+        down = ~above[:, 1:] & above[:, :-1]
+        been_out = (xp.cumsum(up, axis=1) > 0) | above[:, :1]  # out by the end of each step
+        plunge = xp.where(down & been_out, 1, 0)
+        first = (plunge > 0) & (xp.cumsum(plunge, axis=1) == 1)
+        return xp.where(first, xp.maximum(self.crossing_flux, 0.0), 0.0)
 
     def part_touch(self, part: str):
         """Contact of a body part with the first ball (K, R), N s, since the previous record."""
@@ -456,8 +467,8 @@ def ball_head_distance(xp, s: Signals, p: TermParams):
 
 
 @term("splash measure on re-entry (m^3/s): the area times the normal speed of every leading "
-      "face crossing the surface downward, summed; large for a bellyflop, small for a clean "
-      "dive")
+      "face at its re-entry (its first downward crossing of the surface after being out of "
+      "the water), summed; large for a bellyflop, small for a clean dive")
 def splash(xp, s: Signals, p: TermParams):
     return xp.sum(s.entry_flux, axis=(1, 2))
 
