@@ -47,8 +47,9 @@ from zoetic.viz.stunts import frame_strip, stunt_frames
 
 
 def strip_times(times: np.ndarray, com_y: np.ndarray, level: float) -> list[float]:
-    """Four instants like Plate 5: leaving the water, the apex, re-entry, just after it (or,
-    for a stunt that never leaves the water, four evenly spaced instants)."""
+    """Four instants like Plate 5: leaving the water, the apex, re-entry, just after it (for a
+    stunt still in the air at the end: leaving, rising, the apex, the end; for one that never
+    leaves the water, four evenly spaced instants)."""
     above = com_y > level
     if not above.any():
         return list(np.linspace(times[0], times[-1], 4))
@@ -59,6 +60,8 @@ def strip_times(times: np.ndarray, com_y: np.ndarray, level: float) -> list[floa
     i_in = i_apex + int(back[0]) if back.size else len(times) - 1
     i_after = min(len(times) - 1, i_in + int(round(0.3 / (times[1] - times[0]))))
     picks = [i_exit, i_apex, i_in, i_after]
+    if not back.size:  # still in the air at the end: leaving, rising, the apex, the end
+        picks = [i_exit, (i_exit + i_apex) // 2, i_apex, len(times) - 1]
     if len(set(picks)) < 4:  # it only broke the surface at the very end: spread them
         return list(np.linspace(times[0], times[-1], 4))
     return [float(times[i]) for i in picks]
