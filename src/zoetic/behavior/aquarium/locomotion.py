@@ -89,13 +89,21 @@ TURN_BURST = 0.3
 # degrees left with the rest; the all-learned tank ate 56 % of the food (seeds 0-9) with the
 # rest after either side's turn, 39 % with it after the other side's only.
 TURN_REST = 0.3
+# rad: with a learned steering gait, a demanded turn under this is steered while swimming
+# (``LearnedMotor.steer``: go-straight blended with steer-left/right at the weight whose
+# calibrated rate turns it in ``TURN_SECONDS``); the sharp turn only for larger ones
+STEER_MAX = 1.0
 
 
 class LearnedLocomotion:
     """A learned motor skill: ``behavior.motor.LearnedMotor`` calibrated on a repertoire.
 
-    swim(speed) plays the blend of do-nothing and go-straight that swims the speed; a demanded
-    turn of at least ``TURN_MIN`` rad starts the turn of that side (``LearnedMotor.turn_signal``:
+    swim(speed) plays the blend of do-nothing and go-straight that swims the speed. With a
+    learned steering gait in the repertoire (steer-left/right), a demanded turn under
+    ``STEER_MAX`` rad is steered while swimming (``LearnedMotor.steer``: the swim blended with
+    the steering gait at the weight whose calibrated rate turns the angle in ``TURN_SECONDS``,
+    chosen afresh every control period). A larger demanded turn, or without a steering gait
+    any of at least ``TURN_MIN`` rad, starts the sharp turn of that side (``LearnedMotor.turn_signal``:
     the learned sharp turn from its own start), played for as long as the calibration says it
     takes to turn the angle (at least one control period, at most ``TURN_BURST``), then back to
     the swim; a demand to turn the other way ends it at once, and the next turn (either side)
@@ -130,7 +138,12 @@ class LearnedLocomotion:
             if t0 - start >= duration - 1e-9 or other_way:
                 self.turning = None
                 self.last = (side, min(t0, start + duration))
-        if self.turning is None and abs(demand.turn) >= TURN_MIN:
+        steer = self.motor.steers and abs(demand.turn) < STEER_MAX
+        if self.turning is None and steer and t0 - self.last[1] >= TURN_REST - 1e-9:
+            a = self.motor.swim(demand.speed)
+            side, w = self.motor.steer(demand.turn / TURN_SECONDS, a)
+            return self.motor.steer_signal(times, a, w, side, pitch)
+        if self.turning is None and abs(demand.turn) >= TURN_MIN and not steer:
             side, duration = self.motor.turn(demand.turn)
             if t0 - self.last[1] < TURN_REST - 1e-9:
                 return self.motor.swim_signal(times, self.motor.swim(demand.speed), pitch)
