@@ -209,3 +209,23 @@ def test_the_shipped_steer_turns_while_swimming_at_the_rate_asked():
     assert speed > 0.15  # m/s: swimming, not spinning on the spot
     _, right = _swim(LearnedLocomotion(body, motor), Demand(0.3, turn=-turn), 5.0)
     assert right[-1] - right[k] < -0.5 * rate * (len(head) - 1 - k) * rec
+
+
+def test_length_keeping_measures_the_head_to_tail_shortfall():
+    from zoetic.tasks.terms import TERMS, BodyFrame, Signals, TermParams
+
+    body = load_animal("shark")
+    frame = BodyFrame.of(body)
+    rest = np.asarray(body.rest_pos, float)
+    tail = frame.part_mask("tail") > 0
+    centre = rest[tail].mean(axis=0)
+    towards = rest[body.head] - centre
+    shorter = rest.copy()
+    shorter[tail] += 0.2 * towards  # the tail's centre moved a fifth of the way to the head
+    longer = rest.copy()
+    longer[tail] -= 0.2 * towards  # stretched: no shortfall
+    pos = np.stack([np.stack([rest, shorter]), np.stack([rest, longer])])  # (2, 2, N, 3)
+    s = Signals(np, frame, pos, np.zeros((2, 2, body.n_actuators)), np.array([0.0, 0.1]),
+                0.0, 0.1)  # fmt: skip
+    got = TERMS["length_keeping"].fn(np, s, TermParams())
+    np.testing.assert_allclose(got, [0.2**2 / 2, 0.0], atol=1e-6)

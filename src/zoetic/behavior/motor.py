@@ -342,6 +342,7 @@ class LearnedMotor:
     # STEER_WEIGHTS[w] (made monotonic in w; the right side is its mirror image)
     steers: tuple[AbstractController, ...] = ()
     steer_rates: np.ndarray | None = None
+    steer_speeds: np.ndarray | None = None  # (S, W) m/s of the same steers
 
     @classmethod
     def calibrate(cls, body: Body, rep: Repertoire) -> LearnedMotor:
@@ -394,15 +395,16 @@ class LearnedMotor:
         turned = turned.reshape(2, len(LEARNED_TURN))
         turned[0] = np.maximum.accumulate(np.maximum(turned[0], 0.0))
         turned[1] = np.minimum.accumulate(np.minimum(turned[1], 0.0))
-        rates = None
+        rates = speeds = None
         if steers:
-            m = n + 2 * len(LEARNED_TURN)
+            m, shape = n + 2 * len(LEARNED_TURN), (len(LEARNED_SWIM), len(STEER_WEIGHTS))
             heading = heading_angles(body, tr.positions[m:])
             k1 = min(int(round((LEARNED_SETTLE + STEER_MEASURE) / rec)), len(t) - 1)
-            rates = ((heading[:, k1] - heading[:, k]) / (t[k1] - t[k])).reshape(
-                len(LEARNED_SWIM), len(STEER_WEIGHTS))
+            rates = ((heading[:, k1] - heading[:, k]) / (t[k1] - t[k])).reshape(shape)
             rates = np.maximum.accumulate(np.maximum(rates - rates[:, :1], 0.0), axis=1)
-        motor = cls(body, bases, speed, turned, steers, rates)
+            step = np.linalg.norm(np.diff(com[m:, k : k1 + 1], axis=1), axis=-1)
+            speeds = (step.sum(1) / (t[k1] - t[k])).reshape(shape)
+        motor = cls(body, bases, speed, turned, steers, rates, speeds)
         _LEARNED_MOTOR_CACHE[key] = motor
         return motor
 
@@ -443,6 +445,15 @@ class LearnedMotor:
     def steer_top(self) -> float:
         """Return the fastest steady steer (rad/s) at any swim weight (0 without steering)."""
         return 0.0 if self.steer_rates is None else float(self.steer_rates[:, -1].min())
+
+    @property
+    def steer_radius(self) -> float:
+        """Return the radius (m) of the full steer: its speed over its rate, the widest over
+        the swim weights (inf without steering)."""
+        if self.steer_rates is None or self.steer_speeds is None:
+            return float("inf")
+        return float(np.max(self.steer_speeds[:, -1] / np.maximum(self.steer_rates[:, -1],
+                                                                   1e-6)))  # fmt: skip
 
     def steer(self, rate: float, a: float) -> tuple[int, float]:
         """Return (side, weight w): steer left (0) or right (1) at ``rate`` rad/s (left
@@ -498,5 +509,7 @@ class LearnedMotor:
             "turned_right_deg": np.degrees(self.turned[1]).round(1).tolist(),
             **({} if self.steer_rates is None else {
                 "steer_weights": STEER_WEIGHTS.tolist(),
-                "steer_deg_s": np.degrees(self.steer_rates).round(1).tolist()}),
+                "steer_deg_s": np.degrees(self.steer_rates).round(1).tolist(),
+                "steer_speed_m_s": np.asarray(self.steer_speeds).round(3).tolist(),
+                "steer_radius_m": round(self.steer_radius, 3)}),
         }  # fmt: skip
