@@ -177,3 +177,55 @@ def test_the_shipped_repertoire_swims_and_turns_sharply():
     assert np.degrees(motor.turned[0, -1]) > 90 and np.degrees(motor.turned[1, -1]) < -90
     size = sum(p.stat().st_size for p in (SKILLS_DIR / "shark").iterdir())
     assert size < 64 * 1024  # the index and controller files only, not the training runs
+
+
+def test_the_shipped_steer_turns_while_swimming_at_the_rate_asked():
+    from zoetic.behavior.aquarium.locomotion import STEER_MAX, TURN_SECONDS
+    from zoetic.behavior.motor import STEER_WEIGHTS
+
+    body = load_animal("shark")
+    motor = learned_motor(body, SKILLS_DIR / "shark")
+    assert len(motor.steers) == 2 and motor.steer_rates is not None
+    # the calibration: more of the steering gait turns faster, from 0 at none of it
+    assert np.all(np.diff(motor.steer_rates, axis=1) >= 0)
+    assert np.all(motor.steer_rates[:, 0] == 0)
+    a = motor.swim(0.3)
+    assert motor.steer(0.0, a) == (0, 0.0)
+    side, w = motor.steer(-0.5 * motor.steer_top, a)
+    assert side == 1 and 0.0 < w < 1.0
+    assert motor.steer(10 * motor.steer_top, a) == (0, float(STEER_WEIGHTS[-1]))
+    # a fish asked, every period, to turn a little left steers left while it swims on: no
+    # sharp turn under way, a steady heading change, and most of its speed kept
+    turn = min(0.6, 0.9 * STEER_MAX)
+    loco = LearnedLocomotion(body, motor)
+    com, head = _swim(loco, Demand(0.3, turn=turn), 5.0)
+    assert loco.turning is None
+    rec = 10 * body.dt
+    k = int(round(2.0 / rec))  # after 2 s to speed
+    rate = (head[-1] - head[k]) / ((len(head) - 1 - k) * rec)
+    assert rate > 0.5 * min(turn / TURN_SECONDS, motor.steer_top)
+    speed = np.linalg.norm(np.diff(com[k:, [0, 2]], axis=0), axis=1).sum() / (
+        (len(head) - 1 - k) * rec)
+    assert speed > 0.15  # m/s: swimming, not spinning on the spot
+    _, right = _swim(LearnedLocomotion(body, motor), Demand(0.3, turn=-turn), 5.0)
+    assert right[-1] - right[k] < -0.5 * rate * (len(head) - 1 - k) * rec
+
+
+def test_length_keeping_measures_the_head_to_tail_shortfall():
+    from zoetic.tasks.terms import TERMS, BodyFrame, Signals, TermParams
+
+    body = load_animal("shark")
+    frame = BodyFrame.of(body)
+    rest = np.asarray(body.rest_pos, float)
+    tail = frame.part_mask("tail") > 0
+    centre = rest[tail].mean(axis=0)
+    towards = rest[body.head] - centre
+    shorter = rest.copy()
+    shorter[tail] += 0.2 * towards  # the tail's centre moved a fifth of the way to the head
+    longer = rest.copy()
+    longer[tail] -= 0.2 * towards  # stretched: no shortfall
+    pos = np.stack([np.stack([rest, shorter]), np.stack([rest, longer])])  # (2, 2, N, 3)
+    s = Signals(np, frame, pos, np.zeros((2, 2, body.n_actuators)), np.array([0.0, 0.1]),
+                0.0, 0.1)  # fmt: skip
+    got = TERMS["length_keeping"].fn(np, s, TermParams())
+    np.testing.assert_allclose(got, [0.2**2 / 2, 0.0], atol=1e-6)

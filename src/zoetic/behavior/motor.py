@@ -312,6 +312,14 @@ LEARNED_AFTER = 1.5  # s of swimming after a turn (the new heading is measured o
 LEARNED_CRUISE = 0.1  # the swim weight the turns are calibrated from
 LEARNED_STRENGTH = 1.0  # the sharp turn's share of a turn's blend (the swim gait the rest)
 LEARNED_BASES = ("do-nothing", "go-straight", "sharp-turn-left", "sharp-turn-right")
+# The steer while swimming, when the repertoire has a learned steering gait (the aquarium's
+# "steer-left" task and its mirror): the blend (1 - w) swim(a) + w steer of the two periodic
+# gaits, both at the clock's time, so a demand can change w every control period; its turning
+# rate is calibrated per swim weight a (``LEARNED_SWIM``) and steer weight w (``STEER_WEIGHTS``)
+# from rest, over ``STEER_MEASURE`` s after ``LEARNED_SETTLE`` s.
+LEARNED_STEER = ("steer-left", "steer-right")
+STEER_WEIGHTS = np.array([0.0, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0])
+STEER_MEASURE = 2.0
 _LEARNED_MOTOR_CACHE: dict[tuple, LearnedMotor] = {}
 
 
@@ -329,6 +337,12 @@ class LearnedMotor:
     bases: tuple[AbstractController, ...]  # the entries of LEARNED_BASES, in that order
     speeds: np.ndarray
     turned: np.ndarray
+    # the entries of LEARNED_STEER (empty when the repertoire has none) and the turning rates
+    # (S, W), rad/s, of steering left at swim weight LEARNED_SWIM[s] and steer weight
+    # STEER_WEIGHTS[w] (made monotonic in w; the right side is its mirror image)
+    steers: tuple[AbstractController, ...] = ()
+    steer_rates: np.ndarray | None = None
+    steer_speeds: np.ndarray | None = None  # (S, W) m/s of the same steers
 
     @classmethod
     def calibrate(cls, body: Body, rep: Repertoire) -> LearnedMotor:
@@ -338,9 +352,11 @@ class LearnedMotor:
         if missing:
             raise ZoeticError(f"motor controllers need the entries {missing} in the repertoire")
         bases = tuple(rep.controllers[n] for n in LEARNED_BASES)
+        steers = tuple(rep.controllers[n] for n in LEARNED_STEER if n in rep.controllers)
+        steers = steers if len(steers) == len(LEARNED_STEER) else ()
         key = (body.name, body.n_nodes, body.n_actuators, round(float(body.dt), 9),
                tuple(np.concatenate([c.offset, c.freq.ravel(), c.amp.ravel(),
-                                     c.phase.ravel()]).tobytes() for c in bases))  # fmt: skip
+                                     c.phase.ravel()]).tobytes() for c in bases + steers))
         if key in _LEARNED_MOTOR_CACHE:
             return _LEARNED_MOTOR_CACHE[key]
         motor = cls(body, bases, np.zeros(len(LEARNED_SWIM)), np.zeros((2, len(LEARNED_TURN))))
@@ -354,6 +370,9 @@ class LearnedMotor:
                 u[on] = motor.turn_signal(times[on] - LEARNED_SETTLE, times[on], side,
                                           LEARNED_CRUISE, 0.0)  # fmt: skip
                 rows.append(u)
+        steering = cls(body, bases, motor.speeds, motor.turned, steers)
+        grid = [(a, w) for a in LEARNED_SWIM for w in STEER_WEIGHTS] if steers else []
+        rows += [steering.steer_signal(times, a, w, 0, 0.0) for a, w in grid]
         every = max(1, int(round(0.05 / body.dt)))
         tr = simulate(body, np.stack(rows), record_every=every)
         t = np.arange(tr.positions.shape[1]) * every * body.dt
@@ -376,7 +395,16 @@ class LearnedMotor:
         turned = turned.reshape(2, len(LEARNED_TURN))
         turned[0] = np.maximum.accumulate(np.maximum(turned[0], 0.0))
         turned[1] = np.minimum.accumulate(np.minimum(turned[1], 0.0))
-        motor = cls(body, bases, speed, turned)
+        rates = speeds = None
+        if steers:
+            m, shape = n + 2 * len(LEARNED_TURN), (len(LEARNED_SWIM), len(STEER_WEIGHTS))
+            heading = heading_angles(body, tr.positions[m:])
+            k1 = min(int(round((LEARNED_SETTLE + STEER_MEASURE) / rec)), len(t) - 1)
+            rates = ((heading[:, k1] - heading[:, k]) / (t[k1] - t[k])).reshape(shape)
+            rates = np.maximum.accumulate(np.maximum(rates - rates[:, :1], 0.0), axis=1)
+            step = np.linalg.norm(np.diff(com[m:, k : k1 + 1], axis=1), axis=-1)
+            speeds = (step.sum(1) / (t[k1] - t[k])).reshape(shape)
+        motor = cls(body, bases, speed, turned, steers, rates, speeds)
         _LEARNED_MOTOR_CACHE[key] = motor
         return motor
 
@@ -413,6 +441,44 @@ class LearnedMotor:
         keep = np.concatenate([[True], np.diff(x) > 0])  # interp needs increasing angles
         return side, float(np.interp(abs(angle), x[keep], y[keep]))
 
+    @property
+    def steer_top(self) -> float:
+        """Return the fastest steady steer (rad/s) at any swim weight (0 without steering)."""
+        return 0.0 if self.steer_rates is None else float(self.steer_rates[:, -1].min())
+
+    @property
+    def steer_radius(self) -> float:
+        """Return the radius (m) of the full steer: its speed over its rate, the widest over
+        the swim weights (inf without steering)."""
+        if self.steer_rates is None or self.steer_speeds is None:
+            return float("inf")
+        return float(np.max(self.steer_speeds[:, -1] / np.maximum(self.steer_rates[:, -1],
+                                                                   1e-6)))  # fmt: skip
+
+    def steer(self, rate: float, a: float) -> tuple[int, float]:
+        """Return (side, weight w): steer left (0) or right (1) at ``rate`` rad/s (left
+        positive) while swimming at swim weight ``a``: the smallest steer weight whose
+        calibrated rate is reached (the rates at ``a`` interpolated between swim weights);
+        beyond the table, w = 1."""
+        if self.steer_rates is None:
+            raise ZoeticError("this repertoire has no steering entries (steer-left/right)")
+        side = 0 if rate >= 0 else 1
+        sw = LEARNED_SWIM.tolist()
+        a = min(max(float(a), sw[0]), sw[-1])
+        j = min(max(bisect_left(sw, a) - 1, 0), len(sw) - 2)
+        f = (a - sw[j]) / (sw[j + 1] - sw[j])
+        row = ((1 - f) * self.steer_rates[j] + f * self.steer_rates[j + 1]).tolist()
+        if row[-1] <= row[0]:
+            return side, 0.0
+        return side, _interp(abs(float(rate)), row, STEER_WEIGHTS.tolist())
+
+    def steer_signal(self, times: np.ndarray, a: float, w: float, side: int,
+                     pitch: float) -> np.ndarray:  # fmt: skip
+        """Return activations (T, A): (1 - w) of the swim gait of weight ``a`` plus ``w`` of
+        the steering gait of ``side`` (0 left, 1 right), both at ``times``; fins at ``pitch``."""
+        u = (1 - w) * ((1 - a) * self.bases[0].raw(times) + a * self.bases[1].raw(times))
+        return self._fins(u + w * self.steers[side].raw(times), pitch)
+
     def swim_signal(self, times: np.ndarray, a: float, pitch: float) -> np.ndarray:
         """Return activations (T, A) of the swim gait of weight ``a``, fins at ``pitch``."""
         u = (1 - a) * self.bases[0].raw(times) + a * self.bases[1].raw(times)
@@ -441,4 +507,9 @@ class LearnedMotor:
             "turn_seconds": LEARNED_TURN.tolist(),
             "turned_left_deg": np.degrees(self.turned[0]).round(1).tolist(),
             "turned_right_deg": np.degrees(self.turned[1]).round(1).tolist(),
-        }
+            **({} if self.steer_rates is None else {
+                "steer_weights": STEER_WEIGHTS.tolist(),
+                "steer_deg_s": np.degrees(self.steer_rates).round(1).tolist(),
+                "steer_speed_m_s": np.asarray(self.steer_speeds).round(3).tolist(),
+                "steer_radius_m": round(self.steer_radius, 3)}),
+        }  # fmt: skip

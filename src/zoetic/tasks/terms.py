@@ -373,6 +373,17 @@ def roll_keeping(xp, s: Signals, p: TermParams):
     return xp.mean(s.roll**2, axis=1)
 
 
+@term("mean squared shortfall of the head-to-tail distance (head node to the tail part's "
+      "centre) below its start, as a fraction of it: keeps a fin from folding forward")
+def length_keeping(xp, s: Signals, p: TermParams):
+    tail = s.frame.part_mask("tail")
+    tail = tail / max(float(tail.sum()), EPS)
+    d = s.positions[:, :, s.frame.head] - xp.einsum("krnd,n->krd", s.positions,
+                                                     xp.asarray(tail))  # fmt: skip
+    length = xp.sqrt(xp.sum(d * d, axis=-1) + EPS)
+    return xp.mean(xp.maximum(1.0 - length / length[:, :1], 0.0) ** 2, axis=1)
+
+
 @term("greatest height of the centre of mass above its start (m): leaps")
 def max_height(xp, s: Signals, p: TermParams):
     y = s.com[:, :, 1]
