@@ -176,4 +176,8 @@ def test_only_a_tail_that_strikes_the_ball_first_knocks_it_off(dolphin):
     late = touched("belly", "tail")  # the belly knocked it off; the tail touched it later
     assert _term("ball_moved_by_tail", late) == 0.0
     assert _term("tail_strike_rotation", late) == 0.0
-    assert _term("ball_moved_by_nose", late) == 0.0  # (the nose's term is unchanged)
+    assert _term("ball_moved_by_nose", late) == 0.0
+    # the nose's term follows the same rule: first, or it did not knock the ball off
+    assert _term("ball_moved_by_nose", touched("nose", "belly")) == pytest.approx(n - 21,
+                                                                                 rel=1e-6)
+    assert _term("ball_moved_by_nose", touched("belly", "nose")) == 0.0

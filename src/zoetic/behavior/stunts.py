@@ -36,6 +36,7 @@ from zoetic.tasks.terms import (
     BodyFrame,
     Signals,
     TermParams,
+    ball_moved_by_nose,
     ball_moved_by_tail,
     evaluate_terms,
     flight_pitch_rotation,
@@ -300,7 +301,7 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
         parts = ball_parts(s, lane)
         out["ball_contact"] = "yes" if parts else "no"
         out["ball_parts"] = parts
-        out["ball_moved_by_nose_m"] = round(float(s.ball_moved_after("nose")[lane]), 3)
+        out["ball_moved_by_nose_m"] = round(float(ball_moved_by_nose(np, s, None)[lane]), 3)
         out["ball_moved_by_tail_m"] = round(float(ball_moved_by_tail(np, s, None)[lane]), 3)
         # the tail's strike during a somersault: rotation in flight when it struck (0: never
         # while the whole body was out of the water) and how close the tail came

@@ -485,9 +485,10 @@ def splash(xp, s: Signals, p: TermParams):
 
 
 @term("greatest distance (m) the first ball moved from its start at or after the nose first "
-      "touched it: a ball the nose bounced off its support (0 without a nose contact)")
+      "touched it, if the nose struck it first (``Signals.struck_first``): a ball the nose "
+      "bounced off its support (0 without such a contact)")
 def ball_moved_by_nose(xp, s: Signals, p: TermParams):
-    return s.ball_moved_after("nose")
+    return s.ball_moved_after("nose") * xp.max(s.struck_first("nose"), axis=1)
 
 
 @term("greatest distance (m) the first ball moved from its start at or after the tail (flukes) "
