@@ -169,6 +169,18 @@ def _interp(x: float, xp: list, fp: list) -> float:
     return (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j]) * (x - xp[j]) + fp[j]
 
 
+def grid_rates(com: np.ndarray, heading: np.ndarray, t: np.ndarray,
+               shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """Return the speed (m/s: path length over the window) and turning rate (rad/s, less the
+    row's first column, at least 0, made non-decreasing along each row) of a grid of runs:
+    com (K, R, 2) and heading (K, R) recorded at times t (R,) over the window, K runs laid out
+    as ``shape`` (rows: a swim level; columns: a rising steer)."""
+    span = t[-1] - t[0]
+    speed = (np.linalg.norm(np.diff(com, axis=1), axis=-1).sum(1) / span).reshape(shape)
+    rate = ((heading[:, -1] - heading[:, 0]) / span).reshape(shape)
+    return speed, np.maximum.accumulate(np.maximum(rate - rate[:, :1], 0.0), axis=1)
+
+
 @dataclass(frozen=True)
 class WaveMotor:
     """swim / turn / pitch for one body from its own steered wave, calibrated (``calibrate``).
@@ -204,11 +216,8 @@ class WaveMotor:
         sel = t >= WAVE_SETTLE
         com = tr.com(body)[:, sel][..., [0, 2]]
         heading = heading_angles(body, tr.positions)[:, sel]
-        span = t[sel][-1] - t[sel][0]
         shape = (len(WAVE_AMPLITUDES), len(WAVE_BIASES))
-        speed = (np.linalg.norm(np.diff(com, axis=1), axis=-1).sum(1) / span).reshape(shape)
-        rate = ((heading[:, -1] - heading[:, 0]) / span).reshape(shape)
-        rate = np.maximum.accumulate(np.maximum(rate - rate[:, :1], 0.0), axis=1)
+        speed, rate = grid_rates(com, heading, t[sel], shape)
         motor = cls(body, freq, speed[:, 0].copy(), rate)
         _WAVE_CACHE[key] = motor
         return motor
@@ -400,10 +409,8 @@ class LearnedMotor:
             m, shape = n + 2 * len(LEARNED_TURN), (len(LEARNED_SWIM), len(STEER_WEIGHTS))
             heading = heading_angles(body, tr.positions[m:])
             k1 = min(int(round((LEARNED_SETTLE + STEER_MEASURE) / rec)), len(t) - 1)
-            rates = ((heading[:, k1] - heading[:, k]) / (t[k1] - t[k])).reshape(shape)
-            rates = np.maximum.accumulate(np.maximum(rates - rates[:, :1], 0.0), axis=1)
-            step = np.linalg.norm(np.diff(com[m:, k : k1 + 1], axis=1), axis=-1)
-            speeds = (step.sum(1) / (t[k1] - t[k])).reshape(shape)
+            w = slice(k, k1 + 1)
+            speeds, rates = grid_rates(com[m:, w], heading[:, w], t[w], shape)
         motor = cls(body, bases, speed, turned, steers, rates, speeds)
         _LEARNED_MOTOR_CACHE[key] = motor
         return motor
