@@ -228,32 +228,38 @@ def perceive(
 
 
 @njit(cache=True)
+def _seen(eyes, forwards, targets, present, kind, center, size, cos_half, vr, step):
+    """Return the distances (n, m) from the eyes to the targets and whether each target is
+    seen: present, within the eye's range and view cone, and not hidden by an obstacle."""
+    n, m = eyes.shape[0], targets.shape[0]
+    d, seen = np.empty((n, m)), np.empty((n, m), np.bool_)
+    _in_view(eyes, forwards, targets, cos_half, vr, d, seen)
+    for i in range(n):
+        for j in range(m):
+            seen[i, j] = seen[i, j] and present[j]
+    hid = np.zeros((n, m), np.bool_)
+    _blocked(eyes, targets, seen, kind, center, size, step, hid)
+    for i in range(n):
+        for j in range(m):
+            seen[i, j] = seen[i, j] and not hid[i, j]
+    return d, seen
+
+
+@njit(cache=True)
 def _perceive(eyes, forwards, centers, alive, food, left, kind, center, size, cos_half, vr, sr,
               step, fish, food_d, obst) -> None:  # fmt: skip
     """``perceive`` compiled: fill fish (n, n), food_d (n, F) and obst (n, S) with the
     distances perceived (inf where not)."""
     n, m, f = eyes.shape[0], centers.shape[0], food.shape[0]
-    df, vf = np.empty((n, m)), np.empty((n, m), np.bool_)
-    _in_view(eyes, forwards, centers, cos_half, vr, df, vf)
+    df, vf = _seen(eyes, forwards, centers, alive, kind, center, size, cos_half, vr, step)
     for i in range(n):
         for j in range(m):
-            vf[i, j] = vf[i, j] and alive[j]
-    hid = np.zeros((n, m), np.bool_)
-    _blocked(eyes, centers, vf, kind, center, size, step, hid)
-    for i in range(n):
-        for j in range(m):
-            fish[i, j] = df[i, j] if vf[i, j] and not hid[i, j] and i != j else np.inf
+            fish[i, j] = df[i, j] if vf[i, j] and i != j else np.inf
     if f:
-        dd, vd = np.empty((n, f)), np.empty((n, f), np.bool_)
-        _in_view(eyes, forwards, food, cos_half, vr, dd, vd)
+        dd, vd = _seen(eyes, forwards, food, left, kind, center, size, cos_half, vr, step)
         for i in range(n):
             for j in range(f):
-                vd[i, j] = vd[i, j] and left[j]
-        hid = np.zeros((n, f), np.bool_)
-        _blocked(eyes, food, vd, kind, center, size, step, hid)
-        for i in range(n):
-            for j in range(f):
-                ok = (vd[i, j] and not hid[i, j]) or dd[i, j] <= sr[i]
+                ok = vd[i, j] or dd[i, j] <= sr[i]
                 food_d[i, j] = dd[i, j] if ok and left[j] else np.inf
     for i in range(n):
         for s in range(kind.shape[0]):
