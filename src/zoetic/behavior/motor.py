@@ -483,13 +483,16 @@ class LearnedMotor:
                      pitch: float) -> np.ndarray:  # fmt: skip
         """Return activations (T, A): (1 - w) of the swim gait of weight ``a`` plus ``w`` of
         the steering gait of ``side`` (0 left, 1 right), both at ``times``; fins at ``pitch``."""
-        u = (1 - w) * ((1 - a) * self.bases[0].raw(times) + a * self.bases[1].raw(times))
+        u = (1 - w) * self._swim_raw(times, a)
         return self._fins(u + w * self.steers[side].raw(times), pitch)
 
     def swim_signal(self, times: np.ndarray, a: float, pitch: float) -> np.ndarray:
         """Return activations (T, A) of the swim gait of weight ``a``, fins at ``pitch``."""
-        u = (1 - a) * self.bases[0].raw(times) + a * self.bases[1].raw(times)
-        return self._fins(u, pitch)
+        return self._fins(self._swim_raw(times, a), pitch)
+
+    def _swim_raw(self, times: np.ndarray, a: float) -> np.ndarray:
+        """The swim gait of weight ``a`` (do-nothing blended with go-straight), unclipped."""
+        return (1 - a) * self.bases[0].raw(times) + a * self.bases[1].raw(times)
 
     def turn_signal(self, since: np.ndarray, times: np.ndarray, side: int, a: float,
                     pitch: float) -> np.ndarray:  # fmt: skip
@@ -497,8 +500,7 @@ class LearnedMotor:
         ``since`` s from its start, ``LEARNED_STRENGTH`` of it, on the swim gait of weight
         ``a`` at ``times``; fins at ``pitch``."""
         w = LEARNED_STRENGTH
-        u = w * self.bases[2 + side].raw(since) + (1 - w) * (
-            (1 - a) * self.bases[0].raw(times) + a * self.bases[1].raw(times))
+        u = w * self.bases[2 + side].raw(since) + (1 - w) * self._swim_raw(times, a)
         return self._fins(u, pitch)
 
     def _fins(self, u: np.ndarray, pitch: float) -> np.ndarray:
