@@ -166,6 +166,25 @@ def test_focus_keeps_its_rules():
     assert focus(np.array([np.inf, 2.0]), previous=0) == 1  # lost from view
 
 
+def _situation_of(brain, d, food, obst, masks, collision):
+    """One fish's Situation by the definitions, fish by fish (the reference)."""
+    from zoetic.behavior.mind import Situation
+
+    same, hunters, prey = masks
+    ps, crowd = brain.species.habits.personal_space, brain.species.habits.crowd
+    seen = np.isfinite(d)
+    return Situation(
+        collision=collision,
+        predator_distances=tuple(float(x) for x in d[hunters & seen]),
+        food_distance=float(food.min()) if len(food) else np.inf,
+        mate_distance=float(d[same].min(initial=np.inf)),
+        prey_distance=float(d[prey].min(initial=np.inf)),
+        crowded=int(np.sum(d < ps)) > crowd,
+        alone=not seen.any(),
+        near_obstacle=bool(len(obst)) and float(obst.min()) < ps,
+    )
+
+
 def test_situations_of_all_fishes_equal_each_fishs_own():
     from zoetic.behavior.aquarium.routines import Me
     from zoetic.behavior.aquarium.species import load_species
@@ -197,7 +216,8 @@ def test_situations_of_all_fishes_equal_each_fishs_own():
         for i, b in enumerate(brains):
             v = View(me, fish[i], np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)), names,
                      food[i], np.zeros((food.shape[1], 3)), obst[i], hits[i], None)
-            assert sits[i] == b._situation(v)[0]
+            assert sits[i] == b._situation(v) == _situation_of(b, fish[i], food[i], obst[i],
+                                                               masks[i], hits[i])
             assert np.array_equal(pred[i], np.where(masks[i][1], fish[i], np.inf))
 
 

@@ -308,31 +308,14 @@ class FishBrain:
                            np.isin(arr, list(self.species.prey)))  # fmt: skip
         return self._masks
 
-    def _situation(self, v: View) -> tuple[Situation, np.ndarray, np.ndarray, np.ndarray]:
-        sp = self.species
+    def _situation(self, v: View) -> Situation:
+        """The fish's ``Situation`` from its own view (``situations`` for one fish)."""
         same, hunters, prey = self._kinds(v.fish_species)
-        d = v.fish_distance
-        prey_d = np.where(prey, d, np.inf)
-        # a handful of fishes: plain Python over lists beats numpy's per-call overhead
-        dl = d.tolist()
-        seen = [math.isfinite(x) for x in dl]
-        ps = sp.habits.personal_space
-        sit = Situation(
-            collision=v.collision,
-            predator_distances=tuple(
-                x for x, h, s in zip(dl, hunters.tolist(), seen, strict=True) if h and s
-            ),
-            food_distance=float(v.food_distance.min()) if len(v.food_distance) else np.inf,
-            mate_distance=min(
-                (x for x, s in zip(dl, same.tolist(), strict=True) if s), default=np.inf
-            ),
-            prey_distance=float(prey_d.min()) if len(prey_d) else np.inf,
-            crowded=sum(x < ps for x in dl) > sp.habits.crowd,
-            alone=not any(seen),
-            near_obstacle=bool(len(v.obstacle_distance))
-            and float(v.obstacle_distance.min()) < sp.habits.personal_space,
-        )
-        return sit, same, hunters, prey_d
+        h = self.species.habits
+        sits, _ = situations(v.fish_distance[None], v.food_distance[None],
+                             v.obstacle_distance[None], same[None], hunters[None], prey[None],
+                             np.array([h.personal_space]), np.array([h.crowd]), [v.collision])
+        return sits[0]
 
     def act(self, observation: Mapping, period: Period) -> np.ndarray:
         """Return activations (1, T, A) for the period from the fish's percept."""
@@ -352,7 +335,7 @@ class FishBrain:
         sp = self.species
         same, hunters, prey = self._kinds(v.fish_species)
         if sit is None:
-            sit = self._situation(v)[0]
+            sit = self._situation(v)
         self.mind, drives = think(self.mind, period.t0, self.constants, sp.habits, sit,
                                   sp.predator, d)  # fmt: skip
         intention = self.mind.intention
@@ -405,10 +388,10 @@ def situations(fish: np.ndarray, food: np.ndarray, obstacles: np.ndarray, same: 
     """Return every fish's ``Situation`` from all the percepts at once, and (n, n) the
     distances of the predators each perceives (inf elsewhere, for ``mind.drives_many``).
 
-    fish (n, n), food (n, F), obstacles (n, S): the distances perceived (inf: not perceived,
-    ``Percepts``); same, hunters, prey (n, n): row i the masks of ``FishBrain._kinds`` of fish
-    i; personal_space, crowd (n,): the habits; collision (n,) bools. Row by row the same
-    situations as ``FishBrain._situation`` of each fish's view."""
+    fish (n, M), food (n, F), obstacles (n, S): the distances perceived by each of n fishes
+    (inf: not perceived, ``Percepts``; M = n in the tank, one row for ``FishBrain._situation``);
+    same, hunters, prey (n, M): row i the masks of ``FishBrain._kinds`` of fish i;
+    personal_space, crowd (n,): the habits; collision (n,) bools."""
     n = len(fish)
     inf = np.full(n, np.inf)
     seen = np.isfinite(fish)
