@@ -11,7 +11,9 @@ frozen value that can be copied, saved and restored, so a planner can look ahead
 
 Contacts are resolved every time step, but only while some node is within reach of an object
 or of another animal; far from everything the animals run whole slices through the kernel at
-full speed.
+full speed. What the world decides for a stretch of steps (which animals may touch what, which
+food was eaten) it decides on its own grid of slices (every ``MAX_SLICE`` steps from t = 0), never
+per call: stepping 0.1 s at once or as 0.05 + 0.05 s gives the same world bit for bit.
 """
 
 from __future__ import annotations
@@ -416,7 +418,9 @@ class World:
 
     def restore(self, state: WorldState, lanes=None) -> None:
         """Make ``state`` the current one; with ``lanes``, only those lanes take it (the
-        state then holds one lane per index, or one for all) and the clock stays."""
+        state then holds one lane per index, or one for all) and the clock stays. The broad
+        phase decides afresh from here for the rest of the grid's slice, and the food test's
+        path starts here."""
         if len(state.positions) != len(self.animals):
             raise SimulationError(
                 f"the state holds {len(state.positions)} animals; this world {len(self.animals)}"
@@ -582,6 +586,12 @@ class World:
         activations: for each animal (a list, a dict by animal name, or one array for a lone
         animal) an array (A,) or (B, A) held over the slice, or (B, T, A) one row a step with
         T = ``steps_for(seconds)``; None holds every actuator at 0.
+
+        How the steps are split into calls changes nothing: the broad phase decides once for
+        each slice of the world's grid (``MAX_SLICE`` steps; the pairs of animals again every
+        ``SUB_SLICE``) and keeps its decision for the rest of the slice, and food is tested
+        and drifted at the grid's steps (a particle eaten during a slice shows as eaten from
+        the slice's last step on). The returned contacts are this call's.
         """
         steps = int(round((self._n * self.dt + seconds) / self.dt)) - self._n  # steps_for
         if steps < 0:
