@@ -76,7 +76,8 @@ HEIGHT = 2.0  # m: half height of the walls, rocks and seaweed (all span the fis
 class TankConfig:
     """A tank: how many fishes (predators among them), food particles and obstacles, for how
     long, from which seed; ``half_size`` (m, default grows with the crowd), the water
-    current (m/s) that carries the food, the brains' control period and the record period (s)."""
+    current (m/s) that carries the food, the brains' control period and the record period
+    (s; how often positions are kept: the run is the same whatever it is)."""
 
     fishes: int = 10
     predators: int = 1
