@@ -419,8 +419,10 @@ class World:
     def restore(self, state: WorldState, lanes=None) -> None:
         """Make ``state`` the current one; with ``lanes``, only those lanes take it (the
         state then holds one lane per index, or one for all) and the clock stays. The broad
-        phase decides afresh from here for the rest of the grid's slice, and the food test's
-        path starts here."""
+        phase decides afresh from here for the rest of the grid's slice (it only picks which
+        animals are checked for contacts, so the motion is the same), and the food test's path
+        starts here (a state taken between the grid's steps goes on as one never interrupted
+        but for that path and the food's drift rounding)."""
         if len(state.positions) != len(self.animals):
             raise SimulationError(
                 f"the state holds {len(state.positions)} animals; this world {len(self.animals)}"
