@@ -349,7 +349,6 @@ class World:
         self._views = [(self._pos[o0:o1], self._vel[o0:o1])
                        for o0, o1 in zip(self._off[:-1], self._off[1:], strict=True)]  # fmt: skip
         self._lone = len(self.animals) == 1
-        self._near_buf = np.zeros(len(self.animals), bool)
         self._head_rows = np.array([o + b.head for o, b in zip(self._off[:-1], self.bodies,
                                                               strict=True)], int)
         # animal-animal contact: each body's skin triangles and the broad phase's reach
