@@ -11,7 +11,9 @@ frozen value that can be copied, saved and restored, so a planner can look ahead
 
 Contacts are resolved every time step, but only while some node is within reach of an object
 or of another animal; far from everything the animals run whole slices through the kernel at
-full speed.
+full speed. What the world decides for a stretch of steps (which animals may touch what, which
+food was eaten) it decides on its own grid of slices (every ``MAX_SLICE`` steps from t = 0), never
+per call: stepping 0.1 s at once or as 0.05 + 0.05 s gives the same world bit for bit.
 """
 
 from __future__ import annotations
@@ -336,12 +338,17 @@ class World:
         self._food_radius = np.array([f.radius for f in self.foods], float)
         self._eaten = np.zeros((self.batch, len(self.foods)), dtype=bool)
         self._n = 0
+        # the world's own cadence (see ``step``): the food test's last mark (the step, the food
+        # there, the heads there) and the broad phase's decisions for the slice under way
+        self._mark = 0
+        self._mark_heads: np.ndarray | None = None
+        self._plan: tuple | None = None
+        self._sub: tuple | None = None
         self._tables: dict[tuple[int, int], tuple[np.ndarray, tuple]] = {}
         self._tested: set[int] = set()  # the animals whose node contacts a step computed
         self._views = [(self._pos[o0:o1], self._vel[o0:o1])
                        for o0, o1 in zip(self._off[:-1], self._off[1:], strict=True)]  # fmt: skip
         self._lone = len(self.animals) == 1
-        self._near_buf = np.zeros(len(self.animals), bool)
         self._head_rows = np.array([o + b.head for o, b in zip(self._off[:-1], self.bodies,
                                                               strict=True)], int)
         # animal-animal contact: each body's skin triangles and the broad phase's reach
@@ -405,12 +412,16 @@ class World:
         return WorldState(
             self._n, self.dt, pos, vel, tuple(f.copy() for f in self._failed),
             self._bpos.transpose(2, 0, 1).copy(), self._bvel.transpose(2, 0, 1).copy(),
-            self._food.copy(), self._eaten.copy(),
+            self._food_now(), self._eaten.copy(),
         )  # fmt: skip
 
     def restore(self, state: WorldState, lanes=None) -> None:
         """Make ``state`` the current one; with ``lanes``, only those lanes take it (the
-        state then holds one lane per index, or one for all) and the clock stays."""
+        state then holds one lane per index, or one for all) and the clock stays. The broad
+        phase decides afresh from here for the rest of the grid's slice (it only picks which
+        animals are checked for contacts, so the motion is the same), and the food test's path
+        starts here (a state taken between the grid's steps goes on as one never interrupted
+        but for that path and the food's drift rounding)."""
         if len(state.positions) != len(self.animals):
             raise SimulationError(
                 f"the state holds {len(state.positions)} animals; this world {len(self.animals)}"
@@ -430,14 +441,21 @@ class World:
             self._fs[a][sel] = np.where(np.asarray(state.failed_step[a]) >= 0, 0, -1)
         self._bpos[:, :, sel] = np.asarray(state.ball_positions).transpose(1, 2, 0)
         self._bvel[:, :, sel] = np.asarray(state.ball_velocities).transpose(1, 2, 0)
-        self._food[sel] = state.food_positions
         self._eaten[sel] = state.food_eaten
+        # the broad phase decides afresh from here; the food test's mark moves here
+        self._plan = self._sub = None
         if lanes is None:
             if state.batch != self.batch:
                 raise SimulationError(
                     f"the state holds {state.batch} lanes; this world {self.batch}"
                 )
-            self._n = int(state.step)
+            self._n = self._mark = int(state.step)
+            self._food[:] = state.food_positions
+            self._mark_heads = self._heads()
+        else:  # these lanes' food held at the mark, so that it lies where the state puts it now
+            drift = self.current * (self._n - self._mark) * self.dt
+            self._food[sel] = np.asarray(state.food_positions) - drift
+            self._mark_heads[:, sel] = self._heads()[:, sel]
 
     def positions(self, animal: int = 0) -> np.ndarray:
         """Return the animal's node positions (B, N, 3) in m (a copy)."""
@@ -481,7 +499,13 @@ class World:
     @property
     def food_positions(self) -> np.ndarray:
         """Return the food particles (B, F, 3) in m."""
-        return self._food.copy()
+        return self._food_now()
+
+    def _food_now(self) -> np.ndarray:
+        """Return the food particles now (a copy): as at the mark, drifted since."""
+        if self._n == self._mark:
+            return self._food.copy()
+        return self._food + self.current * (self._n - self._mark) * self.dt
 
     @property
     def food_eaten(self) -> np.ndarray:
@@ -563,6 +587,12 @@ class World:
         activations: for each animal (a list, a dict by animal name, or one array for a lone
         animal) an array (A,) or (B, A) held over the slice, or (B, T, A) one row a step with
         T = ``steps_for(seconds)``; None holds every actuator at 0.
+
+        How the steps are split into calls changes nothing: the broad phase decides once for
+        each slice of the world's grid (``MAX_SLICE`` steps; the pairs of animals again every
+        ``SUB_SLICE``) and keeps its decision for the rest of the slice, and food is tested
+        and drifted at the grid's steps (a particle eaten during a slice shows as eaten from
+        the slice's last step on). The returned contacts are this call's.
         """
         steps = int(round((self._n * self.dt + seconds) / self.dt)) - self._n  # steps_for
         if steps < 0:
@@ -581,7 +611,6 @@ class World:
             self._animals_run(tables, 0, steps)
             self._n += steps
             return self._no_contacts
-        heads = self._heads() if len(self.foods) else None
         n_obj = len(self.objects)
         # one zeroed buffer for all the animals' impulses, each a view of its rows
         whole = np.zeros((int(self._off[-1]), n_obj, 3, self.batch))
@@ -589,37 +618,63 @@ class World:
         self._tested = set()
         n_an = len(self.animals)
         between = np.zeros((self.batch, n_an, n_an)) if self._touchy else None
+        decide = self._solids or self._touchy
         t = 0
         while t < steps:
-            t1 = steps if not (self._solids or self._touchy) else min(steps, t + MAX_SLICE)
-            pairs = self._close_pairs((t1 - t) * self.dt) if self._touchy else []
-            if pairs and len(self.balls):  # balls couple everything: all in lockstep
+            # the world's slices end on its own grid (every MAX_SLICE steps from t = 0), not
+            # where the caller's steps end: a caller may split a slice, never change it
+            end = (self._n + t) // MAX_SLICE * MAX_SLICE + MAX_SLICE
+            t1 = min(steps, end - self._n)
+            mode, pairs, near_now = self._decide(end, t) if decide else ("free", [], None)
+            if mode == "lockstep":  # balls couple everything, or some node is near a shape
                 for s in range(t, t1):
                     self._contact_step(tables, s, impulse, pairs, between)
-            elif pairs:
-                self._slice_apart(tables, t, t1, impulse, pairs, between)
-            elif self._solids and not len(self.balls) and len(self.animals) > 1:
-                # no balls couple the animals: only those near a fixed shape step one step at
-                # a time with contacts, the others the whole slice in one kernel call
-                self._slice_apart(tables, t, t1, impulse)
-            elif self._solids and self._any_near((t1 - t) * self.dt):
-                for s in range(t, t1):
-                    self._contact_step(tables, s, impulse)
+            elif mode == "apart":
+                self._slice_apart(tables, t, t1, impulse, near_now, pairs, between)
             else:
                 self._animals_run(tables, t, t1)
                 if len(self.balls):
                     self._bforce[:] = 0.0
                     self._balls(t1 - t)
             t = t1
+            if self.foods and self._n + t == end:
+                self._food_update(end)
         self._n += steps
-        if self.foods:
-            self._food_update(steps, heads)
         return Contacts(
             tuple(i.transpose(3, 0, 1, 2) for i in impulse),
             tuple(o.name for o in self.objects),
             between if between is not None and between.any() else None,
             tuple(sorted(self._tested)),
         )
+
+    def _decide(self, end: int, t: int) -> tuple[str, list[tuple[int, int]], np.ndarray | None]:
+        """Return the broad phase's decisions for the world's slice that ends at step ``end``
+        (the caller's step t of this call): how it is stepped (``lockstep``: all animals one
+        step at a time with their contacts; ``apart``: ``_slice_apart``; ``free``: whole in
+        the kernel), the pairs of animals that may touch, and which animals are near a
+        fixed shape. Decided once, at the first step of the slice stepped (its start, or
+        where a restore left the clock), and kept however the calls split the slice."""
+        if self._plan is not None and self._plan[0] == end:
+            return self._plan[1]
+        horizon = (end - self._n - t) * self.dt
+        pairs = self._close_pairs(horizon) if self._touchy else []
+        near_now = None
+        if pairs and len(self.balls):
+            mode = "lockstep"
+        elif pairs or (self._solids and not len(self.balls) and len(self.animals) > 1):
+            # no balls couple the animals: only those near a fixed shape step one step at a
+            # time with contacts, the others the whole slice in one kernel call
+            mode = "apart"
+            near_now = np.zeros(len(self.animals), bool)
+            near_each(self._pos, self._vel, self._off, self.node_radius, self._bpos,
+                      self._bvel, self._bpar, self._skind, self._scenter, self._ssize, horizon,
+                      near_now)  # fmt: skip
+        elif self._solids and self._any_near(horizon):
+            mode = "lockstep"
+        else:
+            mode = "free"
+        self._plan = (end, (mode, pairs, near_now))
+        return self._plan[1]
 
     def _close_pairs(self, horizon: float) -> list[tuple[int, int]]:
         """Return the pairs of animals that may touch within ``horizon`` s (broad phase)."""
@@ -657,19 +712,16 @@ class World:
                          self._bvel, self._bpar, self._skind, self._scenter, self._ssize,
                          horizon))  # fmt: skip
 
-    def _slice_apart(self, tables, t: int, t1: int, impulse, pairs=(), between=None) -> None:
-        """Step steps t..t1 of animals that no balls couple: each near a fixed shape one step
-        at a time with its contacts, each other one in one kernel call; the animals of
-        ``pairs`` (that may touch one another) in lockstep, one step at a time."""
+    def _slice_apart(self, tables, t: int, t1: int, impulse, near_now: np.ndarray, pairs=(),
+                     between=None) -> None:  # fmt: skip
+        """Step steps t..t1 of animals that no balls couple: each near a fixed shape
+        (``near_now``) one step at a time with its contacts, each other one in one kernel
+        call; the animals of ``pairs`` (that may touch one another) in lockstep, one step at a
+        time."""
         kernel = self._parallel if self.batch * (t1 - t) >= PARALLEL_FROM else self._serial
         one = self._parallel if self.batch >= PARALLEL_FROM else self._serial
         base = self._n + t
         busy = sorted({a for p in pairs for a in p})
-        # every animal's nearness to the objects in one call (``_near`` of each)
-        near_now = self._near_buf
-        near_each(self._pos, self._vel, self._off, self.node_radius, self._bpos, self._bvel,
-                  self._bpar, self._skind, self._scenter, self._ssize, (t1 - t) * self.dt,
-                  near_now)  # fmt: skip
         for a, (stepper, table) in enumerate(zip(self._steppers, tables, strict=False)):
             if a in busy:
                 continue
@@ -682,12 +734,16 @@ class World:
         if not busy:
             return
         near_shape = [a for a in busy if self._solids and near_now[a]]
-        # the pairs checked again every SUB_SLICE steps: an animal of a pair not close now
-        # takes the sub-slice in one kernel call
+        # the pairs checked again every SUB_SLICE steps (on the world's grid, as the slices):
+        # an animal of a pair not close now takes the sub-slice in one kernel call
         s = t
         while s < t1:
-            s1 = min(t1, s + SUB_SLICE)
-            now = [p for p in pairs if self._close(*p, (s1 - s) * self.dt)]
+            end = (self._n + s) // SUB_SLICE * SUB_SLICE + SUB_SLICE
+            s1 = min(t1, end - self._n)
+            if self._sub is None or self._sub[0] != end:
+                horizon = (end - self._n - s) * self.dt
+                self._sub = (end, [p for p in pairs if self._close(*p, horizon)])
+            now = self._sub[1]
             tight = sorted({a for p in now for a in p} | set(near_shape))
             for a in busy:
                 if a not in tight:
@@ -732,12 +788,13 @@ class World:
         """Return the animals' head nodes (animals, B, 3) in m."""
         return self._pos[self._head_rows].transpose(0, 2, 1).astype(np.float64)
 
-    def _food_update(self, steps: int, heads_before: np.ndarray | None) -> None:
-        """Drift the food with the current; a food particle is eaten when a head's path
-        during the slice (relative to the particle) came within its radius."""
+    def _food_update(self, at: int) -> None:
+        """At step ``at`` of the world's grid (where the animals now are): drift
+        the food with the current since the mark; a particle is eaten when a head's path
+        since the mark (relative to the particle, a straight segment) came within its
+        radius. The mark moves here."""
         f0 = self._food.copy()
-        self._food += self.current * steps * self.dt
-        if heads_before is None:
-            return
-        eaten_on_path(heads_before, self._heads(), f0, self._food, self._food_radius,
-                      self._eaten)
+        self._food += self.current * (at - self._mark) * self.dt
+        heads = self._heads()
+        eaten_on_path(self._mark_heads, heads, f0, self._food, self._food_radius, self._eaten)
+        self._mark, self._mark_heads = at, heads

@@ -76,7 +76,8 @@ HEIGHT = 2.0  # m: half height of the walls, rocks and seaweed (all span the fis
 class TankConfig:
     """A tank: how many fishes (predators among them), food particles and obstacles, for how
     long, from which seed; ``half_size`` (m, default grows with the crowd), the water
-    current (m/s) that carries the food, the brains' control period and the record period (s)."""
+    current (m/s) that carries the food, the brains' control period and the record period
+    (s; how often positions are kept: the run is the same whatever it is)."""
 
     fishes: int = 10
     predators: int = 1
@@ -556,7 +557,6 @@ def live(tank: Tank, seconds: float | None = None,
         eaten.append(world.food_eaten[0])
 
     off = world.offsets
-    head_rows = np.array([off[a] + f.body.head for a, f in enumerate(fishes)])
     masses = [(f.body.mass, f.body.total_mass) for f in fishes]
     weights = [m / total for m, total in masses]
     heads_of = [f.body.head for f in fishes]
@@ -637,52 +637,57 @@ def live(tank: Tank, seconds: float | None = None,
                 events.append((t, fishes[i].name, "escape", f"fear {x.fear:.2f}"))
             if x.intention != "avoid":
                 in_fear[i] = afraid
+        # the period is stepped in slices that end at the record times; what happened in it
+        # (meals, touches) is taken at its end, so the record period changes nothing
+        before = world.food_eaten[0]
+        touched: set[tuple[int, int]] = set()
+        fish_hit = np.zeros((n, n), bool)
         j = 0
         while j < steps:
             m = min(steps - j, rec_steps - (world.step_count % rec_steps))
-            before = world.food_eaten[0]
-            heads = nose if j == 0 else world.node_positions(0)[head_rows]
             contacts = world.step(m * dt, [r[:, j:j + m] for r in rows])
             j += m
-            new = world.food_eaten[0] & ~before
-            if new.any():
-                fp = world.food_positions[0]
-                for q in np.flatnonzero(new):
-                    d = np.linalg.norm(heads - fp[q], axis=1)
-                    d[~alive] = np.inf
-                    i = int(np.argmin(d))
-                    brains[i].ate(world.time)
-                    events.append((world.time, fishes[i].name, "eat", f"food_{q}"))
             if contacts.between is not None:  # fish against fish (the world's skin contact)
-                hit = contacts.between[0] + contacts.between[0].T
-                for i, j2 in zip(*np.nonzero(np.triu(hit > 0.0, 1)), strict=True):
-                    if world.time - fish_touch[i, j2] > APART:
-                        events.append((world.time, fishes[i].name, "collision",
-                                       fishes[j2].name))  # fmt: skip
-                    fish_touch[i, j2] = world.time
+                fish_hit |= (contacts.between[0] + contacts.between[0].T) > 0.0
             if contacts.impulse and contacts.impulse[0].shape[2]:
                 # contacts.touching[0] for the one lane, without stacking every animal's
                 # (only the animals whose nodes were tested: the others' impulses are zero)
                 tested = range(n) if contacts.near is None else contacts.near
-                now = [(i, o) for i in tested
-                       for o in np.flatnonzero((contacts.impulse[i][0] != 0.0).any(axis=(0, 2)))]
-                for i, o in now:
-                    if o in static_obj and world.time - touching[i, o] > APART:
-                        events.append((world.time, fishes[i].name, "collision",
-                                       world.objects[o].name))  # fmt: skip
-                    touching[i, o] = world.time
+                touched.update((i, int(o)) for i in tested for o in np.flatnonzero(
+                    (contacts.impulse[i][0] != 0.0).any(axis=(0, 2))))  # fmt: skip
             if world.step_count % rec_steps == 0 or world.step_count == end:
                 allpos = world.node_positions(0)
                 pos = [allpos[o0:o1] for o0, o1 in zip(off[:-1], off[1:], strict=True)]
                 record(pos)
                 recorded = world.step_count
-                if len(kind):
-                    deepest = max(deepest, float(-obstacle_distance(allpos, kind, center,
-                                                                    size).min()))  # fmt: skip
-                deepest_fish = max(deepest_fish, _fish_depth(fishes, pos, extent, masses))
+        t1 = world.time
+        new = world.food_eaten[0] & ~before
+        if new.any():
+            fp = world.food_positions[0]
+            for q in np.flatnonzero(new):  # the eater: the live head nearest at the period's start
+                d = np.linalg.norm(nose - fp[q], axis=1)
+                d[~alive] = np.inf
+                i = int(np.argmin(d))
+                brains[i].ate(t1)
+                events.append((t1, fishes[i].name, "eat", f"food_{q}"))
+        for i, j2 in zip(*np.nonzero(np.triu(fish_hit, 1)), strict=True):
+            if t1 - fish_touch[i, j2] > APART:
+                events.append((t1, fishes[i].name, "collision", fishes[j2].name))
+            fish_touch[i, j2] = t1
+        for i, o in sorted(touched):
+            if o in static_obj and t1 - touching[i, o] > APART:
+                events.append((t1, fishes[i].name, "collision", world.objects[o].name))
+            touching[i, o] = t1
+        # how deep any fish lies in a rock or another fish, once a period
+        if recorded != world.step_count:
+            allpos = world.node_positions(0)
+            pos = [allpos[o0:o1] for o0, o1 in zip(off[:-1], off[1:], strict=True)]
+            recorded = world.step_count
+        if len(kind):
+            deepest = max(deepest, float(-obstacle_distance(allpos, kind, center, size).min()))
+        deepest_fish = max(deepest_fish, _fish_depth(fishes, pos, extent, masses))
         pos, com, fwd, vel, nose = _kinematics(
             world, weights, cw, heads_of, allpos if recorded == world.step_count else None)
-        t1 = world.time
         # catches and matings (fish-fish touches come from the world's contacts above)
         dcoms = np.linalg.norm(com[:, None] - com[None], axis=-1)
         for i, j2 in zip(*np.nonzero(dcoms < NEAR), strict=True):
