@@ -359,6 +359,7 @@ class FishBrain:
             target_velocity=None if target is None or intention == "eat"
             else v.fish_velocity[target],
             away=v.away,
+            obstacle=float(v.obstacle_distance.min()) if len(v.obstacle_distance) else np.inf,
         )  # fmt: skip
         me = v.me
         if intention == "avoid":
