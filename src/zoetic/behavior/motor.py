@@ -43,13 +43,21 @@ def blend(a: AbstractController, b: AbstractController, w: float) -> AbstractCon
     )  # fmt: skip
 
 
-def fin_activation(body: Body, angle: float) -> np.ndarray:
-    """Return, per fin actuator, the activation that sets its fins to ``angle`` rad (clipped)."""
+def fin_rows(body: Body) -> list[tuple[int, float, float]]:
+    """Return each fin's (actuator, angle at activation 0, angle at 1) as Python numbers."""
+    return [(int(a), float(lo), float(hi))
+            for a, (lo, hi) in zip(body.fin_actuator.tolist(), body.fin_angle.tolist(),
+                                   strict=True)]  # fmt: skip
+
+
+def fin_activation(body: Body, angle: float,
+                   rows: list[tuple[int, float, float]] | None = None) -> dict[int, float]:
+    """Return, per fin actuator, the activation that sets its fins to ``angle`` rad (clipped);
+    ``rows``: ``fin_rows(body)`` when kept (a caller many times a second)."""
     out = {}
-    for k, act in enumerate(body.fin_actuator):
-        lo, hi = body.fin_angle[k]
+    for act, lo, hi in fin_rows(body) if rows is None else rows:
         # np.clip's result for a scalar, without its per-call overhead
-        out[int(act)] = min(max(float((angle - lo) / (hi - lo)), 0.0), 1.0) if hi != lo else 0.0
+        out[act] = min(max(float((angle - lo) / (hi - lo)), 0.0), 1.0) if hi != lo else 0.0
     return out
 
 
@@ -529,9 +537,14 @@ class LearnedMotor:
         return self._fins(u, pitch)
 
     def _fins(self, u: np.ndarray, pitch: float) -> np.ndarray:
-        for k, act in fin_activation(self.body, float(pitch)).items():
+        for k, act in fin_activation(self.body, float(pitch), self._fin_rows).items():
             u[:, k] = act
         return np.clip(u, 0.0, 1.0)
+
+    @cached_property
+    def _fin_rows(self) -> list[tuple[int, float, float]]:
+        """``fin_rows(body)``, kept (``_fins`` runs once a fish and control period)."""
+        return fin_rows(self.body)
 
     def summary(self) -> dict:
         """Return the calibration tables (speeds in m/s, angles turned in degrees)."""
