@@ -56,11 +56,13 @@ def _one_fish_tank(seconds: float, **kw):
     return cfg
 
 
-def test_collision_avoidance_keeps_a_fish_off_a_rock_in_its_path():
+@pytest.mark.parametrize("skills", ["built-in", "learned"])
+def test_collision_avoidance_keeps_a_fish_off_a_rock_in_its_path(skills):
     from zoetic.behavior.aquarium import tank as tk
     from zoetic.physics.world import Animal, World
 
-    t = build_tank(_one_fish_tank(1.0))
+    t = build_tank(_one_fish_tank(1.0, skills=skills))
+    assert (t.fishes[0].species.motor.skills == "built-in") == (skills == "built-in")
     body = t.fishes[0].body
     rock = Box((4.0, 0.0, 0.0), (0.6, 2.0, 0.6), name="rock")
     com0 = body.mass @ body.rest_pos / body.total_mass
@@ -75,6 +77,27 @@ def test_collision_avoidance_keeps_a_fish_off_a_rock_in_its_path():
     # it did swim past the rock's front face rather than stopping short of it
     path = life.positions[0].mean(axis=1)
     assert np.abs(path[:, 2]).max() > 0.8
+    assert "avoid" in {tk.INTENTIONS[k] for k in life.intentions[:, 0]}
+
+
+@pytest.mark.parametrize("skills", ["built-in", "learned"])
+def test_a_fish_between_a_wall_and_a_rock_turns_clear_of_the_rock(skills):
+    # a fish 0.4 m off a wall (half size 9.5 m) swimming at a rock 2 m ahead, found in the
+    # default tank (seed 2): the learned steer, turning at its steady rate, went 0.07 m into
+    # the rock; the urgent half turn (routines.URGENT) keeps it out
+    from zoetic.behavior.aquarium import tank as tk
+    from zoetic.physics.world import Animal, World
+
+    t = build_tank(TankConfig(fishes=1, predators=0, food=0, obstacles=0, seed=1,
+                              half_size=9.5, skills=skills))  # fmt: skip
+    rock = Box((7.5, 0.0, 2.9), (0.5, 2.0, 0.4), name="rock")
+    fish = Animal(t.fishes[0].body, (7.27, 0.0, 5.7), -0.66, (0.19, 0.0, -0.17))
+    walls = list(t.world.statics)
+    world = World([fish, *walls, rock], medium="water")
+    kind, center, size = pack_statics([*walls, rock])
+    tank = tk.Tank(t.config, world, t.fishes, kind, center, size, [*t.static_names, "rock"])
+    life = live(tank, 6.0)
+    assert [e for e in life.events if e[2] == "collision"] == [] and life.deepest == 0.0
     assert "avoid" in {tk.INTENTIONS[k] for k in life.intentions[:, 0]}
 
 

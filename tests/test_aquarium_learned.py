@@ -18,6 +18,7 @@ from zoetic.behavior.aquarium.species import (
     with_skills,
 )
 from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live
+from zoetic.behavior.motor import LEARNED_SWIM
 from zoetic.behavior.tracking import handmade_repertoire
 from zoetic.bodies import load_animal
 from zoetic.learn.objective import heading_angles
@@ -229,3 +230,37 @@ def test_length_keeping_measures_the_head_to_tail_shortfall():
                 0.0, 0.1)  # fmt: skip
     got = TERMS["length_keeping"].fn(np, s, TermParams())
     np.testing.assert_allclose(got, [0.2**2 / 2, 0.0], atol=1e-6)
+
+
+def test_fishes_sharing_a_learned_motor_get_what_each_would_alone():
+    """The tank's fishes of one motor share its gaits' evaluations in a control period
+    (``LearnedMotor._raw``): their activations equal each fish's with a motor of its own,
+    bit for bit, while turns start and end and swims and steers mix."""
+    from types import SimpleNamespace
+
+    from zoetic.behavior.aquarium.tank import _activations
+    from zoetic.control.policy import Period
+
+    body = load_animal("shark")
+    motor = learned_motor(body, SKILLS_DIR / "shark")
+    assert motor.steers  # the shipped repertoire steers while swimming
+    demands = [Demand(0.3), Demand(0.5, 0.4, 0.2), Demand(0.2, -1.0), Demand(0.4, 2.5),
+               Demand(0.1, -2.8, -0.3), None]  # fmt: skip
+    shared = [SimpleNamespace(body=body, locomotion=LearnedLocomotion(body, motor))
+              for _ in demands]  # fmt: skip
+    alone = [LearnedLocomotion(body, replace(motor)) for _ in demands]
+    per = int(round(0.1 / body.dt))
+    for k in range(8):
+        # every third period the turns reverse: sharp turns end, rests and steers follow
+        now = [d if d is None or k % 3 else Demand(d.speed, -d.turn, d.pitch) for d in demands]
+        rows = _activations(shared, now, Period(k * per, per, body.dt))
+        t = (k * per + np.arange(per)) * body.dt
+        for row, loco, d in zip(rows, alone, now, strict=True):
+            want = np.zeros((per, body.n_actuators)) if d is None else loco.activations(d, t)
+            assert np.array_equal(row[0], want)
+    # the swim weight read from the table kept once is np.interp's over the sorted speeds
+    top = int(np.argmax(motor.speeds))
+    order = np.argsort(motor.speeds[: top + 1])
+    for v in np.linspace(motor.speeds[0], 1.5, 31):
+        want = np.interp(v, motor.speeds[: top + 1][order], LEARNED_SWIM[: top + 1][order])
+        assert motor.swim(v) == float(want)

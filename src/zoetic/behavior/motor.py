@@ -14,7 +14,7 @@ entry a repertoire (and so greedy tracking) can use (``motor_repertoire``).
 from __future__ import annotations
 
 from bisect import bisect_left, bisect_right
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -43,13 +43,21 @@ def blend(a: AbstractController, b: AbstractController, w: float) -> AbstractCon
     )  # fmt: skip
 
 
-def fin_activation(body: Body, angle: float) -> np.ndarray:
-    """Return, per fin actuator, the activation that sets its fins to ``angle`` rad (clipped)."""
+def fin_rows(body: Body) -> list[tuple[int, float, float]]:
+    """Return each fin's (actuator, angle at activation 0, angle at 1) as Python numbers."""
+    return [(int(a), float(lo), float(hi))
+            for a, (lo, hi) in zip(body.fin_actuator.tolist(), body.fin_angle.tolist(),
+                                   strict=True)]  # fmt: skip
+
+
+def fin_activation(body: Body, angle: float,
+                   rows: list[tuple[int, float, float]] | None = None) -> dict[int, float]:
+    """Return, per fin actuator, the activation that sets its fins to ``angle`` rad (clipped);
+    ``rows``: ``fin_rows(body)`` when kept (a caller many times a second)."""
     out = {}
-    for k, act in enumerate(body.fin_actuator):
-        lo, hi = body.fin_angle[k]
+    for act, lo, hi in fin_rows(body) if rows is None else rows:
         # np.clip's result for a scalar, without its per-call overhead
-        out[int(act)] = min(max(float((angle - lo) / (hi - lo)), 0.0), 1.0) if hi != lo else 0.0
+        out[act] = min(max(float((angle - lo) / (hi - lo)), 0.0), 1.0) if hi != lo else 0.0
     return out
 
 
@@ -352,6 +360,8 @@ class LearnedMotor:
     steers: tuple[AbstractController, ...] = ()
     steer_rates: np.ndarray | None = None
     steer_speeds: np.ndarray | None = None  # (S, W) m/s of the same steers
+    # the gaits' raw signals at the latest control period's times (``_raw``)
+    _memo: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @classmethod
     def calibrate(cls, body: Body, rep: Repertoire) -> LearnedMotor:
@@ -434,10 +444,17 @@ class LearnedMotor:
         lo = float(self.speeds[0])
         if speed < lo:
             return float(LEARNED_SWIM[0] * max(speed, 0.0) / max(lo, 1e-9))
+        sp, w = self._swim_table
+        return float(_interp(float(speed), sp, w))
+
+    @cached_property
+    def _swim_table(self) -> tuple[list[float], list[float]]:
+        """The speeds (ascending) and swim weights ``swim`` interpolates: the weights up to
+        the fastest, sorted by speed (computed once, not once a fish and period)."""
         top = int(np.argmax(self.speeds))
         sp, w = self.speeds[: top + 1], LEARNED_SWIM[: top + 1]
         order = np.argsort(sp)
-        return float(np.interp(speed, sp[order], w[order]))
+        return sp[order].tolist(), w[order].tolist()
 
     def turn(self, angle: float) -> tuple[int, float]:
         """Return (side, seconds): play sharp-turn-left (0) or -right (1) for that long from its
@@ -484,7 +501,7 @@ class LearnedMotor:
         """Return activations (T, A): (1 - w) of the swim gait of weight ``a`` plus ``w`` of
         the steering gait of ``side`` (0 left, 1 right), both at ``times``; fins at ``pitch``."""
         u = (1 - w) * self._swim_raw(times, a)
-        return self._fins(u + w * self.steers[side].raw(times), pitch)
+        return self._fins(u + w * self._raw(self.steers[side], times), pitch)
 
     def swim_signal(self, times: np.ndarray, a: float, pitch: float) -> np.ndarray:
         """Return activations (T, A) of the swim gait of weight ``a``, fins at ``pitch``."""
@@ -492,7 +509,23 @@ class LearnedMotor:
 
     def _swim_raw(self, times: np.ndarray, a: float) -> np.ndarray:
         """The swim gait of weight ``a`` (do-nothing blended with go-straight), unclipped."""
-        return (1 - a) * self.bases[0].raw(times) + a * self.bases[1].raw(times)
+        return (1 - a) * self._raw(self.bases[0], times) + a * self._raw(self.bases[1], times)
+
+    def _raw(self, gait: AbstractController, times: np.ndarray) -> np.ndarray:
+        """Return ``gait.raw(times)`` (read-only), evaluated once for the same times: the
+        fishes of one motor play their periodic gaits at the same clock times in a control
+        period, so a tank evaluates each gait once a period, not once a fish (only the latest
+        times are kept)."""
+        key = times.tobytes()
+        memo = self._memo
+        if memo.get("times") != key:
+            memo.clear()
+            memo["times"] = key
+        out = memo.get(id(gait))
+        if out is None:
+            out = memo[id(gait)] = gait.raw(times)
+            out.flags.writeable = False
+        return out
 
     def turn_signal(self, since: np.ndarray, times: np.ndarray, side: int, a: float,
                     pitch: float) -> np.ndarray:  # fmt: skip
@@ -504,9 +537,14 @@ class LearnedMotor:
         return self._fins(u, pitch)
 
     def _fins(self, u: np.ndarray, pitch: float) -> np.ndarray:
-        for k, act in fin_activation(self.body, float(pitch)).items():
+        for k, act in fin_activation(self.body, float(pitch), self._fin_rows).items():
             u[:, k] = act
         return np.clip(u, 0.0, 1.0)
+
+    @cached_property
+    def _fin_rows(self) -> list[tuple[int, float, float]]:
+        """``fin_rows(body)``, kept (``_fins`` runs once a fish and control period)."""
+        return fin_rows(self.body)
 
     def summary(self) -> dict:
         """Return the calibration tables (speeds in m/s, angles turned in degrees)."""

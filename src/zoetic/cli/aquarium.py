@@ -97,11 +97,15 @@ def bench_aquarium_cmd(
     perception: str = typer.Option("oracle", help="oracle, or vision for the first predator."),
     predator_skills: Path = typer.Option(
         None, "--predator-skills", help="A learned repertoire's directory for the predator."),
+    skills: str = typer.Option(
+        None, "--skills", help="Every fish's motor skills: built-in, learned, a repertoire's "
+        "directory, or both (the built-in and the learned tank side by side); default the "
+        "species files'."),
     json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
     """Realtime factor of a tank (oracle perception, or animat vision for one predator),
     against its physics alone."""
     from zoetic.bench.aquarium import bench_aquarium
 
-    skills = None if predator_skills is None else str(predator_skills)
-    emit(bench_aquarium(fishes, food, obstacles, seconds, seed, perception, skills), json)
+    pred = None if predator_skills is None else str(predator_skills)
+    emit(bench_aquarium(fishes, food, obstacles, seconds, seed, perception, pred, skills), json)

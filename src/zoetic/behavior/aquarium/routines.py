@@ -30,6 +30,9 @@ FISH_CLEARANCE = 0.8  # m between centres ahead that triggers avoid-fish
 ROOM_STEP = 0.4  # m between the probes of the room to either side (walls are 0.5 m thick)
 _SIN60 = math.sqrt(3) / 2
 RADIUS_MARGIN = 1.1  # the turning circle a fish plans with, over its calibrated sharpest turn
+# s of travel: an avoiding fish whose nose is nearer than this to an obstacle turns as hard as
+# its motor can (a half turn asked at once), not at its steady steering rate
+URGENT = 1.5
 
 
 @dataclass(frozen=True)
@@ -59,6 +62,7 @@ class Around:
     target: np.ndarray | None = None
     target_velocity: np.ndarray | None = None
     away: np.ndarray | None = None  # unit horizontal direction away from the threat
+    obstacle: float = math.inf  # m from the nose to the nearest perceived obstacle surface
 
 
 def _flat(v: np.ndarray) -> np.ndarray:
@@ -179,12 +183,16 @@ def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int 
 
 
 def avoid(me: Me, around: Around) -> Demand:
-    """Turn hard to the side of the way out (kept while the avoidance lasts), beating hard."""
+    """Turn hard to the side of the way out (kept while the avoidance lasts), beating hard:
+    a quarter turn asked in ``TURN_SECONDS``, or a half turn (as hard as the motor can turn)
+    once an obstacle is nearer than ``URGENT`` s of travel."""
     if around.away is None:
         return Demand(me.cruise, 0.0)
     f = _unit(_flat(me.forward))
     left = float(around.away @ np.array([-f[2], 0.0, f[0]])) >= 0.0
-    return Demand(me.top, np.pi / 2 if left else -np.pi / 2)
+    speed = max(math.sqrt(me.velocity @ me.velocity), me.cruise)
+    turn = np.pi if around.obstacle < URGENT * speed else np.pi / 2
+    return Demand(me.top, turn if left else -turn)
 
 
 def wander(me: Me, around: Around, rng: np.random.Generator) -> Demand:

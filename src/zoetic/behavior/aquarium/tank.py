@@ -95,6 +95,9 @@ class TankConfig:
     food_margin: float = 3.0  # m from the walls food is dropped: 1.5 turning radii of a fish
     perception: str = "oracle"  # or "vision": the first predator sees with animat vision
     predator_skills: str | None = None  # a learned repertoire's directory for the predator
+    # every species' motor skills ("built-in", "learned" or a repertoire's directory) instead
+    # of what the species files say (``predator_skills`` then still names the predator's)
+    skills: str | None = None
     fish_contact: bool = True  # fishes push each other apart (``physics.bodycontact``)
 
     def size(self) -> float:
@@ -167,6 +170,9 @@ def build_tank(cfg: TankConfig) -> Tank:
     prey, pred = load_species(cfg.prey_species), load_species(cfg.predator_species)
     if not pred.predator:
         raise SpeciesError(f"{pred.source}: species {pred.name!r} is not a predator")
+    if cfg.skills is not None:
+        where = f"--skills {str(cfg.skills)!r}"
+        prey, pred = with_skills(prey, cfg.skills, where), with_skills(pred, cfg.skills, where)
     if cfg.predator_skills is not None:
         pred = with_skills(pred, cfg.predator_skills,
                            f"--predator-skills {str(cfg.predator_skills)!r}")
@@ -360,6 +366,7 @@ class FishBrain:
             target_velocity=None if target is None or intention == "eat"
             else v.fish_velocity[target],
             away=v.away,
+            obstacle=float(v.obstacle_distance.min()) if len(v.obstacle_distance) else np.inf,
         )  # fmt: skip
         me = v.me
         if intention == "avoid":
@@ -475,16 +482,18 @@ def _activations(brains: list[FishBrain], demands: list[Demand | None],
     share a motor (body and wave frequency) in one batched call."""
     rows: list[np.ndarray] = [np.empty(0)] * len(brains)
     groups: dict[int, list[int]] = {}
+    times = period.times
     for i, (b, d) in enumerate(zip(brains, demands, strict=True)):
         if d is None:
             rows[i] = np.zeros((1, period.steps, b.body.n_actuators))
-        elif isinstance(b.locomotion, LearnedLocomotion):  # each fish its own turn under way
-            rows[i] = b.locomotion.activations(d, period.times)[None]
+        elif isinstance(b.locomotion, LearnedLocomotion):
+            # each fish its own turn under way; the gaits evaluated once for the fishes of a
+            # motor (``LearnedMotor._raw``)
+            rows[i] = b.locomotion.activations(d, times)[None]
         else:
             groups.setdefault(id(b.locomotion.motor), []).append(i)
     for idx in groups.values():
-        acts = brains[idx[0]].locomotion.activations_many([demands[i] for i in idx],
-                                                          period.times)  # fmt: skip
+        acts = brains[idx[0]].locomotion.activations_many([demands[i] for i in idx], times)
         for k, i in enumerate(idx):
             rows[i] = acts[k : k + 1]
     return rows
