@@ -64,6 +64,7 @@ from zoetic.errors import SimulationError
 from zoetic.physics.bodycontact import deepest as deepest_into
 from zoetic.physics.objects import Box, Cylinder, Food, pack_statics
 from zoetic.physics.world import Animal, World
+from zoetic.tasks.terms import BodyFrame, roll_angle
 
 WALL = 0.25  # m: half thickness of the tank's walls
 PERCEPTIONS = ("oracle", "vision")
@@ -99,6 +100,9 @@ class TankConfig:
     # of what the species files say (``predator_skills`` then still names the predator's)
     skills: str | None = None
     fish_contact: bool = True  # fishes push each other apart (``physics.bodycontact``)
+    # the motor layer's righting reflex: the fins lean against each fish's roll
+    # (``behavior.motor.righting``)
+    righting: bool = True
 
     def size(self) -> float:
         """Return the half width of the tank (m)."""
@@ -265,14 +269,15 @@ class FishBrain:
 
     sensors: tuple[str, ...] = ()
 
-    def __init__(self, species: Species, body: Body, hunted_by: frozenset[str]) -> None:
+    def __init__(self, species: Species, body: Body, hunted_by: frozenset[str],
+                 righting: bool = True) -> None:  # fmt: skip
         self.species, self.body, self.hunted_by = species, body, hunted_by
         m = species.motor
         self.locomotion: MotorLocomotion | LearnedLocomotion
         if m.skills == BUILT_IN:
-            self.locomotion = MotorLocomotion(body, m.frequency)
+            self.locomotion = MotorLocomotion(body, m.frequency, righting=righting)
         else:  # a learned repertoire (checked when the species was read)
-            self.locomotion = LearnedLocomotion(body, learned_motor(body, m.skills))
+            self.locomotion = LearnedLocomotion(body, learned_motor(body, m.skills), righting)
         self.top = min(m.max_speed, self.locomotion.top_speed)
         self.cruise = min(m.cruise_speed, self.top)
         self.radius = self.locomotion.turn_radius
@@ -476,6 +481,15 @@ def _kinematics(world: World, weights: list[np.ndarray], cw: list[np.ndarray],
     return pos, np.array(com), np.array(fwd), np.array(cv), np.array(nose)
 
 
+def fish_rolls(pos: list[np.ndarray], fwd: np.ndarray,
+               frames: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:  # fmt: skip
+    """Return each fish's roll (n,), rad over +-pi (``tasks.terms.roll_angle`` against its
+    heading ``fwd``), from its node positions; frames: each fish's (left, right) mirror nodes
+    (``BodyFrame``)."""
+    return np.array([float(roll_angle(np, p, lr[0], lr[1], f))
+                     for p, f, lr in zip(pos, fwd, frames, strict=True)])  # fmt: skip
+
+
 def _activations(brains: list[FishBrain], demands: list[Demand | None],
                  period: Period) -> list[np.ndarray]:  # fmt: skip
     """Return each fish's activations (1, T, A) for its demand (zeros when dead): fishes that
@@ -523,7 +537,8 @@ def live(tank: Tank, seconds: float | None = None,
         s.name: frozenset(f.species.name for f in fishes if s.name in f.species.prey)
         for s in {f.species.name: f.species for f in fishes}.values()
     }
-    brains = [FishBrain(f.species, f.body, hunted_by[f.species.name]) for f in fishes]
+    brains = [FishBrain(f.species, f.body, hunted_by[f.species.name], cfg.righting)
+              for f in fishes]  # fmt: skip
     for i, b in enumerate(brains):
         b.reset(cfg.seed * 1000 + i)
     names = tuple(f.species.name for f in fishes)
@@ -569,7 +584,9 @@ def live(tank: Tank, seconds: float | None = None,
     masses = [(f.body.mass, f.body.total_mass) for f in fishes]
     weights = [m / total for m, total in masses]
     heads_of = [f.body.head for f in fishes]
+    frames = [(fr.left, fr.right) for fr in (BodyFrame.of(f.body) for f in fishes)]
     pos, com, fwd, vel, nose = _kinematics(world, weights, cw, heads_of)
+    last_roll: tuple[np.ndarray, float] | None = None  # the rolls at the last period's start
     record(pos)
     recorded, allpos = -1, None
     end = world.step_count + world.steps_for(seconds)
@@ -632,6 +649,15 @@ def live(tank: Tank, seconds: float | None = None,
                         food_pos, pc.obstacles[i], hits[i], aways[i])  # fmt: skip
             demands.append(b.decide({**obs, "view": view}, period, sits[i],
                                     Drives(hunger[i], libido[i], fear[i])))  # fmt: skip
+        # each fish's roll and roll rate (over the last period) for the motor layer's
+        # righting reflex
+        roll = fish_rolls(pos, fwd, frames)
+        roll_rate = np.zeros(n) if last_roll is None else (
+            np.angle(np.exp(1j * (roll - last_roll[0]))) / (t - last_roll[1]))  # fmt: skip
+        last_roll = (roll, t)
+        demands = [None if d is None else replace(d, roll=float(roll[i]),
+                                                  roll_rate=float(roll_rate[i]))
+                   for i, d in enumerate(demands)]  # fmt: skip
         rows = _activations(brains, demands, period)
         th = [b.thought for b in brains]
         b_times.append(t)
