@@ -81,6 +81,8 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, nargs="+", default=list(range(10)))
     ap.add_argument("--skills", nargs="+", choices=("learned", "built-in"),
                     default=["learned", "built-in"], help="which to run (default both)")
+    ap.add_argument("--no-righting", action="store_true",
+                    help="without the motor layer's righting reflex (TankConfig.righting)")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     print(json.dumps(learned_motor(load_animal("shark"), SKILLS_DIR / "shark").summary()))
@@ -92,7 +94,8 @@ def main() -> None:
             if label not in args.skills:
                 continue
             tank = build_tank(TankConfig(seed=seed, record_period=0.1, prey_species=str(prey),
-                                         predator_species=str(pred)))  # fmt: skip
+                                         predator_species=str(pred),
+                                         righting=not args.no_righting))  # fmt: skip
             c0 = time.process_time()
             life = live(tank)
             cpu = time.process_time() - c0

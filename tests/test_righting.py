@@ -101,3 +101,32 @@ def test_the_reflex_rights_a_fish_swimming_on_learned_skills():
     off = _rights(LearnedLocomotion(body, motor, righting=False), body, 45.0, 4.0)
     assert abs(off[-1]) > 30.0
     assert abs(on[-1]) < 15.0 and abs(on[-1]) < 0.3 * abs(off[-1])
+
+
+def test_the_right_steer_beats_in_phase_with_the_swim_so_switching_sides_keeps_upright():
+    body = load_animal("shark")
+    motor = learned_motor(body, SKILLS_DIR / "shark")
+    gait = motor.bases[1]  # go-straight: its mirror image is itself half a stroke later
+    assert motor.steer_lag == pytest.approx(gait.period / 2, abs=body.dt / 2)
+    t = np.arange(40) * body.dt
+    np.testing.assert_allclose(body.mirror_actuators(gait.raw(t)),
+                               gait.raw(t + motor.steer_lag), atol=1e-6)  # fmt: skip
+    # steering right is steering left mirrored: the same swim, the other side
+    a, w = motor.swim(0.4), 0.75
+    right = motor.steer_signal(t, a, w, 1, 0.0)
+    left = motor.steer_signal(t + motor.steer_lag, a, w, 0, 0.0)
+    np.testing.assert_allclose(right, body.mirror_actuators(left), atol=1e-6)
+    # a fish asked to turn left and right by turns every 0.3 s stays upright without the
+    # reflex (played at the clock's time, the right steer rolled it over)
+    frame, hw = BodyFrame.of(body), heading_weights(body)
+    loco = LearnedLocomotion(body, motor, righting=False)
+    state = State(body.rest_pos[None].copy(), np.zeros((1, body.n_nodes, 3)))
+    rolls = []
+    for k in range(60):
+        times = (k * PERIOD + np.arange(PERIOD)) * body.dt
+        side = 1.0 if int(times[0] / 0.3) % 2 == 0 else -1.0
+        act = loco.activations(Demand(0.4, turn=0.3 * side), times)
+        state = simulate(body, act[None], state=state, record_every=PERIOD).final
+        p = state.positions[0]
+        rolls.append(float(roll_angle(np, p, frame.left, frame.right, hw @ p)))
+    assert np.degrees(np.abs(rolls)).max() < 10.0
