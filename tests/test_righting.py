@@ -14,7 +14,7 @@ from zoetic.behavior.aquarium.locomotion import (
     learned_motor,
 )
 from zoetic.behavior.aquarium.species import SKILLS_DIR
-from zoetic.behavior.aquarium.tank import fish_rolls, heading_weights
+from zoetic.behavior.aquarium.tank import fish_rolls, heading_weights, roll_pairs
 from zoetic.behavior.motor import RIGHTING_MAX, fin_activation, righting
 from zoetic.bodies import load_animal
 from zoetic.physics import simulate
@@ -48,8 +48,9 @@ def test_roll_angle_reads_the_roll_and_with_the_heading_tells_upside_down():
     # the tank's per-fish rolls: the same definition, the heading from the nodes
     pos = [rolled(body, 60.0), rolled(body, -170.0)]
     fwd2 = np.array([heading_weights(body) @ p for p in pos])
-    lr = (frame.left, frame.right)
-    assert np.degrees(fish_rolls(pos, fwd2, [lr, lr])) == pytest.approx([60.0, -170.0], abs=0.5)
+    pairs = roll_pairs([body, body], np.array([0, body.n_nodes]))
+    assert np.degrees(fish_rolls(np.concatenate(pos), fwd2, pairs)) == pytest.approx(
+        [60.0, -170.0], abs=0.5)
 
 
 def test_the_fins_lean_against_the_roll_within_their_range():

@@ -481,13 +481,29 @@ def _kinematics(world: World, weights: list[np.ndarray], cw: list[np.ndarray],
     return pos, np.array(com), np.array(fwd), np.array(cv), np.array(nose)
 
 
-def fish_rolls(pos: list[np.ndarray], fwd: np.ndarray,
-               frames: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:  # fmt: skip
+def roll_pairs(bodies: list[Body], offsets: np.ndarray) -> list[tuple[np.ndarray, ...]]:
+    """Return the fishes' mirror node pairs (``BodyFrame.left``, ``.right``) as indices into
+    the world's node array (``offsets``: each fish's first node), grouped by pair count: a
+    list of (fishes (k,), left (k, P), right (k, P)); fishes without pairs are left out."""
+    groups: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {}
+    for a, body in enumerate(bodies):
+        frame = BodyFrame.of(body)
+        if len(frame.left):
+            o = int(offsets[a])
+            groups.setdefault(len(frame.left), []).append((a, o + frame.left, o + frame.right))
+    return [(np.array([g[0] for g in grp]), np.stack([g[1] for g in grp]),
+             np.stack([g[2] for g in grp])) for grp in groups.values()]  # fmt: skip
+
+
+def fish_rolls(allpos: np.ndarray, fwd: np.ndarray,
+               pairs: list[tuple[np.ndarray, ...]]) -> np.ndarray:  # fmt: skip
     """Return each fish's roll (n,), rad over +-pi (``tasks.terms.roll_angle`` against its
-    heading ``fwd``), from its node positions; frames: each fish's (left, right) mirror nodes
-    (``BodyFrame``)."""
-    return np.array([float(roll_angle(np, p, lr[0], lr[1], f))
-                     for p, f, lr in zip(pos, fwd, frames, strict=True)])  # fmt: skip
+    heading ``fwd`` (n, 3)), from the world's node positions ``allpos``; pairs: ``roll_pairs``
+    (one array expression a group of fishes with as many pairs; 0 for a fish without)."""
+    out = np.zeros(len(fwd))
+    for idx, left, right in pairs:
+        out[idx] = roll_angle(np, allpos, left, right, fwd[idx])
+    return out
 
 
 def _activations(brains: list[FishBrain], demands: list[Demand | None],
@@ -584,11 +600,11 @@ def live(tank: Tank, seconds: float | None = None,
     masses = [(f.body.mass, f.body.total_mass) for f in fishes]
     weights = [m / total for m, total in masses]
     heads_of = [f.body.head for f in fishes]
-    frames = [(fr.left, fr.right) for fr in (BodyFrame.of(f.body) for f in fishes)]
     pos, com, fwd, vel, nose = _kinematics(world, weights, cw, heads_of)
     last_roll: tuple[np.ndarray, float] | None = None  # the rolls at the last period's start
     record(pos)
     recorded, allpos = -1, None
+    pairs = roll_pairs([f.body for f in fishes], off)
     end = world.step_count + world.steps_for(seconds)
     rec_steps = max(1, int(round(cfg.record_period / dt)))
     k = 0
@@ -651,13 +667,13 @@ def live(tank: Tank, seconds: float | None = None,
                                     Drives(hunger[i], libido[i], fear[i])))  # fmt: skip
         # each fish's roll and roll rate (over the last period) for the motor layer's
         # righting reflex
-        roll = fish_rolls(pos, fwd, frames)
+        roll = fish_rolls(world.node_positions(0) if allpos is None else allpos, fwd, pairs)
         roll_rate = np.zeros(n) if last_roll is None else (
             np.angle(np.exp(1j * (roll - last_roll[0]))) / (t - last_roll[1]))  # fmt: skip
         last_roll = (roll, t)
-        demands = [None if d is None else replace(d, roll=float(roll[i]),
-                                                  roll_rate=float(roll_rate[i]))
-                   for i, d in enumerate(demands)]  # fmt: skip
+        demands = [None if d is None else Demand(d.speed, d.turn, d.pitch, r, w)
+                   for d, r, w in zip(demands, roll.tolist(), roll_rate.tolist(),
+                                      strict=True)]  # fmt: skip
         rows = _activations(brains, demands, period)
         th = [b.thought for b in brains]
         b_times.append(t)
