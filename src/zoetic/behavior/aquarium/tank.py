@@ -330,7 +330,8 @@ class FishBrain:
         return sits[0]
 
     def act(self, observation: Mapping, period: Period) -> np.ndarray:
-        """Return activations (1, T, A) for the period from the fish's percept."""
+        """Return activations (1, T, A) for the period from the fish's percept (the percept
+        holds no roll, so the righting reflex rests here: ``live`` measures the rolls)."""
         demand = self.decide(observation, period)
         if demand is None:
             return np.zeros((1, period.steps, self.body.n_actuators))
