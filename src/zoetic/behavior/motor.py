@@ -590,15 +590,18 @@ class LearnedMotor:
         u = w * self.bases[2 + side].raw(since) + (1 - w) * self._swim_raw(times, a)
         return self._fins(u, pitch)
 
-    def _fins(self, u: np.ndarray, pitch: float, lean: float = 0.0) -> np.ndarray:
-        for k, act in fin_activation(self.body, float(pitch), self._fin_rows, lean).items():
+    def _fins(self, u: np.ndarray, pitch: float) -> np.ndarray:
+        for k, act in fin_activation(self.body, float(pitch), self._fin_rows).items():
             u[:, k] = act
         return np.clip(u, 0.0, 1.0)
 
     def lean(self, u: np.ndarray, pitch: float, lean: float) -> np.ndarray:
-        """Return activations ``u`` (T, A) with the fins at ``pitch`` rad, the left ones
-        ``lean`` rad more and the right ones less (``righting``)."""
-        return self._fins(u, pitch, lean)
+        """Set the fins of activations ``u`` (T, A; changed in place and returned) to
+        ``pitch`` rad, the left ones ``lean`` rad more and the right ones less
+        (``righting``)."""
+        for k, act in fin_activation(self.body, float(pitch), self._fin_rows, lean).items():
+            u[:, k] = act
+        return u
 
     @cached_property
     def _fin_rows(self) -> list[tuple[int, float, float, float]]:
