@@ -23,8 +23,17 @@ import numpy as np
 
 from zoetic.behavior.aquarium.locomotion import learned_motor
 from zoetic.behavior.aquarium.species import BUILT_IN, LEARNED, SKILLS_DIR, load_species
-from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live, summarize
+from zoetic.behavior.aquarium.tank import (
+    TankConfig,
+    build_tank,
+    heading_weights,
+    live,
+    summarize,
+)
 from zoetic.bodies import load_animal
+from zoetic.tasks.terms import BodyFrame, roll_angle
+
+ON_SIDE = np.radians(30.0)  # |roll| over this: the fish lies on its side
 
 
 def species_file(out: Path, name: str, skills: str) -> Path:
@@ -46,12 +55,34 @@ def folded(body, positions: np.ndarray) -> bool:
     return bool(np.linalg.norm(positions[-1, 0] - positions[-1, tail]) < 0.8 * rest)
 
 
+def rolled_time(tank, life) -> tuple[float, float, int]:
+    """Return the fraction of live fish-time with |roll| over ``ON_SIDE`` (30 degrees), the
+    fraction upside down (over 90 degrees), and how many fishes ever lay on their side; the
+    roll of ``tasks.terms.roll_angle`` against each fish's heading, at the record times."""
+    over = under = total = 0
+    fishes_on_side = 0
+    for a, f in enumerate(tank.fishes):
+        p = life.positions[a]  # (R, N, 3)
+        frame = BodyFrame.of(f.body)
+        fwd = np.einsum("n,rnd->rd", heading_weights(f.body), p)
+        roll = np.abs(roll_angle(np, p, frame.left, frame.right, fwd))
+        k = np.minimum(np.arange(len(p)), len(life.alive) - 1)
+        live_ = life.alive[k, a]
+        over += int(np.count_nonzero(live_ & (roll > ON_SIDE)))
+        under += int(np.count_nonzero(live_ & (roll > np.pi / 2)))
+        total += int(np.count_nonzero(live_))
+        fishes_on_side += bool((live_ & (roll > ON_SIDE)).any())
+    return over / max(total, 1), under / max(total, 1), fishes_on_side
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("/tmp/aquarium_learned"))
     ap.add_argument("--seeds", type=int, nargs="+", default=list(range(10)))
     ap.add_argument("--skills", nargs="+", choices=("learned", "built-in"),
                     default=["learned", "built-in"], help="which to run (default both)")
+    ap.add_argument("--no-righting", action="store_true",
+                    help="without the motor layer's righting reflex (TankConfig.righting)")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     print(json.dumps(learned_motor(load_animal("shark"), SKILLS_DIR / "shark").summary()))
@@ -63,7 +94,8 @@ def main() -> None:
             if label not in args.skills:
                 continue
             tank = build_tank(TankConfig(seed=seed, record_period=0.1, prey_species=str(prey),
-                                         predator_species=str(pred)))  # fmt: skip
+                                         predator_species=str(pred),
+                                         righting=not args.no_righting))  # fmt: skip
             c0 = time.process_time()
             life = live(tank)
             cpu = time.process_time() - c0
@@ -76,6 +108,10 @@ def main() -> None:
                 "deepest_into_fish_m": s["deepest_into_fish_m"], "folded_tails": folds,
                 "cpu_realtime_factor": round(s["seconds"] / cpu, 1),
             }  # fmt: skip
+            on_side, upside_down, fishes_on_side = rolled_time(tank, life)
+            row["on_side_fraction"] = round(on_side, 3)
+            row["upside_down_fraction"] = round(upside_down, 3)
+            row["fishes_on_side"] = fishes_on_side
             rows[label].append(row)
             print(json.dumps(row), flush=True)
     print(json.dumps({label: {
@@ -83,6 +119,11 @@ def main() -> None:
         "catches": sum(r["events"]["catch"] for r in rs),
         "max_deepest_into_obstacle_m": max(r["deepest_into_obstacle_m"] for r in rs),
         "max_deepest_into_fish_m": max(r["deepest_into_fish_m"] for r in rs),
+        "on_side_mean": round(float(np.mean([r["on_side_fraction"] for r in rs])), 3),
+        "upside_down_mean": round(float(np.mean([r["upside_down_fraction"] for r in rs])), 3),
+        "folded_tails": sum(r["folded_tails"] for r in rs),
+        "cpu_realtime_factor_mean": round(float(np.mean([r["cpu_realtime_factor"]
+                                                         for r in rs])), 1),
     } for label, rs in rows.items() if rs}))  # fmt: skip
 
 

@@ -43,22 +43,48 @@ def blend(a: AbstractController, b: AbstractController, w: float) -> AbstractCon
     )  # fmt: skip
 
 
-def fin_rows(body: Body) -> list[tuple[int, float, float]]:
-    """Return each fin's (actuator, angle at activation 0, angle at 1) as Python numbers."""
-    return [(int(a), float(lo), float(hi))
+def fin_rows(body: Body) -> list[tuple[int, float, float, float]]:
+    """Return each fin's (actuator, angle at activation 0, angle at 1, side) as Python numbers;
+    side is 1 for a fin on the left, -1 on the right, 0 on neither (its actuator's side)."""
+    sides = {"left": 1.0, "right": -1.0}
+    return [(int(a), float(lo), float(hi), sides.get(body.actuator_side[int(a)], 0.0))
             for a, (lo, hi) in zip(body.fin_actuator.tolist(), body.fin_angle.tolist(),
                                    strict=True)]  # fmt: skip
 
 
-def fin_activation(body: Body, angle: float,
-                   rows: list[tuple[int, float, float]] | None = None) -> dict[int, float]:
-    """Return, per fin actuator, the activation that sets its fins to ``angle`` rad (clipped);
-    ``rows``: ``fin_rows(body)`` when kept (a caller many times a second)."""
+def fin_activation(body: Body, angle: float, rows: list[tuple[int, float, float, float]]
+                   | None = None, lean: float = 0.0) -> dict[int, float]:  # fmt: skip
+    """Return, per fin actuator, the activation that sets its fins to ``angle`` rad (clipped),
+    the left fins ``lean`` rad more and the right ones ``lean`` less (``righting``: a
+    differential pitch rolls the fish); ``rows``: ``fin_rows(body)`` when kept (a caller many
+    times a second)."""
     out = {}
-    for act, lo, hi in fin_rows(body) if rows is None else rows:
+    for act, lo, hi, side in fin_rows(body) if rows is None else rows:
+        a = angle + side * lean
         # np.clip's result for a scalar, without its per-call overhead
-        out[act] = min(max(float((angle - lo) / (hi - lo)), 0.0), 1.0) if hi != lo else 0.0
+        out[act] = min(max(float((a - lo) / (hi - lo)), 0.0), 1.0) if hi != lo else 0.0
     return out
+
+
+# The righting reflex. The water model has no restoring roll moment (a fish laid on its side
+# stays there), but the pectoral fins pitched differentially (the left fin ``lean`` rad nose
+# up, the right one ``lean`` nose down) roll a swimming fish (its right side down): on the zoo
+# shark swimming at 0.3 m/s from rest, 0.25 rad of lean rolls it 20 degrees in 3 s, 0.5 rad
+# 33 degrees (0.1 m/s: 4 and 6 degrees; the moment grows with the speed squared). Fed back as
+# a PD on the roll (``righting``), a fish started 45 degrees rolled is upright (under 5
+# degrees) 4 s later at 0.3 m/s, with no overshoot beyond 3 degrees (gains 4 and 2; 1 and 0:
+# 17 degrees of overshoot; without the reflex it stays at 45 degrees).
+RIGHTING_GAIN = 4.0  # rad of lean per rad of roll
+RIGHTING_DAMPING = 2.0  # rad of lean per rad/s of roll rate
+RIGHTING_MAX = 0.5  # rad: the most lean (the zoo fishes' fins pitch +-0.5 rad)
+
+
+def righting(roll: float, roll_rate: float = 0.0) -> float:
+    """Return the fins' lean (rad, ``fin_activation``) that rights a fish rolled ``roll`` rad
+    (``tasks.terms.roll_angle``: positive with its left side down) turning at ``roll_rate``
+    rad/s: a PD on the roll, clipped to +-``RIGHTING_MAX``."""
+    lean = RIGHTING_GAIN * roll + RIGHTING_DAMPING * roll_rate
+    return min(max(lean, -RIGHTING_MAX), RIGHTING_MAX)
 
 
 @dataclass
@@ -267,18 +293,21 @@ class WaveMotor:
         bias = _interp(need, row, biases) if row[-1] > row[0] else 0.0
         return amp, bias if angle >= 0 else -bias
 
-    def fins(self, pitch: float) -> float:
-        """Return what to add to the fins' held (level) activation to pitch them ``pitch`` rad
-        (``fin_activation`` of the angle less that of level; 0 without fins)."""
-        rows = self.body.fin_angle
-        if not len(rows):
-            return 0.0
-        out = 0.0
-        for lo, hi in rows.tolist():
+    def fins(self, pitch: float, lean: float = 0.0) -> np.ndarray:
+        """Return (A,) what to add to each fin's held (level) activation to pitch it ``pitch``
+        rad, the left fins ``lean`` rad more and the right ones less (``fin_activation`` of
+        the angle less that of level; 0 on the muscles and without fins)."""
+        out = np.zeros(self.body.n_actuators)
+        for act, lo, hi, side in self._fin_rows:
             if hi != lo:
-                out += min(max((pitch - lo) / (hi - lo), 0.0), 1.0)
-                out -= min(max(-lo / (hi - lo), 0.0), 1.0)
-        return out / len(rows)
+                out[act] = (min(max((pitch + side * lean - lo) / (hi - lo), 0.0), 1.0)
+                            - min(max(-lo / (hi - lo), 0.0), 1.0))  # fmt: skip
+        return out
+
+    @cached_property
+    def _fin_rows(self) -> list[tuple[int, float, float, float]]:
+        """``fin_rows(body)``, kept (``fins`` runs once a fish and control period)."""
+        return fin_rows(self.body)
 
     def activations(self, times: np.ndarray, speed: float, turn: float = 0.0,
                     pitch: float = 0.0, seconds: float = 1.0) -> np.ndarray:  # fmt: skip
@@ -290,15 +319,17 @@ class WaveMotor:
         return steered_wave(self.body, times, amp, bias, self.fins(pitch), self.frequency)
 
     def activations_many(self, times: np.ndarray, speeds, turns, pitches,
-                         seconds: float = 1.0) -> np.ndarray:  # fmt: skip
+                         seconds: float = 1.0, leans=None) -> np.ndarray:  # fmt: skip
         """Return activations (D, T, A) of ``activations`` for D (speed, turn, pitch) demands
-        at once: one ``steered_wave`` evaluation broadcast over the demands."""
+        at once (``leans``: each one's fin lean, ``fins``; default none): one
+        ``steered_wave`` evaluation broadcast over the demands."""
         from zoetic.control import steered_wave
 
         ab = [self.turn(t, seconds, self.swim(v)) for v, t in zip(speeds, turns, strict=True)]
         amp = np.array([a for a, _ in ab])[:, None, None]
         bias = np.array([b for _, b in ab])[:, None, None]
-        fins = np.array([self.fins(p) for p in pitches])[:, None, None]
+        leans = [0.0] * len(pitches) if leans is None else leans
+        fins = np.array([self.fins(p, q) for p, q in zip(pitches, leans, strict=True)])[:, None]
         return steered_wave(self.body, times, amp, bias, fins, self.frequency)
 
     def summary(self) -> dict:
@@ -501,7 +532,29 @@ class LearnedMotor:
         """Return activations (T, A): (1 - w) of the swim gait of weight ``a`` plus ``w`` of
         the steering gait of ``side`` (0 left, 1 right), both at ``times``; fins at ``pitch``."""
         u = (1 - w) * self._swim_raw(times, a)
-        return self._fins(u + w * self._raw(self.steers[side], times), pitch)
+        return self._fins(u + w * self._steer_raw(side, times), pitch)
+
+    def _steer_raw(self, side: int, times: np.ndarray) -> np.ndarray:
+        """The steering gait of ``side`` at ``times``, the right one ``steer_lag`` s ahead."""
+        return self._raw(self.steers[side], times, self.steer_lag if side else 0.0)
+
+    @cached_property
+    def steer_lag(self) -> float:
+        """Return the time shift (s) at which the swim gait's mirror image is itself:
+        go-straight mirrored left for right equals go-straight ``steer_lag`` s later (half its
+        period for a symmetric stroke; the least squared difference on the body's time step).
+        The right steering gait (steer-left mirrored) is played that far ahead of the clock,
+        so that it beats in phase with the swim gait it is blended with, and the right steer
+        is the left steer's mirror image. Played at the clock's time it beat in anti-phase
+        (the shipped repertoire's right steer against go-straight: correlations down to -0.8
+        where the left one's are up to 0.96), and a fish switching between the two steers
+        every 0.1 to 1 s rolled over (up to 180 degrees, on its side half the time); with the
+        lag it stays within 1 degree of upright."""
+        gait = self.bases[1]
+        t = np.arange(max(1, int(round(gait.period / self.body.dt)))) * self.body.dt
+        mirrored = self.body.mirror_actuators(gait.raw(t))
+        err = [float(np.sum((mirrored - gait.raw(t + s)) ** 2)) for s in t.tolist()]
+        return float(t[int(np.argmin(err))])
 
     def swim_signal(self, times: np.ndarray, a: float, pitch: float) -> np.ndarray:
         """Return activations (T, A) of the swim gait of weight ``a``, fins at ``pitch``."""
@@ -511,9 +564,10 @@ class LearnedMotor:
         """The swim gait of weight ``a`` (do-nothing blended with go-straight), unclipped."""
         return (1 - a) * self._raw(self.bases[0], times) + a * self._raw(self.bases[1], times)
 
-    def _raw(self, gait: AbstractController, times: np.ndarray) -> np.ndarray:
-        """Return ``gait.raw(times)`` (read-only), evaluated once for the same times: the
-        fishes of one motor play their periodic gaits at the same clock times in a control
+    def _raw(self, gait: AbstractController, times: np.ndarray,
+             shift: float = 0.0) -> np.ndarray:  # fmt: skip
+        """Return ``gait.raw(times + shift)`` (read-only), evaluated once for the same times:
+        the fishes of one motor play their periodic gaits at the same clock times in a control
         period, so a tank evaluates each gait once a period, not once a fish (only the latest
         times are kept)."""
         key = times.tobytes()
@@ -521,9 +575,9 @@ class LearnedMotor:
         if memo.get("times") != key:
             memo.clear()
             memo["times"] = key
-        out = memo.get(id(gait))
+        out = memo.get((id(gait), shift))
         if out is None:
-            out = memo[id(gait)] = gait.raw(times)
+            out = memo[(id(gait), shift)] = gait.raw(times + shift if shift else times)
             out.flags.writeable = False
         return out
 
@@ -541,8 +595,16 @@ class LearnedMotor:
             u[:, k] = act
         return np.clip(u, 0.0, 1.0)
 
+    def lean(self, u: np.ndarray, pitch: float, lean: float) -> np.ndarray:
+        """Set the fins of activations ``u`` (T, A; changed in place and returned) to
+        ``pitch`` rad, the left ones ``lean`` rad more and the right ones less
+        (``righting``)."""
+        for k, act in fin_activation(self.body, float(pitch), self._fin_rows, lean).items():
+            u[:, k] = act
+        return u
+
     @cached_property
-    def _fin_rows(self) -> list[tuple[int, float, float]]:
+    def _fin_rows(self) -> list[tuple[int, float, float, float]]:
         """``fin_rows(body)``, kept (``_fins`` runs once a fish and control period)."""
         return fin_rows(self.body)
 

@@ -85,6 +85,23 @@ def _norm_xz(xp, v):
     return xp.sqrt(x * x + z * z)
 
 
+def roll_angle(xp, positions, left, right, forward=None):
+    """Return the roll (...), rad, of positions (..., N, 3): the tilt of the left-right axis
+    (the mean of left minus right over the mirror pairs, ``BodyFrame.left`` and ``.right``)
+    from the horizontal, positive when the left side is down (rolled to the left, seen from
+    behind); 0 without pairs. Within +-pi/2, so a fish upside down reads 0, unless
+    ``forward`` (..., 3), the fish's heading, is given: then the left-right axis is measured
+    against the heading's horizontal left, and the roll runs over +-pi (pi upside down)."""
+    if len(left) == 0:
+        return xp.zeros(positions.shape[:-2])
+    lat = xp.mean(positions[..., left, :] - positions[..., right, :], axis=-2)
+    if forward is None:
+        return xp.arctan2(-lat[..., 1], _norm_xz(xp, lat) + EPS)
+    # the horizontal left of the heading is (-f_z, f_x) in (x, z): left turns are toward +z
+    side = lat[..., 2] * forward[..., 0] - lat[..., 0] * forward[..., 2]
+    return xp.arctan2(-lat[..., 1], side)
+
+
 class Signals:
     """What a batch of recordings shows, derived lazily with one array module ``xp``."""
 
@@ -140,12 +157,7 @@ class Signals:
     @cached_property
     def roll(self):
         """Roll (K, R), rad: the tilt of the left-right axis (mirror pairs); 0 without pairs."""
-        xp = self.xp
-        if self.frame.left.size == 0:
-            return xp.zeros(self.positions.shape[:2])
-        pos = self.positions
-        lat = xp.mean(pos[:, :, self.frame.left] - pos[:, :, self.frame.right], axis=2)
-        return xp.arctan2(-lat[..., 1], _norm_xz(xp, lat) + EPS)
+        return roll_angle(self.xp, self.positions, self.frame.left, self.frame.right)
 
     @cached_property
     def body_angle(self):

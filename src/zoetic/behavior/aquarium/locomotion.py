@@ -16,7 +16,7 @@ from typing import Protocol
 
 import numpy as np
 
-from zoetic.behavior.motor import LearnedMotor, WaveMotor
+from zoetic.behavior.motor import LearnedMotor, WaveMotor, righting
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.bodies import Body
 
@@ -27,11 +27,16 @@ MAX_PITCH = 0.5  # rad: the largest fin pitch a routine may ask for
 @dataclass(frozen=True)
 class Demand:
     """What a behaviour routine asks of the motor system: forward speed (m/s), the heading
-    change wanted (rad, left positive) and the pitch wanted (rad, nose up positive)."""
+    change wanted (rad, left positive) and the pitch wanted (rad, nose up positive); and the
+    fish's roll (rad, ``tasks.terms.roll_angle``, left side down positive) and roll rate
+    (rad/s) that the tank measured, which the motor layer's righting reflex feeds back to the
+    fins (``behavior.motor.righting``)."""
 
     speed: float
     turn: float = 0.0
     pitch: float = 0.0
+    roll: float = 0.0
+    roll_rate: float = 0.0
 
 
 class Locomotion(Protocol):
@@ -47,10 +52,11 @@ class MotorLocomotion:
     pitch controllers (``turn_seconds``: the time a demanded turn is to take)."""
 
     def __init__(self, body: Body, frequency: float | None = None,
-                 turn_seconds: float = TURN_SECONDS) -> None:  # fmt: skip
+                 turn_seconds: float = TURN_SECONDS, righting: bool = True) -> None:  # fmt: skip
         self.body = body
         self.motor = WaveMotor.calibrate(body, frequency)
         self.turn_seconds = float(turn_seconds)
+        self.righting = righting  # the righting reflex (fins' lean from the demand's roll)
 
     @property
     def top_speed(self) -> float:
@@ -71,6 +77,7 @@ class MotorLocomotion:
         return self.motor.activations_many(
             times, [d.speed for d in demands], [d.turn for d in demands],
             [min(max(d.pitch, -MAX_PITCH), MAX_PITCH) for d in demands], self.turn_seconds,
+            [righting(d.roll, d.roll_rate) if self.righting else 0.0 for d in demands],
         )  # fmt: skip
 
 
@@ -117,9 +124,10 @@ class LearnedLocomotion:
     and repertoire).
     """
 
-    def __init__(self, body: Body, motor: LearnedMotor) -> None:
+    def __init__(self, body: Body, motor: LearnedMotor, righting: bool = True) -> None:
         self.body = body
         self.motor = motor
+        self.righting = righting  # the righting reflex (fins' lean from the demand's roll)
         self.turning: tuple[int, float, float] | None = None  # side, start s, duration s
         self.last: tuple[int, float] = (0, -np.inf)  # the last turn's side and end (s)
 
@@ -136,7 +144,17 @@ class LearnedLocomotion:
         return self.motor.turn_radius
 
     def activations(self, demand: Demand, times: np.ndarray) -> np.ndarray:
-        """Return activations (T, A) for the demand over the control period at ``times`` (s)."""
+        """Return activations (T, A) for the demand over the control period at ``times`` (s):
+        the gait (``play``), the fins leaning by the righting reflex."""
+        out = self.play(demand, times)
+        if not self.righting:
+            return out
+        pitch = min(max(demand.pitch, -MAX_PITCH), MAX_PITCH)
+        return self.motor.lean(out, pitch, righting(demand.roll, demand.roll_rate))
+
+    def play(self, demand: Demand, times: np.ndarray) -> np.ndarray:
+        """Return activations (T, A) of the gait for the demand over the control period at
+        ``times`` (s), fins at the demand's pitch."""
         t0 = float(times[0])
         pitch = min(max(demand.pitch, -MAX_PITCH), MAX_PITCH)
         if self.turning is not None:

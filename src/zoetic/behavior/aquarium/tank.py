@@ -64,6 +64,7 @@ from zoetic.errors import SimulationError
 from zoetic.physics.bodycontact import deepest as deepest_into
 from zoetic.physics.objects import Box, Cylinder, Food, pack_statics
 from zoetic.physics.world import Animal, World
+from zoetic.tasks.terms import BodyFrame, roll_angle
 
 WALL = 0.25  # m: half thickness of the tank's walls
 PERCEPTIONS = ("oracle", "vision")
@@ -99,6 +100,9 @@ class TankConfig:
     # of what the species files say (``predator_skills`` then still names the predator's)
     skills: str | None = None
     fish_contact: bool = True  # fishes push each other apart (``physics.bodycontact``)
+    # the motor layer's righting reflex: the fins lean against each fish's roll
+    # (``behavior.motor.righting``)
+    righting: bool = True
 
     def size(self) -> float:
         """Return the half width of the tank (m)."""
@@ -265,14 +269,15 @@ class FishBrain:
 
     sensors: tuple[str, ...] = ()
 
-    def __init__(self, species: Species, body: Body, hunted_by: frozenset[str]) -> None:
+    def __init__(self, species: Species, body: Body, hunted_by: frozenset[str],
+                 righting: bool = True) -> None:  # fmt: skip
         self.species, self.body, self.hunted_by = species, body, hunted_by
         m = species.motor
         self.locomotion: MotorLocomotion | LearnedLocomotion
         if m.skills == BUILT_IN:
-            self.locomotion = MotorLocomotion(body, m.frequency)
+            self.locomotion = MotorLocomotion(body, m.frequency, righting=righting)
         else:  # a learned repertoire (checked when the species was read)
-            self.locomotion = LearnedLocomotion(body, learned_motor(body, m.skills))
+            self.locomotion = LearnedLocomotion(body, learned_motor(body, m.skills), righting)
         self.top = min(m.max_speed, self.locomotion.top_speed)
         self.cruise = min(m.cruise_speed, self.top)
         self.radius = self.locomotion.turn_radius
@@ -325,7 +330,8 @@ class FishBrain:
         return sits[0]
 
     def act(self, observation: Mapping, period: Period) -> np.ndarray:
-        """Return activations (1, T, A) for the period from the fish's percept."""
+        """Return activations (1, T, A) for the period from the fish's percept (the percept
+        holds no roll, so the righting reflex rests here: ``live`` measures the rolls)."""
         demand = self.decide(observation, period)
         if demand is None:
             return np.zeros((1, period.steps, self.body.n_actuators))
@@ -476,6 +482,31 @@ def _kinematics(world: World, weights: list[np.ndarray], cw: list[np.ndarray],
     return pos, np.array(com), np.array(fwd), np.array(cv), np.array(nose)
 
 
+def roll_pairs(bodies: list[Body], offsets: np.ndarray) -> list[tuple[np.ndarray, ...]]:
+    """Return the fishes' mirror node pairs (``BodyFrame.left``, ``.right``) as indices into
+    the world's node array (``offsets``: each fish's first node), grouped by pair count: a
+    list of (fishes (k,), left (k, P), right (k, P)); fishes without pairs are left out."""
+    groups: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {}
+    for a, body in enumerate(bodies):
+        frame = BodyFrame.of(body)
+        if len(frame.left):
+            o = int(offsets[a])
+            groups.setdefault(len(frame.left), []).append((a, o + frame.left, o + frame.right))
+    return [(np.array([g[0] for g in grp]), np.stack([g[1] for g in grp]),
+             np.stack([g[2] for g in grp])) for grp in groups.values()]  # fmt: skip
+
+
+def fish_rolls(allpos: np.ndarray, fwd: np.ndarray,
+               pairs: list[tuple[np.ndarray, ...]]) -> np.ndarray:  # fmt: skip
+    """Return each fish's roll (n,), rad over +-pi (``tasks.terms.roll_angle`` against its
+    heading ``fwd`` (n, 3)), from the world's node positions ``allpos``; pairs: ``roll_pairs``
+    (one array expression a group of fishes with as many pairs; 0 for a fish without)."""
+    out = np.zeros(len(fwd))
+    for idx, left, right in pairs:
+        out[idx] = roll_angle(np, allpos, left, right, fwd[idx])
+    return out
+
+
 def _activations(brains: list[FishBrain], demands: list[Demand | None],
                  period: Period) -> list[np.ndarray]:  # fmt: skip
     """Return each fish's activations (1, T, A) for its demand (zeros when dead): fishes that
@@ -523,7 +554,8 @@ def live(tank: Tank, seconds: float | None = None,
         s.name: frozenset(f.species.name for f in fishes if s.name in f.species.prey)
         for s in {f.species.name: f.species for f in fishes}.values()
     }
-    brains = [FishBrain(f.species, f.body, hunted_by[f.species.name]) for f in fishes]
+    brains = [FishBrain(f.species, f.body, hunted_by[f.species.name], cfg.righting)
+              for f in fishes]  # fmt: skip
     for i, b in enumerate(brains):
         b.reset(cfg.seed * 1000 + i)
     names = tuple(f.species.name for f in fishes)
@@ -570,8 +602,10 @@ def live(tank: Tank, seconds: float | None = None,
     weights = [m / total for m, total in masses]
     heads_of = [f.body.head for f in fishes]
     pos, com, fwd, vel, nose = _kinematics(world, weights, cw, heads_of)
+    last_roll: tuple[np.ndarray, float] | None = None  # the rolls at the last period's start
     record(pos)
     recorded, allpos = -1, None
+    pairs = roll_pairs([f.body for f in fishes], off)
     end = world.step_count + world.steps_for(seconds)
     rec_steps = max(1, int(round(cfg.record_period / dt)))
     k = 0
@@ -632,6 +666,15 @@ def live(tank: Tank, seconds: float | None = None,
                         food_pos, pc.obstacles[i], hits[i], aways[i])  # fmt: skip
             demands.append(b.decide({**obs, "view": view}, period, sits[i],
                                     Drives(hunger[i], libido[i], fear[i])))  # fmt: skip
+        # each fish's roll and roll rate (over the last period) for the motor layer's
+        # righting reflex
+        roll = fish_rolls(world.node_positions(0) if allpos is None else allpos, fwd, pairs)
+        roll_rate = np.zeros(n) if last_roll is None else (
+            np.angle(np.exp(1j * (roll - last_roll[0]))) / (t - last_roll[1]))  # fmt: skip
+        last_roll = (roll, t)
+        demands = [None if d is None else Demand(d.speed, d.turn, d.pitch, r, w)
+                   for d, r, w in zip(demands, roll.tolist(), roll_rate.tolist(),
+                                      strict=True)]  # fmt: skip
         rows = _activations(brains, demands, period)
         th = [b.thought for b in brains]
         b_times.append(t)
