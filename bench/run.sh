@@ -14,5 +14,6 @@ Z=".venv/bin/zoetic"
 "$Z" bench jax --json | tail -n 1
 "$Z" bench gym --json | tail -n 1
 "$Z" bench vision --json | tail -n 1
-"$Z" bench aquarium --json | tail -n 1
+"$Z" bench aquarium --skills both --json | tail -n 1
+"$Z" bench aquarium --perception vision --json | tail -n 1
 "$Z" bench stunts --json | tail -n 1

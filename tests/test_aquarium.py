@@ -236,3 +236,15 @@ def test_a_way_out_of_another_fish_does_not_lead_into_a_wall():
     assert hit and away[2] > 0.9  # left, away from the wall
     hit, away = collision_ahead(me, np.zeros(0, int), np.zeros((0, 3)), np.zeros((0, 3)), other)
     assert hit and away[2] < -0.9  # without the wall: away from the fish
+
+
+@pytest.mark.parametrize("skills", [None, "built-in"])
+def test_the_summary_names_each_species_motor_skills(skills):
+    """By default every species swims by the learned repertoire shipped for its body; the
+    summary says so by name (and says "built-in" when the tank is told so)."""
+    from zoetic.behavior.aquarium.tank import TankConfig, summarize
+
+    tank = build_tank(TankConfig(fishes=3, food=1, obstacles=0, seconds=0.2, skills=skills))
+    got = summarize(tank, live(tank))["motor_skills"]
+    assert set(got) == {f.species.name for f in tank.fishes} == {"minnow", "shark"}
+    assert set(got.values()) == {skills or "learned"}

@@ -35,9 +35,9 @@ def skills(tmp_path_factory):
 
 def _species_file(tmp_path, skills_value: str):
     text = open(load_species("shark").source).read()
-    assert 'skills = "built-in"' in text
+    assert 'skills = "learned"' in text
     path = tmp_path / "shark.toml"
-    path.write_text(text.replace('skills = "built-in"', f"skills = {json.dumps(skills_value)}"))
+    path.write_text(text.replace('skills = "learned"', f"skills = {json.dumps(skills_value)}"))
     return path
 
 
@@ -160,12 +160,14 @@ def test_a_learned_turn_plays_the_sharp_turn_from_its_start(skills):
 
 
 def test_learned_names_the_repertoire_shipped_for_the_body(tmp_path):
-    # both species swim with the shark lattice, so one shipped repertoire serves both
+    # both species swim with the shark lattice, so one shipped repertoire serves both, and
+    # both swim by it by default; "built-in" selects the calibrated wave instead
     for name in ("minnow", "shark"):
+        assert load_species(name).motor.skills == str(SKILLS_DIR / "shark")
         text = open(load_species(name).source).read()
         path = tmp_path / f"{name}.toml"
-        path.write_text(text.replace('skills = "built-in"', 'skills = "learned"'))
-        assert load_species(path).motor.skills == str(SKILLS_DIR / "shark")
+        path.write_text(text.replace('skills = "learned"', 'skills = "built-in"'))
+        assert load_species(path).motor.skills == "built-in"
     # a body with no shipped repertoire is refused, naming where the value came from
     snake = replace(load_species("minnow"), body="snake")
     with pytest.raises(SpeciesError, match=r"--x.*no learned repertoire is shipped for body"):

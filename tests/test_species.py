@@ -26,6 +26,8 @@ def test_a_species_file_round_trips(tmp_path):
     path = s.save(tmp_path / "fish.toml")
     back = load_species(path)
     assert back.to_dict() == s.to_dict()
+    # the shipped learned skills are written by name, not by where this install keeps them
+    assert 'skills = "learned"' in path.read_text() and back.motor.skills == s.motor.skills
 
 
 @pytest.mark.parametrize(
@@ -35,7 +37,7 @@ def test_a_species_file_round_trips(tmp_path):
         (("hunger_rate = 0.01675", "hunger_rate = -1.0"), "hunger_rate must be at least 0"),
         (('dislikes = ["crowd"]', 'dislikes = ["crowds"]'), "did you mean 'crowd'"),
         (("fear_threshold = 0.5 ", "fear_threshold = 0.9 "), "panic_threshold"),
-        (('skills = "built-in"', 'skills = "learnd"'), "[motor] skills"),
+        (('skills = "learned"', 'skills = "learnd"'), "[motor] skills"),
     ],
 )
 def test_a_bad_species_file_is_refused_naming_the_file_and_entry(tmp_path, edit, message):

@@ -120,6 +120,9 @@ class Species:
             d["mind"][k] = list(d["mind"][k])
         if d["motor"]["frequency"] is None:  # the body's own: TOML has no null, so leave it out
             del d["motor"]["frequency"]
+        body = Path(self.body).stem if is_path(self.body) else self.body
+        if d["motor"]["skills"] == str(SKILLS_DIR / body):  # the shipped one, not its path
+            d["motor"]["skills"] = LEARNED
         return d
 
     def save(self, path: str | Path) -> Path:

@@ -809,6 +809,9 @@ def summarize(tank: Tank, life: Life) -> dict:
         "seconds": sim,
         "seed": tank.config.seed,
         "perception": tank.config.perception,
+        # per species: "learned" (the repertoire shipped for its body), "built-in" or a directory
+        "motor_skills": {f.species.name: f.species.to_dict()["motor"]["skills"]
+                         for f in tank.fishes},  # fmt: skip
         "tank_half_size_m": tank.config.size(),
         "events": counts,
         "collisions_with_obstacles": obstacle_hits,
