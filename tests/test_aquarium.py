@@ -147,6 +147,18 @@ def test_cli_aquarium_refuses_unknown_perception_and_bad_counts_cleanly(tmp_path
     assert "oracle, vision" in err and "sonar" in err and "Traceback" not in err
     assert main(["aquarium", "--fishes", "2", "--predators", "3",
                  "--out", str(tmp_path / "b")]) == 2  # fmt: skip
+    capsys.readouterr()
+    assert main(["aquarium", "--skills", "lerned", "--out", str(tmp_path / "c")]) == 2
+    err = capsys.readouterr().err
+    assert "--skills 'lerned'" in err and "Traceback" not in err
+
+
+def test_cli_aquarium_skills_built_in_swims_every_fish_by_the_wave(tmp_path):
+    out = tmp_path / "tank"
+    assert main(["aquarium", "--fishes", "2", "--food", "1", "--obstacles", "0", "--seconds",
+                 "0.5", "--skills", "built-in", "--no-video", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["motor_skills"] == {"minnow": "built-in", "shark": "built-in"}
 
 
 def test_a_fish_that_just_mated_is_not_willing_again_until_its_libido_returns():

@@ -28,6 +28,10 @@ def aquarium(
     predator_skills: Path = typer.Option(
         None, "--predator-skills", help="A learned repertoire's directory (zoetic repertoire "
         "train) the predator swims by instead of its species' motor skills."),
+    skills: str = typer.Option(
+        None, "--skills", help="Every fish's motor skills instead of its species file's: "
+        "learned (the repertoire shipped for its body, the species' default), built-in (the "
+        "calibrated wave) or a learned repertoire's directory."),
     video: bool = typer.Option(True, help="Write video.mp4."),
     labels: bool = typer.Option(True, help="Label each fish with its intention in the video."),
     control_period: float = typer.Option(0.1, help="Brain period (s)."),
@@ -50,7 +54,7 @@ def aquarium(
                      control_period=control_period, perception=perception,
                      record_period=min(0.05, control_period),
                      predator_skills=None if predator_skills is None else str(predator_skills),
-                     )  # fmt: skip
+                     skills=skills)  # fmt: skip
     tank = build_tank(cfg)
     with console.status("the fishes live...") as status:
         life = live(tank, progress=lambda t: status.update(f"t = {t:.1f} s"))
