@@ -30,13 +30,39 @@ class Demand:
     change wanted (rad, left positive) and the pitch wanted (rad, nose up positive); and the
     fish's roll (rad, ``tasks.terms.roll_angle``, left side down positive) and roll rate
     (rad/s) that the tank measured, which the motor layer's righting reflex feeds back to the
-    fins (``behavior.motor.righting``)."""
+    fins (``behavior.motor.righting``); and its bend (``bend``: nose to tail over the rest
+    length, 1 straight), which the learned motor's fold guard reads."""
 
     speed: float
     turn: float = 0.0
     pitch: float = 0.0
     roll: float = 0.0
     roll_rate: float = 0.0
+    bend: float = 1.0
+
+
+TAIL_NODE = "tail_top"  # the node whose distance to the nose (node 0) measures a fish's bend
+FOLDED = 0.8  # bend under this: the tail fin has folded forward through the peduncle (0.6-0.7)
+
+
+def bend_nodes(body: Body) -> tuple[int, int, float] | None:
+    """Return (nose node, tail node, rest distance m) that ``bend`` measures on the body, or
+    None if it has no ``TAIL_NODE``."""
+    if TAIL_NODE not in body.node_names:
+        return None
+    tail = body.node_names.index(TAIL_NODE)
+    return 0, tail, float(np.linalg.norm(body.rest_pos[0] - body.rest_pos[tail]))
+
+
+def bend(body: Body, positions: np.ndarray) -> np.ndarray:
+    """Return the fish's bend at each of ``positions`` (..., N, 3): the nose-to-tail-fin
+    distance over its rest length (1 for a body without a tail node). A fish steering hard
+    bends to about 0.87; a folded tail leaves 0.6-0.7 (under ``FOLDED``)."""
+    nodes = bend_nodes(body)
+    if nodes is None:
+        return np.ones(positions.shape[:-2])
+    nose, tail, rest = nodes
+    return np.linalg.norm(positions[..., nose, :] - positions[..., tail, :], axis=-1) / rest
 
 
 class Locomotion(Protocol):
@@ -104,6 +130,9 @@ TURN_REST = 0.3
 # with 2 and STEER_SECONDS 1.5
 STEER_MAX = 2.0
 STEER_SECONDS = TURN_SECONDS  # s a steered turn is to take (the rate asked: turn over this)
+# the fold guard: a fish bent under this (``Demand.bend``) swims straight this period, any
+# turn under way ended. FOLD_GUARD_NOTE
+BEND_GUARD = 0.87
 
 
 class LearnedLocomotion:
@@ -157,6 +186,12 @@ class LearnedLocomotion:
         ``times`` (s), fins at the demand's pitch."""
         t0 = float(times[0])
         pitch = min(max(demand.pitch, -MAX_PITCH), MAX_PITCH)
+        if demand.bend < BEND_GUARD:  # the fold guard: straighten out
+            if self.turning is not None:
+                side, start, duration = self.turning
+                self.turning = None
+                self.last = (side, min(t0, start + duration))
+            return self.motor.swim_signal(times, self.motor.swim(demand.speed), pitch)
         if self.turning is not None:
             side, start, duration = self.turning
             other_way = demand.turn < -TURN_MIN if side == 0 else demand.turn > TURN_MIN
