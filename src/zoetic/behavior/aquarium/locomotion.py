@@ -130,9 +130,19 @@ TURN_REST = 0.3
 # with 2 and STEER_SECONDS 1.5
 STEER_MAX = 2.0
 STEER_SECONDS = TURN_SECONDS  # s a steered turn is to take (the rate asked: turn over this)
-# the fold guard: a fish bent under this (``Demand.bend``) swims straight this period, any
-# turn under way ended. FOLD_GUARD_NOTE
+# The fold guard: a fish asked to swim slower than GUARD_SPEED and bent under BEND_GUARD
+# (``Demand.bend``, measured by the tank at the period's start) swims straight this period,
+# any turn under way ended. The tank's folds (seeds 10 and 17, 20-29: 3 more) came at 0.15 m/s
+# while steering, upright or rolled 50-70 degrees after back-to-back sharp turns: the bend,
+# 0.85-0.92 period after period, dropped within one period to 0.66-0.69 and stayed. The
+# all-learned tank over seeds 0-9 / 10-19 / 20-29 (food, folded tails): no guard 87.3 / 76.7
+# / 76.7 %, 0 / 2 / 3; guard at any speed 80.0 / 83.3 / 81.3 %, no folds, but a fish 5 mm
+# into a rock (an avoiding turn straightened); guard 0.85 or 0.83 folded 1-3 a decade (a fold
+# comes within a period, unannounced); under 0.2 m/s 1 a decade; under 0.3 m/s 86.0 / 78.0 /
+# 82.7 %, no folds, 0 m into rocks. A steady steer bends the shark to 0.85-0.88 (isolated,
+# 0.15 or 0.3 m/s, never folding): the guard then alternates steer and swim.
 BEND_GUARD = 0.87
+GUARD_SPEED = 0.3  # m/s
 
 
 class LearnedLocomotion:
@@ -148,9 +158,10 @@ class LearnedLocomotion:
     long as the calibration says it takes to turn the angle (at least one control period, at
     most ``TURN_BURST``), then back to the swim; a demand to turn the other way ends it at
     once, and the next turn or steer (either side) starts only after ``TURN_REST`` s of
-    swimming. Fins hold the pitch. Same interface as ``MotorLocomotion``; the state is the
-    turn under way, so each fish has its own (``motor`` is shared by the fishes of one body
-    and repertoire).
+    swimming. The fold guard: a fish asked under ``GUARD_SPEED`` and bent under ``BEND_GUARD``
+    (``Demand.bend``) swims straight, any turn under way ended. Fins hold the pitch. Same
+    interface as ``MotorLocomotion``; the state is the turn under way, so each fish has its own
+    (``motor`` is shared by the fishes of one body and repertoire).
     """
 
     def __init__(self, body: Body, motor: LearnedMotor, righting: bool = True) -> None:
@@ -186,7 +197,7 @@ class LearnedLocomotion:
         ``times`` (s), fins at the demand's pitch."""
         t0 = float(times[0])
         pitch = min(max(demand.pitch, -MAX_PITCH), MAX_PITCH)
-        if demand.bend < BEND_GUARD:  # the fold guard: straighten out
+        if demand.bend < BEND_GUARD and demand.speed < GUARD_SPEED:  # fold guard: straighten
             if self.turning is not None:
                 side, start, duration = self.turning
                 self.turning = None
