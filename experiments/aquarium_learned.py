@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from zoetic.behavior.aquarium.locomotion import learned_motor
+from zoetic.behavior.aquarium.locomotion import FOLDED, bend, learned_motor
 from zoetic.behavior.aquarium.species import BUILT_IN, LEARNED, SKILLS_DIR, load_species
 from zoetic.behavior.aquarium.tank import (
     TankConfig,
@@ -48,11 +48,9 @@ def species_file(out: Path, name: str, skills: str) -> Path:
 
 
 def folded(body, positions: np.ndarray) -> bool:
-    """Return True if the fish's tail fin ends folded forward (nose to tail under 0.8 rest: a
-    fold leaves 0.6-0.7, a fish steering hard bends to about 0.87)."""
-    tail = body.node_names.index("tail_top")
-    rest = np.linalg.norm(body.rest_pos[0] - body.rest_pos[tail])
-    return bool(np.linalg.norm(positions[-1, 0] - positions[-1, tail]) < 0.8 * rest)
+    """Return True if the fish's tail fin ends folded forward (``locomotion.bend`` under
+    ``FOLDED``, 0.8: a fold leaves 0.6-0.7, a fish steering hard bends to about 0.87)."""
+    return bool(bend(body, positions[-1]) < FOLDED)
 
 
 def rolled_time(tank, life) -> tuple[float, float, int]:

@@ -266,3 +266,61 @@ def test_fishes_sharing_a_learned_motor_get_what_each_would_alone():
     for v in np.linspace(motor.speeds[0], 1.5, 31):
         want = np.interp(v, motor.speeds[: top + 1][order], LEARNED_SWIM[: top + 1][order])
         assert motor.swim(v) == float(want)
+
+
+def test_the_bend_is_one_at_rest_and_falls_as_the_tail_comes_forward():
+    from zoetic.behavior.aquarium.locomotion import FOLDED, TAIL_NODE, bend
+    from zoetic.behavior.aquarium.tank import bend_indices, fish_bends
+
+    body = load_animal("shark")
+    rest = np.asarray(body.rest_pos, float)
+    tail = body.node_names.index(TAIL_NODE)
+    folded = rest.copy()
+    folded[tail] = rest[0] + 0.7 * (rest[tail] - rest[0])  # the tail fin 30 % nearer the nose
+    assert bend(body, rest) == pytest.approx(1.0)
+    assert bend(body, folded) == pytest.approx(0.7) and bend(body, folded) < FOLDED
+    np.testing.assert_allclose(bend(body, np.stack([rest, folded])), [1.0, 0.7])
+    # the tank's per-fish measure is the same, read off the world's node array
+    allpos = np.concatenate([folded, rest])
+    got = fish_bends(allpos, bend_indices([body, body], np.array([0, body.n_nodes])))
+    np.testing.assert_allclose(got, [0.7, 1.0])
+
+
+def test_a_bent_fish_swims_straight_ending_its_turn():
+    """The fold guard: a slow fish bent under ``BEND_GUARD`` is not steered nor turned sharply
+    this period (a steer at low speed folded the shark's tail fin for good in the tank); a
+    fast one steers on."""
+    from zoetic.behavior.aquarium.locomotion import BEND_GUARD, GUARD_SPEED
+
+    body = load_animal("shark")
+    motor = learned_motor(body, SKILLS_DIR / "shark")
+    per = int(round(0.1 / body.dt))
+    t = np.arange(per) * body.dt
+    straight = motor.swim_signal(t, motor.swim(0.15), 0.0)
+    bent = BEND_GUARD - 0.02
+    for turn in (-0.4, 0.4, 2.5):
+        loco = LearnedLocomotion(body, motor, righting=False)
+        assert not np.array_equal(loco.activations(Demand(0.15, turn), t), straight)
+    loco = LearnedLocomotion(body, motor, righting=False)
+    for turn in (-0.4, 2.5):
+        assert np.array_equal(loco.activations(Demand(0.15, turn, bend=bent), t), straight)
+    loco.activations(Demand(0.15, 2.5), t)  # a sharp turn under way
+    assert loco.turning is not None
+    got = loco.activations(Demand(0.15, 2.5, bend=bent), t + 0.1)
+    assert np.array_equal(got, motor.swim_signal(t + 0.1, motor.swim(0.15), 0.0))
+    assert loco.turning is None
+    fast = GUARD_SPEED + 0.1
+    loco = LearnedLocomotion(body, motor, righting=False)
+    got = loco.activations(Demand(fast, -0.4, bend=bent), t)
+    assert not np.array_equal(got, motor.swim_signal(t, motor.swim(fast), 0.0))
+
+
+def test_a_slow_steering_learned_fish_keeps_its_tail():
+    """Seed 10's all-learned tank: a minnow steering right at 0.15 m/s, upright, folded its
+    tail fin at 16.4 s without the fold guard (bend 0.84 then 0.66)."""
+    from zoetic.behavior.aquarium.locomotion import FOLDED, bend
+
+    tank = build_tank(TankConfig(seed=10, seconds=17.0, record_period=0.1, skills="learned"))
+    life = live(tank)
+    ends = [float(bend(f.body, p[-1])) for f, p in zip(tank.fishes, life.positions, strict=True)]
+    assert min(ends) > FOLDED

@@ -30,13 +30,39 @@ class Demand:
     change wanted (rad, left positive) and the pitch wanted (rad, nose up positive); and the
     fish's roll (rad, ``tasks.terms.roll_angle``, left side down positive) and roll rate
     (rad/s) that the tank measured, which the motor layer's righting reflex feeds back to the
-    fins (``behavior.motor.righting``)."""
+    fins (``behavior.motor.righting``); and its bend (``bend``: nose to tail over the rest
+    length, 1 straight), which the learned motor's fold guard reads."""
 
     speed: float
     turn: float = 0.0
     pitch: float = 0.0
     roll: float = 0.0
     roll_rate: float = 0.0
+    bend: float = 1.0
+
+
+TAIL_NODE = "tail_top"  # the node whose distance to the nose (node 0) measures a fish's bend
+FOLDED = 0.8  # bend under this: the tail fin has folded forward through the peduncle (0.6-0.7)
+
+
+def bend_nodes(body: Body) -> tuple[int, int, float] | None:
+    """Return (nose node, tail node, rest distance m) that ``bend`` measures on the body, or
+    None if it has no ``TAIL_NODE``."""
+    if TAIL_NODE not in body.node_names:
+        return None
+    tail = body.node_names.index(TAIL_NODE)
+    return 0, tail, float(np.linalg.norm(body.rest_pos[0] - body.rest_pos[tail]))
+
+
+def bend(body: Body, positions: np.ndarray) -> np.ndarray:
+    """Return the fish's bend at each of ``positions`` (..., N, 3): the nose-to-tail-fin
+    distance over its rest length (1 for a body without a tail node). A fish steering hard
+    bends to about 0.87; a folded tail leaves 0.6-0.7 (under ``FOLDED``)."""
+    nodes = bend_nodes(body)
+    if nodes is None:
+        return np.ones(positions.shape[:-2])
+    nose, tail, rest = nodes
+    return np.linalg.norm(positions[..., nose, :] - positions[..., tail, :], axis=-1) / rest
 
 
 class Locomotion(Protocol):
@@ -104,6 +130,19 @@ TURN_REST = 0.3
 # with 2 and STEER_SECONDS 1.5
 STEER_MAX = 2.0
 STEER_SECONDS = TURN_SECONDS  # s a steered turn is to take (the rate asked: turn over this)
+# The fold guard: a fish asked to swim slower than GUARD_SPEED and bent under BEND_GUARD
+# (``Demand.bend``, measured by the tank at the period's start) swims straight this period,
+# any turn under way ended. The tank's folds (seeds 10 and 17, 20-29: 3 more) came at 0.15 m/s
+# while steering, upright or rolled 50-70 degrees after back-to-back sharp turns: the bend,
+# 0.85-0.92 period after period, dropped within one period to 0.66-0.69 and stayed. The
+# all-learned tank over seeds 0-9 / 10-19 / 20-29 (food, folded tails): no guard 87.3 / 76.7
+# / 76.7 %, 0 / 2 / 3; guard at any speed 80.0 / 83.3 / 81.3 %, no folds, but a fish 5 mm
+# into a rock (an avoiding turn straightened); guard 0.85 or 0.83 folded 1-3 a decade (a fold
+# comes within a period, unannounced); under 0.2 m/s 1 a decade; under 0.3 m/s 86.0 / 78.0 /
+# 82.7 %, no folds, 0 m into rocks. A steady steer bends the shark to 0.85-0.88 (isolated,
+# 0.15 or 0.3 m/s, never folding): the guard then alternates steer and swim.
+BEND_GUARD = 0.87
+GUARD_SPEED = 0.3  # m/s
 
 
 class LearnedLocomotion:
@@ -119,9 +158,10 @@ class LearnedLocomotion:
     long as the calibration says it takes to turn the angle (at least one control period, at
     most ``TURN_BURST``), then back to the swim; a demand to turn the other way ends it at
     once, and the next turn or steer (either side) starts only after ``TURN_REST`` s of
-    swimming. Fins hold the pitch. Same interface as ``MotorLocomotion``; the state is the
-    turn under way, so each fish has its own (``motor`` is shared by the fishes of one body
-    and repertoire).
+    swimming. The fold guard: a fish asked under ``GUARD_SPEED`` and bent under ``BEND_GUARD``
+    (``Demand.bend``) swims straight, any turn under way ended. Fins hold the pitch. Same
+    interface as ``MotorLocomotion``; the state is the turn under way, so each fish has its own
+    (``motor`` is shared by the fishes of one body and repertoire).
     """
 
     def __init__(self, body: Body, motor: LearnedMotor, righting: bool = True) -> None:
@@ -157,6 +197,12 @@ class LearnedLocomotion:
         ``times`` (s), fins at the demand's pitch."""
         t0 = float(times[0])
         pitch = min(max(demand.pitch, -MAX_PITCH), MAX_PITCH)
+        if demand.bend < BEND_GUARD and demand.speed < GUARD_SPEED:  # fold guard: straighten
+            if self.turning is not None:
+                side, start, duration = self.turning
+                self.turning = None
+                self.last = (side, min(t0, start + duration))
+            return self.motor.swim_signal(times, self.motor.swim(demand.speed), pitch)
         if self.turning is not None:
             side, start, duration = self.turning
             other_way = demand.turn < -TURN_MIN if side == 0 else demand.turn > TURN_MIN

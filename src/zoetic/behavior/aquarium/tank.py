@@ -20,6 +20,7 @@ from zoetic.behavior.aquarium.locomotion import (
     Demand,
     LearnedLocomotion,
     MotorLocomotion,
+    bend_nodes,
     learned_motor,
 )
 from zoetic.behavior.aquarium.perception import obstacle_distance, perceive
@@ -507,6 +508,29 @@ def fish_rolls(allpos: np.ndarray, fwd: np.ndarray,
     return out
 
 
+def bend_indices(bodies: list[Body], offsets: np.ndarray
+                 ) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """Return what ``fish_bends`` needs: each fish's nose and tail node as indices into the
+    world's node array (``offsets``: each fish's first node) and rest distance, for the fishes
+    that ``locomotion.bend_nodes`` measures (after how many fishes)."""
+    rows = [(a, int(offsets[a]) + nodes[0], int(offsets[a]) + nodes[1], nodes[2])
+            for a, b in enumerate(bodies) if (nodes := bend_nodes(b)) is not None]  # fmt: skip
+    idx, nose, tail, rest = (np.array([r[k] for r in rows], dtype=float if k == 3 else int)
+                             for k in range(4))  # fmt: skip
+    return len(bodies), idx, nose, tail, rest
+
+
+def fish_bends(allpos: np.ndarray,
+               bends: tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
+    """Return each fish's bend (n,) (``locomotion.bend``: nose to tail over rest, 1 for a fish
+    without a tail node) from the world's node positions ``allpos``; bends: ``bend_indices``."""
+    n, idx, nose, tail, rest = bends
+    out = np.ones(n)
+    if len(idx):
+        out[idx] = np.linalg.norm(allpos[nose] - allpos[tail], axis=1) / rest
+    return out
+
+
 def _activations(brains: list[FishBrain], demands: list[Demand | None],
                  period: Period) -> list[np.ndarray]:  # fmt: skip
     """Return each fish's activations (1, T, A) for its demand (zeros when dead): fishes that
@@ -606,6 +630,7 @@ def live(tank: Tank, seconds: float | None = None,
     record(pos)
     recorded, allpos = -1, None
     pairs = roll_pairs([f.body for f in fishes], off)
+    bends = bend_indices([f.body for f in fishes], off)
     end = world.step_count + world.steps_for(seconds)
     rec_steps = max(1, int(round(cfg.record_period / dt)))
     k = 0
@@ -672,9 +697,10 @@ def live(tank: Tank, seconds: float | None = None,
         roll_rate = np.zeros(n) if last_roll is None else (
             np.angle(np.exp(1j * (roll - last_roll[0]))) / (t - last_roll[1]))  # fmt: skip
         last_roll = (roll, t)
-        demands = [None if d is None else Demand(d.speed, d.turn, d.pitch, r, w)
-                   for d, r, w in zip(demands, roll.tolist(), roll_rate.tolist(),
-                                      strict=True)]  # fmt: skip
+        bend = fish_bends(world.node_positions(0) if allpos is None else allpos, bends)
+        demands = [None if d is None else Demand(d.speed, d.turn, d.pitch, r, w, c)
+                   for d, r, w, c in zip(demands, roll.tolist(), roll_rate.tolist(),
+                                         bend.tolist(), strict=True)]  # fmt: skip
         rows = _activations(brains, demands, period)
         th = [b.thought for b in brains]
         b_times.append(t)
