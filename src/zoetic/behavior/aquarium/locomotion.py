@@ -46,12 +46,12 @@ FOLDED = 0.8  # bend under this: the tail fin has folded forward through the ped
 
 
 def bend_nodes(body: Body) -> tuple[int, int, float] | None:
-    """Return (nose node, tail node, rest distance m) that ``bend`` measures on the body, or
-    None if it has no ``TAIL_NODE``."""
+    """Return (nose node: the body's head, tail node, rest distance m) that ``bend`` measures
+    on the body, or None if it has no ``TAIL_NODE``."""
     if TAIL_NODE not in body.node_names:
         return None
-    tail = body.node_names.index(TAIL_NODE)
-    return 0, tail, float(np.linalg.norm(body.rest_pos[0] - body.rest_pos[tail]))
+    head, tail = body.head, body.node_names.index(TAIL_NODE)
+    return head, tail, float(np.linalg.norm(body.rest_pos[head] - body.rest_pos[tail]))
 
 
 def bend(body: Body, positions: np.ndarray) -> np.ndarray:
@@ -227,7 +227,8 @@ class LearnedLocomotion:
         out = self.motor.turn_signal(times - start, times, side, a, pitch)
         after = times - start >= duration
         if after.any():
-            out[after] = self.motor.swim_signal(times[after], a, pitch)
+            # at the whole period's times (the gaits shared by the fishes of this motor)
+            out[after] = self.motor.swim_signal(times, a, pitch)[after]
         return out
 
     def activations_many(self, demands: list[Demand], times: np.ndarray) -> np.ndarray:
