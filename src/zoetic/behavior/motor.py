@@ -298,10 +298,9 @@ class WaveMotor:
         rad, the left fins ``lean`` rad more and the right ones less (``fin_activation`` of
         the angle less that of level; 0 on the muscles and without fins)."""
         out = np.zeros(self.body.n_actuators)
-        for act, lo, hi, side in self._fin_rows:
-            if hi != lo:
-                out[act] = (min(max((pitch + side * lean - lo) / (hi - lo), 0.0), 1.0)
-                            - min(max(-lo / (hi - lo), 0.0), 1.0))  # fmt: skip
+        level = fin_activation(self.body, 0.0, self._fin_rows)
+        for act, v in fin_activation(self.body, pitch, self._fin_rows, lean).items():
+            out[act] = v - level[act]
         return out
 
     @cached_property
@@ -591,9 +590,7 @@ class LearnedMotor:
         return self._fins(u, pitch)
 
     def _fins(self, u: np.ndarray, pitch: float) -> np.ndarray:
-        for k, act in fin_activation(self.body, float(pitch), self._fin_rows).items():
-            u[:, k] = act
-        return np.clip(u, 0.0, 1.0)
+        return np.clip(self.lean(u, pitch, 0.0), 0.0, 1.0)
 
     def lean(self, u: np.ndarray, pitch: float, lean: float) -> np.ndarray:
         """Set the fins of activations ``u`` (T, A; changed in place and returned) to

@@ -40,8 +40,13 @@ class Demand:
     roll_rate: float = 0.0
     bend: float = 1.0
 
+    @property
+    def fin_pitch(self) -> float:
+        """The pitch the fins are set to: the one asked, within +-``MAX_PITCH``."""
+        return min(max(self.pitch, -MAX_PITCH), MAX_PITCH)
 
-TAIL_NODE = "tail_top"  # the node whose distance to the nose (node 0) measures a fish's bend
+
+TAIL_NODE = "tail_top"  # the node whose distance to the nose (the head) measures the bend
 FOLDED = 0.8  # bend under this: the tail fin has folded forward through the peduncle (0.6-0.7)
 
 
@@ -102,7 +107,7 @@ class MotorLocomotion:
         """Return activations (D, T, A) for several demands at once (one wave evaluation)."""
         return self.motor.activations_many(
             times, [d.speed for d in demands], [d.turn for d in demands],
-            [min(max(d.pitch, -MAX_PITCH), MAX_PITCH) for d in demands], self.turn_seconds,
+            [d.fin_pitch for d in demands], self.turn_seconds,
             [righting(d.roll, d.roll_rate) if self.righting else 0.0 for d in demands],
         )  # fmt: skip
 
@@ -189,26 +194,22 @@ class LearnedLocomotion:
         out = self.play(demand, times)
         if not self.righting:
             return out
-        pitch = min(max(demand.pitch, -MAX_PITCH), MAX_PITCH)
-        return self.motor.lean(out, pitch, righting(demand.roll, demand.roll_rate))
+        return self.motor.lean(out, demand.fin_pitch, righting(demand.roll, demand.roll_rate))
 
     def play(self, demand: Demand, times: np.ndarray) -> np.ndarray:
         """Return activations (T, A) of the gait for the demand over the control period at
         ``times`` (s), fins at the demand's pitch."""
         t0 = float(times[0])
-        pitch = min(max(demand.pitch, -MAX_PITCH), MAX_PITCH)
+        pitch = demand.fin_pitch
         if demand.bend < BEND_GUARD and demand.speed < GUARD_SPEED:  # fold guard: straighten
             if self.turning is not None:
-                side, start, duration = self.turning
-                self.turning = None
-                self.last = (side, min(t0, start + duration))
+                self._end_turn(t0)
             return self.motor.swim_signal(times, self.motor.swim(demand.speed), pitch)
         if self.turning is not None:
             side, start, duration = self.turning
             other_way = demand.turn < -TURN_MIN if side == 0 else demand.turn > TURN_MIN
             if t0 - start >= duration - 1e-9 or other_way:
-                self.turning = None
-                self.last = (side, min(t0, start + duration))
+                self._end_turn(t0)
         steer = self.motor.steers and abs(demand.turn) < STEER_MAX
         if self.turning is None and steer and t0 - self.last[1] >= TURN_REST - 1e-9:
             a = self.motor.swim(demand.speed)
@@ -230,6 +231,13 @@ class LearnedLocomotion:
             # at the whole period's times (the gaits shared by the fishes of this motor)
             out[after] = self.motor.swim_signal(times, a, pitch)[after]
         return out
+
+    def _end_turn(self, t0: float) -> None:
+        """End the turn under way at ``t0`` s (or where it was to end, if earlier): the rest
+        before the next turn counts from there."""
+        side, start, duration = self.turning
+        self.turning = None
+        self.last = (side, min(t0, start + duration))
 
     def activations_many(self, demands: list[Demand], times: np.ndarray) -> np.ndarray:
         """Return activations (D, T, A) for several demands (one fish's state: use one)."""
