@@ -625,10 +625,11 @@ def live(tank: Tank, seconds: float | None = None,
     masses = [(f.body.mass, f.body.total_mass) for f in fishes]
     weights = [m / total for m, total in masses]
     heads_of = [f.body.head for f in fishes]
-    pos, com, fwd, vel, nose = _kinematics(world, weights, cw, heads_of)
+    # the world's node positions now: kept current at every period's start (below)
+    allpos, recorded = world.node_positions(0), world.step_count
+    pos, com, fwd, vel, nose = _kinematics(world, weights, cw, heads_of, allpos)
     last_roll: tuple[np.ndarray, float] | None = None  # the rolls at the last period's start
     record(pos)
-    recorded, allpos = -1, None
     pairs = roll_pairs([f.body for f in fishes], off)
     bends = bend_indices([f.body for f in fishes], off)
     end = world.step_count + world.steps_for(seconds)
@@ -693,12 +694,12 @@ def live(tank: Tank, seconds: float | None = None,
                                     Drives(hunger[i], libido[i], fear[i])))  # fmt: skip
         # each fish's roll and roll rate (over the last period) for the motor layer's
         # righting reflex
-        roll = fish_rolls(world.node_positions(0) if allpos is None else allpos, fwd, pairs)
+        roll = fish_rolls(allpos, fwd, pairs)
         roll_rate = np.zeros(n) if last_roll is None else (
             np.angle(np.exp(1j * (roll - last_roll[0]))) / (t - last_roll[1]))  # fmt: skip
         last_roll = (roll, t)
-        bend = fish_bends(world.node_positions(0) if allpos is None else allpos, bends)
-        demands = [None if d is None else Demand(d.speed, d.turn, d.pitch, r, w, c)
+        bend = fish_bends(allpos, bends)
+        demands = [None if d is None else replace(d, roll=r, roll_rate=w, bend=c)
                    for d, r, w, c in zip(demands, roll.tolist(), roll_rate.tolist(),
                                          bend.tolist(), strict=True)]  # fmt: skip
         rows = _activations(brains, demands, period)
@@ -756,7 +757,7 @@ def live(tank: Tank, seconds: float | None = None,
             if o in static_obj and t1 - touching[i, o] > APART:
                 events.append((t1, fishes[i].name, "collision", world.objects[o].name))
             touching[i, o] = t1
-        # how deep any fish lies in a rock or another fish, once a period
+        # how deep any fish lies in a rock or another fish, once a period (allpos, pos: now)
         if recorded != world.step_count:
             allpos = world.node_positions(0)
             pos = [allpos[o0:o1] for o0, o1 in zip(off[:-1], off[1:], strict=True)]
@@ -764,8 +765,7 @@ def live(tank: Tank, seconds: float | None = None,
         if len(kind):
             deepest = max(deepest, float(-obstacle_distance(allpos, kind, center, size).min()))
         deepest_fish = max(deepest_fish, _fish_depth(fishes, pos, extent, masses))
-        pos, com, fwd, vel, nose = _kinematics(
-            world, weights, cw, heads_of, allpos if recorded == world.step_count else None)
+        pos, com, fwd, vel, nose = _kinematics(world, weights, cw, heads_of, allpos)
         # catches and matings (fish-fish touches come from the world's contacts above)
         dcoms = np.linalg.norm(com[:, None] - com[None], axis=-1)
         for i, j2 in zip(*np.nonzero(dcoms < NEAR), strict=True):
