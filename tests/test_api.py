@@ -53,9 +53,9 @@ def test_import_zoetic_is_light_and_names_load_lazily():
     assert out.stdout.split("\n")[:2] == ["[]", "[]"]
     for name in zoetic.__all__:
         assert getattr(zoetic, name) is not None
-    import zoetic.learn.run as run_module  # the package stays reachable beside zoetic.learn()
+    import zoetic.learning.run as run_module  # the package stays reachable beside zoetic.learn()
 
-    assert callable(zoetic.learn) and zoetic.learn.run is run_module
+    assert callable(zoetic.learn) and zoetic.learning.run is run_module
 
 
 def test_learn_can_keep_its_run_directory(tmp_path):

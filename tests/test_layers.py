@@ -18,7 +18,7 @@ LAYERS = {
     "render": 3,
     "control": 4,
     "tasks": 5,
-    "learn": 6,
+    "learning": 6,
     "perception": 7, "behavior": 7,
     "viz": 8, "web": 8, "gym": 8, "cli": 8, "bench": 8,
 }  # fmt: skip
@@ -106,14 +106,14 @@ def test_the_checker_catches_upward_imports_and_stray_matplotlib(tmp_path):
     pkg = tmp_path / "zoetic"
     for name, text in {
         "physics/step.py": "from zoetic.control import Controller\n",
-        "control/lazy.py": "def f():\n    from zoetic.learn.run import Run\n",
+        "control/lazy.py": "def f():\n    from zoetic.learning.run import Run\n",
         "tasks/plot.py": "import matplotlib.pyplot as plt\n",
-        "learn/ok.py": "from zoetic.physics import simulate\nfrom . import run\n",
-        "learn/rel.py": "from ..behavior import macro\n",
-        "behavior/ok.py": "from zoetic.learn.optimizers import Annealing\n",
+        "learning/ok.py": "from zoetic.physics import simulate\nfrom . import run\n",
+        "learning/rel.py": "from ..behavior import macro\n",
+        "behavior/ok.py": "from zoetic.learning.optimizers import Annealing\n",
         "san/bad.py": "from zoetic.behavior.macro import search\n",
         "physics/bench.py": "from zoetic.control import wave_controller\n",
-        "learn/timing.py": "def f():\n    from zoetic.bench.simulate import bench_simulate\n",
+        "learning/timing.py": "def f():\n    from zoetic.bench.simulate import bench_simulate\n",
         "bench/fine.py": "from zoetic.behavior.skills import skill_figures\n",
         "viz/fine.py": "import matplotlib\n",
         "cli/fine.py": "from zoetic.runs import finish_run\nfrom zoetic.san import tune\n",
@@ -123,13 +123,13 @@ def test_the_checker_catches_upward_imports_and_stray_matplotlib(tmp_path):
         (pkg / name).write_text(text)
     found = "\n".join(violations(pkg))
     assert "step.py:1: physics (layer 2) imports zoetic.control" in found
-    assert "lazy.py:2: control (layer 4) imports zoetic.learn.run" in found
+    assert "lazy.py:2: control (layer 4) imports zoetic.learning.run" in found
     assert "plot.py:1: imports matplotlib outside viz/" in found
-    assert "rel.py:1: learn (layer 6) imports zoetic.behavior" in found
+    assert "rel.py:1: learning (layer 6) imports zoetic.behavior" in found
     assert "bad.py:1: san imports zoetic.behavior.macro" in found
     assert "up.py:1: behavior imports zoetic.runs (the top level)" in found
     assert "up.py:2: behavior imports zoetic.san (only the top imports san)" in found
     # benchmarks live in zoetic.bench, the top layer: a driver left below is checked as such
     assert "bench.py:1: physics (layer 2) imports zoetic.control" in found
-    assert "timing.py:2: learn (layer 6) imports zoetic.bench.simulate (layer 8)" in found
+    assert "timing.py:2: learning (layer 6) imports zoetic.bench.simulate (layer 8)" in found
     assert "ok.py" not in found and "fine.py" not in found

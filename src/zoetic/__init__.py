@@ -162,7 +162,7 @@ def _learn(
     import numpy as np
 
     from zoetic.bodies import Body
-    from zoetic.learn.run import LearnConfig, Run
+    from zoetic.learning.run import LearnConfig, Run
 
     name = animal.source if isinstance(animal, Body) and Path(animal.source).exists() else animal
     if isinstance(name, Body):
@@ -189,13 +189,13 @@ def _learn(
 
 class _Learn:
     """``zoetic.learn(...)`` learns (see ``_learn``); ``zoetic.learn.<module>``
-    still reaches the ``zoetic.learn`` package, whose name this callable shares."""
+    still reaches the ``zoetic.learning`` package, whose name this callable shares."""
 
     def __call__(self, *args: Any, **kwargs: Any) -> Any:
         return _learn(*args, **kwargs)
 
     def __getattr__(self, name: str) -> Any:
-        return getattr(import_module("zoetic.learn"), name)
+        return getattr(import_module("zoetic.learning"), name)
 
     @property
     def __signature__(self):  # so that help() and IDEs show api.learn's typed signature
@@ -212,7 +212,7 @@ learn = _Learn()
 
 
 class _Package(types.ModuleType):
-    """The zoetic module: importing the ``zoetic.learn`` package must not replace the
+    """The zoetic module: importing the ``zoetic.learning`` package must not replace the
     ``learn`` callable (Python binds a loaded submodule as an attribute of its parent)."""
 
     def __setattr__(self, name: str, value: Any) -> None:

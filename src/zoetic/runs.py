@@ -178,7 +178,7 @@ def finish_run(run, video: bool = True, fps: int = 30) -> dict:
 # ----------------------------------------------------------------------------- run configs
 
 MAX_BUDGET = 10_000_000  # evaluations of one learning run
-CHOICES = {  # the controller kinds are left to learn.run.build, which names its own
+CHOICES = {  # the controller kinds are left to learning.run.build, which names its own
     "interp": ("linear", "bspline"),
     "evaluator": ("batch", "process", "ray"),
     "coupling": ("auto", "none", "wave", "antiphase"),
@@ -199,8 +199,8 @@ def check_learn_config(d: dict, where: str) -> dict:
 
     from zoetic import io as rd
     from zoetic.errors import RunDirError
-    from zoetic.learn import optimizers
-    from zoetic.learn.run import LearnConfig
+    from zoetic.learning import optimizers
+    from zoetic.learning.run import LearnConfig
 
     E = RunDirError
     names = tuple(getattr(optimizers, "OPTIMIZERS", ("anneal", "simplex", "cmaes")))
@@ -333,7 +333,7 @@ def abstract_files(
     """Abstract a learned controller; write abstract.json and abstract.png; return a summary."""
     from zoetic.behavior.training import abstract_source, abstraction_report
     from zoetic.io import write_json
-    from zoetic.learn.abstraction import abstract
+    from zoetic.learning.abstraction import abstract
     from zoetic.viz.abstraction import plot_abstraction
 
     body, ctrl, task_obj = abstract_source(source, task)
@@ -388,7 +388,7 @@ def show_repertoire(directory: str | Path, plot: bool = True) -> list[dict[str, 
     Writes repertoire.png into the directory (paths: each entry played three times over).
     """
     from zoetic.behavior.repertoire import Repertoire
-    from zoetic.learn.abstraction import measure
+    from zoetic.learning.abstraction import measure
 
     directory = Path(directory)
     rep = Repertoire.load(directory)

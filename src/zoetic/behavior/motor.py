@@ -24,7 +24,7 @@ from zoetic.behavior.tracking import body_length
 from zoetic.bodies import Body
 from zoetic.control.abstract import AbstractController
 from zoetic.errors import ZoeticError
-from zoetic.learn.objective import heading_angles
+from zoetic.learning.objective import heading_angles
 from zoetic.physics import simulate
 
 WEIGHTS = np.linspace(0.0, 1.0, 6)

@@ -97,7 +97,7 @@ def learn(
     checkpoint_every: float = typer.Option(2.0, min=0.0, help="Seconds between checkpoints."),
 ) -> None:
     """Learn a controller for an animal and a task; writes a resumable run directory."""
-    from zoetic.learn.run import LearnConfig, Run
+    from zoetic.learning.run import LearnConfig, Run
     from zoetic.runs import finish_run
 
     if ray_address:  # ray.init() reads it; the run's config keeps only the evaluator's name
@@ -144,7 +144,7 @@ def demo(
     video: bool = typer.Option(True),
 ) -> None:
     """A shark learns to swim from scratch (CMA-ES, 40 nodes per muscle, ~15 s on 2 cores)."""
-    from zoetic.learn.run import LearnConfig, Run
+    from zoetic.learning.run import LearnConfig, Run
     from zoetic.runs import clear_demo, finish_run, mark_demo
 
     check_out_dir(out)

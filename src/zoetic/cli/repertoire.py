@@ -26,7 +26,7 @@ def abstract_cmd(
     out: Path = typer.Option(None, help="Where abstract.json/.png go (default: SOURCE's dir)."),
 ) -> None:
     """Abstract a learned controller into its primary modes (FFT) and say what it keeps."""
-    from zoetic.learn.abstraction import parse_modes
+    from zoetic.learning.abstraction import parse_modes
     from zoetic.runs import abstract_files
 
     if source.is_dir():
@@ -66,7 +66,7 @@ def train_cmd(
         os.environ["RAY_ADDRESS"] = ray_address
     from zoetic.behavior.training import train_repertoire
     from zoetic.io import check_out_dir
-    from zoetic.learn.abstraction import parse_modes
+    from zoetic.learning.abstraction import parse_modes
     from zoetic.runs import check_learnable, show_repertoire
 
     check_learnable(animal)

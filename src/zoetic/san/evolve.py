@@ -18,7 +18,7 @@ the cross-section; the moment of inertia, when the file gives one, with mass x l
 touch probes and link starts scale with their link's length; an anchor with its parent's
 length (then the shift is added).
 
-One annealing walk (``tune.anneal_values``, the project's ``learn.optimizers.Annealing``)
+One annealing walk (``tune.anneal_values``, the project's ``learning.optimizers.Annealing``)
 moves one parameter at a time, body genes and Fig. 8 parameters alike, and keeps the
 network's weights. Every candidate body is a new MuJoCo model.
 """

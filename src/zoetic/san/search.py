@@ -108,7 +108,7 @@ def _evaluate_chunk(start: int, networks: Sequence[Network]) -> tuple[int, list[
 
 @dataclass(frozen=True)
 class _Trials:
-    """One creature, terrain, seed and horizon: the job a Ray actor keeps (learn.ray_eval)."""
+    """One creature, terrain, seed and horizon: the job a Ray actor keeps (learning.ray_eval)."""
 
     creature: object
     terrain: str
@@ -176,7 +176,7 @@ def evaluate_networks(
             progress(done, total, float(best))
 
     if evaluator == "ray":
-        from zoetic.learn.ray_eval import RayPool
+        from zoetic.learning.ray_eval import RayPool
 
         pool = RayPool(actors=workers if workers and workers > 1 else None)
         done = 0

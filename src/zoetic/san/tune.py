@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from zoetic.errors import ZoeticError
-from zoetic.learn.optimizers import Annealing
+from zoetic.learning.optimizers import Annealing
 from zoetic.san.network import TUNING_KEYS, Network, SanPolicy, check_fits
 
 __all__ = [
@@ -189,7 +189,7 @@ def anneal_values(
     every: int = 25,
 ) -> Walk:
     """Maximise ``score(values)`` by moving one of ``params`` a step at a time (the walk
-    of ``tune``, also used by ``evolve``): annealing (learn.optimizers.Annealing) minimising
+    of ``tune``, also used by ``evolve``): annealing (learning.optimizers.Annealing) minimising
     -score, T dropping every ``per_temperature`` trials; ``sga`` is the same walk at T = 0,
     keeping strict improvements. A step that ``_perturbed`` or ``valid`` refuses counts as a
     trial but is not evaluated. ``resume`` (a ``checkpoint``'s history) continues a walk.

@@ -1,6 +1,6 @@
 """Gradient descent on a differentiable loss: Adam (optax) inside box bounds.
 
-``Gradient`` is that method as an ordinary ask/tell optimizer of ``learn.optimizers``: it asks
+``Gradient`` is that method as an ordinary ask/tell optimizer of ``learning.optimizers``: it asks
 for one point at a time and needs the gradient there, which the evaluator supplies through
 ``value_and_grad`` (the task's objective rebuilt in JAX from the same term registry and
 differentiated through the JAX simulator). ``make_loss`` builds a loss for custom objectives.
@@ -28,13 +28,13 @@ import optax
 from zoetic.bodies import Body
 from zoetic.control import Controller
 from zoetic.control.jax_sampling import jax_table
-from zoetic.learn.optimizers import Optimizer
+from zoetic.learning.optimizers import Optimizer
 from zoetic.physics.jax_backend import F32, rollout_fn
 from zoetic.physics.simulate import rest_state
 from zoetic.tasks.terms import BodyFrame, Signals, evaluate_terms
 
 if TYPE_CHECKING:
-    from zoetic.learn.objective import Evaluation, Objective
+    from zoetic.learning.objective import Evaluation, Objective
 
 Loss = Callable[[jax.Array, jax.Array, jax.Array], jax.Array]
 
@@ -206,7 +206,7 @@ def make_loss(
 
     It samples the controller (``jax_table``), rolls one candidate out from ``state`` (a
     ``State`` with batch 1; default the rest pose) and applies the JAX objective. Wrap it in
-    ``jax.jit(jax.value_and_grad(...))`` (or pass it to ``learn.gradient.optimize_gradient``).
+    ``jax.jit(jax.value_and_grad(...))`` (or pass it to ``learning.gradient.optimize_gradient``).
     """
     dt = float(dt or body.dt)
     state = state or rest_state(body, 1)
@@ -247,7 +247,7 @@ def jax_objective(objective: Objective) -> Callable:
     The same terms (``tasks.terms``) as the NumPy objective, on the same records, from the
     same start states (the mean over them), through the JAX simulator.
     """
-    from zoetic.learn.objective import control_energy_xp
+    from zoetic.learning.objective import control_energy_xp
 
     task, body = objective.task, objective.body
     L, c = (jnp.asarray(a, F32) for a in linear_map(objective))
@@ -286,7 +286,7 @@ _COMPILED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # objective 
 
 def value_and_grad(objective: Objective, X: np.ndarray) -> tuple[Evaluation, np.ndarray]:
     """Return the Evaluation of points (K, dim) and the gradient of E at each, (K, dim)."""
-    from zoetic.learn.objective import Evaluation
+    from zoetic.learning.objective import Evaluation
 
     vg = _COMPILED.get(objective)
     if vg is None:

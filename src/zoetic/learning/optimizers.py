@@ -405,7 +405,7 @@ class CMAES(Optimizer):
 
 
 def _gradient(*args, **kwargs) -> Optimizer:
-    from zoetic.learn.gradient import Gradient
+    from zoetic.learning.gradient import Gradient
 
     return Gradient(*args, **kwargs)
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from zoetic.learn.objective import Evaluation, Objective
+from zoetic.learning.objective import Evaluation, Objective
 
 
 class Evaluator:
@@ -23,7 +23,7 @@ class Evaluator:
 
     def value_and_grad(self, objective: Objective, params: np.ndarray):
         """Return (Evaluation, gradients (K, dim)) of a batch, through the JAX simulator."""
-        from zoetic.learn.gradient import value_and_grad
+        from zoetic.learning.gradient import value_and_grad
 
         return value_and_grad(objective, params)
 
@@ -104,7 +104,7 @@ class ProcessPoolEvaluator(Evaluator):
 
 
 def make_evaluator(name: str, workers: int | None = None):
-    """Return an evaluator by name: 'batch' (default), 'process' or 'ray' (learn.ray_eval)."""
+    """Return an evaluator by name: 'batch' (default), 'process' or 'ray' (learning.ray_eval)."""
     from zoetic.errors import ZoeticError
 
     if name == "batch":
@@ -112,7 +112,7 @@ def make_evaluator(name: str, workers: int | None = None):
     if name == "process":
         return ProcessPoolEvaluator(workers)
     if name == "ray":  # connects to RAY_ADDRESS (zoetic learn --ray-address), else a local Ray
-        from zoetic.learn.ray_eval import RayEvaluator
+        from zoetic.learning.ray_eval import RayEvaluator
 
         return RayEvaluator(actors=workers)
     raise ZoeticError(f"unknown evaluator {name!r} (choose from batch, process, ray)")

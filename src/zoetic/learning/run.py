@@ -26,9 +26,9 @@ from zoetic.bodies import load_animal
 from zoetic.control import Controller, frequency_domain, save_controller, time_domain
 from zoetic.errors import RunDirError, ZoeticError
 from zoetic.io import atomic_write_bytes, read_toml, write_toml
-from zoetic.learn.evaluate import make_evaluator
-from zoetic.learn.objective import Objective
-from zoetic.learn.optimizers import Optimizer, make_optimizer
+from zoetic.learning.evaluate import make_evaluator
+from zoetic.learning.objective import Objective
+from zoetic.learning.optimizers import Optimizer, make_optimizer
 from zoetic.tasks import Task, check_fits, load_task, parse_task
 
 # Defaults measured on the zoo (docs/reproduction.md, "Why default learning was weak"): a
