@@ -295,27 +295,10 @@ def useful_mask(result: SearchResult, threshold_cm_s: float | None = None) -> np
     return (~result.fell) & (result.speeds >= thr) & np.isfinite(result.metrics)
 
 
-def plot_ranking(result: SearchResult, path, top: int = 10):
-    """Write ranking.png: every trial's metric from best to worst (the long-tailed curve)."""
-    from zoetic.viz.san import plot_ranking as plot
-
-    return plot(result, path, top)
-
-def _video_job(job: tuple) -> Path:
-    """Replay one kept network and write its video; returns the video's path."""
-    from zoetic.san import draw
-    from zoetic.san.show import replay
-    from zoetic.viz.video import write_mp4
-
-    net, creature, seconds, terrain, seed, path = job
-    rollout = replay(net, creature, seconds, terrain, seed, fps=30)
-    step = float(rollout.times[1] - rollout.times[0]) if len(rollout.times) > 1 else 1 / 30
-    return write_mp4(draw.render_frames(creature, rollout), path, fps=1.0 / step)
-
-
-def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -> dict:
-    """Write a search run directory (sans/NN.json, videos/NN.mp4, ranking.png, trials.csv)."""
-
+def write_search(result: SearchResult, out, top: int = 10) -> dict:
+    """Write a search run directory's data (config.toml, trials.csv, sans/NN.json, each SAN
+    file carrying its creature; summary.json) and return the summary. Its pictures (ranking,
+    videos) are drawn by ``zoetic.viz.san.draw_search``."""
     from zoetic.io import atomic_write_bytes, write_json, write_toml
     from zoetic.san.network import save_network
 
@@ -323,10 +306,9 @@ def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -
     c = result.creature
     speeds = result.speeds
     kept = result.top(top)
-    write_toml(out / "config.toml", {
-        "creature": c.name, "trials": len(result.networks), "top": top, "seed": result.seed,
-        "terrain": result.terrain, "seconds": result.seconds, "workers": result.workers,
-    })  # fmt: skip
+    config = {"creature": c.name, "trials": len(result.networks), "top": top}
+    config |= {"seed": result.seed, "terrain": result.terrain, "seconds": result.seconds}
+    write_toml(out / "config.toml", config | {"workers": result.workers})
     lines = ["trial,metric,speed_cm_s,fell,distance_m"]
     for i, (m, s, f, d) in enumerate(
         zip(result.metrics, speeds, result.fell, result.distances, strict=True)
@@ -335,26 +317,11 @@ def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -
     atomic_write_bytes(out / "trials.csv", ("\n".join(lines) + "\n").encode())
     sans = []
     for rank, i in enumerate(kept, start=1):
-        net = result.networks[i].with_params(info={
-            "rank": rank, "trial": i, "metric": float(result.metrics[i]),
-            "speed_cm_s": round(float(speeds[i]), 3), "fell": bool(result.fell[i]),
-            "terrain": result.terrain, "seed": result.seed, "seconds": result.seconds,
-        })  # fmt: skip
-        sans.append(save_network(net, out / "sans" / f"{rank:02d}.json"))
-    plot_ranking(result, out / "ranking.png", top=min(top, len(kept)))
-    videos = []
-    if video:  # one video per kept gait, rendered on all cores
-        jobs = [
-            (result.networks[i], c, result.seconds, result.terrain, result.seed,
-             out / "videos" / f"{rank:02d}.mp4")
-            for rank, i in enumerate(kept, start=1)
-        ]  # fmt: skip
-        workers = max(1, min(os.cpu_count() or 1, len(jobs)))
-        if workers == 1:
-            videos = [_video_job(job) for job in jobs]
-        else:
-            with ProcessPoolExecutor(max_workers=workers, mp_context=pool_context()) as pool:
-                videos = list(pool.map(_video_job, jobs))
+        info = {"rank": rank, "trial": i, "metric": float(result.metrics[i])}
+        info |= {"speed_cm_s": round(float(speeds[i]), 3), "fell": bool(result.fell[i])}
+        info |= {"terrain": result.terrain, "seed": result.seed, "seconds": result.seconds}
+        net = result.networks[i].with_params(info=info)
+        sans.append(save_network(net, out / "sans" / f"{rank:02d}.json", c))
     use = useful_mask(result)
     bar = getattr(c, "useful_speed", None)  # the creature's absolute bar (cm/s)
     absolute = None
@@ -373,9 +340,6 @@ def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -
         "fell": int(result.fell.sum()),
         "evaluation_s": round(result.elapsed, 2),
         "sans": str(out / "sans"),
-        "ranking": str(out / "ranking.png"),
     }
-    if videos:
-        summary["videos"] = str(out / "videos")
     write_json(out / "summary.json", summary)
     return summary
