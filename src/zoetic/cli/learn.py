@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from zoetic.cli import app
+from zoetic.cli.app import app
 from zoetic.cli.bench import bench_app
 from zoetic.cli.output import console, emit, progress_bar
 from zoetic.io import check_out_dir
@@ -106,9 +106,7 @@ def learn(
         os.environ["RAY_ADDRESS"] = ray_address
     if resume is not None:
         from zoetic.errors import ZoeticError, naming
-        from zoetic.runs import check_run_dir
 
-        check_run_dir(resume)
         try:
             run = Run.resume(resume)
         except ZoeticError as exc:
@@ -117,18 +115,15 @@ def learn(
     else:
         if animal is None:
             raise typer.BadParameter("give an ANIMAL (or --resume RUN_DIR)")
+        from zoetic.bodies import load_animal
+
         config = LearnConfig(
             animal=animal, task=task, optimizer=optimizer, budget=budget, seed=seed,
             controller=controller, nodes=nodes, interp=interp, popsize=popsize, chains=chains,
             evaluator=evaluator, coupling=coupling, fins=fins, frequency=frequency,
         )  # fmt: skip
-        from zoetic.runs import check_learn_config, check_learn_size, check_learnable
-
-        check_learn_config(config.to_dict(), "options")
-        check_learnable(animal)
-        check_learn_size(config.to_dict())
         out = check_out_dir(out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}")
-        run = Run.create(out, config)
+        run = Run.create(out, config, load_animal(animal))  # the run checks: learning.checks
     cfg = run.setup.config
     run_with_progress(run, f"{cfg.animal} {cfg.optimizer}", checkpoint_every)
     summary = finish_run(run, video=video)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from zoetic.learning.objective import Evaluation, Objective
+from zoetic.learning.objective import Evaluation, Objective, merge
 
 
 class Evaluator:
@@ -55,19 +55,6 @@ def _init_worker(objective: Objective) -> None:
 
 def _evaluate_chunk(params: np.ndarray) -> Evaluation:
     return _WORKER["objective"].evaluate(params)
-
-
-def merge(parts: list[Evaluation]) -> Evaluation:
-    """Return one Evaluation from the Evaluations of consecutive chunks of a batch."""
-    cat = np.concatenate
-    return Evaluation(
-        cat([p.E for p in parts]),
-        cat([p.E_u for p in parts]),
-        cat([p.E_v for p in parts]),
-        {k: cat([p.terms[k] for p in parts]) for k in parts[0].terms},
-        cat([p.failed for p in parts]),
-        None if parts[0].per_start is None else cat([p.per_start for p in parts]),
-    )
 
 
 class ProcessPoolEvaluator(Evaluator):

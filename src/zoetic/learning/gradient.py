@@ -1,7 +1,7 @@
 """Gradient descent on a differentiable loss: Adam (optax) inside box bounds.
 
-``Gradient`` is that method as an ordinary ask/tell optimizer of ``learning.optimizers``: it asks
-for one point at a time and needs the gradient there, which the evaluator supplies through
+``learning.optimizers.gradient.Gradient`` is that method as an ordinary ask/tell optimizer: it
+asks for one point at a time and needs the gradient there, which the evaluator supplies through
 ``value_and_grad`` (the task's objective rebuilt in JAX from the same term registry and
 differentiated through the JAX simulator). ``make_loss`` builds a loss for custom objectives.
 
@@ -28,7 +28,6 @@ import optax
 from zoetic.bodies import Body
 from zoetic.control import Controller
 from zoetic.control.jax_sampling import jax_table
-from zoetic.learning.optimizers import Optimizer
 from zoetic.physics.jax_backend import F32, rollout_fn
 from zoetic.physics.simulate import rest_state
 from zoetic.tasks.terms import BodyFrame, Signals, evaluate_terms
@@ -299,36 +298,3 @@ def value_and_grad(objective: Objective, X: np.ndarray) -> tuple[Evaluation, np.
     G = np.stack([np.asarray(o[1], dtype=np.float64) for o in out])
     failed = ~np.isfinite(E)
     return Evaluation(np.where(failed, np.inf, E), e_u, e_v, {}, failed), G
-
-
-class Gradient(Optimizer):
-    """Adam in box bounds (``GradientDescent``) as an ask/tell optimizer that needs gradients."""
-
-    name = "gradient"
-    needs_gradient = True
-
-    def __init__(self, x0, lower, upper, seed, budget=None, learning_rate=0.02,
-                 max_grad_norm=1.0):  # fmt: skip
-        super().__init__(x0, lower, upper, seed)
-        self.gd = GradientDescent(learning_rate, max_grad_norm)
-        self.state = self.gd.init(self.x0, self.lower, self.upper, seed)
-
-    def ask(self):
-        return self.gd.x(self.state)[None]
-
-    def tell(self, X, f, grad=None):
-        if grad is None:
-            raise ValueError("the gradient optimizer needs the gradient of each point it asks")
-        self.record(X, f)
-        self.state = self.gd._update(self.state, jnp.asarray(f[0], jnp.float32),
-                                     jnp.asarray(grad[0], jnp.float32))  # fmt: skip
-
-    def status(self):
-        return {"|g|": float(self.state.grad_norm)}
-
-    def _state(self):
-        return {f"gd_{k}": v for k, v in self.gd.state_to_numpy(self.state).items()}
-
-    def _load(self, s):
-        arrays = {k[3:]: np.asarray(v) for k, v in s.items() if k.startswith("gd_")}
-        self.state = self.gd.state_from_numpy(arrays)
