@@ -126,8 +126,11 @@ def violations(root: Path = ROOT) -> list[str]:
 
 def _targets(tree: ast.AST, path: Path, root: Path):
     """Yield (line, module, name or None) for every imported module and imported name."""
-    package = _module(path, root) if path.name == "__init__.py" else ".".join(
-        ("zoetic", *path.relative_to(root).with_suffix("").parts[:-1]))
+    package = (
+        _module(path, root)
+        if path.name == "__init__.py"
+        else ".".join(("zoetic", *path.relative_to(root).with_suffix("").parts[:-1]))
+    )
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
             for alias in node.names:
@@ -238,24 +241,27 @@ def _package(tmp_path: Path, files: dict[str, str]) -> Path:
 
 
 def test_the_checker_catches_upward_imports_and_stray_matplotlib(tmp_path):
-    pkg = _package(tmp_path, {
-        "physics/step.py": "from zoetic.control import Controller\n",
-        "control/lazy.py": "def f():\n    from zoetic.learning.run import Run\n",
-        "tasks/plot.py": "import matplotlib.pyplot as plt\n",
-        "learning/ok.py": "from zoetic.physics import simulate\nfrom . import run\n",
-        "learning/rel.py": "from ..behavior import macro\n",
-        "behavior/ok.py": "from zoetic.learning.optimizers import Annealing\n",
-        "san/bad.py": "from zoetic.behavior.macro import search\n",
-        "san/draws.py": "def f():\n    from zoetic.viz.san import plot_ranking\n",
-        "physics/bench.py": "from zoetic.control import wave_controller\n",
-        "learning/timing.py": "def f():\n    from zoetic.bench.simulate import bench_simulate\n",
-        "bench/fine.py": "from zoetic.behavior.skills import skill_figures\n",
-        "viz/fine.py": "import matplotlib\nfrom zoetic.san import tune\nfrom ..runs import x\n",
-        "cli/fine.py": "from zoetic.runs import finish_run\nfrom zoetic.san import tune\n",
-        "behavior/up.py": "from zoetic.runs import finish_run\nfrom zoetic.san import tune\n",
-        "runs.py": "def f():\n    from zoetic.viz.plots import plot_path\n",
-        "gym/envs.py": "from zoetic.viz.render3d import render_frames\n",
-    })  # fmt: skip
+    pkg = _package(
+        tmp_path,
+        {
+            "physics/step.py": "from zoetic.control import Controller\n",
+            "control/lazy.py": "def f():\n    from zoetic.learning.run import Run\n",
+            "tasks/plot.py": "import matplotlib.pyplot as plt\n",
+            "learning/ok.py": "from zoetic.physics import simulate\nfrom . import run\n",
+            "learning/rel.py": "from ..behavior import macro\n",
+            "behavior/ok.py": "from zoetic.learning.optimizers import Annealing\n",
+            "san/bad.py": "from zoetic.behavior.macro import search\n",
+            "san/draws.py": "def f():\n    from zoetic.viz.san import plot_ranking\n",
+            "physics/bench.py": "from zoetic.control import wave_controller\n",
+            "learning/timing.py": "def f():\n    from zoetic.bench.simulate import run\n",
+            "bench/fine.py": "from zoetic.behavior.skills import skill_figures\n",
+            "viz/fine.py": "import matplotlib\nfrom zoetic.san import tune\nfrom ..runs import x\n",
+            "cli/fine.py": "from zoetic.runs import finish_run\nfrom zoetic.san import tune\n",
+            "behavior/up.py": "from zoetic.runs import finish_run\nfrom zoetic.san import tune\n",
+            "runs.py": "def f():\n    from zoetic.viz.plots import plot_path\n",
+            "gym/envs.py": "from zoetic.viz.render3d import render_frames\n",
+        },
+    )
     found = "\n".join(violations(pkg))
     assert "step.py:1: physics (layer 2) imports zoetic.control" in found
     assert "lazy.py:2: control (layer 4) imports zoetic.learning.run" in found
@@ -274,17 +280,20 @@ def test_the_checker_catches_upward_imports_and_stray_matplotlib(tmp_path):
 
 
 def test_the_checker_names_the_modules_of_an_import_cycle(tmp_path):
-    pkg = _package(tmp_path, {
-        "learning/__init__.py": "",
-        "learning/a.py": "from zoetic.learning.b import g\n",
-        "learning/b.py": "def g():\n    from zoetic.learning import a\n",  # a lazy import too
-        "learning/c.py": "from zoetic.learning import a\n",  # leads into it: not a cycle
-        "control/__init__.py": "from zoetic.control import kinds\n",
-        "control/kinds.py": "from zoetic.control import load\n",  # a name of the package
-        "tasks/t.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
-                      "    from zoetic.tasks import u\n",
-        "tasks/u.py": "from zoetic.tasks import t\n",  # only a type checker sees the way back
-    })  # fmt: skip
+    pkg = _package(
+        tmp_path,
+        {
+            "learning/__init__.py": "",
+            "learning/a.py": "from zoetic.learning.b import g\n",
+            "learning/b.py": "def g():\n    from zoetic.learning import a\n",  # a lazy import too
+            "learning/c.py": "from zoetic.learning import a\n",  # leads into it: not a cycle
+            "control/__init__.py": "from zoetic.control import kinds\n",
+            "control/kinds.py": "from zoetic.control import load\n",  # a name of the package
+            "tasks/t.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+            "    from zoetic.tasks import u\n",
+            "tasks/u.py": "from zoetic.tasks import t\n",  # only a type checker sees the way back
+        },
+    )
     found = cycles(pkg)
     assert len(found) == 2, found
     control, learning = found

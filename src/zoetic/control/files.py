@@ -126,29 +126,39 @@ def from_dict(d: dict, where: str = "controller") -> Controller:
             if unknown:
                 raise ControllerError(f"hold names unknown actuators {sorted(unknown)}")
             return WaveController(
-                *common, float(d["frequency"]), float(d["amplitude"]), float(d["offset"]),
+                *common,
+                float(d["frequency"]),
+                float(d["amplitude"]),
+                float(d["offset"]),
                 tuple(float(p) for p in d["phases"]),
                 tuple((str(k), float(v)) for k, v in d.get("hold", {}).items()),
-            )  # fmt: skip
+            )
         if kind == "time":
             return TimeDomainController(
-                *common, float(d["duration"]), np.array(d["values"], float),
+                *common,
+                float(d["duration"]),
+                np.array(d["values"], float),
                 d.get("interp", "linear"),
-            )  # fmt: skip
+            )
         if kind == "frequency":
             return FrequencyDomainController(
-                *common, np.array(d["omega"], float), np.array(d["phase"], float),
+                *common,
+                np.array(d["omega"], float),
+                np.array(d["phase"], float),
                 np.array(d["amplitudes"], float),
-            )  # fmt: skip
+            )
         if kind == "mirrored":
             inner = from_dict(d["inner"], where)
             return MirroredController(*common, inner, tuple(int(m) for m in d["mirror"]))
         if kind == "abstract":
             return AbstractController(
-                *common, np.array(d["offset"], float), np.array(d["freq"], float),
-                np.array(d["amp"], float), np.array(d["phase"], float),
+                *common,
+                np.array(d["offset"], float),
+                np.array(d["freq"], float),
+                np.array(d["amp"], float),
+                np.array(d["phase"], float),
                 float(d.get("period", 1.0)),
-            )  # fmt: skip
+            )
         items = tuple((from_dict(it["controller"]), float(it["duration"])) for it in d["items"])
         return SequenceController(*common, items, float(d.get("overlap", 0.05)))
     except ControllerError as exc:

@@ -92,11 +92,15 @@ def _joints_xml(joint, root_z: float) -> tuple[str, str, list[str]]:
     if joint is None:
         # the root's joint axes live in its own frame: keep it unrotated; World sets the
         # start angle through the root hinge's qpos
-        return _f(0, 0, root_z), "1 0 0 0", [
-            '<joint name="root_x" type="slide" axis="1 0 0" limited="false"/>',
-            '<joint name="root_z" type="slide" axis="0 0 1" limited="false"/>',
-            '<joint name="root_a" type="hinge" axis="0 -1 0" limited="false"/>',
-        ]
+        return (
+            _f(0, 0, root_z),
+            "1 0 0 0",
+            [
+                '<joint name="root_x" type="slide" axis="1 0 0" limited="false"/>',
+                '<joint name="root_z" type="slide" axis="0 0 1" limited="false"/>',
+                '<joint name="root_a" type="hinge" axis="0 -1 0" limited="false"/>',
+            ],
+        )
     ca, sa = math.cos(joint.angle), math.sin(joint.angle)
     ax, az = joint.anchor
     pos = _f(ax + joint.offset * ca, 0, az + joint.offset * sa)

@@ -20,8 +20,15 @@ import numpy as np
 
 from zoetic.san.network import Network, SanPolicy, random_network
 
-__all__ = ["Outcome", "SearchResult", "evaluate_networks", "pool_context", "search",
-           "speed_cm_s", "time_one_trial"]
+__all__ = [
+    "Outcome",
+    "SearchResult",
+    "evaluate_networks",
+    "pool_context",
+    "search",
+    "speed_cm_s",
+    "time_one_trial",
+]
 
 Progress = Callable[[int, int, float], None]  # (done, total, best metric so far)
 TERRAINS = ("flat", "rough")
@@ -122,8 +129,9 @@ class _Trials:
         return [_evaluate_one(net) for net in networks]
 
 
-def time_one_trial(creature, network: Network, terrain: str = "flat", seed: int = 0,
-                   seconds: float | None = None) -> tuple[float, float]:  # fmt: skip
+def time_one_trial(
+    creature, network: Network, terrain: str = "flat", seed: int = 0, seconds: float | None = None
+) -> tuple[float, float]:
     """Return (seconds to set up a worker, seconds for one trial of ``network``), both in this
     process and exactly as a search's worker does them. Setting up builds the World (its first
     use compiles the simulator); no worker state is left behind."""
@@ -255,8 +263,9 @@ def search(
     networks = [random_network(creature, rng, n_hidden=n_hidden) for _ in range(trials)]
     seconds = float(creature.seconds if seconds is None else seconds)
     t0 = time.perf_counter()
-    outs = evaluate_networks(creature, networks, terrain, seed, seconds, workers, progress,
-                             evaluator=evaluator)  # fmt: skip
+    outs = evaluate_networks(
+        creature, networks, terrain, seed, seconds, workers, progress, evaluator=evaluator
+    )
     elapsed = time.perf_counter() - t0
     return SearchResult(
         creature=creature,

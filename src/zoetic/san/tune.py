@@ -28,8 +28,14 @@ from zoetic.learning.optimizers import Annealing
 from zoetic.san.network import TUNING_KEYS, Network, SanPolicy, check_fits
 
 __all__ = [
-    "METHODS", "Param", "TuneResult", "Walk", "WorldEvaluator", "anneal_values",
-    "tunable_parameters", "tune",
+    "METHODS",
+    "Param",
+    "TuneResult",
+    "Walk",
+    "WorldEvaluator",
+    "anneal_values",
+    "tunable_parameters",
+    "tune",
 ]
 
 METHODS = ("sga", "anneal")
@@ -239,10 +245,17 @@ def anneal_values(
         f_start, accepted, done = safe(values), 0, 0
         temp = float(temperature) if temperature is not None else 0.1 * max(abs(f_start), 1e-3)
     sa = Annealing(
-        x0, np.full(x0.size, -np.inf), np.full(x0.size, np.inf), seed,
-        t0=temp if method == "anneal" else 0.0, alpha=cooling, perturb=moves.perturb,
-        max_steps=per_temperature, min_accepts=10**18, accept_ties=method == "anneal",
-    )  # fmt: skip
+        x0,
+        np.full(x0.size, -np.inf),
+        np.full(x0.size, np.inf),
+        seed,
+        t0=temp if method == "anneal" else 0.0,
+        alpha=cooling,
+        perturb=moves.perturb,
+        max_steps=per_temperature,
+        min_accepts=10**18,
+        accept_ties=method == "anneal",
+    )
     if resume is not None:
         sa.load_state_dict(resume["state"])
         for name, arr in track.items():
@@ -267,9 +280,13 @@ def anneal_values(
     f_best = -sa.best_f
     kept = moves.unflat(sa.best_x) if f_best > f_start else {k: v.copy() for k, v in values.items()}
     return Walk(
-        values=kept, before=f_start, after=max(f_best, f_start), accepted=accepted,
-        state=sa.state_dict(), **track,
-    )  # fmt: skip
+        values=kept,
+        before=f_start,
+        after=max(f_best, f_start),
+        accepted=accepted,
+        state=sa.state_dict(),
+        **track,
+    )
 
 
 def tune(
@@ -309,9 +326,17 @@ def tune(
         return float(evaluate(net, tuned))
 
     walk = anneal_values(
-        _start_values(network, creature), params, score, method, trials, seed, progress,
-        per_temperature, cooling, temperature,
-    )  # fmt: skip
+        _start_values(network, creature),
+        params,
+        score,
+        method,
+        trials,
+        seed,
+        progress,
+        per_temperature,
+        cooling,
+        temperature,
+    )
     f_start, f_best = walk.before, walk.after
     start_net = _network(network, _start_values(network, creature))
     best_net = _network(network, walk.values) if f_best > f_start else start_net
@@ -320,10 +345,19 @@ def tune(
     info.update(tuned=method, trials=trials, seed=seed, before=f_start, after=f_best)
     best_net = best_net.with_params(info=info)
     return TuneResult(
-        network=best_net, start=network, before=f_start, after=f_best, method=method,
-        trials=trials, seed=seed, current=current, best=best, tried=tried, accepted=accepted,
+        network=best_net,
+        start=network,
+        before=f_start,
+        after=f_best,
+        method=method,
+        trials=trials,
+        seed=seed,
+        current=current,
+        best=best,
+        tried=tried,
+        accepted=accepted,
         elapsed=time.perf_counter() - t0,
-    )  # fmt: skip
+    )
 
 
 def write_tune(result: TuneResult, creature, out, terrain: str = "flat") -> dict:

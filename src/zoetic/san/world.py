@@ -389,9 +389,20 @@ class World:
         d = self.data
         root = self.root_body
         return (
-            self.body, d.cvel, d.xipos, self._xmat, d.subtree_com[root], d.xfrc_applied,
-            self._water, self._wn, self._wt, self._wrot, root, self._load, self._mu,
-        )  # fmt: skip
+            self.body,
+            d.cvel,
+            d.xipos,
+            self._xmat,
+            d.subtree_com[root],
+            d.xfrc_applied,
+            self._water,
+            self._wn,
+            self._wt,
+            self._wrot,
+            root,
+            self._load,
+            self._mu,
+        )
 
     def _record(self, buf: dict, t: float, s, u, target, policy, follow) -> None:
         """Append one recorded control tick to the rollout's buffers."""

@@ -180,13 +180,22 @@ def plot_ranking(result, path, top: int = 10):
 
     use = useful_mask(result)[order]
     if use.any():
-        ax.scatter(ranks[use], m[use], facecolor="none", edgecolor="tab:green", s=40,
-                   label=f"useful ({use.sum()}/{len(m)})")  # fmt: skip
+        ax.scatter(
+            ranks[use],
+            m[use],
+            facecolor="none",
+            edgecolor="tab:green",
+            s=40,
+            label=f"useful ({use.sum()}/{len(m)})",
+        )
     ax.set_xlabel("rank of the random network")
     unit = {"distance": "|x| (m), 0 if fallen", "follow": "∫ v·F dt (m)", "hop": "∫ ẋ + k y² dt"}
     ax.set_ylabel(f"metric: {unit.get(c.metric, c.metric)}")
-    ax.set_title(f"{c.name}: {len(m)} random SANs, {result.seconds:g} s each, "
-                 f"{result.terrain} terrain (seed {result.seed})", fontsize=10)  # fmt: skip
+    ax.set_title(
+        f"{c.name}: {len(m)} random SANs, {result.seconds:g} s each, "
+        f"{result.terrain} terrain (seed {result.seed})",
+        fontsize=10,
+    )
     ax.grid(alpha=0.3)
     ax.legend(loc="upper right", fontsize=8)
     sec = ax.secondary_yaxis(
@@ -288,8 +297,16 @@ def _gait_video(job: tuple) -> str:
 
         def panel(ax, i: int) -> None:
             ax.axis("off")
-            ax.text(0.0, 1.0, text, va="top", ha="left", fontsize=8, family="monospace",
-                    transform=ax.transAxes)  # fmt: skip
+            ax.text(
+                0.0,
+                1.0,
+                text,
+                va="top",
+                ha="left",
+                fontsize=8,
+                family="monospace",
+                transform=ax.transAxes,
+            )
 
     frames = render_frames(creature, rollout, side_panel=panel)
     return str(write_mp4(frames, path, fps=_fps(rollout)))
@@ -316,10 +333,17 @@ def draw_search(result, out, top: int = 10, video: bool = True) -> dict[str, str
     files = {"ranking": str(plot_ranking(result, out / "ranking.png", top=min(top, len(kept))))}
     if video:
         jobs = [
-            (result.networks[i], result.creature, result.seconds, result.terrain, result.seed,
-             out / "videos" / f"{rank:02d}.mp4", None)
+            (
+                result.networks[i],
+                result.creature,
+                result.seconds,
+                result.terrain,
+                result.seed,
+                out / "videos" / f"{rank:02d}.mp4",
+                None,
+            )
             for rank, i in enumerate(kept, start=1)
-        ]  # fmt: skip
+        ]
         _gait_videos(jobs)
         files["videos"] = str(out / "videos")
     return files
@@ -345,17 +369,31 @@ def draw_evolve(result, out, terrain: str = "flat", video: bool = True) -> dict[
     return {"video": str(path)}
 
 
-def draw_modes(creature, networks: list, doc: dict, seconds: float | None = None,
-               terrain: str = "flat", seed: int = 0,
-               workers: int | None = None) -> list[str]:  # fmt: skip
+def draw_modes(
+    creature,
+    networks: list,
+    doc: dict,
+    seconds: float | None = None,
+    terrain: str = "flat",
+    seed: int = 0,
+    workers: int | None = None,
+) -> list[str]:
     """Draw each gait mode's clip that ``san.gaits.write_modes`` named (its fastest network,
     with the mode's caption beside it); return the clips written."""
     from zoetic.san.gaits import mode_caption
 
     n = len(doc["modes"])
     jobs = [
-        (networks[m["network"]], creature, seconds, terrain, seed, Path(m["clip"]),
-         mode_caption(m, n))
-        for m in doc["modes"] if "clip" in m
-    ]  # fmt: skip
+        (
+            networks[m["network"]],
+            creature,
+            seconds,
+            terrain,
+            seed,
+            Path(m["clip"]),
+            mode_caption(m, n),
+        )
+        for m in doc["modes"]
+        if "clip" in m
+    ]
     return _gait_videos(jobs, workers) if jobs else []
