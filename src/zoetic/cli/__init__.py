@@ -8,7 +8,7 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
-from zoetic.cli.app import _DEBUG, app
+from zoetic.cli.apps import _DEBUG, app
 from zoetic.errors import ZoeticError
 
 __all__ = ["app", "main"]

@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from zoetic.cli.app import app
+from zoetic.cli.apps import app
 from zoetic.cli.learn import learn_bar
 from zoetic.cli.output import console
 
