@@ -19,7 +19,7 @@ from zoetic.bodies import Body, load_animal
 from zoetic.control import steered_wave
 from zoetic.control.loop import Observer, Schedule, drive
 from zoetic.control.policy import Period
-from zoetic.control.sensors import observe
+from zoetic.control.sensors import observe, wrap_angle
 from zoetic.errors import ZoeticError
 from zoetic.perception.eyes import EyeSpec, body_frame, gaze_angles, head_frame, look
 from zoetic.perception.gaze import GazeController, GazeState, fixation
@@ -32,10 +32,6 @@ from zoetic.render.scene import Mesh, merge
 PREDATOR, PREY, DISTRACTOR = (0.45, 0.5, 0.58), (0.85, 0.22, 0.16), (0.9, 0.8, 0.2)
 FOG = (0.05, 0.25, 0.35)
 SEABED_LEVEL, SEABED_EXTENT = -2.0, 30.0
-
-
-def _wrap(a):
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
 
 
 def steer(
@@ -196,7 +192,7 @@ class WanderFleePolicy:
         elif period.t0 >= self._next:
             self._goal = heading + self._rng.uniform(-1.0, 1.0)
             self._next = period.t0 + self.wander_every
-        bias = float(np.clip(0.8 * _wrap(self._goal - heading), -0.4, 0.4))
+        bias = float(np.clip(0.8 * wrap_angle(self._goal - heading), -0.4, 0.4))
         return steer(self.world.bodies[self.animal], period.times, bias, self.amplitude)[None]
 
 
