@@ -46,12 +46,15 @@ class Schedule:
     multiples of control_period, so that decisions come at the asked-for rate on average.
     record_every: steps between records, counted from the run's start (None: at each period's
     end). record_end: also record at the run's end when it falls between record times.
+    plan: asked with the world at each period's start for that period's steps (a planner
+    that commits to windows of varying length); None: the periods come from control_period.
     """
 
     control_period: float = 1 / 30
     fixed: bool = False
     record_every: int | None = None
     record_end: bool = True
+    plan: Callable[[World], int] | None = None
 
     def __post_init__(self) -> None:
         if not self.control_period > 0:
@@ -69,7 +72,9 @@ def periods(world: World, seconds: float, schedule: Schedule) -> Iterator[Period
     k, i = start, 0
     while k < end:
         i += 1
-        if schedule.fixed:
+        if schedule.plan is not None:
+            steps = min(max(1, int(schedule.plan(world))), end - k)
+        elif schedule.fixed:
             steps = min(fixed, end - k)
         else:
             steps = min(max(1, start + int(round(i * schedule.control_period / dt)) - k), end - k)
