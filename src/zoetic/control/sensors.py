@@ -214,9 +214,14 @@ def observe(
         else np.zeros((world.batch, len(world.objects)), dtype=bool)
     )
     s = Senses(
-        world.bodies[animal], world.positions(animal), world.velocities(animal), world.medium,
-        world.time, touching, resolve_target(world, target, world.batch),
-    )  # fmt: skip
+        world.bodies[animal],
+        world.positions(animal),
+        world.velocities(animal),
+        world.medium,
+        world.time,
+        touching,
+        resolve_target(world, target, world.batch),
+    )
     for n in names:
         obs[n] = SENSORS[n](s)
     return obs

@@ -223,15 +223,17 @@ class _Core:
         return obs, reward.astype(np.float64), terminated
 
     def render(self, lane: int, size: tuple[int, int]) -> np.ndarray:
-        """Return an (H, W, 3) uint8 picture of one lane (``zoetic.render``): the animal seen
-        from above and behind its centre of mass, the goal as a ball (swim)."""
+        """Return an (H, W, 3) uint8 picture of one lane (``zoetic.render``): the animal (and
+        its goal, as a ball) seen from above and to the side."""
         pos = self.world.positions(0)[lane]
         com = self.body.mass @ pos / self.body.total_mass
         length = float(np.ptp(pos @ np.asarray(self.body.forward, float))) + 1e-9
         goal = [Ball(0.1 * length, position=tuple(self.goal[lane]))] if self.kind == "swim" else []
         mesh = world_mesh([self.body], [pos], [ANIMAL], goal)
-        eye = com + np.array([-1.2, 1.0, 1.6]) * length
-        view = Cameras(eye, look_rotation(com - eye), np.radians(60.0), size)
+        centre = 0.5 * (com + self.goal[lane]) if goal else com
+        span = max(length, float(np.linalg.norm(self.goal[lane] - com)) if goal else 0.0)
+        eye = centre + np.array([0.0, 0.6, 1.0]) * span
+        view = Cameras(eye, look_rotation(centre - eye), np.radians(60.0), size)
         return render(mesh.vertices, mesh.triangles, mesh.colors, view, WATER)[0]
 
 
