@@ -22,7 +22,11 @@ from zoetic.behavior.repertoire import Repertoire
 from zoetic.behavior.stunt_problem import StuntProblem, StuntRecord
 from zoetic.behavior.tracking import body_length
 from zoetic.behavior.tricks import Trick, parse_object
-from zoetic.behavior.tricks import load_trick as load_trick  # the stunt commands load tricks here
+
+# re-exported: the stunt commands and experiments find the trick files here
+from zoetic.behavior.tricks import list_tricks as list_tricks
+from zoetic.behavior.tricks import load_trick as load_trick
+from zoetic.behavior.tricks import parse_trick as parse_trick
 from zoetic.bodies import Body
 from zoetic.control.abstract import SequenceController
 from zoetic.errors import TaskError
