@@ -1,7 +1,10 @@
 """Basic training (section 3 of the muscle paper): learn, abstract and keep a repertoire.
 
-For each entry of the plan, a time-domain controller is learned for its task (in a run
-directory of its own, resumable), abstracted by FFT into its primary modes, checked against
+For each entry of the plan, a controller is learned for its task (in a run directory of its
+own, resumable): by default a periodic one, a constant plus two harmonics of the animal's
+stroke frequency per actuator (``learning.run.LearnConfig.controller``; a time-domain
+controller with ``controller="time"``). It is then abstracted by FFT into its primary modes
+(for the periodic default this keeps the harmonics that carry the motion), checked against
 the original in the same simulation, and added to the repertoire; right turns are the left
 ones with left and right actuator signals swapped. The repertoire directory is written after
 every entry, so an interrupted training keeps what it finished and picks up where it stopped.
@@ -127,7 +130,7 @@ def plan_digest(animal: str | Path) -> str:
 
 
 def train_repertoire(
-    animal: str | Path,
+    animal: str | Path | Body,
     out: str | Path,
     budget: int = 3000,
     seed: int = 0,
@@ -139,14 +142,16 @@ def train_repertoire(
     progress: Callable[[object], None] | None = None,
     evaluator: str = "batch",
 ) -> Repertoire:
-    """Learn, abstract and save the basic repertoire of ``animal`` into ``out``; return it.
+    """Learn, abstract and save the basic repertoire of ``animal`` (a zoo name, an animal
+    file or a Body, learned as given) into ``out``; return it.
 
     nodes: controller nodes per actuator (default: each task's). on_entry(name, run) is called
     before each entry is learned; progress(run) during learning.
     """
     from zoetic.learning.run import LearnConfig, Run
 
-    body = load_animal(animal)
+    body = animal if isinstance(animal, Body) else load_animal(animal)
+    name = body.name if isinstance(animal, Body) else str(animal)
     out = Path(out)
     rep = Repertoire(body.name, tuple(body.actuator_names))
     rep.add("do-nothing", rest_abstraction(body), REST_SECONDS, source="all muscles relaxed")
@@ -157,10 +162,16 @@ def train_repertoire(
             run = Run.resume(run_dir)
             check_same_task(run_dir, run.setup.task, entry.task)
         else:
-            config = LearnConfig(animal=str(animal), task=entry.task.name, optimizer=optimizer,
-                                 budget=budget, seed=seed + k, nodes=nodes,
-                                 evaluator=evaluator)  # fmt: skip
-            run = Run.create(run_dir, config)
+            config = LearnConfig(
+                animal=name,
+                task=entry.task.name,
+                optimizer=optimizer,
+                budget=budget,
+                seed=seed + k,
+                nodes=nodes,
+                evaluator=evaluator,
+            )
+            run = Run.create(run_dir, config, body)
         if on_entry:
             on_entry(entry.name, run)
         run.learn(progress=progress)
