@@ -106,6 +106,9 @@ async function main() {
         n: a.actuators.length });
     });
   });
+  // the last few events (eat, catch, mate, ...) up to the time shown
+  const events = data.events || [];
+  const eventBox = events.length ? el("div", { className: "sub events" }, panel) : null;
   const bar = el("div", { id: "controls" }, root);
   const play = el("button", { id: "play", textContent: "pause" }, bar);
   const slider = el("input", { id: "timeline", type: "range", min: 0, max: data.duration,
@@ -130,6 +133,12 @@ async function main() {
     dynamic.distance.textContent = Math.hypot(now.x - start.x, now.z - start.z).toFixed(3);
     timeText.textContent = `t = ${t.toFixed(2)} s / ${data.duration.toFixed(2)} s`;
     slider.value = t;
+    if (eventBox) {
+      let n = 0;
+      while (n < events.length && events[n][0] <= t + 1e-9) n++;
+      eventBox.textContent = events.slice(Math.max(0, n - 5), n)
+        .map((e) => `${e[0].toFixed(1)} s ${e[1]} ${e[2]} ${e[3]}`).join("\n");
+    }
     for (const b of bars) b.fill.style.width = `${(100 * b.values[i * b.n + b.j]).toFixed(1)}%`;
   };
   play.onclick = () => { playing = !playing; play.textContent = playing ? "pause" : "play"; };

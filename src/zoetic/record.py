@@ -204,7 +204,9 @@ class _Check:
         a = self.arrays[key]
         if a.dtype.kind not in kind:
             raise self.fail(f"{key} has dtype {a.dtype}, expected {kind!r}")
-        if a.ndim != len(shape) or any(s is not None and s != n for s, n in zip(shape, a.shape)):
+        if a.ndim != len(shape) or any(
+            s is not None and s != n for s, n in zip(shape, a.shape, strict=True)
+        ):
             want = "(" + ", ".join("?" if s is None else str(s) for s in shape) + ")"
             raise self.fail(f"{key} has shape {a.shape}, expected {want}")
         if a.dtype.kind == "f" and key != "times" and not key.startswith("scalar/"):

@@ -36,7 +36,8 @@ def aquarium(
     labels: bool = typer.Option(True, help="Label each fish with its intention in the video."),
     control_period: float = typer.Option(0.1, help="Brain period (s)."),
 ) -> None:
-    """Let a tank of fishes live: write events.csv, mind.png, summary.json and video.mp4."""
+    """Let a tank of fishes live: write events.csv, mind.png, summary.json, record.npz and
+    video.mp4."""
     from zoetic.behavior.aquarium.tank import (
         TankConfig,
         build_tank,
@@ -61,6 +62,9 @@ def aquarium(
     make_dir(out)
     names = [f.name for f in tank.fishes]
     atomic_write_bytes(out / "events.csv", events_csv(life).encode())
+    from zoetic.cli.records import write_aquarium_record
+
+    write_aquarium_record(out, tank, life)
     summary = summarize(tank, life)
     from zoetic.viz.aquarium import plot_minds, write_tank_video
 
@@ -88,7 +92,8 @@ def aquarium(
         f"{summary['deepest_into_obstacle_m']:.3f} m, into a fish "
         f"{summary['deepest_into_fish_m']:.3f} m"
     )
-    console.print(f"wrote {out}/events.csv, mind.png, summary.json" + (", video.mp4" * video))
+    console.print(f"wrote {out}/events.csv, mind.png, summary.json, record.npz"
+                  + (", video.mp4" * video))  # fmt: skip
 
 
 @bench_app.command("aquarium")

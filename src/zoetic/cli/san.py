@@ -31,6 +31,14 @@ def _progress(bar: Progress, tid, unit: str = ""):
     return update
 
 
+def _record(out: Path, network: Path) -> str:
+    """Write the run record of a SAN run (its best network replayed); return its path, or
+    "" when the run kept no network."""
+    from zoetic.cli.records import write_san_record
+
+    return str(write_san_record(out, network)) if network.is_file() else ""
+
+
 def _check_seconds(creature, seconds: float | None) -> None:
     """Refuse --seconds that would take the creature's world past its step limit."""
     from zoetic.san.creature import CreatureError
@@ -101,6 +109,7 @@ def search_cmd(
                         evaluator=evaluator)  # fmt: skip
     with console.status(f"writing {out}" + (" (videos)" if video else "")):
         summary = write_search(result, out, top=top, video=video)
+        summary["record"] = _record(out, out / "sans" / "01.json")
     for key, value in summary.items():
         console.print(f"{key:>18}: {value}")
     if gaits:
@@ -189,6 +198,7 @@ def evolve_cmd(
                         checkpoint=lambda _t, _sa, h: save_checkpoint(ckpt, config, h))  # fmt: skip
     with console.status(f"writing {out}" + (" (video)" if video else "")):
         summary = write_evolve(result, out, terrain=terrain, video=video)
+        summary["record"] = _record(out, out / "san.json")
     from rich.table import Table
 
     table = Table(box=None, header_style="bold", title=f"what evolution changed ({c.name})")
@@ -199,7 +209,7 @@ def evolve_cmd(
     table.add_row("speed (cm/s)", f"{summary['speed_before_cm_s']:.2f}",
                   f"{summary['speed_after_cm_s']:.2f}")  # fmt: skip
     console.print(table)
-    for key in ("creature_file", "network", "video"):
+    for key in ("creature_file", "network", "video", "record"):
         if key in summary:
             console.print(f"{key:>14}: {summary[key]}")
 
@@ -229,6 +239,7 @@ def tune_cmd(
                       progress=_progress(bar, tid))  # fmt: skip
     with console.status(f"writing {out}" + (" (video)" if video else "")):
         summary = write_tune(result, c, out, terrain=terrain, video=video)
+        summary["record"] = _record(out, out / "san.json")
     for key, value in summary.items():
         console.print(f"{key:>18}: {value}")
 
