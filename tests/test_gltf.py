@@ -13,8 +13,7 @@ import pytest
 
 from zoetic.bodies import load_animal
 from zoetic.cli import main
-from zoetic.control import save_controller, wave_controller
-from zoetic.io import write_json, write_toml
+from zoetic.control import wave_controller
 from zoetic.runs import simulate_run
 from zoetic.viz.gltf import MIRROR, scene_glb, write_glb
 from zoetic.viz.scene import load_scene
