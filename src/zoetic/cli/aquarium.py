@@ -82,6 +82,11 @@ def aquarium(
                 labels=frame_labels(life, names) if labels else None, half_size=cfg.size(),
             )  # fmt: skip
     write_json(out / "summary.json", summary)
+    _report(summary, out, video)
+
+
+def _report(summary: dict, out: Path, video: bool) -> None:
+    """Print what the tank's fishes did and what was written."""
     ev = summary["events"]
     console.print(
         f"{summary['seconds']:.1f} s simulated in {summary['wall_seconds']:.1f} s "

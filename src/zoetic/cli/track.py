@@ -176,11 +176,8 @@ def macro(
     write_json(out / "summary.json", summary)
     traj = problem.rollout(result.entries, result.durations, record_every=4)
     com = traj.com(body)[0]
-    from zoetic.cli.records import obstacle_discs, targets, write_sequence_record
-
     depth = float(com[0, 1])
-    write_sequence_record(out, "macro", body, traj.times, traj.positions[0], result.sequence,
-                          targets(g, depth, "goal") + obstacle_discs(obs, depth))  # fmt: skip
+    _write_plan_record(out, body, traj, result.sequence, g, obs, depth)
     starts = result.sequence.starts()
     idx = np.searchsorted(traj.times, starts[starts < horizon] - 1e-9)
     s = result.summary()
@@ -200,6 +197,14 @@ def macro(
                      fps=fps, markers=np.vstack([_buoys(g, depth), rims]),
                      marker_colors=colors)  # fmt: skip
     _report_plan(method, s, out, video)
+
+
+def _write_plan_record(out: Path, body, traj, sequence, goal, obstacles, depth: float) -> None:
+    """Write a macro run's record: the planned run, its goal and obstacle discs."""
+    from zoetic.cli.records import obstacle_discs, targets, write_sequence_record
+
+    things = targets(goal, depth, "goal") + obstacle_discs(obstacles, depth)
+    write_sequence_record(out, "macro", body, traj.times, traj.positions[0], sequence, things)
 
 
 def _report_plan(method: str, s: dict, out: Path, video: bool) -> None:
