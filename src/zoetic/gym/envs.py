@@ -195,14 +195,21 @@ class _Core:
         return obs, reward.astype(np.float64), terminated
 
     def render(self, lane: int, size: tuple[int, int]) -> np.ndarray:
-        """Return an (H, W, 3) uint8 picture of one lane through the project's renderer."""
-        from zoetic.viz.render3d import render_frames
+        """Return an (H, W, 3) uint8 picture of one lane through the project's rasteriser:
+        the animal from behind and above, the goal as a ball, a checkered floor."""
+        from zoetic.physics.objects import Ball
+        from zoetic.render import Cameras, look_rotation, render, world_mesh
 
         pos = self.world.positions(0)[lane]
-        markers = self.goal[lane][None] if self.kind == "swim" else None
-        frames = render_frames([self.body], [pos[None]], np.array([self.world.time]),
-                               self.world.medium, size=size, markers=markers)  # fmt: skip
-        return next(iter(frames))
+        com = np.nan_to_num(pos.mean(0))
+        goal = [Ball(0.1, position=tuple(self.goal[lane]))] if self.kind == "swim" else []
+        level = 0.0 if self.world.medium.floor else com[1] - 1.0  # the ground, or under it
+        mesh = world_mesh([self.body], [np.nan_to_num(pos)], [(0.48, 0.53, 0.6)], goal,
+                          floor=(com[0], com[2], level, 20.0))  # fmt: skip
+        size_m = float(np.ptp(pos, axis=0).max()) if np.isfinite(pos).all() else 1.0
+        eye = com + max(size_m, 0.3) * np.array([-1.6, 1.0, 1.2])
+        cam = Cameras(eye[None], look_rotation((com - eye)[None]), np.radians(60.0), size)
+        return render(mesh.vertices, mesh.triangles, mesh.colors, cam)[0]
 
 
 class ZoeticEnv(gymnasium.Env):
@@ -246,7 +253,7 @@ class ZoeticEnv(gymnasium.Env):
         return obs[0], float(reward[0]), bool(terminated[0]), False, {}
 
     def render(self) -> np.ndarray | None:
-        """Return an RGB picture (rgb_array mode), rendered by zoetic.viz.render3d."""
+        """Return an RGB picture (rgb_array mode), rendered by zoetic.render."""
         if self.render_mode != "rgb_array":
             return None
         return self.core.render(0, self.render_size)
