@@ -3,8 +3,11 @@
 Each animal is a skinned mesh with one joint per node: a joint's translation is its node's
 position, keyframed at the scene's frame rate (LINEAR), and each vertex follows its own joint
 with weight 1. The file grows as frames x nodes x 12 bytes, like morph targets would, without
-the frames^2 weights table and the per-shader limits on morph target counts. Ground, sea floor
-and sea surface are static quads (checkered by a 2 x 2 texture), targets small octahedra.
+the frames^2 weights table and the per-shader limits on morph target counts. A rigid-link
+creature's links are meshes posed per frame. Objects are meshes of their shapes (spheres,
+boxes, cylinders; a target a small octahedron), moved where they move and scaled to nothing
+once gone (food eaten). Ground, sea floor and sea surface are static quads (checkered by a
+2 x 2 texture).
 
 zoetic's axes are x forward, y up, z LEFT; glTF's are right-handed, so z is mirrored (and
 triangles reversed to stay counter-clockwise from outside): left stays on the animal's left.
