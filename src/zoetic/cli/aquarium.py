@@ -62,10 +62,10 @@ def aquarium(
     make_dir(out)
     names = [f.name for f in tank.fishes]
     atomic_write_bytes(out / "events.csv", events_csv(life).encode())
+    summary = summarize(tank, life)
     from zoetic.cli.records import write_aquarium_record
 
-    write_aquarium_record(out, tank, life)
-    summary = summarize(tank, life)
+    write_aquarium_record(out, tank, life, summary)
     from zoetic.viz.aquarium import plot_minds, write_tank_video
 
     plot_minds(life.brain_times, life.drives, life.intentions, life.alive, names, INTENTIONS,

@@ -60,7 +60,13 @@ def write_sequence_record(out: Path, kind: str, body, times, positions, ctrl, th
     return write_record(out, rec)
 
 
-def write_aquarium_record(out: Path, tank, life) -> Path:
+def figures(summary: dict) -> dict:
+    """Return a summary's plain figures (finite numbers, strings, booleans) for the viewer."""
+    return {k: v for k, v in summary.items() if isinstance(v, str | bool | int)
+            or (isinstance(v, float) and np.isfinite(v))}  # fmt: skip
+
+
+def write_aquarium_record(out: Path, tank, life, summary: dict) -> Path:
     """Write a tank's record: every fish, the food (eaten or not), rocks, seaweed and walls,
     the events, and per brain period each fish's drives, intention and whether it lives."""
     from zoetic.behavior.mind import INTENTIONS
@@ -81,7 +87,7 @@ def write_aquarium_record(out: Path, tank, life) -> Path:
         animals, objects=tuple(things),
         events=tuple(Event(float(t), w, what, d) for t, w, what, d in life.events),
         period_times=life.brain_times, scalars=scalars,
-        labels={"intention": list(INTENTIONS)},
+        labels={"intention": list(INTENTIONS)}, numbers=figures(summary),
         units={"hunger": "", "libido": "", "fear": "", "intention": "", "alive": "",
                "target": ""},
     )  # fmt: skip
@@ -114,8 +120,7 @@ def write_chase_record(out: Path, chase, result, summary: dict) -> Path:
                  events=events, period_times=np.asarray(result.times[:n], float),
                  scalars=scalars, units={"gaze": "rad", "locked": "", "theta_p": "rad",
                                          "phi_p": "rad", "range": "m"},
-                 numbers={k: v for k, v in summary.items()
-                          if isinstance(v, int | float | str | bool)})  # fmt: skip
+                 numbers=figures(summary))  # fmt: skip
     return write_record(out, rec)
 
 

@@ -91,17 +91,18 @@ def stunt(
     make_dir(out)
     write_json(out / "macro.json", macro_document(problem, result.sequence, tr.task.source))
     from zoetic.behavior.stunts import targets_met
-    from zoetic.cli.records import solid_things, write_sequence_record
+    from zoetic.cli.records import figures, solid_things, write_sequence_record
 
-    times = rec.traj.times
-    write_sequence_record(out, "stunt", body, times, rec.traj.positions[0], result.sequence,
-                          solid_things(tr.objects, times, rec.balls[0]))  # fmt: skip
     summary = found.summary()
     summary |= {
         "targets": targets_met(tr.name, summary, tr), "memory": str(memory), "seed": seed,
         "history": [[n, round(f, 5)] for n, f in result.history],
     }  # fmt: skip
     write_json(out / "summary.json", summary)
+    times = rec.traj.times
+    write_sequence_record(out, "stunt", body, times, rec.traj.positions[0], result.sequence,
+                          solid_things(tr.objects, times, rec.balls[0]),
+                          figures(summary))  # fmt: skip
     got, seconds = found.measures, summary["seconds"]
     starts = result.sequence.starts()
     plot_score(rec.traj.times, score_series(problem, rec), out / "score.png",

@@ -177,7 +177,7 @@ def macro(
     traj = problem.rollout(result.entries, result.durations, record_every=4)
     com = traj.com(body)[0]
     depth = float(com[0, 1])
-    _write_plan_record(out, body, traj, result.sequence, g, obs, depth)
+    _write_plan_record(out, body, traj, result.sequence, g, obs, depth, summary)
     starts = result.sequence.starts()
     idx = np.searchsorted(traj.times, starts[starts < horizon] - 1e-9)
     s = result.summary()
@@ -199,12 +199,14 @@ def macro(
     _report_plan(method, s, out, video)
 
 
-def _write_plan_record(out: Path, body, traj, sequence, goal, obstacles, depth: float) -> None:
-    """Write a macro run's record: the planned run, its goal and obstacle discs."""
-    from zoetic.cli.records import obstacle_discs, targets, write_sequence_record
+def _write_plan_record(out: Path, body, traj, sequence, goal, obstacles, depth: float,
+                       summary: dict) -> None:  # fmt: skip
+    """Write a macro run's record: the planned run, its goal and obstacle discs, figures."""
+    from zoetic.cli.records import figures, obstacle_discs, targets, write_sequence_record
 
     things = targets(goal, depth, "goal") + obstacle_discs(obstacles, depth)
-    write_sequence_record(out, "macro", body, traj.times, traj.positions[0], sequence, things)
+    write_sequence_record(out, "macro", body, traj.times, traj.positions[0], sequence, things,
+                          figures(summary))  # fmt: skip
 
 
 def _report_plan(method: str, s: dict, out: Path, video: bool) -> None:

@@ -28,6 +28,7 @@ def viewer_data(scene: Scene) -> dict:
     extent = float(np.linalg.norm(first - first.mean(0), axis=1).max()) if len(first) else 1.0
     sea = abs(scene.medium.water_level) < 1e8
     side_view = any(ln.axis == "z" for c in scene.creatures for ln in c.links)  # planar SANs
+    events = sorted(scene.events, key=lambda e: e.t)[:MAX_EVENTS]
     numbers = {k: v for k, v in scene.numbers.items() if k != "distance_m"}
     if "distance_m" in scene.numbers:
         numbers["final distance (m)"] = scene.numbers["distance_m"]
@@ -42,7 +43,7 @@ def viewer_data(scene: Scene) -> dict:
             "actuators": list(a.actuators),
             "activations": None if a.activations is None else _round(a.activations, 3),
         } for a in scene.movers],
-        "events": [[round(e.t, 3), e.who, e.what, e.detail] for e in scene.events[:MAX_EVENTS]],
+        "events": [[round(e.t, 3), e.who, e.what, e.detail] for e in events],
         "glb": base64.b64encode(scene_glb(scene)).decode("ascii"),
     }  # fmt: skip
 
