@@ -27,7 +27,6 @@ VERSION = 1
 FILE = "record.npz"
 SHAPES = ("sphere", "box", "cylinder", "point")
 AXES = ("x", "y", "z")
-MAX_BYTES = 1 << 31  # a record's arrays, uncompressed, may not exceed this (2 GiB)
 
 
 @dataclass(frozen=True)
@@ -352,9 +351,9 @@ def _load(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
     try:
         with zipfile.ZipFile(path) as zf:
             total = sum(i.file_size for i in zf.infolist())
-        if total > MAX_BYTES:
+        if total > LIMITS.memory_bytes:  # checked before anything is decompressed
             raise RunDirError(f"{path}: {total / 2**20:.0f} MiB of arrays, more than a run "
-                              f"record may hold ({MAX_BYTES / 2**20:.0f} MiB)")  # fmt: skip
+                              f"record may hold ({LIMITS.memory_bytes / 2**20:.0f} MiB)")
         with np.load(path, allow_pickle=False) as z:
             arrays = {k: z[k] for k in z.files}
     except RunDirError:
