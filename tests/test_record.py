@@ -151,3 +151,12 @@ def test_a_record_that_could_not_be_read_is_not_written(tmp_path):
     with pytest.raises(RunDirError, match="animal/0/positions has shape"):
         write_record(tmp_path, rec)
     assert not (tmp_path / FILE).exists()
+
+
+def test_a_record_larger_than_the_memory_limit_is_refused_unread(tmp_path, monkeypatch):
+    import zoetic.record as record
+
+    path = write_record(tmp_path, _record())
+    monkeypatch.setattr(record, "LIMITS", dataclasses.replace(record.LIMITS, memory_bytes=100))
+    with pytest.raises(RunDirError, match=r"MiB of arrays, more than a run record may hold"):
+        read_record(path)
