@@ -292,3 +292,18 @@ def test_the_khronos_validator_finds_no_issue_in_any_kind_of_run(runs, tmp_path)
     for kind, run in runs.items():
         issues = _validate(write_glb(load_scene(run, fps=10), tmp_path / f"{kind}.glb"))
         assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, (kind, issues["messages"])
+
+
+def test_every_kind_of_run_gives_the_viewer_its_page_data(runs):
+    import base64
+
+    from zoetic.viz.viewer import viewer_data
+
+    for kind, run in runs.items():
+        scene = load_scene(run, fps=10)
+        data = viewer_data(scene)
+        assert data["kind"] == scene.kind and data["frames"] == len(scene.times), kind
+        assert base64.b64decode(data["glb"]) == scene_glb(scene), kind
+        assert len(data["animals"]) == len(scene.movers) > 0, kind
+        for a in data["animals"]:
+            assert len(a["com"]) == 3 * len(scene.times), kind
