@@ -1,6 +1,7 @@
-"""Run directories: what the commands (simulate, learn, abstract, repertoire show) write and
-read, the run record among them. Pictures (plots, videos) are drawn at the edge (``viz``),
-handed in by the command line; nothing here draws."""
+"""Run directories: the simulate and learn runs' records (``zoetic.record``), the checks of a
+learning run's configuration, size and directory, the demo's files, a repertoire's body.
+Pictures (plots, videos) are drawn at the edge (``viz.media``) and handed in by the command
+line as ``media``; nothing here draws."""
 
 from __future__ import annotations
 
