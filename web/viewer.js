@@ -28,7 +28,8 @@ function el(tag, attrs = {}, parent = null) {
 }
 
 function fmt(v) {
-  return typeof v === "number" ? (Math.abs(v) >= 100 ? v.toFixed(1) : v.toPrecision(4)) : String(v);
+  if (typeof v !== "number" || Number.isInteger(v)) return String(v);
+  return Math.abs(v) >= 100 ? v.toFixed(1) : v.toPrecision(4);
 }
 
 async function main() {
