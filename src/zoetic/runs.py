@@ -88,8 +88,7 @@ def simulate_run(
     media: Media | None = None,
 ) -> dict:
     """Simulate; write the run record (record.npz) into ``out``, and what ``media`` draws of
-    the run (``media(body, trajectory, medium, out)`` returns the files it wrote); return a
-    summary."""
+    it (``media(body, record, out)`` returns the files it wrote); return a summary."""
     body = load_animal(animal)
     ctrl = controller_from_spec(controller, body)
     med = get_medium(medium or body.medium)
@@ -102,7 +101,7 @@ def simulate_run(
     rec = Record("simulate", f"{body.name} ({out.name})", med.name, traj.times,
                  (animal_record(body, traj.positions[0], traj.times, ctrl),))  # fmt: skip
     path = write_record(out, rec)
-    files = media(body, traj, med, out) if media is not None else {}
+    files = media(body, rec, out) if media is not None else {}
     com = traj.com(body)[0]
     travelled = float(np.linalg.norm(com[-1, [0, 2]] - com[0, [0, 2]]))
     if not np.isfinite(travelled):  # never report nan as a result
@@ -120,7 +119,7 @@ def simulate_run(
 
 def finish_run(run, media: Media | None = None) -> dict:
     """Write the run record of a finished learning run's best controller (record.npz), and
-    what ``media`` draws of it (``media(run, trajectory)`` returns the files it wrote).
+    what ``media`` draws of it (``media(run, record)`` returns the files it wrote).
 
     The summary says how many candidates failed (blew up); a run in which every candidate
     failed is a BlowUpError, not a result.
@@ -142,7 +141,7 @@ def finish_run(run, media: Media | None = None) -> dict:
                  (animal_record(body, traj.positions[0], traj.times, run.best_controller()),),
                  numbers={"best_E": best_E, "task": task.name})  # fmt: skip
     write_record(out, rec)
-    files = media(run, traj) if media is not None else {}
+    files = media(run, rec) if media is not None else {}
     com = traj.com(body)[0]
     travelled = float(np.linalg.norm(com[-1, [0, 2]] - com[0, [0, 2]]))
     return {

@@ -1,5 +1,6 @@
-"""The pictures a run leaves in its directory (plots, videos): drawn here at the edge from
-what the run computed, handed to the run-directory writers in ``zoetic.runs`` as ``media``."""
+"""The pictures a run leaves in its directory (plots, videos), drawn here at the edge and
+handed to the run-directory writers in ``zoetic.runs`` as ``media``: a run's path and video are
+drawn from its record (``zoetic.record``), as the viewer draws it."""
 
 from __future__ import annotations
 
@@ -8,27 +9,37 @@ from pathlib import Path
 import numpy as np
 
 from zoetic.bodies import Body
-from zoetic.physics import Medium, Trajectory
+from zoetic.physics import get_medium
+from zoetic.record import Record
 
 
-def simulation_media(body: Body, traj: Trajectory, medium: Medium, out: Path, video: bool = True,
+def _motion(rec: Record) -> tuple[np.ndarray, np.ndarray]:
+    """Return the first animal's node positions (T, N, 3) and centre of mass (T, 3), in m."""
+    a = rec.animals[0]
+    pos = np.asarray(a.positions, float)
+    mass = np.asarray(a.mass, float)
+    return pos, np.einsum("tnk,n->tk", pos, mass / mass.sum())
+
+
+def simulation_media(body: Body, rec: Record, out: Path, video: bool = True,
                      fps: int = 30) -> dict:  # fmt: skip
-    """Write path.png (and video.mp4) of a simulation's first candidate; return their paths."""
+    """Write path.png (and video.mp4) of a simulation's record; return their paths. ``body``
+    (the record's animal) gives the video its display surface."""
     from zoetic.viz.plots import plot_path
 
-    files = {"path": plot_path(traj.com(body)[0], out / "path.png", title=body.name)}
+    pos, com = _motion(rec)
+    files = {"path": plot_path(com, out / "path.png", title=body.name)}
     if video:
         from zoetic.viz.render3d import render_video
 
-        files["video"] = render_video(
-            body, traj.positions[0], traj.times, medium, out / "video.mp4", fps=fps
-        )
+        files["video"] = render_video(body, pos, rec.times, get_medium(rec.medium),
+                                      out / "video.mp4", fps=fps)  # fmt: skip
     return files
 
 
-def learning_media(run, traj: Trajectory, video: bool = True, fps: int = 30) -> dict:
-    """Write learning.png, controller.png (and video.mp4 of the best controller's trajectory)
-    of a finished learning run; return their paths."""
+def learning_media(run, rec: Record, video: bool = True, fps: int = 30) -> dict:
+    """Write learning.png, controller.png (and video.mp4 of the best controller's run, from the
+    run's record) of a finished learning run; return their paths."""
     from zoetic.viz.learning import plot_controller, plot_learning
 
     setup = run.setup
@@ -48,7 +59,7 @@ def learning_media(run, traj: Trajectory, video: bool = True, fps: int = 30) -> 
     if video:
         from zoetic.viz.render3d import render_video
 
-        files["video"] = render_video(body, traj.positions[0], traj.times, obj.medium,
+        files["video"] = render_video(body, _motion(rec)[0], rec.times, obj.medium,
                                       out / "video.mp4", fps=fps)  # fmt: skip
     return files
 
