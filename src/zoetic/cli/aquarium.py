@@ -46,7 +46,6 @@ def aquarium(
         live,
         summarize,
     )
-    from zoetic.behavior.mind import INTENTIONS
     from zoetic.io import atomic_write_bytes, check_out_dir, make_dir, write_json
 
     check_out_dir(out)
@@ -65,11 +64,12 @@ def aquarium(
     summary = summarize(tank, life)
     from zoetic.cli.records import write_aquarium_record
 
-    write_aquarium_record(out, tank, life, summary)
-    from zoetic.viz.aquarium import plot_minds, write_tank_video
+    record = write_aquarium_record(out, tank, life, summary)
+    from zoetic.record import read_record
+    from zoetic.viz.aquarium import write_tank_video
+    from zoetic.viz.media import mind_media
 
-    plot_minds(life.brain_times, life.drives, life.intentions, life.alive, names, INTENTIONS,
-               out / "mind.png")  # fmt: skip
+    mind_media(read_record(record), out)
     if video:
         statics = [s for s in tank.static_names]
         centers = [tank.center[k] for k, nm in enumerate(statics) if nm != "wall"]

@@ -64,6 +64,20 @@ def learning_media(run, rec: Record, video: bool = True, fps: int = 30) -> dict:
     return files
 
 
+def mind_media(rec: Record, out: Path) -> Path:
+    """Write mind.png of an aquarium's record: each fish's drives and intentions over time."""
+    from zoetic.viz.aquarium import plot_minds
+
+    names = [a.name for a in rec.animals]
+    per = [rec.scalars[n] for n in names]
+    drives = np.stack([np.stack([np.asarray(s[k], float) for k in ("hunger", "libido", "fear")],
+                                axis=-1) for s in per], axis=1)  # fmt: skip
+    intentions = np.stack([np.asarray(s["intention"]).astype(int) for s in per], axis=1)
+    alive = np.stack([np.asarray(s["alive"]) > 0.5 for s in per], axis=1)
+    return plot_minds(rec.period_times, drives, intentions, alive, names,
+                      rec.labels["intention"], out / "mind.png")  # fmt: skip
+
+
 def abstract_files(
     source: str | Path,
     out: str | Path,
