@@ -107,6 +107,8 @@ def _rewrite(path, change) -> None:
      "animal/0/faces indexes vertices outside 0..3"),
     (lambda m, a: a.update({"animal/1/mass": np.ones(7, np.float32)}), "animal/1/mass has shape"),
     (lambda m, a: a.update({"times": np.array([0.0, 0.2, 0.1, 0.3, 0.4])}), "non-decreasing"),
+    (lambda m, a: a.update({"animal/0/mass": np.float32([1, np.nan, 1, 2])}),
+     "animal/0/mass holds non-finite values"),
     (lambda m, a: m["objects"][1].update(shape="cone"), "objects[1]: shape must be"),
     (lambda m, a: m["objects"][1].update(size=[0.5, -1, 0.3]), "3 positive sizes"),
     (lambda m, a: m["events"].append(["soon", "x", "y", "z"]), "an event must be"),
