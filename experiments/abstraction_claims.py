@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from zoetic.bodies import load_animal
-from zoetic.learn.abstraction import abstract, compare, spectrum
-from zoetic.learn.run import LearnConfig, Run
+from zoetic.learning.abstraction import abstract, compare, spectrum
+from zoetic.learning.run import LearnConfig, Run
 from zoetic.physics import get_medium, rest_state, simulate
 from zoetic.tasks import load_task
 from zoetic.viz.media import abstract_files

@@ -28,7 +28,7 @@ from zoetic.behavior.tracking import body_length, handmade_repertoire
 from zoetic.bench.skills import burst, learn_skill, sustained_speed
 from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller
-from zoetic.learn.objective import heading_angles
+from zoetic.learning.objective import heading_angles
 from zoetic.physics import State, simulate
 from zoetic.tasks import load_task, start_state
 

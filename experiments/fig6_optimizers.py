@@ -3,7 +3,7 @@ and the annealing's cooling rate on the time (b) and frequency (c) domain contro
 
 The shark with 3 actuators (left/right in antiphase per segment), goal reaching
 E_v = |d_g|^2 with mu1 = 0, 3500 evaluations per run. The annealing is zoetic's one
-(``learn.optimizers.Annealing``) with the paper's schedule: T0 = 0.5, T <- alpha T after at
+(``learning.optimizers.Annealing``) with the paper's schedule: T0 = 0.5, T <- alpha T after at
 most 10NM steps or NM accepted moves, every parameter moved by at most 10% of its range.
 Panel (a) uses the paper's usual alpha = 0.9; panels (b-c) use the caption's cooling rates
 alpha = 0.8, 0.85 and 0.9 (the caption calls them "T0, T1, T2"; the footnote says the
@@ -46,8 +46,8 @@ import numpy as np
 from zoetic.bodies import load_animal
 from zoetic.control import wave_controller
 from zoetic.io import write_json
-from zoetic.learn.optimizers import Optimizer
-from zoetic.learn.run import LearnConfig, build
+from zoetic.learning.optimizers import Optimizer
+from zoetic.learning.run import LearnConfig, build
 from zoetic.physics import simulate
 from zoetic.tasks import Task, load_task, parse_task
 from zoetic.viz.learning import best_so_far, plot_learning_seeds

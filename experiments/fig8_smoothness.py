@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from zoetic.learn.run import LearnConfig, build
+from zoetic.learning.run import LearnConfig, build
 from zoetic.tasks import parse_task
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "figures"

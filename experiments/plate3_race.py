@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from zoetic.learn.run import LearnConfig, build
+from zoetic.learning.run import LearnConfig, build
 from zoetic.physics import State, rest_state
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "figures"

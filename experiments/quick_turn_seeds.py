@@ -24,7 +24,7 @@ import numpy as np
 from zoetic.bench.skills import learn_skill, skill_figures
 from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller, rest_controller
-from zoetic.learn.objective import heading_angles
+from zoetic.learning.objective import heading_angles
 from zoetic.physics import simulate
 from zoetic.tasks import load_task
 

@@ -36,6 +36,7 @@ from zoetic.san.gaits import THRESHOLD, describe_gaits, feature_matrix, gait_fea
 from zoetic.san.search import search, speed_cm_s
 from zoetic.san.show import replay
 from zoetic.san.tune import tune
+from zoetic.viz.san import draw_modes
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "docs" / "figures"
@@ -71,8 +72,9 @@ def modes(name: str, trials: int, keep: int, seed: int, workers: int, tune_trial
     ranked = res.top(len(res.networks))
     kept = [i for i in ranked if not res.fell[i] and res.metrics[i] > 0][:keep]
     info = [{"rank": ranked.index(i) + 1, "trial": int(i)} for i in kept]
-    doc = write_modes(c, [res.networks[i] for i in kept], info, RUNS / name, seed=seed,
-                      workers=workers)  # fmt: skip
+    networks = [res.networks[i] for i in kept]
+    doc = write_modes(c, networks, info, RUNS / name, seed=seed)
+    draw_modes(c, networks, doc, seed=seed, workers=workers)
     row = {
         "trials": trials, "kept": len(kept), "modes_found": doc["modes_found"],
         "kinds": doc["kinds"],
@@ -101,7 +103,7 @@ def _stills(c, res, doc: dict, path: Path) -> None:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from zoetic.san import draw
+        from zoetic.viz import san as draw
     except ImportError as exc:  # drawing is optional for the numbers
         print(f"no stills: {exc}")
         return
@@ -128,7 +130,7 @@ def _evolve_job(job: tuple) -> dict:
     net = res.networks[ok[0]]
     tuned = tune(net, c, method="anneal", trials=trials, seed=seed)
     ev = evolve(net, c, trials=trials, seed=seed)
-    summary = write_evolve(ev, RUNS / f"{name}-evolve", video=False)
+    summary = write_evolve(ev, RUNS / f"{name}-evolve")
     cm = lambda m: round(speed_cm_s(c, m, 0.0), 1)  # noqa: E731
     return {
         "creature": name, "trials": trials, "start_cm_s": cm(ev.before),

@@ -28,8 +28,8 @@ from zoetic.bodies import load_animal
 from zoetic.control import Controller
 from zoetic.control.abstract import AbstractController
 from zoetic.io import atomic_write_bytes, read_json
-from zoetic.learn.abstraction import abstract, mirror_abstract
-from zoetic.learn.optimizers import make_optimizer
+from zoetic.learning.abstraction import abstract, mirror_abstract
+from zoetic.learning.optimizers import make_optimizer
 from zoetic.tasks import load_task
 
 # (entry name, task, entry it starts from): what the aquarium's learned motor needs beyond
@@ -46,7 +46,7 @@ def learn_from(body_name: str, task_name: str, start: AbstractController, seed: 
                budget: int) -> Controller:
     """Return the periodic controller CMA-ES learns for ``task_name`` starting from the gait
     ``start`` (its signals fitted by the task's periodic basis; steps ``STEP_SIGMA``)."""
-    from zoetic.learn.run import CMAES_POPSIZE, LearnConfig, build
+    from zoetic.learning.run import CMAES_POPSIZE, LearnConfig, build
 
     setup = build(LearnConfig(animal=body_name, task=task_name, seed=seed, budget=budget))
     obj = setup.objective

@@ -10,8 +10,8 @@ from zoetic.bodies import load_animal
 from zoetic.control import FrequencyDomainController, TimeDomainController, from_dict
 from zoetic.control.abstract import AbstractController, SequenceController
 from zoetic.errors import ControllerError, ZoeticError
-from zoetic.learn.abstraction import abstract, mirror_abstract, parse_modes, spectrum
-from zoetic.learn.abstraction import measure as measure_motion
+from zoetic.learning.abstraction import abstract, mirror_abstract, parse_modes, spectrum
+from zoetic.learning.abstraction import measure as measure_motion
 
 
 @pytest.fixture(scope="module")

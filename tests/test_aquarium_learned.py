@@ -21,7 +21,7 @@ from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live
 from zoetic.behavior.motor import LEARNED_SWIM
 from zoetic.behavior.tracking import handmade_repertoire
 from zoetic.bodies import load_animal
-from zoetic.learn.objective import heading_angles
+from zoetic.learning.objective import heading_angles
 from zoetic.physics import simulate
 
 

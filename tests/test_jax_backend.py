@@ -17,7 +17,7 @@ import jax.numpy as jnp  # noqa: E402
 from zoetic.bodies import list_animals, load_animal  # noqa: E402
 from zoetic.control import frequency_domain, time_domain, wave_controller  # noqa: E402
 from zoetic.control.jax_sampling import jax_table  # noqa: E402
-from zoetic.learn.gradient import (  # noqa: E402
+from zoetic.learning.gradient import (  # noqa: E402
     GradientDescent,
     make_loss,
     optimize_gradient,

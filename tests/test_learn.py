@@ -9,9 +9,9 @@ from conftest import write_short_task
 from zoetic.bodies import load_animal
 from zoetic.control import rest_controller, time_domain, wave_controller
 from zoetic.errors import RunDirError, TaskError, ZoeticError
-from zoetic.learn.objective import Objective, control_energy
-from zoetic.learn.optimizers import make_optimizer
-from zoetic.learn.run import LearnConfig, Run, build
+from zoetic.learning.objective import Objective, control_energy
+from zoetic.learning.optimizers import make_optimizer
+from zoetic.learning.run import LearnConfig, Run, build
 from zoetic.tasks import list_tasks, load_task, parse_task
 
 
@@ -189,8 +189,8 @@ def test_gradient_run_learns_and_resumes_to_the_same_result(tmp_path, short_task
 
 
 def test_process_pool_evaluator_matches_the_in_process_batch(short_task):
-    from zoetic.learn.evaluate import BatchEvaluator, ProcessPoolEvaluator
-    from zoetic.learn.run import build
+    from zoetic.learning.evaluate import BatchEvaluator, ProcessPoolEvaluator
+    from zoetic.learning.run import build
 
     setup = build(LearnConfig(animal="shark", task=str(short_task), seed=2))
     rng = np.random.default_rng(0)
@@ -216,7 +216,7 @@ def test_parallel_annealing_chains_and_frequency_controllers(tmp_path, short_tas
 
 def test_a_task_that_requires_fins_learns_them_and_others_hold_them_level():
     # a dolphin cannot bend left or right: its turn task requires fins, so it banks on them
-    from zoetic.learn.run import build
+    from zoetic.learning.run import build
 
     body = load_animal("dolphin")
     fins = [k for k, kind in enumerate(body.actuator_kind) if kind == "fin"]
@@ -252,7 +252,7 @@ def test_wave_coupling_plays_each_right_actuator_as_its_left_mirror_half_a_strok
 
 
 def test_auto_defaults_couple_straight_gaits_and_free_the_fins_for_turns():
-    from zoetic.learn.run import build
+    from zoetic.learning.run import build
 
     body = load_animal("shark")
     straight = build(LearnConfig(animal="shark", task="swim-straight", budget=1))

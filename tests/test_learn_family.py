@@ -15,8 +15,8 @@ import pytest
 
 from conftest import write_short_task
 from zoetic.errors import RunDirError
-from zoetic.learn.optimizers import OPTIMIZERS, make_optimizer
-from zoetic.learn.run import (
+from zoetic.learning.optimizers import OPTIMIZERS, make_optimizer
+from zoetic.learning.run import (
     CHECKPOINT,
     PREVIOUS,
     LearnConfig,

@@ -125,7 +125,7 @@ def test_macro_command_writes_its_run(tmp_path, capsys):
 
 
 def test_plan_annealing_runs_on_the_one_annealing_of_learn(problem):
-    from zoetic.learn.optimizers import Annealing
+    from zoetic.learning.optimizers import Annealing
 
     sa = PlanAnnealing(problem, seed=0, chains=4)
     assert isinstance(sa.sa, Annealing) and sa.sa.relative

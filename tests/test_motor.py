@@ -8,7 +8,7 @@ import pytest
 from zoetic.behavior.motor import MotorControllers, blend, motor_repertoire
 from zoetic.behavior.tracking import handmade_repertoire
 from zoetic.bodies import load_animal
-from zoetic.learn.objective import heading_angles
+from zoetic.learning.objective import heading_angles
 from zoetic.physics import simulate
 
 

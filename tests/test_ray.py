@@ -12,9 +12,9 @@ import pytest
 import ray
 
 from zoetic.cli import main
-from zoetic.learn.evaluate import BatchEvaluator, make_evaluator
-from zoetic.learn.ray_eval import RayEvaluator
-from zoetic.learn.run import LearnConfig, Run
+from zoetic.learning.evaluate import BatchEvaluator, make_evaluator
+from zoetic.learning.ray_eval import RayEvaluator
+from zoetic.learning.run import LearnConfig, Run
 
 CONFIG = dict(animal="snake", task="crawl-straight", optimizer="cmaes", budget=30, popsize=10,
               seed=5, nodes=4)  # fmt: skip
@@ -141,7 +141,7 @@ def test_stunt_search_on_ray_matches_in_process(local_ray, tmp_path, monkeypatch
     from zoetic.behavior.training import rest_abstraction
     from zoetic.bodies import load_animal
     from zoetic.control.abstract import AbstractController
-    from zoetic.learn.ray_eval import RayPool
+    from zoetic.learning.ray_eval import RayPool
 
     dolphin = load_animal("dolphin")
     a = dolphin.n_actuators

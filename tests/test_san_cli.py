@@ -9,7 +9,13 @@ import pytest
 
 from zoetic.cli import main
 from zoetic.san import load_creature
-from zoetic.san.network import SanPolicy, load_network, random_network, save_network
+from zoetic.san.network import (
+    SanPolicy,
+    load_network,
+    load_with_creature,
+    random_network,
+    save_network,
+)
 from zoetic.san.search import search, useful_mask
 from zoetic.san.tune import tune
 from zoetic.san.world import World
@@ -87,7 +93,7 @@ def test_annealing_tune_never_worse(cart):
 
 
 def test_show_writes_a_video_with_the_network_beside(search_run, tmp_path):
-    pytest.importorskip("zoetic.san.draw")
+    pytest.importorskip("zoetic.viz.san")
     video = tmp_path / "show.mp4"
     argv = ["san", "show", str(search_run), "--seconds", "0.5", "--out", str(video)]
     assert main(argv) == 0
@@ -132,3 +138,42 @@ def test_unknown_method_terrain_or_creature_exit_2(capsys):
     assert "unknown terrain 'bumpy'" in capsys.readouterr().err
     assert main(["san", "search", "unicorn", "--trials", "1"]) == 2
     assert "unicorn" in capsys.readouterr().err
+
+
+def test_a_san_found_for_a_creature_file_is_tuned_shown_and_evolved(tmp_path):
+    """The SAN file carries its creature: a creature that is in no zoo goes the whole way."""
+    from zoetic.san.creature import ZOO_DIR
+
+    text = (ZOO_DIR / "cart.toml").read_text()
+    text = text.replace('name = "cart"', 'name = "longcart"')
+    text = text.replace("length = 0.12", "length = 0.14", 1)
+    mine = tmp_path / "my_creature.toml"
+    mine.write_text(text)
+    run = tmp_path / "r"
+    search_argv = ["san", "search", str(mine), "--trials", "3", "--top", "2", "--seconds", "0.5",
+                   "--workers", "1", "--out", str(run), "--no-video"]
+    assert main(search_argv) == 0
+    mine.unlink()  # the SAN file alone is enough from here on
+    san = run / "sans" / "01.json"
+    net, creature = load_with_creature(san)
+    assert creature.name == "longcart" and creature.links[0].length == 0.14
+    tuned = tmp_path / "t"
+    argv = ["san", "tune", str(san), "--trials", "2", "--out", str(tuned), "--no-video"]
+    assert main(argv) == 0
+    assert load_with_creature(tuned / "san.json")[1].links[0].length == 0.14
+    show = ["san", "show", str(tuned / "san.json"), "--seconds", "0.2", "--out",
+            str(tmp_path / "show.mp4")]
+    assert main(show) == 0
+    evolve = ["san", "evolve", "--network", str(san), "--trials", "2", "--out",
+              str(tmp_path / "e"), "--no-video"]
+    assert main(evolve) == 0
+
+
+def test_an_old_san_file_naming_a_zoo_creature_still_loads(search_run, tmp_path):
+    data = json.loads((search_run / "sans" / "01.json").read_text())
+    del data["creature_def"]
+    old = tmp_path / "old.json"
+    old.write_text(json.dumps(data))
+    net, creature = load_with_creature(old)
+    assert creature.name == "cart" and creature.path.name == "cart.toml"
+    assert net == load_network(search_run / "sans" / "01.json")

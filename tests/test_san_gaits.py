@@ -150,7 +150,7 @@ def test_evolve_improves_its_objective_and_resumes_to_the_same_result(cart):
 def test_evolve_writes_a_valid_creature_file(cart, tmp_path):
     net = random_network(cart, np.random.default_rng(1))
     res = evolve(net, cart, trials=3, seed=0, seconds=0.3)
-    summary = write_evolve(res, tmp_path, video=False)
+    summary = write_evolve(res, tmp_path)
     body = strict_load(tmp_path / "creature.toml")
     assert body.name == "cart-evolved" and len(body.links) == 2
     assert summary["speed_after_cm_s"] >= summary["speed_before_cm_s"]

@@ -350,7 +350,7 @@ def test_tuning_in_the_fake_world_is_at_least_as_fast(fake_world):
 
 
 def test_tuning_runs_on_the_one_annealing_of_learn(monkeypatch):
-    from zoetic.learn.optimizers import Annealing
+    from zoetic.learning.optimizers import Annealing
 
     told = []
     tell = Annealing.tell

@@ -424,7 +424,7 @@ def test_every_zoo_creature_round_trips(tmp_path, name):
 
 
 def test_render_frames_yields_rgb_frames_with_a_side_panel():
-    from zoetic.san.draw import render_frames
+    from zoetic.viz.san import render_frames
 
     c = load_creature("bouncer")
     r = World(c, terrain="rough").run(Square(0.2, [0, 0.1, 0.2, 0.3]), 0.2, record_every=20)

@@ -7,8 +7,8 @@ import pytest
 
 from zoetic.bench.skills import skill_figures
 from zoetic.bodies import ZOO_DIR, load_animal
-from zoetic.learn.objective import heading_angles
-from zoetic.learn.run import LearnConfig, build
+from zoetic.learning.objective import heading_angles
+from zoetic.learning.run import LearnConfig, build
 from zoetic.physics import simulate
 from zoetic.tasks import load_task, parse_task
 

@@ -11,7 +11,7 @@ from zoetic.bodies import list_animals, load_animal
 from zoetic.cli import main
 from zoetic.control import frequency_domain
 from zoetic.errors import TaskError
-from zoetic.learn.objective import Objective
+from zoetic.learning.objective import Objective
 from zoetic.tasks import cruise_speed, parse_task, start_state, start_states
 
 TERMS = [{"kind": "distance_along_heading", "weight": -1.0},
@@ -120,7 +120,7 @@ def test_basic_training_learns_every_entry_from_rest_and_a_cruising_start():
 
 
 def test_the_jax_objective_takes_the_same_mean_over_the_starts(objectives):
-    from zoetic.learn.gradient import jax_objective
+    from zoetic.learning.gradient import jax_objective
 
     both, each, X = objectives
     e, _ = jax_objective(both)(X[0].astype(np.float32))

@@ -12,7 +12,7 @@ from zoetic.bodies import load_animal
 from zoetic.cli import main
 from zoetic.control import time_domain, wave_controller
 from zoetic.errors import TaskError
-from zoetic.learn.objective import Objective, heading_angles, motion_terms, signals
+from zoetic.learning.objective import Objective, heading_angles, motion_terms, signals
 from zoetic.physics import rest_state, simulate
 from zoetic.tasks import (
     Term,
@@ -213,7 +213,7 @@ def test_a_users_animal_takes_every_task_that_fits(my_eel, tmp_path, capsys):
 
 def test_jax_objective_scores_like_the_numpy_objective():
     pytest.importorskip("jax")
-    from zoetic.learn.gradient import value_and_grad
+    from zoetic.learning.gradient import value_and_grad
 
     body = load_animal("shark")
     task = parse_task(_task(horizon=0.3, nodes=4, nu1=0.01, mu1=1.0,
@@ -230,7 +230,7 @@ def test_jax_objective_scores_like_the_numpy_objective():
 
 
 def test_abstraction_measure_scores_like_the_objective_from_the_tasks_start():
-    from zoetic.learn.abstraction import measure
+    from zoetic.learning.abstraction import measure
 
     body = load_animal("shark")
     task = parse_task(_task(horizon=0.6, nodes=4, start={"heading": -0.4, "speed": 0.3},

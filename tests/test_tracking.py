@@ -20,7 +20,7 @@ from zoetic.bodies import load_animal
 from zoetic.cli import main
 from zoetic.control import load_controller
 from zoetic.control.abstract import SequenceController
-from zoetic.learn.objective import heading_angles
+from zoetic.learning.objective import heading_angles
 from zoetic.physics import simulate
 
 COURSE = np.array([[1.5, 0.3], [2.8, 1.2]])

@@ -11,8 +11,6 @@ no JAX, no matplotlib, no Numba until a simulation runs)::
 
 from __future__ import annotations
 
-import sys
-import types
 from dataclasses import dataclass
 from importlib import import_module
 from pathlib import Path
@@ -142,7 +140,7 @@ class LearnResult:
     run_dir: Path | None = None
 
 
-def _learn(
+def learn(
     animal: Body | str | Path,
     task: str | Path = "swim-straight",
     optimizer: str = "cmaes",
@@ -152,8 +150,12 @@ def _learn(
     out: str | Path | None = None,
     **options,
 ) -> LearnResult:
-    """Learn a controller for an animal and a task and return a LearnResult; ``out`` keeps
-    the run directory (resumable with ``zoetic learn --resume``), else it is temporary.
+    """Learn a controller for an animal and a task and return a LearnResult.
+
+    ``animal`` is a Body (learned exactly as given, changes included) or a zoo name or animal
+    file to load. ``out`` keeps the run directory, with the animal stored in it (resumable with
+    ``zoetic learn --resume``); else the run lives in a temporary directory. The same checks as
+    ``zoetic learn`` refuse a run (ZoeticError) before anything is written.
 
     options: further LearnConfig fields (nodes, popsize, chains, evaluator, coupling, medium).
     """
@@ -162,18 +164,22 @@ def _learn(
     import numpy as np
 
     from zoetic.bodies import Body
-    from zoetic.learn.run import LearnConfig, Run
+    from zoetic.learning.run import LearnConfig, Run
 
-    name = animal.source if isinstance(animal, Body) and Path(animal.source).exists() else animal
-    if isinstance(name, Body):
-        name = name.name
+    body = _body(animal)
+    label = body.name if isinstance(animal, Body) else str(animal)
     config = LearnConfig(
-        animal=str(name), task=str(task), optimizer=optimizer, budget=budget, seed=seed,
-        controller=controller, **options,
-    )  # fmt: skip
+        animal=label,
+        task=str(task),
+        optimizer=optimizer,
+        budget=budget,
+        seed=seed,
+        controller=controller,
+        **options,
+    )
 
     def run_in(directory: Path) -> LearnResult:
-        run = Run.create(directory, config).learn()
+        run = Run.create(directory, config, body).learn()
         return LearnResult(
             controller=run.best_controller(),
             best_E=float(run.setup.optimizer.best_f),
@@ -185,40 +191,3 @@ def _learn(
         return run_in(Path(out))
     with tempfile.TemporaryDirectory(prefix="zoetic-learn-") as tmp:
         return run_in(Path(tmp))
-
-
-class _Learn:
-    """``zoetic.learn(...)`` learns (see ``_learn``); ``zoetic.learn.<module>``
-    still reaches the ``zoetic.learn`` package, whose name this callable shares."""
-
-    def __call__(self, *args: Any, **kwargs: Any) -> Any:
-        return _learn(*args, **kwargs)
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(import_module("zoetic.learn"), name)
-
-    @property
-    def __signature__(self):  # so that help() and IDEs show api.learn's typed signature
-        import inspect
-
-        return inspect.signature(_learn)
-
-    @property
-    def __doc__(self) -> str | None:  # type: ignore[override]
-        return _learn.__doc__
-
-
-learn = _Learn()
-
-
-class _Package(types.ModuleType):
-    """The zoetic module: importing the ``zoetic.learn`` package must not replace the
-    ``learn`` callable (Python binds a loaded submodule as an attribute of its parent)."""
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        if name == "learn" and isinstance(value, types.ModuleType):
-            return
-        super().__setattr__(name, value)
-
-
-sys.modules[__name__].__class__ = _Package

@@ -14,6 +14,13 @@ from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller, controller_from_spec
 from zoetic.errors import BlowUpError, SimulationError
 from zoetic.io import atomic_write_bytes, check_memory, check_steps, make_dir
+from zoetic.learning.checks import (  # noqa: F401 - the run checks, for the commands
+    MAX_BUDGET,
+    check_learn_config,
+    check_learn_size,
+    check_learnable,
+    check_run_dir,
+)
 from zoetic.physics import Medium, Trajectory, get_medium
 from zoetic.physics.simulate import check_dt, good_dt
 from zoetic.record import Animal, Record, write_record
@@ -152,122 +159,6 @@ def finish_run(run, media: Media | None = None) -> dict:
         "run": str(out),
         **{k: str(v) for k, v in files.items()},
     }
-
-
-# ----------------------------------------------------------------------------- run configs
-
-MAX_BUDGET = 10_000_000  # evaluations of one learning run
-CHOICES = {  # the controller kinds are left to learn.run.build, which names its own
-    "interp": ("linear", "bspline"),
-    "evaluator": ("batch", "process", "ray"),
-    "coupling": ("auto", "none", "wave", "antiphase"),
-    "fins": ("auto", "held", "free"),
-    "medium": ("ground", "water", "sea", "vacuum"),
-}
-BOUNDS = {"budget": (1, MAX_BUDGET), "nodes": (2, 100_000), "popsize": (2, 100_000),
-          "chains": (1, 10_000), "seed": (0, 2**63 - 1)}  # fmt: skip
-
-
-def check_learn_config(d: dict, where: str) -> dict:
-    """Check a learning run's settings (config.toml's [run], or the CLI's) strictly.
-
-    The keys are LearnConfig's fields (so new fields are known at once); each value's type
-    follows the field's annotation, choices and bounds are checked; returns ``d``.
-    """
-    from dataclasses import fields
-
-    from zoetic import io as rd
-    from zoetic.errors import RunDirError
-    from zoetic.learn import optimizers
-    from zoetic.learn.run import LearnConfig
-
-    E = RunDirError
-    names = tuple(getattr(optimizers, "OPTIMIZERS", ("anneal", "simplex", "cmaes")))
-    choices = CHOICES | {"optimizer": (*names, *(() if "gradient" in names else ("gradient",)))}
-    if not isinstance(d, dict):
-        raise E(f"{where}: must be a table, got {rd.abbrev(d)}")
-    kinds = {f.name: str(f.type) for f in fields(LearnConfig)}
-    rd.check_keys(d, kinds, where, E)
-    for key, value in d.items():
-        at, kind = f"{where}: {key}", kinds[key]
-        if value is None and "None" in kind:
-            continue
-        if kind.startswith("int"):
-            lo, hi = BOUNDS.get(key, (None, None))
-            rd.integer(value, at, E, lo, hi)
-        elif kind.startswith("float"):
-            rd.number(value, at, E)
-        elif kind.startswith("str"):
-            rd.string(value, at, E, choices.get(key))
-        elif kind.startswith("bool") and not isinstance(value, bool):
-            raise E(f"{at} must be true or false, got {rd.abbrev(value)}")
-        elif kind.startswith("dict") and not isinstance(value, dict):
-            raise E(f"{at} must be a table, got {rd.abbrev(value)}")
-    return d
-
-
-def check_learnable(animal: str) -> Body:
-    """Return the animal's body, refusing one with nothing to learn (no actuators) or whose
-    own time step is beyond what its springs and masses allow."""
-    from zoetic.errors import BodyError
-
-    body = load_animal(animal)
-    check_dt(body, body.dt, None, body.source)  # the file's own step, before anything is written
-    if body.n_actuators == 0:
-        raise BodyError(
-            f"{animal}: the {body.name} has no actuators, so there is nothing to learn; give "
-            "it [[actuators]] and muscles (springs with an 'actuator')"
-        )
-    return body
-
-
-def check_learn_size(run: dict, task=None, where: str = "options") -> None:
-    """Refuse a learning run that would take more than the memory limit or too many steps.
-
-    Counted before anything is built: the log of every evaluation (budget x parameters) and
-    one batch of simulations (candidates x steps x actuators); the task's horizon at the
-    animal's dt is bounded in steps. ``task`` defaults to the named one.
-    """
-    from zoetic.errors import RunDirError
-    from zoetic.io import check_memory, check_steps
-    from zoetic.tasks import load_task
-
-    body = load_animal(run.get("animal", "shark"))
-    task = task or load_task(run.get("task", "swim-straight"))
-    horizon = float(getattr(task, "horizon", 0.0) or 0.0)
-    steps = check_steps(horizon, body.dt, f"{where}: the task's horizon", RunDirError)
-    nodes = int(run.get("nodes") or getattr(task, "nodes", 15) or 15)
-    params = body.n_actuators * nodes
-    budget = int(run.get("budget", 3500))
-    batch = int(run.get("popsize") or 0) or max(64, int(run.get("chains") or 1))
-    check_memory(budget * (params + 6) * 8 * 2, f"{where}: a log of {budget:,} evaluations of "
-                 f"{params:,} parameters", RunDirError,
-                 "use a smaller --budget or fewer --nodes")  # fmt: skip
-    what = f"{where}: simulating {batch} candidates for {horizon:g} s"
-    check_memory(batch * steps * (body.n_actuators * 12 + 8 * nodes), what, RunDirError,
-                 "use a smaller --popsize, fewer --nodes or a shorter task")  # fmt: skip
-
-
-def check_run_dir(out: Path) -> None:
-    """Refuse a run directory whose config.toml is missing, unreadable or malformed."""
-    from zoetic.errors import RunDirError
-    from zoetic.io import read_toml
-
-    out = Path(out)
-    if not out.is_dir():
-        raise RunDirError(f"{out}: no such run directory")
-    cfg = out / "config.toml"
-    if not cfg.is_file():
-        raise RunDirError(f"{out}: no config.toml, so not a zoetic run directory")
-    doc = read_toml(cfg, what="run configuration", error=RunDirError)
-    if "run" not in doc or "task" not in doc:
-        raise RunDirError(f"{cfg}: needs a [run] and a [task] table; was it edited?")
-    check_learn_config(doc["run"], f"{cfg}: [run]")
-    if not isinstance(doc["task"], dict):
-        raise RunDirError(f"{cfg}: [task] must be a table")
-    from zoetic.tasks import parse_task
-
-    check_learn_size(doc["run"], parse_task(doc["task"], str(cfg)), f"{cfg}: [run]")
 
 
 MARKER = ".zoetic-demo"

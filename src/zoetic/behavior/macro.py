@@ -24,7 +24,7 @@ from zoetic.behavior.repertoire import Repertoire
 from zoetic.behavior.tracking import OVERLAP, TrackingError, body_length, obstacle_seconds
 from zoetic.bodies import Body
 from zoetic.control.abstract import SequenceController
-from zoetic.learn.optimizers import Annealing
+from zoetic.learning.optimizers import Annealing
 from zoetic.physics import Trajectory, simulate
 
 
@@ -174,7 +174,7 @@ class PlanAnnealing(_Search):
     Each step moves every duration uniformly by up to 10% of its range, replaces each entry
     by another with probability 10%, and swaps two neighbouring segments with probability
     10%. Temperatures are in units of the chains' mean starting cost. The annealing itself is
-    ``learn.optimizers.Annealing`` over plans coded as [entries, durations].
+    ``learning.optimizers.Annealing`` over plans coded as [entries, durations].
     """
 
     name = "anneal"
@@ -340,7 +340,7 @@ def search(
 ) -> MacroResult:
     """Return the best plan ``method`` (anneal or ga) finds within ``budget`` evaluations.
 
-    ``evaluator``: batch (this process) or ray (learn.ray_eval: RAY_ADDRESS, else a local Ray).
+    ``evaluator``: batch (this process) or ray (learning.ray_eval: RAY_ADDRESS, else a local Ray).
     """
     if method not in SEARCHES:
         raise TrackingError(f"unknown search method {method!r}: choose anneal or ga")
@@ -349,7 +349,7 @@ def search(
     opt = SEARCHES[method](problem, seed, **options)
     pool = None
     if evaluator == "ray":
-        from zoetic.learn.ray_eval import RayPool
+        from zoetic.learning.ray_eval import RayPool
 
         pool, job = RayPool(), _Plans(problem)
 

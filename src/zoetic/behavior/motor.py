@@ -13,6 +13,7 @@ entry a repertoire (and so greedy tracking) can use (``motor_repertoire``).
 
 from __future__ import annotations
 
+import weakref
 from bisect import bisect_left, bisect_right
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -24,7 +25,7 @@ from zoetic.behavior.tracking import body_length
 from zoetic.bodies import Body
 from zoetic.control.abstract import AbstractController
 from zoetic.errors import ZoeticError
-from zoetic.learn.objective import heading_angles
+from zoetic.learning.objective import heading_angles
 from zoetic.physics import simulate
 
 WEIGHTS = np.linspace(0.0, 1.0, 6)
@@ -189,7 +190,8 @@ WAVE_AMPLITUDES = np.array([0.2, 0.4, 0.6, 0.8, 1.0])
 WAVE_BIASES = np.array([0.0, 0.1, 0.2, 0.3, 0.4, 0.5])
 WAVE_SETTLE = 2.0  # s from rest before the speed and turning rate are measured
 WAVE_MEASURE = 3.0  # s over which they are measured
-_WAVE_CACHE: dict[tuple, WaveMotor] = {}
+# calibrations per body object (an edited body is another object), then per settings
+_WAVE_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _AMPS, _BIASES = WAVE_AMPLITUDES.tolist(), WAVE_BIASES.tolist()
 
 
@@ -235,9 +237,9 @@ class WaveMotor:
         batched run from rest (settled ``WAVE_SETTLE`` s, measured over ``WAVE_MEASURE`` s);
         cached per body and frequency for the process."""
         freq = float(frequency or body.wave_frequency)
-        key = (body.name, body.n_nodes, body.n_actuators, round(float(body.dt), 9), freq)
-        if key in _WAVE_CACHE:
-            return _WAVE_CACHE[key]
+        cached = _WAVE_CACHE.setdefault(body, {})
+        if freq in cached:
+            return cached[freq]
         from zoetic.control import steered_wave
 
         steps = int(round((WAVE_SETTLE + WAVE_MEASURE) / body.dt))
@@ -253,7 +255,7 @@ class WaveMotor:
         shape = (len(WAVE_AMPLITUDES), len(WAVE_BIASES))
         speed, rate = grid_rates(com, heading, t[sel], shape)
         motor = cls(body, freq, speed[:, 0].copy(), rate)
-        _WAVE_CACHE[key] = motor
+        cached[freq] = motor
         return motor
 
     @property
@@ -367,7 +369,7 @@ LEARNED_BASES = ("do-nothing", "go-straight", "sharp-turn-left", "sharp-turn-rig
 LEARNED_STEER = ("steer-left", "steer-right")
 STEER_WEIGHTS = np.array([0.0, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0])
 STEER_MEASURE = 2.0
-_LEARNED_MOTOR_CACHE: dict[tuple, LearnedMotor] = {}
+_LEARNED_MOTOR_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # as _WAVE_CACHE
 
 
 @dataclass(frozen=True)
@@ -403,11 +405,11 @@ class LearnedMotor:
         bases = tuple(rep.controllers[n] for n in LEARNED_BASES)
         steers = tuple(rep.controllers[n] for n in LEARNED_STEER if n in rep.controllers)
         steers = steers if len(steers) == len(LEARNED_STEER) else ()
-        key = (body.name, body.n_nodes, body.n_actuators, round(float(body.dt), 9),
-               tuple(np.concatenate([c.offset, c.freq.ravel(), c.amp.ravel(),
-                                     c.phase.ravel()]).tobytes() for c in bases + steers))
-        if key in _LEARNED_MOTOR_CACHE:
-            return _LEARNED_MOTOR_CACHE[key]
+        key = tuple(np.concatenate([c.offset, c.freq.ravel(), c.amp.ravel(),
+                                    c.phase.ravel()]).tobytes() for c in bases + steers)
+        cached = _LEARNED_MOTOR_CACHE.setdefault(body, {})
+        if key in cached:
+            return cached[key]
         motor = cls(body, bases, np.zeros(len(LEARNED_SWIM)), np.zeros((2, len(LEARNED_TURN))))
         total = LEARNED_SETTLE + LEARNED_TURN[-1] + LEARNED_AFTER
         times = np.arange(int(round(total / body.dt))) * body.dt
@@ -452,7 +454,7 @@ class LearnedMotor:
             w = slice(k, k1 + 1)
             speeds, rates = grid_rates(com[m:, w], heading[:, w], t[w], shape)
         motor = cls(body, bases, speed, turned, steers, rates, speeds)
-        _LEARNED_MOTOR_CACHE[key] = motor
+        cached[key] = motor
         return motor
 
     @property

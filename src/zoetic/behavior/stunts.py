@@ -8,7 +8,7 @@ hurdle's bar, a beach ball on its post). Its ``horizon`` is the stunt's duration
 terms (``zoetic.tasks.terms``), which here also see the World's contact record and the balls.
 
 A plan, as for ``behavior.macro``, is a sequence of repertoire entries with durations, played
-cross-faded (5%); the same searches (simulated annealing on ``learn.optimizers.Annealing``, or
+cross-faded (5%); the same searches (simulated annealing on ``learning.optimizers.Annealing``, or
 the genetic algorithm) look for the plan of least E = sum of weighted terms, every batch of
 plans simulated as one World (the animal in B copies beside the trick's objects).
 """

@@ -25,7 +25,7 @@ from zoetic.bodies import Body
 from zoetic.control import Controller
 from zoetic.control.abstract import AbstractController, SequenceController
 from zoetic.errors import SimulationError, ZoeticError
-from zoetic.learn.abstraction import mirror_abstract
+from zoetic.learning.abstraction import mirror_abstract
 from zoetic.physics import State, Trajectory, rest_state, simulate
 
 OVERLAP = 0.05  # cross-fade: fraction of each controller's length shared with the next

@@ -23,7 +23,7 @@ from zoetic.control import Controller, load_controller
 from zoetic.control.abstract import AbstractController, SequenceController
 from zoetic.errors import RunDirError, ZoeticError
 from zoetic.io import read_json, read_toml
-from zoetic.learn.abstraction import Abstraction, abstract, compare, mirror_abstract
+from zoetic.learning.abstraction import Abstraction, abstract, compare, mirror_abstract
 from zoetic.tasks import Task, capabilities, fits, load_task
 
 # (entry name, task per medium kind): the paper's basic training, in order
@@ -144,7 +144,7 @@ def train_repertoire(
     nodes: controller nodes per actuator (default: each task's). on_entry(name, run) is called
     before each entry is learned; progress(run) during learning.
     """
-    from zoetic.learn.run import LearnConfig, Run
+    from zoetic.learning.run import LearnConfig, Run
 
     body = load_animal(animal)
     out = Path(out)

@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from zoetic.learn.run import LearnConfig, build
+from zoetic.learning.run import LearnConfig, build
 
 
 def learn_until(config: LearnConfig, target: float | None = None,
@@ -44,7 +44,7 @@ def learn_until(config: LearnConfig, target: float | None = None,
 
 def bench_gradient(base: dict, target: float, max_seconds: float) -> dict:
     """Return the gradient path's compile time and wall time to reach E <= target."""
-    from zoetic.learn.gradient import value_and_grad
+    from zoetic.learning.gradient import value_and_grad
 
     setup = build(LearnConfig(optimizer="gradient", budget=10**6, **base))
     opt, obj = setup.optimizer, setup.objective

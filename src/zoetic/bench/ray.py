@@ -6,8 +6,8 @@ import time
 
 import numpy as np
 
-from zoetic.learn.evaluate import BatchEvaluator
-from zoetic.learn.ray_eval import RayEvaluator, import_ray
+from zoetic.learning.evaluate import BatchEvaluator
+from zoetic.learning.ray_eval import RayEvaluator, import_ray
 
 
 def bench_ray(
@@ -18,7 +18,7 @@ def bench_ray(
     actors: int | None = None,
 ) -> dict:
     """Seconds per generation in process and on a local Ray, measured side by side."""
-    from zoetic.learn.run import LearnConfig, build
+    from zoetic.learning.run import LearnConfig, build
     from zoetic.physics.simulate import cores
 
     setup = build(LearnConfig(animal=animal, task=task, seed=0))

@@ -22,7 +22,7 @@ from zoetic.behavior.tracking import body_length, handmade_repertoire
 from zoetic.behavior.training import plan_for
 from zoetic.bodies import Body, list_animals, load_animal
 from zoetic.control import Controller
-from zoetic.learn.objective import heading_angles, motion_terms
+from zoetic.learning.objective import heading_angles, motion_terms
 from zoetic.physics import State, rest_state, simulate
 from zoetic.tasks import Task, start_state
 
@@ -151,7 +151,7 @@ def start_speeds(body: Body, task: Task) -> dict:
 def learn_skill(animal: str, task: Task, seed: int = 0, budget: int | None = None):
     """Return (controller, wall seconds) learned with the defaults of ``zoetic learn``."""
     from zoetic.bench.learn import learn_until
-    from zoetic.learn.run import LearnConfig
+    from zoetic.learning.run import LearnConfig
 
     config = LearnConfig(animal=animal, task=task.name, seed=seed)
     if budget:

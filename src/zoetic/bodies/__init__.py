@@ -32,8 +32,18 @@ def list_animals() -> list[str]:
 
 
 @lru_cache(maxsize=32)
-def _load_path(path: str, mtime: float) -> Body:
+def _compiled(path: str, text: bytes) -> Body:
+    """Return the Body of an animal file with this text (keyed by content: an edited file is
+    compiled afresh, an unchanged one is the same object)."""
     return compile_body(read_animal_file(path))
+
+
+def _load_path(path: str) -> Body:
+    try:
+        text = Path(path).read_bytes()
+    except OSError as exc:
+        raise BodyError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    return _compiled(path, text)
 
 
 def load_animal(name_or_path: str | Path) -> Body:
@@ -49,7 +59,7 @@ def load_animal(name_or_path: str | Path) -> Body:
             raise BodyError(f"{text}: is a directory, not an animal file")
         if not candidate.is_file():
             raise BodyError(f"{text}: no such animal file")
-        return _load_path(str(candidate.resolve()), candidate.stat().st_mtime)
+        return _load_path(str(candidate.resolve()))
     zoo_file = ZOO_DIR / f"{text}.toml"
     if not zoo_file.is_file():
         hint = f" (to use the file {text!r} here, write ./{text})" if Path(text).exists() else ""
@@ -57,4 +67,4 @@ def load_animal(name_or_path: str | Path) -> Body:
             f"unknown animal {text!r}{suggest(text, list_animals())}: choose one of "
             f"{', '.join(list_animals())} or give the path of an animal .toml file{hint}"
         )
-    return _load_path(str(zoo_file), zoo_file.stat().st_mtime)
+    return _load_path(str(zoo_file))

@@ -8,24 +8,12 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
+from zoetic.cli.apps import _DEBUG, app
 from zoetic.errors import ZoeticError
 
-app = typer.Typer(
-    name="zoetic",
-    help="Physics-based artificial animals that learn to move by themselves.",
-    no_args_is_help=True,
-    pretty_exceptions_enable=False,
-    add_completion=False,
-)
+__all__ = ["app", "main"]
+
 err_console = Console(stderr=True)
-
-_DEBUG = {"on": False}
-
-
-@app.callback()
-def _root(debug: bool = typer.Option(False, "--debug", help="Show full tracebacks.")) -> None:
-    _DEBUG["on"] = debug
-
 
 def _register() -> None:
     from zoetic.cli import (  # noqa: F401  (commands register)

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from zoetic.cli import app
+from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
 from zoetic.cli.output import console, emit
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import typer
 
-from zoetic.cli import app
+from zoetic.cli.apps import app
 from zoetic.cli.output import emit
 
 bench_app = typer.Typer(help="Benchmarks; figures are ratios measured side by side.")

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import typer
 
-from zoetic.cli import app
+from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
 from zoetic.cli.output import console, emit, progress_bar
 from zoetic.io import check_out_dir
@@ -98,7 +98,7 @@ def learn(
     checkpoint_every: float = typer.Option(2.0, min=0.0, help="Seconds between checkpoints."),
 ) -> None:
     """Learn a controller for an animal and a task; writes a resumable run directory."""
-    from zoetic.learn.run import LearnConfig, Run
+    from zoetic.learning.run import LearnConfig, Run
     from zoetic.runs import finish_run
     from zoetic.viz.media import learning_media
 
@@ -108,9 +108,7 @@ def learn(
         os.environ["RAY_ADDRESS"] = ray_address
     if resume is not None:
         from zoetic.errors import ZoeticError, naming
-        from zoetic.runs import check_run_dir
 
-        check_run_dir(resume)
         try:
             run = Run.resume(resume)
         except ZoeticError as exc:
@@ -119,18 +117,15 @@ def learn(
     else:
         if animal is None:
             raise typer.BadParameter("give an ANIMAL (or --resume RUN_DIR)")
+        from zoetic.bodies import load_animal
+
         config = LearnConfig(
             animal=animal, task=task, optimizer=optimizer, budget=budget, seed=seed,
             controller=controller, nodes=nodes, interp=interp, popsize=popsize, chains=chains,
             evaluator=evaluator, coupling=coupling, fins=fins, frequency=frequency,
         )  # fmt: skip
-        from zoetic.runs import check_learn_config, check_learn_size, check_learnable
-
-        check_learn_config(config.to_dict(), "options")
-        check_learnable(animal)
-        check_learn_size(config.to_dict())
         out = check_out_dir(out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}")
-        run = Run.create(out, config)
+        run = Run.create(out, config, load_animal(animal))  # the run checks: learning.checks
     cfg = run.setup.config
     run_with_progress(run, f"{cfg.animal} {cfg.optimizer}", checkpoint_every)
     summary = finish_run(run, partial(learning_media, video=video))
@@ -146,7 +141,7 @@ def demo(
     video: bool = typer.Option(True),
 ) -> None:
     """A shark learns to swim from scratch (CMA-ES, 40 nodes per muscle, ~15 s on 2 cores)."""
-    from zoetic.learn.run import LearnConfig, Run
+    from zoetic.learning.run import LearnConfig, Run
     from zoetic.runs import clear_demo, finish_run, mark_demo
     from zoetic.viz.media import learning_media
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from zoetic.cli import app
+from zoetic.cli.apps import app
 from zoetic.cli.output import console
 from zoetic.io import make_dir, write_json
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from zoetic.cli import app
+from zoetic.cli.apps import app
 from zoetic.cli.learn import learn_bar
 from zoetic.cli.output import console
 
@@ -27,7 +27,7 @@ def abstract_cmd(
     out: Path = typer.Option(None, help="Where abstract.json/.png go (default: SOURCE's dir)."),
 ) -> None:
     """Abstract a learned controller into its primary modes (FFT) and say what it keeps."""
-    from zoetic.learn.abstraction import parse_modes
+    from zoetic.learning.abstraction import parse_modes
     from zoetic.viz.media import abstract_files
 
     if source.is_dir():
@@ -67,7 +67,7 @@ def train_cmd(
         os.environ["RAY_ADDRESS"] = ray_address
     from zoetic.behavior.training import train_repertoire
     from zoetic.io import check_out_dir
-    from zoetic.learn.abstraction import parse_modes
+    from zoetic.learning.abstraction import parse_modes
     from zoetic.runs import check_learnable
     from zoetic.viz.media import show_repertoire
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 from rich.progress import Progress
 
-from zoetic.cli import app
+from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
 from zoetic.cli.output import console, emit, progress_bar
 
@@ -37,6 +37,15 @@ def _record(out: Path, network: Path) -> str:
     from zoetic.cli.records import write_san_record
 
     return str(write_san_record(out, network)) if network.is_file() else ""
+
+
+def _with_files(out: Path, summary: dict, files: dict) -> dict:
+    """Return the run's summary with the pictures drawn for it, written to summary.json."""
+    from zoetic.io import write_json
+
+    summary = summary | files
+    write_json(out / "summary.json", summary)
+    return summary
 
 
 def _check_seconds(creature, seconds: float | None) -> None:
@@ -98,6 +107,7 @@ def search_cmd(
         os.environ["RAY_ADDRESS"] = ray_address
     from zoetic.san import load_creature
     from zoetic.san.search import search, write_search
+    from zoetic.viz.san import draw_search
 
     c = load_creature(creature)
     _check_seconds(c, seconds)
@@ -108,7 +118,8 @@ def search_cmd(
                         progress=_progress(bar, tid), seconds=seconds,
                         evaluator=evaluator)  # fmt: skip
     with console.status(f"writing {out}" + (" (videos)" if video else "")):
-        summary = write_search(result, out, top=top, video=video)
+        summary = write_search(result, out, top=top)
+        summary = _with_files(out, summary, draw_search(result, out, top=top, video=video))
         summary["record"] = _record(out, out / "sans" / "01.json")
     for key, value in summary.items():
         console.print(f"{key:>18}: {value}")
@@ -119,13 +130,15 @@ def search_cmd(
 def _gaits(result, top: int, out: Path, video: bool, workers: int | None) -> None:
     """Cluster the search's kept gaits that did not fall into modes; print and write them."""
     from zoetic.san.gaits import write_modes
+    from zoetic.viz.san import draw_modes
 
     kept = [i for i in result.top(top) if not result.fell[i]]
     info = [{"rank": r, "trial": i} for r, i in enumerate(result.top(top), 1) if i in kept]
     with console.status(f"sorting {len(kept)} gaits into modes" + (" (clips)" if video else "")):
-        doc = write_modes(result.creature, [result.networks[i] for i in kept], info, out,
-                          seconds=result.seconds, terrain=result.terrain, seed=result.seed,
-                          video=video, workers=workers)  # fmt: skip
+        networks = [result.networks[i] for i in kept]
+        where = {"seconds": result.seconds, "terrain": result.terrain, "seed": result.seed}
+        doc = write_modes(result.creature, networks, info, out, video=video, **where)
+        draw_modes(result.creature, networks, doc, workers=workers, **where)
     console.print(f"{'distinct modes':>18}: {doc['modes_found']} among {len(kept)} kept gaits "
                   f"that did not fall (distance > {doc['threshold']:g} scaled units)")  # fmt: skip
     for m in doc["modes"]:
@@ -137,7 +150,8 @@ def _gaits(result, top: int, out: Path, video: bool, workers: int | None) -> Non
 
 @san_app.command("evolve")
 def evolve_cmd(
-    creature: str = typer.Argument(..., help="Built-in creature name or creature .toml file."),
+    creature: str = typer.Argument(None, help="Built-in creature name or creature .toml file "
+                                   "(default with --network: the creature its file carries)."),
     network: Path = typer.Option(None, help="Start from this network .json (default: the best "
                                  "of a phase-1 search of --search random networks)."),
     search_trials: int = typer.Option(200, "--search", min=1, max=1_000_000,
@@ -163,22 +177,27 @@ def evolve_cmd(
         save_checkpoint,
         write_evolve,
     )
-    from zoetic.san.network import load_network, save_network
+    from zoetic.san.network import load_with_creature, save_network
     from zoetic.san.search import TERRAINS, search
+    from zoetic.viz.san import draw_evolve
 
     if terrain not in TERRAINS:
         raise CreatureError(f"unknown terrain {terrain!r} (expected 'flat' or 'rough')")
-    c = load_creature(creature)
+    if creature is None and network is None:
+        raise typer.BadParameter("give a CREATURE (or --network FILE, whose creature it is)")
+    net = None
+    if network is not None:
+        net, c = load_with_creature(network, creature)
+    else:
+        c = load_creature(creature)
     check_evolvable(c)
     out = out or Path("runs") / f"{c.name}-evolve"
     ckpt = out / "checkpoint.npz"
     start_file = out / "start.json"
     history = None
     if resume and ckpt.exists() and start_file.exists():
-        net = load_network(start_file, c)
-    elif network is not None:
-        net = load_network(network, c)
-    else:
+        net = load_with_creature(start_file, c)[0]
+    elif net is None:
         bar, tid = _bar(f"{c.name} start search", search_trials)
         with bar:
             res = search(c, trials=search_trials, seed=seed, terrain=terrain, workers=workers,
@@ -190,14 +209,15 @@ def evolve_cmd(
     if resume and ckpt.exists():
         history = load_checkpoint(ckpt, config)
         console.print(f"resuming {ckpt} at step {int(history['done'])} of {trials}")
-    save_network(net, start_file)
+    save_network(net, start_file, c)
     bar, tid = _bar(f"{c.name} evolve", trials)
     with bar:
         result = evolve(net, c, trials=trials, seed=seed, terrain=terrain,
                         progress=_progress(bar, tid), resume=history,
                         checkpoint=lambda _t, _sa, h: save_checkpoint(ckpt, config, h))  # fmt: skip
     with console.status(f"writing {out}" + (" (video)" if video else "")):
-        summary = write_evolve(result, out, terrain=terrain, video=video)
+        summary = write_evolve(result, out, terrain=terrain)
+        summary = _with_files(out, summary, draw_evolve(result, out, terrain, video))
         summary["record"] = _record(out, out / "san.json")
     from rich.table import Table
 
@@ -228,6 +248,7 @@ def tune_cmd(
     """Phase 2: fine-tune the Fig. 8 parameters (delays, actuators, sensors), weights kept."""
     from zoetic.san.network import load_with_creature
     from zoetic.san.tune import METHODS, TuneError, tune, write_tune
+    from zoetic.viz.san import draw_tune
 
     if method not in METHODS:
         raise TuneError(f"unknown tuning method {method!r}; use one of {', '.join(METHODS)}")
@@ -238,7 +259,8 @@ def tune_cmd(
         result = tune(net, c, method=method, trials=trials, seed=seed, terrain=terrain,
                       progress=_progress(bar, tid))  # fmt: skip
     with console.status(f"writing {out}" + (" (video)" if video else "")):
-        summary = write_tune(result, c, out, terrain=terrain, video=video)
+        summary = write_tune(result, c, out, terrain=terrain)
+        summary = _with_files(out, summary, draw_tune(result, c, out, terrain, video))
         summary["record"] = _record(out, out / "san.json")
     for key, value in summary.items():
         console.print(f"{key:>18}: {value}")
@@ -259,7 +281,8 @@ def show_cmd(
     """Replay a network with its sensor and node states drawn beside the creature (video)."""
     from zoetic.san.network import load_with_creature
     from zoetic.san.search import speed_cm_s
-    from zoetic.san.show import resolve_network, show_video
+    from zoetic.san.show import resolve_network
+    from zoetic.viz.san import show_video
 
     file = resolve_network(path, rank)
     if creature is None and (file.parent / "creature.toml").is_file():

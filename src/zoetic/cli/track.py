@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import typer
 
-from zoetic.cli import app
+from zoetic.cli.apps import app
 from zoetic.cli.output import console, progress_bar
 from zoetic.io import make_dir
 

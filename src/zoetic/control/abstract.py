@@ -13,7 +13,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from zoetic.control.controllers import Controller
-from zoetic.control.registry import register_kind
 from zoetic.errors import ControllerError
 
 
@@ -123,24 +122,3 @@ class SequenceController(Controller):
             "overlap": self.overlap,
             "items": [{"duration": dur, "controller": c.to_dict()} for c, dur in self.items],
         }
-
-
-def _abstract_from_dict(d: dict) -> AbstractController:
-    return AbstractController(
-        str(d["animal"]), tuple(d["actuators"]), np.array(d["offset"], float),
-        np.array(d["freq"], float), np.array(d["amp"], float), np.array(d["phase"], float),
-        float(d.get("period", 1.0)),
-    )  # fmt: skip
-
-
-def _sequence_from_dict(d: dict) -> SequenceController:
-    from zoetic.control import from_dict
-
-    items = tuple((from_dict(it["controller"]), float(it["duration"])) for it in d["items"])
-    return SequenceController(
-        str(d["animal"]), tuple(d["actuators"]), items, float(d.get("overlap", 0.05))
-    )
-
-
-register_kind("abstract", _abstract_from_dict)
-register_kind("sequence", _sequence_from_dict)

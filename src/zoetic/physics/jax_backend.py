@@ -4,7 +4,7 @@ The model is the one in ``reference.py`` and ``kernel.py``, term for term: sprin
 muscles, gravity and buoyancy, water panels whose force can at most stop a panel's normal
 motion in one step, fins, a penalty floor with implicit directional Coulomb friction, implicit
 nodal damping and semi-implicit Euler. Everything here is a pure function of arrays; ``jit``
-and ``vmap`` are applied only at the edge (``make_rollout``; losses in ``learn.gradient``),
+and ``vmap`` are applied only at the edge (``make_rollout``; losses in ``learning.gradient``),
 brax-style.
 
 Unlike the Numba kernel, a candidate that blows up is not reset to rest: its state simply

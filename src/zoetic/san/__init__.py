@@ -10,7 +10,7 @@ compiles the MuJoCo model once; ``World.run(policy, seconds=None, record_every=0
 :class:`Rollout`; :func:`evaluate` is the one-call metric. A :class:`Policy` has ``reset()`` and
 ``step(sensors (S,) bool, dt) -> (A,) commands in [-2, 2]``.
 
-Drawing (``zoetic.san.draw``, imported on demand): ``draw_frame`` and ``render_frames``.
+Pictures are drawn by ``zoetic.viz.san`` from what this package computes (it draws nothing).
 
 Synthesis, imported on demand: ``search`` (phase 1, random SANs), ``tune`` (phase 2, Fig. 8
 parameters), ``gaits`` (kept gaits sorted into distinct modes), ``evolve`` (body and network

@@ -165,14 +165,8 @@ def _name(t: _Table, seen: set[str], what: str) -> str:
     return name
 
 
-def creature_from_dict(data: dict, path: str | os.PathLike | None = None) -> Creature:
-    """Return the validated creature described by parsed TOML ``data`` (from ``path``)."""
-    src = str(path) if path is not None else "<creature>"
-    top = _Table(data, src)
-    top.used.update(("creature", "link", "joint", "sensor", "actuator"))
-    top.finish()
-    if "creature" not in data:
-        raise CreatureError(f"{src}: missing the [creature] table")
+def _header(data: dict, src: str) -> dict[str, Any]:
+    """Return the Creature's keyword values from the [creature] table."""
     h = _Table(data["creature"], f"{src}: [creature]")
     kw: dict[str, Any] = {}
     kw["name"] = h.str("name")
@@ -232,7 +226,11 @@ def creature_from_dict(data: dict, path: str | os.PathLike | None = None) -> Cre
         raise h.err("fall_links must be a list of link names")
     kw["fall_links"] = tuple(fl)
     h.finish()
+    return kw
 
+
+def _links(data: dict, src: str) -> list[Link]:
+    """Return the [[link]] entries as Links (at least one)."""
     links, seen = [], set()
     for i, entry in enumerate(_entries(data, "link", src)):
         t = _Table(entry, f"{src}: [[link]] #{i + 1}")
@@ -258,8 +256,13 @@ def creature_from_dict(data: dict, path: str | os.PathLike | None = None) -> Cre
         links.append(Link(name, shape, length, radius, mass, inertia, depth, start))
     if not links:
         raise CreatureError(f"{src}: a creature needs at least one [[link]]")
-    link_names = {ln.name for ln in links}
+    return links
 
+
+def _joints(data: dict, src: str, links: list[Link]) -> tuple[list[Joint], str]:
+    """Return the [[joint]] entries as Joints, and the root link: they must join the links
+    into one tree."""
+    link_names = {ln.name for ln in links}
     joints, jseen, has_parent = [], set(), {}
     for i, entry in enumerate(_entries(data, "joint", src)):
         t = _Table(entry, f"{src}: [[joint]] #{i + 1}")
@@ -303,8 +306,11 @@ def creature_from_dict(data: dict, path: str | os.PathLike | None = None) -> Cre
             cur, steps = parent_of[cur], steps + 1
             if steps > len(links):
                 raise CreatureError(f"{src}: the joints form a cycle through link {ln!r}")
-    joint_by = {j.name: j for j in joints}
+    return joints, roots[0]
 
+
+def _actuators(data: dict, src: str, joint_by: dict[str, Joint]) -> list[Actuator]:
+    """Return the [[actuator]] entries as Actuators (at least one), one per joint."""
     acts, aseen = [], set()
     for i, entry in enumerate(_entries(data, "actuator", src)):
         t = _Table(entry, f"{src}: [[actuator]] #{i + 1}")
@@ -330,8 +336,13 @@ def creature_from_dict(data: dict, path: str | os.PathLike | None = None) -> Cre
         raise CreatureError(
             f"{src}: a creature needs at least one [[actuator]] (a network has nothing to drive)"
         )
-    act_by = {a.name: a for a in acts}
+    return acts
 
+
+def _sensors(
+    data: dict, src: str, link_names: set[str], joint_by: dict[str, Joint], act_by: dict
+) -> list[Sensor]:
+    """Return the [[sensor]] entries as Sensors, each on a target of its kind."""
     sens, sseen = [], set()
     for i, entry in enumerate(_entries(data, "sensor", src)):
         t = _Table(entry, f"{src}: [[sensor]] #{i + 1}")
@@ -359,14 +370,30 @@ def creature_from_dict(data: dict, path: str | os.PathLike | None = None) -> Cre
         t.finish()
         _check_range(lo, hi, t.where)
         sens.append(Sensor(name, kind, target, lo, hi, at))
+    return sens
 
+
+def creature_from_dict(data: dict, path: str | os.PathLike | None = None) -> Creature:
+    """Return the validated creature described by parsed TOML ``data`` (from ``path``)."""
+    src = str(path) if path is not None else "<creature>"
+    top = _Table(data, src)
+    top.used.update(("creature", "link", "joint", "sensor", "actuator"))
+    top.finish()
+    if "creature" not in data:
+        raise CreatureError(f"{src}: missing the [creature] table")
+    kw = _header(data, src)
+    links = _links(data, src)
+    link_names = {ln.name for ln in links}
+    joints, root = _joints(data, src, links)
+    joint_by = {j.name: j for j in joints}
+    acts = _actuators(data, src, joint_by)
+    sens = _sensors(data, src, link_names, joint_by, {a.name: a for a in acts})
     for ln in kw["fall_links"]:
         if ln not in link_names:
             raise CreatureError(f"{src}: [creature]: fall link {ln!r} does not exist")
     if kw["metric"] == "follow" and not any(s.kind == "eye" for s in sens):
         raise CreatureError(f"{src}: [creature]: metric 'follow' needs at least one eye sensor")
     # the root link first: the world makes it the planar root
-    root = roots[0]
     links.sort(key=lambda ln: ln.name != root)
     return Creature(
         links=tuple(links),

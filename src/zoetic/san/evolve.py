@@ -18,7 +18,7 @@ the cross-section; the moment of inertia, when the file gives one, with mass x l
 touch probes and link starts scale with their link's length; an anchor with its parent's
 length (then the shift is added).
 
-One annealing walk (``tune.anneal_values``, the project's ``learn.optimizers.Annealing``)
+One annealing walk (``tune.anneal_values``, the project's ``learning.optimizers.Annealing``)
 moves one parameter at a time, body genes and Fig. 8 parameters alike, and keeps the
 network's weights. Every candidate body is a new MuJoCo model.
 """
@@ -266,9 +266,11 @@ def changes(result: EvolveResult) -> list[dict]:
     return rows
 
 
-def write_evolve(result: EvolveResult, out, terrain: str = "flat", video: bool = True) -> dict:
-    """Write an evolve run: creature.toml (the evolved body, read back by the strict reader),
-    san.json (its network), start.json, history.csv, summary.json, video.mp4."""
+def write_evolve(result: EvolveResult, out, terrain: str = "flat") -> dict:
+    """Write an evolve run's data: creature.toml (the evolved body, read back by the strict
+    reader), san.json (its network, carrying the evolved body), start.json (carrying the
+    starting body), history.csv, summary.json; return the summary. Its video is drawn by
+    ``zoetic.viz.san.draw_evolve``."""
     from zoetic.io import atomic_write_bytes, write_json
     from zoetic.san.creature_file import load_creature, save_creature
     from zoetic.san.network import save_network
@@ -280,8 +282,8 @@ def write_evolve(result: EvolveResult, out, terrain: str = "flat", video: bool =
     net = result.network.with_params(info={**result.network.info, "terrain": terrain,
                                            "creature_file": str(path)})  # fmt: skip
     check_fits(net, evolved)
-    save_network(net, out / "san.json")
-    save_network(result.start, out / "start.json")
+    save_network(net, out / "san.json", evolved)
+    save_network(result.start, out / "start.json", result.base)
     lines = ["trial,candidate,best"] + [
         f"{i + 1},{a:.6g},{b:.6g}" for i, (a, b) in enumerate(zip(result.tried, result.best,
                                                                strict=True))
@@ -306,11 +308,6 @@ def write_evolve(result: EvolveResult, out, terrain: str = "flat", video: bool =
         "creature_file": str(path),
         "network": str(out / "san.json"),
     }
-    if video:
-        from zoetic.san.show import show_video
-
-        written, _ = show_video(net, evolved, out / "video.mp4", terrain=terrain)
-        summary["video"] = str(written)
     write_json(out / "summary.json", summary)
     return summary
 

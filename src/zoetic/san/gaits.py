@@ -29,7 +29,6 @@ of "distinct" does not depend on what else was found.
 from __future__ import annotations
 
 import math
-import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -219,23 +218,15 @@ def _slug(text: str) -> str:
     return re.sub(r"[^a-z0-9+-]+", "-", text.lower()).strip("-")[:48]
 
 
-def _clip_job(job: tuple) -> str:
-    """Render one mode's clip (its fastest member), with the mode's label beside it."""
-    from zoetic.san import draw
-    from zoetic.san.show import replay
-    from zoetic.viz.video import write_mp4
-
-    net, creature, seconds, terrain, seed, path, text = job
-    rollout = replay(net, creature, seconds, terrain, seed, fps=30)
-    step = float(rollout.times[1] - rollout.times[0]) if len(rollout.times) > 1 else 1 / 30
-
-    def panel(ax, i: int) -> None:
-        ax.axis("off")
-        ax.text(0.0, 1.0, text, va="top", ha="left", fontsize=8, family="monospace",
-                transform=ax.transAxes)  # fmt: skip
-
-    frames = draw.render_frames(creature, rollout, side_panel=panel)
-    return str(write_mp4(frames, path, fps=1.0 / step))
+def mode_caption(entry: dict, n_modes: int) -> str:
+    """Return the text shown beside a mode's clip: its label and its best gait's features."""
+    f = entry["best"]
+    lines = [f"mode {entry['mode']} of {n_modes}", entry["label"], f"{entry['count']} network(s)"]
+    lines += [f"{f['speed_cm_s']:.1f} cm/s", f"turns {f['turns']:.2f}"]
+    lines += [f"airborne {100 * f['airborne']:.0f}%", f"period {f['period_s']:.2f} s"]
+    lines += [f"periodicity {f['periodicity']:.2f}"]
+    lines += [f"{n} down {100 * v:.0f}%" for n, v in f["contact"].items()]
+    return "\n".join(lines)
 
 
 def write_modes(
@@ -248,10 +239,10 @@ def write_modes(
     seed: int = 0,
     threshold: float = THRESHOLD,
     video: bool = True,
-    workers: int | None = None,
 ) -> dict:
     """Replay ``networks`` (with ``info`` per network: rank, trial, ...), cluster their gaits,
-    write ``out``/modes.json and one labelled clip per mode (modes/NN-label.mp4)."""
+    write ``out``/modes.json and return it. With ``video`` each mode names its clip
+    (modes/NN-label.mp4), drawn by ``zoetic.viz.san.draw_modes``."""
     from zoetic.io import write_json
     from zoetic.san.show import replay
 
@@ -262,37 +253,15 @@ def write_modes(
         features.append(gait_features(net.tuned_creature(creature), ro))
     modes = describe_gaits(features, threshold)
     X, names = feature_matrix(features)
-    doc_modes, jobs = [], []
+    doc_modes = []
     for m in modes:
-        f = features[m.best]
-        clip = out / "modes" / f"{m.number:02d}-{_slug(m.label)}.mp4"
-        text = "\n".join([
-            f"mode {m.number} of {len(modes)}", m.label, f"{len(m.members)} network(s)",
-            f"{f['speed_cm_s']:.1f} cm/s", f"turns {f['turns']:.2f}",
-            f"airborne {100 * f['airborne']:.0f}%", f"period {f['period_s']:.2f} s",
-            f"periodicity {f['periodicity']:.2f}",
-        ] + [f"{n} down {100 * v:.0f}%" for n, v in f["contact"].items()])  # fmt: skip
-        entry = {
-            "mode": m.number, "label": m.label, "count": len(m.members),
-            "best": {**info[m.best], **f},
-            "members": [{**info[i], **features[i]} for i in m.members],
-        }  # fmt: skip
+        entry = {"mode": m.number, "label": m.label, "count": len(m.members)}
+        entry["best"] = {**info[m.best], **features[m.best]}
+        entry["members"] = [{**info[i], **features[i]} for i in m.members]
+        entry["network"] = m.best  # its index in ``networks``
         if video:
-            entry["clip"] = str(clip)
-            jobs.append((networks[m.best], creature, seconds, terrain, seed, clip, text))
+            entry["clip"] = str(out / "modes" / f"{m.number:02d}-{_slug(m.label)}.mp4")
         doc_modes.append(entry)
-    if jobs:
-        n = max(1, min(int(workers or os.cpu_count() or 1), len(jobs)))
-        if n == 1:
-            for job in jobs:
-                _clip_job(job)
-        else:
-            from concurrent.futures import ProcessPoolExecutor
-
-            from zoetic.san.search import pool_context
-
-            with ProcessPoolExecutor(max_workers=n, mp_context=pool_context()) as pool:
-                list(pool.map(_clip_job, jobs))
     doc = {
         "creature": creature.name,
         "gaits": len(networks),

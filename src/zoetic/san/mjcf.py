@@ -86,6 +86,75 @@ def _geom(link, contact: str) -> str:
     return out
 
 
+def _joints_xml(joint, root_z: float) -> tuple[str, str, list[str]]:
+    """Return a body's position, orientation and joint elements for the joint that attaches
+    it to its parent (None: the root, which slides and turns freely in the plane)."""
+    if joint is None:
+        # the root's joint axes live in its own frame: keep it unrotated; World sets the
+        # start angle through the root hinge's qpos
+        return (
+            _f(0, 0, root_z),
+            "1 0 0 0",
+            [
+                '<joint name="root_x" type="slide" axis="1 0 0" limited="false"/>',
+                '<joint name="root_z" type="slide" axis="0 0 1" limited="false"/>',
+                '<joint name="root_a" type="hinge" axis="0 -1 0" limited="false"/>',
+            ],
+        )
+    ca, sa = math.cos(joint.angle), math.sin(joint.angle)
+    ax, az = joint.anchor
+    pos = _f(ax + joint.offset * ca, 0, az + joint.offset * sa)
+    if joint.kind == "fixed":
+        return pos, plane_quat(joint.angle), []
+    typ, axis = ("hinge", "0 -1 0") if joint.kind == "hinge" else ("slide", "1 0 0")
+    extra = f'stiffness="{_f(joint.stiffness)}" damping="{_f(joint.damping)}"'
+    if joint.range is not None:
+        extra += f' limited="true" range="{_f(*joint.range)}"'
+    else:
+        extra += ' limited="false"'
+    element = f'<joint name={quoteattr(joint.name)} type="{typ}" axis="{axis}" {extra}/>'
+    return pos, plane_quat(joint.angle), [element]
+
+
+def _bodies_xml(creature: Creature, contact: str, root_z: float) -> list[str]:
+    """Return the nested <body> elements of the creature's link tree, root first."""
+    children: dict[str, list] = {}
+    for j in creature.joints:
+        children.setdefault(j.parent, []).append(j)
+    links = {ln.name: ln for ln in creature.links}
+
+    def body(name: str, joint, indent: str) -> list[str]:
+        pos, quat, jx = _joints_xml(joint, root_z)
+        lines = [f'{indent}<body name={quoteattr(name)} pos="{pos}" quat="{quat}">']
+        lines += [indent + "  " + x for x in jx]
+        lines.append(indent + "  " + _geom(links[name], contact))
+        for cj in children.get(name, []):
+            lines += body(cj.child, cj, indent + "  ")
+        lines.append(indent + "</body>")
+        return lines
+
+    return body(creature.links[0].name, None, "    ")
+
+
+def _ground_xml(terrain: np.ndarray | None, fr: str) -> tuple[str, str]:
+    """Return the <asset> (a height field for a terrain profile) and the ground's <geom>."""
+    if terrain is None:
+        plane = f'<geom name="ground" type="plane" size="0 0 1" {fr} contype="1" conaffinity="2"/>'
+        return "", plane
+    x, z = terrain[:, 0], terrain[:, 1]
+    top = max(float(z.max()), 1e-6)
+    rx = (x[-1] - x[0]) / 2
+    asset = (
+        f'<asset><hfield name="terrain" nrow="3" ncol="{len(x)}" '
+        f'size="{_f(rx, 1.0, top, 0.1)}"/></asset>'
+    )
+    floor = (
+        '<geom name="ground" type="hfield" hfield="terrain" '
+        f'pos="{_f((x[0] + x[-1]) / 2)} 0 0" {fr} contype="1" conaffinity="2"/>'
+    )
+    return asset, floor
+
+
 def build_mjcf(creature: Creature, terrain: np.ndarray | None = None, root_z: float = 0.0) -> str:
     """Return the MJCF text of ``creature`` on flat ground or on the ``terrain`` profile (K, 2)."""
     c = creature
@@ -95,72 +164,13 @@ def build_mjcf(creature: Creature, terrain: np.ndarray | None = None, root_z: fl
     # too, or their default 1.0 would override any lower ``friction``
     fr = f'friction="{_f(c.friction)} 0.005 0.0001"'
     contact = f'contype="2" conaffinity="0" {fr}' if vertical else 'contype="0" conaffinity="0"'
-    children: dict[str, list] = {}
-    for j in c.joints:
-        children.setdefault(j.parent, []).append(j)
-    links = {ln.name: ln for ln in c.links}
-
-    def body(name: str, joint, indent: str) -> list[str]:
-        link = links[name]
-        if joint is None:
-            # the root's joint axes live in its own frame: keep it unrotated; World sets the
-            # start angle through the root hinge's qpos
-            pos, quat = _f(0, 0, root_z), "1 0 0 0"
-            jx = [
-                '<joint name="root_x" type="slide" axis="1 0 0" limited="false"/>',
-                '<joint name="root_z" type="slide" axis="0 0 1" limited="false"/>',
-                '<joint name="root_a" type="hinge" axis="0 -1 0" limited="false"/>',
-            ]
-        else:
-            ca, sa = math.cos(joint.angle), math.sin(joint.angle)
-            ax, az = joint.anchor
-            pos = _f(ax + joint.offset * ca, 0, az + joint.offset * sa)
-            quat = plane_quat(joint.angle)
-            jx = []
-            if joint.kind != "fixed":
-                typ, axis = ("hinge", "0 -1 0") if joint.kind == "hinge" else ("slide", "1 0 0")
-                extra = f'stiffness="{_f(joint.stiffness)}" damping="{_f(joint.damping)}"'
-                if joint.range is not None:
-                    extra += f' limited="true" range="{_f(*joint.range)}"'
-                else:
-                    extra += ' limited="false"'
-                jx.append(
-                    f'<joint name={quoteattr(joint.name)} type="{typ}" axis="{axis}" {extra}/>'
-                )
-        lines = [f'{indent}<body name={quoteattr(name)} pos="{pos}" quat="{quat}">']
-        lines += [indent + "  " + x for x in jx]
-        lines.append(indent + "  " + _geom(link, contact))
-        for cj in children.get(name, []):
-            lines += body(cj.child, cj, indent + "  ")
-        lines.append(indent + "</body>")
-        return lines
-
-    asset, floor = "", ""
-    if vertical:
-        if terrain is None:
-            floor = (
-                f'<geom name="ground" type="plane" size="0 0 1" {fr} contype="1" conaffinity="2"/>'
-            )
-        else:
-            x, z = terrain[:, 0], terrain[:, 1]
-            top = max(float(z.max()), 1e-6)
-            rx = (x[-1] - x[0]) / 2
-            asset = (
-                f'<asset><hfield name="terrain" nrow="3" ncol="{len(x)}" '
-                f'size="{_f(rx, 1.0, top, 0.1)}"/></asset>'
-            )
-            floor = (
-                '<geom name="ground" type="hfield" hfield="terrain" '
-                f'pos="{_f((x[0] + x[-1]) / 2)} 0 0" {fr} contype="1" conaffinity="2"/>'
-            )
-    acts = []
-    for a in c.actuators:
-        acts.append(
-            f"<position name={quoteattr(a.name)} joint={quoteattr(a.joint)} "
-            f'kp="{_f(a.ks)}" kv="{_f(a.kd)}" ctrllimited="false" forcelimited="false"/>'
-        )
+    asset, floor = _ground_xml(terrain, fr) if vertical else ("", "")
+    acts = [
+        f"<position name={quoteattr(a.name)} joint={quoteattr(a.joint)} "
+        f'kp="{_f(a.ks)}" kv="{_f(a.kd)}" ctrllimited="false" forcelimited="false"/>'
+        for a in c.actuators
+    ]
     flags = "" if vertical else '<flag contact="disable"/>'
-    root = c.links[0].name
     parts = [
         f"<mujoco model={quoteattr(c.name)}>",
         '  <compiler angle="radian" autolimits="true"/>',
@@ -169,7 +179,7 @@ def build_mjcf(creature: Creature, terrain: np.ndarray | None = None, root_z: fl
         f"  {asset}",
         "  <worldbody>",
         f"    {floor}",
-        *body(root, None, "    "),
+        *_bodies_xml(c, contact, root_z),
         "  </worldbody>",
         "  <actuator>",
         *["    " + a for a in acts],

@@ -26,6 +26,7 @@ import numpy as np
 from zoetic import io as rd
 from zoetic.errors import ZoeticError
 from zoetic.io import LIMITS, abbrev, check_keys, read_json, write_json
+from zoetic.san.creature_file import creature_from_dict, creature_to_dict, load_creature
 
 __all__ = [
     "FORMAT",
@@ -221,8 +222,10 @@ def check_fits(network: Network, creature, source: str | os.PathLike | None = No
         )
 
 
-NETWORK_KEYS = ("format", "version", "creature", "n_sensors", "n_hidden", "n_actuators",
-                "weights", "k1", "k2", "tuning", "info")  # fmt: skip
+NETWORK_KEYS = (
+    "format", "version", "creature", "n_sensors", "n_hidden", "n_actuators", "weights", "k1",
+    "k2", "tuning", "info", "creature_def",
+)  # fmt: skip
 
 
 def network_from_dict(data: Any, source: str | os.PathLike | None = None) -> Network:
@@ -275,9 +278,18 @@ def network_from_dict(data: Any, source: str | os.PathLike | None = None) -> Net
     return shell
 
 
-def save_network(network: Network, path: str | os.PathLike) -> Path:
-    """Write the network as JSON (atomically); returns the path."""
-    return write_json(path, network.to_dict())
+def save_network(network: Network, path: str | os.PathLike, creature=None) -> Path:
+    """Write the network as JSON (atomically); returns the path.
+
+    With ``creature`` (the untuned creature it drives) the file carries the creature's whole
+    definition (``creature_def``, the creature file's tables), so it is read back without the
+    zoo or the creature file: a SAN found for a creature file is tuned, shown and evolved
+    like a zoo one."""
+    data = network.to_dict()
+    if creature is not None:
+        check_fits(network, creature, path)
+        data["creature_def"] = creature_to_dict(creature)
+    return write_json(path, data)
 
 
 def load_network(path: str | os.PathLike, creature=None) -> Network:
@@ -290,12 +302,22 @@ def load_network(path: str | os.PathLike, creature=None) -> Network:
 
 
 def load_with_creature(path: str | os.PathLike, creature=None):
-    """Return (network, creature) from a network file; the creature defaults to the file's."""
-    from zoetic.san import load_creature
+    """Return (network, creature) from a network file.
 
-    net = load_network(path)
+    The creature is ``creature`` when given (a Creature, a zoo name or a creature file), else
+    the one the file carries (``creature_def``), else, for a file written before SAN files
+    carried their creature, the zoo creature the file names."""
+    data = read_json(path, "network file", NetworkError)
+    net = network_from_dict(data, path)
     try:
-        c = load_creature(creature if creature is not None else net.creature)
+        if creature is not None and not isinstance(creature, str | os.PathLike):
+            c = creature
+        elif creature is not None:
+            c = load_creature(creature)
+        elif "creature_def" in data:
+            c = creature_from_dict(data["creature_def"], path)
+        else:
+            c = load_creature(net.creature)
     except ZoeticError as exc:
         raise NetworkError(f"{path}: its creature: {exc}") from None
     check_fits(net, c, path)

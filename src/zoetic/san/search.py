@@ -20,8 +20,15 @@ import numpy as np
 
 from zoetic.san.network import Network, SanPolicy, random_network
 
-__all__ = ["Outcome", "SearchResult", "evaluate_networks", "pool_context", "search",
-           "speed_cm_s", "time_one_trial"]
+__all__ = [
+    "Outcome",
+    "SearchResult",
+    "evaluate_networks",
+    "pool_context",
+    "search",
+    "speed_cm_s",
+    "time_one_trial",
+]
 
 Progress = Callable[[int, int, float], None]  # (done, total, best metric so far)
 TERRAINS = ("flat", "rough")
@@ -108,7 +115,7 @@ def _evaluate_chunk(start: int, networks: Sequence[Network]) -> tuple[int, list[
 
 @dataclass(frozen=True)
 class _Trials:
-    """One creature, terrain, seed and horizon: the job a Ray actor keeps (learn.ray_eval)."""
+    """One creature, terrain, seed and horizon: the job a Ray actor keeps (learning.ray_eval)."""
 
     creature: object
     terrain: str
@@ -122,8 +129,9 @@ class _Trials:
         return [_evaluate_one(net) for net in networks]
 
 
-def time_one_trial(creature, network: Network, terrain: str = "flat", seed: int = 0,
-                   seconds: float | None = None) -> tuple[float, float]:  # fmt: skip
+def time_one_trial(
+    creature, network: Network, terrain: str = "flat", seed: int = 0, seconds: float | None = None
+) -> tuple[float, float]:
     """Return (seconds to set up a worker, seconds for one trial of ``network``), both in this
     process and exactly as a search's worker does them. Setting up builds the World (its first
     use compiles the simulator); no worker state is left behind."""
@@ -176,7 +184,7 @@ def evaluate_networks(
             progress(done, total, float(best))
 
     if evaluator == "ray":
-        from zoetic.learn.ray_eval import RayPool
+        from zoetic.learning.ray_eval import RayPool
 
         pool = RayPool(actors=workers if workers and workers > 1 else None)
         done = 0
@@ -255,8 +263,9 @@ def search(
     networks = [random_network(creature, rng, n_hidden=n_hidden) for _ in range(trials)]
     seconds = float(creature.seconds if seconds is None else seconds)
     t0 = time.perf_counter()
-    outs = evaluate_networks(creature, networks, terrain, seed, seconds, workers, progress,
-                             evaluator=evaluator)  # fmt: skip
+    outs = evaluate_networks(
+        creature, networks, terrain, seed, seconds, workers, progress, evaluator=evaluator
+    )
     elapsed = time.perf_counter() - t0
     return SearchResult(
         creature=creature,
@@ -295,27 +304,10 @@ def useful_mask(result: SearchResult, threshold_cm_s: float | None = None) -> np
     return (~result.fell) & (result.speeds >= thr) & np.isfinite(result.metrics)
 
 
-def plot_ranking(result: SearchResult, path, top: int = 10):
-    """Write ranking.png: every trial's metric from best to worst (the long-tailed curve)."""
-    from zoetic.viz.san import plot_ranking as plot
-
-    return plot(result, path, top)
-
-def _video_job(job: tuple) -> Path:
-    """Replay one kept network and write its video; returns the video's path."""
-    from zoetic.san import draw
-    from zoetic.san.show import replay
-    from zoetic.viz.video import write_mp4
-
-    net, creature, seconds, terrain, seed, path = job
-    rollout = replay(net, creature, seconds, terrain, seed, fps=30)
-    step = float(rollout.times[1] - rollout.times[0]) if len(rollout.times) > 1 else 1 / 30
-    return write_mp4(draw.render_frames(creature, rollout), path, fps=1.0 / step)
-
-
-def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -> dict:
-    """Write a search run directory (sans/NN.json, videos/NN.mp4, ranking.png, trials.csv)."""
-
+def write_search(result: SearchResult, out, top: int = 10) -> dict:
+    """Write a search run directory's data (config.toml, trials.csv, sans/NN.json, each SAN
+    file carrying its creature; summary.json) and return the summary. Its pictures (ranking,
+    videos) are drawn by ``zoetic.viz.san.draw_search``."""
     from zoetic.io import atomic_write_bytes, write_json, write_toml
     from zoetic.san.network import save_network
 
@@ -323,10 +315,9 @@ def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -
     c = result.creature
     speeds = result.speeds
     kept = result.top(top)
-    write_toml(out / "config.toml", {
-        "creature": c.name, "trials": len(result.networks), "top": top, "seed": result.seed,
-        "terrain": result.terrain, "seconds": result.seconds, "workers": result.workers,
-    })  # fmt: skip
+    config = {"creature": c.name, "trials": len(result.networks), "top": top}
+    config |= {"seed": result.seed, "terrain": result.terrain, "seconds": result.seconds}
+    write_toml(out / "config.toml", config | {"workers": result.workers})
     lines = ["trial,metric,speed_cm_s,fell,distance_m"]
     for i, (m, s, f, d) in enumerate(
         zip(result.metrics, speeds, result.fell, result.distances, strict=True)
@@ -335,26 +326,11 @@ def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -
     atomic_write_bytes(out / "trials.csv", ("\n".join(lines) + "\n").encode())
     sans = []
     for rank, i in enumerate(kept, start=1):
-        net = result.networks[i].with_params(info={
-            "rank": rank, "trial": i, "metric": float(result.metrics[i]),
-            "speed_cm_s": round(float(speeds[i]), 3), "fell": bool(result.fell[i]),
-            "terrain": result.terrain, "seed": result.seed, "seconds": result.seconds,
-        })  # fmt: skip
-        sans.append(save_network(net, out / "sans" / f"{rank:02d}.json"))
-    plot_ranking(result, out / "ranking.png", top=min(top, len(kept)))
-    videos = []
-    if video:  # one video per kept gait, rendered on all cores
-        jobs = [
-            (result.networks[i], c, result.seconds, result.terrain, result.seed,
-             out / "videos" / f"{rank:02d}.mp4")
-            for rank, i in enumerate(kept, start=1)
-        ]  # fmt: skip
-        workers = max(1, min(os.cpu_count() or 1, len(jobs)))
-        if workers == 1:
-            videos = [_video_job(job) for job in jobs]
-        else:
-            with ProcessPoolExecutor(max_workers=workers, mp_context=pool_context()) as pool:
-                videos = list(pool.map(_video_job, jobs))
+        info = {"rank": rank, "trial": i, "metric": float(result.metrics[i])}
+        info |= {"speed_cm_s": round(float(speeds[i]), 3), "fell": bool(result.fell[i])}
+        info |= {"terrain": result.terrain, "seed": result.seed, "seconds": result.seconds}
+        net = result.networks[i].with_params(info=info)
+        sans.append(save_network(net, out / "sans" / f"{rank:02d}.json", c))
     use = useful_mask(result)
     bar = getattr(c, "useful_speed", None)  # the creature's absolute bar (cm/s)
     absolute = None
@@ -373,9 +349,6 @@ def write_search(result: SearchResult, out, top: int = 10, video: bool = True) -
         "fell": int(result.fell.sum()),
         "evaluation_s": round(result.elapsed, 2),
         "sans": str(out / "sans"),
-        "ranking": str(out / "ranking.png"),
     }
-    if videos:
-        summary["videos"] = str(out / "videos")
     write_json(out / "summary.json", summary)
     return summary

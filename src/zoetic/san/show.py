@@ -1,4 +1,5 @@
-"""Replaying a SAN with its sensors and nodes drawn beside the creature, so one sees why it moves.
+"""Replaying a SAN, and what is drawn beside the creature so one sees why it moves (the video
+itself is drawn by ``zoetic.viz.san.show_video``).
 
 The side panel is a scrolling raster of the last seconds: one row per sensor (on = dark blue),
 one per hidden node and one per actuator node (the integrator's state as a light tone, the
@@ -15,12 +16,19 @@ import numpy as np
 
 from zoetic.san.network import Network, NetworkError, SanPolicy, check_fits
 
-__all__ = ["network_raster", "record_every_for", "replay", "resolve_network", "show_video"]
+__all__ = [
+    "BLANK",
+    "labelled_raster",
+    "network_raster",
+    "record_every_for",
+    "replay",
+    "resolve_network",
+]
 
 _SENSOR = np.array([0.16, 0.35, 0.75])
 _HIDDEN = np.array([0.90, 0.50, 0.10])
 _ACTUATOR = np.array([0.15, 0.60, 0.25])
-_BLANK = np.array([0.97, 0.97, 0.97])
+BLANK = np.array([0.97, 0.97, 0.97])
 
 
 def resolve_network(path: str | os.PathLike, rank: int = 1) -> Path:
@@ -73,7 +81,7 @@ def network_raster(network: Network, rollout) -> tuple[np.ndarray, list[str]]:
     cmds = np.clip(np.asarray(rollout.commands, dtype=float) / 2.0, -1.0, 1.0)  # (R, A)
 
     def tone(color, level):  # level 0 -> blank, 1 -> colour
-        return _BLANK + level[..., None] * (color - _BLANK)
+        return BLANK + level[..., None] * (color - BLANK)
 
     rows = [tone(_SENSOR, sensors.T)]
     node_level = np.where(out > 0.5, 1.0, 0.35 * istate).T
@@ -97,29 +105,11 @@ def _items(rollout, what: str):
     return getattr(creature, what, ()) if creature is not None else ()
 
 
-def show_video(
-    network: Network,
-    creature,
-    path: str | os.PathLike,
-    seconds: float | None = None,
-    terrain: str = "flat",
-    seed: int = 0,
-    fps: float = 30.0,
-    window: float = 2.0,
-    size: tuple[int, int] = (1120, 416),
-    rollout=None,
-) -> tuple[Path, object]:
-    """Write a video of the creature with its network's activity beside it.
-
-    Returns the video's path and the replayed Rollout.
-    """
-    from zoetic.san import draw
-    from zoetic.viz.video import write_mp4
-
-    tuned = network.tuned_creature(creature)
-    if rollout is None:
-        rollout = replay(network, creature, seconds, terrain, seed, fps)
+def labelled_raster(network: Network, creature, rollout) -> tuple[np.ndarray, list[str]]:
+    """Return ``network_raster`` with its rows named after the (tuned) creature's sensors and
+    actuators: what the video's side panel shows."""
     raster, labels = network_raster(network, rollout)
+    tuned = network.tuned_creature(creature)
     sensor_names = [s.name for s in tuned.sensors] if getattr(tuned, "sensors", None) else []
     act_names = [a.name for a in tuned.actuators] if getattr(tuned, "actuators", None) else []
     if len(sensor_names) == network.n_sensors:
@@ -128,25 +118,4 @@ def show_video(
         k = network.n_sensors + network.n_hidden
         labels[k : k + network.n_actuators] = [f"node {a}" for a in act_names]
         labels[k + network.n_actuators :] = [f"cmd {a}" for a in act_names]
-    times = np.asarray(rollout.times, dtype=float)
-    step = float(times[1] - times[0]) if len(times) > 1 else 1.0 / fps
-    width = max(2, int(round(window / step)))
-
-    def panel(ax, i: int) -> None:
-        lo = max(0, i + 1 - width)
-        img = np.full((raster.shape[0], width, 3), _BLANK)
-        seg = raster[:, lo : i + 1]
-        img[:, width - seg.shape[1] :] = seg
-        ax.imshow(img, aspect="auto", interpolation="nearest",
-                  extent=(-width * step, 0.0, raster.shape[0] - 0.5, -0.5))  # fmt: skip
-        ax.set_yticks(range(len(labels)))
-        ax.set_yticklabels(labels, fontsize=7)
-        ax.set_xlabel("seconds before now", fontsize=7)
-        ax.tick_params(axis="x", labelsize=7)
-        for y in (network.n_sensors, network.n_sensors + network.n_hidden,
-                  network.n_sensors + network.n_nodes):  # fmt: skip
-            ax.axhline(y - 0.5, color="0.5", lw=0.6)
-        ax.set_title(f"SAN  t = {times[i]:.2f} s", fontsize=8)
-
-    frames = draw.render_frames(tuned, rollout, side_panel=panel, size=size)
-    return write_mp4(frames, path, fps=1.0 / step), rollout  # real time
+    return raster, labels

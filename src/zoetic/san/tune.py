@@ -24,12 +24,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from zoetic.errors import ZoeticError
-from zoetic.learn.optimizers import Annealing
+from zoetic.learning.optimizers import Annealing
 from zoetic.san.network import TUNING_KEYS, Network, SanPolicy, check_fits
 
 __all__ = [
-    "METHODS", "Param", "TuneResult", "Walk", "WorldEvaluator", "anneal_values",
-    "tunable_parameters", "tune",
+    "METHODS",
+    "Param",
+    "TuneResult",
+    "Walk",
+    "WorldEvaluator",
+    "anneal_values",
+    "tunable_parameters",
+    "tune",
 ]
 
 METHODS = ("sga", "anneal")
@@ -172,6 +178,35 @@ class Walk:
 Checkpoint = Callable[[int, "Annealing", dict], None]  # (trials done, optimizer, history)
 
 
+class _Moves:
+    """The walk's space: ``values`` flattened into one vector, and its one-parameter move
+    (a move that ``_perturbed`` or ``valid`` refuses leaves ``invalid`` set)."""
+
+    def __init__(self, values: dict[str, np.ndarray], params: list[Param], valid=None):
+        self.keys = list(values)
+        self.shapes = [values[k].shape for k in self.keys]
+        self.splits = np.cumsum([values[k].size for k in self.keys])[:-1]
+        self.params, self.valid = params, valid
+        self.invalid = False
+
+    def flat(self, values: dict[str, np.ndarray]) -> np.ndarray:
+        return np.concatenate([values[k].ravel() for k in self.keys])
+
+    def unflat(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        parts = np.split(np.asarray(x, dtype=float), self.splits)
+        pairs = zip(self.keys, parts, self.shapes, strict=True)
+        return {k: a.reshape(shape).copy() for k, a, shape in pairs}
+
+    def perturb(self, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        p = self.params[int(rng.integers(len(self.params)))]
+        sign = 1 if rng.random() < 0.5 else -1
+        cand = _perturbed(self.unflat(x[0]), p, sign)
+        if cand is not None and self.valid is not None and not self.valid(cand):
+            cand = None
+        self.invalid = cand is None
+        return x if cand is None else self.flat(cand)[None]
+
+
 def anneal_values(
     values: dict[str, np.ndarray],
     params: list[Param],
@@ -189,78 +224,69 @@ def anneal_values(
     every: int = 25,
 ) -> Walk:
     """Maximise ``score(values)`` by moving one of ``params`` a step at a time (the walk
-    of ``tune``, also used by ``evolve``): annealing (learn.optimizers.Annealing) minimising
+    of ``tune``, also used by ``evolve``): annealing (learning.optimizers.Annealing) minimising
     -score, T dropping every ``per_temperature`` trials; ``sga`` is the same walk at T = 0,
     keeping strict improvements. A step that ``_perturbed`` or ``valid`` refuses counts as a
     trial but is not evaluated. ``resume`` (a ``checkpoint``'s history) continues a walk.
     """
-    keys = list(values)
-    sizes = [values[k].size for k in keys]
-
-    def unflat(x: np.ndarray) -> dict[str, np.ndarray]:
-        parts = np.split(np.asarray(x, dtype=float), np.cumsum(sizes)[:-1])
-        return {k: a.reshape(values[k].shape).copy() for k, a in zip(keys, parts, strict=True)}
-
-    invalid = [False]
-
-    def perturb(x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        p = params[int(rng.integers(len(params)))]
-        sign = 1 if rng.random() < 0.5 else -1
-        cand = _perturbed(unflat(x[0]), p, sign)
-        if cand is not None and valid is not None and not valid(cand):
-            cand = None
-        invalid[0] = cand is None
-        return x if cand is None else np.concatenate([cand[k].ravel() for k in keys])[None]
+    moves = _Moves(values, params, valid)
 
     def safe(v: dict[str, np.ndarray]) -> float:
         f = float(score(v))
         return f if np.isfinite(f) else -math.inf
 
-    x0 = np.concatenate([values[k].ravel() for k in keys])
-    current, best = np.empty(trials), np.empty(trials)
-    tried = np.full(trials, np.nan)
+    x0 = moves.flat(values)
+    track = {"current": np.empty(trials), "best": np.empty(trials)}
+    track["tried"] = np.full(trials, np.nan)
     if resume is not None:
         f_start, accepted = float(resume["before"]), int(resume["accepted"])
-        done = int(resume["done"])
-        temp = float(resume["temperature"])
+        done, temp = int(resume["done"]), float(resume["temperature"])
     else:
         f_start, accepted, done = safe(values), 0, 0
         temp = float(temperature) if temperature is not None else 0.1 * max(abs(f_start), 1e-3)
-    sa = Annealing(x0, np.full(x0.size, -np.inf), np.full(x0.size, np.inf), seed,
-                   t0=temp if method == "anneal" else 0.0, alpha=cooling, perturb=perturb,
-                   max_steps=per_temperature, min_accepts=10**18,
-                   accept_ties=method == "anneal")  # fmt: skip
+    sa = Annealing(
+        x0,
+        np.full(x0.size, -np.inf),
+        np.full(x0.size, np.inf),
+        seed,
+        t0=temp if method == "anneal" else 0.0,
+        alpha=cooling,
+        perturb=moves.perturb,
+        max_steps=per_temperature,
+        min_accepts=10**18,
+        accept_ties=method == "anneal",
+    )
     if resume is not None:
         sa.load_state_dict(resume["state"])
-        n = min(done, trials)
-        for name, arr in (("current", current), ("best", best), ("tried", tried)):
-            arr[:n] = np.asarray(resume[name], dtype=float)[:n]
+        for name, arr in track.items():
+            arr[: min(done, trials)] = np.asarray(resume[name], dtype=float)[: min(done, trials)]
     else:
         sa.tell(sa.ask(), np.array([-f_start]))
     for t in range(done, trials):
         X = sa.ask()
-        if invalid[0]:
-            g = np.inf  # not evaluated; rejected, but the trial counts in the schedule
-        else:
-            f = safe(unflat(X[0]))
-            tried[t], g = f, -f
+        g = np.inf  # a refused move is not evaluated; rejected, but it counts in the schedule
+        if not moves.invalid:
+            track["tried"][t] = f = safe(moves.unflat(X[0]))
+            g = -f
         sa.tell(X, np.array([g]))
         accepted += int(sa.last_accept[0])
-        current[t], best[t] = -sa.f[0], -sa.best_f
+        track["current"][t], track["best"][t] = -sa.f[0], -sa.best_f
         if progress is not None:
             progress(t + 1, trials, -sa.best_f)
         if checkpoint is not None and ((t + 1) % every == 0 or t + 1 == trials):
-            checkpoint(t + 1, sa, {
-                "before": f_start, "accepted": accepted, "done": t + 1, "temperature": temp,
-                "current": current[: t + 1].tolist(), "best": best[: t + 1].tolist(),
-                "tried": tried[: t + 1].tolist(), "state": sa.state_dict(),
-            })  # fmt: skip
+            history = {k: v[: t + 1].tolist() for k, v in track.items()}
+            history |= {"before": f_start, "accepted": accepted, "done": t + 1}
+            checkpoint(t + 1, sa, history | {"temperature": temp, "state": sa.state_dict()})
     f_best = -sa.best_f
+    kept = moves.unflat(sa.best_x) if f_best > f_start else {k: v.copy() for k, v in values.items()}
     return Walk(
-        values=unflat(sa.best_x) if f_best > f_start else {k: v.copy() for k, v in values.items()},
-        before=f_start, after=max(f_best, f_start), current=current, best=best, tried=tried,
-        accepted=accepted, state=sa.state_dict(),
-    )  # fmt: skip
+        values=kept,
+        before=f_start,
+        after=max(f_best, f_start),
+        accepted=accepted,
+        state=sa.state_dict(),
+        **track,
+    )
 
 
 def tune(
@@ -300,9 +326,17 @@ def tune(
         return float(evaluate(net, tuned))
 
     walk = anneal_values(
-        _start_values(network, creature), params, score, method, trials, seed, progress,
-        per_temperature, cooling, temperature,
-    )  # fmt: skip
+        _start_values(network, creature),
+        params,
+        score,
+        method,
+        trials,
+        seed,
+        progress,
+        per_temperature,
+        cooling,
+        temperature,
+    )
     f_start, f_best = walk.before, walk.after
     start_net = _network(network, _start_values(network, creature))
     best_net = _network(network, walk.values) if f_best > f_start else start_net
@@ -311,71 +345,59 @@ def tune(
     info.update(tuned=method, trials=trials, seed=seed, before=f_start, after=f_best)
     best_net = best_net.with_params(info=info)
     return TuneResult(
-        network=best_net, start=network, before=f_start, after=f_best, method=method,
-        trials=trials, seed=seed, current=current, best=best, tried=tried, accepted=accepted,
+        network=best_net,
+        start=network,
+        before=f_start,
+        after=f_best,
+        method=method,
+        trials=trials,
+        seed=seed,
+        current=current,
+        best=best,
+        tried=tried,
+        accepted=accepted,
         elapsed=time.perf_counter() - t0,
-    )  # fmt: skip
+    )
 
 
-def plot_tuning(result: TuneResult, path, title: str = ""):
-    """Write tuning.png: each candidate's metric, the accepted and the best against trials."""
-    from zoetic.viz.san import plot_tuning as plot
-
-    return plot(result, path, title)
-
-def write_tune(result: TuneResult, creature, out, terrain: str = "flat", video: bool = True):
-    """Write a tune run directory (san.json, start.json, history.csv, tuning.png, video.mp4)."""
+def write_tune(result: TuneResult, creature, out, terrain: str = "flat") -> dict:
+    """Write a tune run directory's data (san.json and start.json, each carrying the creature;
+    config.toml, history.csv, summary.json) and return the summary. Its pictures (tuning.png,
+    video.mp4) are drawn by ``zoetic.viz.san.draw_tune``."""
     from pathlib import Path
 
     from zoetic.io import atomic_write_bytes, write_json, write_toml
     from zoetic.san.network import save_network
     from zoetic.san.search import speed_cm_s
+    from zoetic.san.show import replay
 
     out = Path(out)
-    seconds = float(creature.seconds)
-    info = dict(result.network.info)
-    info["terrain"] = terrain
-    net = result.network.with_params(info=info)
-    save_network(net, out / "san.json")
-    save_network(result.start, out / "start.json")
-    write_toml(out / "config.toml", {
-        "creature": creature.name, "method": result.method, "trials": result.trials,
-        "seed": result.seed, "terrain": terrain,
-    })  # fmt: skip
-    lines = ["trial,candidate,current,best"] + [
-        f"{i + 1},{a:.6g},{b:.6g},{c:.6g}"
-        for i, (a, b, c) in enumerate(zip(result.tried, result.current, result.best, strict=True))
-    ]
+    net = result.network.with_params(info=dict(result.network.info) | {"terrain": terrain})
+    save_network(net, out / "san.json", creature)
+    save_network(result.start, out / "start.json", creature)
+    config = {"creature": creature.name, "method": result.method, "trials": result.trials}
+    write_toml(out / "config.toml", config | {"seed": result.seed, "terrain": terrain})
+    rows = zip(result.tried, result.current, result.best, strict=True)
+    lines = ["trial,candidate,current,best"]
+    lines += [f"{i + 1},{a:.6g},{b:.6g},{c:.6g}" for i, (a, b, c) in enumerate(rows)]
     atomic_write_bytes(out / "history.csv", ("\n".join(lines) + "\n").encode())
-    plot_tuning(result, out / "tuning.png", f"{creature.name} {result.method}")
-
-    def speed(metric: float) -> float:
-        # tuning never changes the metric's kind; hop speed needs the distance, so replay
-        if creature.metric in ("distance", "follow"):
-            return speed_cm_s(creature, metric, 0.0, seconds)
-        return float("nan")
-
+    if creature.metric in ("distance", "follow"):  # the metric is the distance covered
+        before = speed_cm_s(creature, result.before, 0.0)
+        after = speed_cm_s(creature, result.after, 0.0)
+    else:  # tuning never changes the metric's kind; a hop's speed needs its distance: replay
+        ro = replay(net, creature, terrain=terrain)
+        before, after = float("nan"), speed_cm_s(creature, ro.metric, ro.distance, ro.seconds)
     summary = {
         "creature": creature.name,
         "method": result.method,
         "trials": result.trials,
         "metric_before": round(result.before, 4),
         "metric_after": round(result.after, 4),
-        "speed_before_cm_s": round(speed(result.before), 2),
-        "speed_after_cm_s": round(speed(result.after), 2),
+        "speed_before_cm_s": round(before, 2),
+        "speed_after_cm_s": round(after, 2),
         "accepted": result.accepted,
         "seconds": round(result.elapsed, 1),
         "network": str(out / "san.json"),
-        "tuning_plot": str(out / "tuning.png"),
     }
-    if video:
-        from zoetic.san.show import show_video
-
-        path, rollout = show_video(net, creature, out / "video.mp4", terrain=terrain)
-        if creature.metric not in ("distance", "follow"):
-            summary["speed_after_cm_s"] = round(
-                speed_cm_s(creature, rollout.metric, rollout.distance, rollout.seconds), 2
-            )
-        summary["video"] = str(path)
     write_json(out / "summary.json", summary)
     return summary

@@ -305,58 +305,19 @@ class World:
         creature's); records every ``record_every`` control ticks (0: the metric only)."""
         c, m, d = self.creature, self.model, self.data
         seconds = float(c.seconds if seconds is None else seconds)
-        cdt = c.control_dt
+        cdt, k = c.control_dt, self.substeps
         n_ticks = int(round(seconds / cdt))
-        mujoco.mj_resetData(m, d)
-        d.qpos[:] = self.qpos0
-        mujoco.mj_forward(m, d)
-        policy.reset()
-        angle0 = float(self.poses()[0, 2])
-        com0 = self.com()
-        path = None
-        if self.follow_on:
-            length = c.follow_speed * max(seconds, 1.0) * 1.5 + 2.0
-            path = FollowPath(
-                com0, c.follow_lead, c.follow_speed, length, self.seed, lateral=not self.vertical
-            )
-        kind = c.metric if (c.metric != "follow" or path is not None) else "distance"
-        rec = record_every > 0
-        buf: dict[str, list] = {k: [] for k in "tpsugxf"}
+        angle0, com0, path, kind = self._begin(policy, seconds)
+        buf: dict[str, list] = {key: [] for key in "tpsugxf"}
         fell = unstable = False
         acc = 0.0
-        k = self.substeps
         qpos, xpos, xmat, ctrl = self._qpos, self._xpos, self._xmat, d.ctrl
-        itab, ftab, gx, gz, slo, shi, raw = (
-            self._itab,
-            self._ftab,
-            self._gx,
-            self._gz,
-            self._slo,
-            self._shi,
-            self._raw,
-        )
+        gx, gz = self._gx, self._gz
+        itab, ftab, slo, shi, raw = self._itab, self._ftab, self._slo, self._shi, self._raw
         alo, aspan, off = self._alo, self._aspan, self._off
         fbody, fpts, root, tilt = self._fbody, self._fpts, self.root_body, self._tilt
-        check_fall = self.checks_fall
-        medium = self.medium_force
-        if medium:
-            margs = (
-                self.body,
-                d.cvel,
-                d.xipos,
-                xmat,
-                d.subtree_com[root],
-                d.xfrc_applied,
-                self._water,
-                self._wn,
-                self._wt,
-                self._wrot,
-                root,
-                self._load,
-                self._mu,
-            )
-        target = np.zeros(c.n_actuators)
-        u = np.zeros(c.n_actuators)
+        check_fall, margs = self.checks_fall, self._medium_args()
+        target, u = np.zeros(c.n_actuators), np.zeros(c.n_actuators)
         com = com0
         fp = path.at(0.0) if path is not None else np.zeros(0)
         for tick in range(n_ticks + 1):
@@ -370,18 +331,12 @@ class World:
                         f"{c.name!r} has {c.n_actuators} actuators"
                     )
                 command(u, alo, aspan, off, target, ctrl)
-            if rec and tick % record_every == 0:
-                buf["t"].append(tick * cdt)
-                buf["p"].append(self.poses())
-                buf["s"].append(s)
-                buf["u"].append(np.clip(u, -2.0, 2.0))
-                buf["g"].append(target.copy())
-                st = getattr(policy, "state", None)
-                buf["x"].append(None if st is None else np.array(st, dtype=float).ravel())
-                buf["f"].append(fp if path is not None else None)
+            if record_every > 0 and tick % record_every == 0:
+                follow = fp if path is not None else None
+                self._record(buf, tick * cdt, s, u, target, policy, follow)
             if tick == n_ticks:
                 break
-            if medium:
+            if margs is not None:
                 for _ in range(k):
                     medium_forces(*margs)
                     mujoco.mj_step(m, d)
@@ -405,6 +360,64 @@ class World:
             if tick % 64 == 63 and not math.isfinite(qpos[1] + d.qvel[0]):
                 unstable = True
                 break
+        metric, fell, distance, unstable = self._outcome(kind, com0, acc, fell, unstable)
+        return self._rollout(metric, fell, distance, seconds, buf, unstable)
+
+    def _begin(self, policy: Policy, seconds: float):
+        """Put the creature at its start pose and reset the policy; return the start angle,
+        the start centre of mass, the follow path (or None) and the metric's kind."""
+        c, m, d = self.creature, self.model, self.data
+        mujoco.mj_resetData(m, d)
+        d.qpos[:] = self.qpos0
+        mujoco.mj_forward(m, d)
+        policy.reset()
+        angle0 = float(self.poses()[0, 2])
+        com0 = self.com()
+        path = None
+        if self.follow_on:
+            length = c.follow_speed * max(seconds, 1.0) * 1.5 + 2.0
+            path = FollowPath(
+                com0, c.follow_lead, c.follow_speed, length, self.seed, lateral=not self.vertical
+            )
+        kind = c.metric if (c.metric != "follow" or path is not None) else "distance"
+        return angle0, com0, path, kind
+
+    def _medium_args(self) -> tuple | None:
+        """Return the arguments of ``kernels.medium_forces`` (None without a medium force)."""
+        if not self.medium_force:
+            return None
+        d = self.data
+        root = self.root_body
+        return (
+            self.body,
+            d.cvel,
+            d.xipos,
+            self._xmat,
+            d.subtree_com[root],
+            d.xfrc_applied,
+            self._water,
+            self._wn,
+            self._wt,
+            self._wrot,
+            root,
+            self._load,
+            self._mu,
+        )
+
+    def _record(self, buf: dict, t: float, s, u, target, policy, follow) -> None:
+        """Append one recorded control tick to the rollout's buffers."""
+        buf["t"].append(t)
+        buf["p"].append(self.poses())
+        buf["s"].append(s)
+        buf["u"].append(np.clip(u, -2.0, 2.0))
+        buf["g"].append(target.copy())
+        st = getattr(policy, "state", None)
+        buf["x"].append(None if st is None else np.array(st, dtype=float).ravel())
+        buf["f"].append(follow)
+
+    def _outcome(self, kind: str, com0, acc: float, fell: bool, unstable: bool):
+        """Return (metric, fell, signed distance, unstable) at the end of a run."""
+        m, d = self.model, self.data
         mujoco.mj_forward(m, d)
         bad = d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0
         if unstable or bad or not np.isfinite(d.qpos).all():
@@ -419,7 +432,7 @@ class World:
             metric = distance + acc
         else:
             metric = acc
-        return self._rollout(metric, fell, distance, seconds, buf, unstable)
+        return metric, fell, distance, unstable
 
     def _rollout(self, metric, fell, distance, seconds, buf, unstable) -> Rollout:
         c = self.creature

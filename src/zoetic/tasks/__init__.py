@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import weakref
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -357,7 +358,7 @@ def start_states(task: Task, body: Body, medium: Medium | str | None = None) -> 
                  np.concatenate([s.velocities for s in each]))  # fmt: skip
 
 
-_CRUISE: dict = {}  # (id(body), medium, start bytes) -> (body, m/s)
+_CRUISE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # body -> {settings: m/s}
 
 
 def cruise_speed(body: Body, medium: Medium | str | None = None, start: State | None = None,
@@ -370,10 +371,10 @@ def cruise_speed(body: Body, medium: Medium | str | None = None, start: State | 
 
     med = get_medium(medium or body.medium)
     start = start if start is not None else rest_state(body, 1)
-    key = (id(body), med.name, start.positions.tobytes(), float(seconds))
-    hit = _CRUISE.get(key)
-    if hit is not None and hit[0] is body:
-        return hit[1]
+    key = (med.name, start.positions.tobytes(), start.velocities.tobytes(), float(seconds))
+    cached = _CRUISE.setdefault(body, {})
+    if key in cached:
+        return cached[key]
     steps = int(round(seconds / body.dt))
     every = max(1, steps // 40)
     tr = simulate(body, wave_controller(body).table(steps, body.dt)[None], med, body.dt,
@@ -382,5 +383,5 @@ def cruise_speed(body: Body, medium: Medium | str | None = None, start: State | 
     half = com.shape[0] // 2
     dist = float(np.linalg.norm((com[-1] - com[half])[[0, 2]]))
     v = dist / float(tr.times[-1] - tr.times[half]) if not tr.failed[0] else 0.0
-    _CRUISE[key] = (body, v)
+    cached[key] = v
     return v

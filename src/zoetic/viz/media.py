@@ -88,7 +88,7 @@ def abstract_files(
     """Abstract a learned controller; write abstract.json and abstract.png; return a summary."""
     from zoetic.behavior.training import abstract_source, abstraction_report
     from zoetic.io import write_json
-    from zoetic.learn.abstraction import abstract
+    from zoetic.learning.abstraction import abstract
     from zoetic.viz.abstraction import plot_abstraction
 
     body, ctrl, task_obj = abstract_source(source, task)
@@ -126,7 +126,7 @@ def show_repertoire(directory: str | Path, plot: bool = True) -> list[dict[str, 
     Writes repertoire.png into the directory (paths: each entry played three times over).
     """
     from zoetic.behavior.repertoire import Repertoire
-    from zoetic.learn.abstraction import measure
+    from zoetic.learning.abstraction import measure
     from zoetic.runs import repertoire_body
 
     directory = Path(directory)

@@ -15,17 +15,39 @@ Public interface::
 
 A video: ``zoetic.viz.video.write_mp4(render_frames(c, r), "out.mp4", fps=1 / (r.times[1]
 - r.times[0]))``.
+
+The pictures of the SAN commands, drawn from what ``zoetic.san`` computed (its results and
+replays; ``san`` itself draws nothing)::
+
+    show_video(network, creature, path, ...) -> (path, rollout)   the gait with its network
+    draw_search(result, out, top, video) -> files   ranking.png, videos/NN.mp4
+    draw_tune(result, creature, out, terrain, video) -> files   tuning.png, video.mp4
+    draw_evolve(result, out, terrain, video) -> files   video.mp4
+    draw_modes(creature, networks, doc, ...) -> files   one labelled clip per gait mode
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Iterator
+from pathlib import Path
 
 import numpy as np
 
 from zoetic.san.creature import Creature, Link
 
-__all__ = ["draw_frame", "link_outline", "plot_ranking", "plot_tuning", "render_frames"]
+__all__ = [
+    "draw_evolve",
+    "draw_frame",
+    "draw_modes",
+    "draw_search",
+    "draw_tune",
+    "link_outline",
+    "plot_ranking",
+    "plot_tuning",
+    "render_frames",
+    "show_video",
+]
 
 LINK_COLOURS = ("#4c72b0", "#dd8452", "#55a868", "#c44e52", "#8172b3", "#937860")
 
@@ -158,13 +180,22 @@ def plot_ranking(result, path, top: int = 10):
 
     use = useful_mask(result)[order]
     if use.any():
-        ax.scatter(ranks[use], m[use], facecolor="none", edgecolor="tab:green", s=40,
-                   label=f"useful ({use.sum()}/{len(m)})")  # fmt: skip
+        ax.scatter(
+            ranks[use],
+            m[use],
+            facecolor="none",
+            edgecolor="tab:green",
+            s=40,
+            label=f"useful ({use.sum()}/{len(m)})",
+        )
     ax.set_xlabel("rank of the random network")
     unit = {"distance": "|x| (m), 0 if fallen", "follow": "∫ v·F dt (m)", "hop": "∫ ẋ + k y² dt"}
     ax.set_ylabel(f"metric: {unit.get(c.metric, c.metric)}")
-    ax.set_title(f"{c.name}: {len(m)} random SANs, {result.seconds:g} s each, "
-                 f"{result.terrain} terrain (seed {result.seed})", fontsize=10)  # fmt: skip
+    ax.set_title(
+        f"{c.name}: {len(m)} random SANs, {result.seconds:g} s each, "
+        f"{result.terrain} terrain (seed {result.seed})",
+        fontsize=10,
+    )
     ax.grid(alpha=0.3)
     ax.legend(loc="upper right", fontsize=8)
     sec = ax.secondary_yaxis(
@@ -200,3 +231,169 @@ def plot_tuning(result, path, title: str = ""):
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     return save_figure(fig, path)
+
+
+def _fps(rollout, fps: float = 30.0) -> float:
+    """Return the frame rate that plays a recorded rollout in real time."""
+    times = np.asarray(rollout.times, dtype=float)
+    return 1.0 / float(times[1] - times[0]) if len(times) > 1 else float(fps)
+
+
+def show_video(
+    network,
+    creature,
+    path: str | os.PathLike,
+    seconds: float | None = None,
+    terrain: str = "flat",
+    seed: int = 0,
+    fps: float = 30.0,
+    window: float = 2.0,
+    size: tuple[int, int] = (1120, 416),
+    rollout=None,
+) -> tuple[Path, object]:
+    """Write a video of the creature with its network's activity beside it (the scrolling
+    raster of ``san.show.labelled_raster``); return the video's path and the Rollout."""
+    from zoetic.san.show import BLANK, labelled_raster, replay
+    from zoetic.viz.video import write_mp4
+
+    tuned = network.tuned_creature(creature)
+    if rollout is None:
+        rollout = replay(network, creature, seconds, terrain, seed, fps)
+    raster, labels = labelled_raster(network, creature, rollout)
+    times = np.asarray(rollout.times, dtype=float)
+    step = 1.0 / _fps(rollout, fps)
+    width = max(2, int(round(window / step)))
+    bounds = (network.n_sensors, network.n_sensors + network.n_hidden)
+    bounds += (network.n_sensors + network.n_nodes,)
+
+    def panel(ax, i: int) -> None:
+        lo = max(0, i + 1 - width)
+        img = np.full((raster.shape[0], width, 3), BLANK)
+        seg = raster[:, lo : i + 1]
+        img[:, width - seg.shape[1] :] = seg
+        extent = (-width * step, 0.0, raster.shape[0] - 0.5, -0.5)
+        ax.imshow(img, aspect="auto", interpolation="nearest", extent=extent)
+        ax.set_yticks(range(len(labels)))
+        ax.set_yticklabels(labels, fontsize=7)
+        ax.set_xlabel("seconds before now", fontsize=7)
+        ax.tick_params(axis="x", labelsize=7)
+        for y in bounds:
+            ax.axhline(y - 0.5, color="0.5", lw=0.6)
+        ax.set_title(f"SAN  t = {times[i]:.2f} s", fontsize=8)
+
+    frames = render_frames(tuned, rollout, side_panel=panel, size=size)
+    return write_mp4(frames, path, fps=1.0 / step), rollout  # real time
+
+
+def _gait_video(job: tuple) -> str:
+    """Replay one network and write its video, with ``text`` beside it when given."""
+    from zoetic.san.show import replay
+    from zoetic.viz.video import write_mp4
+
+    net, creature, seconds, terrain, seed, path, text = job
+    rollout = replay(net, creature, seconds, terrain, seed, fps=30)
+    panel = None
+    if text is not None:
+
+        def panel(ax, i: int) -> None:
+            ax.axis("off")
+            ax.text(
+                0.0,
+                1.0,
+                text,
+                va="top",
+                ha="left",
+                fontsize=8,
+                family="monospace",
+                transform=ax.transAxes,
+            )
+
+    frames = render_frames(creature, rollout, side_panel=panel)
+    return str(write_mp4(frames, path, fps=_fps(rollout)))
+
+
+def _gait_videos(jobs: list[tuple], workers: int | None = None) -> list[str]:
+    """Render gait videos, on all cores (or ``workers`` processes)."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    from zoetic.san.search import pool_context
+
+    n = max(1, min(int(workers or os.cpu_count() or 1), len(jobs)))
+    if n == 1:
+        return [_gait_video(job) for job in jobs]
+    with ProcessPoolExecutor(max_workers=n, mp_context=pool_context()) as pool:
+        return list(pool.map(_gait_video, jobs))
+
+
+def draw_search(result, out, top: int = 10, video: bool = True) -> dict[str, str]:
+    """Draw a search run's pictures: ranking.png and, with ``video``, one video per kept
+    gait (videos/NN.mp4); return what was written."""
+    out = Path(out)
+    kept = result.top(top)
+    files = {"ranking": str(plot_ranking(result, out / "ranking.png", top=min(top, len(kept))))}
+    if video:
+        jobs = [
+            (
+                result.networks[i],
+                result.creature,
+                result.seconds,
+                result.terrain,
+                result.seed,
+                out / "videos" / f"{rank:02d}.mp4",
+                None,
+            )
+            for rank, i in enumerate(kept, start=1)
+        ]
+        _gait_videos(jobs)
+        files["videos"] = str(out / "videos")
+    return files
+
+
+def draw_tune(result, creature, out, terrain: str = "flat", video: bool = True) -> dict[str, str]:
+    """Draw a tune run's pictures: tuning.png and, with ``video``, the tuned gait with its
+    network (video.mp4); return what was written."""
+    out = Path(out)
+    title = f"{creature.name} {result.method}"
+    files = {"tuning_plot": str(plot_tuning(result, out / "tuning.png", title))}
+    if video:
+        path, _ = show_video(result.network, creature, out / "video.mp4", terrain=terrain)
+        files["video"] = str(path)
+    return files
+
+
+def draw_evolve(result, out, terrain: str = "flat", video: bool = True) -> dict[str, str]:
+    """Draw an evolve run's video: the evolved creature with its network (video.mp4)."""
+    if not video:
+        return {}
+    path, _ = show_video(result.network, result.creature, Path(out) / "video.mp4", terrain=terrain)
+    return {"video": str(path)}
+
+
+def draw_modes(
+    creature,
+    networks: list,
+    doc: dict,
+    seconds: float | None = None,
+    terrain: str = "flat",
+    seed: int = 0,
+    workers: int | None = None,
+) -> list[str]:
+    """Draw each gait mode's clip that ``san.gaits.write_modes`` named (its fastest network,
+    with the mode's caption beside it); return the clips written."""
+    from zoetic.san.gaits import mode_caption
+
+    n = len(doc["modes"])
+    jobs = [
+        (
+            networks[m["network"]],
+            creature,
+            seconds,
+            terrain,
+            seed,
+            Path(m["clip"]),
+            mode_caption(m, n),
+        )
+        for m in doc["modes"]
+        if "clip" in m
+    ]
+    return _gait_videos(jobs, workers) if jobs else []

@@ -10,6 +10,7 @@ body can).
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
@@ -244,15 +245,15 @@ class LearnedLocomotion:
         return np.stack([self.activations(d, times) for d in demands])
 
 
-_LEARNED_CACHE: dict[tuple, LearnedMotor] = {}
+_LEARNED_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # body -> {dir: motor}
 
 
 def learned_motor(body: Body, directory: str | Path) -> LearnedMotor:
     """Return ``LearnedMotor.calibrate`` on the repertoire in ``directory`` (checked against
-    the body), cached per body and directory for the process (a tank of one species
-    calibrates once)."""
+    the body), cached per body object and directory for the process (a tank of one species
+    calibrates once; an edited body is another object, calibrated afresh)."""
     where = str(Path(directory).resolve())
-    key = (body.name, body.n_nodes, body.n_actuators, round(float(body.dt), 9), where)
-    if key not in _LEARNED_CACHE:
-        _LEARNED_CACHE[key] = LearnedMotor.calibrate(body, Repertoire.load(directory, body))
-    return _LEARNED_CACHE[key]
+    cached = _LEARNED_CACHE.setdefault(body, {})
+    if where not in cached:
+        cached[where] = LearnedMotor.calibrate(body, Repertoire.load(directory, body))
+    return cached[where]

@@ -2,8 +2,9 @@
 
 The checkpoint (``checkpoint.npz``) holds the log of every evaluation and the optimizer's
 whole state (``state_dict``), with a SHA-256 checksum over both; it is written atomically and
-the previous one is kept as ``checkpoint.prev.npz``. Resuming rebuilds the problem from
-``config.toml`` and restores the optimizer's state (nothing is replayed), then carries on to
+the previous one is kept as ``checkpoint.prev.npz``. The animal learned is stored beside
+``config.toml`` (``animal.npz``, the Body's arrays). Resuming rebuilds the problem from those
+two and restores the optimizer's state (nothing is replayed), then carries on to
 the same budget: an interrupted run and an uninterrupted one with the same seed end with the
 same history. The budget is an upper bound: a batch that would pass it is cut short.
 """
@@ -17,63 +18,36 @@ import os
 import shutil
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from zoetic.bodies import load_animal
+from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller, frequency_domain, save_controller, time_domain
 from zoetic.errors import RunDirError, ZoeticError
-from zoetic.io import atomic_write_bytes, read_toml, write_toml
-from zoetic.learn.evaluate import make_evaluator
-from zoetic.learn.objective import Objective
-from zoetic.learn.optimizers import Optimizer, make_optimizer
-from zoetic.tasks import Task, check_fits, load_task, parse_task
+from zoetic.io import atomic_write_bytes, write_toml
+from zoetic.learning.checks import check_fits, check_run, run_dir_parts
+from zoetic.learning.config import LearnConfig
+from zoetic.learning.evaluate import make_evaluator
+from zoetic.learning.objective import Objective
+from zoetic.learning.optimizers import Optimizer, make_optimizer
+from zoetic.learning.stored_body import ANIMAL_FILE, body_digest, save_body
+from zoetic.tasks import Task, load_task, parse_task
 
-# Defaults measured on the zoo (docs/reproduction.md, "Why default learning was weak"): a
-# gait is periodic, so the default controller is a Fourier series on harmonics of the animal's
-# stroke frequency (a constant and two harmonics per actuator), which keeps going past the
-# horizon; CMA-ES asks for populations of 32, which the batched kernel simulates at once.
-PERIODIC_NODES = 5
-CMAES_POPSIZE = 32
-# the periodic controller's harmonic amplitudes may reach 1, not only the Fourier basis's 0.5:
-# at 0.5 the learned turns and gaits sat on the bounds (a harmonic of amplitude 0.5 cannot
-# swing a muscle across its whole range off a constant that is not 0.5); measured on the
-# shark's quick turn, 90 -> 110 degrees in 1.5 s
-PERIODIC_AMPLITUDE = 1.0
+__all__ = ["LearnConfig", "Run", "Setup", "build"]
+
+# The defaults and why they are what they are: docs/reproduction.md, "Why default learning was
+# weak" and "Learning defaults, measured".
+PERIODIC_NODES = 5  # the periodic controller: a constant and two harmonics per actuator
+CMAES_POPSIZE = 32  # one population is one batch of the simulator
+PERIODIC_AMPLITUDE = 1.0  # bound on the periodic controller's harmonic amplitudes
 # terms that prefer neither side: a task made only of these is mirror-symmetric, and its gait
-# is learned mirror-symmetric ("auto" coupling -> "wave": half the parameters, and a gait that
-# does not roll or veer once it is played past its horizon)
-SYMMETRIC_TERMS = frozenset({"distance_along_heading", "lateral_deviation", "depth_keeping",
-                             "roll_keeping", "final_pitch", "pitch_change", "speed_deviation",
-                             "mean_speed", "effort", "max_height"})  # fmt: skip
-
-
-@dataclass
-class LearnConfig:
-    """Everything that defines a learning run (written to config.toml)."""
-
-    animal: str = "shark"
-    task: str = "swim-straight"
-    optimizer: str = "cmaes"
-    budget: int = 3500
-    seed: int = 0
-    controller: str = "periodic"
-    nodes: int | None = None
-    interp: str = "linear"
-    popsize: int | None = None
-    chains: int = 1
-    evaluator: str = "batch"
-    coupling: str = "auto"  # auto: "wave" for a mirror-symmetric task, else "none"
-    fins: str = "auto"  # auto: "free" (learned) for a task that turns the heading, else "held"
-    medium: str | None = None
-    frequency: float | None = None  # periodic controller's base frequency, Hz (animal's wave)
-    extra: dict = field(default_factory=dict)
-
-    def to_dict(self) -> dict:
-        d = {k: v for k, v in asdict(self).items() if v is not None}
-        return d
+# is learned mirror-symmetric ("auto" coupling -> "wave")
+SYMMETRIC_TERMS = frozenset(
+    "distance_along_heading lateral_deviation depth_keeping roll_keeping final_pitch "
+    "pitch_change speed_deviation mean_speed effort max_height".split()
+)
 
 
 @dataclass
@@ -86,32 +60,45 @@ class Setup:
     optimizer: Optimizer
     template: Controller
 
+    @property
+    def body(self) -> Body:
+        """The animal being learned."""
+        return self.objective.body
 
-def build(config: LearnConfig, task: Task | None = None) -> Setup:
-    """Return the body, task, objective and a fresh optimizer for a configuration."""
-    body = load_animal(config.animal)
-    task = task or load_task(config.task)
-    check_fits(task, body, config.medium)
+
+def _template(config: LearnConfig, body: Body, task: Task) -> tuple[Controller, int]:
+    """Return the controller family's template and its nodes per actuator."""
     periodic = config.controller == "periodic"
     m = config.nodes or (PERIODIC_NODES if periodic else task.nodes)
     if config.controller == "time":
-        template = time_domain(body, m, task.horizon, interp=config.interp)
-    elif config.controller == "frequency":
-        template = frequency_domain(body, m, task.horizon)
-    elif periodic:
+        return time_domain(body, m, task.horizon, interp=config.interp), m
+    if config.controller == "frequency":
+        return frequency_domain(body, m, task.horizon), m
+    if periodic:
         base = config.frequency or body.wave_frequency
         if not base > 0:
             raise ZoeticError(f"the periodic controller needs a positive frequency, got {base}")
-        template = frequency_domain(body, m, task.horizon, base=base)
-    else:
-        raise ZoeticError(
-            f"unknown controller {config.controller!r} (periodic, time or frequency)"
-        )
+        return frequency_domain(body, m, task.horizon, base=base), m
+    raise ZoeticError(f"unknown controller {config.controller!r} (periodic, time or frequency)")
+
+
+def build(config: LearnConfig, task: Task | None = None, body: Body | None = None) -> Setup:
+    """Return the task, objective and a fresh optimizer for a configuration and an animal.
+
+    ``body`` is the animal learned (default: ``config.animal`` loaded from the zoo or its
+    file); ``task`` defaults to ``config.task`` loaded."""
+    body = body if body is not None else load_animal(config.animal)
+    task = task or load_task(config.task)
+    check_fits(task, body, config.medium)
+    template, m = _template(config, body, task)
+    periodic = config.controller == "periodic"
     if m != task.nodes:
         task = parse_task({**task.to_dict(), "nodes": m}, task.source)
     coupling, fins = resolve_coupling(config, task, body), resolve_fins(config, task)
-    objective = Objective(task, body, template, config.medium, coupling=coupling, fins=fins,
-                          harmonic_bound=PERIODIC_AMPLITUDE if periodic else None)  # fmt: skip
+    bound = PERIODIC_AMPLITUDE if periodic else None
+    objective = Objective(
+        task, body, template, config.medium, coupling=coupling, fins=fins, harmonic_bound=bound
+    )
     lo, hi = objective.bounds()
     rng = np.random.default_rng(config.seed)
     x0 = rng.uniform(lo, hi)
@@ -134,9 +121,11 @@ def resolve_coupling(config: LearnConfig, task: Task, body) -> str:
     if config.coupling != "auto":
         return config.coupling
     mirror = np.asarray(body.actuator_mirror)
-    pairs = any(side == "right" and 0 <= mirror[k] != k and kind != "fin"
-                for k, (side, kind) in enumerate(zip(body.actuator_side, body.actuator_kind,
-                                                     strict=True)))  # fmt: skip
+    sides = zip(body.actuator_side, body.actuator_kind, strict=True)
+    pairs = any(
+        side == "right" and 0 <= mirror[k] != k and kind != "fin"
+        for k, (side, kind) in enumerate(sides)
+    )
     symmetric = all(t.kind in SYMMETRIC_TERMS for t in task.terms)
     return "wave" if symmetric and pairs and config.controller != "time" else "none"
 
@@ -259,21 +248,26 @@ def read_checkpoint(path: Path) -> tuple[Log, dict]:
         arrays.pop("config_json", None)  # read by saved_config
         state = json.loads(arrays.pop("opt_json").tobytes().decode())
         state |= {k[4:]: v for k, v in arrays.items() if k.startswith("opt.")}
-        log = Log(*(list(arrays[k]) for k in LOG_KEYS[:-1]),
-                  batches=[int(b) for b in arrays["batches"]])  # fmt: skip
+        columns = (list(arrays[k]) for k in LOG_KEYS[:-1])
+        log = Log(*columns, batches=[int(b) for b in arrays["batches"]])
     except RunDirError:
         raise
     except Exception as exc:  # noqa: BLE001 - any damage reads the same to the user
         prev = path.parent / PREVIOUS
-        offer = (
-            f"the previous good checkpoint is {prev}: move it over {path} to resume from there, "
-            if path.name != PREVIOUS and prev.exists() else ""
-        )  # fmt: skip
+        offer = ""
+        if path.name != PREVIOUS and prev.exists():
+            offer = f"the previous good checkpoint is {prev}: move it over {path} to resume from "
+            offer += "there, "
         raise RunDirError(
             f"{path}: damaged checkpoint ({type(exc).__name__}: {exc}); {offer}or start afresh "
             f"with another --out (or delete {path.parent})"
         ) from None
     return log, state
+
+
+def _identity(setup: Setup) -> dict:
+    """Return what a checkpoint must have been written with: the settings and the animal."""
+    return setup.config.to_dict() | {"animal_sha256": body_digest(setup.body)}
 
 
 class Run:
@@ -288,31 +282,34 @@ class Run:
         self.t_start = time.perf_counter() - (self.log.wall[-1] if self.log.wall else 0.0)
 
     @classmethod
-    def create(cls, out: Path, config: LearnConfig) -> Run:
-        """Start a new run in ``out`` (refuses a directory that already holds one)."""
+    def create(
+        cls, out: Path, config: LearnConfig, body: Body | None = None, task: Task | None = None
+    ) -> Run:
+        """Start a new run of ``config`` on ``body`` in ``out`` (refuses a directory that already
+        holds one, and whatever ``checks.check_run`` refuses).
+
+        ``body`` is the animal learned (default: ``config.animal`` loaded); it is stored in the
+        run directory (``animal.npz``) and a resumed run learns it, never a reloaded one."""
         out = Path(out)
         if (out / CHECKPOINT).exists():
             raise RunDirError(
                 f"{out} already holds a run; resume it with --resume {out} or choose another --out"
             )
-        setup = build(config)
+        body = body if body is not None else load_animal(config.animal)
+        task = task or load_task(config.task)
+        check_run(config, body, task)
+        setup = build(config, task, body)
         out.mkdir(parents=True, exist_ok=True)
+        save_body(body, out / ANIMAL_FILE)
         write_toml(out / "config.toml", {"run": config.to_dict(), "task": setup.task.to_dict()})
         return cls(out, setup)
 
     @classmethod
     def resume(cls, out: Path) -> Run:
-        """Rebuild a run from its config.toml and replay its checkpoint."""
+        """Rebuild a run from its config.toml and stored animal, and restore its checkpoint."""
         out = Path(out)
-        if not (out / "config.toml").exists():
-            raise RunDirError(f"{out}: no config.toml, so not a zoetic run directory")
-        doc = read_toml(out / "config.toml", what="run configuration")
-        try:
-            config = LearnConfig(**doc["run"])
-            task = parse_task(doc["task"], str(out / "config.toml"))
-        except (KeyError, TypeError) as exc:
-            raise RunDirError(f"{out / 'config.toml'}: malformed ({exc})") from None
-        setup = build(config, task)
+        config, task, body = run_dir_parts(out)
+        setup = build(config, task, body)
         path = out / CHECKPOINT
         if not path.exists() and (out / PREVIOUS).exists():
             path = out / PREVIOUS  # killed between keeping the previous and writing the next
@@ -320,10 +317,13 @@ class Run:
             return cls(out, setup)
         log, state = read_checkpoint(path)
         saved = saved_config(path)
-        changed = edited_keys(saved, config.to_dict()) if saved is not None else []
+        now = _identity(setup)
+        if saved is not None and "animal_sha256" not in saved:  # written before animals were
+            now.pop("animal_sha256")
+        changed = edited_keys(saved, now) if saved is not None else []
         if changed:
             raise RunDirError(
-                f"{out / 'config.toml'}: was edited since the checkpoint was written "
+                f"{out}: config.toml or {ANIMAL_FILE} was edited since the checkpoint was written "
                 f"({', '.join(changed)} changed); undo the edit, or start afresh with another --out"
             )
         try:
@@ -353,7 +353,7 @@ class Run:
             del self.log.batches[batches:]
             self.setup.optimizer.load_state_dict(state)
             self._before = None
-        data = checkpoint_bytes(self.log, state, self.setup.config.to_dict())
+        data = checkpoint_bytes(self.log, state, _identity(self.setup))
         keep_previous(self.out / CHECKPOINT, self.out / PREVIOUS)
         atomic_write_bytes(self.out / CHECKPOINT, data)
         self._saved = self.evaluations

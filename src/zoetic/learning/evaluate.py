@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from zoetic.learn.objective import Evaluation, Objective
+from zoetic.learning.objective import Evaluation, Objective, merge
 
 
 class Evaluator:
@@ -23,7 +23,7 @@ class Evaluator:
 
     def value_and_grad(self, objective: Objective, params: np.ndarray):
         """Return (Evaluation, gradients (K, dim)) of a batch, through the JAX simulator."""
-        from zoetic.learn.gradient import value_and_grad
+        from zoetic.learning.gradient import value_and_grad
 
         return value_and_grad(objective, params)
 
@@ -55,19 +55,6 @@ def _init_worker(objective: Objective) -> None:
 
 def _evaluate_chunk(params: np.ndarray) -> Evaluation:
     return _WORKER["objective"].evaluate(params)
-
-
-def merge(parts: list[Evaluation]) -> Evaluation:
-    """Return one Evaluation from the Evaluations of consecutive chunks of a batch."""
-    cat = np.concatenate
-    return Evaluation(
-        cat([p.E for p in parts]),
-        cat([p.E_u for p in parts]),
-        cat([p.E_v for p in parts]),
-        {k: cat([p.terms[k] for p in parts]) for k in parts[0].terms},
-        cat([p.failed for p in parts]),
-        None if parts[0].per_start is None else cat([p.per_start for p in parts]),
-    )
 
 
 class ProcessPoolEvaluator(Evaluator):
@@ -104,7 +91,7 @@ class ProcessPoolEvaluator(Evaluator):
 
 
 def make_evaluator(name: str, workers: int | None = None):
-    """Return an evaluator by name: 'batch' (default), 'process' or 'ray' (learn.ray_eval)."""
+    """Return an evaluator by name: 'batch' (default), 'process' or 'ray' (learning.ray_eval)."""
     from zoetic.errors import ZoeticError
 
     if name == "batch":
@@ -112,7 +99,7 @@ def make_evaluator(name: str, workers: int | None = None):
     if name == "process":
         return ProcessPoolEvaluator(workers)
     if name == "ray":  # connects to RAY_ADDRESS (zoetic learn --ray-address), else a local Ray
-        from zoetic.learn.ray_eval import RayEvaluator
+        from zoetic.learning.ray_eval import RayEvaluator
 
         return RayEvaluator(actors=workers)
     raise ZoeticError(f"unknown evaluator {name!r} (choose from batch, process, ray)")

@@ -82,6 +82,19 @@ class Evaluation:
     per_start: np.ndarray | None = None  # E (K, S) from each start; None for a single start
 
 
+def merge(parts: list[Evaluation]) -> Evaluation:
+    """Return one Evaluation from the Evaluations of consecutive chunks of a batch."""
+    cat = np.concatenate
+    return Evaluation(
+        cat([p.E for p in parts]),
+        cat([p.E_u for p in parts]),
+        cat([p.E_v for p in parts]),
+        {k: cat([p.terms[k] for p in parts]) for k in parts[0].terms},
+        cat([p.failed for p in parts]),
+        None if parts[0].per_start is None else cat([p.per_start for p in parts]),
+    )
+
+
 class Objective:
     """Scores parameter vectors of one controller family on one task for one body."""
 

@@ -20,8 +20,7 @@ from collections.abc import Callable
 import numpy as np
 
 from zoetic.errors import ZoeticError
-from zoetic.learn.evaluate import merge
-from zoetic.learn.objective import Evaluation, Objective
+from zoetic.learning.objective import Evaluation, Objective, merge
 
 
 def import_ray():

@@ -1,7 +1,7 @@
 """Gradient descent on a differentiable loss: Adam (optax) inside box bounds.
 
-``Gradient`` is that method as an ordinary ask/tell optimizer of ``learn.optimizers``: it asks
-for one point at a time and needs the gradient there, which the evaluator supplies through
+``learning.optimizers.gradient.Gradient`` is that method as an ordinary ask/tell optimizer: it
+asks for one point at a time and needs the gradient there, which the evaluator supplies through
 ``value_and_grad`` (the task's objective rebuilt in JAX from the same term registry and
 differentiated through the JAX simulator). ``make_loss`` builds a loss for custom objectives.
 
@@ -28,13 +28,12 @@ import optax
 from zoetic.bodies import Body
 from zoetic.control import Controller
 from zoetic.control.jax_sampling import jax_table
-from zoetic.learn.optimizers import Optimizer
 from zoetic.physics.jax_backend import F32, rollout_fn
 from zoetic.physics.simulate import rest_state
 from zoetic.tasks.terms import BodyFrame, Signals, evaluate_terms
 
 if TYPE_CHECKING:
-    from zoetic.learn.objective import Evaluation, Objective
+    from zoetic.learning.objective import Evaluation, Objective
 
 Loss = Callable[[jax.Array, jax.Array, jax.Array], jax.Array]
 
@@ -206,7 +205,7 @@ def make_loss(
 
     It samples the controller (``jax_table``), rolls one candidate out from ``state`` (a
     ``State`` with batch 1; default the rest pose) and applies the JAX objective. Wrap it in
-    ``jax.jit(jax.value_and_grad(...))`` (or pass it to ``learn.gradient.optimize_gradient``).
+    ``jax.jit(jax.value_and_grad(...))`` (or pass it to ``learning.gradient.optimize_gradient``).
     """
     dt = float(dt or body.dt)
     state = state or rest_state(body, 1)
@@ -247,7 +246,7 @@ def jax_objective(objective: Objective) -> Callable:
     The same terms (``tasks.terms``) as the NumPy objective, on the same records, from the
     same start states (the mean over them), through the JAX simulator.
     """
-    from zoetic.learn.objective import control_energy_xp
+    from zoetic.learning.objective import control_energy_xp
 
     task, body = objective.task, objective.body
     L, c = (jnp.asarray(a, F32) for a in linear_map(objective))
@@ -286,7 +285,7 @@ _COMPILED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # objective 
 
 def value_and_grad(objective: Objective, X: np.ndarray) -> tuple[Evaluation, np.ndarray]:
     """Return the Evaluation of points (K, dim) and the gradient of E at each, (K, dim)."""
-    from zoetic.learn.objective import Evaluation
+    from zoetic.learning.objective import Evaluation
 
     vg = _COMPILED.get(objective)
     if vg is None:
@@ -299,36 +298,3 @@ def value_and_grad(objective: Objective, X: np.ndarray) -> tuple[Evaluation, np.
     G = np.stack([np.asarray(o[1], dtype=np.float64) for o in out])
     failed = ~np.isfinite(E)
     return Evaluation(np.where(failed, np.inf, E), e_u, e_v, {}, failed), G
-
-
-class Gradient(Optimizer):
-    """Adam in box bounds (``GradientDescent``) as an ask/tell optimizer that needs gradients."""
-
-    name = "gradient"
-    needs_gradient = True
-
-    def __init__(self, x0, lower, upper, seed, budget=None, learning_rate=0.02,
-                 max_grad_norm=1.0):  # fmt: skip
-        super().__init__(x0, lower, upper, seed)
-        self.gd = GradientDescent(learning_rate, max_grad_norm)
-        self.state = self.gd.init(self.x0, self.lower, self.upper, seed)
-
-    def ask(self):
-        return self.gd.x(self.state)[None]
-
-    def tell(self, X, f, grad=None):
-        if grad is None:
-            raise ValueError("the gradient optimizer needs the gradient of each point it asks")
-        self.record(X, f)
-        self.state = self.gd._update(self.state, jnp.asarray(f[0], jnp.float32),
-                                     jnp.asarray(grad[0], jnp.float32))  # fmt: skip
-
-    def status(self):
-        return {"|g|": float(self.state.grad_norm)}
-
-    def _state(self):
-        return {f"gd_{k}": v for k, v in self.gd.state_to_numpy(self.state).items()}
-
-    def _load(self, s):
-        arrays = {k[3:]: np.asarray(v) for k, v in s.items() if k.startswith("gd_")}
-        self.state = self.gd.state_from_numpy(arrays)

@@ -30,7 +30,7 @@ from zoetic.control import (
 )
 from zoetic.control.abstract import AbstractController
 from zoetic.errors import ControllerError, ZoeticError
-from zoetic.learn.objective import control_energy, signals
+from zoetic.learning.objective import control_energy, signals
 from zoetic.physics import Medium, get_medium, rest_state, simulate
 from zoetic.tasks import Task, parse_task, start_state
 from zoetic.tasks.terms import evaluate_terms

@@ -1,0 +1,33 @@
+"""LearnConfig: everything that defines a learning run but the animal (written to config.toml)."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+
+@dataclass
+class LearnConfig:
+    """A learning run's settings. ``animal`` is the animal's label (a zoo name or the file it
+    came from); the body learned is the one given to ``Run.create``, stored in the run
+    directory, so the label is never loaded again once a run exists."""
+
+    animal: str = "shark"
+    task: str = "swim-straight"
+    optimizer: str = "cmaes"
+    budget: int = 3500
+    seed: int = 0
+    controller: str = "periodic"
+    nodes: int | None = None
+    interp: str = "linear"
+    popsize: int | None = None
+    chains: int = 1
+    evaluator: str = "batch"
+    coupling: str = "auto"  # auto: "wave" for a mirror-symmetric task, else "none"
+    fins: str = "auto"  # auto: "free" (learned) for a task that turns the heading, else "held"
+    medium: str | None = None
+    frequency: float | None = None  # periodic controller's base frequency, Hz (animal's wave)
+    extra: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        """Return the settings that are set (None left out), as config.toml's [run]."""
+        return {k: v for k, v in asdict(self).items() if v is not None}

@@ -1,0 +1,120 @@
+"""CMA-ES (the ``cma`` package) as an ask/tell optimizer whose state is ours to save."""
+
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+
+from zoetic.learning.optimizers.base import Optimizer
+
+
+class _Randn:
+    """CMA-ES's normal samples from the optimizer's own generator, not NumPy's global one.
+
+    It is the stream ``cma`` itself would draw after seeding NumPy's global generator (the
+    legacy Mersenne Twister), so results are those of plain ``cma``, yet the state is ours.
+    """
+
+    def __init__(self, seed: int):
+        self.rng = np.random.RandomState(seed)
+
+    def __call__(self, *shape):
+        return self.rng.randn(*shape)
+
+    def state(self) -> dict:
+        """Return the generator's state as plain values."""
+        s = self.rng.get_state(legacy=False)
+        return {
+            "key": s["state"]["key"].tolist(),
+            "pos": int(s["state"]["pos"]),
+            "has_gauss": int(s["has_gauss"]),
+            "gauss": float(s["gauss"]),
+        }
+
+    def load(self, s: dict) -> None:
+        """Restore a state from ``state``."""
+        self.rng.set_state(
+            {
+                "bit_generator": "MT19937",
+                "state": {"key": np.asarray(s["key"], np.uint32), "pos": s["pos"]},
+                "has_gauss": s["has_gauss"],
+                "gauss": s["gauss"],
+            }
+        )
+
+
+class CMAES(Optimizer):
+    """CMA-ES from the ``cma`` package, with its own handling of the box bounds.
+
+    Its state is the pickled strategy (exact resume) plus the mean, step size, covariance and
+    evolution paths, from which a fresh strategy is rebuilt (continuing, not bit-identical) if
+    a later ``cma`` cannot read the pickle.
+    """
+
+    name = "cmaes"
+
+    def __init__(self, x0, lower, upper, seed, budget=None, popsize=None, sigma=0.3):
+        super().__init__(x0, lower, upper, seed)
+        import cma
+
+        scale = self.upper - self.lower
+        opts = {
+            "bounds": [list(self.lower), list(self.upper)],
+            "seed": self.seed + 1,  # cma treats 0 as "seed from the clock"
+            "verbose": -9,
+            "CMA_stds": list(scale / scale.mean()),
+            "randn": _Randn(self.seed + 1),
+        }
+        if popsize:
+            opts["popsize"] = int(popsize)
+        self.es = cma.CMAEvolutionStrategy(list(self.x0), sigma * scale.mean(), opts)
+
+    def ask(self):
+        return np.array(self.es.ask(), dtype=np.float64)
+
+    def tell(self, X, f, grad=None):
+        self.record(X, f)
+        finite = np.isfinite(f)
+        worst = np.max(f[finite]) if finite.any() else 1.0
+        g = np.where(finite, f, worst + 1e3 * (1 + abs(worst)))
+        self.es.tell(list(X), list(g))
+
+    def done(self):
+        return bool(self.es.stop()) and "maxfevals" not in self.es.stop()
+
+    def status(self):
+        return {"sigma": float(self.es.sigma)}
+
+    def _state(self):
+        es = self.es
+        return {
+            "pickle": np.frombuffer(pickle.dumps(es), dtype=np.uint8).copy(),
+            "mean": np.array(es.mean, float),
+            "sigma": float(es.sigma),
+            "C": np.array(es.sm.C, float),
+            "pc": np.array(es.pc, float),
+            "ps": np.array(getattr(es.adapt_sigma, "ps", np.zeros(self.dimension)), float),
+            "countiter": int(es.countiter),
+            "countevals": int(es.countevals),
+            "rng": es.opts["randn"].state(),
+        }
+
+    def _load(self, s):
+        try:
+            self.es = pickle.loads(np.asarray(s["pickle"], dtype=np.uint8).tobytes())
+        except Exception:  # another cma release: rebuild from the numbers
+            self._rebuild(s)
+
+    def _rebuild(self, s):
+        es = self.es
+        es.mean = np.array(s["mean"], float)
+        es.sigma = float(s["sigma"])
+        es.sm.C = np.array(s["C"], float)
+        if hasattr(es.sm, "_decompose_C"):
+            es.sm._decompose_C()
+        es.pc = np.array(s["pc"], float)
+        if hasattr(es.adapt_sigma, "ps"):
+            es.adapt_sigma.ps = np.array(s["ps"], float)
+        es.countevals = int(s["countevals"])  # iterations are counted afresh
+        es.opts["randn"].load(s["rng"])
