@@ -250,6 +250,11 @@ def test_an_aquarium_exports_its_fishes_food_rocks_and_events(runs, tmp_path):
     data = viewer_data(scene)
     assert [a["name"] for a in data["animals"]] == [a.name for a in rec.animals]
     assert data["events"] == [[round(e.t, 3), e.who, e.what, e.detail] for e in rec.events]
+    # each fish's intention at every frame, as held since its brain period began
+    period = np.searchsorted(rec.period_times, scene.times + rec.times[0] + 1e-9, "right") - 1
+    codes = rec.scalars[fish]["intention"][period].astype(int)
+    names = rec.labels["intention"]
+    assert data["states"][fish]["intention"] == [names[c] for c in codes]
 
 
 def test_a_pursuit_exports_its_three_fishes_and_the_scenery(runs, tmp_path):

@@ -169,6 +169,7 @@ def test_an_aquarium_plays_in_chromium_with_its_objects_and_events(tmp_path):
     write_record(run, dataclasses.replace(rec, events=(Event(0.2, fish, "eat", "food 1"),)))
     html = tmp_path / "tank.html"
     assert main(["view", str(run), "--html", str(html), "--fps", "20"]) == 0
+    scene = load_scene(run, fps=20)
     with sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=CHROMIUM, args=WEBGL_FLAGS, headless=True)
         try:
@@ -183,6 +184,10 @@ def test_an_aquarium_plays_in_chromium_with_its_objects_and_events(tmp_path):
             assert page.inner_text("#panel .events") == ""  # nothing has happened yet
             page.evaluate("window.zoetic.setTime(0.3)")
             assert page.inner_text("#panel .events") == f"0.2 s {fish} eat food 1"
+            t = page.evaluate("window.zoetic.time()")  # 0.3 s: frame 6 at 20 fps
+            states = page.inner_text("#panel .states").split("\n")
+            assert states == [f"{a.name}: {scene.states[a.name]['intention'][6]}"
+                              for a in rec.animals], (t, states)
             assert _canvas(page).std() > 10, "the canvas is blank"
         finally:
             browser.close()

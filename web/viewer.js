@@ -107,6 +107,9 @@ async function main() {
         n: a.actuators.length });
     });
   });
+  // each animal's named states (an aquarium fish's intention) at the frame shown
+  const states = Object.entries(data.states || {});
+  const stateBox = states.length ? el("div", { className: "sub states" }, panel) : null;
   // the last few events (eat, catch, mate, ...) up to the time shown
   const events = data.events || [];
   const eventBox = events.length ? el("div", { className: "sub events" }, panel) : null;
@@ -134,6 +137,10 @@ async function main() {
     dynamic.distance.textContent = Math.hypot(now.x - start.x, now.z - start.z).toFixed(3);
     timeText.textContent = `t = ${t.toFixed(2)} s / ${data.duration.toFixed(2)} s`;
     slider.value = t;
+    if (stateBox) {
+      stateBox.textContent = states.map(([who, q]) =>
+        `${who}: ${Object.values(q).map((v) => v[i]).join(", ")}`).join("\n");
+    }
     if (eventBox) {
       let n = 0;
       while (n < events.length && events[n][0] <= t + 1e-9) n++;

@@ -49,6 +49,7 @@ class Scene:
     numbers: dict = field(default_factory=dict)  # run figures shown beside the view
     creatures: tuple[Creature, ...] = ()
     events: tuple[Event, ...] = ()  # what happened and when (s from the record's start)
+    states: dict = field(default_factory=dict)  # who -> quantity -> (R,) label names per frame
 
     @property
     def movers(self) -> tuple:
@@ -96,6 +97,23 @@ def _link(ln: Link, i: np.ndarray, frac: np.ndarray) -> Link:
                 _lerp(angles, i, frac), ln.axis)  # fmt: skip
 
 
+def _states(rec: Record, frame_times: np.ndarray) -> dict:
+    """Return each animal's named states (an intention: the labels of integer-coded per-period
+    scalars) at the frames, as held since the last control period began."""
+    if not len(rec.period_times):
+        return {}
+    k = np.clip(np.searchsorted(rec.period_times, frame_times + 1e-9, side="right") - 1, 0,
+                len(rec.period_times) - 1)  # fmt: skip
+    out: dict = {}
+    for who, quantities in rec.scalars.items():
+        for what, values in quantities.items():
+            names = rec.labels.get(what)
+            if names and np.ndim(values) == 1:
+                codes = np.clip(np.nan_to_num(values[k]).astype(int), 0, len(names) - 1)
+                out.setdefault(who, {})[what] = [str(names[c]) for c in codes]
+    return out
+
+
 def scene_of(rec: Record, fps: float = 30.0) -> Scene:
     """Return the Scene of a record, its motion resampled at ``fps`` frames per second."""
     times = np.asarray(rec.times, float)
@@ -126,7 +144,8 @@ def scene_of(rec: Record, fps: float = 30.0) -> Scene:
     t0 = float(t_new[0])
     events = tuple(Event(e.t - t0, e.who, e.what, e.detail) for e in rec.events)
     return Scene(rec.title, rec.kind, t_new - t0, float(fps), get_medium(rec.medium),
-                 tuple(animals), objects, numbers, creatures, events)  # fmt: skip
+                 tuple(animals), objects, numbers, creatures, events,
+                 _states(rec, t_new))  # fmt: skip
 
 
 def load_scene(run_dir: str | Path, fps: float = 30.0) -> Scene:

@@ -43,6 +43,7 @@ def viewer_data(scene: Scene) -> dict:
             "actuators": list(a.actuators),
             "activations": None if a.activations is None else _round(a.activations, 3),
         } for a in scene.movers],
+        "states": scene.states,
         "events": [[round(e.t, 3), e.who, e.what, e.detail] for e in events],
         "glb": base64.b64encode(scene_glb(scene)).decode("ascii"),
     }  # fmt: skip

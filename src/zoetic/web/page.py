@@ -27,7 +27,7 @@ html, body { margin: 0; height: 100%; overflow: hidden; background: #222;
 #panel .title { font-weight: 600; margin-bottom: 2px; }
 #panel .time { font-variant-numeric: tabular-nums; margin-bottom: 4px; }
 #panel .sub { margin-top: 6px; color: #bcd; }
-#panel .events { white-space: pre-line; font-size: 11px; }
+#panel .events, #panel .states { white-space: pre-line; font-size: 11px; }
 #panel table { border-collapse: collapse; width: 100%; }
 #panel td:last-child { text-align: right; font-variant-numeric: tabular-nums; }
 .bar { display: flex; align-items: center; gap: 6px; margin: 1px 0; }
