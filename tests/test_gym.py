@@ -66,3 +66,48 @@ def test_the_crawl_reward_pays_for_crawling_not_for_resting():
         totals[name] = sum(env.step(ctrl.sample(np.array([k * period]))[0])[1] for k in range(60))
     assert totals["wave"] > 0.05
     assert abs(totals["rest"]) < 0.01
+
+
+@pytest.mark.parametrize("env_id", ["zoetic/SharkSwim-v0", "zoetic/SharkTurn-v0"])
+def test_observations_are_the_sensors_readings_of_the_world(env_id):
+    from zoetic.control.sensors import observe
+
+    env = gymnasium.make(env_id)
+    env.reset(seed=2)
+    rng = np.random.default_rng(5)
+    for _ in range(3):
+        obs = env.step(rng.random(env.action_space.shape[0]).astype(np.float32))[0]
+    core = env.unwrapped.core
+    goal = core.goal if core.kind == "swim" else None
+    s = observe(core.world, 0, target=goal)
+    want = [s["pitch"][0], s["roll"][0], s["depth"][0]]
+    np.testing.assert_array_equal(obs[3:6], np.float32(want))
+    # the heading frame is the sensors' heading (kept unwrapped across steps)
+    assert np.isclose(np.angle(np.exp(1j * (core.heading[0] - s["heading"][0]))), 0.0)
+    if core.kind == "swim":
+        bearing, dist = s["target_bearing"][0], s["target_distance"][0]
+        np.testing.assert_allclose(obs[6:9], [np.cos(bearing), np.sin(bearing), dist], rtol=1e-6)
+    v, h = s["velocity"][0], s["heading"][0]
+    fwd, left = np.cos(h) * v[0] + np.sin(h) * v[2], -np.sin(h) * v[0] + np.cos(h) * v[2]
+    np.testing.assert_allclose(obs[:3], [fwd, v[1], left], rtol=1e-5, atol=1e-7)
+
+
+def test_rewards_are_the_change_of_the_tasks_terms():
+    from zoetic.tasks.signals import BodyFrame, Signals
+    from zoetic.tasks.terms import TERMS, TermParams
+
+    env = gymnasium.make("zoetic/SharkSwim-v0")
+    env.reset(seed=0)
+    core = env.unwrapped.core
+    frame = BodyFrame.of(core.body)
+
+    def distance() -> float:
+        pos = core.world.positions(0)[:, None]
+        s = Signals(np, frame, pos, np.zeros((1, 1, core.n_act)), np.zeros(1), 0.0, 1.0)
+        return float(TERMS["goal_distance_xz"].fn(np, s, TermParams(0.0, core.goal))[0])
+
+    ctrl = wave_controller(core.body)
+    for k in range(4):
+        before = distance()
+        reward = env.step(ctrl.sample(np.array([k * core.period]))[0])[1]
+        assert reward == pytest.approx(before - distance(), abs=1e-12)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
 from zoetic.bodies import load_animal
 from zoetic.cli import main
@@ -65,3 +66,13 @@ def test_pursue_command_writes_its_outputs(tmp_path):
     assert s["frames"] == 15 and s["seed"] == 1 and isinstance(s["caught"], bool)
     for name in ("gaze.png", "frames.png", "video.mp4"):
         assert (out / name).stat().st_size > 1000
+
+
+def test_a_chase_stops_at_the_catch_with_the_frames_the_eyes_saw():
+    chase = make_chase(0, distractors=0, rocks=False, start_distance=1.6)
+    result = run_chase(chase, 3.0, fps=15.0, catch_radius=0.75)
+    assert result.caught and result.time_to_catch < 3.0
+    # one record per control period, at its start: the frames the predator looked at
+    assert len(result.times) == len(result.log) == len(result.positions[0])
+    np.testing.assert_allclose([r.time for r in result.log], result.times)
+    assert result.time_to_catch == pytest.approx(result.times[-1] + 1 / 15.0, abs=0.006)

@@ -11,15 +11,10 @@ import numpy as np
 import pytest
 
 from zoetic.behavior.repertoire import Repertoire
-from zoetic.behavior.stunts import (
-    StuntProblem,
-    list_tricks,
-    load_trick,
-    measures,
-    object_markers,
-    parse_trick,
-)
+from zoetic.behavior.stunt_problem import StuntProblem
+from zoetic.behavior.stunts import measures, object_markers
 from zoetic.behavior.training import rest_abstraction
+from zoetic.behavior.tricks import list_tricks, load_trick, parse_trick
 from zoetic.bodies import load_animal
 from zoetic.cli import main
 from zoetic.control.abstract import AbstractController

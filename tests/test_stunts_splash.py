@@ -13,18 +13,10 @@ import numpy as np
 import pytest
 
 from zoetic.behavior.repertoire import Repertoire
-from zoetic.behavior.stunts import (
-    StuntProblem,
-    StuntRecord,
-    cylinder_distance,
-    list_tricks,
-    load_trick,
-    measures,
-    parse_trick,
-    splash_ratio,
-    targets_met,
-)
+from zoetic.behavior.stunt_problem import StuntProblem, StuntRecord
+from zoetic.behavior.stunts import cylinder_distance, measures, splash_ratio, targets_met
 from zoetic.behavior.training import rest_abstraction
+from zoetic.behavior.tricks import list_tricks, load_trick, parse_trick
 from zoetic.cli import main
 from zoetic.physics import State, Trajectory, simulate
 from zoetic.physics.objects import Cylinder

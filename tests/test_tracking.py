@@ -20,8 +20,10 @@ from zoetic.bodies import load_animal
 from zoetic.cli import main
 from zoetic.control import load_controller
 from zoetic.control.abstract import SequenceController
+from zoetic.control.loop import Schedule, drive
 from zoetic.learning.objective import heading_angles
 from zoetic.physics import simulate
+from zoetic.physics.world import World
 
 COURSE = np.array([[1.5, 0.3], [2.8, 1.2]])
 
@@ -75,6 +77,24 @@ def test_tracking_reaches_every_target_and_replays(shark):
     assert idx[0] == 0 and np.all(np.diff(idx) > 0)
     assert isinstance(result.sequence, SequenceController)
     assert all(a != b for a, b in zip(result.names, result.names[1:], strict=False))
+
+
+def test_the_driver_asks_the_planner_for_each_window_and_cuts_the_last(shark):
+    """The tracker's windows vary: ``Schedule.plan`` gives each control period its steps."""
+    world = World([shark])
+    asked, seen = [], []
+
+    def plan(w: World) -> int:
+        asked.append(w.step_count)
+        return 7 if len(asked) % 2 else 4
+
+    def decide(w: World, period) -> list[np.ndarray]:
+        seen.append((period.start, period.steps))
+        return [np.zeros((1, shark.n_actuators))]
+
+    n = drive(world, decide, 20 * shark.dt, Schedule(1.0, plan=plan))
+    assert seen == [(0, 7), (7, 4), (11, 7), (18, 2)] and n == 4
+    assert asked == [0, 7, 11, 18] and world.step_count == 20
 
 
 def test_tracking_is_deterministic_and_pure_distance_gain_stalls_behind(shark):

@@ -1,11 +1,8 @@
 """Stunts (section 3.2, Plate 5): macro controllers searched for a trick's style terms.
 
-A trick is a task file with two more tables: ``[trick]`` (``segments``, the number of
-repertoire entries in a plan, and ``durations`` [min, max] s of each) and ``[[objects]]``
-(``kind`` = ``ball``, ``box`` or ``cylinder`` and that object's fields, in world metres: a
-hurdle's bar, a beach ball on its post). Its ``horizon`` is the stunt's duration, its
-``[start]`` where the animal starts (e.g. at depth, at rest) and its ``[[terms]]`` the style
-terms (``zoetic.tasks.terms``), which here also see the World's contact record and the balls.
+A trick (``behavior.tricks``) is a task file with a plan's shape and the world's objects: a
+hurdle's bar, a beach ball on its post; its style terms (``zoetic.tasks.terms``) here also see
+the World's contact record and the balls (``behavior.stunt_problem``).
 
 A plan, as for ``behavior.macro``, is a sequence of repertoire entries with durations, played
 cross-faded (5%); the same searches (simulated annealing on ``learning.optimizers.Annealing``, or
@@ -21,243 +18,33 @@ from pathlib import Path
 
 import numpy as np
 
-from zoetic.behavior.macro import MacroProblem
 from zoetic.behavior.repertoire import Repertoire
-from zoetic.behavior.tracking import TrackingError, body_length
+from zoetic.behavior.stunt_problem import StuntProblem, StuntRecord
+from zoetic.behavior.tracking import body_length
+from zoetic.behavior.tricks import Trick, parse_object
+
+# re-exported: the stunt commands and experiments find the trick files here
+from zoetic.behavior.tricks import list_tricks as list_tricks
+from zoetic.behavior.tricks import load_trick as load_trick
+from zoetic.behavior.tricks import parse_trick as parse_trick
 from zoetic.bodies import Body
 from zoetic.control.abstract import SequenceController
-from zoetic.errors import TaskError, ZoeticError
-from zoetic.physics import Trajectory, get_medium
+from zoetic.errors import TaskError
+from zoetic.io import read_json
+from zoetic.physics import Trajectory
 from zoetic.physics.objects import Ball, Box, Cylinder
-from zoetic.tasks import TASK_DIR, Task, check_fits, parse_task, start_state
 from zoetic.tasks.terms import (
     PARTS,
     TAIL_STRIKE_TURN,
-    BodyFrame,
     Signals,
     TermParams,
     ball_moved_by_nose,
     ball_moved_by_tail,
-    evaluate_terms,
     flight_pitch_rotation,
     tail_strike_rotation,
-    term_names,
 )
 
-TRICK_DIR = TASK_DIR / "tricks"
-TRICK_KEYS = ("segments", "durations")
-OBJECTS = {"ball": Ball, "box": Box, "cylinder": Cylinder}
 MACRO_FORMAT = "zoetic-stunt-macro"
-
-
-@dataclass(frozen=True)
-class Trick:
-    """A stunt to discover: the task (duration, start, style terms) and the world's objects."""
-
-    task: Task
-    objects: tuple[Ball | Box | Cylinder, ...] = ()
-    segments: int = 4
-    durations: tuple[float, float] = (0.3, 2.0)
-
-    @property
-    def name(self) -> str:
-        return self.task.name
-
-    def to_dict(self) -> dict:
-        """Return the trick as a JSON-able dict (task, objects, plan shape)."""
-        objs = [{"kind": k, **dataclasses.asdict(o)} for o in self.objects
-                for k, c in OBJECTS.items() if type(o) is c]  # fmt: skip
-        return {"task": self.task.to_dict(), "objects": objs, "segments": self.segments,
-                "durations": list(self.durations)}  # fmt: skip
-
-
-def _object(raw, where: str):
-    if not isinstance(raw, dict) or raw.get("kind") not in OBJECTS:
-        raise TaskError(f"{where}: an object needs kind = ball, box or cylinder")
-    cls = OBJECTS[raw["kind"]]
-    fields = {f.name for f in dataclasses.fields(cls)}
-    args = {k: v for k, v in raw.items() if k != "kind"}
-    bad = sorted(set(args) - fields)
-    if bad:
-        raise TaskError(f"{where}: unknown key(s) {bad} for a {raw['kind']} "
-                        f"(it has {sorted(fields)})")  # fmt: skip
-    try:
-        return cls(**args)
-    except (ZoeticError, TypeError, ValueError) as exc:
-        raise TaskError(f"{where}: {exc}") from None
-
-
-def parse_trick(doc: dict, source: str = "<memory>") -> Trick:
-    """Return the Trick a parsed TOML document describes; TaskError names what is wrong."""
-    if not isinstance(doc, dict):
-        raise TaskError(f"{source}: a trick file holds a table")
-    doc = dict(doc)
-    raw_trick = doc.pop("trick", {})
-    raw_objects = doc.pop("objects", [])
-    task = parse_task(doc, source)
-    if not isinstance(raw_trick, dict):
-        raise TaskError(f"{source}: [trick] must be a table")
-    bad = sorted(set(raw_trick) - set(TRICK_KEYS))
-    if bad:
-        raise TaskError(f"{source}: trick: unknown key(s) {bad} (allowed: {list(TRICK_KEYS)})")
-    segments = raw_trick.get("segments", 4)
-    if isinstance(segments, bool) or not isinstance(segments, int) or segments < 1:
-        raise TaskError(f"{source}: trick: 'segments' must be a positive integer, got {segments!r}")
-    durations = raw_trick.get("durations", [0.3, min(2.0, task.horizon)])
-    ok = isinstance(durations, list) and len(durations) == 2 and all(
-        isinstance(d, int | float) and not isinstance(d, bool) for d in durations)  # fmt: skip
-    if not ok or not 0 < durations[0] < durations[1]:
-        raise TaskError(f"{source}: trick: 'durations' must be [min, max] s with "
-                        f"0 < min < max, got {durations!r}")  # fmt: skip
-    if not isinstance(raw_objects, list):
-        raise TaskError(f"{source}: objects must be [[objects]] tables")
-    objects = tuple(_object(o, f"{source}: objects[{k}]") for k, o in enumerate(raw_objects))
-    return Trick(task, objects, int(segments), (float(durations[0]), float(durations[1])))
-
-
-def list_tricks() -> list[str]:
-    """Return the names of the built-in tricks."""
-    return sorted(p.stem for p in TRICK_DIR.glob("*.toml"))
-
-
-def load_trick(name_or_path: str | Path) -> Trick:
-    """Return a built-in trick by name, or the trick in a TOML file."""
-    from zoetic.io import read_toml
-
-    path = Path(name_or_path)
-    if not (path.suffix == ".toml" or path.exists()):
-        path = TRICK_DIR / f"{name_or_path}.toml"
-        if not path.exists():
-            raise TaskError(f"unknown trick {str(name_or_path)!r}: choose one of "
-                            f"{', '.join(list_tricks())} or give a trick .toml file")  # fmt: skip
-    try:
-        doc = read_toml(path, what="trick file")
-    except ZoeticError as exc:
-        raise TaskError(str(exc)) from None
-    return parse_trick(doc, str(path))
-
-
-@dataclass
-class StuntRecord:
-    """A batch of stunts as the terms see them: trajectories plus the world's records."""
-
-    traj: Trajectory  # positions (B, R, N, 3), times (R,)
-    activations: np.ndarray  # (B, R, A) at the records
-    contacts: np.ndarray  # (B, R) node-object contacts since the previous record
-    balls: np.ndarray  # (B, R, nb, 3)
-    failed: np.ndarray  # (B,)
-    touch: np.ndarray | None = None  # (B, R, N, O) |impulse| (N s) each node got from each object
-
-
-class StuntProblem(MacroProblem):
-    """A trick over a repertoire: plans of L (entry, duration) segments, scored in batches."""
-
-    def __init__(self, body: Body, repertoire: Repertoire, trick: Trick,
-                 segments: int | None = None, record_every: int | None = None,
-                 allowed: tuple[str, ...] | None = None):  # fmt: skip
-        check_fits(trick.task, body)
-        self.body, self.trick, self.task = body, trick, trick.task
-        self.names = list(repertoire.names if allowed is None else allowed)
-        missing = [n for n in self.names if n not in repertoire.controllers]
-        if missing or not self.names:
-            raise TrackingError(f"the repertoire has no entries {missing or self.names}")
-        self.ctrls = [repertoire.controllers[n] for n in self.names]
-        self.segments = int(segments or trick.segments)
-        if self.segments < 1:
-            raise TrackingError("a plan needs at least one segment")
-        self.lower, self.upper = trick.durations
-        every = record_every or max(1, int(round(1.0 / (trick.task.record_hz * body.dt))))
-        self.record_every = int(every)
-        self.steps = max(1, int(round(trick.task.horizon / body.dt / every))) * every
-        self.start = start_state(trick.task, body)
-        self.frame = BodyFrame.of(body)
-        self.level = get_medium(body.medium).water_level
-        self.radius = 0.0
-
-    def world(self, batch: int):
-        """Return the trick's World (the animal at the start state, the objects), B lanes."""
-        from zoetic.physics.world import World
-
-        w = World([self.body, *self.trick.objects], medium=self.body.medium, batch=batch)
-        st = w.initial_state()
-        b = (batch, self.body.n_nodes, 3)
-        pos = np.broadcast_to(self.start.positions[0], b).copy()
-        vel = np.broadcast_to(self.start.velocities[0], b).copy()
-        w.restore(dataclasses.replace(st, positions=(pos,), velocities=(vel,)))
-        return w
-
-    def record(self, entries, durations, record_every: int | None = None) -> StuntRecord:
-        """Return what plans (B, L) do from the trick's start state over its duration."""
-        from zoetic.control.rollout import rollout
-
-        e, d = np.atleast_2d(entries), np.atleast_2d(durations)
-        dt = self.body.dt
-        tables = np.stack(
-            [self.sequence(a, b).table(self.steps, dt) for a, b in zip(e, d, strict=True)]
-        )
-        every = int(record_every or self.record_every)
-        world = self.world(len(e))
-        seconds = self.steps * dt
-        if not world.objects:
-            ro = rollout(world, tables, seconds, control_period=seconds, record_every=every)
-            traj = ro.trajectory(0)
-            rows = np.minimum(np.arange(traj.positions.shape[1]) * every, self.steps - 1)
-            return StuntRecord(traj, tables[:, rows], ro.contacts, ro.ball_positions,
-                               np.asarray(traj.failed))  # fmt: skip
-        return self._record_contacts(world, tables, every)
-
-    def _record_contacts(self, world, tables: np.ndarray, every: int) -> StuntRecord:
-        """Step a World with objects record by record, keeping which node touched what."""
-        from zoetic.physics.simulate import State
-
-        b, n, o = world.batch, self.body.n_nodes, len(world.objects)
-        marks = list(range(0, self.steps, every)) + [self.steps]
-        r = len(marks)
-        pos, balls = np.empty((b, r, n, 3)), np.empty((b, r, len(world.balls), 3))
-        touch, count = np.zeros((b, r, n, o)), np.zeros((b, r), dtype=np.int64)
-        pos[:, 0], balls[:, 0] = world.positions(0), world.ball_positions
-        for k in range(1, r):
-            c = world.step((marks[k] - marks[k - 1]) * world.dt,
-                           tables[:, marks[k - 1]:marks[k]])  # fmt: skip
-            touch[:, k] = np.linalg.norm(c.impulse[0], axis=-1)
-            count[:, k] = c.count
-            pos[:, k], balls[:, k] = world.positions(0), world.ball_positions
-        failed = world.failed(0)
-        st = world.state
-        times = np.array(marks, float) * world.dt
-        traj = Trajectory(times=times, positions=pos,
-                          final=State(st.positions[0], st.velocities[0]),
-                          failed_step=st.failed_step[0], dt=world.dt)  # fmt: skip
-        rows = np.minimum(np.array(marks[:-1] + [self.steps - 1]), self.steps - 1)
-        return StuntRecord(traj, tables[:, rows], count, balls, failed, touch)
-
-    def ball_index(self) -> int | None:
-        """Return the index in the trick's objects of its first ball (None without one)."""
-        return next((i for i, ob in enumerate(self.trick.objects) if isinstance(ob, Ball)), None)
-
-    def signals(self, rec: StuntRecord) -> Signals:
-        """Return the terms' view of a batch of stunts."""
-        k = self.ball_index()
-        touch = None if rec.touch is None or k is None else rec.touch[..., k]
-        return Signals(np, self.frame, rec.traj.positions, rec.activations, rec.traj.times,
-                       self.level, self.task.horizon, rec.contacts.astype(float),
-                       rec.balls, touch)  # fmt: skip
-
-    def terms(self, rec: StuntRecord) -> dict[str, np.ndarray]:
-        """Return each style term's raw value (B,) by name."""
-        vals = evaluate_terms(np, self.signals(rec), self.task.terms)
-        return dict(zip(term_names(self.task.terms), vals, strict=True))
-
-    def evaluate(self, entries: np.ndarray, durations: np.ndarray) -> dict:
-        """Return E ('cost', inf for a blow-up) and the terms of plans (B, L), one batch."""
-        rec = self.record(entries, durations)
-        return self.scores(rec)
-
-    def scores(self, rec: StuntRecord) -> dict:  # type: ignore[override]
-        terms = self.terms(rec)
-        cost = sum(t.weight * v for t, v in zip(self.task.terms, terms.values(), strict=True))
-        ok = ~rec.failed & np.isfinite(cost)
-        return {"cost": np.where(ok, cost, np.inf), **terms}
 
 
 def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
@@ -276,24 +63,27 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
         "apex_time_s": round(float(rec.traj.times[int(com_y.argmax())]), 3),
         # the paper's finding: dive deep first, then thrust upward (depth of the centre of
         # mass at its lowest before the apex, m below the surface)
-        "deepest_before_apex_m": round(float(problem.level - com_y[: int(com_y.argmax()) + 1]
-                                             .min()), 3),  # fmt: skip
+        "deepest_before_apex_m": round(
+            float(problem.level - com_y[: int(com_y.argmax()) + 1].min()), 3
+        ),
         "air_time_s": round(float(air.sum() * dt), 3),
         "most_nodes_out_of_water": round(float(np.mean(1 - s.in_water[lane], axis=1).max()), 3),
         "rotation_in_air_deg": round(float(np.degrees(rot)), 1),
         "rotations_in_air": round(rot / (2 * np.pi), 3),
         # the somersault part of it: about the body's own left-right axis (a spin about the
         # vertical, or a body turned sideways to the start's plane, counts above, not here)
-        "pitch_rotation_in_air_deg": round(float(np.degrees(
-            flight_pitch_rotation(np, s, None)[lane])), 1),  # fmt: skip
+        "pitch_rotation_in_air_deg": round(
+            float(np.degrees(flight_pitch_rotation(np, s, None)[lane])), 1
+        ),
         "contacts": int(rec.contacts[lane].sum()),
         "body_length_m": round(length, 3),
     }
     out["splash_m3_s"] = round(float(np.sum(s.entry_flux[lane])), 4)
     out["entries_into_water"] = int(np.sum(np.diff(s.airborne[lane]) < 0))
     # how far the highest node is still above the surface at the end (0: the body is back in)
-    out["final_height_m"] = round(float(max(rec.traj.positions[lane, -1, :, 1].max()
-                                            - problem.level, 0.0)), 3)  # fmt: skip
+    out["final_height_m"] = round(
+        float(max(rec.traj.positions[lane, -1, :, 1].max() - problem.level, 0.0)), 3
+    )
     if rec.balls.shape[2]:
         b = rec.balls[lane, :, 0]
         out["ball_rise_m"] = round(float(b[:, 1].max() - b[0, 1]), 3)
@@ -309,12 +99,16 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
         out["tail_strike_rotation_deg"] = round(float(np.degrees(turned)), 1)
         out["ball_tail_distance_m"] = round(float(s.part_ball_distance("tail")[lane].min()), 3)
         out |= strike_speeds(rec, s.ball_touch[lane], lane)
-    bars = [(i, o) for i, o in enumerate(problem.trick.objects)
-            if isinstance(o, Cylinder) and o.axis != "y"]  # fmt: skip
+    bars = [
+        (i, o)
+        for i, o in enumerate(problem.trick.objects)
+        if isinstance(o, Cylinder) and o.axis != "y"
+    ]
     if bars:
         pos = rec.traj.positions[lane]
-        out["hurdle_clearance_m"] = round(min(float(np.nanmin(cylinder_distance(o, pos)))
-                                              for _, o in bars), 3)  # fmt: skip
+        out["hurdle_clearance_m"] = round(
+            min(float(np.nanmin(cylinder_distance(o, pos))) for _, o in bars), 3
+        )
         # over the bar: the whole body passed from before it to beyond it, and where the
         # centre of mass passed it, the body's lowest node was above the bar's top
         crossed = []
@@ -357,14 +151,14 @@ def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, boo
         flags["no_contact"] = not m.get("hurdle_touched", True)
     elif name in ("ball-nose", "ball-tail"):
         part = "nose" if name == "ball-nose" else "tail"
-        radius = next((o.radius for o in (trick.objects if trick else ()) if isinstance(o, Ball)),
-                      0.0)  # fmt: skip
+        radius = next(
+            (o.radius for o in (trick.objects if trick else ()) if isinstance(o, Ball)), 0.0
+        )
         # off its support: the ball moved more than its radius after that part struck it
         flags[f"struck_by_{part}"] = part in m.get("ball_parts", [])
         flags["off_support"] = bool(m.get(f"ball_moved_by_{part}_m", 0.0) > radius)
         if part == "tail":  # during a somersault: out of the water, half a turn or more done
-            flags["in_somersault"] = bool(m.get("tail_strike_rotation_deg", 0.0)
-                                          >= TAIL_STRIKE_DEG)  # fmt: skip
+            flags["in_somersault"] = bool(m.get("tail_strike_rotation_deg", 0.0) >= TAIL_STRIKE_DEG)
     return flags
 
 
@@ -381,16 +175,20 @@ def strike_speeds(rec: StuntRecord, touch: np.ndarray, lane: int = 0) -> dict:
     ball = np.linalg.norm(np.diff(rec.balls[lane, :, 0], axis=0), axis=-1) / dt[:, 0]
     rows = hit[hit > 0]
     striker = max((float(nodes[r - 1][touch[r] > 0].max()) for r in rows), default=0.0)
-    return {"striker_speed_m_s": round(striker, 2),
-            "ball_speed_m_s": round(float(ball[max(int(hit[0]) - 1, 0):].max()), 2)}
+    return {
+        "striker_speed_m_s": round(striker, 2),
+        "ball_speed_m_s": round(float(ball[max(int(hit[0]) - 1, 0) :].max()), 2),
+    }
 
 
 def splash_ratio(bellyflop: dict, clean_dive: dict) -> float | None:
     """Return the bellyflop's splash measure over the clean dive's, both ``measures``; None
     unless both left the water wholly and the dive splashed at all (a body that only broke the
     surface from below, or one still in the air at the end, makes no re-entry to compare)."""
-    both = all(m["most_nodes_out_of_water"] >= 1.0 and m.get("final_height_m", 0.0) == 0.0
-               for m in (bellyflop, clean_dive))  # fmt: skip
+    both = all(
+        m["most_nodes_out_of_water"] >= 1.0 and m.get("final_height_m", 0.0) == 0.0
+        for m in (bellyflop, clean_dive)
+    )
     a, b = bellyflop["splash_m3_s"], clean_dive["splash_m3_s"]
     return float(a / b) if both and b > 0 else None
 
@@ -423,11 +221,13 @@ def macro_document(problem: StuntProblem, sequence: SequenceController, trick_so
         "animal": problem.body.name,
         "trick": trick_source,
         "seconds": problem.steps * problem.body.dt,
-        "start": {"positions": problem.start.positions[0].tolist(),
-                  "velocities": problem.start.velocities[0].tolist()},
+        "start": {
+            "positions": problem.start.positions[0].tolist(),
+            "velocities": problem.start.velocities[0].tolist(),
+        },
         "objects": problem.trick.to_dict()["objects"],
         "controller": sequence.to_dict(),
-    }  # fmt: skip
+    }
 
 
 def is_macro_file(path: str | Path) -> bool:
@@ -447,7 +247,6 @@ def load_macro(path: str | Path, body: Body) -> tuple[SequenceController, dict]:
     """Return the controller of a macro.json (checked against the body) and the document."""
     from zoetic.control import check_fits as controller_fits
     from zoetic.control import from_dict
-    from zoetic.io import read_json
 
     doc = read_json(path, what="stunt macro file")
     try:
@@ -455,18 +254,22 @@ def load_macro(path: str | Path, body: Body) -> tuple[SequenceController, dict]:
         pos = np.asarray(doc["start"]["positions"], float)
         vel = np.asarray(doc["start"]["velocities"], float)
         seconds = float(doc["seconds"])
-        objects = tuple(_object(o, f"{path}: objects[{k}]")
-                        for k, o in enumerate(doc["objects"]))  # fmt: skip
+        objects = tuple(
+            parse_object(o, f"{path}: objects[{k}]") for k, o in enumerate(doc["objects"])
+        )
     except (KeyError, TypeError, ValueError) as exc:
         raise TaskError(f"{path}: malformed stunt macro file ({exc})") from None
     if pos.shape != (body.n_nodes, 3) or vel.shape != pos.shape:
-        raise TaskError(f"{path}: the start state is for {pos.shape[0]} nodes; the "
-                        f"{body.name} has {body.n_nodes}")  # fmt: skip
+        raise TaskError(
+            f"{path}: the start state is for {pos.shape[0]} nodes; the "
+            f"{body.name} has {body.n_nodes}"
+        )
     return ctrl, {"seconds": seconds, "positions": pos, "velocities": vel, "objects": objects}
 
 
-def replay(body: Body, path: str | Path, seconds: float | None = None,
-           record_every: int = 2) -> tuple[Trajectory, np.ndarray]:  # fmt: skip
+def replay(
+    body: Body, path: str | Path, seconds: float | None = None, record_every: int = 2
+) -> tuple[Trajectory, np.ndarray]:
     """Replay a macro.json from its start state among its objects; return the trajectory and
     the balls' positions (R, nb, 3)."""
     from zoetic.control.policy import OpenLoopPolicy
@@ -477,10 +280,14 @@ def replay(body: Body, path: str | Path, seconds: float | None = None,
     seconds = float(info["seconds"] if seconds is None else seconds)
     w = World([body, *info["objects"]], medium=body.medium, batch=1)
     st = w.initial_state()
-    w.restore(dataclasses.replace(st, positions=(info["positions"][None],),
-                                  velocities=(info["velocities"][None],)))  # fmt: skip
-    ro = rollout(w, OpenLoopPolicy(ctrl), seconds, control_period=seconds,
-                 record_every=record_every)  # fmt: skip
+    w.restore(
+        dataclasses.replace(
+            st, positions=(info["positions"][None],), velocities=(info["velocities"][None],)
+        )
+    )
+    ro = rollout(
+        w, OpenLoopPolicy(ctrl), seconds, control_period=seconds, record_every=record_every
+    )
     return ro.trajectory(0), ro.ball_positions[0]
 
 
@@ -493,7 +300,8 @@ def score_series(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict
         "body angle (deg)": np.degrees(s.body_angle[lane]),
         "contacts (cumulative)": np.cumsum(rec.contacts[lane]),
         "splash (cumulative, m^3/s)": np.concatenate(
-            [[0.0], np.cumsum(s.entry_flux[lane].sum(axis=1))]),
+            [[0.0], np.cumsum(s.entry_flux[lane].sum(axis=1))]
+        ),
     }
     if rec.balls.shape[2]:
         out["ball height (m)"] = rec.balls[lane, :, 0, 1]
@@ -515,8 +323,7 @@ def object_markers(objects, balls: np.ndarray, spacing: float = 0.08) -> np.ndar
             fixed.append(np.asarray(o.center, float)[None])
     fix = np.concatenate(fixed) if fixed else np.zeros((0, 3))
     r = balls.shape[0]
-    return np.concatenate([balls.reshape(r, -1, 3), np.broadcast_to(fix, (r, *fix.shape))],
-                          axis=1)  # fmt: skip
+    return np.concatenate([balls.reshape(r, -1, 3), np.broadcast_to(fix, (r, *fix.shape))], axis=1)
 
 
 @dataclass
@@ -534,21 +341,39 @@ class Stunt:
         r, seconds = self.result, self.problem.steps * self.problem.body.dt
         starts = r.sequence.starts()
         return {
-            "animal": self.problem.body.name, "trick": self.problem.trick.name,
-            "trick_file": self.problem.task.source, "method": r.method, "seconds": seconds,
+            "animal": self.problem.body.name,
+            "trick": self.problem.trick.name,
+            "trick_file": self.problem.task.source,
+            "method": r.method,
+            "seconds": seconds,
             **self.measures,
             "E": round(float(self.scores["cost"][0]), 5),
             "terms": {k: round(float(v[0]), 5) for k, v in self.scores.items() if k != "cost"},
-            "plan": [{"entry": n, "start_s": round(float(t), 3),
-                      "duration_s": round(float(d), 3), "played": bool(t < seconds)}
-                     for n, t, d in zip(r.names, starts, r.durations, strict=True)],
-            "evaluations": r.evaluations, "wall_s": round(r.wall, 2),
-        }  # fmt: skip
+            "plan": [
+                {
+                    "entry": n,
+                    "start_s": round(float(t), 3),
+                    "duration_s": round(float(d), 3),
+                    "played": bool(t < seconds),
+                }
+                for n, t, d in zip(r.names, starts, r.durations, strict=True)
+            ],
+            "evaluations": r.evaluations,
+            "wall_s": round(r.wall, 2),
+        }
 
 
-def discover(body: Body, repertoire: Repertoire, trick: Trick, method: str = "anneal",
-             budget: int = BUDGET, seed: int = 0, segments: int | None = None,
-             progress=None, evaluator: str = "batch") -> Stunt:  # fmt: skip
+def discover(
+    body: Body,
+    repertoire: Repertoire,
+    trick: Trick,
+    method: str = "anneal",
+    budget: int = BUDGET,
+    seed: int = 0,
+    segments: int | None = None,
+    progress=None,
+    evaluator: str = "batch",
+) -> Stunt:
     """Return the best stunt ``method`` (anneal: 16 chains; ga: 32 a generation) finds for the
     trick within ``budget`` plan evaluations.
 
@@ -558,7 +383,6 @@ def discover(body: Body, repertoire: Repertoire, trick: Trick, method: str = "an
 
     problem = StuntProblem(body, repertoire, trick, segments)
     opts = {"chains": min(16, budget)} if method == "anneal" else {"popsize": min(32, budget)}
-    result = search(problem, method, budget, seed, progress=progress, evaluator=evaluator,
-                    **opts)  # fmt: skip
+    result = search(problem, method, budget, seed, progress=progress, evaluator=evaluator, **opts)
     rec = problem.record(result.entries[None], result.durations[None], record_every=2)
     return Stunt(problem, result, rec, problem.scores(rec), measures(problem, rec))

@@ -24,9 +24,13 @@ from zoetic.behavior.repertoire import Repertoire
 from zoetic.bodies import Body
 from zoetic.control import Controller
 from zoetic.control.abstract import AbstractController, SequenceController
+from zoetic.control.loop import Observer, Schedule, drive
+from zoetic.control.policy import Period
+from zoetic.control.rollout import rollout
 from zoetic.errors import SimulationError, ZoeticError
 from zoetic.learning.abstraction import mirror_abstract
 from zoetic.physics import State, Trajectory, rest_state, simulate
+from zoetic.physics.world import World
 
 OVERLAP = 0.05  # cross-fade: fraction of each controller's length shared with the next
 
@@ -91,10 +95,14 @@ def handmade_repertoire(body: Body) -> Repertoire:
     sharp = wave_abstraction(body, 0.2, 0.3)
     wide = wave_abstraction(body, 0.5, 0.1)
     rest = AbstractController(
-        body.name, body.actuator_names, np.nan_to_num(body.wave_held),  # fins level
-        np.zeros((body.n_actuators, 1)), np.zeros((body.n_actuators, 1)),
-        np.zeros((body.n_actuators, 1)), period,
-    )  # fmt: skip
+        body.name,
+        body.actuator_names,
+        np.nan_to_num(body.wave_held),  # fins level
+        np.zeros((body.n_actuators, 1)),
+        np.zeros((body.n_actuators, 1)),
+        np.zeros((body.n_actuators, 1)),
+        period,
+    )
     mirror = body.actuator_mirror
     for name, ctrl in (
         ("do-nothing", rest),
@@ -218,9 +226,11 @@ def _candidate_tables(ctrls, current, t, steps, dt) -> np.ndarray:
             continue
         window = steps * dt
         seq = SequenceController(
-            ctrl.animal, ctrl.actuators,
-            ((ctrls[ci], held / (1 - OVERLAP)), (ctrl, window / (1 - OVERLAP) + 1.0)), OVERLAP,
-        )  # fmt: skip
+            ctrl.animal,
+            ctrl.actuators,
+            ((ctrls[ci], held / (1 - OVERLAP)), (ctrl, window / (1 - OVERLAP) + 1.0)),
+            OVERLAP,
+        )
         tables.append(seq.table(steps, dt, t0=held))
     return np.stack(tables)
 
@@ -235,6 +245,86 @@ def _entries(repertoire: Repertoire, allowed) -> tuple[list[str], list[Controlle
     return names, [repertoire.controllers[n] for n in names]
 
 
+class _Path(Observer):
+    """The animal's positions (lane 0) at each record."""
+
+    def __init__(self) -> None:
+        self.frames: list[np.ndarray] = []
+
+    def record(self, world: World) -> None:
+        self.frames.append(world.positions(0)[0])
+
+
+@dataclass
+class _Greedy:
+    """The tracker's decisions: at each re-evaluation it simulates every entry over the next
+    window from the world's state (one batch) and plays the one of greatest gain."""
+
+    body: Body
+    ctrls: list[Controller]
+    names: list[str]
+    targets: np.ndarray
+    config: TrackConfig
+    radius: float
+    turn_radius: float
+    progress: Callable[[float, int], None] | None = None
+    t: float = 0.0  # s, the start of the next window
+    fade_end: float = 0.0  # s, when the last cross-fade ends
+    goal: int = 0  # the target being tracked
+    items: list[list] = field(default_factory=list)  # [entry index, start time]
+    chosen: list[str] = field(default_factory=list)  # entry chosen at each re-evaluation
+    times: list[float] = field(default_factory=lambda: [0.0])  # s, of the records
+
+    def __post_init__(self) -> None:
+        self.reached = np.full(len(self.targets), np.nan)
+
+    def window(self, world: World) -> int:
+        """Return the steps of the next window: the interval, or to the end of a cross-fade,
+        in whole records."""
+        dt, rec = self.body.dt, int(self.config.record_every)
+        window = max(self.config.interval, self.fade_end - self.t, rec * dt)
+        return int(np.ceil(window / dt / rec)) * rec
+
+    def __call__(self, world: World, period: Period) -> list[np.ndarray]:
+        """Return the activations (1, T, A) of the entry of greatest gain over ``period``."""
+        body, dt, rec, k = self.body, self.body.dt, int(self.config.record_every), len(self.ctrls)
+        current = None if not self.items else (self.items[-1][0], self.items[-1][1])
+        tables = _candidate_tables(self.ctrls, current, self.t, period.steps, dt)
+        state = State(world.positions(0), world.velocities(0))
+        traj = simulate(body, tables, state=_repeat(state, k), record_every=rec)
+        com = np.einsum("brnk,n->brk", traj.positions, body.mass / body.total_mass)[..., [0, 2]]
+        # the cost-to-go at the start is the same for every entry, so the gain ranks as its drop
+        gain = -cost_to_go(
+            body, traj.positions, self.targets[self.goal], self.turn_radius, rec * dt
+        )
+        gain -= self.config.obstacle_weight * obstacle_seconds(com, self.config.obstacles, rec * dt)
+        gain[traj.failed] = -np.inf
+        if not np.isfinite(gain).any():
+            raise SimulationError(f"every repertoire entry blew up at t = {self.t:.2f} s")
+        best = int(np.argmax(gain))
+        self.chosen.append(self.names[best])
+        if current is None or best != current[0]:
+            if current is not None:
+                self.fade_end = self.t + (self.t - current[1]) * OVERLAP / (1 - OVERLAP)
+            self.items.append([best, self.t])
+        for r in range(1, traj.positions.shape[1]):
+            while (
+                self.goal < len(self.targets)
+                and np.linalg.norm(com[best, r] - self.targets[self.goal]) < self.radius
+            ):
+                self.reached[self.goal] = self.t + r * rec * dt
+                self.goal += 1
+        self.times.extend(self.t + np.arange(1, traj.positions.shape[1]) * rec * dt)
+        self.t += period.steps * dt
+        return [tables[best][None]]
+
+    def done(self, world: World) -> bool:
+        """Report progress; return True once every target is reached or time is up."""
+        if self.progress is not None:
+            self.progress(self.t, self.goal)
+        return self.goal >= len(self.targets) or self.t >= self.config.time_limit - 1e-9
+
+
 def track(
     body: Body,
     repertoire: Repertoire,
@@ -242,7 +332,8 @@ def track(
     config: TrackConfig = TrackConfig(),
     progress: Callable[[float, int], None] | None = None,
 ) -> TrackResult:
-    """Return the path of the animal greedily tracking ``targets`` (M, 2) in turn.
+    """Return the path of the animal greedily tracking ``targets`` (M, 2) in turn, its World
+    run through the one closed-loop driver (each window one control period).
 
     progress(t, reached) is called after every re-evaluation.
     """
@@ -255,56 +346,39 @@ def track(
         raise TrackingError("radius, interval and time limit must be positive")
     dt, rec = body.dt, int(config.record_every)
     lam = 1.5 * body_length(body) if config.turn_radius is None else float(config.turn_radius)
-    w = body.mass / body.total_mass
-    state = rest_state(body, 1)
     t0 = time.perf_counter()
+    state = rest_state(body, 1)
     simulate(body, np.zeros((len(ctrls), rec, body.n_actuators)), state=_repeat(state, len(ctrls)))
     compile_wall = time.perf_counter() - t0
 
-    times, frames = [0.0], [state.positions[0]]
-    items: list[list] = []  # [entry index, start time]
-    reached = np.full(len(targets), np.nan)
-    chosen: list[str] = []
-    goal, t, fade_end = 0, 0.0, 0.0
+    world = World([body])
+    greedy = _Greedy(body, ctrls, names, targets, config, float(radius), lam, progress)
+    path = _Path()
+    # the run ends at ``done``; a window that starts before the time limit plays whole, so
+    # the driver's own end lies past the longest window that can start then
+    longest = max(config.interval, config.time_limit * OVERLAP / (1 - OVERLAP)) + 2 * rec * dt
+    schedule = Schedule(config.interval, record_every=rec, record_end=False, plan=greedy.window)
     start = time.perf_counter()
-    while goal < len(targets) and t < config.time_limit - 1e-9:
-        window = max(config.interval, fade_end - t, rec * dt)
-        steps = int(np.ceil(window / dt / rec)) * rec
-        current = None if not items else (items[-1][0], items[-1][1])
-        tables = _candidate_tables(ctrls, current, t, steps, dt)
-        traj = simulate(body, tables, state=_repeat(state, len(ctrls)), record_every=rec)
-        com = np.einsum("brnk,n->brk", traj.positions, w)[..., [0, 2]]
-        # the cost-to-go at the start is the same for every entry, so the gain ranks as its drop
-        gain = -cost_to_go(body, traj.positions, targets[goal], lam, rec * dt)
-        gain -= config.obstacle_weight * obstacle_seconds(com, config.obstacles, rec * dt)
-        gain[traj.failed] = -np.inf
-        if not np.isfinite(gain).any():
-            raise SimulationError(f"every repertoire entry blew up at t = {t:.2f} s")
-        best = int(np.argmax(gain))
-        chosen.append(names[best])
-        if current is None or best != current[0]:
-            if current is not None:
-                fade_end = t + (t - current[1]) * OVERLAP / (1 - OVERLAP)
-            items.append([best, t])
-        for r in range(1, traj.positions.shape[1]):
-            while goal < len(targets) and np.linalg.norm(com[best, r] - targets[goal]) < radius:
-                reached[goal] = t + r * rec * dt
-                goal += 1
-        times.extend(t + np.arange(1, traj.positions.shape[1]) * rec * dt)
-        frames.extend(traj.positions[best, 1:])
-        state = traj.final.take(best)
-        t += steps * dt
-        if progress is not None:
-            progress(t, goal)
+    drive(world, greedy, config.time_limit + longest, schedule, (path,), stop=greedy.done)
     wall = time.perf_counter() - start
-    seq, starts = _sequence(ctrls, items, t)
-    positions = np.array(frames)
+    seq, starts = _sequence(ctrls, greedy.items, greedy.t)
+    positions = np.array(path.frames)
+    w = body.mass / body.total_mass
     return TrackResult(
-        times=np.array(times), positions=positions, com=np.einsum("rnk,n->rk", positions, w),
-        targets=targets, radius=float(radius), sequence=seq,
-        names=[names[i] for i, _ in items], starts=starts, reached=reached,
-        evaluations=chosen, wall=wall, compile_wall=compile_wall, record_every=rec,
-    )  # fmt: skip
+        times=np.array(greedy.times),
+        positions=positions,
+        com=np.einsum("rnk,n->rk", positions, w),
+        targets=targets,
+        radius=float(radius),
+        sequence=seq,
+        names=[names[i] for i, _ in greedy.items],
+        starts=starts,
+        reached=greedy.reached,
+        evaluations=greedy.chosen,
+        wall=wall,
+        compile_wall=compile_wall,
+        record_every=rec,
+    )
 
 
 def _repeat(state: State, k: int) -> State:
@@ -324,7 +398,10 @@ def _sequence(ctrls, items, t_end) -> tuple[SequenceController, np.ndarray]:
 
 
 def replay(body: Body, result: TrackResult) -> Trajectory:
-    """Return the trajectory of the recorded sequence played from rest (for checks, video)."""
-    dt = body.dt
-    steps = int(round(result.sim_time / dt))
-    return simulate(body, result.sequence.table(steps, dt), record_every=result.record_every)
+    """Return the trajectory of the recorded sequence played from rest in a World (for checks,
+    video), recorded every ``result.record_every`` steps."""
+    steps = int(round(result.sim_time / body.dt))
+    table = result.sequence.table(steps, body.dt)
+    seconds = steps * body.dt
+    ro = rollout(World([body]), table[None], seconds, seconds, record_every=result.record_every)
+    return ro.trajectory(0)

@@ -1,4 +1,5 @@
-"""Closed-loop rollouts: policies sense and act every control period while a World steps."""
+"""Closed-loop rollouts: policies sense and act every control period while a World steps
+(through the one driver, ``control.loop``)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from zoetic.control.loop import Observer, Schedule, drive
 from zoetic.control.policy import Period, Policy, as_policy
 from zoetic.control.sensors import observe
 from zoetic.errors import ControllerError
@@ -52,19 +54,44 @@ def _policies(world: World, policies) -> list[Policy]:
     return [as_policy(p) for p in policies]
 
 
-def _as_rows(u, world: World, animal: int, steps: int) -> np.ndarray:
-    u = np.asarray(u, dtype=float)
-    na = world.bodies[animal].n_actuators
-    if u.ndim == 1:
-        u = u[None]
-    if u.ndim == 2:  # held over the period
-        u = np.broadcast_to(u[:, None, :], (u.shape[0], steps, u.shape[1]))
-    if u.shape[1:] != (steps, na) or u.shape[0] not in (1, world.batch):
-        raise ControllerError(
-            f"the {world.bodies[animal].name}'s policy returned activations {u.shape}; "
-            f"expected ({world.batch}, {steps}, {na}) or ({world.batch}, {na})"
-        )
-    return np.broadcast_to(u, (world.batch, steps, na))
+class _Recorder(Observer):
+    """Times, every animal's positions, the balls and the node-object contacts at each record."""
+
+    def __init__(self, world: World) -> None:
+        self.times: list[float] = []
+        self.pos: list[list[np.ndarray]] = [[] for _ in world.animals]
+        self.balls: list[np.ndarray] = []
+        self.counts: list[np.ndarray] = []
+        self.touched = np.zeros(world.batch, dtype=np.int64)
+
+    def slice(self, world: World, contacts) -> None:
+        if world.objects:
+            self.touched += contacts.count
+
+    def record(self, world: World) -> None:
+        self.times.append(world.time)
+        for a, p in enumerate(self.pos):
+            p.append(world.positions(a))
+        self.balls.append(world.ball_positions)
+        self.counts.append(self.touched)
+        self.touched = np.zeros(world.batch, dtype=np.int64)
+
+
+class _Sensing(Observer):
+    """Every animal's policy asked with its sensors' observations (the contacts of the last
+    slice feed the touch sensors)."""
+
+    def __init__(self, world: World, policies: list[Policy], target) -> None:
+        self.policies, self.target, self.contacts = policies, target, None
+
+    def slice(self, world: World, contacts) -> None:
+        self.contacts = contacts
+
+    def __call__(self, world: World, period: Period) -> list[np.ndarray]:
+        return [
+            p.act(observe(world, a, p.sensors, self.contacts, self.target), period)
+            for a, p in enumerate(self.policies)
+        ]
 
 
 def rollout(
@@ -87,52 +114,14 @@ def rollout(
     pols = _policies(world, policies)
     for p in pols:
         p.reset(seed)
-    dt = world.dt
-    if not control_period > 0:
-        raise ControllerError(f"control_period must be positive, got {control_period}")
-    rec_every = int(record_every) if record_every is not None else 0  # 0: at each period end
-    if record_every is not None and rec_every < 1:
-        raise ControllerError("record_every must be at least 1")
-    start = world.step_count
-    end = start + world.steps_for(seconds)
-    times = [world.time]
-    pos = [[world.positions(a)] for a in range(len(world.animals))]
-    balls = [world.ball_positions]
-    counts = [np.zeros(world.batch, dtype=np.int64)]
-    touched = np.zeros(world.batch, dtype=np.int64)
-    contacts = None
-    k = start
-    i = 0
-    while k < end:
-        # periods end on the dt grid nearest to multiples of control_period (1/30 s with dt
-        # 5 ms alternates 7 and 6 steps), so that policies are asked at the asked-for rate
-        i += 1
-        steps = min(max(1, start + int(round(i * control_period / dt)) - k), end - k)
-        period = Period(k, steps, dt)
-        rows = []
-        for a, p in enumerate(pols):
-            obs = observe(world, a, p.sensors, contacts, target)
-            rows.append(_as_rows(p.act(obs, period), world, a, steps))
-        j = 0
-        while j < steps:
-            here = k + j - start
-            m = steps - j if not rec_every else min(steps - j, rec_every - here % rec_every)
-            contacts = world.step(m * dt, [r[:, j : j + m] for r in rows])
-            if world.objects:
-                touched += contacts.count
-            j += m
-            if (j == steps if not rec_every else (k + j - start) % rec_every == 0):
-                times.append(world.time)
-                for a in range(len(world.animals)):
-                    pos[a].append(world.positions(a))
-                balls.append(world.ball_positions)
-                counts.append(touched)
-                touched = np.zeros(world.batch, dtype=np.int64)
-        k += steps
+    schedule = Schedule(control_period, record_every=record_every, record_end=False)
+    rec = _Recorder(world)
+    sensing = _Sensing(world, pols, target)
+    drive(world, sensing, seconds, schedule, observers=(sensing, rec))
     return Rollout(
-        times=np.array(times) - times[0],
-        positions=tuple(np.stack(p, axis=1) for p in pos),
-        ball_positions=np.stack(balls, axis=1),
-        contacts=np.stack(counts, axis=1),
+        times=np.array(rec.times) - rec.times[0],
+        positions=tuple(np.stack(p, axis=1) for p in rec.pos),
+        ball_positions=np.stack(rec.balls, axis=1),
+        contacts=np.stack(rec.counts, axis=1),
         final=world.state,
     )

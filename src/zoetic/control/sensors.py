@@ -39,19 +39,37 @@ def orientation(body: Body, positions: np.ndarray) -> np.ndarray:
     return r
 
 
-def linear_fit(body: Body, positions: np.ndarray) -> np.ndarray:
+def linear_fit(body: Body, positions, xp=np):
     """Return the linear maps L (B, 3, 3) that best carry the centred rest pose onto the
     centred ``positions`` in the mass-weighted least-squares sense (the rotation itself for
-    a rigid motion; cheaper than ``orientation``, which needs an SVD per lane)."""
+    a rigid motion; cheaper than ``orientation``, which needs an SVD per lane), computed with
+    the array module ``xp`` (NumPy or JAX)."""
     w = body.mass / body.total_mass
     r0 = body.rest_pos - w @ body.rest_pos
     m_inv = np.linalg.pinv(np.einsum("n,ni,nj->ij", w, r0, r0))
-    x = positions - np.einsum("n,bnk->bk", w, positions)[:, None, :]
-    return np.einsum("n,bni,nj,jk->bik", w, x, r0, m_inv, optimize=True)
+    x = positions - xp.einsum("n,bnk->bk", w, positions)[:, None, :]
+    return xp.einsum("n,bni,nj,jk->bik", w, x, r0, m_inv, optimize=True)
 
 
-def _unit(v: np.ndarray) -> np.ndarray:
-    return v / (np.linalg.norm(v, axis=-1, keepdims=True) + 1e-12)
+def forward_axis(body: Body, positions, xp=np):
+    """Return the body's forward axes (B, 3) at ``positions`` (B, N, 3): the rest pose's
+    forward axis carried by the best linear fit (``linear_fit``), as unit vectors."""
+    return _unit(linear_fit(body, positions, xp) @ body.forward, xp)
+
+
+def heading_of(forward, xp=np):
+    """Return the headings (...,) in rad of forward axes (..., 3): atan2(f_z, f_x), left turns
+    (toward +z) positive."""
+    return xp.arctan2(forward[..., 2], forward[..., 0])
+
+
+def wrap_angle(a):
+    """Return angles (rad) wrapped into [-pi, pi) (NumPy or JAX arrays, or floats)."""
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+def _unit(v, xp=np):
+    return v / (xp.linalg.norm(v, axis=-1, keepdims=True) + 1e-12)
 
 
 @dataclass
@@ -86,7 +104,7 @@ class Senses:
     @cached_property
     def forward(self) -> np.ndarray:
         """(B, 3) the body's forward axis: the rest heading carried by the best linear fit."""
-        return _unit(self.frame @ self.body.forward)
+        return _unit(self.frame @ self.body.forward)  # forward_axis, with the fit kept
 
     @cached_property
     def up(self) -> np.ndarray:
@@ -102,7 +120,7 @@ class Senses:
 
 
 def _heading(s: Senses) -> np.ndarray:
-    return np.arctan2(s.forward[:, 2], s.forward[:, 0])
+    return heading_of(s.forward)
 
 
 def _pitch(s: Senses) -> np.ndarray:
@@ -128,8 +146,7 @@ def _to_target(s: Senses) -> np.ndarray:
 
 def _target_bearing(s: Senses) -> np.ndarray:
     d = _to_target(s)
-    ang = np.arctan2(d[:, 2], d[:, 0]) - _heading(s)
-    return (ang + np.pi) % (2 * np.pi) - np.pi
+    return wrap_angle(np.arctan2(d[:, 2], d[:, 0]) - _heading(s))
 
 
 def _target_elevation(s: Senses) -> np.ndarray:
@@ -197,9 +214,14 @@ def observe(
         else np.zeros((world.batch, len(world.objects)), dtype=bool)
     )
     s = Senses(
-        world.bodies[animal], world.positions(animal), world.velocities(animal), world.medium,
-        world.time, touching, resolve_target(world, target, world.batch),
-    )  # fmt: skip
+        world.bodies[animal],
+        world.positions(animal),
+        world.velocities(animal),
+        world.medium,
+        world.time,
+        touching,
+        resolve_target(world, target, world.batch),
+    )
     for n in names:
         obs[n] = SENSORS[n](s)
     return obs

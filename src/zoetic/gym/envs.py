@@ -2,12 +2,14 @@
 
 Every environment is a ``_Core`` of B lanes: the single ``ZoeticEnv`` is B = 1 and the native
 ``ZoeticVectorEnv`` is B = num_envs stepping all lanes in one kernel call, so both run the
-same numbers.
+same numbers. Each action is one control period of the one closed-loop driver
+(``control.loop.step_period``).
 
 Action: ``Box(0, 1, (A,), float32)``, the activation of each actuator (muscles contract toward
 1, fins tilt), held for one control period (``control_period`` s, default 0.05).
 
-Observation: ``Box(-inf, inf, (12 + A,), float32)``:
+Observation: ``Box(-inf, inf, (12 + A,), float32)``, read from the animal's sensors
+(``control.sensors``; heading, pitch and roll of the body's forward and up axes):
 
 ====== =============================================================================
 index  reading
@@ -18,17 +20,18 @@ index  reading
 5      depth below the water surface (m; 0 without a surface)
 6, 7   cos and sin of the bearing to the goal (goal tasks), of the heading error to the
        target heading (turn) or of the heading against the start heading (crawl)
-8      distance to the goal (m; 0 for turn and crawl)
+8      distance to the goal (m, in 3-D; 0 for turn and crawl)
 9      heading change since the start (rad, left positive)
 10, 11 cos and sin of 2 pi f t: a clock at the animal's own wave frequency f
 12-    the activations now held (the previous action)
 ====== =============================================================================
 
-Rewards (computed from the world state, per step): ``swim`` the decrease of the distance to
-the goal (m), +1 on reaching it (within ``goal_radius``, which ends the episode); ``crawl`` the
-forward displacement of the centre of mass along the start heading (m); ``turn`` the decrease
-of the absolute heading error to a target heading +-pi/2 from the start (rad), ending within
-0.1 rad. A blown-up simulation ends the episode with reward -1.
+Rewards (per step) are the change of a task term (``tasks.terms``) over the step: ``swim`` the
+decrease of ``goal_distance_xz`` (the top-view distance to the goal, m), +1 on reaching it
+(within ``goal_radius``, which ends the episode); ``crawl`` the increase of ``position_along``
+the start heading (m); ``turn`` the decrease of ``heading_error`` against a target heading
++-pi/2 from the start (rad), ending within 0.1 rad. A blown-up simulation ends the episode
+with reward -1.
 """
 
 from __future__ import annotations
@@ -43,15 +46,27 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from zoetic.bodies import load_animal
-from zoetic.control.sensors import Senses
+from zoetic.control.loop import as_rows, step_period
+from zoetic.control.policy import Period
+from zoetic.control.sensors import observe, wrap_angle
+from zoetic.physics.objects import Ball
 from zoetic.physics.world import Animal, World
+from zoetic.render import Cameras, look_rotation, render, world_mesh
+from zoetic.tasks.signals import BodyFrame, Signals
+from zoetic.tasks.terms import TERMS, TermParams
 
 KINDS = ("swim", "crawl", "turn")
 N_OBS = 12
-
-
-def _wrap(a: np.ndarray) -> np.ndarray:
-    return (a + np.pi) % (2 * np.pi) - np.pi
+SENSORS = ("velocity", "heading", "pitch", "roll", "depth")
+GOAL_SENSORS = ("target_distance", "target_bearing")
+# each task's reward: the term whose change over a step it is, and whether an increase pays
+REWARDS = {
+    "swim": ("goal_distance_xz", False),
+    "crawl": ("position_along", True),
+    "turn": ("heading_error", False),
+}
+WATER = (0.05, 0.25, 0.35)  # the colour of empty water in the pictures
+ANIMAL = (0.55, 0.6, 0.68)
 
 
 class _Core:
@@ -76,6 +91,7 @@ class _Core:
         self.goal_radius = float(goal_radius)
         self.world = World([Animal(self.body)], batch=batch)
         self.n_act = self.body.n_actuators
+        self.frame = BodyFrame.of(self.body)
         self._start = self.world.initial_state()
         w = self.body.mass / self.body.total_mass
         self._com0 = w @ self._start.positions[0][0]
@@ -88,97 +104,109 @@ class _Core:
         self.heading = np.zeros(batch)
 
     def observation_size(self) -> int:
+        """Return the length of an observation (12 + A)."""
         return N_OBS + self.n_act
+
+    def _place(self, lane: int, rng: np.random.Generator) -> None:
+        """Put one lane back at the start turned to a random heading; draw its goal."""
+        yaw = float(rng.uniform(-np.pi, np.pi))
+        pose = self._start.take(0)
+        com = self._com0
+        c, s = np.cos(yaw), np.sin(yaw)
+        rel = pose.positions[0][0] - com
+        turned = np.stack(
+            [c * rel[:, 0] - s * rel[:, 2], rel[:, 1], s * rel[:, 0] + c * rel[:, 2]], 1
+        )
+        self.world.restore(replace(pose, positions=(turned[None] + com,)), lanes=[lane])
+        self.held[lane] = 0.0
+        self.steps[lane] = 0
+        if self.kind == "swim":
+            bearing = yaw + float(rng.uniform(-np.pi / 4, np.pi / 4))
+            self.goal[lane] = com + self.goal_distance * np.array(
+                [np.cos(bearing), 0.0, np.sin(bearing)]
+            )
+        elif self.kind == "turn":
+            self.goal[lane] = com
+            self.target_heading[lane] = np.pi / 2 * (1.0 if rng.random() < 0.5 else -1.0)
 
     def reset_lanes(self, lanes: np.ndarray, rngs: list[np.random.Generator]) -> None:
         """Put each lane back at the start, with its own random heading and goal."""
         for lane, rng in zip(lanes, rngs, strict=True):
-            yaw = float(rng.uniform(-np.pi, np.pi))
-            pose = self._start.take(0)
-            com = self._com0
-            c, s = np.cos(yaw), np.sin(yaw)
-            rel = pose.positions[0][0] - com
-            turned = np.stack([c * rel[:, 0] - s * rel[:, 2], rel[:, 1],
-                               s * rel[:, 0] + c * rel[:, 2]], 1) + com  # fmt: skip
-            state = replace(pose, positions=(turned[None],))
-            self.world.restore(state, lanes=[lane])
-            self.held[lane] = 0.0
-            self.steps[lane] = 0
-            if self.kind == "swim":
-                bearing = yaw + float(rng.uniform(-np.pi / 4, np.pi / 4))
-                self.goal[lane] = com + self.goal_distance * np.array(
-                    [np.cos(bearing), 0.0, np.sin(bearing)]
-                )
-            elif self.kind == "turn":
-                self.goal[lane] = com
-                self.target_heading[lane] = np.pi / 2 * (1.0 if rng.random() < 0.5 else -1.0)
-        senses = self._senses()
-        head = self._heading(senses)
+            self._place(lane, rng)
+        head = self._sense()["heading"]
         self.start_heading[lanes] = head[lanes]
         self.heading[lanes] = head[lanes]
         if self.kind == "turn":
             self.target_heading[lanes] += head[lanes]
-        self.potential[lanes] = self._potential(senses)[lanes]
+        self.potential[lanes] = self._potential()[lanes]
 
-    def _senses(self) -> Senses:
-        w = self.world
-        return Senses(self.body, w.positions(0), w.velocities(0), w.medium, w.time,
-                      np.zeros((w.batch, 0), bool), self.goal)  # fmt: skip
-
-    @staticmethod
-    def _heading(s: Senses) -> np.ndarray:
-        return np.arctan2(s.forward[:, 2], s.forward[:, 0])
-
-    def _potential(self, s: Senses) -> np.ndarray:
-        """Return what the reward is the decrease (swim, turn) or increase (crawl) of."""
+    def _sense(self) -> dict[str, np.ndarray]:
+        """Return the sensors' readings the observation is made of (control.sensors)."""
         if self.kind == "swim":
-            return np.linalg.norm((self.goal - s.com)[:, [0, 2]], axis=-1)
-        if self.kind == "turn":
-            return np.abs(_wrap(self.target_heading - self.heading))
-        d = np.stack([np.cos(self.start_heading), np.sin(self.start_heading)], 1)
-        return (s.com[:, [0, 2]] * d).sum(-1)
+            return observe(self.world, 0, SENSORS + GOAL_SENSORS, target=self.goal)
+        return observe(self.world, 0, SENSORS)
 
-    def observe(self, s: Senses | None = None) -> np.ndarray:
+    def _potential(self) -> np.ndarray:
+        """Return the reward's term (REWARDS) of the world now, (B,)."""
+        w = self.world
+        s = Signals(
+            np,
+            self.frame,
+            w.positions(0)[:, None],
+            self.held[:, None],
+            np.array([w.time]),
+            w.medium.water_level,
+            self.period,
+        )
+        target = self.start_heading if self.kind == "crawl" else self.target_heading
+        return TERMS[REWARDS[self.kind][0]].fn(np, s, TermParams(target, self.goal))
+
+    def observe(self, sensed: dict[str, np.ndarray] | None = None) -> np.ndarray:
         """Return the observations (B, 12 + A) float32 (see the module's table)."""
-        s = s or self._senses()
+        o = sensed or self._sense()
         head = self.heading
         c, sn = np.cos(head), np.sin(head)
-        v = s.com_velocity
+        v = o["velocity"]
         fwd = c * v[:, 0] + sn * v[:, 2]
         left = -sn * v[:, 0] + c * v[:, 2]
-        f = s.forward
-        pitch = np.arcsin(np.clip(f[:, 1], -1.0, 1.0))
-        side = np.cross(f, np.array([0.0, 1.0, 0.0]))
-        side /= np.linalg.norm(side, axis=-1, keepdims=True) + 1e-12
-        roll = np.arctan2((s.up * side).sum(-1), (s.up * np.cross(side, f)).sum(-1))
-        level = s.medium.water_level
-        depth = level - s.com[:, 1] if abs(level) < 1e8 else np.zeros(self.batch)
         if self.kind == "swim":
-            to = self.goal - s.com
-            ang = np.arctan2(to[:, 2], to[:, 0]) - head
-            dist = np.linalg.norm(to[:, [0, 2]], axis=-1)
+            ang, dist = o["target_bearing"], o["target_distance"]
         elif self.kind == "turn":
             ang, dist = self.target_heading - head, np.zeros(self.batch)
         else:
             ang, dist = head - self.start_heading, np.zeros(self.batch)
         phase = 2 * np.pi * self.body.wave_frequency * self.steps * self.period
-        obs = np.column_stack([
-            fwd, v[:, 1], left, pitch, roll, depth, np.cos(ang), np.sin(ang), dist,
-            _wrap(head - self.start_heading), np.cos(phase), np.sin(phase), self.held,
-        ])  # fmt: skip
+        obs = np.column_stack(
+            [
+                fwd,
+                v[:, 1],
+                left,
+                o["pitch"],
+                o["roll"],
+                o["depth"],
+                np.cos(ang),
+                np.sin(ang),
+                dist,
+                wrap_angle(head - self.start_heading),
+                np.cos(phase),
+                np.sin(phase),
+                self.held,
+            ]
+        )
         return obs.astype(np.float32)
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Hold ``actions`` (B, A) for one period; return observations, rewards, terminated."""
         a = np.clip(np.asarray(actions, dtype=np.float64).reshape(self.batch, self.n_act), 0, 1)
-        self.world.step(self.period, a)
+        w = self.world
+        period = Period(w.step_count, w.steps_for(self.period), w.dt)
+        step_period(w, [as_rows(a, w, 0, period.steps)], period)
         self.held = a
         self.steps += 1
-        s = self._senses()
-        new = self._heading(s)
-        self.heading = self.heading + _wrap(new - self.heading)  # unwrapped
-        pot = self._potential(s)
-        reward = pot - self.potential if self.kind == "crawl" else self.potential - pot
+        sensed = self._sense()
+        self.heading = self.heading + wrap_angle(sensed["heading"] - self.heading)  # unwrapped
+        pot = self._potential()
+        reward = pot - self.potential if REWARDS[self.kind][1] else self.potential - pot
         self.potential = pot
         terminated = np.zeros(self.batch, dtype=bool)
         if self.kind == "swim":
@@ -187,29 +215,26 @@ class _Core:
             terminated |= reached
         elif self.kind == "turn":
             terminated |= pot < 0.1
-        failed = self.world.failed(0) | ~np.isfinite(reward)
+        failed = w.failed(0) | ~np.isfinite(reward)
         reward = np.where(failed, -1.0, reward)
         terminated |= failed
-        obs = self.observe(s)
+        obs = self.observe(sensed)
         obs[failed] = 0.0
         return obs, reward.astype(np.float64), terminated
 
     def render(self, lane: int, size: tuple[int, int]) -> np.ndarray:
-        """Return an (H, W, 3) uint8 picture of one lane through the project's rasteriser:
-        the animal from behind and above, the goal as a ball, a checkered floor."""
-        from zoetic.physics.objects import Ball
-        from zoetic.render import Cameras, look_rotation, render, world_mesh
-
+        """Return an (H, W, 3) uint8 picture of one lane (``zoetic.render``): the animal (and
+        its goal, as a ball) seen from above and to the side."""
         pos = self.world.positions(0)[lane]
-        com = np.nan_to_num(pos.mean(0))
-        goal = [Ball(0.1, position=tuple(self.goal[lane]))] if self.kind == "swim" else []
-        level = 0.0 if self.world.medium.floor else com[1] - 1.0  # the ground, or under it
-        mesh = world_mesh([self.body], [np.nan_to_num(pos)], [(0.48, 0.53, 0.6)], goal,
-                          floor=(com[0], com[2], level, 20.0))  # fmt: skip
-        size_m = float(np.ptp(pos, axis=0).max()) if np.isfinite(pos).all() else 1.0
-        eye = com + max(size_m, 0.3) * np.array([-1.6, 1.0, 1.2])
-        cam = Cameras(eye[None], look_rotation((com - eye)[None]), np.radians(60.0), size)
-        return render(mesh.vertices, mesh.triangles, mesh.colors, cam)[0]
+        com = self.body.mass @ pos / self.body.total_mass
+        length = float(np.ptp(pos @ np.asarray(self.body.forward, float))) + 1e-9
+        goal = [Ball(0.1 * length, position=tuple(self.goal[lane]))] if self.kind == "swim" else []
+        mesh = world_mesh([self.body], [pos], [ANIMAL], goal)
+        centre = 0.5 * (com + self.goal[lane]) if goal else com
+        span = max(length, float(np.linalg.norm(self.goal[lane] - com)) if goal else 0.0)
+        eye = centre + np.array([0.0, 0.6, 1.0]) * span
+        view = Cameras(eye, look_rotation(centre - eye), np.radians(60.0), size)
+        return render(mesh.vertices, mesh.triangles, mesh.colors, view, WATER)[0]
 
 
 class ZoeticEnv(gymnasium.Env):

@@ -17,8 +17,9 @@ import numpy as np
 
 from zoetic.bodies import Body, load_animal
 from zoetic.control import steered_wave
+from zoetic.control.loop import Observer, Schedule, drive
 from zoetic.control.policy import Period
-from zoetic.control.sensors import observe
+from zoetic.control.sensors import observe, wrap_angle
 from zoetic.errors import ZoeticError
 from zoetic.perception.eyes import EyeSpec, body_frame, gaze_angles, head_frame, look
 from zoetic.perception.gaze import GazeController, GazeState, fixation
@@ -33,12 +34,9 @@ FOG = (0.05, 0.25, 0.35)
 SEABED_LEVEL, SEABED_EXTENT = -2.0, 30.0
 
 
-def _wrap(a):
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
-
-
-def steer(body: Body, times: np.ndarray, bias: float, amplitude: float = 1.0,
-          pitch: float = 0.0) -> np.ndarray:  # fmt: skip
+def steer(
+    body: Body, times: np.ndarray, bias: float, amplitude: float = 1.0, pitch: float = 0.0
+) -> np.ndarray:
     """Return activations (T, A): the body's own wave steered (``control.steered_wave``):
     ``bias`` > 0 turns left, ``pitch`` > 0 tilts the fins nose up (the animal rises)."""
     return steered_wave(body, times, amplitude, bias, pitch)
@@ -136,10 +134,19 @@ class PredatorPolicy:
         if self.state.locked.any() and abs(phi_p) >= self.threshold:
             pitch = float(np.clip(self.fin_gain * phi_p, -self.max_pitch, self.max_pitch))
         n = spec.levels
-        self.log.append(VisionRecord(
-            period.t0, a.copy(), self.state.locked.copy(), theta_p, phi_p, float(rng), images,
-            cams.rotation[::n, 2].copy(), cams.eye[::n].copy(),
-        ))  # fmt: skip
+        self.log.append(
+            VisionRecord(
+                period.t0,
+                a.copy(),
+                self.state.locked.copy(),
+                theta_p,
+                phi_p,
+                float(rng),
+                images,
+                cams.rotation[::n, 2].copy(),
+                cams.eye[::n].copy(),
+            )
+        )
         return steer(body, period.times, bias, pitch=pitch)[None]
 
 
@@ -185,7 +192,7 @@ class WanderFleePolicy:
         elif period.t0 >= self._next:
             self._goal = heading + self._rng.uniform(-1.0, 1.0)
             self._next = period.t0 + self.wander_every
-        bias = float(np.clip(0.8 * _wrap(self._goal - heading), -0.4, 0.4))
+        bias = float(np.clip(0.8 * wrap_angle(self._goal - heading), -0.4, 0.4))
         return steer(self.world.bodies[self.animal], period.times, bias, self.amplitude)[None]
 
 
@@ -205,18 +212,24 @@ class CruisePolicy:
         return steer(self.body, period.times, 0.0, self.amplitude)[None]
 
 
-def learn_model(body: Body, positions: np.ndarray, color, spec: EyeSpec,
-                distances=(0.6, 1.2, 2.4, 4.0)) -> np.ndarray:  # fmt: skip
+def learn_model(
+    body: Body, positions: np.ndarray, color, spec: EyeSpec, distances=(0.6, 1.2, 2.4, 4.0)
+) -> np.ndarray:
     """Return the colour histogram of the prey seen alone from the side through the same
     water, its pixels only (by the depth buffer), pooled over views at ``distances`` m (the
     fog shifts its colours with range)."""
     mesh = world_mesh([body], [positions], [color])
     com = positions.mean(0)
     eyes = np.array([com + np.array([0.0, 0.15 * d, d]) for d in distances])
-    cam = Cameras(eyes, look_rotation(com - eyes), np.full(len(eyes), np.radians(50.0)),
-                  (spec.size, spec.size))  # fmt: skip
-    img, depth = render(mesh.vertices, mesh.triangles, mesh.colors, cam, FOG, spec.visibility,
-                        with_depth=True)  # fmt: skip
+    cam = Cameras(
+        eyes,
+        look_rotation(com - eyes),
+        np.full(len(eyes), np.radians(50.0)),
+        (spec.size, spec.size),
+    )
+    img, depth = render(
+        mesh.vertices, mesh.triangles, mesh.colors, cam, FOG, spec.visibility, with_depth=True
+    )
     hist = np.mean([histogram(i, np.isfinite(d)) for i, d in zip(img, depth, strict=True)], 0)
     return hist / hist.sum()
 
@@ -231,9 +244,15 @@ class Chase:
     predator: PredatorPolicy
 
 
-def make_chase(seed: int = 0, distractors: int = 1, visibility: float = 6.0,
-               spec: EyeSpec | None = None, start_distance: float | None = None,
-               rocks: bool = True, prey_height: float = 0.0) -> Chase:  # fmt: skip
+def make_chase(
+    seed: int = 0,
+    distractors: int = 1,
+    visibility: float = 6.0,
+    spec: EyeSpec | None = None,
+    start_distance: float | None = None,
+    rocks: bool = True,
+    prey_height: float = 0.0,
+) -> Chase:
     """Return a chase scene: a shark with eyes, a reddish prey ahead of it (off to one side,
     in its periphery, ``prey_height`` m above it), yellowish distractors crossing behind the
     prey, rocks and seaweed."""
@@ -245,8 +264,10 @@ def make_chase(seed: int = 0, distractors: int = 1, visibility: float = 6.0,
     d = start_distance if start_distance is not None else rng.uniform(2.5, 3.5)
     bearing = rng.choice([-1, 1]) * rng.uniform(0.35, 0.6)
     prey_at = np.array([d * np.cos(bearing), prey_height, d * np.sin(bearing)])
-    members: list = [Animal(shark, (0.0, 0.0, 0.0), 0.0),
-                     Animal(shark, tuple(prey_at), float(rng.uniform(-0.8, 0.8)))]  # fmt: skip
+    members: list = [
+        Animal(shark, (0.0, 0.0, 0.0), 0.0),
+        Animal(shark, tuple(prey_at), float(rng.uniform(-0.8, 0.8))),
+    ]
     for k in range(distractors):
         side = -1.0 if k % 2 == 0 else 1.0
         start = prey_at + np.array([2.0 + 0.8 * k, 0.3 * k, 3.0 * side])
@@ -255,13 +276,13 @@ def make_chase(seed: int = 0, distractors: int = 1, visibility: float = 6.0,
         for k in range(6):
             x, z = rng.uniform(-3, 12), rng.choice([-1, 1]) * rng.uniform(3.0, 8.0)
             h = rng.uniform(0.3, 0.7)
-            members.append(Box((x, SEABED_LEVEL + h, z), (h, h, rng.uniform(0.3, 0.8)),
-                               name=f"rock{k}"))  # fmt: skip
+            members.append(
+                Box((x, SEABED_LEVEL + h, z), (h, h, rng.uniform(0.3, 0.8)), name=f"rock{k}")
+            )
         for k in range(10):
             x, z = rng.uniform(-3, 14), rng.choice([-1, 1]) * rng.uniform(2.5, 9.0)
             ln = rng.uniform(1.0, 1.8)
-            members.append(Cylinder((x, SEABED_LEVEL + 0.5 * ln, z), 0.04, ln,
-                                    name=f"seaweed{k}"))  # fmt: skip
+            members.append(Cylinder((x, SEABED_LEVEL + 0.5 * ln, z), 0.04, ln, name=f"seaweed{k}"))
     world = World(members, medium="water")
     colors = (PREDATOR, PREY) + (DISTRACTOR,) * distractors
     scenery = Scenery(colors)
@@ -292,36 +313,62 @@ def _off_gaze(dirs: np.ndarray, eyes: np.ndarray, nodes: np.ndarray) -> np.ndarr
     return np.arccos(np.clip((to * dirs[:, None]).sum(-1), -1.0, 1.0)).min(1)
 
 
-def run_chase(chase: Chase, seconds: float, fps: float = 30.0, seed: int = 0,
-              catch_radius: float = 0.3) -> ChaseResult:  # fmt: skip
+class _Frames(Observer):
+    """Every animal's positions (lane 0) at each record, and the times."""
+
+    def __init__(self, world: World) -> None:
+        self.times: list[float] = []
+        self.positions: list[list[np.ndarray]] = [[] for _ in world.animals]
+
+    def record(self, world: World) -> None:
+        self.times.append(world.time)
+        for a, p in enumerate(self.positions):
+            p.append(world.positions(a)[0])
+
+
+@dataclass
+class _Catch:
+    """The stop condition of a chase: the predator's head within ``radius`` m of a prey node
+    (a blown-up predator or prey raises)."""
+
+    radius: float
+    time: float | None = None
+
+    def __call__(self, world: World) -> bool:
+        if world.failed(0)[0] or world.failed(1)[0]:
+            raise ZoeticError("the chase blew up (an animal's state went non-finite)")
+        head = world.positions(0)[0][world.bodies[0].head]
+        gap = np.linalg.norm(world.positions(1)[0] - head, axis=-1).min()
+        if gap < self.radius:
+            self.time = world.time
+        return self.time is not None
+
+
+def run_chase(
+    chase: Chase, seconds: float, fps: float = 30.0, seed: int = 0, catch_radius: float = 0.3
+) -> ChaseResult:
     """Run the chase for ``seconds`` (stopping at a catch: the predator's head within
-    ``catch_radius`` m of a prey node) with every policy asked ``fps`` times a second."""
+    ``catch_radius`` m of a prey node) with every policy asked ``fps`` times a second; the
+    positions are recorded at the start of each control period (the frames the eyes saw)."""
     world = chase.world
     for p in chase.policies:
         p.reset(seed)
-    period_steps = max(1, int(round(1.0 / (fps * world.dt))))
-    end = world.steps_for(seconds)
-    head = world.bodies[0].head
-    times, positions = [], [[] for _ in world.animals]
-    caught, t_catch = False, None
-    k = 0
-    while k < end:
-        steps = min(period_steps, end - k)
-        period = Period(world.step_count, steps, world.dt)
-        rows = [p.act(observe(world, a, p.sensors), period) for a, p in enumerate(chase.policies)]
-        times.append(world.time)
-        for a in range(len(world.animals)):
-            positions[a].append(world.positions(a)[0])
-        world.step(steps * world.dt, rows)
-        k += steps
-        if world.failed(0)[0] or world.failed(1)[0]:
-            raise ZoeticError("the chase blew up (an animal's state went non-finite)")
-        gap = np.linalg.norm(world.positions(1)[0] - world.positions(0)[0][head], axis=-1).min()
-        if gap < catch_radius:
-            caught, t_catch = True, world.time
-            break
-    return ChaseResult(np.array(times), [np.stack(p) for p in positions], chase.predator.log,
-                       caught, t_catch, catch_radius)  # fmt: skip
+
+    def decide(world: World, period: Period) -> list[np.ndarray]:
+        return [p.act(observe(world, a, p.sensors), period) for a, p in enumerate(chase.policies)]
+
+    frames, catch = _Frames(world), _Catch(catch_radius)
+    drive(world, decide, seconds, Schedule(1.0 / fps, fixed=True), (frames,), stop=catch)
+    # the driver also records the state after the last period, which no policy saw
+    positions = [np.stack(p[:-1]) for p in frames.positions]
+    return ChaseResult(
+        np.array(frames.times[:-1]),
+        positions,
+        chase.predator.log,
+        catch.time is not None,
+        catch.time,
+        catch_radius,
+    )
 
 
 def summarize(result: ChaseResult, spec: EyeSpec) -> dict:

@@ -1,0 +1,177 @@
+"""A trick over a repertoire as a search problem: plans of repertoire entries played in a World
+beside the trick's objects, recorded through the one closed-loop driver and scored by the
+trick's style terms (which here also see the World's contact record and the balls)."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from zoetic.behavior.macro import MacroProblem
+from zoetic.behavior.repertoire import Repertoire
+from zoetic.behavior.tracking import TrackingError
+from zoetic.behavior.tricks import Trick
+from zoetic.bodies import Body
+from zoetic.control.loop import Observer, Schedule, drive
+from zoetic.physics import Trajectory, get_medium
+from zoetic.physics.objects import Ball
+from zoetic.physics.simulate import State
+from zoetic.physics.world import World
+from zoetic.tasks import check_fits, start_state
+from zoetic.tasks.terms import BodyFrame, Signals, evaluate_terms, term_names
+
+
+@dataclass
+class StuntRecord:
+    """A batch of stunts as the terms see them: trajectories plus the world's records."""
+
+    traj: Trajectory  # positions (B, R, N, 3), times (R,)
+    activations: np.ndarray  # (B, R, A) at the records
+    contacts: np.ndarray  # (B, R) node-object contacts since the previous record
+    balls: np.ndarray  # (B, R, nb, 3)
+    failed: np.ndarray  # (B,)
+    touch: np.ndarray | None = None  # (B, R, N, O) |impulse| (N s) each node got from each object
+
+
+class _Frames(Observer):
+    """At each record: the animal's positions, the balls, the node-object contacts and the
+    |impulse| (N s) each node got from each object since the previous record."""
+
+    def __init__(self, world: World) -> None:
+        self.times: list[float] = []
+        self.positions: list[np.ndarray] = []
+        self.balls: list[np.ndarray] = []
+        self.counts: list[np.ndarray] = []
+        self.touch: list[np.ndarray] = []
+        self._count = np.zeros(world.batch, dtype=np.int64)
+        self._impulse = np.zeros((world.batch, world.bodies[0].n_nodes, len(world.objects), 3))
+
+    def slice(self, world: World, contacts) -> None:
+        if world.objects:
+            self._count = self._count + contacts.count
+            self._impulse = self._impulse + contacts.impulse[0]
+
+    def record(self, world: World) -> None:
+        self.times.append(world.time)
+        self.positions.append(world.positions(0))
+        self.balls.append(world.ball_positions)
+        self.counts.append(self._count)
+        self.touch.append(np.linalg.norm(self._impulse, axis=-1))
+        self._count = np.zeros_like(self._count)
+        self._impulse = np.zeros_like(self._impulse)
+
+
+class StuntProblem(MacroProblem):
+    """A trick over a repertoire: plans of L (entry, duration) segments, scored in batches."""
+
+    def __init__(
+        self,
+        body: Body,
+        repertoire: Repertoire,
+        trick: Trick,
+        segments: int | None = None,
+        record_every: int | None = None,
+        allowed: tuple[str, ...] | None = None,
+    ):
+        check_fits(trick.task, body)
+        self.body, self.trick, self.task = body, trick, trick.task
+        self.names = list(repertoire.names if allowed is None else allowed)
+        missing = [n for n in self.names if n not in repertoire.controllers]
+        if missing or not self.names:
+            raise TrackingError(f"the repertoire has no entries {missing or self.names}")
+        self.ctrls = [repertoire.controllers[n] for n in self.names]
+        self.segments = int(segments or trick.segments)
+        if self.segments < 1:
+            raise TrackingError("a plan needs at least one segment")
+        self.lower, self.upper = trick.durations
+        every = record_every or max(1, int(round(1.0 / (trick.task.record_hz * body.dt))))
+        self.record_every = int(every)
+        self.steps = max(1, int(round(trick.task.horizon / body.dt / every))) * every
+        self.start = start_state(trick.task, body)
+        self.frame = BodyFrame.of(body)
+        self.level = get_medium(body.medium).water_level
+        self.radius = 0.0
+
+    def world(self, batch: int) -> World:
+        """Return the trick's World (the animal at the start state, the objects), B lanes."""
+        w = World([self.body, *self.trick.objects], medium=self.body.medium, batch=batch)
+        st = w.initial_state()
+        b = (batch, self.body.n_nodes, 3)
+        pos = np.broadcast_to(self.start.positions[0], b).copy()
+        vel = np.broadcast_to(self.start.velocities[0], b).copy()
+        w.restore(dataclasses.replace(st, positions=(pos,), velocities=(vel,)))
+        return w
+
+    def record(self, entries, durations, record_every: int | None = None) -> StuntRecord:
+        """Return what plans (B, L) do from the trick's start state over its duration: each
+        plan's activation table played in one control period, recorded every
+        ``record_every`` steps (default the problem's)."""
+        e, d = np.atleast_2d(entries), np.atleast_2d(durations)
+        dt = self.body.dt
+        tables = np.stack(
+            [self.sequence(a, b).table(self.steps, dt) for a, b in zip(e, d, strict=True)]
+        )
+        every = int(record_every or self.record_every)
+        world = self.world(len(e))
+        seconds = self.steps * dt
+        frames = _Frames(world)
+        schedule = Schedule(seconds, record_every=every, record_end=False)
+        drive(world, lambda w, period: [tables], seconds, schedule, (frames,))
+        st = world.state
+        traj = Trajectory(
+            times=np.array(frames.times) - frames.times[0],
+            positions=np.stack(frames.positions, axis=1),
+            final=State(st.positions[0], st.velocities[0]),
+            failed_step=st.failed_step[0],
+            dt=world.dt,
+        )
+        rows = np.minimum(np.arange(traj.positions.shape[1]) * every, self.steps - 1)
+        touch = np.stack(frames.touch, axis=1) if world.objects else None
+        return StuntRecord(
+            traj,
+            tables[:, rows],
+            np.stack(frames.counts, axis=1),
+            np.stack(frames.balls, axis=1),
+            world.failed(0),
+            touch,
+        )
+
+    def ball_index(self) -> int | None:
+        """Return the index in the trick's objects of its first ball (None without one)."""
+        return next((i for i, ob in enumerate(self.trick.objects) if isinstance(ob, Ball)), None)
+
+    def signals(self, rec: StuntRecord) -> Signals:
+        """Return the terms' view of a batch of stunts."""
+        k = self.ball_index()
+        touch = None if rec.touch is None or k is None else rec.touch[..., k]
+        return Signals(
+            np,
+            self.frame,
+            rec.traj.positions,
+            rec.activations,
+            rec.traj.times,
+            self.level,
+            self.task.horizon,
+            rec.contacts.astype(float),
+            rec.balls,
+            touch,
+        )
+
+    def terms(self, rec: StuntRecord) -> dict[str, np.ndarray]:
+        """Return each style term's raw value (B,) by name."""
+        vals = evaluate_terms(np, self.signals(rec), self.task.terms)
+        return dict(zip(term_names(self.task.terms), vals, strict=True))
+
+    def evaluate(self, entries: np.ndarray, durations: np.ndarray) -> dict:
+        """Return E ('cost', inf for a blow-up) and the terms of plans (B, L), one batch."""
+        rec = self.record(entries, durations)
+        return self.scores(rec)
+
+    def scores(self, rec: StuntRecord) -> dict:  # type: ignore[override]
+        """Return E ('cost', inf for a blow-up or a non-finite E) and each term's value (B,)."""
+        terms = self.terms(rec)
+        cost = sum(t.weight * v for t, v in zip(self.task.terms, terms.values(), strict=True))
+        ok = ~rec.failed & np.isfinite(cost)
+        return {"cost": np.where(ok, cost, np.inf), **terms}

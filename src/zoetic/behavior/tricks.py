@@ -1,0 +1,131 @@
+"""Trick files: a stunt to discover as a task file with two more tables.
+
+``[trick]`` holds ``segments`` (the number of repertoire entries in a plan) and ``durations``
+[min, max] s of each; ``[[objects]]`` the world's objects (``kind`` = ``ball``, ``box`` or
+``cylinder`` and that object's fields, in world metres: a hurdle's bar, a beach ball on its
+post). The task's ``horizon`` is the stunt's duration, its ``[start]`` where the animal starts
+(e.g. at depth, at rest) and its ``[[terms]]`` the style terms (``zoetic.tasks.terms``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from pathlib import Path
+
+from zoetic.errors import TaskError, ZoeticError
+from zoetic.io import read_toml
+from zoetic.physics.objects import Ball, Box, Cylinder
+from zoetic.tasks import TASK_DIR, Task, parse_task
+
+TRICK_DIR = TASK_DIR / "tricks"
+TRICK_KEYS = ("segments", "durations")
+OBJECTS = {"ball": Ball, "box": Box, "cylinder": Cylinder}
+
+
+@dataclass(frozen=True)
+class Trick:
+    """A stunt to discover: the task (duration, start, style terms) and the world's objects."""
+
+    task: Task
+    objects: tuple[Ball | Box | Cylinder, ...] = ()
+    segments: int = 4
+    durations: tuple[float, float] = (0.3, 2.0)
+
+    @property
+    def name(self) -> str:
+        """Return the trick's name (its task's)."""
+        return self.task.name
+
+    def to_dict(self) -> dict:
+        """Return the trick as a JSON-able dict (task, objects, plan shape)."""
+        objs = [
+            {"kind": k, **dataclasses.asdict(o)}
+            for o in self.objects
+            for k, c in OBJECTS.items()
+            if type(o) is c
+        ]
+        return {
+            "task": self.task.to_dict(),
+            "objects": objs,
+            "segments": self.segments,
+            "durations": list(self.durations),
+        }
+
+
+def parse_object(raw, where: str) -> Ball | Box | Cylinder:
+    """Return the object an ``[[objects]]`` table describes; TaskError names what is wrong."""
+    if not isinstance(raw, dict) or raw.get("kind") not in OBJECTS:
+        raise TaskError(f"{where}: an object needs kind = ball, box or cylinder")
+    cls = OBJECTS[raw["kind"]]
+    fields = {f.name for f in dataclasses.fields(cls)}
+    args = {k: v for k, v in raw.items() if k != "kind"}
+    bad = sorted(set(args) - fields)
+    if bad:
+        raise TaskError(
+            f"{where}: unknown key(s) {bad} for a {raw['kind']} (it has {sorted(fields)})"
+        )
+    try:
+        return cls(**args)
+    except (ZoeticError, TypeError, ValueError) as exc:
+        raise TaskError(f"{where}: {exc}") from None
+
+
+def _durations(raw_trick: dict, task: Task, source: str) -> tuple[float, float]:
+    durations = raw_trick.get("durations", [0.3, min(2.0, task.horizon)])
+    ok = (
+        isinstance(durations, list)
+        and len(durations) == 2
+        and all(isinstance(d, int | float) and not isinstance(d, bool) for d in durations)
+    )
+    if not ok or not 0 < durations[0] < durations[1]:
+        raise TaskError(
+            f"{source}: trick: 'durations' must be [min, max] s with 0 < min < max, "
+            f"got {durations!r}"
+        )
+    return float(durations[0]), float(durations[1])
+
+
+def parse_trick(doc: dict, source: str = "<memory>") -> Trick:
+    """Return the Trick a parsed TOML document describes; TaskError names what is wrong."""
+    if not isinstance(doc, dict):
+        raise TaskError(f"{source}: a trick file holds a table")
+    doc = dict(doc)
+    raw_trick = doc.pop("trick", {})
+    raw_objects = doc.pop("objects", [])
+    task = parse_task(doc, source)
+    if not isinstance(raw_trick, dict):
+        raise TaskError(f"{source}: [trick] must be a table")
+    bad = sorted(set(raw_trick) - set(TRICK_KEYS))
+    if bad:
+        raise TaskError(f"{source}: trick: unknown key(s) {bad} (allowed: {list(TRICK_KEYS)})")
+    segments = raw_trick.get("segments", 4)
+    if isinstance(segments, bool) or not isinstance(segments, int) or segments < 1:
+        raise TaskError(f"{source}: trick: 'segments' must be a positive integer, got {segments!r}")
+    durations = _durations(raw_trick, task, source)
+    if not isinstance(raw_objects, list):
+        raise TaskError(f"{source}: objects must be [[objects]] tables")
+    objects = tuple(parse_object(o, f"{source}: objects[{k}]") for k, o in enumerate(raw_objects))
+    return Trick(task, objects, int(segments), durations)
+
+
+def list_tricks() -> list[str]:
+    """Return the names of the built-in tricks."""
+    return sorted(p.stem for p in TRICK_DIR.glob("*.toml"))
+
+
+def load_trick(name_or_path: str | Path) -> Trick:
+    """Return a built-in trick by name, or the trick in a TOML file."""
+    path = Path(name_or_path)
+    if not (path.suffix == ".toml" or path.exists()):
+        path = TRICK_DIR / f"{name_or_path}.toml"
+        if not path.exists():
+            raise TaskError(
+                f"unknown trick {str(name_or_path)!r}: choose one of "
+                f"{', '.join(list_tricks())} or give a trick .toml file"
+            )
+    try:
+        doc = read_toml(path, what="trick file")
+    except ZoeticError as exc:
+        raise TaskError(str(exc)) from None
+    return parse_trick(doc, str(path))
