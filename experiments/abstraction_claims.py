@@ -24,8 +24,8 @@ from zoetic.bodies import load_animal
 from zoetic.learning.abstraction import abstract, compare, spectrum
 from zoetic.learning.run import LearnConfig, Run
 from zoetic.physics import get_medium, rest_state, simulate
-from zoetic.runs import abstract_files
 from zoetic.tasks import load_task
+from zoetic.viz.media import abstract_files
 
 FIGS = Path(__file__).resolve().parents[1] / "docs" / "figures"
 CASES = (  # animal, task, nodes

@@ -22,13 +22,17 @@ def test_animals_lists_the_zoo(capsys):
     assert "91" in out and "190" in out  # springs of the shark and the snake
 
 
-def test_simulate_writes_trajectory_video_and_path(tmp_path):
+def test_simulate_writes_record_video_and_path(tmp_path):
+    from zoetic.record import read_record
+
     out = tmp_path / "first"
     code = main(["simulate", "shark", "--controller", "wave", "--seconds", "2", "--out", str(out)])
     assert code == 0
-    with np.load(out / "trajectory.npz") as z:
-        times, pos = z["times"], z["positions"]
-    assert pos.shape == (len(times), 23, 3)
+    rec = read_record(out)
+    times, pos = rec.times, rec.animals[0].positions
+    assert rec.kind == "simulate" and rec.animals[0].species == "shark"
+    assert pos.shape == (len(times), 23, 3) and pos.dtype == np.float32
+    assert rec.animals[0].activations.shape == (len(times), len(rec.animals[0].actuators))
     assert times[0] == 0.0 and times[-1] == pytest.approx(2.0)
     assert pos[-1, :, 0].mean() > pos[0, :, 0].mean() + 0.2  # it swam forward
     assert (out / "path.png").stat().st_size > 1000
@@ -46,7 +50,7 @@ def test_simulate_rest_and_controller_file(tmp_path):
         out = tmp_path / spec.replace("/", "_")
         args = ["simulate", "snake", "--controller", spec, "--seconds", "1", "--out", str(out)]
         assert main([*args, "--no-video"]) == 0
-        assert (out / "trajectory.npz").exists()
+        assert (out / "record.npz").exists()
 
 
 def test_controller_for_another_animal_is_refused(tmp_path, capsys):
@@ -120,8 +124,13 @@ def test_learn_cli_and_tasks(tmp_path, capsys):
                  "--out", str(out), "--no-video"])  # fmt: skip
     assert code == 0
     for name in ("config.toml", "controller.json", "history.csv", "learning.png",
-                 "controller.png", "checkpoint.npz"):  # fmt: skip
+                 "controller.png", "checkpoint.npz", "record.npz"):  # fmt: skip
         assert (out / name).exists(), name
+    from zoetic.record import read_record
+
+    rec = read_record(out)  # the best controller's run, as the viewer shows it
+    assert rec.kind == "learn" and rec.numbers["task"] == "swim-straight"
+    assert rec.times[-1] > 0 and rec.animals[0].activations is not None
     # the learned controller plays back through simulate
     assert main(["simulate", "shark", "--controller", str(out / "controller.json"),
                  "--seconds", "1", "--out", str(tmp_path / "play"), "--no-video"]) == 0  # fmt: skip

@@ -13,8 +13,7 @@ import pytest
 
 from zoetic.bodies import load_animal
 from zoetic.cli import main
-from zoetic.control import save_controller, wave_controller
-from zoetic.io import write_json, write_toml
+from zoetic.control import wave_controller
 from zoetic.runs import simulate_run
 from zoetic.viz.gltf import MIRROR, scene_glb, write_glb
 from zoetic.viz.scene import load_scene
@@ -27,7 +26,7 @@ WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
 @pytest.fixture(scope="module")
 def shark_run(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("shark")
-    simulate_run("shark", "wave", 1.0, out, video=False)
+    simulate_run("shark", "wave", 1.0, out)
     return out
 
 
@@ -87,37 +86,35 @@ def test_the_glb_holds_the_run_frame_by_frame(shark_run, tmp_path):
     assert "sea floor" in names and "ground" not in names  # the shark swims in open water
 
 
-def test_ground_targets_and_a_learning_run(tmp_path):
-    """A run known by its controller (config.toml) is simulated again; a track run has targets."""
+def test_ground_and_targets_of_a_tracking_record(tmp_path):
+    """A snake on the ground with two targets: a checkered ground, and the targets where the
+    record puts them (z mirrored)."""
+    from zoetic.cli.records import targets, write_sequence_record
+    from zoetic.physics import get_medium
+    from zoetic.runs import run_controller
+
     body = load_animal("snake")
-    save_controller(wave_controller(body), tmp_path / "controller.json")
-    write_toml(
-        tmp_path / "config.toml",
-        {"run": {"animal": "snake"}, "task": {"name": "crawl", "horizon": 0.5}},
-    )
+    ctrl = wave_controller(body)
+    traj = run_controller(body, ctrl, 0.5, get_medium("ground"), body.dt)
+    write_sequence_record(tmp_path, "track", body, traj.times, traj.positions[0], ctrl,
+                          targets([[1, 2], [3, -1]], 0.0), {"targets_reached": "1/2"})
     scene = load_scene(tmp_path, fps=10)
-    assert scene.kind == "learn" and len(scene.times) == 6
-    g, _ = _load(write_glb(scene, tmp_path / "snake.glb"))
+    assert scene.kind == "track" and len(scene.times) == 6
+    assert scene.numbers["targets_reached"] == "1/2"
+    g, _ = _load(write_glb(scene, tmp_path / "track.glb"))
     assert "ground" in {nd.name for nd in g.nodes}
-    (tmp_path / "config.toml").unlink()
-    write_json(tmp_path / "summary.json", {"animal": "snake", "simulated_s": 0.5,
-                                           "targets_xz": [[1, 2], [3, -1]], "reached": 1,
-                                           "targets": 2})  # fmt: skip
-    scene = load_scene(tmp_path, fps=10)
-    assert scene.kind == "track" and scene.numbers["targets_reached"] == "1/2"
-    g, blob = _load(write_glb(scene, tmp_path / "track.glb"))
     marks = [nd for nd in g.nodes if nd.name.startswith("target-")]
     assert [m.translation[0] for m in marks] == [1, 3]
     assert [m.translation[2] for m in marks] == [-2, 1]  # z mirrored
 
 
-def test_the_khronos_validator_finds_no_issue(shark_run, tmp_path):
+def _validate(path: Path) -> dict:
+    """Return the Khronos glTF validator's issues with a .glb."""
     node = shutil.which("node")
     validator = WEB / "node_modules" / "gltf-validator"
     assert node and validator.exists(), (
         "the Khronos glTF validator is installed by ./run.sh (npm ci in web/; needs Node.js)"
     )
-    path = write_glb(load_scene(shark_run), tmp_path / "s.glb")
     script = (
         "const v = require(process.argv[1]); const fs = require('fs');"
         "v.validateBytes(new Uint8Array(fs.readFileSync(process.argv[2])))"
@@ -125,7 +122,11 @@ def test_the_khronos_validator_finds_no_issue(shark_run, tmp_path):
     )
     out = subprocess.run([node, "-e", script, str(validator), str(path)], capture_output=True,
                          text=True, timeout=60, check=True)  # fmt: skip
-    issues = json.loads(out.stdout)
+    return json.loads(out.stdout)
+
+
+def test_the_khronos_validator_finds_no_issue(shark_run, tmp_path):
+    issues = _validate(write_glb(load_scene(shark_run), tmp_path / "s.glb"))
     assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, issues["messages"]
 
 
@@ -134,16 +135,18 @@ def test_export_cli(shark_run, tmp_path, capsys):
     assert main(["export", str(shark_run), "--gltf", str(out), "--fps", "10"]) == 0
     assert out.read_bytes() == scene_glb(load_scene(shark_run, fps=10))
     assert main(["export", str(tmp_path), "--gltf", str(tmp_path / "x.glb")]) == 2
-    assert "no trajectory.npz" in capsys.readouterr().err
+    assert "no run record" in capsys.readouterr().err
 
 
 def test_a_san_creature_is_rigid_links_posed_frame_by_frame(tmp_path):
+    from zoetic.cli.records import write_san_record
     from zoetic.san import load_creature
     from zoetic.san.network import random_network, save_network
 
     creature = load_creature("walker")
     net = random_network(creature, np.random.default_rng(1))
     save_network(net.with_params(info={"seconds": 0.5, "seed": 0}), tmp_path / "san.json")
+    write_san_record(tmp_path, tmp_path / "san.json", fps=20)
     scene = load_scene(tmp_path, fps=20)
     (c,) = scene.creatures
     assert scene.kind == "san" and len(scene.times) == 11 and len(c.links) == 6
@@ -159,3 +162,153 @@ def test_a_san_creature_is_rigid_links_posed_frame_by_frame(tmp_path):
     np.testing.assert_allclose(2 * np.arctan2(q[:, 2], q[:, 3]), link.angles, atol=1e-5)
     assert np.ptp(link.angles) > 0  # the links move
     assert "ground" in {nd.name for nd in g.nodes}
+
+
+# ---------------------------------------------- every kind of run, through the one record
+
+STUNT = """name = "ball-lob"
+requires = ["surface"]
+horizon = 0.5
+record_hz = 20.0
+[start]
+depth = 0.6
+speed = 1.0
+[trick]
+segments = 2
+durations = [0.1, 0.4]
+[[objects]]
+kind = "ball"
+name = "beach-ball"
+radius = 0.25
+mass = 0.3
+position = [0.6, 0.5, 0.0]
+[[terms]]
+kind = "apex_above_surface"
+weight = -1.0
+"""
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory) -> dict[str, Path]:
+    """One tiny run of each kind the record made viewable: aquarium, pursuit, stunt, SAN."""
+    from zoetic.behavior.repertoire import Repertoire
+    from zoetic.behavior.training import rest_abstraction
+
+    tmp = tmp_path_factory.mktemp("runs")
+    out = {k: tmp / k for k in ("aquarium", "pursuit", "stunt", "san")}
+    assert main(["aquarium", "--fishes", "2", "--food", "2", "--obstacles", "1", "--seconds",
+                 "0.3", "--no-video", "--out", str(out["aquarium"])]) == 0  # fmt: skip
+    assert main(["pursue", "--seconds", "0.3", "--no-video", "--out", str(out["pursuit"])]) == 0
+    dolphin = load_animal("dolphin")
+    rep = Repertoire(dolphin.name, tuple(dolphin.actuator_names))
+    rep.add("do-nothing", rest_abstraction(dolphin), 1.0)
+    rep.save(tmp / "memory")
+    (tmp / "lob.toml").write_text(STUNT)
+    assert main(["stunt", "dolphin", "--memory", str(tmp / "memory"), "--trick",
+                 str(tmp / "lob.toml"), "--budget", "2", "--no-video",
+                 "--out", str(out["stunt"])]) == 0  # fmt: skip
+    assert main(["san", "search", "walker", "--trials", "2", "--top", "1", "--seconds", "0.5",
+                 "--workers", "1", "--no-video", "--out", str(out["san"])]) == 0  # fmt: skip
+    return out
+
+
+def _exported(run: Path, tmp_path: Path, fps: int = 10):
+    """Export a run with the CLI; return the parsed glTF, its binary chunk and the Scene."""
+    path = tmp_path / f"{run.name}.glb"
+    assert main(["export", str(run), "--gltf", str(path), "--fps", str(fps)]) == 0
+    scene = load_scene(run, fps=fps)
+    assert path.read_bytes() == scene_glb(scene)
+    g, blob = _load(path)
+    return g, blob, scene
+
+
+def _tracks(g, node: int) -> dict[str, int]:
+    (anim,) = g.animations
+    return {ch.target.path: anim.samplers[ch.sampler].output for ch in anim.channels
+            if ch.target.node == node}  # fmt: skip
+
+
+def test_an_aquarium_exports_its_fishes_food_rocks_and_events(runs, tmp_path):
+    from zoetic.record import read_record
+    from zoetic.viz.viewer import viewer_data
+
+    rec = read_record(runs["aquarium"])
+    g, blob, scene = _exported(runs["aquarium"], tmp_path)
+    assert scene.kind == "aquarium" and len(g.skins) == 2 == len(rec.animals)
+    assert {a.name for a in rec.animals} == set(rec.scalars)  # per-period scalars per fish
+    fish = rec.animals[0].name
+    assert set(rec.scalars[fish]) >= {"hunger", "fear", "intention", "alive"}
+    assert len(rec.scalars[fish]["hunger"]) == len(rec.period_times) > 0
+    kinds = [o.kind for o in rec.objects]
+    assert kinds.count("food") == 2 and kinds.count("wall") == 4 and len(kinds) == 7
+    food = next(i for i, nd in enumerate(g.nodes) if nd.name.startswith("food-"))
+    k = [o.kind for o in scene.objects].index("food")
+    tracks = _tracks(g, food)
+    np.testing.assert_allclose(_read(g, blob, tracks["translation"]),
+                               scene.objects[k].positions * MIRROR, atol=1e-6)  # fmt: skip
+    assert set(_read(g, blob, tracks["scale"]).ravel()) <= {0.0, 1.0}  # eaten: hidden
+    data = viewer_data(scene)
+    assert [a["name"] for a in data["animals"]] == [a.name for a in rec.animals]
+    assert data["events"] == [[round(e.t, 3), e.who, e.what, e.detail] for e in rec.events]
+    # each fish's intention at every frame, as held since its brain period began
+    period = np.searchsorted(rec.period_times, scene.times + rec.times[0] + 1e-9, "right") - 1
+    codes = rec.scalars[fish]["intention"][period].astype(int)
+    names = rec.labels["intention"]
+    assert data["states"][fish]["intention"] == [names[c] for c in codes]
+
+
+def test_a_pursuit_exports_its_three_fishes_and_the_scenery(runs, tmp_path):
+    from zoetic.record import read_record
+
+    rec = read_record(runs["pursuit"])
+    g, blob, scene = _exported(runs["pursuit"], tmp_path)
+    assert [a.name for a in rec.animals] == ["predator", "prey", "distractor 1"]
+    assert len(g.skins) == 3 and scene.kind == "pursuit"
+    assert {"rock", "seaweed"} <= {o.kind for o in rec.objects}
+    gaze = rec.scalars["predator"]["gaze"]
+    assert gaze.shape == (len(rec.period_times), 4) and np.isfinite(gaze).all()
+    (prey_skin,) = [s for s in g.skins if s.name == "prey"]
+    (anim,) = g.animations
+    ch = next(c for c in anim.channels if c.target.node == prey_skin.joints[0])
+    np.testing.assert_allclose(_read(g, blob, anim.samplers[ch.sampler].output),
+                               scene.animals[1].positions[:, 0] * MIRROR, atol=1e-6)
+
+
+def test_a_stunt_exports_the_dolphin_and_its_moving_ball(runs, tmp_path):
+    g, blob, scene = _exported(runs["stunt"], tmp_path)
+    assert scene.kind == "stunt" and len(g.skins) == 1
+    (ball,) = [o for o in scene.objects if o.kind == "ball"]
+    assert ball.shape == "sphere" and ball.size == (0.25,) and len(ball.positions) > 1
+    node = next(i for i, nd in enumerate(g.nodes) if nd.name.startswith("ball-"))
+    np.testing.assert_allclose(_read(g, blob, _tracks(g, node)["translation"]),
+                               ball.positions * MIRROR, atol=1e-6)  # fmt: skip
+    assert scene.animals[0].activations is not None
+
+
+def test_a_san_search_run_exports_its_best_creature(runs, tmp_path):
+    g, blob, scene = _exported(runs["san"], tmp_path)
+    (c,) = scene.creatures
+    assert scene.kind == "san" and not scene.animals and len(c.links) == 6
+    assert {"metric", "speed_cm_s", "fell"} <= set(scene.numbers)
+    assert len(g.animations[0].channels) == 2 * len(c.links)
+
+
+def test_the_khronos_validator_finds_no_issue_in_any_kind_of_run(runs, tmp_path):
+    for kind, run in runs.items():
+        issues = _validate(write_glb(load_scene(run, fps=10), tmp_path / f"{kind}.glb"))
+        assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, (kind, issues["messages"])
+
+
+def test_every_kind_of_run_gives_the_viewer_its_page_data(runs):
+    import base64
+
+    from zoetic.viz.viewer import viewer_data
+
+    for kind, run in runs.items():
+        scene = load_scene(run, fps=10)
+        data = viewer_data(scene)
+        assert data["kind"] == scene.kind and data["frames"] == len(scene.times), kind
+        assert base64.b64decode(data["glb"]) == scene_glb(scene), kind
+        assert len(data["animals"]) == len(scene.movers) > 0, kind
+        for a in data["animals"]:
+            assert len(a["com"]) == 3 * len(scene.times), kind

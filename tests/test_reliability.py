@@ -236,7 +236,7 @@ def test_learning_says_how_many_candidates_failed_and_refuses_an_all_failed_run(
 
     dead = SimpleNamespace(out=tmp_path, log=SimpleNamespace(E=[np.inf] * 5))
     with pytest.raises(BlowUpError, match="every one of the 5 candidates"):
-        finish_run(dead, video=False)
+        finish_run(dead)
     out = tmp_path / "r"
     assert main(["learn", "shark", "--budget", "8", "--popsize", "4", "--no-video",
                  "--out", str(out)]) == 0  # fmt: skip

@@ -159,7 +159,7 @@ def test_sequence_command_simulates_a_cross_faded_controller(tmp_path, capsys):
     seq = load_controller(tmp_path / "s" / "sequence.json", shark)
     assert isinstance(seq, SequenceController)
     assert seq.duration == pytest.approx(2 + 2 * 0.95)
-    assert (tmp_path / "s" / "path.png").exists() and (tmp_path / "s" / "trajectory.npz").exists()
+    assert (tmp_path / "s" / "path.png").exists() and (tmp_path / "s" / "record.npz").exists()
     args[5] = "go-straight:2,backflip"
     assert main(args) == 2
     assert "no entry 'backflip'" in capsys.readouterr().err

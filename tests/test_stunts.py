@@ -188,8 +188,10 @@ def test_stunt_cli_writes_its_files_and_the_macro_replays(tmp_path, capsys, dolp
     code = main(["simulate", "dolphin", "--controller", str(out / "macro.json"), "--out",
                  str(tmp_path / "replay"), "--no-video"])  # fmt: skip
     assert code == 0
-    with np.load(tmp_path / "replay" / "trajectory.npz") as z:
-        times, pos = z["times"], z["positions"]
+    from zoetic.record import read_record
+
+    replayed = read_record(tmp_path / "replay")
+    times, pos = replayed.times, replayed.animals[0].positions
     assert times[-1] == pytest.approx(0.5)  # the stunt's own duration by default
     com_y = pos[..., 1] @ (dolphin.mass / dolphin.total_mass)
     assert com_y.max() == pytest.approx(s["apex_above_surface_m"], abs=2e-3)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import dataclasses
 import json
 import re
 import shutil
@@ -18,7 +19,8 @@ from zoetic.cli import main
 from zoetic.runs import simulate_run
 from zoetic.viz.gltf import scene_glb, write_glb
 from zoetic.viz.scene import load_scene
-from zoetic.web.page import scene_html
+from zoetic.viz.viewer import viewer_data
+from zoetic.web.page import page_html
 from zoetic.web.server import make_server
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
@@ -30,7 +32,7 @@ WEBGL_FLAGS = ["--use-gl=angle", "--use-angle=swiftshader", "--enable-unsafe-swi
 @pytest.fixture(scope="module")
 def shark_run(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("shark")
-    simulate_run("shark", "wave", 2.0, out, video=False)
+    simulate_run("shark", "wave", 2.0, out)
     return out
 
 
@@ -48,11 +50,9 @@ def test_the_page_is_self_contained_and_carries_the_run(shark_run, tmp_path):
 
 
 def test_no_text_of_the_run_can_close_the_data_element(shark_run):
-    import dataclasses
-
     title = "a </script><!-- <script> b"
     scene = dataclasses.replace(load_scene(shark_run, fps=5), title=title)
-    text = scene_html(scene)
+    text = page_html(viewer_data(scene))
     data = re.search(r"id='zoetic-data'[^>]*>(.*?)</script>", text, re.S).group(1)
     assert json.loads(data)["title"] == title
     assert "&lt;/script>" in text.split("</title>")[0]
@@ -100,7 +100,7 @@ def test_the_viewer_draws_and_scrubs_in_chromium(shark_run, tmp_path):
         "(Debian: apt-get install -y chromium)"
     )
     html = tmp_path / "view.html"
-    html.write_text(scene_html(load_scene(shark_run, fps=30)))
+    html.write_text(page_html(viewer_data(load_scene(shark_run, fps=30))))
     glb = write_glb(load_scene(shark_run, fps=30), tmp_path / "s.glb")
     with sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=CHROMIUM, args=WEBGL_FLAGS, headless=True)
@@ -152,3 +152,42 @@ def test_the_viewer_draws_and_scrubs_in_chromium(shark_run, tmp_path):
     assert info["animations"] == 1 and info["tracks"] == n
     assert info["duration"] == pytest.approx(2.0, abs=1e-3)
     assert (tmp_path / "viewer-1.5s.png").stat().st_size > 1000
+
+
+def test_an_aquarium_plays_in_chromium_with_its_objects_and_events(tmp_path):
+    """A tiny aquarium run, opened like any other: the page loads, draws the fishes, food,
+    rock and walls, and lists the events up to the time shown."""
+    from playwright.sync_api import sync_playwright
+
+    from zoetic.record import Event, read_record, write_record
+
+    run = tmp_path / "tank"
+    assert main(["aquarium", "--fishes", "2", "--food", "2", "--obstacles", "1", "--seconds",
+                 "0.5", "--no-video", "--out", str(run)]) == 0  # fmt: skip
+    rec = read_record(run)
+    fish = rec.animals[0].name
+    write_record(run, dataclasses.replace(rec, events=(Event(0.2, fish, "eat", "food 1"),)))
+    html = tmp_path / "tank.html"
+    assert main(["view", str(run), "--html", str(html), "--fps", "20"]) == 0
+    scene = load_scene(run, fps=20)
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=WEBGL_FLAGS, headless=True)
+        try:
+            page = browser.new_page(viewport={"width": 800, "height": 500})
+            errors: list[str] = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(html.as_uri())
+            page.wait_for_function("window.zoetic && (window.zoetic.ready || window.zoetic.error)",
+                                   timeout=30_000)  # fmt: skip
+            assert page.evaluate("window.zoetic.error") is None and not errors, errors
+            page.evaluate("window.zoetic.pause(); window.zoetic.setTime(0.1)")
+            assert page.inner_text("#panel .events") == ""  # nothing has happened yet
+            page.evaluate("window.zoetic.setTime(0.3)")
+            assert page.inner_text("#panel .events") == f"0.2 s {fish} eat food 1"
+            t = page.evaluate("window.zoetic.time()")  # 0.3 s: frame 6 at 20 fps
+            states = page.inner_text("#panel .states").split("\n")
+            assert states == [f"{a.name}: {scene.states[a.name]['intention'][6]}"
+                              for a in rec.animals], (t, states)
+            assert _canvas(page).std() > 10, "the canvas is blank"
+        finally:
+            browser.close()

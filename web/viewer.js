@@ -28,7 +28,8 @@ function el(tag, attrs = {}, parent = null) {
 }
 
 function fmt(v) {
-  return typeof v === "number" ? (Math.abs(v) >= 100 ? v.toFixed(1) : v.toPrecision(4)) : String(v);
+  if (typeof v !== "number" || Number.isInteger(v)) return String(v);
+  return Math.abs(v) >= 100 ? v.toFixed(1) : v.toPrecision(4);
 }
 
 async function main() {
@@ -106,6 +107,12 @@ async function main() {
         n: a.actuators.length });
     });
   });
+  // each animal's named states (an aquarium fish's intention) at the frame shown
+  const states = Object.entries(data.states || {});
+  const stateBox = states.length ? el("div", { className: "sub states" }, panel) : null;
+  // the last few events (eat, catch, mate, ...) up to the time shown
+  const events = data.events || [];
+  const eventBox = events.length ? el("div", { className: "sub events" }, panel) : null;
   const bar = el("div", { id: "controls" }, root);
   const play = el("button", { id: "play", textContent: "pause" }, bar);
   const slider = el("input", { id: "timeline", type: "range", min: 0, max: data.duration,
@@ -130,6 +137,16 @@ async function main() {
     dynamic.distance.textContent = Math.hypot(now.x - start.x, now.z - start.z).toFixed(3);
     timeText.textContent = `t = ${t.toFixed(2)} s / ${data.duration.toFixed(2)} s`;
     slider.value = t;
+    if (stateBox) {
+      stateBox.textContent = states.map(([who, q]) =>
+        `${who}: ${Object.values(q).map((v) => v[i]).join(", ")}`).join("\n");
+    }
+    if (eventBox) {
+      let n = 0;
+      while (n < events.length && events[n][0] <= t + 1e-9) n++;
+      eventBox.textContent = events.slice(Math.max(0, n - 5), n)
+        .map((e) => `${e[0].toFixed(1)} s ${e[1]} ${e[2]} ${e[3]}`).join("\n");
+    }
     for (const b of bars) b.fill.style.width = `${(100 * b.values[i * b.n + b.j]).toFixed(1)}%`;
   };
   play.onclick = () => { playing = !playing; play.textContent = playing ? "pause" : "play"; };

@@ -1,10 +1,11 @@
-"""Run directories and the files a user gets from the commands (simulate, learn, abstract,
-repertoire show): where the library's results meet the disk and the pictures."""
+"""Run directories: the simulate and learn runs' records (``zoetic.record``), the checks of a
+learning run's configuration, size and directory, the demo's files, a repertoire's body.
+Pictures (plots, videos) are drawn at the edge (``viz.media``) and handed in by the command
+line as ``media``; nothing here draws."""
 
 from __future__ import annotations
 
-import io
-import json
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +23,9 @@ from zoetic.learning.checks import (  # noqa: F401 - the run checks, for the com
 )
 from zoetic.physics import Medium, Trajectory, get_medium
 from zoetic.physics.simulate import check_dt, good_dt
+from zoetic.record import Animal, Record, write_record
+
+Media = Callable[..., dict]  # writes a run's pictures (plots, video); returns {name: path}
 
 
 def record_stride(dt: float, rate_hz: float = 100.0) -> int:
@@ -29,15 +33,16 @@ def record_stride(dt: float, rate_hz: float = 100.0) -> int:
     return max(1, int(round(1.0 / (rate_hz * dt))))
 
 
-def save_trajectory(path: Path, traj: Trajectory, index: int = 0, **meta: str) -> Path:
-    """Write times (T,) and positions (T, nodes, 3) of one candidate to an .npz file.
-
-    ``meta`` strings (animal, medium, controller JSON) let viewers rebuild the scene.
-    """
-    buf = io.BytesIO()
-    extra = {k: np.array(str(v)) for k, v in meta.items()}
-    np.savez_compressed(buf, times=traj.times, positions=traj.positions[index], **extra)
-    return atomic_write_bytes(path, buf.getvalue())
+def animal_record(body: Body, positions: np.ndarray, times: np.ndarray, ctrl=None,
+                  name: str | None = None, color=None) -> Animal:
+    """Return the run record's entry of one animal: its surface, its node positions (T, N, 3)
+    at ``times`` (T,) s, and (with ``ctrl``) the activations its controller gave then."""
+    acts = None
+    if ctrl is not None:
+        acts = np.clip(np.asarray(ctrl.sample(np.asarray(times, float)), np.float32), 0.0, 1.0)
+    return Animal(name or body.name, body.name, np.asarray(body.faces, np.int32),
+                  np.asarray(positions, np.float32), np.asarray(body.mass, np.float32), color,
+                  tuple(body.actuator_names), acts)  # fmt: skip
 
 
 def run_controller(
@@ -80,20 +85,6 @@ def check_simulation(body: Body, ctrl: Controller, seconds: float, dt: float,
     return steps
 
 
-def write_media(body: Body, traj: Trajectory, medium: Medium, out: Path, video: bool, fps: int):
-    """Write path.png (and video.mp4) for the first candidate of a trajectory."""
-    from zoetic.viz.plots import plot_path
-
-    files = {"path": plot_path(traj.com(body)[0], out / "path.png", title=body.name)}
-    if video:
-        from zoetic.viz.render3d import render_video
-
-        files["video"] = render_video(
-            body, traj.positions[0], traj.times, medium, out / "video.mp4", fps=fps
-        )
-    return files
-
-
 def simulate_run(
     animal: str,
     controller: str,
@@ -101,10 +92,10 @@ def simulate_run(
     out: Path,
     medium: str | None = None,
     dt: float | None = None,
-    video: bool = True,
-    fps: int = 30,
+    media: Media | None = None,
 ) -> dict:
-    """Simulate, write trajectory.npz, path.png and video.mp4 into ``out``; return a summary."""
+    """Simulate; write the run record (record.npz) into ``out``, and what ``media`` draws of
+    it (``media(body, record, out)`` returns the files it wrote); return a summary."""
     body = load_animal(animal)
     ctrl = controller_from_spec(controller, body)
     med = get_medium(medium or body.medium)
@@ -114,10 +105,10 @@ def simulate_run(
     out = Path(out)
     make_dir(out)
     traj = run_controller(body, ctrl, seconds, med, dt)
-    where = str(Path(animal).resolve()) if Path(animal).is_file() else animal
-    meta = {"animal": where, "medium": med.name, "controller": json.dumps(ctrl.to_dict())}
-    save_trajectory(out / "trajectory.npz", traj, **meta)
-    files = write_media(body, traj, med, out, video, fps)
+    rec = Record("simulate", f"{body.name} ({out.name})", med.name, traj.times,
+                 (animal_record(body, traj.positions[0], traj.times, ctrl),))  # fmt: skip
+    path = write_record(out, rec)
+    files = media(body, rec, out) if media is not None else {}
     com = traj.com(body)[0]
     travelled = float(np.linalg.norm(com[-1, [0, 2]] - com[0, [0, 2]]))
     if not np.isfinite(travelled):  # never report nan as a result
@@ -128,19 +119,18 @@ def simulate_run(
         "seconds": seconds,
         "distance_m": round(travelled, 3),
         "speed_m_s": round(travelled / seconds, 3),
-        "trajectory": str(out / "trajectory.npz"),
+        "record": str(path),
         **{k: str(v) for k, v in files.items()},
     }
 
 
-def finish_run(run, video: bool = True, fps: int = 30) -> dict:
-    """Write learning.png, controller.png and video.mp4 of a finished learning run.
+def finish_run(run, media: Media | None = None) -> dict:
+    """Write the run record of a finished learning run's best controller (record.npz), and
+    what ``media`` draws of it (``media(run, record)`` returns the files it wrote).
 
     The summary says how many candidates failed (blew up); a run in which every candidate
     failed is a BlowUpError, not a result.
     """
-    from zoetic.viz.learning import plot_controller, plot_learning
-
     failed = int(np.count_nonzero(~np.isfinite(np.asarray(run.log.E, float))))
     if run.log.E and failed == len(run.log.E):
         raise BlowUpError(
@@ -151,31 +141,20 @@ def finish_run(run, video: bool = True, fps: int = 30) -> dict:
     setup = run.setup
     body, task, obj = setup.objective.body, setup.task, setup.objective
     out = Path(run.out)
-    ctrl = run.best_controller()
-    files = {
-        "learning": plot_learning(
-            {setup.config.optimizer: np.array(run.log.E)}, out / "learning.png",
-            title=f"{body.name} {task.name}: E against evaluations",
-        ),
-    }  # fmt: skip
-    t = np.linspace(0.0, task.horizon, 400)
-    files["controller"] = plot_controller(
-        t, ctrl.sample(t), body.actuator_names, body.actuator_side, out / "controller.png",
-        title=f"learned {setup.config.controller}-domain controller",
-    )  # fmt: skip
     ev = obj.evaluate(setup.optimizer.best_x[None])
     traj = obj.simulate(setup.optimizer.best_x[None])
+    best_E = round(float(ev.E[0]), 4)
+    rec = Record("learn", f"{body.name} learn ({out.name})", obj.medium.name, traj.times,
+                 (animal_record(body, traj.positions[0], traj.times, run.best_controller()),),
+                 numbers={"best_E": best_E, "task": task.name})  # fmt: skip
+    write_record(out, rec)
+    files = media(run, rec) if media is not None else {}
     com = traj.com(body)[0]
-    if video:
-        from zoetic.viz.render3d import render_video
-
-        files["video"] = render_video(body, traj.positions[0], traj.times, obj.medium,
-                                      out / "video.mp4", fps=fps)  # fmt: skip
     travelled = float(np.linalg.norm(com[-1, [0, 2]] - com[0, [0, 2]]))
     return {
         "evaluations": run.evaluations,
         "failed_candidates": failed,
-        "best_E": round(float(ev.E[0]), 4),
+        "best_E": best_E,
         "distance_m": round(travelled, 3),
         "run": str(out),
         **{k: str(v) for k, v in files.items()},
@@ -214,46 +193,6 @@ def mark_demo(out: Path, before: set[str]) -> None:
     atomic_write_bytes(Path(out) / MARKER, text.encode())
 
 
-def abstract_files(
-    source: str | Path,
-    out: str | Path,
-    modes: str | int = "auto",
-    threshold: float = 0.3,
-    task: str | None = None,
-) -> dict[str, object]:
-    """Abstract a learned controller; write abstract.json and abstract.png; return a summary."""
-    from zoetic.behavior.training import abstract_source, abstraction_report
-    from zoetic.io import write_json
-    from zoetic.learning.abstraction import abstract
-    from zoetic.viz.abstraction import plot_abstraction
-
-    body, ctrl, task_obj = abstract_source(source, task)
-    ab = abstract(ctrl, modes, threshold)
-    info = abstraction_report(body, ctrl, ab, task_obj)
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    write_json(out / "abstract.json", ab.controller.to_dict() | {"abstraction": info})
-    duration = float(getattr(ctrl, "duration", task_obj.horizon))
-    t = np.linspace(0.0, duration, 400)
-    spec = ab.spectrum
-    plot_abstraction(
-        t, ctrl.sample(t), ab.controller.sample(t), tuple(body.actuator_names), spec.freq,
-        spec.amp, spec.phase, ab.kept, out / "abstract.png",
-        title=f"{body.name}: {task_obj.name}, {ab.rule}, kept {info['kept']:.0%} of "
-        f"{info['measure']}",
-    )  # fmt: skip
-    return info | {"file": str(out / "abstract.json"), "figure": str(out / "abstract.png")}
-
-
-def _by_strength(freq: np.ndarray, amp: np.ndarray) -> list[float]:
-    """Return the frequencies (Hz) present, strongest first (amplitude summed over actuators)."""
-    total: dict[float, float] = {}
-    for f, a in zip(np.ravel(freq), np.ravel(np.abs(amp)), strict=True):
-        if a > 0:
-            total[round(float(f), 3)] = total.get(round(float(f), 3), 0.0) + float(a)
-    return sorted(total, key=lambda f: -total[f])
-
-
 def repertoire_body(directory: str | Path, animal: str) -> Body:
     """Return the body a repertoire is for: a zoo animal, or the file its training runs used."""
     from zoetic.errors import BodyError
@@ -269,42 +208,3 @@ def repertoire_body(directory: str | Path, animal: str) -> Body:
                 if body.name == animal:
                     return body
         raise
-
-
-def show_repertoire(directory: str | Path, plot: bool = True) -> list[dict[str, object]]:
-    """Return one row per entry (modes, frequencies, what it does from rest); plot it too.
-
-    Each entry is played from rest for its duration; forward (m along the start heading) and
-    turn (degrees, left positive) say what it does; frequencies_hz come strongest first.
-    Writes repertoire.png into the directory (paths: each entry played three times over).
-    """
-    from zoetic.behavior.repertoire import Repertoire
-    from zoetic.learning.abstraction import measure
-
-    directory = Path(directory)
-    rep = Repertoire.load(directory)
-    body = repertoire_body(directory, rep.animal)
-    rep = Repertoire.load(directory, body)
-    rows, signals, paths = [], {}, {}
-    for name, ctrl in rep.controllers.items():
-        seconds = rep.durations[name]
-        m = measure(body, ctrl, seconds)
-        amp = np.asarray(getattr(ctrl, "amp", np.zeros((0, 0))))
-        freq = np.asarray(getattr(ctrl, "freq", np.zeros((0, 0))))
-        rows.append({
-            "entry": name, "kind": ctrl.kind, "seconds": round(seconds, 3),
-            "modes": int(np.count_nonzero(amp)),
-            "frequencies_hz": _by_strength(freq, amp),
-            "forward_m": round(m["forward"], 3),
-            "turn_deg": round(float(np.degrees(m["heading_change"])), 1),
-            "source": rep.info.get(name, {}).get("source", ""),
-        })  # fmt: skip
-        t = np.linspace(0.0, seconds, 300)
-        signals[name] = (t, ctrl.sample(t))
-        paths[name] = measure(body, ctrl, 3 * seconds)["com"]  # played three times over
-    if plot:
-        from zoetic.viz.abstraction import plot_repertoire
-
-        plot_repertoire(signals, paths, tuple(body.actuator_names), directory / "repertoire.png",
-                        title=f"{rep.animal} repertoire ({len(rep.names)} entries)")  # fmt: skip
-    return rows

@@ -36,7 +36,8 @@ def aquarium(
     labels: bool = typer.Option(True, help="Label each fish with its intention in the video."),
     control_period: float = typer.Option(0.1, help="Brain period (s)."),
 ) -> None:
-    """Let a tank of fishes live: write events.csv, mind.png, summary.json and video.mp4."""
+    """Let a tank of fishes live: write events.csv, mind.png, summary.json, record.npz and
+    video.mp4."""
     from zoetic.behavior.aquarium.tank import (
         TankConfig,
         build_tank,
@@ -45,7 +46,6 @@ def aquarium(
         live,
         summarize,
     )
-    from zoetic.behavior.mind import INTENTIONS
     from zoetic.io import atomic_write_bytes, check_out_dir, make_dir, write_json
 
     check_out_dir(out)
@@ -62,10 +62,14 @@ def aquarium(
     names = [f.name for f in tank.fishes]
     atomic_write_bytes(out / "events.csv", events_csv(life).encode())
     summary = summarize(tank, life)
-    from zoetic.viz.aquarium import plot_minds, write_tank_video
+    from zoetic.cli.records import write_aquarium_record
 
-    plot_minds(life.brain_times, life.drives, life.intentions, life.alive, names, INTENTIONS,
-               out / "mind.png")  # fmt: skip
+    record = write_aquarium_record(out, tank, life, summary)
+    from zoetic.record import read_record
+    from zoetic.viz.aquarium import write_tank_video
+    from zoetic.viz.media import mind_media
+
+    mind_media(read_record(record), out)
     if video:
         statics = [s for s in tank.static_names]
         centers = [tank.center[k] for k, nm in enumerate(statics) if nm != "wall"]
@@ -78,6 +82,11 @@ def aquarium(
                 labels=frame_labels(life, names) if labels else None, half_size=cfg.size(),
             )  # fmt: skip
     write_json(out / "summary.json", summary)
+    _report(summary, out, video)
+
+
+def _report(summary: dict, out: Path, video: bool) -> None:
+    """Print what the tank's fishes did and what was written."""
     ev = summary["events"]
     console.print(
         f"{summary['seconds']:.1f} s simulated in {summary['wall_seconds']:.1f} s "
@@ -88,7 +97,8 @@ def aquarium(
         f"{summary['deepest_into_obstacle_m']:.3f} m, into a fish "
         f"{summary['deepest_into_fish_m']:.3f} m"
     )
-    console.print(f"wrote {out}/events.csv, mind.png, summary.json" + (", video.mp4" * video))
+    console.print(f"wrote {out}/events.csv, mind.png, summary.json, record.npz"
+                  + (", video.mp4" * video))  # fmt: skip
 
 
 @bench_app.command("aquarium")

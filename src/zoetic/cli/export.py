@@ -12,7 +12,7 @@ from zoetic.cli.output import console
 
 @app.command()
 def export(
-    run_dir: Path = typer.Argument(..., help="A run directory (simulate, learn, track, ...)."),
+    run_dir: Path = typer.Argument(..., help="A run directory (it holds record.npz)."),
     gltf: Path = typer.Option(..., "--gltf", help="The .glb file to write."),
     fps: float = typer.Option(30.0, min=1.0, help="Frames per second of the animation."),
 ) -> None:
@@ -24,6 +24,7 @@ def export(
     path = write_glb(scene, gltf)
     size = path.stat().st_size
     console.print(
-        f"wrote {path} ({size / 1024:.0f} KiB): {len(scene.animals)} animal(s), "
+        f"wrote {path} ({size / 1024:.0f} KiB): {len(scene.movers)} animal(s), "
+        f"{len(scene.objects)} object(s), "
         f"{len(scene.times)} frames at {fps:g} fps over {scene.duration:.2f} s"
     )

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
 
 import typer
@@ -99,6 +100,7 @@ def learn(
     """Learn a controller for an animal and a task; writes a resumable run directory."""
     from zoetic.learning.run import LearnConfig, Run
     from zoetic.runs import finish_run
+    from zoetic.viz.media import learning_media
 
     if ray_address:  # ray.init() reads it; the run's config keeps only the evaluator's name
         import os
@@ -126,7 +128,7 @@ def learn(
         run = Run.create(out, config, load_animal(animal))  # the run checks: learning.checks
     cfg = run.setup.config
     run_with_progress(run, f"{cfg.animal} {cfg.optimizer}", checkpoint_every)
-    summary = finish_run(run, video=video)
+    summary = finish_run(run, partial(learning_media, video=video))
     for key, value in summary.items():
         console.print(f"{key:>14}: {value}")
 
@@ -141,6 +143,7 @@ def demo(
     """A shark learns to swim from scratch (CMA-ES, 40 nodes per muscle, ~15 s on 2 cores)."""
     from zoetic.learning.run import LearnConfig, Run
     from zoetic.runs import clear_demo, finish_run, mark_demo
+    from zoetic.viz.media import learning_media
 
     check_out_dir(out)
     clear_demo(out)  # only what an earlier demo made; anything else stays
@@ -156,7 +159,7 @@ def demo(
     run = Run.create(out, config)
     try:
         run_with_progress(run, "shark learns to swim")
-        summary = finish_run(run, video=video)
+        summary = finish_run(run, partial(learning_media, video=video))
     finally:  # also when interrupted: the next demo may then clear what this one made
         mark_demo(out, before)
     for key, value in summary.items():

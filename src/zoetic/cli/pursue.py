@@ -25,7 +25,7 @@ def pursue(
     """Chase a reddish prey by sight: saccades, vergence, stabilisation, muscle turns.
 
     Writes video.mp4 (world view, gaze rays, both retinas), gaze.png (Fig. 7), frames.png
-    (Fig. 8) and summary.json.
+    (Fig. 8), summary.json and record.npz.
     """
     from zoetic.perception.pursuit import make_chase, run_chase, summarize
     from zoetic.viz.gaze import chase_frames, plot_frames, plot_gaze
@@ -37,6 +37,9 @@ def pursue(
         result = run_chase(chase, seconds, fps=fps, seed=seed)
     summary = summarize(result, chase.predator.gaze.spec) | {"seed": seed, "seconds": seconds}
     write_json(out / "summary.json", summary)
+    from zoetic.cli.records import write_chase_record
+
+    write_chase_record(out, chase, result, summary)
     plot_gaze(result.log, out / "gaze.png")
     plot_frames(result.log, out / "frames.png")
     if video:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from functools import partial
 from pathlib import Path
 
 import typer
@@ -27,7 +28,7 @@ def abstract_cmd(
 ) -> None:
     """Abstract a learned controller into its primary modes (FFT) and say what it keeps."""
     from zoetic.learning.abstraction import parse_modes
-    from zoetic.runs import abstract_files
+    from zoetic.viz.media import abstract_files
 
     if source.is_dir():
         from zoetic.runs import check_run_dir
@@ -67,7 +68,8 @@ def train_cmd(
     from zoetic.behavior.training import train_repertoire
     from zoetic.io import check_out_dir
     from zoetic.learning.abstraction import parse_modes
-    from zoetic.runs import check_learnable, show_repertoire
+    from zoetic.runs import check_learnable
+    from zoetic.viz.media import show_repertoire
 
     check_learnable(animal)
     out = check_out_dir(out or Path("memory") / Path(animal).stem)
@@ -116,7 +118,7 @@ def show_cmd(
 ) -> None:
     """Print a repertoire's entries and what each does; writes repertoire.png beside them."""
     from zoetic.errors import ZoeticError, naming
-    from zoetic.runs import show_repertoire
+    from zoetic.viz.media import show_repertoire
 
     try:
         rows = show_repertoire(memory)
@@ -146,6 +148,7 @@ def sequence_cmd(
     from zoetic.io import make_dir
     from zoetic.runs import simulate_run
     from zoetic.viz.learning import plot_controller
+    from zoetic.viz.media import simulation_media
 
     body = load_animal(animal)
     rep = Repertoire.load(memory, body)
@@ -157,7 +160,8 @@ def sequence_cmd(
     t = np.linspace(0.0, seq.duration, 600)
     plot_controller(t, seq.sample(t), body.actuator_names, body.actuator_side,
                     out / "controller.png", title=f"sequence: {entries}")  # fmt: skip
-    summary = simulate_run(animal, str(path), seq.duration, out, video=video)
+    summary = simulate_run(animal, str(path), seq.duration, out,
+                           media=partial(simulation_media, video=video))  # fmt: skip
     for key, value in summary.items():
         console.print(f"{key:>12}: {value}")
     console.print(f"{'sequence':>12}: {path}")

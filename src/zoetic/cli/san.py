@@ -31,6 +31,14 @@ def _progress(bar: Progress, tid, unit: str = ""):
     return update
 
 
+def _record(out: Path, network: Path) -> str:
+    """Write the run record of a SAN run (its best network replayed); return its path, or
+    "" when the run kept no network."""
+    from zoetic.cli.records import write_san_record
+
+    return str(write_san_record(out, network)) if network.is_file() else ""
+
+
 def _with_files(out: Path, summary: dict, files: dict) -> dict:
     """Return the run's summary with the pictures drawn for it, written to summary.json."""
     from zoetic.io import write_json
@@ -112,6 +120,7 @@ def search_cmd(
     with console.status(f"writing {out}" + (" (videos)" if video else "")):
         summary = write_search(result, out, top=top)
         summary = _with_files(out, summary, draw_search(result, out, top=top, video=video))
+        summary["record"] = _record(out, out / "sans" / "01.json")
     for key, value in summary.items():
         console.print(f"{key:>18}: {value}")
     if gaits:
@@ -209,6 +218,7 @@ def evolve_cmd(
     with console.status(f"writing {out}" + (" (video)" if video else "")):
         summary = write_evolve(result, out, terrain=terrain)
         summary = _with_files(out, summary, draw_evolve(result, out, terrain, video))
+        summary["record"] = _record(out, out / "san.json")
     from rich.table import Table
 
     table = Table(box=None, header_style="bold", title=f"what evolution changed ({c.name})")
@@ -219,7 +229,7 @@ def evolve_cmd(
     table.add_row("speed (cm/s)", f"{summary['speed_before_cm_s']:.2f}",
                   f"{summary['speed_after_cm_s']:.2f}")  # fmt: skip
     console.print(table)
-    for key in ("creature_file", "network", "video"):
+    for key in ("creature_file", "network", "video", "record"):
         if key in summary:
             console.print(f"{key:>14}: {summary[key]}")
 
@@ -251,6 +261,7 @@ def tune_cmd(
     with console.status(f"writing {out}" + (" (video)" if video else "")):
         summary = write_tune(result, c, out, terrain=terrain)
         summary = _with_files(out, summary, draw_tune(result, c, out, terrain, video))
+        summary["record"] = _record(out, out / "san.json")
     for key, value in summary.items():
         console.print(f"{key:>18}: {value}")
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
 
 import typer
@@ -41,9 +42,10 @@ def simulate(
     video: bool = typer.Option(True, help="Write video.mp4."),
     fps: int = typer.Option(30, min=1, help="Video frame rate."),
 ) -> None:
-    """Simulate one animal under a controller; write trajectory.npz, video.mp4 and path.png."""
+    """Simulate one animal under a controller; write record.npz, video.mp4 and path.png."""
     from zoetic.behavior.stunts import is_macro_file
     from zoetic.runs import simulate_run
+    from zoetic.viz.media import simulation_media
 
     if is_macro_file(controller) and medium is None and dt is None:  # a stunt, replayed whole
         from zoetic.bodies import load_animal
@@ -51,8 +53,9 @@ def simulate(
 
         result = write_replay(load_animal(animal), Path(controller), seconds, out, video, fps)
     else:
+        media = partial(simulation_media, video=video, fps=fps)
         result = simulate_run(animal, controller, 10.0 if seconds is None else seconds, out,
-                              medium, dt, video, fps)  # fmt: skip
+                              medium, dt, media)  # fmt: skip
     for key, value in result.items():
         console.print(f"{key:>12}: {value}")
 

@@ -14,17 +14,19 @@ from zoetic.cli.track import track_bar
 
 def write_replay(body, path: Path, seconds: float | None, out: Path, video: bool,
                  fps: int) -> dict:  # fmt: skip
-    """Replay a stunt's macro.json; write trajectory.npz, score.png, video.mp4 into out."""
+    """Replay a stunt's macro.json; write record.npz (and video.mp4) into out."""
     from zoetic.behavior.stunts import load_macro, replay
+    from zoetic.cli.records import solid_things, write_sequence_record
     from zoetic.io import make_dir
-    from zoetic.runs import save_trajectory
 
     traj, balls = replay(body, path, seconds)
-    _, info = load_macro(path, body)
+    ctrl, info = load_macro(path, body)
     make_dir(out)
-    save_trajectory(out / "trajectory.npz", traj, animal=body.name, controller=str(path))
+    things = solid_things(info["objects"], traj.times, balls)
+    record = write_sequence_record(out, "stunt", body, traj.times, traj.positions[0], ctrl,
+                                   things)  # fmt: skip
     com = traj.com(body)[0]
-    files = {"trajectory": str(out / "trajectory.npz")}
+    files = {"record": str(record)}
     if video:
         from zoetic.viz.stunts import render_stunt_video
 
@@ -55,7 +57,7 @@ def stunt(
 ) -> None:
     """Discover a stunt: a macro controller of repertoire entries that scores the trick's style
     terms best; writes macro.json (replay: zoetic simulate ANIMAL --controller macro.json),
-    video.mp4, score.png and summary.json."""
+    video.mp4, score.png, record.npz and summary.json."""
     if ray_address:  # ray.init() reads it
         import os
 
@@ -89,6 +91,7 @@ def stunt(
     make_dir(out)
     write_json(out / "macro.json", macro_document(problem, result.sequence, tr.task.source))
     from zoetic.behavior.stunts import targets_met
+    from zoetic.cli.records import figures, solid_things, write_sequence_record
 
     summary = found.summary()
     summary |= {
@@ -96,6 +99,10 @@ def stunt(
         "history": [[n, round(f, 5)] for n, f in result.history],
     }  # fmt: skip
     write_json(out / "summary.json", summary)
+    times = rec.traj.times
+    write_sequence_record(out, "stunt", body, times, rec.traj.positions[0], result.sequence,
+                          solid_things(tr.objects, times, rec.balls[0]),
+                          figures(summary))  # fmt: skip
     got, seconds = found.measures, summary["seconds"]
     starts = result.sequence.starts()
     plot_score(rec.traj.times, score_series(problem, rec), out / "score.png",
@@ -109,8 +116,14 @@ def stunt(
         render_stunt_video(body, rec.traj.positions[0], rec.traj.times, body.medium,
                            out / "video.mp4", tr.objects, rec.balls[0], fps=fps,
                            title=f"{body.name} {tr.name}")  # fmt: skip
+    _report(tr.name, method, result, summary, got, out, video)
+
+
+def _report(name: str, method: str, result, summary: dict, got: dict, out: Path,
+            video: bool) -> None:  # fmt: skip
+    """Print what a discovered stunt achieved and what was written."""
     console.print(
-        f"{tr.name} ({method}, {result.evaluations} plans, {result.wall:.1f} s): "
+        f"{name} ({method}, {result.evaluations} plans, {result.wall:.1f} s): "
         f"E = {summary['E']:.4f}; apex {got['apex_above_surface_m']:.3f} m above the surface "
         f"({got['apex_body_lengths']:.2f} body lengths), {got['air_time_s']:.2f} s wholly in "
         f"the air, {got['rotation_in_air_deg']:.0f} deg rotation in the air "
@@ -126,7 +139,7 @@ def stunt(
                       f"{'touched' if got.get('hurdle_touched') else 'not touched'}")
     played = [f"{p['entry']} {p['duration_s']:.2f} s" for p in summary["plan"] if p["played"]]
     console.print("plan: " + ", ".join(played))
-    console.print(f"wrote {out}/ (macro.json, summary.json, score.png"
+    console.print(f"wrote {out}/ (macro.json, summary.json, record.npz, score.png"
                   f"{', video.mp4' if video else ''})")  # fmt: skip
 
 

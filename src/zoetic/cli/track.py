@@ -92,9 +92,13 @@ def track(
     }  # fmt: skip
     save_controller(result.sequence, out / "controller.json")
     write_json(out / "summary.json", summary)
+    from zoetic.cli.records import targets, write_sequence_record
     from zoetic.viz.plots import plot_path
 
     reached = int(np.isfinite(result.reached).sum())
+    write_sequence_record(out, "track", body, result.times, result.positions, result.sequence,
+                          targets(pts, float(result.com[0, 1])),
+                          {"targets_reached": f"{reached}/{len(pts)}"})  # fmt: skip
     plot_path(result.com, out / "path.png", targets=pts, starts=result.start_indices,
               title=f"{body.name} tracking {reached}/{len(pts)} targets "
                     f"(white: a new controller starts)")  # fmt: skip
@@ -110,7 +114,7 @@ def track(
         f"({len(result.names)} controllers, {len(result.evaluations)} re-evaluations of "
         f"{len(rep.names)} entries in one batch each)"
     )
-    console.print(f"wrote {out}/ (controller.json, summary.json, path.png"
+    console.print(f"wrote {out}/ (controller.json, summary.json, record.npz, path.png"
                   f"{', video.mp4' if video else ''})")  # fmt: skip
 
 
@@ -172,6 +176,8 @@ def macro(
     write_json(out / "summary.json", summary)
     traj = problem.rollout(result.entries, result.durations, record_every=4)
     com = traj.com(body)[0]
+    depth = float(com[0, 1])
+    _write_plan_record(out, body, traj, result.sequence, g, obs, depth, summary)
     starts = result.sequence.starts()
     idx = np.searchsorted(traj.times, starts[starts < horizon] - 1e-9)
     s = result.summary()
@@ -185,12 +191,26 @@ def macro(
     if video:
         from zoetic.viz.render3d import render_video
 
-        depth = float(com[0, 1])
         rims = _rings(obs, depth)
         colors = [(220, 40, 30)] + [(240, 200, 40)] * len(rims)
         render_video(body, traj.positions[0], traj.times, body.medium, out / "video.mp4",
                      fps=fps, markers=np.vstack([_buoys(g, depth), rims]),
                      marker_colors=colors)  # fmt: skip
+    _report_plan(method, s, out, video)
+
+
+def _write_plan_record(out: Path, body, traj, sequence, goal, obstacles, depth: float,
+                       summary: dict) -> None:  # fmt: skip
+    """Write a macro run's record: the planned run, its goal and obstacle discs, figures."""
+    from zoetic.cli.records import figures, obstacle_discs, targets, write_sequence_record
+
+    things = targets(goal, depth, "goal") + obstacle_discs(obstacles, depth)
+    write_sequence_record(out, "macro", body, traj.times, traj.positions[0], sequence, things,
+                          figures(summary))  # fmt: skip
+
+
+def _report_plan(method: str, s: dict, out: Path, video: bool) -> None:
+    """Print what a macro controller achieved and what was written."""
     console.print(
         f"{method}: E = {s['cost']:.3f}, final distance {s['final_m']:.2f} m, closest "
         f"{s['closest_m']:.2f} m, {s['inside_obstacle_s']:.1f} s in obstacles, reached "
@@ -198,5 +218,5 @@ def macro(
     )
     played = [f"{p['entry']} {p['duration_s']:.1f} s" for p in s["plan"] if p["played"]]
     console.print("plan: " + ", ".join(played))
-    console.print(f"wrote {out}/ (controller.json, summary.json, path.png"
+    console.print(f"wrote {out}/ (controller.json, summary.json, record.npz, path.png"
                   f"{', video.mp4' if video else ''})")  # fmt: skip

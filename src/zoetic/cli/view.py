@@ -12,7 +12,7 @@ from zoetic.cli.output import console
 
 @app.command()
 def view(
-    run_dir: Path = typer.Argument(..., help="A run directory (simulate, learn, track, ...)."),
+    run_dir: Path = typer.Argument(..., help="A run directory (it holds record.npz)."),
     html: Path = typer.Option(None, "--html", help="Write one self-contained HTML file instead."),
     port: int = typer.Option(8000, min=0, max=65535, help="Port on 127.0.0.1 (0: any free)."),
     fps: float = typer.Option(30.0, min=1.0, help="Frames per second kept of the run."),
@@ -20,13 +20,14 @@ def view(
 ) -> None:
     """Look at a run in 3D in the browser: scrub, play, orbit, follow the animal."""
     from zoetic.viz.scene import load_scene
-    from zoetic.web.page import scene_html, write_html
+    from zoetic.viz.viewer import viewer_data
+    from zoetic.web.page import page_html, write_html
 
-    scene = load_scene(run_dir, fps)
+    data = viewer_data(load_scene(run_dir, fps))
     if html is not None:
-        path = write_html(scene, html)
+        path = write_html(data, html)
         console.print(f"wrote {path} ({path.stat().st_size / 1024:.0f} KiB); open it in a browser")
         return
     from zoetic.web.server import serve
 
-    serve(scene_html(scene), port, open_browser, console.print)
+    serve(page_html(data), port, open_browser, console.print)

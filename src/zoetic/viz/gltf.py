@@ -3,8 +3,11 @@
 Each animal is a skinned mesh with one joint per node: a joint's translation is its node's
 position, keyframed at the scene's frame rate (LINEAR), and each vertex follows its own joint
 with weight 1. The file grows as frames x nodes x 12 bytes, like morph targets would, without
-the frames^2 weights table and the per-shader limits on morph target counts. Ground, sea floor
-and sea surface are static quads (checkered by a 2 x 2 texture), targets small octahedra.
+the frames^2 weights table and the per-shader limits on morph target counts. A rigid-link
+creature's links are meshes posed per frame. Objects are meshes of their shapes (spheres,
+boxes, cylinders; a target a small octahedron), moved where they move and scaled to nothing
+once gone (food eaten). Ground, sea floor and sea surface are static quads (checkered by a
+2 x 2 texture).
 
 zoetic's axes are x forward, y up, z LEFT; glTF's are right-handed, so z is mirrored (and
 triangles reversed to stay counter-clockwise from outside): left stays on the animal's left.
@@ -21,12 +24,19 @@ from pathlib import Path
 import numpy as np
 
 from zoetic.io import atomic_write_bytes
-from zoetic.viz.scene import Scene
+from zoetic.viz.scene import Animal, Creature, Scene, Thing
 
 MIRROR = np.array([1.0, 1.0, -1.0], np.float32)  # zoetic (x, y, z left) -> glTF (z right)
 _FLOAT, _UINT, _USHORT, _UBYTE = 5126, 5125, 5123, 5121
 _ARRAY, _ELEMENTS = 34962, 34963
 _TILE = 0.5  # m, side of a checker square (as in the videos)
+OBJECT_COLORS = {  # kind: (sRGB 0-255, opacity)
+    "ball": ((235, 235, 220), 1.0), "food": ((240, 170, 50), 1.0),
+    "rock": ((115, 107, 97), 1.0), "seaweed": ((40, 140, 50), 1.0),
+    "hurdle": ((230, 90, 40), 1.0), "target": ((220, 40, 30), 1.0),
+    "goal": ((220, 40, 30), 1.0), "obstacle": ((240, 200, 40), 0.35),
+    "wall": ((150, 180, 210), 0.12),
+}  # fmt: skip
 
 
 def to_gltf_axes(points: np.ndarray) -> np.ndarray:
@@ -191,31 +201,6 @@ def _quad(b: _Builder, name: str, y: float, lo, hi, material: int, textured: boo
     b.node({"name": name, "mesh": mesh})
 
 
-def _octahedron(b: _Builder, name: str, centre, radius: float, material: int) -> None:
-    v = np.array(
-        [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], np.float32
-    ) * np.float32(radius)
-    f = np.array(
-        [[0, 2, 4], [4, 2, 1], [1, 2, 5], [5, 2, 0], [4, 3, 0], [1, 3, 4], [5, 3, 1], [0, 3, 5]],
-        np.uint16,
-    )
-    attrs = {"POSITION": b.accessor(v, "VEC3", _ARRAY, bounds=True)}
-    mesh = b.add(
-        "meshes",
-        {
-            "name": name,
-            "primitives": [
-                {
-                    "attributes": attrs,
-                    "indices": b.accessor(f.ravel(), "SCALAR", _ELEMENTS),
-                    "material": material,
-                }
-            ],
-        },
-    )
-    b.node({"name": name, "mesh": mesh, "translation": [float(c) for c in centre]})
-
-
 def _quaternions(angles: np.ndarray, axis: str) -> np.ndarray:
     """Return glTF rotations (R, 4) xyzw of planar angles (R,) in zoetic axes.
 
@@ -240,7 +225,7 @@ def environment_levels(scene: Scene) -> dict:
         return {"ground": 0.0}
     if med.water_level < -1e8:  # vacuum: nothing to stand on
         return {}
-    low = min(float(np.nanmin(m.com[:, 1])) - 0.5 for m in scene.movers)
+    low = min([float(np.nanmin(m.com[:, 1])) - 0.5 for m in scene.movers] + [0.0])
     for a in scene.animals:
         low = min(low, float(np.nanmin(a.positions[..., 1])))
     base = med.water_level if abs(med.water_level) < 1e8 else 0.0
@@ -251,11 +236,11 @@ def environment_levels(scene: Scene) -> dict:
 
 
 def scene_bounds(scene: Scene, margin: float = 8.0) -> tuple[np.ndarray, np.ndarray]:
-    """Return the (x, z) rectangle in glTF axes that the ground covers: the paths + margin."""
+    """Return the (x, z) rectangle in glTF axes that the ground covers: the paths, the objects
+    and a margin."""
     pts = [to_gltf_axes(m.com)[:, [0, 2]] for m in scene.movers]
-    if len(scene.markers):
-        pts.append(to_gltf_axes(scene.markers)[:, [0, 2]])
-    allp = np.concatenate(pts)
+    pts += [to_gltf_axes(o.positions)[:, [0, 2]] for o in scene.objects]
+    allp = np.concatenate(pts) if pts else np.zeros((0, 2), np.float32)
     allp = allp[np.isfinite(allp).all(axis=1)]
     if not len(allp):
         allp = np.zeros((1, 2), np.float32)
@@ -264,136 +249,155 @@ def scene_bounds(scene: Scene, margin: float = 8.0) -> tuple[np.ndarray, np.ndar
     return lo, hi
 
 
-def scene_glb(scene: Scene) -> bytes:
-    """Return the scene as GLB bytes: skinned animals animated at the scene's frame rate."""
+class _Tracks:
+    """The animation's channels and samplers, all keyed on one time accessor."""
+
+    def __init__(self, b: _Builder, times: np.ndarray) -> None:
+        self.b, self.channels, self.samplers = b, [], []
+        self.times = b.accessor(times, "SCALAR", bounds=True)
+
+    def add(self, node: int, path: str, output: int, interpolation: str = "LINEAR") -> None:
+        self.samplers.append({"input": self.times, "output": output,
+                              "interpolation": interpolation})  # fmt: skip
+        self.channels.append({"sampler": len(self.samplers) - 1,
+                              "target": {"node": node, "path": path}})  # fmt: skip
+
+
+def _add_animal(b: _Builder, tracks: _Tracks, k: int, animal: Animal) -> None:
+    """Add an animal as a skinned mesh, one joint per node keyframed at its node's positions."""
+    pos = to_gltf_axes(_fill_frames(animal.positions))  # (R, N, 3)
+    n = pos.shape[1]
+    rest = pos[0]
+    faces = np.asarray(animal.faces)[:, ::-1]
+    itype = np.uint16 if n < 65535 else np.uint32
+    joint_ids = np.zeros((n, 4), np.uint8 if n <= 256 else np.uint16)  # JOINTS_0: 8/16 bit
+    joint_ids[:, 0] = np.arange(n)
+    mat = _material(b, animal.name, _linear(animal.color), roughness=0.6)
+    attrs = {
+        "POSITION": b.accessor(rest, "VEC3", _ARRAY, bounds=True),
+        "JOINTS_0": b.accessor(joint_ids, "VEC4", _ARRAY),
+        "WEIGHTS_0": b.accessor(np.tile(np.float32([1, 0, 0, 0]), (n, 1)), "VEC4", _ARRAY),
+    }
+    idx = b.accessor(faces.astype(itype).ravel(), "SCALAR", _ELEMENTS)
+    prim = {"attributes": attrs, "material": mat, "indices": idx}
+    mesh = b.add("meshes", {"name": f"{animal.name}-surface", "primitives": [prim]})
+    joints = [b.node({"name": f"{animal.name}-{k}-node-{i}",
+                      "translation": [float(c) for c in rest[i]]}, root=False)
+              for i in range(n)]  # fmt: skip
+    ibm = np.tile(np.eye(4, dtype=np.float32), (n, 1, 1))
+    ibm[:, 3, :3] = -rest  # column-major: the translation is the last column
+    skin = b.add("skins", {"name": animal.name, "joints": joints,
+                           "inverseBindMatrices": b.accessor(ibm, "MAT4")})  # fmt: skip
+    b.node({"name": f"{animal.name}-{k}", "children": joints})
+    b.node({"name": f"{animal.name}-{k}-surface", "mesh": mesh, "skin": skin})
+    track = np.ascontiguousarray(pos.transpose(1, 0, 2))  # (N, R, 3): node-major
+    view = b.view(track.tobytes())
+    for i, joint in enumerate(joints):
+        out = b.accessor(track[i], "VEC3", view=view, offset=i * track[i].nbytes)
+        tracks.add(joint, "translation", out)
+
+
+def _add_creature(b: _Builder, tracks: _Tracks, k: int, creature: Creature) -> None:
+    """Add a rigid-link creature: one mesh per link, posed per frame."""
+    parent = b.node({"name": f"{creature.name}-{k}"})
+    kids = []
+    for link in creature.links:
+        mat = _material(b, link.name, _linear(link.color), roughness=0.6)
+        verts = to_gltf_axes(link.vertices)
+        faces = np.asarray(link.faces)[:, ::-1].astype(np.uint16).ravel()
+        prim = {"attributes": {"POSITION": b.accessor(verts, "VEC3", _ARRAY, bounds=True)},
+                "indices": b.accessor(faces, "SCALAR", _ELEMENTS), "material": mat}  # fmt: skip
+        mesh = b.add("meshes", {"name": link.name, "primitives": [prim]})
+        tr = to_gltf_axes(np.nan_to_num(link.translations))
+        rot = _quaternions(np.nan_to_num(link.angles), link.axis)
+        node = b.node({"name": f"{creature.name}-{k}-{link.name}", "mesh": mesh,
+                       "translation": tr[0].tolist(), "rotation": rot[0].tolist()},
+                      root=False)  # fmt: skip
+        kids.append(node)
+        tracks.add(node, "translation", b.accessor(np.ascontiguousarray(tr), "VEC3"))
+        tracks.add(node, "rotation", b.accessor(np.ascontiguousarray(rot), "VEC4"))
+    b.doc["nodes"][parent]["children"] = kids
+
+
+def _solid(thing: Thing, marker: float) -> tuple[np.ndarray, np.ndarray]:
+    """Return the vertices (V, 3) about the object's centre and triangles of its shape."""
+    from zoetic.render.scene import _box, _cylinder, _sphere
+
+    if thing.shape == "box":
+        v, f = _box(np.zeros(3), thing.size)
+    elif thing.shape == "cylinder":
+        v, f = _cylinder(np.zeros(3), thing.size[0], thing.size[1], thing.axis, sides=12)
+    elif thing.shape == "sphere":
+        v, f = _sphere(np.zeros(3), thing.size[0])
+    else:  # a point (a target): an octahedron sized to the scene
+        v = np.float32([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]])
+        v = v * np.float32(marker)
+        f = np.array([[0, 2, 4], [4, 2, 1], [1, 2, 5], [5, 2, 0], [4, 3, 0], [1, 3, 4],
+                      [5, 3, 1], [0, 3, 5]])  # fmt: skip
+    return to_gltf_axes(v), np.asarray(f)[:, ::-1].astype(np.uint16)
+
+
+def _add_objects(b: _Builder, tracks: _Tracks, scene: Scene) -> None:
+    """Add every object: a mesh of its shape, moved where it moves, hidden once gone."""
+    sizes = [float(np.ptp(a.positions[0][np.isfinite(a.positions[0]).all(1)], axis=0).max())
+             for a in scene.animals if np.isfinite(a.positions[0]).any()]  # fmt: skip
+    marker = 0.08 * max(max(sizes + [0.5]), 0.1)
+    materials: dict[str, int] = {}
+    for i, thing in enumerate(scene.objects):
+        if thing.kind not in materials:
+            rgb, alpha = OBJECT_COLORS.get(thing.kind, ((160, 160, 160), 1.0))
+            rgba = _linear(rgb)[:3] + [alpha]
+            materials[thing.kind] = _material(b, thing.kind, rgba, blend=alpha < 1)
+        verts, faces = _solid(thing, marker)
+        prim = {"attributes": {"POSITION": b.accessor(verts, "VEC3", _ARRAY, bounds=True)},
+                "indices": b.accessor(faces.ravel(), "SCALAR", _ELEMENTS),
+                "material": materials[thing.kind]}  # fmt: skip
+        mesh = b.add("meshes", {"name": thing.name, "primitives": [prim]})
+        pos = to_gltf_axes(_fill_frames(thing.positions[:, None])[:, 0])
+        node = b.node({"name": f"{thing.kind}-{i + 1}-{thing.name}", "mesh": mesh,
+                       "translation": [float(c) for c in pos[0]]})  # fmt: skip
+        if len(pos) > 1 and len(scene.times) > 1:
+            tracks.add(node, "translation", b.accessor(np.ascontiguousarray(pos), "VEC3"))
+        if thing.visible is not None and len(scene.times) > 1:
+            scale = np.repeat(np.asarray(thing.visible, np.float32)[:, None], 3, axis=1)
+            tracks.add(node, "scale", b.accessor(scale, "VEC3"), "STEP")
+
+
+def _add_environment(b: _Builder, scene: Scene) -> None:
+    """Add the ground, the sea floor and the sea surface as quads under the scene."""
     from zoetic.viz import render3d as r3
 
-    b = _Builder()
-    times = np.asarray(scene.times - scene.times[0], np.float32)
-    t_acc = b.accessor(times, "SCALAR", bounds=True)
-    channels, samplers = [], []
-    for k, animal in enumerate(scene.animals):
-        pos = to_gltf_axes(_fill_frames(animal.positions))  # (R, N, 3)
-        n = pos.shape[1]
-        rest = pos[0]
-        faces = np.asarray(animal.faces)[:, ::-1]
-        itype = np.uint16 if n < 65535 else np.uint32
-        joint_ids = np.zeros((n, 4), np.uint8 if n <= 256 else np.uint16)  # JOINTS_0: 8/16 bit
-        joint_ids[:, 0] = np.arange(n)
-        mat = _material(b, animal.name, _linear(animal.color), roughness=0.6)
-        attrs = {
-            "POSITION": b.accessor(rest, "VEC3", _ARRAY, bounds=True),
-            "JOINTS_0": b.accessor(joint_ids, "VEC4", _ARRAY),
-            "WEIGHTS_0": b.accessor(np.tile(np.float32([1, 0, 0, 0]), (n, 1)), "VEC4", _ARRAY),
-        }
-        mesh = b.add(
-            "meshes",
-            {
-                "name": f"{animal.name}-surface",
-                "primitives": [
-                    {
-                        "attributes": attrs,
-                        "material": mat,
-                        "indices": b.accessor(faces.astype(itype).ravel(), "SCALAR", _ELEMENTS),
-                    }
-                ],
-            },
-        )
-        joints = [
-            b.node(
-                {"name": f"{animal.name}-{k}-node-{i}", "translation": [float(c) for c in rest[i]]},
-                root=False,
-            )
-            for i in range(n)
-        ]
-        ibm = np.tile(np.eye(4, dtype=np.float32), (n, 1, 1))
-        ibm[:, 3, :3] = -rest  # column-major: the translation is the last column
-        skin = b.add(
-            "skins",
-            {"name": animal.name, "joints": joints, "inverseBindMatrices": b.accessor(ibm, "MAT4")},
-        )
-        b.node({"name": f"{animal.name}-{k}", "children": joints})
-        b.node({"name": f"{animal.name}-{k}-surface", "mesh": mesh, "skin": skin})
-        track = np.ascontiguousarray(pos.transpose(1, 0, 2))  # (N, R, 3): node-major
-        view = b.view(track.tobytes())
-        for i, joint in enumerate(joints):
-            out = b.accessor(track[i], "VEC3", view=view, offset=i * track[i].nbytes)
-            samplers.append({"input": t_acc, "output": out, "interpolation": "LINEAR"})
-            channels.append(
-                {"sampler": len(samplers) - 1, "target": {"node": joint, "path": "translation"}}
-            )
-    for k, creature in enumerate(scene.creatures):
-        parent = b.node({"name": f"{creature.name}-{k}"})
-        kids = []
-        for link in creature.links:
-            mat = _material(b, link.name, _linear(link.color), roughness=0.6)
-            verts = to_gltf_axes(link.vertices)
-            prim = {"attributes": {"POSITION": b.accessor(verts, "VEC3", _ARRAY, bounds=True)},
-                    "indices": b.accessor(np.asarray(link.faces)[:, ::-1].astype(np.uint16)
-                                          .ravel(), "SCALAR", _ELEMENTS),
-                    "material": mat}  # fmt: skip
-            mesh = b.add("meshes", {"name": link.name, "primitives": [prim]})
-            tr = to_gltf_axes(np.nan_to_num(link.translations))
-            rot = _quaternions(np.nan_to_num(link.angles), link.axis)
-            node = b.node({"name": f"{creature.name}-{k}-{link.name}", "mesh": mesh,
-                           "translation": tr[0].tolist(), "rotation": rot[0].tolist()},
-                          root=False)  # fmt: skip
-            kids.append(node)
-            for path, values, kind in (("translation", tr, "VEC3"), ("rotation", rot, "VEC4")):
-                out = b.accessor(np.ascontiguousarray(values), kind)
-                samplers.append({"input": t_acc, "output": out, "interpolation": "LINEAR"})
-                channels.append({"sampler": len(samplers) - 1,
-                                 "target": {"node": node, "path": path}})  # fmt: skip
-        b.doc["nodes"][parent]["children"] = kids
-    if len(times) > 1:
-        b.add("animations", {"name": "run", "channels": channels, "samplers": samplers})
     levels = environment_levels(scene)
     lo, hi = scene_bounds(scene)
     if "ground" in levels:
-        tex = _checker_png(*r3._GROUND)
-        _quad(
-            b, "ground", levels["ground"], lo, hi, _material(b, "ground", [1, 1, 1, 1], tex), True
-        )
+        mat = _material(b, "ground", [1, 1, 1, 1], _checker_png(*r3._GROUND))
+        _quad(b, "ground", levels["ground"], lo, hi, mat, True)
     if "seabed" in levels:
-        tex = _checker_png(*r3._SEABED)
-        _quad(
-            b,
-            "sea floor",
-            levels["seabed"],
-            lo,
-            hi,
-            _material(b, "sea floor", [1, 1, 1, 1], tex),
-            True,
-        )
+        mat = _material(b, "sea floor", [1, 1, 1, 1], _checker_png(*r3._SEABED))
+        _quad(b, "sea floor", levels["seabed"], lo, hi, mat, True)
     if "surface" in levels:
         rgba = _linear(r3._SURFACE)[:3] + [0.35]
-        _quad(
-            b,
-            "sea surface",
-            levels["surface"],
-            lo,
-            hi,
-            _material(b, "sea surface", rgba, blend=True, roughness=0.2),
-            False,
-        )
-    if len(scene.markers):
-        extent = max(
-            [
-                float(np.ptp(a.positions[0][np.isfinite(a.positions[0]).all(1)], axis=0).max())
-                for a in scene.animals
-            ]
-            + [0.5]
-        )
-        mat = _material(b, "target", _linear((220, 40, 30)))
-        for i, m in enumerate(to_gltf_axes(scene.markers)):
-            _octahedron(b, f"target-{i + 1}", m, 0.08 * max(extent, 0.1), mat)
+        mat = _material(b, "sea surface", rgba, blend=True, roughness=0.2)
+        _quad(b, "sea surface", levels["surface"], lo, hi, mat, False)
+
+
+def scene_glb(scene: Scene) -> bytes:
+    """Return the scene as GLB bytes: skinned animals, rigid creatures and objects animated at
+    the scene's frame rate, over the ground or sea floor."""
+    b = _Builder()
+    tracks = _Tracks(b, np.asarray(scene.times - scene.times[0], np.float32))
+    for k, animal in enumerate(scene.animals):
+        _add_animal(b, tracks, k, animal)
+    for k, creature in enumerate(scene.creatures):
+        _add_creature(b, tracks, k, creature)
+    _add_objects(b, tracks, scene)
+    if len(scene.times) > 1 and tracks.channels:
+        b.add("animations", {"name": "run", "channels": tracks.channels,
+                             "samplers": tracks.samplers})  # fmt: skip
+    _add_environment(b, scene)
     b.doc["scenes"][0]["name"] = scene.title
-    b.doc["scenes"][0]["extras"] = {
-        "fps": scene.fps,
-        "duration_s": scene.duration,
-        "medium": scene.medium.name,
-        "kind": scene.kind,
-    }
+    b.doc["scenes"][0]["extras"] = {"fps": scene.fps, "duration_s": scene.duration,
+                                    "medium": scene.medium.name, "kind": scene.kind}  # fmt: skip
     return b.glb()
 
 

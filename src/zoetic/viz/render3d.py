@@ -63,11 +63,16 @@ class Camera:
         return np.array([-np.cos(el) * np.cos(az), np.sin(el), -np.cos(el) * np.sin(az)])
 
 
+def name_color(name: str) -> tuple[int, int, int]:
+    """Return the display colour (RGB 0-255) of an animal by its species' name."""
+    if name in ANIMAL_COLORS:
+        return ANIMAL_COLORS[name]
+    return _PALETTE[sum(map(ord, name)) % len(_PALETTE)]
+
+
 def body_color(body: Body) -> tuple[int, int, int]:
     """Return the display colour (RGB 0-255) of an animal, by name."""
-    if body.name in ANIMAL_COLORS:
-        return ANIMAL_COLORS[body.name]
-    return _PALETTE[sum(map(ord, body.name)) % len(_PALETTE)]
+    return name_color(body.name)
 
 
 def look_at(eye: np.ndarray, target: np.ndarray) -> np.ndarray:

@@ -265,21 +265,18 @@ def stunt_frames(body, positions: np.ndarray, times: np.ndarray, medium, objects
     bar, and spray where the body crosses the surface; the camera frames the whole stunt.
 
     positions (R, N, 3) and balls (R, K, 3) at ``times`` (R,); objects: the trick's objects."""
-    from PIL import Image, ImageDraw
+    from PIL import Image
 
     from zoetic.physics.media import get_medium
     from zoetic.physics.objects import Ball, Box, Cylinder
     from zoetic.viz.render3d import (
-        TEXT_STYLE,
         SceneMesh,
         background,
         body_color,
-        draw_buoy,
         face_items,
         label_font,
         look_at,
         project_points,
-        water_tint,
     )
 
     medium = get_medium(medium)
@@ -291,17 +288,7 @@ def stunt_frames(body, positions: np.ndarray, times: np.ndarray, medium, objects
     bl = np.zeros((len(times), 0, 3)) if balls is None else np.asarray(balls, float)
     ball_objs = [o for o in objects if isinstance(o, Ball)]
     fixed = [o for o in objects if isinstance(o, Cylinder | Box)]
-    fixed_pts = []
-    for o in fixed:
-        c = np.asarray(o.center, float)
-        if isinstance(o, Cylinder):
-            d = np.zeros(3)
-            d["xyz".index(o.axis)] = 0.5 * o.length
-            top = c + d
-            fixed_pts += [top, c - d] if o.axis != "y" else [top]
-        else:
-            fixed_pts += [c - o.half_size, c + o.half_size]
-    fp = np.asarray(fixed_pts).reshape(-1, 3)
+    fp = _fixed_points(fixed)
     radii = np.array([ball_objs[k].radius if k < len(ball_objs) else 0.15 for k in range(nb)])
     ball_box = [bl + radii[:, None] * np.eye(3)[i] * sign for i in range(3) for sign in (-1, 1)]
     frame_pts = np.concatenate([pos, *ball_box, np.broadcast_to(fp, (len(times), *fp.shape))],
@@ -331,35 +318,9 @@ def stunt_frames(body, positions: np.ndarray, times: np.ndarray, medium, objects
         for q, c in zip(quads, qcols, strict=True):
             for it in _quad_items([q], [c], eye, rot, focal, size, medium):
                 (above if np.mean(np.asarray(q)[:, 1]) >= level else below).append(it)
-        for o in fixed:
-            c = np.asarray(o.center, float)
-            if isinstance(o, Cylinder):
-                d = np.zeros(3)
-                d["xyz".index(o.axis)] = 0.5 * o.length
-                col = _BAR_COLOR if o.axis != "y" else _POST_COLOR
-                ends = np.stack([c - d, c + d])
-                if o.axis == "y":  # a post stands on the pool's floor
-                    ends[0, 1] = min(ends[0, 1], level - pool.depth)
-                segments = [(ends, col)]
-                if o.axis != "y":  # a bar rests on two stands at its ends
-                    segments += [(np.stack([e, [e[0], level - pool.depth, e[2]]]), _POST_COLOR)
-                                 for e in ends]  # fmt: skip
-                parts = [(p, cl) for seg, cl in segments for p in _segment_split(seg, level)]
-                for part, col in parts:
-                    scr, z = project_points(part, eye, rot, focal, size)
-                    if (z > 0.05).all():
-                        tint = water_tint(col[None], part.mean(0)[None], eye, medium)[0]
-                        wpx = max(2.0, 2 * focal * o.radius / z.mean())
-                        it = (float(z.mean()), 2, (scr.ravel().tolist(), wpx),
-                              tuple(np.clip(tint, 0, 255).astype(int)))  # fmt: skip
-                        (above if part[:, 1].mean() >= level else below).append(it)
-        for k in range(nb):
-            rad = radii[k]
-            scr, z = project_points(bl[r, k][None], eye, rot, focal, size)
-            if z[0] > 0.05 + rad:
-                tint = water_tint(_BALL_COLOR[None], bl[r, k][None], eye, medium)[0]
-                it = (float(z[0]), 1, (scr[0, 0], scr[0, 1], focal * rad / z[0]), tint)
-                (above if bl[r, k, 1] >= level else below).append(it)
+        view = (eye, rot, focal, size, medium, level)
+        _fixed_items(fixed, view, level - pool.depth, below, above)
+        _ball_items(bl[r], radii, view, below, above)
         below += face_items(verts, mesh, eye, rot, focal, size, medium, side=-1)
         above += face_items(verts, mesh, eye, rot, focal, size, medium, side=1)
         for p in spray(times[r]):
@@ -367,17 +328,93 @@ def stunt_frames(body, positions: np.ndarray, times: np.ndarray, medium, objects
             if z[0] > 0.05:
                 above.append((float(z[0]), 3, (scr[0, 0], scr[0, 1],
                                                max(1.5, focal * 0.025 / z[0])), _SPRAY))
-        _paint(ImageDraw.Draw(img), below, draw_buoy)
-        layer = Image.new("RGBA", img.size, (0, 0, 0, 0))
-        scr, z = project_points(np.asarray(sheet, float), eye, rot, focal, size)
-        if (z > 0.05).all():
-            ImageDraw.Draw(layer).polygon(scr.ravel().tolist(), fill=_WATER_SHEET)
-        img = Image.alpha_composite(img.convert("RGBA"), layer).convert("RGB")
-        draw = ImageDraw.Draw(img)
-        _paint(draw, above, draw_buoy)
         label = f"t = {times[r]:.2f} s" + (f"   {title}" if title else "")
-        draw.text((8, 6), label, font=font, **TEXT_STYLE)
-        yield np.array(img)
+        yield _compose(img, below, above, np.asarray(sheet, float), view, label, font)
+
+
+def _fixed_points(fixed) -> np.ndarray:
+    """Return (M, 3) points the camera keeps in view for the fixed objects: a post's top, a
+    bar's two ends, a box's two corners."""
+    from zoetic.physics.objects import Cylinder
+
+    pts = []
+    for o in fixed:
+        c = np.asarray(o.center, float)
+        if isinstance(o, Cylinder):
+            d = np.zeros(3)
+            d["xyz".index(o.axis)] = 0.5 * o.length
+            top = c + d
+            pts += [top, c - d] if o.axis != "y" else [top]
+        else:
+            pts += [c - o.half_size, c + o.half_size]
+    return np.asarray(pts).reshape(-1, 3)
+
+
+def _fixed_items(fixed, view: tuple, floor: float, below: list, above: list) -> None:
+    """Append painter items of the posts and bars (thick segments, split at the surface) to
+    ``below`` and ``above`` the water; a post stands on the floor, a bar on two stands."""
+    from zoetic.physics.objects import Cylinder
+    from zoetic.viz.render3d import project_points, water_tint
+
+    eye, rot, focal, size, medium, level = view
+    for o in fixed:
+        if not isinstance(o, Cylinder):
+            continue
+        c = np.asarray(o.center, float)
+        d = np.zeros(3)
+        d["xyz".index(o.axis)] = 0.5 * o.length
+        col = _BAR_COLOR if o.axis != "y" else _POST_COLOR
+        ends = np.stack([c - d, c + d])
+        if o.axis == "y":  # a post stands on the pool's floor
+            ends[0, 1] = min(ends[0, 1], floor)
+        segments = [(ends, col)]
+        if o.axis != "y":  # a bar rests on two stands at its ends
+            segments += [(np.stack([e, [e[0], floor, e[2]]]), _POST_COLOR) for e in ends]
+        parts = [(p, cl) for seg, cl in segments for p in _segment_split(seg, level)]
+        for part, col in parts:
+            scr, z = project_points(part, eye, rot, focal, size)
+            if (z > 0.05).all():
+                tint = water_tint(col[None], part.mean(0)[None], eye, medium)[0]
+                wpx = max(2.0, 2 * focal * o.radius / z.mean())
+                it = (float(z.mean()), 2, (scr.ravel().tolist(), wpx),
+                      tuple(np.clip(tint, 0, 255).astype(int)))  # fmt: skip
+                (above if part[:, 1].mean() >= level else below).append(it)
+
+
+def _ball_items(balls: np.ndarray, radii: np.ndarray, view: tuple, below: list,
+                above: list) -> None:  # fmt: skip
+    """Append painter items of the balls at one frame ((K, 3) m) to ``below``/``above``."""
+    from zoetic.viz.render3d import project_points, water_tint
+
+    eye, rot, focal, size, medium, level = view
+    for k in range(len(radii)):
+        rad = radii[k]
+        scr, z = project_points(balls[k][None], eye, rot, focal, size)
+        if z[0] > 0.05 + rad:
+            tint = water_tint(_BALL_COLOR[None], balls[k][None], eye, medium)[0]
+            it = (float(z[0]), 1, (scr[0, 0], scr[0, 1], focal * rad / z[0]), tint)
+            (above if balls[k, 1] >= level else below).append(it)
+
+
+def _compose(img, below: list, above: list, sheet: np.ndarray, view: tuple, label: str,
+             font) -> np.ndarray:  # fmt: skip
+    """Return the frame: what is under water, the translucent surface sheet, what is above,
+    and the label."""
+    from PIL import Image, ImageDraw
+
+    from zoetic.viz.render3d import TEXT_STYLE, draw_buoy, project_points
+
+    eye, rot, focal, size, _, _ = view
+    _paint(ImageDraw.Draw(img), below, draw_buoy)
+    layer = Image.new("RGBA", img.size, (0, 0, 0, 0))
+    scr, z = project_points(sheet, eye, rot, focal, size)
+    if (z > 0.05).all():
+        ImageDraw.Draw(layer).polygon(scr.ravel().tolist(), fill=_WATER_SHEET)
+    img = Image.alpha_composite(img.convert("RGBA"), layer).convert("RGB")
+    draw = ImageDraw.Draw(img)
+    _paint(draw, above, draw_buoy)
+    draw.text((8, 6), label, font=font, **TEXT_STYLE)
+    return np.array(img)
 
 
 def _segment_split(ends: np.ndarray, level: float) -> list[np.ndarray]:
