@@ -177,6 +177,7 @@ def test_same_seed_same_result_and_refusals(tmp_path, short_task):
         Run.create(tmp_path / "c", LearnConfig(animal="snake", task=str(short_task)))
 
 
+@pytest.mark.slow
 def test_gradient_run_learns_and_resumes_to_the_same_result(tmp_path, short_task):
     whole = _learn(tmp_path / "whole", short_task, "gradient", budget=8)
     e = np.array(whole.log.E)

@@ -156,6 +156,7 @@ def _history_E(path):
     return [line.split(",")[1] for line in lines]
 
 
+@pytest.mark.slow
 def test_sigkill_during_learning_then_resume_gives_the_same_history(tmp_path, short_task):
     whole = Run.create(tmp_path / "whole", _config(short_task, "anneal", 60)).learn()
     out = tmp_path / "killed"

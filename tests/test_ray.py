@@ -16,6 +16,9 @@ from zoetic.learning.evaluate import BatchEvaluator, make_evaluator
 from zoetic.learning.ray_eval import RayEvaluator
 from zoetic.learning.run import LearnConfig, Run
 
+# every test here starts a Ray cluster (seconds each): the slow tier
+pytestmark = pytest.mark.slow
+
 CONFIG = dict(animal="snake", task="crawl-straight", optimizer="cmaes", budget=30, popsize=10,
               seed=5, nodes=4)  # fmt: skip
 

@@ -119,6 +119,7 @@ def test_basic_training_learns_every_entry_from_rest_and_a_cruising_start():
             assert speeds[0] == 0.0 and speeds[1] > 0.1, (name, entry.name, speeds)
 
 
+@pytest.mark.slow
 def test_the_jax_objective_takes_the_same_mean_over_the_starts(objectives):
     from zoetic.learning.gradient import jax_objective
 

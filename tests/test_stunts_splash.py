@@ -129,6 +129,7 @@ def _area_facing_down(body, pitch: float) -> float:
     return float(np.maximum(-0.5 * twice[:, 1], 0.0).sum())
 
 
+@pytest.mark.slow
 def test_a_bellyflop_splashes_more_than_a_nose_first_dive_in_numpy_and_jax(dolphin):
     jnp = pytest.importorskip("jax.numpy")
     frame = BodyFrame.of(dolphin)

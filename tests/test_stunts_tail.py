@@ -127,6 +127,7 @@ def test_a_dive_still_in_the_air_at_the_end_is_not_a_clean_dive():
     assert splash_ratio(belly, dict(flying, splash_m3_s=0.5)) is None
 
 
+@pytest.mark.slow
 def test_the_tail_distance_counts_only_after_half_a_somersault_in_the_air(dolphin):
     n = 41
     turn = np.linspace(0, 2 * np.pi, n)  # records 0.05 s apart, aloft, a full turn

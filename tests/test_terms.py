@@ -211,6 +211,7 @@ def test_a_users_animal_takes_every_task_that_fits(my_eel, tmp_path, capsys):
     assert [e.name for e in plan_for(eel)] == ["go-straight", "sharp-turn-left", "wide-turn-left"]
 
 
+@pytest.mark.slow
 def test_jax_objective_scores_like_the_numpy_objective():
     pytest.importorskip("jax")
     from zoetic.learning.gradient import value_and_grad
