@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from zoetic.record import Creature, Event, Link, Record, Thing, write_record
-from zoetic.runs import animal_record
+from zoetic.runs import animal_record, write_run_record
 
 
 def _kind(obj) -> str:
@@ -57,7 +57,7 @@ def write_sequence_record(out: Path, kind: str, body, times, positions, ctrl, th
     rec = Record(kind, f"{body.name} {kind} ({Path(out).name})", body.medium,
                  np.asarray(times, float), (animal_record(body, positions, times, ctrl),),
                  objects=tuple(things), numbers=numbers or {})  # fmt: skip
-    return write_record(out, rec)
+    return write_run_record(out, rec, [body])[0]
 
 
 def figures(summary: dict) -> dict:
@@ -91,7 +91,7 @@ def write_aquarium_record(out: Path, tank, life, summary: dict) -> Path:
         units={"hunger": "", "libido": "", "fear": "", "intention": "", "alive": "",
                "target": ""},
     )  # fmt: skip
-    return write_record(out, rec)
+    return write_run_record(out, rec, [f.body for f in fishes])[0]
 
 
 def write_chase_record(out: Path, chase, result, summary: dict) -> Path:
@@ -121,7 +121,7 @@ def write_chase_record(out: Path, chase, result, summary: dict) -> Path:
                  scalars=scalars, units={"gaze": "rad", "locked": "", "theta_p": "rad",
                                          "phi_p": "rad", "range": "m"},
                  numbers=figures(summary))  # fmt: skip
-    return write_record(out, rec)
+    return write_run_record(out, rec, world.bodies)[0]
 
 
 def _prism(outline: np.ndarray, depth: float, axis: str) -> tuple[np.ndarray, np.ndarray]:
