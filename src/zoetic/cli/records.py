@@ -1,6 +1,7 @@
 """The run record of each command that simulates, built at the command line's edge from what
 the library returned (tracking and macro results, stunts, the aquarium's life, a chase, a SAN
-replay) and written through the one writer, ``zoetic.record.write_record``."""
+replay) and written through ``zoetic.runs.write_run_record``, which adds every animal's motion
+(``control.measure``) before the one writer, ``zoetic.record.write_record``, writes it."""
 
 from __future__ import annotations
 
