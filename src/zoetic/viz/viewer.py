@@ -90,5 +90,3 @@ def viewer_data(scene: Scene, rec: Record | None = None) -> dict:
         "plots": {} if rec is None else plots_data(rec),
         "glb": base64.b64encode(scene_glb(scene)).decode("ascii"),
     }  # fmt: skip
-
-
