@@ -162,3 +162,27 @@ def test_a_record_larger_than_the_memory_limit_is_refused_unread(tmp_path, monke
     monkeypatch.setattr(record, "LIMITS", dataclasses.replace(record.LIMITS, memory_bytes=100))
     with pytest.raises(RunDirError, match=r"MiB of arrays, more than a run record may hold"):
         read_record(path)
+
+
+def test_a_simulate_run_records_its_motion_as_measured_from_its_positions(tmp_path):
+    """A shark at rest dropped at the sea's surface sinks: its record carries, per recorded
+    instant, a depth that grows, no roll, and what the measure gives of its positions."""
+    from zoetic.bodies import load_animal
+    from zoetic.control.measure import motion_scalars
+    from zoetic.physics import get_medium
+    from zoetic.runs import simulate_run
+
+    simulate_run("shark", "rest", 0.6, tmp_path, medium="sea")
+    rec = read_record(tmp_path)
+    got = rec.scalars["shark"]
+    assert set(got) == {"speed", "depth", "heading", "pitch", "roll"}
+    np.testing.assert_array_equal(rec.period_times, rec.times)
+    assert rec.units["depth"] == "m" and rec.units["speed"] == "m/s"
+    assert rec.units["heading"] == rec.units["pitch"] == rec.units["roll"] == "deg"
+    depth = got["depth"]
+    assert depth[-1] > depth[0] + 0.05 and np.all(np.diff(depth[:20]) > 0)  # it sinks
+    assert np.abs(got["roll"]).max() < 0.5  # deg: upright, a symmetric body at rest
+    want = motion_scalars(load_animal("shark"), rec.animals[0].positions[None], rec.times,
+                          get_medium("sea"))  # fmt: skip
+    for q, v in want.items():
+        np.testing.assert_allclose(got[q], v[0], atol=1e-5)

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from zoetic.cli import main
+from zoetic.record import read_record
 from zoetic.runs import simulate_run
 from zoetic.viz.gltf import scene_glb, write_glb
 from zoetic.viz.scene import load_scene
@@ -47,6 +48,15 @@ def test_the_page_is_self_contained_and_carries_the_run(shark_run, tmp_path):
     assert data["frames"] == 31 and data["duration"] == pytest.approx(2.0)
     acts = np.array(data["animals"][0]["activations"]).reshape(31, -1)
     np.testing.assert_allclose(acts, scene.animals[0].activations, atol=5e-4)
+    # the time plots: the record's motion of the shark at every recorded instant
+    rec = read_record(shark_run)
+    plots = data["plots"]
+    assert list(plots["animals"]) == ["shark"]
+    assert list(plots["animals"]["shark"])[:2] == ["speed", "height"]  # water: no surface
+    np.testing.assert_allclose(plots["times"], rec.period_times - rec.times[0], atol=1e-4)
+    np.testing.assert_allclose(plots["animals"]["shark"]["roll"], rec.scalars["shark"]["roll"],
+                               atol=1e-4)  # fmt: skip
+    assert plots["units"]["speed"] == "m/s" and plots["units"]["pitch"] == "deg"
 
 
 def test_no_text_of_the_run_can_close_the_data_element(shark_run):
@@ -88,8 +98,29 @@ def _canvas(page) -> np.ndarray:
 
     from PIL import Image
 
-    png = page.locator("canvas").screenshot()
+    png = page.locator("#zoetic > canvas").screenshot()
     return np.asarray(Image.open(BytesIO(png)).convert("RGB"), float)
+
+
+def _check_plots(page, who: str, what: list[str], points: int) -> None:
+    """The time plots show ``who``'s ``what`` with ``points`` samples each, drawn, and their
+    cursor follows the time shown."""
+    from io import BytesIO
+
+    from PIL import Image
+
+    info = page.evaluate("window.zoetic.plots()")
+    assert info["who"] == who and [c["what"] for c in info["charts"]] == what, info
+    assert all(c["points"] == points and c["max"] > c["min"] for c in info["charts"]), info
+    chart = page.locator("#plots canvas").first
+    shots = []
+    for t in (0.05, 0.45):
+        page.evaluate(f"window.zoetic.pause(); window.zoetic.setTime({t})")
+        shots.append(np.asarray(Image.open(BytesIO(chart.screenshot())).convert("RGB"), float))
+    assert shots[0].std() > 10, "the strip chart is blank"
+    assert (np.abs(shots[1] - shots[0]).max(axis=2) > 40).mean() > 0.002, "the cursor stood"
+    box, view = page.locator("#plots").bounding_box(), page.locator("#panel").bounding_box()
+    assert box["x"] > view["x"] + view["width"] or box["y"] > view["y"] + view["height"]
 
 
 def test_the_viewer_draws_and_scrubs_in_chromium(shark_run, tmp_path):
@@ -100,7 +131,7 @@ def test_the_viewer_draws_and_scrubs_in_chromium(shark_run, tmp_path):
         "(Debian: apt-get install -y chromium)"
     )
     html = tmp_path / "view.html"
-    html.write_text(page_html(viewer_data(load_scene(shark_run, fps=30))))
+    html.write_text(page_html(viewer_data(load_scene(shark_run, fps=30), read_record(shark_run))))
     glb = write_glb(load_scene(shark_run, fps=30), tmp_path / "s.glb")
     with sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=CHROMIUM, args=WEBGL_FLAGS, headless=True)
@@ -142,6 +173,7 @@ def test_the_viewer_draws_and_scrubs_in_chromium(shark_run, tmp_path):
             end = _canvas(page)  # the last frame, not the first again (a looping clip wraps)
             assert (np.abs(end - start).max(axis=2) > 20).mean() > 0.005
             assert (np.abs(end - later).max(axis=2) > 20).mean() > 0.001
+            _check_plots(page, "shark", ["speed", "height"], 201)
             # the exported .glb, read by three.js's own GLTFLoader
             b64 = base64.b64encode(glb.read_bytes()).decode()
             info = page.evaluate("b => window.zoetic.inspectGlb(b)", b64)
@@ -189,5 +221,11 @@ def test_an_aquarium_plays_in_chromium_with_its_objects_and_events(tmp_path):
             assert states == [f"{a.name}: {scene.states[a.name]['intention'][6]}"
                               for a in rec.animals], (t, states)
             assert _canvas(page).std() > 10, "the canvas is blank"
+            _check_plots(page, rec.animals[0].name, ["speed", "height"],
+                         len(rec.period_times))  # fmt: skip
+            other = rec.animals[1].name
+            page.select_option("#plot-who", other)  # another fish: its own charts
+            assert page.evaluate("window.zoetic.plots()")["who"] == other
+            page.screenshot(path=str(tmp_path / "tank.png"))
         finally:
             browser.close()

@@ -32,6 +32,112 @@ function fmt(v) {
   return Math.abs(v) >= 100 ? v.toFixed(1) : v.toPrecision(4);
 }
 
+// ---- time plots of the record's per-period scalars: one strip chart per chosen quantity of
+// the chosen animal, with a cursor at the time shown (data.plots, from zoetic.viz.viewer)
+const CHART_H = 58; // css px per strip chart
+const MAX_CHARTS = 4; // charts shown at once, so the box stays clear of the panel
+
+function lastAtOrBefore(times, t) { // index of the last period that began by t (0 if none)
+  let lo = 0, hi = times.length - 1;
+  while (lo < hi) { const mid = (lo + hi + 1) >> 1; if (times[mid] <= t + 1e-9) lo = mid; else hi = mid - 1; }
+  return lo;
+}
+
+function makePlots(plots, root, duration) {
+  const who = Object.keys(plots.animals || {});
+  if (!who.length) return null;
+  const box = el("div", { id: "plots" }, root);
+  const head = el("div", { className: "head" }, box);
+  const pick = el("select", { id: "plot-who" }, head);
+  for (const w of who) el("option", { value: w, textContent: w }, pick);
+  const chips = el("div", { className: "chips" }, box);
+  const holder = el("div", {}, box);
+  const chosen = new Set();
+  let charts = [];
+  const unitOf = (what) => plots.units[what] ?? plots.units[what.replace(/ \d+$/, "")] ?? "";
+  const build = () => {
+    holder.replaceChildren();
+    const series = plots.animals[pick.value];
+    charts = [...chosen].filter((q) => q in series).map((what) => {
+      const values = series[what];
+      const finite = values.filter((v) => v !== null);
+      let lo = Math.min(...finite), hi = Math.max(...finite);
+      if (!finite.length) { lo = 0; hi = 1; }
+      if (hi - lo < 1e-9) { lo -= 0.5; hi += 0.5; }
+      const canvas = el("canvas", { className: "chart" }, holder);
+      const dpr = window.devicePixelRatio || 1;
+      const w = holder.clientWidth || 280;
+      canvas.style.width = `${w}px`; canvas.style.height = `${CHART_H}px`;
+      canvas.width = Math.round(w * dpr); canvas.height = Math.round(CHART_H * dpr);
+      const trace = document.createElement("canvas"); // the series, drawn once
+      trace.width = canvas.width; trace.height = canvas.height;
+      const g = trace.getContext("2d");
+      g.scale(dpr, dpr);
+      const top = 14, bottom = CHART_H - 3;
+      const xOf = (t) => (w * t) / Math.max(duration, 1e-9);
+      const yOf = (v) => bottom - ((v - lo) / (hi - lo)) * (bottom - top);
+      g.fillStyle = "rgba(255,255,255,0.06)"; g.fillRect(0, top, w, bottom - top);
+      g.strokeStyle = "#6cc4ff"; g.lineWidth = 1.2; g.beginPath();
+      let pen = false;
+      values.forEach((v, k) => {
+        if (v === null) { pen = false; return; }
+        const x = xOf(plots.times[k]), y = yOf(v);
+        if (pen) g.lineTo(x, y); else g.moveTo(x, y);
+        pen = true;
+      });
+      g.stroke();
+      g.fillStyle = "#9ab"; g.font = "10px system-ui, sans-serif"; g.textAlign = "right";
+      g.fillText(`${short(lo)} … ${short(hi)}`, w - 2, 10);
+      return { what, values, canvas, trace, w, xOf, unit: unitOf(what), points: finite.length, lo, hi };
+    });
+  };
+  const toggle = (what, on) => {
+    if (on) chosen.add(what); else chosen.delete(what);
+    build();
+  };
+  const makeChips = () => {
+    chips.replaceChildren();
+    const names = Object.keys(plots.animals[pick.value]);
+    for (const q of [...chosen]) if (!names.includes(q)) chosen.delete(q);
+    if (!chosen.size) names.slice(0, 2).forEach((q) => chosen.add(q));
+    for (const q of names) {
+      const label = el("label", { className: "chip" }, chips);
+      const box2 = el("input", { type: "checkbox", checked: chosen.has(q), value: q }, label);
+      label.append(q);
+      box2.onchange = () => {
+        if (box2.checked && chosen.size >= MAX_CHARTS) { box2.checked = false; return; }
+        toggle(q, box2.checked);
+      };
+    }
+    build();
+  };
+  pick.onchange = makeChips;
+  makeChips();
+  const draw = (t) => {
+    for (const c of charts) {
+      const g = c.canvas.getContext("2d");
+      const dpr = c.canvas.width / c.w;
+      g.setTransform(1, 0, 0, 1, 0, 0);
+      g.clearRect(0, 0, c.canvas.width, c.canvas.height);
+      g.drawImage(c.trace, 0, 0);
+      g.scale(dpr, dpr);
+      const x = c.xOf(t);
+      g.strokeStyle = "#ffd040"; g.lineWidth = 1; g.beginPath();
+      g.moveTo(x, 12); g.lineTo(x, CHART_H); g.stroke();
+      const v = c.values[lastAtOrBefore(plots.times, t)];
+      g.fillStyle = "#eee"; g.font = "11px system-ui, sans-serif"; g.textAlign = "left";
+      g.fillText(`${c.what}${c.unit ? ` (${c.unit})` : ""}: ${v === null ? "–" : String(Number(v.toPrecision(4)))}`, 2, 10);
+    }
+  };
+  const info = () => ({ who: pick.value, charts: charts.map((c) =>
+    ({ what: c.what, unit: c.unit, points: c.points, min: c.lo, max: c.hi })) });
+  return { draw, info };
+}
+
+function short(v) { // three significant digits, no trailing zeros: an axis range
+  return String(Number(v.toPrecision(3)));
+}
+
 async function main() {
   const data = JSON.parse(document.getElementById("zoetic-data").textContent);
   const api = { ready: false, error: null, frames: data.frames, duration: data.duration };
@@ -119,6 +225,7 @@ async function main() {
     step: 1 / data.fps, value: 0 }, bar);
   const speed = el("select", { id: "speed" }, bar);
   for (const s of [0.25, 0.5, 1, 2, 4]) el("option", { value: s, textContent: `${s}x`, selected: s === 1 }, speed);
+  const plots = makePlots(data.plots || {}, root, data.duration);
   const followLabel = el("label", { textContent: " follow" }, bar);
   const follow = el("input", { id: "follow", type: "checkbox", checked: true });
   followLabel.prepend(follow);
@@ -147,6 +254,7 @@ async function main() {
       eventBox.textContent = events.slice(Math.max(0, n - 5), n)
         .map((e) => `${e[0].toFixed(1)} s ${e[1]} ${e[2]} ${e[3]}`).join("\n");
     }
+    if (plots) plots.draw(t);
     for (const b of bars) b.fill.style.width = `${(100 * b.values[i * b.n + b.j]).toFixed(1)}%`;
   };
   play.onclick = () => { playing = !playing; play.textContent = playing ? "pause" : "play"; };
@@ -181,6 +289,8 @@ async function main() {
     time: () => t,
     setTime: (time) => { setTime(time); render(); },
     pause: () => { playing = false; play.textContent = "play"; },
+    // for tests and tools: the animal and the quantities plotted, with their sample counts
+    plots: () => (plots ? plots.info() : null),
     // for tests and tools: parse any .glb (base64) with three.js's GLTFLoader and count its parts
     inspectGlb: async (b64) => {
       const g = await parseGlb(decodeBase64(b64));

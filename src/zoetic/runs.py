@@ -5,13 +5,14 @@ line as ``media``; nothing here draws."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller, controller_from_spec
+from zoetic.control.measure import measure_record
 from zoetic.errors import BlowUpError, SimulationError
 from zoetic.io import atomic_write_bytes, check_memory, check_steps, make_dir
 from zoetic.learning.checks import (  # noqa: F401 - the run checks, for the commands
@@ -43,6 +44,14 @@ def animal_record(body: Body, positions: np.ndarray, times: np.ndarray, ctrl=Non
     return Animal(name or body.name, body.name, np.asarray(body.faces, np.int32),
                   np.asarray(positions, np.float32), np.asarray(body.mass, np.float32), color,
                   tuple(body.actuator_names), acts)  # fmt: skip
+
+
+def write_run_record(out: Path, rec: Record, bodies: Sequence[Body]) -> tuple[Path, Record]:
+    """Write a run's record with every animal's motion added (speed, depth or height, heading,
+    pitch, roll: ``control.measure``), ``bodies[i]`` being the Body of ``rec.animals[i]``;
+    return the file and the record written. Every command that records animals writes here."""
+    rec = measure_record(rec, bodies)
+    return write_record(out, rec), rec
 
 
 def run_controller(
@@ -107,7 +116,7 @@ def simulate_run(
     traj = run_controller(body, ctrl, seconds, med, dt)
     rec = Record("simulate", f"{body.name} ({out.name})", med.name, traj.times,
                  (animal_record(body, traj.positions[0], traj.times, ctrl),))  # fmt: skip
-    path = write_record(out, rec)
+    path, rec = write_run_record(out, rec, [body])
     files = media(body, rec, out) if media is not None else {}
     com = traj.com(body)[0]
     travelled = float(np.linalg.norm(com[-1, [0, 2]] - com[0, [0, 2]]))
@@ -147,7 +156,7 @@ def finish_run(run, media: Media | None = None) -> dict:
     rec = Record("learn", f"{body.name} learn ({out.name})", obj.medium.name, traj.times,
                  (animal_record(body, traj.positions[0], traj.times, run.best_controller()),),
                  numbers={"best_E": best_E, "task": task.name})  # fmt: skip
-    write_record(out, rec)
+    _, rec = write_run_record(out, rec, [body])
     files = media(run, rec) if media is not None else {}
     com = traj.com(body)[0]
     travelled = float(np.linalg.norm(com[-1, [0, 2]] - com[0, [0, 2]]))

@@ -1,6 +1,7 @@
 """The run record of each command that simulates, built at the command line's edge from what
 the library returned (tracking and macro results, stunts, the aquarium's life, a chase, a SAN
-replay) and written through the one writer, ``zoetic.record.write_record``."""
+replay) and written through ``zoetic.runs.write_run_record``, which adds every animal's motion
+(``control.measure``) before the one writer, ``zoetic.record.write_record``, writes it."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from zoetic.record import Creature, Event, Link, Record, Thing, write_record
-from zoetic.runs import animal_record
+from zoetic.runs import animal_record, write_run_record
 
 
 def _kind(obj) -> str:
@@ -57,7 +58,7 @@ def write_sequence_record(out: Path, kind: str, body, times, positions, ctrl, th
     rec = Record(kind, f"{body.name} {kind} ({Path(out).name})", body.medium,
                  np.asarray(times, float), (animal_record(body, positions, times, ctrl),),
                  objects=tuple(things), numbers=numbers or {})  # fmt: skip
-    return write_record(out, rec)
+    return write_run_record(out, rec, [body])[0]
 
 
 def figures(summary: dict) -> dict:
@@ -91,7 +92,7 @@ def write_aquarium_record(out: Path, tank, life, summary: dict) -> Path:
         units={"hunger": "", "libido": "", "fear": "", "intention": "", "alive": "",
                "target": ""},
     )  # fmt: skip
-    return write_record(out, rec)
+    return write_run_record(out, rec, [f.body for f in fishes])[0]
 
 
 def write_chase_record(out: Path, chase, result, summary: dict) -> Path:
@@ -121,7 +122,7 @@ def write_chase_record(out: Path, chase, result, summary: dict) -> Path:
                  scalars=scalars, units={"gaze": "rad", "locked": "", "theta_p": "rad",
                                          "phi_p": "rad", "range": "m"},
                  numbers=figures(summary))  # fmt: skip
-    return write_record(out, rec)
+    return write_run_record(out, rec, world.bodies)[0]
 
 
 def _prism(outline: np.ndarray, depth: float, axis: str) -> tuple[np.ndarray, np.ndarray]:

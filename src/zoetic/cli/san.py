@@ -219,9 +219,14 @@ def evolve_cmd(
         summary = write_evolve(result, out, terrain=terrain)
         summary = _with_files(out, summary, draw_evolve(result, out, terrain, video))
         summary["record"] = _record(out, out / "san.json")
+    _print_evolve(c.name, summary)
+
+
+def _print_evolve(name: str, summary: dict) -> None:
+    """Print what evolution changed in the creature ``name`` (before and after) and its files."""
     from rich.table import Table
 
-    table = Table(box=None, header_style="bold", title=f"what evolution changed ({c.name})")
+    table = Table(box=None, header_style="bold", title=f"what evolution changed ({name})")
     for col in ("parameter", "before", "after"):
         table.add_column(col, justify="left" if col == "parameter" else "right")
     for row in summary["changes"]:

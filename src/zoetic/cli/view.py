@@ -19,11 +19,13 @@ def view(
     open_browser: bool = typer.Option(True, "--open/--no-open", help="Open a browser if any."),
 ) -> None:
     """Look at a run in 3D in the browser: scrub, play, orbit, follow the animal."""
-    from zoetic.viz.scene import load_scene
+    from zoetic.record import read_record
+    from zoetic.viz.scene import scene_of
     from zoetic.viz.viewer import viewer_data
     from zoetic.web.page import page_html, write_html
 
-    data = viewer_data(load_scene(run_dir, fps))
+    rec = read_record(run_dir)
+    data = viewer_data(scene_of(rec, fps), rec)
     if html is not None:
         path = write_html(data, html)
         console.print(f"wrote {path} ({path.stat().st_size / 1024:.0f} KiB); open it in a browser")

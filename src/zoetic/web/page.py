@@ -37,6 +37,15 @@ html, body { margin: 0; height: 100%; overflow: hidden; background: #222;
 #controls { position: fixed; left: 0; right: 0; bottom: 0; height: 44px; display: flex;
   align-items: center; gap: 10px; padding: 0 12px; background: #1a1d24; box-sizing: border-box; }
 #timeline { flex: 1; }
+#plots { position: absolute; right: 8px; bottom: 8px; width: 300px; padding: 6px 8px;
+  background: rgba(20, 24, 32, 0.72); border-radius: 6px; font-size: 11px; }
+#plots .head { display: flex; gap: 6px; align-items: center; margin-bottom: 3px; }
+#plots select { flex: 1; font-size: 11px; }
+#plots .chips { display: flex; flex-wrap: wrap; gap: 2px 8px; margin-bottom: 3px; }
+#plots .chip { white-space: nowrap; color: #bcd; }
+#plots .chip input { margin: 0 2px 0 0; vertical-align: middle; }
+#plots canvas { display: block; margin-top: 2px; }
+@media (max-width: 600px) { #plots { display: none; } }  /* no room beside the panel */
 #error { position: absolute; top: 40%; left: 10%; color: #f88; white-space: pre-wrap; }
 """
 

@@ -1,0 +1,109 @@
+"""What a run record shows of each animal's motion, measured once for every kind of run:
+forward speed, depth (or height), heading, pitch and roll at the recorded instants.
+
+The quantities are the sensors' own (``control.sensors``: the forward and up axes carried by
+the best linear fit of the rest pose), read from recorded node positions instead of a live
+world; velocities come from central differences of the recorded positions. Animals that share
+a Body (a school of one species) are measured in one batch.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+
+import numpy as np
+
+from zoetic.bodies import Body
+from zoetic.errors import ZoeticError
+from zoetic.physics import Medium, get_medium
+from zoetic.record import Record
+
+from .sensors import SENSORS, Senses
+
+FAR = 1e8  # m; a water level at least this far away is no surface
+# the measured quantities and their units; "depth" where the medium has a water surface,
+# "height" (of the centre of mass above y = 0) where it has none
+UNITS = {"speed": "m/s", "depth": "m", "height": "m", "heading": "deg", "pitch": "deg",
+         "roll": "deg"}  # fmt: skip
+
+
+def has_surface(medium: Medium) -> bool:
+    """Return whether the medium has a water surface that depths are measured from."""
+    return abs(medium.water_level) < FAR
+
+
+def _velocities(positions: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """Return node velocities (K, T, N, 3) m/s by central differences over ``times`` (T,) s;
+    NaN where two instants coincide, zeros for a single instant."""
+    if positions.shape[1] < 2:
+        return np.zeros_like(positions)
+    dt = np.gradient(np.asarray(times, float))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        step = np.where(dt > 0, 1.0 / np.where(dt > 0, dt, 1.0), np.nan)
+        return np.gradient(positions, axis=1) * step[None, :, None, None]
+
+
+def motion_scalars(body: Body, positions: np.ndarray, times: np.ndarray,
+                   medium: Medium) -> dict[str, np.ndarray]:  # fmt: skip
+    """Return the motion of animals sharing ``body``, positions (K, T, N, 3) m at ``times``
+    (T,) s, as arrays (K, T): speed (m/s along the forward axis), depth below the surface (m;
+    ``height`` of the centre of mass where the medium has no surface), heading (deg, left
+    turns positive, unwrapped over time), pitch (deg, nose up positive) and roll (deg, the
+    back toward the animal's right positive)."""
+    pos = np.asarray(positions, float)
+    k, t, n = pos.shape[:3]
+    flat = pos.reshape(k * t, n, 3)
+    vel = _velocities(pos, times).reshape(k * t, n, 3)
+    s = Senses(body, flat, vel, medium, 0.0, np.zeros((k * t, 0), bool))
+    out = {"speed": SENSORS["forward_speed"](s)}
+    if has_surface(medium):
+        out["depth"] = SENSORS["depth"](s)
+    else:
+        out["height"] = s.com[:, 1]
+    heading = SENSORS["heading"](s).reshape(k, t)
+    for a in range(k):  # each animal's heading unwrapped over its finite (not blown-up) rows
+        good = np.isfinite(heading[a])
+        heading[a, good] = np.unwrap(heading[a, good])
+    out["heading"] = np.degrees(heading).reshape(k * t)
+    out["pitch"] = np.degrees(SENSORS["pitch"](s))
+    out["roll"] = np.degrees(SENSORS["roll"](s))
+    return {q: v.reshape(k, t) for q, v in out.items()}
+
+
+def _at(values: np.ndarray, times: np.ndarray, when: np.ndarray) -> np.ndarray:
+    """Return ``values`` (T,) at the instants ``times`` (T,) interpolated at ``when`` (P,)."""
+    if len(values) == len(when) and np.array_equal(times, when):
+        return values
+    return np.interp(when, times, values)
+
+
+def measure_record(rec: Record, bodies: Sequence[Body]) -> Record:
+    """Return the record with each animal's motion scalars added (``motion_scalars``), the
+    Body of ``rec.animals[i]`` being ``bodies[i]``.
+
+    A record without control periods gets the recorded instants as its periods, so the
+    quantities are per recorded instant; one with control periods (an aquarium's brains)
+    gets them interpolated at its period times.
+    """
+    if len(bodies) != len(rec.animals):
+        raise ZoeticError(f"{len(bodies)} bodies for the {len(rec.animals)} animals of a record")
+    times = np.asarray(rec.times, float)
+    periods = np.asarray(rec.period_times, float)
+    if not len(periods) and not rec.scalars:
+        periods = times
+    medium = get_medium(rec.medium)
+    scalars = {who: dict(q) for who, q in rec.scalars.items()}
+    groups: dict[int, list[int]] = {}
+    for i, body in enumerate(bodies):
+        groups.setdefault(id(body), []).append(i)
+    for members in groups.values():
+        body = bodies[members[0]]
+        pos = np.stack([np.asarray(rec.animals[i].positions, float) for i in members])
+        measured = motion_scalars(body, pos, times, medium)
+        for row, i in enumerate(members):
+            mine = scalars.setdefault(rec.animals[i].name, {})
+            for what, values in measured.items():
+                mine[what] = _at(values[row], times, periods).astype(np.float32)
+    units = {**rec.units, **{q: UNITS[q] for q in UNITS if any(q in s for s in scalars.values())}}
+    return dataclasses.replace(rec, period_times=periods, scalars=scalars, units=units)
