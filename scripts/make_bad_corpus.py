@@ -106,8 +106,16 @@ hi_deg = 90.0
 ks_deg = 0.002
 """
 
-SHARK_ACTS = ["front_left", "front_right", "middle_left", "middle_right", "back_left",
-              "back_right", "fin_left", "fin_right"]  # fmt: skip
+SHARK_ACTS = [
+    "front_left",
+    "front_right",
+    "middle_left",
+    "middle_right",
+    "back_left",
+    "back_right",
+    "fin_left",
+    "fin_right",
+]
 NA = len(SHARK_ACTS)
 
 
@@ -120,11 +128,16 @@ def _network(**over) -> dict:
     # the twolink from the zoo: 6 sensors, 1 actuator; 5 hidden nodes -> 6 nodes, 12 columns
     n, cols = 6, 12
     d = {
-        "format": "zoetic-san", "version": 1, "creature": "twolink", "n_sensors": 6,
-        "n_hidden": 5, "n_actuators": 1, "weights": [[(i + j) % 5 - 2 for j in range(cols)]
-                                                     for i in range(n)],
-        "k1": [8.0] * n, "k2": [-8.0] * n,
-    }  # fmt: skip
+        "format": "zoetic-san",
+        "version": 1,
+        "creature": "twolink",
+        "n_sensors": 6,
+        "n_hidden": 5,
+        "n_actuators": 1,
+        "weights": [[(i + j) % 5 - 2 for j in range(cols)] for i in range(n)],
+        "k1": [8.0] * n,
+        "k2": [-8.0] * n,
+    }
     return d | over
 
 
@@ -175,7 +188,7 @@ def animals() -> dict[str, bytes | str]:
     med = 'medium = "water"'
     desc = 'description = "three nodes, one muscle: the smallest animal"'
     return {
-        "misspelled-top-key.toml": _sub(a, "medium =", "mediun = \"water\"\nmedium ="),
+        "misspelled-top-key.toml": _sub(a, "medium =", 'mediun = "water"\nmedium ='),
         "misspelled-node-key.toml": _sub(a, "mass = 0.1\n", "mas = 0.1\nmass = 0.1\n"),
         "misspelled-spring-key.toml": _sub(a, "[[faces]]", "stifness = 3.0\n\n[[faces]]"),
         "misspelled-default.toml": _sub(a, "stiffness = 200.0", "stiffnes = 200.0"),
@@ -201,21 +214,21 @@ def animals() -> dict[str, bytes | str]:
         "actuator-without-muscle.toml": _sub(a, 'actuator = "m"\nmax_shortening = 0.2\n', ""),
         "phase-for-unknown-actuator.toml": _sub(a, "m = 0.0", "mm = 0.0"),
         "deep-nesting.toml": a + "junk = " + "[" * 200 + "]" * 200 + "\n",
-        "head-out-of-range.toml": _sub(a, med, med + '\nhead = 999'),
-        "forward-zero.toml": _sub(a, med, med + '\nforward = [0, 0, 0]'),
-        "forward-wrong-length.toml": _sub(a, med, med + '\nforward = [1, 0]'),
+        "head-out-of-range.toml": _sub(a, med, med + "\nhead = 999"),
+        "forward-zero.toml": _sub(a, med, med + "\nforward = [0, 0, 0]"),
+        "forward-wrong-length.toml": _sub(a, med, med + "\nforward = [1, 0]"),
         "muscle-not-shorter.toml": _sub(a, "max_shortening = 0.2", "max_shortening = -0.5"),
         "description-number.toml": _sub(a, desc, "description = 5"),
         "mirror-unknown.toml": _sub(a, 'side = "center"', 'side = "center", mirror = "n"'),
-        "nodes-not-tables.toml": _sub(a, med, med + '\nfins = [1, 2]'),
-        "one-node.toml": a.split("[[nodes]]")[0] + '[[nodes]]\npos = [0, 0, 0]\nmass = 1.0\n',
+        "nodes-not-tables.toml": _sub(a, med, med + "\nfins = [1, 2]"),
+        "one-node.toml": a.split("[[nodes]]")[0] + "[[nodes]]\npos = [0, 0, 0]\nmass = 1.0\n",
         "pos-nan.toml": _sub(a, "pos = [0.1, 0.0, 0.0]", "pos = [0.1, nan, 0.0]"),
         "huge-number.toml": _sub(a, "mass = 0.1", "mass = 1e400"),
         "eyes-unknown-node.toml": a + _sub(EYES, 'node = "a"', 'node = "eye"'),
         "eyes-negative-fov.toml": a + _sub(EYES, "fov = 90.0", "fov = -90.0"),
         "eyes-misspelled-key.toml": a + _sub(EYES, "pixels =", "pixel ="),
         "eyes-zero-levels.toml": a + _sub(EYES, "levels = 2", "levels = 0"),
-    }  # fmt: skip
+    }
 
 
 def creatures() -> dict[str, bytes | str]:
@@ -237,41 +250,79 @@ def creatures() -> dict[str, bytes | str]:
         "duplicate-link.toml": _sub(c, 'name = "L2"', 'name = "L1"'),
         "deep-nesting.toml": c + "\n[[link]]\nname = " + "[" * 300 + "]" * 300 + "\n",
         "no-actuators.toml": c.split("[[actuator]]")[0],
-    }  # fmt: skip
+    }
 
 
 def controllers() -> dict[str, bytes | str]:
     inner = _constant()
     for _ in range(40):
-        inner = {"type": "mirrored", "animal": "shark", "actuators": SHARK_ACTS, "inner": inner,
-                 "mirror": [1, 0, 3, 2, 5, 4]}  # fmt: skip
+        inner = {
+            "type": "mirrored",
+            "animal": "shark",
+            "actuators": SHARK_ACTS,
+            "inner": inner,
+            "mirror": [1, 0, 3, 2, 5, 4],
+        }
     files = {
         "constant-wrong-length.json": _constant(values=[0.5] * 5),
-        "mirror-out-of-range.json": {"type": "mirrored", "animal": "shark",
-                                     "actuators": SHARK_ACTS, "inner": _constant(),
-                                     "mirror": [1, 0, 3, 2, 5, 4, 7, 60]},  # fmt: skip
+        "mirror-out-of-range.json": {
+            "type": "mirrored",
+            "animal": "shark",
+            "actuators": SHARK_ACTS,
+            "inner": _constant(),
+            "mirror": [1, 0, 3, 2, 5, 4, 7, 60],
+        },
         "deep-nesting.json": inner,
         "non-finite.json": _constant(values=[0.5, 0.5, float("nan"), 0.5, 0.5, 0.5]),
-        "wave-phases-wrong-length.json": {"type": "wave", "animal": "shark",
-                                          "actuators": SHARK_ACTS, "frequency": 1.0,
-                                          "amplitude": 1.0, "offset": 0.0,
-                                          "phases": [0.0, 0.5]},  # fmt: skip
+        "wave-phases-wrong-length.json": {
+            "type": "wave",
+            "animal": "shark",
+            "actuators": SHARK_ACTS,
+            "frequency": 1.0,
+            "amplitude": 1.0,
+            "offset": 0.0,
+            "phases": [0.0, 0.5],
+        },
         "unknown-type.json": _constant(type="sine"),
         "type-is-a-list.json": _constant(type=["constant"]),
-        "ragged-values.json": {"type": "time", "animal": "shark", "actuators": SHARK_ACTS,
-                               "duration": 2.0, "values": [[0.1, 0.2]] * 5 + [[0.1]]},
-        "negative-duration.json": {"type": "time", "animal": "shark", "actuators": SHARK_ACTS,
-                                   "duration": -2.0, "values": [[0.1, 0.2]] * NA},
+        "ragged-values.json": {
+            "type": "time",
+            "animal": "shark",
+            "actuators": SHARK_ACTS,
+            "duration": 2.0,
+            "values": [[0.1, 0.2]] * 5 + [[0.1]],
+        },
+        "negative-duration.json": {
+            "type": "time",
+            "animal": "shark",
+            "actuators": SHARK_ACTS,
+            "duration": -2.0,
+            "values": [[0.1, 0.2]] * NA,
+        },
         "for-another-animal.json": _constant(animal="ray"),
         "wrong-actuators.json": _constant(actuators=[f"a{i}" for i in range(6)]),
-        "misspelled-key.json": {"type": "constant", "animal": "shark", "actuators": SHARK_ACTS,
-                                "valeus": [0.5] * NA},
+        "misspelled-key.json": {
+            "type": "constant",
+            "animal": "shark",
+            "actuators": SHARK_ACTS,
+            "valeus": [0.5] * NA,
+        },
         "string-values.json": _constant(values=["0.5"] * NA),
         "not-an-object.json": [1, 2, 3],
-        "huge-duration.json": {"type": "time", "animal": "shark", "actuators": SHARK_ACTS,
-                               "duration": 1e300, "values": [[0.1, 0.2]] * NA},
-        "one-node.json": {"type": "time", "animal": "shark", "actuators": SHARK_ACTS,
-                          "duration": 2.0, "values": [[0.1]] * NA},
+        "huge-duration.json": {
+            "type": "time",
+            "animal": "shark",
+            "actuators": SHARK_ACTS,
+            "duration": 1e300,
+            "values": [[0.1, 0.2]] * NA,
+        },
+        "one-node.json": {
+            "type": "time",
+            "animal": "shark",
+            "actuators": SHARK_ACTS,
+            "duration": 2.0,
+            "values": [[0.1]] * NA,
+        },
     }
     out: dict[str, bytes | str] = {k: json.dumps(v) for k, v in files.items()}
     out["truncated.json"] = json.dumps(_constant())[:40]
@@ -309,35 +360,45 @@ def repertoires() -> dict[str, dict[str, bytes | str]]:
     good = json.dumps(_constant())
 
     def index(*entries, **over):
-        return json.dumps({"animal": "shark", "actuators": SHARK_ACTS,
-                           "entries": list(entries)} | over)  # fmt: skip
+        return json.dumps(
+            {"animal": "shark", "actuators": SHARK_ACTS, "entries": list(entries)} | over
+        )
 
     def entry(name="go-straight", file="go-straight.json", duration=4.0):
         return {"name": name, "file": file, "duration": duration}
 
     ray = json.dumps(_constant(animal="ray", actuators=[f"r{i}" for i in range(6)]))
     return {
-        "negative-duration": {"repertoire.json": index(entry(duration=-4.0)),
-                              "go-straight.json": good},
-        "nan-duration": {"repertoire.json": index(entry(duration=float("nan"))),
-                         "go-straight.json": good},
-        "duplicated-entry": {"repertoire.json": index(entry(), entry()),
-                             "go-straight.json": good},
-        "entry-is-directory": {"repertoire.json": index(entry(file="sub")),
-                               "sub/keep.txt": "a directory, not a controller\n"},
-        "entry-for-another-animal": {"repertoire.json": index(entry(file="ray.json")),
-                                     "ray.json": ray},
+        "negative-duration": {
+            "repertoire.json": index(entry(duration=-4.0)),
+            "go-straight.json": good,
+        },
+        "nan-duration": {
+            "repertoire.json": index(entry(duration=float("nan"))),
+            "go-straight.json": good,
+        },
+        "duplicated-entry": {"repertoire.json": index(entry(), entry()), "go-straight.json": good},
+        "entry-is-directory": {
+            "repertoire.json": index(entry(file="sub")),
+            "sub/keep.txt": "a directory, not a controller\n",
+        },
+        "entry-for-another-animal": {
+            "repertoire.json": index(entry(file="ray.json")),
+            "ray.json": ray,
+        },
         "missing-entry-file": {"repertoire.json": index(entry(file="gone.json"))},
-        "misspelled-key": {"repertoire.json": index(entry(), entires=[]),
-                           "go-straight.json": good},
+        "misspelled-key": {"repertoire.json": index(entry(), entires=[]), "go-straight.json": good},
         "index-not-json": {"repertoire.json": "{animal: shark", "go-straight.json": good},
-        "string-duration": {"repertoire.json": index(entry(duration="4 s")),
-                            "go-straight.json": good},
-        "entry-outside": {"repertoire.json": index(entry(file="../go-straight.json")),
-                          "go-straight.json": good},
-        "broken-controller": {"repertoire.json": index(entry()),
-                              "go-straight.json": good[:30]},
-    }  # fmt: skip
+        "string-duration": {
+            "repertoire.json": index(entry(duration="4 s")),
+            "go-straight.json": good,
+        },
+        "entry-outside": {
+            "repertoire.json": index(entry(file="../go-straight.json")),
+            "go-straight.json": good,
+        },
+        "broken-controller": {"repertoire.json": index(entry()), "go-straight.json": good[:30]},
+    }
 
 
 def rundirs() -> dict[str, dict[str, bytes | str]]:
@@ -356,7 +417,7 @@ def rundirs() -> dict[str, dict[str, bytes | str]]:
         "huge-budget": {"config.toml": _sub(c, "budget = 48", "budget = 9000000")},
         "huge-popsize": {"config.toml": _sub(c, "seed = 0", "seed = 0\npopsize = 90000")},
         "huge-horizon": {"config.toml": _sub(c, "horizon = 4.0", "horizon = 1e9")},
-    }  # fmt: skip
+    }
 
 
 def _write(path: Path, data: bytes | str) -> None:
@@ -367,8 +428,12 @@ def _write(path: Path, data: bytes | str) -> None:
 def main() -> None:
     if ROOT.exists():
         shutil.rmtree(ROOT)
-    for kind, files in (("animal", animals()), ("creature", creatures()),
-                        ("controller", controllers()), ("network", networks())):  # fmt: skip
+    for kind, files in (
+        ("animal", animals()),
+        ("creature", creatures()),
+        ("controller", controllers()),
+        ("network", networks()),
+    ):
         for name, data in files.items():
             _write(ROOT / kind / name, data)
     for kind, dirs in (("repertoire", repertoires()), ("rundir", rundirs())):

@@ -92,8 +92,7 @@ FISH_WAVE_LAG = 0.1  # cycles of phase between successive segments of the built-
 FISH_WAVE_HZ = 5.0  # the built-in wave's (and the learned gait's base) stroke frequency
 # the eyes the fish see with (zoetic.perception): on the nose, 8 cm behind it and 6 cm to each
 # side; 4 levels of 64 x 64 pixels, 120 degrees wide down to the 15-degree fovea
-FISH_EYES = {"node": "nose", "offset": [-0.08, 0.0, 0.06], "fov": 120.0, "levels": 4,
-             "pixels": 64}  # fmt: skip
+FISH_EYES = {"node": "nose", "offset": [-0.08, 0.0, 0.06], "fov": 120.0, "levels": 4, "pixels": 64}
 
 
 def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
@@ -572,6 +571,7 @@ def ray(**over) -> dict:
         lat.spring(nose, rows_bot[0][p], k_s, "structural")
     for n in ("TL", "TR", "BL", "BR"):
         lat.spring(tail, stations[-1][n], k_s, "structural")
+
     # passive stiffness by group
     def group(a: str, b: str) -> str:
         wing = [("mid" in v or "tip" in v) for v in (a, b)]
@@ -589,8 +589,12 @@ def ray(**over) -> dict:
             if k is not None:
                 s["stiffness"] = round(k, 4)
     # the rear half of each wing is softer, so a flapping wing twists and pushes water back
-    wing_rear = {lat.nodes[i]["name"] for st in stations[2:]
-                 for key, i in st.items() if key.startswith(("mid", "tip"))}  # fmt: skip
+    wing_rear = {
+        lat.nodes[i]["name"]
+        for st in stations[2:]
+        for key, i in st.items()
+        if key.startswith(("mid", "tip"))
+    }
     for s in lat.springs:
         if "actuator" not in s and any(v in wing_rear for v in s["nodes"]):
             if all(v in wing_rear or v.startswith(("s2_", "s3_")) for v in s["nodes"]):

@@ -42,8 +42,9 @@ EXTRA_BUDGET = 3000  # evaluations
 STEP_SIGMA = 0.1  # CMA-ES's first step, as a fraction of each parameter's range
 
 
-def learn_from(body_name: str, task_name: str, start: AbstractController, seed: int,
-               budget: int) -> Controller:
+def learn_from(
+    body_name: str, task_name: str, start: AbstractController, seed: int, budget: int
+) -> Controller:
     """Return the periodic controller CMA-ES learns for ``task_name`` starting from the gait
     ``start`` (its signals fitted by the task's periodic basis; steps ``STEP_SIGMA``)."""
     from zoetic.learning.run import CMAES_POPSIZE, LearnConfig, build
@@ -55,8 +56,7 @@ def learn_from(body_name: str, task_name: str, start: AbstractController, seed: 
     coef = np.linalg.lstsq(basis, start.raw(times), rcond=None)[0].T  # (A, M)
     lo, hi = obj.bounds()
     x0 = np.clip(obj.free_params(coef.ravel()), lo, hi)
-    opt = make_optimizer("cmaes", x0, lo, hi, seed, budget, popsize=CMAES_POPSIZE,
-                         sigma=STEP_SIGMA)  # fmt: skip
+    opt = make_optimizer("cmaes", x0, lo, hi, seed, budget, popsize=CMAES_POPSIZE, sigma=STEP_SIGMA)
     while opt.evaluations < budget and not opt.done():
         x = opt.ask()
         if len(x) == 0:
@@ -71,15 +71,29 @@ def learn_extra(body_name: str, out: Path, seed: int, budget: int | None) -> Non
     rep = Repertoire.load(out, body)
     for k, (name, task_name, base) in enumerate(EXTRA):
         task = load_task(task_name)
-        original = learn_from(body_name, task_name, rep.controllers[base],
-                              seed + EXTRA_SEED + k, budget or EXTRA_BUDGET)  # fmt: skip
+        original = learn_from(
+            body_name,
+            task_name,
+            rep.controllers[base],
+            seed + EXTRA_SEED + k,
+            budget or EXTRA_BUDGET,
+        )
         ab = abstract(original)
-        rep.add(name, ab.controller, task.horizon, source=f"learned from {base}",
-                **abstraction_report(body, original, ab, task))  # fmt: skip
+        rep.add(
+            name,
+            ab.controller,
+            task.horizon,
+            source=f"learned from {base}",
+            **abstraction_report(body, original, ab, task),
+        )
         right = mirrored_name(name)
         if right:
-            rep.add(right, mirror_abstract(ab.controller, body.actuator_mirror), task.horizon,
-                    source=f"mirror of {name}")  # fmt: skip
+            rep.add(
+                right,
+                mirror_abstract(ab.controller, body.actuator_mirror),
+                task.horizon,
+                source=f"mirror of {name}",
+            )
     rep.save(out)
 
 
@@ -93,8 +107,18 @@ def train(body: str, seed: int, budget: int | None, extra_only: bool = False) ->
             for f in dest.glob("*.json"):
                 (out / f.name).write_bytes(f.read_bytes())
         else:
-            cmd = [sys.executable, "-m", "zoetic", "repertoire", "train", body, "--out",
-                   str(out), "--seed", str(seed)]  # fmt: skip
+            cmd = [
+                sys.executable,
+                "-m",
+                "zoetic",
+                "repertoire",
+                "train",
+                body,
+                "--out",
+                str(out),
+                "--seed",
+                str(seed),
+            ]
             if budget is not None:
                 cmd += ["--budget", str(budget)]
             subprocess.run(cmd, check=True)
@@ -115,8 +139,11 @@ def main() -> None:
     ap.add_argument("--bodies", nargs="+", default=["shark"])
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--budget", type=int, default=None, help="evaluations per learned entry")
-    ap.add_argument("--extra-only", action="store_true",
-                    help="learn only the extra entries into the shipped repertoire")
+    ap.add_argument(
+        "--extra-only",
+        action="store_true",
+        help="learn only the extra entries into the shipped repertoire",
+    )
     args = ap.parse_args()
     for body in args.bodies:
         dest = train(body, args.seed, args.budget, args.extra_only)

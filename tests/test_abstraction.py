@@ -26,8 +26,11 @@ def _known(shark, nodes: int = 41, duration: float = 4.0):
     offset = np.linspace(0.3, 0.6, a)
     amp1, amp2 = np.linspace(0.2, 0.3, a), np.full(a, 0.05)
     ph1 = np.linspace(-2.5, 2.5, a)
-    vals = (offset[:, None] + amp1[:, None] * np.cos(2 * np.pi * 1.0 * t + ph1[:, None])
-            + amp2[:, None] * np.cos(2 * np.pi * 1.5 * t + 0.7))  # fmt: skip
+    vals = (
+        offset[:, None]
+        + amp1[:, None] * np.cos(2 * np.pi * 1.0 * t + ph1[:, None])
+        + amp2[:, None] * np.cos(2 * np.pi * 1.5 * t + 0.7)
+    )
     ctrl = TimeDomainController("shark", tuple(shark.actuator_names), duration, vals)
     return ctrl, offset, amp1, ph1, amp2
 
@@ -45,8 +48,11 @@ def test_fft_recovers_known_sinusoids(shark):
     np.testing.assert_allclose(c.phase[:, 0], ph1, atol=1e-9)
     np.testing.assert_allclose(c.phase[:, 1], 0.7, atol=1e-9)
     t = np.linspace(0, 4, 200)
-    expected = (offset + amp1 * np.cos(2 * np.pi * t[:, None] + ph1)
-                + 0.05 * np.cos(2 * np.pi * 1.5 * t[:, None] + 0.7))  # fmt: skip
+    expected = (
+        offset
+        + amp1 * np.cos(2 * np.pi * t[:, None] + ph1)
+        + 0.05 * np.cos(2 * np.pi * 1.5 * t[:, None] + 0.7)
+    )
     np.testing.assert_allclose(c.raw(t), expected, atol=1e-9)
 
 
@@ -74,9 +80,11 @@ def test_frequency_domain_amplitudes_are_thresholded_directly(shark):
     ab = abstract(ctrl, "auto", 0.3)
     assert ab.modes_per_actuator().tolist() == [1] * a  # the 0.02 mode at 2 Hz is dropped
     t = np.linspace(0, 3, 50)
-    np.testing.assert_allclose(ab.controller.raw(t)[:, 0],
-                               0.5 + 0.3 * np.cos(2 * np.pi * t) - 0.4 * np.sin(2 * np.pi * t),
-                               atol=1e-9)  # fmt: skip
+    np.testing.assert_allclose(
+        ab.controller.raw(t)[:, 0],
+        0.5 + 0.3 * np.cos(2 * np.pi * t) - 0.4 * np.sin(2 * np.pi * t),
+        atol=1e-9,
+    )
 
 
 def test_abstracted_controller_is_periodic_and_round_trips(shark):
@@ -124,7 +132,7 @@ def _two(shark):
         np.ones((a, 1)),
         0.5,
     )
-    return one, two  # fmt: skip
+    return one, two
 
 
 def test_blending_is_continuous_at_the_seams(shark):

@@ -62,8 +62,9 @@ def test_import_zoetic_is_light_and_names_load_lazily():
 
 
 def test_learn_can_keep_its_run_directory(tmp_path):
-    result = zoetic.learn("snake", "crawl-straight", optimizer="anneal", budget=12, seed=1,
-                          out=tmp_path / "run")  # fmt: skip
+    result = zoetic.learn(
+        "snake", "crawl-straight", optimizer="anneal", budget=12, seed=1, out=tmp_path / "run"
+    )
     assert result.run_dir == tmp_path / "run"
     assert (tmp_path / "run" / "controller.json").exists()
     assert np.isfinite(result.best_E)

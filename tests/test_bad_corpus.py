@@ -41,15 +41,45 @@ def _argv(kind: str, target: Path, out: Path) -> list[str]:
     t, o = str(target), str(out)
     return {
         "animal": ["simulate", t, "--seconds", "0.1", "--no-video", "--out", o],
-        "creature": ["san", "search", t, "--trials", "1", "--top", "1", "--workers", "1",
-                     "--no-video", "--out", o],
-        "controller": ["simulate", "shark", "--controller", t, "--seconds", "0.1",
-                       "--no-video", "--out", o],
+        "creature": [
+            "san",
+            "search",
+            t,
+            "--trials",
+            "1",
+            "--top",
+            "1",
+            "--workers",
+            "1",
+            "--no-video",
+            "--out",
+            o,
+        ],
+        "controller": [
+            "simulate",
+            "shark",
+            "--controller",
+            t,
+            "--seconds",
+            "0.1",
+            "--no-video",
+            "--out",
+            o,
+        ],
         "network": ["san", "show", t, "--out", str(out / "show.mp4")],
-        "repertoire": ["sequence", "shark", "--memory", t, "--entries", "go-straight:1",
-                       "--no-video", "--out", o],
+        "repertoire": [
+            "sequence",
+            "shark",
+            "--memory",
+            t,
+            "--entries",
+            "go-straight:1",
+            "--no-video",
+            "--out",
+            o,
+        ],
         "rundir": ["learn", "--resume", t, "--no-video"],
-    }[kind]  # fmt: skip
+    }[kind]
 
 
 def _check_refusal(code: int, err: str, name: str, out: Path) -> None:
@@ -108,12 +138,16 @@ def _generated(tmp_path: Path) -> list[tuple[str, Path]]:
     big["values"] = [0.5] * 2_000_000
     (tmp_path / "huge-array.json").write_text(json.dumps(big))
     head, _ = corpus.ANIMAL.split("[[nodes]]", 1)
-    nodes = "".join(f'[[nodes]]\npos = [{i * 0.01}, 0, 0]\nmass = 1.0\n' for i in range(10_001))
+    nodes = "".join(f"[[nodes]]\npos = [{i * 0.01}, 0, 0]\nmass = 1.0\n" for i in range(10_001))
     (tmp_path / "many-nodes.toml").write_text(head + nodes)
     (tmp_path / "dir.toml").mkdir()
     (tmp_path / "dir.json").mkdir()
-    return [("controller", tmp_path / "huge-array.json"), ("animal", tmp_path / "many-nodes.toml"),
-            ("animal", tmp_path / "dir.toml"), ("controller", tmp_path / "dir.json")]  # fmt: skip
+    return [
+        ("controller", tmp_path / "huge-array.json"),
+        ("animal", tmp_path / "many-nodes.toml"),
+        ("animal", tmp_path / "dir.toml"),
+        ("controller", tmp_path / "dir.json"),
+    ]
 
 
 def test_huge_and_odd_files_are_refused_with_short_messages(tmp_path, capsys):
@@ -123,8 +157,11 @@ def test_huge_and_odd_files_are_refused_with_short_messages(tmp_path, capsys):
         _check_refusal(code, capsys.readouterr().err, path.name, out)
 
 
-SUBPROCESS = [("animal", "utf16.toml"), ("controller", "deep-nesting.json"),
-              ("rundir", "string-budget")]  # fmt: skip
+SUBPROCESS = [
+    ("animal", "utf16.toml"),
+    ("controller", "deep-nesting.json"),
+    ("rundir", "string-budget"),
+]
 
 
 @pytest.mark.parametrize("kind, name", SUBPROCESS)
@@ -132,15 +169,24 @@ def test_a_real_subprocess_exits_2_without_traceback(tmp_path, kind, name):
     out = tmp_path / "out"
     proc = subprocess.run(
         [sys.executable, "-m", "zoetic", *_argv(kind, BAD / kind / name, out)],
-        capture_output=True, text=True, timeout=120,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     _check_refusal(proc.returncode, proc.stderr, name, out)
 
 
 def test_debug_shows_the_traceback(tmp_path):
     proc = subprocess.run(
-        [sys.executable, "-m", "zoetic", "--debug",
-         *_argv("animal", BAD / "animal" / "nan-mass.toml", tmp_path / "o")],
-        capture_output=True, text=True, timeout=120,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "zoetic",
+            "--debug",
+            *_argv("animal", BAD / "animal" / "nan-mass.toml", tmp_path / "o"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode != 0 and "Traceback" in proc.stderr and "BodyError" in proc.stderr

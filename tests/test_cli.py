@@ -56,8 +56,17 @@ def test_simulate_rest_and_controller_file(tmp_path):
 def test_controller_for_another_animal_is_refused(tmp_path, capsys):
     shark = load_animal("shark")
     save_controller(time_domain(shark, 5, 1.0), tmp_path / "shark.json")
-    code = main(["simulate", "snake", "--controller", str(tmp_path / "shark.json"),
-                 "--out", str(tmp_path / "x"), "--no-video"])  # fmt: skip
+    code = main(
+        [
+            "simulate",
+            "snake",
+            "--controller",
+            str(tmp_path / "shark.json"),
+            "--out",
+            str(tmp_path / "x"),
+            "--no-video",
+        ]
+    )
     assert code == 2
     err = capsys.readouterr().err
     assert "shark.json" in err and "for the 'shark', not the 'snake'" in err
@@ -83,8 +92,12 @@ def test_unknown_animal_and_bad_controller_spec(tmp_path, capsys):
 
 
 def test_usage_errors_exit_2_without_a_traceback(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "zoetic", "simulate", "shark", "--bogus"],
-                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    proc = subprocess.run(
+        [sys.executable, "-m", "zoetic", "simulate", "shark", "--bogus"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode == 2
     assert "No such option: --bogus" in proc.stderr
     assert "Traceback" not in proc.stderr
@@ -92,16 +105,36 @@ def test_usage_errors_exit_2_without_a_traceback(tmp_path):
 
 def test_console_script_runs_and_bench_prints_json(tmp_path):
     proc = subprocess.run(
-        [sys.executable, "-m", "zoetic", "bench", "simulate", "--json", "--seconds", "0.5",
-         "--batch", "16"],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "zoetic",
+            "bench",
+            "simulate",
+            "--json",
+            "--seconds",
+            "0.5",
+            "--batch",
+            "16",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert proc.returncode == 0, proc.stderr
     result = json.loads(proc.stdout)
-    for key in ("animal", "dt", "sim_seconds_per_second_single",
-                "sim_seconds_per_second_batched", "numpy_reference_sim_seconds_per_second",
-                "speedup_vs_numpy", "cores", "closed_loop_overhead",
-                "closed_loop_overhead_wall", "closed_loop_over_simulate_wall"):  # fmt: skip
+    for key in (
+        "animal",
+        "dt",
+        "sim_seconds_per_second_single",
+        "sim_seconds_per_second_batched",
+        "numpy_reference_sim_seconds_per_second",
+        "speedup_vs_numpy",
+        "cores",
+        "closed_loop_overhead",
+        "closed_loop_overhead_wall",
+        "closed_loop_over_simulate_wall",
+    ):
         assert key in result
     assert result["speedup_vs_numpy"] > 1
     assert result["closed_loop_overhead"] > 0.5
@@ -110,8 +143,18 @@ def test_console_script_runs_and_bench_prints_json(tmp_path):
 def test_every_benchmark_is_a_bench_subcommand(capsys):
     assert main(["bench", "--help"]) == 0
     out = capsys.readouterr().out
-    for name in ("simulate", "jax", "learn", "skills", "san", "ray", "gym", "vision", "aquarium",
-                 "stunts"):  # fmt: skip
+    for name in (
+        "simulate",
+        "jax",
+        "learn",
+        "skills",
+        "san",
+        "ray",
+        "gym",
+        "vision",
+        "aquarium",
+        "stunts",
+    ):
         assert f" {name} " in out, name
 
 
@@ -120,11 +163,31 @@ def test_learn_cli_and_tasks(tmp_path, capsys):
     listing = capsys.readouterr().out
     assert "swim-straight" in listing and "from rest and cruising" in listing
     out = tmp_path / "run"
-    code = main(["learn", "shark", "--optimizer", "cmaes", "--budget", "40", "--popsize", "8",
-                 "--out", str(out), "--no-video"])  # fmt: skip
+    code = main(
+        [
+            "learn",
+            "shark",
+            "--optimizer",
+            "cmaes",
+            "--budget",
+            "40",
+            "--popsize",
+            "8",
+            "--out",
+            str(out),
+            "--no-video",
+        ]
+    )
     assert code == 0
-    for name in ("config.toml", "controller.json", "history.csv", "learning.png",
-                 "controller.png", "checkpoint.npz", "record.npz"):  # fmt: skip
+    for name in (
+        "config.toml",
+        "controller.json",
+        "history.csv",
+        "learning.png",
+        "controller.png",
+        "checkpoint.npz",
+        "record.npz",
+    ):
         assert (out / name).exists(), name
     from zoetic.record import read_record
 
@@ -132,8 +195,22 @@ def test_learn_cli_and_tasks(tmp_path, capsys):
     assert rec.kind == "learn" and rec.numbers["task"] == "swim-straight"
     assert rec.times[-1] > 0 and rec.animals[0].activations is not None
     # the learned controller plays back through simulate
-    assert main(["simulate", "shark", "--controller", str(out / "controller.json"),
-                 "--seconds", "1", "--out", str(tmp_path / "play"), "--no-video"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "simulate",
+                "shark",
+                "--controller",
+                str(out / "controller.json"),
+                "--seconds",
+                "1",
+                "--out",
+                str(tmp_path / "play"),
+                "--no-video",
+            ]
+        )
+        == 0
+    )
     # a finished run refuses to be overwritten, and resumes as a no-op
     assert main(["learn", "shark", "--out", str(out), "--budget", "40"]) == 2
     assert main(["learn", "--resume", str(out), "--no-video"]) == 0

@@ -96,8 +96,16 @@ def test_ground_and_targets_of_a_tracking_record(tmp_path):
     body = load_animal("snake")
     ctrl = wave_controller(body)
     traj = run_controller(body, ctrl, 0.5, get_medium("ground"), body.dt)
-    write_sequence_record(tmp_path, "track", body, traj.times, traj.positions[0], ctrl,
-                          targets([[1, 2], [3, -1]], 0.0), {"targets_reached": "1/2"})
+    write_sequence_record(
+        tmp_path,
+        "track",
+        body,
+        traj.times,
+        traj.positions[0],
+        ctrl,
+        targets([[1, 2], [3, -1]], 0.0),
+        {"targets_reached": "1/2"},
+    )
     scene = load_scene(tmp_path, fps=10)
     assert scene.kind == "track" and len(scene.times) == 6
     assert scene.numbers["targets_reached"] == "1/2"
@@ -120,8 +128,13 @@ def _validate(path: Path) -> dict:
         "v.validateBytes(new Uint8Array(fs.readFileSync(process.argv[2])))"
         ".then(r => console.log(JSON.stringify(r.issues)));"
     )
-    out = subprocess.run([node, "-e", script, str(validator), str(path)], capture_output=True,
-                         text=True, timeout=60, check=True)  # fmt: skip
+    out = subprocess.run(
+        [node, "-e", script, str(validator), str(path)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=True,
+    )
     return json.loads(out.stdout)
 
 
@@ -154,10 +167,14 @@ def test_a_san_creature_is_rigid_links_posed_frame_by_frame(tmp_path):
     (anim,) = g.animations
     link = c.links[2]
     node = next(i for i, nd in enumerate(g.nodes) if nd.name.endswith(f"-{link.name}"))
-    paths = {ch.target.path: anim.samplers[ch.sampler].output for ch in anim.channels
-             if ch.target.node == node}  # fmt: skip
-    np.testing.assert_allclose(_read(g, blob, paths["translation"]),
-                               link.translations * MIRROR, atol=1e-6)  # fmt: skip
+    paths = {
+        ch.target.path: anim.samplers[ch.sampler].output
+        for ch in anim.channels
+        if ch.target.node == node
+    }
+    np.testing.assert_allclose(
+        _read(g, blob, paths["translation"]), link.translations * MIRROR, atol=1e-6
+    )
     q = _read(g, blob, paths["rotation"])  # about z for a walker in the vertical plane
     np.testing.assert_allclose(2 * np.arctan2(q[:, 2], q[:, 3]), link.angles, atol=1e-5)
     assert np.ptp(link.angles) > 0  # the links move
@@ -196,19 +213,70 @@ def runs(tmp_path_factory) -> dict[str, Path]:
 
     tmp = tmp_path_factory.mktemp("runs")
     out = {k: tmp / k for k in ("aquarium", "pursuit", "stunt", "san")}
-    assert main(["aquarium", "--fishes", "2", "--food", "2", "--obstacles", "1", "--seconds",
-                 "0.3", "--no-video", "--out", str(out["aquarium"])]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "aquarium",
+                "--fishes",
+                "2",
+                "--food",
+                "2",
+                "--obstacles",
+                "1",
+                "--seconds",
+                "0.3",
+                "--no-video",
+                "--out",
+                str(out["aquarium"]),
+            ]
+        )
+        == 0
+    )
     assert main(["pursue", "--seconds", "0.3", "--no-video", "--out", str(out["pursuit"])]) == 0
     dolphin = load_animal("dolphin")
     rep = Repertoire(dolphin.name, tuple(dolphin.actuator_names))
     rep.add("do-nothing", rest_abstraction(dolphin), 1.0)
     rep.save(tmp / "memory")
     (tmp / "lob.toml").write_text(STUNT)
-    assert main(["stunt", "dolphin", "--memory", str(tmp / "memory"), "--trick",
-                 str(tmp / "lob.toml"), "--budget", "2", "--no-video",
-                 "--out", str(out["stunt"])]) == 0  # fmt: skip
-    assert main(["san", "search", "walker", "--trials", "2", "--top", "1", "--seconds", "0.5",
-                 "--workers", "1", "--no-video", "--out", str(out["san"])]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "stunt",
+                "dolphin",
+                "--memory",
+                str(tmp / "memory"),
+                "--trick",
+                str(tmp / "lob.toml"),
+                "--budget",
+                "2",
+                "--no-video",
+                "--out",
+                str(out["stunt"]),
+            ]
+        )
+        == 0
+    )
+    assert (
+        main(
+            [
+                "san",
+                "search",
+                "walker",
+                "--trials",
+                "2",
+                "--top",
+                "1",
+                "--seconds",
+                "0.5",
+                "--workers",
+                "1",
+                "--no-video",
+                "--out",
+                str(out["san"]),
+            ]
+        )
+        == 0
+    )
     return out
 
 
@@ -224,8 +292,11 @@ def _exported(run: Path, tmp_path: Path, fps: int = 10):
 
 def _tracks(g, node: int) -> dict[str, int]:
     (anim,) = g.animations
-    return {ch.target.path: anim.samplers[ch.sampler].output for ch in anim.channels
-            if ch.target.node == node}  # fmt: skip
+    return {
+        ch.target.path: anim.samplers[ch.sampler].output
+        for ch in anim.channels
+        if ch.target.node == node
+    }
 
 
 def test_an_aquarium_exports_its_fishes_food_rocks_and_events(runs, tmp_path):
@@ -244,8 +315,9 @@ def test_an_aquarium_exports_its_fishes_food_rocks_and_events(runs, tmp_path):
     food = next(i for i, nd in enumerate(g.nodes) if nd.name.startswith("food-"))
     k = [o.kind for o in scene.objects].index("food")
     tracks = _tracks(g, food)
-    np.testing.assert_allclose(_read(g, blob, tracks["translation"]),
-                               scene.objects[k].positions * MIRROR, atol=1e-6)  # fmt: skip
+    np.testing.assert_allclose(
+        _read(g, blob, tracks["translation"]), scene.objects[k].positions * MIRROR, atol=1e-6
+    )
     assert set(_read(g, blob, tracks["scale"]).ravel()) <= {0.0, 1.0}  # eaten: hidden
     data = viewer_data(scene)
     assert [a["name"] for a in data["animals"]] == [a.name for a in rec.animals]
@@ -270,8 +342,11 @@ def test_a_pursuit_exports_its_three_fishes_and_the_scenery(runs, tmp_path):
     (prey_skin,) = [s for s in g.skins if s.name == "prey"]
     (anim,) = g.animations
     ch = next(c for c in anim.channels if c.target.node == prey_skin.joints[0])
-    np.testing.assert_allclose(_read(g, blob, anim.samplers[ch.sampler].output),
-                               scene.animals[1].positions[:, 0] * MIRROR, atol=1e-6)
+    np.testing.assert_allclose(
+        _read(g, blob, anim.samplers[ch.sampler].output),
+        scene.animals[1].positions[:, 0] * MIRROR,
+        atol=1e-6,
+    )
 
 
 def test_a_stunt_exports_the_dolphin_and_its_moving_ball(runs, tmp_path):
@@ -280,8 +355,9 @@ def test_a_stunt_exports_the_dolphin_and_its_moving_ball(runs, tmp_path):
     (ball,) = [o for o in scene.objects if o.kind == "ball"]
     assert ball.shape == "sphere" and ball.size == (0.25,) and len(ball.positions) > 1
     node = next(i for i, nd in enumerate(g.nodes) if nd.name.startswith("ball-"))
-    np.testing.assert_allclose(_read(g, blob, _tracks(g, node)["translation"]),
-                               ball.positions * MIRROR, atol=1e-6)  # fmt: skip
+    np.testing.assert_allclose(
+        _read(g, blob, _tracks(g, node)["translation"]), ball.positions * MIRROR, atol=1e-6
+    )
     assert scene.animals[0].activations is not None
 
 

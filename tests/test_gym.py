@@ -37,8 +37,9 @@ def test_native_vector_env_equals_sync_vector_env_through_autoresets():
     n, horizon = 5, 12
     kw = {"num_envs": n, "max_episode_steps": horizon}
     sync = gymnasium.make_vec("zoetic/SharkTurn-v0", vectorization_mode="sync", **kw)
-    native = gymnasium.make_vec("zoetic/SharkTurn-v0", vectorization_mode="vector_entry_point",
-                                **kw)  # fmt: skip
+    native = gymnasium.make_vec(
+        "zoetic/SharkTurn-v0", vectorization_mode="vector_entry_point", **kw
+    )
     assert isinstance(native, zoetic.gym.ZoeticVectorEnv)
     o_sync, _ = sync.reset(seed=3)
     o_nat, _ = native.reset(seed=3)

@@ -109,8 +109,13 @@ def test_annealing_follows_the_papers_schedule():
 @pytest.mark.parametrize("alpha", [0.8, 0.85])
 def test_annealing_cooling_rate_is_a_setting(alpha, tmp_path, short_task):
     # Fig. 6(b-c) varies alpha in T <- alpha T; it reaches the annealer through a run's config
-    config = LearnConfig(animal="shark", task=str(short_task), optimizer="anneal", budget=4,
-                         extra={"optimizer": {"alpha": alpha}})  # fmt: skip
+    config = LearnConfig(
+        animal="shark",
+        task=str(short_task),
+        optimizer="anneal",
+        budget=4,
+        extra={"optimizer": {"alpha": alpha}},
+    )
     opt = build(config).optimizer
     assert opt.alpha == alpha and opt.T == 0.5
     for _ in range(opt.min_accepts + 1):  # NM accepted (downhill) moves: one drop
@@ -118,13 +123,13 @@ def test_annealing_cooling_rate_is_a_setting(alpha, tmp_path, short_task):
         opt.tell(X, np.array([-float(opt.evaluations)]))
     assert opt.T == pytest.approx(0.5 * alpha)
     with pytest.raises(ZoeticError, match="cooling rate alpha"):
-        make_optimizer("anneal", np.zeros(2), np.zeros(2), np.ones(2), seed=0, budget=9,
-                       alpha=1.2)  # fmt: skip
+        make_optimizer("anneal", np.zeros(2), np.zeros(2), np.ones(2), seed=0, budget=9, alpha=1.2)
 
 
 def _learn(out, task, optimizer, budget=60, stop_at=None):
-    config = LearnConfig(animal="shark", task=str(task), optimizer=optimizer, budget=budget,
-                         seed=3, popsize=8)  # fmt: skip
+    config = LearnConfig(
+        animal="shark", task=str(task), optimizer=optimizer, budget=budget, seed=3, popsize=8
+    )
     run = Run.create(out, config)
 
     def interrupt(r):
@@ -206,8 +211,15 @@ def test_process_pool_evaluator_matches_the_in_process_batch(short_task):
 
 
 def test_parallel_annealing_chains_and_frequency_controllers(tmp_path, short_task):
-    config = LearnConfig(animal="shark", task=str(short_task), optimizer="anneal", budget=64,
-                         chains=8, controller="frequency", seed=1)  # fmt: skip
+    config = LearnConfig(
+        animal="shark",
+        task=str(short_task),
+        optimizer="anneal",
+        budget=64,
+        chains=8,
+        controller="frequency",
+        seed=1,
+    )
     run = Run.create(tmp_path / "f", config)
     run.learn()
     assert run.log.batches[1:] == [8] * (len(run.log.batches) - 1)

@@ -66,14 +66,26 @@ def test_the_cli_learns_an_animal_file_and_resumes_it_without_the_file(
     tmp_path, short_task, capsys
 ):
     text = Path(zoetic.load_animal("shark").source).read_text()
-    heavy_text = re.sub(r"^mass = (\S+)$", lambda m: f"mass = {20 * float(m[1])!r}", text,
-                        flags=re.M)
+    heavy_text = re.sub(
+        r"^mass = (\S+)$", lambda m: f"mass = {20 * float(m[1])!r}", text, flags=re.M
+    )
     assert heavy_text != text
     path = tmp_path / "heavy_shark.toml"
     path.write_text(heavy_text)
     heavy_body = zoetic.load_animal(str(path))
-    args = ["--task", str(short_task), "--optimizer", "cmaes", "--budget", "16", "--seed", "3",
-            "--popsize", "4", "--no-video"]
+    args = [
+        "--task",
+        str(short_task),
+        "--optimizer",
+        "cmaes",
+        "--budget",
+        "16",
+        "--seed",
+        "3",
+        "--popsize",
+        "4",
+        "--no-video",
+    ]
     assert main(["learn", str(path), *args, "--out", str(tmp_path / "heavy")]) == 0
     assert main(["learn", "shark", *args, "--out", str(tmp_path / "zoo")]) == 0
     out = capsys.readouterr().out

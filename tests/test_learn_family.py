@@ -23,7 +23,7 @@ from zoetic.learning.run import (
     Log,
     Run,
     checkpoint_bytes,
-    read_checkpoint,  # fmt: skip
+    read_checkpoint,
 )
 
 TARGET = np.array([0.3, 0.7, 0.2, 0.55, 0.8])
@@ -41,8 +41,9 @@ def _make(name):
     opts = {"popsize": 6} if name == "cmaes" else {}
     if name == "anneal":
         opts = {"chains": 3}
-    return make_optimizer(name, np.full(5, 0.9), np.zeros(5), np.ones(5), seed=4, budget=400,
-                          **opts)  # fmt: skip
+    return make_optimizer(
+        name, np.full(5, 0.9), np.zeros(5), np.ones(5), seed=4, budget=400, **opts
+    )
 
 
 def _steps(opt, n):
@@ -99,8 +100,9 @@ def short_task(tmp_path):
 
 
 def _config(task, optimizer="cmaes", budget=50):
-    return LearnConfig(animal="shark", task=str(task), optimizer=optimizer, budget=budget,
-                       seed=5, popsize=8)  # fmt: skip
+    return LearnConfig(
+        animal="shark", task=str(task), optimizer=optimizer, budget=budget, seed=5, popsize=8
+    )
 
 
 def test_budget_is_an_upper_bound(tmp_path, short_task):
@@ -160,9 +162,28 @@ def _history_E(path):
 def test_sigkill_during_learning_then_resume_gives_the_same_history(tmp_path, short_task):
     whole = Run.create(tmp_path / "whole", _config(short_task, "anneal", 60)).learn()
     out = tmp_path / "killed"
-    cmd = [sys.executable, "-m", "zoetic", "learn", "shark", "--task", str(short_task),
-           "--optimizer", "anneal", "--budget", "60", "--seed", "5", "--popsize", "8",
-           "--checkpoint-every", "0", "--no-video", "--out", str(out)]  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "zoetic",
+        "learn",
+        "shark",
+        "--task",
+        str(short_task),
+        "--optimizer",
+        "anneal",
+        "--budget",
+        "60",
+        "--seed",
+        "5",
+        "--popsize",
+        "8",
+        "--checkpoint-every",
+        "0",
+        "--no-video",
+        "--out",
+        str(out),
+    ]
     env = os.environ | {"COLUMNS": "200"}
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
     try:
@@ -189,9 +210,17 @@ def test_cmaes_draws_what_plain_cma_draws():
     import cma
 
     opt = _make("cmaes")
-    es = cma.CMAEvolutionStrategy(list(np.full(5, 0.9)), 0.3, {
-        "bounds": [[0.0] * 5, [1.0] * 5], "seed": 5, "verbose": -9, "CMA_stds": [1.0] * 5,
-        "popsize": 6})  # fmt: skip
+    es = cma.CMAEvolutionStrategy(
+        list(np.full(5, 0.9)),
+        0.3,
+        {
+            "bounds": [[0.0] * 5, [1.0] * 5],
+            "seed": 5,
+            "verbose": -9,
+            "CMA_stds": [1.0] * 5,
+            "popsize": 6,
+        },
+    )
     for _ in range(3):
         X, Y = opt.ask(), np.array(es.ask())
         assert np.array_equal(X, Y)

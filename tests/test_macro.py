@@ -107,9 +107,26 @@ def test_macro_command_writes_its_run(tmp_path, capsys):
     memory = tmp_path / "memory"
     handmade_repertoire(shark).save(memory)
     out = tmp_path / "m1"
-    args = ["macro", "shark", "--memory", str(memory), "--goal", "1.8,0.8", "--obstacle",
-            "0.9,0.3,0.3", "--horizon", "5", "--segments", "3", "--budget", "48",
-            "--out", str(out), "--fps", "10"]  # fmt: skip
+    args = [
+        "macro",
+        "shark",
+        "--memory",
+        str(memory),
+        "--goal",
+        "1.8,0.8",
+        "--obstacle",
+        "0.9,0.3,0.3",
+        "--horizon",
+        "5",
+        "--segments",
+        "3",
+        "--budget",
+        "48",
+        "--out",
+        str(out),
+        "--fps",
+        "10",
+    ]
     assert main([*args, "--method", "anneal"]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["method"] == "anneal" and len(summary["plan"]) == 3

@@ -33,8 +33,13 @@ def test_a_pose_turned_and_pitched_reads_its_angles_and_an_upright_one_no_roll(s
     f = np.asarray(shark.forward, float)
     assert abs(f[1]) < 1e-9 and abs(f[2]) < 1e-9  # the zoo shark faces +x at rest
     times = np.array([0.0, 0.5, 1.0])
-    pos = np.stack([_turned(shark, 0.0, 0.0), _turned(shark, 0.4, 0.0, (0.5, 0, 0)),
-                    _turned(shark, 0.4, 0.2, (1.0, -0.3, 0))])[None]  # fmt: skip
+    pos = np.stack(
+        [
+            _turned(shark, 0.0, 0.0),
+            _turned(shark, 0.4, 0.0, (0.5, 0, 0)),
+            _turned(shark, 0.4, 0.2, (1.0, -0.3, 0)),
+        ]
+    )[None]
     m = motion_scalars(shark, pos, times, get_medium("sea"))
     np.testing.assert_allclose(m["heading"][0], np.degrees([0.0, 0.4, 0.4]), atol=1e-6)
     np.testing.assert_allclose(m["pitch"][0], np.degrees([0.0, 0.0, 0.2]), atol=1e-6)
@@ -75,11 +80,23 @@ def test_a_batch_reads_as_each_animal_alone_and_agrees_with_the_sensors(shark):
 def test_a_record_with_control_periods_gets_the_motion_at_its_period_times(shark):
     times = np.linspace(0.0, 1.0, 11)
     pos = np.stack([_turned(shark, 0.0, 0.0, (0.0, -0.5 * t, 0.0)) for t in times])
-    fish = Animal("s", "shark", np.asarray(shark.faces, np.int32), pos.astype(np.float32),
-                  np.asarray(shark.mass, np.float32))  # fmt: skip
+    fish = Animal(
+        "s",
+        "shark",
+        np.asarray(shark.faces, np.int32),
+        pos.astype(np.float32),
+        np.asarray(shark.mass, np.float32),
+    )
     periods = np.array([0.0, 0.25, 0.5])
-    rec = Record("aquarium", "t", "sea", times, (fish,), period_times=periods,
-                 scalars={"s": {"hunger": np.zeros(3, np.float32)}})  # fmt: skip
+    rec = Record(
+        "aquarium",
+        "t",
+        "sea",
+        times,
+        (fish,),
+        period_times=periods,
+        scalars={"s": {"hunger": np.zeros(3, np.float32)}},
+    )
     got = measure_record(rec, [shark])
     assert set(got.scalars["s"]) == {"hunger", "speed", "depth", "heading", "pitch", "roll"}
     d0 = got.scalars["s"]["depth"][0]

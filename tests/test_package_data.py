@@ -31,6 +31,7 @@ def test_data_files_exist() -> None:
 
 def test_every_data_file_is_package_data() -> None:
     patterns = _patterns()
+
     # fnmatch's * crosses "/", so compare segment counts too: "tasks/*.toml" is not tricks/
     def shipped(name: str) -> bool:
         return any(fnmatch(name, p) and name.count("/") == p.count("/") for p in patterns)

@@ -142,8 +142,13 @@ def test_the_animal_file_places_the_eyes_and_sets_their_fields_of_view(tmp_path)
     from zoetic.bodies import ZOO_DIR
 
     doc = read_toml(ZOO_DIR / "shark.toml")
-    doc["eyes"] = {"node": "r1_1", "offset": [0.02, 0.05, 0.1], "fov": 80.0, "levels": 3,
-                   "pixels": 24}  # fmt: skip
+    doc["eyes"] = {
+        "node": "r1_1",
+        "offset": [0.02, 0.05, 0.1],
+        "fov": 80.0,
+        "levels": 3,
+        "pixels": 24,
+    }
     path = tmp_path / "wide-eyed.toml"
     path.write_text(tomli_w.dumps(doc))
     fish = load_animal(path)
@@ -189,8 +194,9 @@ def test_the_vestibulo_ocular_reflex_keeps_the_gaze_on_the_target_as_the_head_tu
         state = ctl.step(state, FRAME, img, cams)
     # the head yaws 12 deg (more than the fovea's half field of 7.5 deg) between frames
     c, s = np.cos(np.radians(12.0)), np.sin(np.radians(12.0))
-    turned = HeadFrame(np.zeros(3), np.array([c, 0, s]), np.array([0, 1.0, 0]),
-                       np.array([-s, 0, c]))  # fmt: skip
+    turned = HeadFrame(
+        np.zeros(3), np.array([c, 0, s]), np.array([0, 1.0, 0]), np.array([-s, 0, c])
+    )
     held = ctl.hold(state, turned)
     assert np.allclose(held.angles[:, 0], state.angles[:, 0] - np.radians(12.0), atol=1e-6)
     img, _ = look(mesh, turned, held.angles, spec)

@@ -29,8 +29,9 @@ def test_the_fins_tilt_from_level_with_pitch_and_raise_or_sink_the_shark():
     t = np.arange(400) * shark.dt
     level = steer(shark, t, 0.0)[:, fins]
     assert np.allclose(steer(shark, t, 0.0, pitch=0.3)[:, fins], level + 0.3)
-    world = World([Animal(shark, (0.0, 0.0, 0.0), 0.0), Animal(shark, (0.0, 0.0, 3.0), 0.0)],
-                  medium="water")  # fmt: skip
+    world = World(
+        [Animal(shark, (0.0, 0.0, 0.0), 0.0), Animal(shark, (0.0, 0.0, 3.0), 0.0)], medium="water"
+    )
     t = np.arange(world.steps_for(1.0)) * world.dt
     world.step(1.0, [steer(shark, t, 0.0, pitch=p)[None] for p in (0.4, -0.4)])
     rise, sink = (world.positions(a)[0][:, 1].mean() for a in (0, 1))

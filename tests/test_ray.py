@@ -19,14 +19,20 @@ from zoetic.learning.run import LearnConfig, Run
 # every test here starts a Ray cluster (seconds each): the slow tier
 pytestmark = pytest.mark.slow
 
-CONFIG = dict(animal="snake", task="crawl-straight", optimizer="cmaes", budget=30, popsize=10,
-              seed=5, nodes=4)  # fmt: skip
+CONFIG = dict(
+    animal="snake", task="crawl-straight", optimizer="cmaes", budget=30, popsize=10, seed=5, nodes=4
+)
 
 
 @pytest.fixture(scope="module")
 def local_ray():
-    ray.init(num_cpus=2, object_store_memory=80 * 1024**2, include_dashboard=False,
-             log_to_driver=False, configure_logging=False)  # fmt: skip
+    ray.init(
+        num_cpus=2,
+        object_store_memory=80 * 1024**2,
+        include_dashboard=False,
+        log_to_driver=False,
+        configure_logging=False,
+    )
     yield ray.get_runtime_context().gcs_address
     ray.shutdown()
 
@@ -78,10 +84,29 @@ def test_a_worker_killed_mid_run_loses_no_evaluation(local_ray, reference, tmp_p
 
 def test_learn_cli_with_a_ray_address(local_ray, reference, tmp_path):
     c = CONFIG
-    args = ["learn", c["animal"], "--task", c["task"], "--optimizer", c["optimizer"],
-            "--budget", str(c["budget"]), "--popsize", str(c["popsize"]), "--nodes",
-            str(c["nodes"]), "--seed", str(c["seed"]), "--no-video", "--out", str(tmp_path),
-            "--evaluator", "ray", "--ray-address", local_ray]  # fmt: skip
+    args = [
+        "learn",
+        c["animal"],
+        "--task",
+        c["task"],
+        "--optimizer",
+        c["optimizer"],
+        "--budget",
+        str(c["budget"]),
+        "--popsize",
+        str(c["popsize"]),
+        "--nodes",
+        str(c["nodes"]),
+        "--seed",
+        str(c["seed"]),
+        "--no-video",
+        "--out",
+        str(tmp_path),
+        "--evaluator",
+        "ray",
+        "--ray-address",
+        local_ray,
+    ]
     assert main(args) == 0
     with (tmp_path / "history.csv").open() as fh:
         assert [row["E"] for row in csv.DictReader(fh)] == [f"{e:.6g}" for e in reference[1]]
@@ -102,8 +127,7 @@ def test_repertoire_training_learns_on_ray(local_ray, tmp_path):
         entries.append(name)
 
     with pytest.raises(Stop):
-        train_repertoire("snake", tmp_path, budget=10, nodes=4, on_entry=on_entry,
-                         evaluator="ray")  # fmt: skip
+        train_repertoire("snake", tmp_path, budget=10, nodes=4, on_entry=on_entry, evaluator="ray")
     run_dir = tmp_path / "runs" / entries[0]
     assert 'evaluator = "ray"' in (run_dir / "config.toml").read_text()
     assert len((run_dir / "history.csv").read_text().splitlines()) > 10  # one CMA-ES generation
@@ -148,9 +172,15 @@ def test_stunt_search_on_ray_matches_in_process(local_ray, tmp_path, monkeypatch
 
     dolphin = load_animal("dolphin")
     a = dolphin.n_actuators
-    beat = AbstractController(dolphin.name, tuple(dolphin.actuator_names), np.full(a, 0.5),
-                              np.full((a, 1), 2.0), np.full((a, 1), 0.5),
-                              -np.pi * np.arange(a)[:, None] / 4, 1.0)  # fmt: skip
+    beat = AbstractController(
+        dolphin.name,
+        tuple(dolphin.actuator_names),
+        np.full(a, 0.5),
+        np.full((a, 1), 2.0),
+        np.full((a, 1), 0.5),
+        -np.pi * np.arange(a)[:, None] / 4,
+        1.0,
+    )
     rep = Repertoire(dolphin.name, tuple(dolphin.actuator_names))
     rep.add("do-nothing", rest_abstraction(dolphin), 1.0)
     rep.add("beat", beat, 1.0)
@@ -159,7 +189,8 @@ def test_stunt_search_on_ray_matches_in_process(local_ray, tmp_path, monkeypatch
         'name = "hop"\nrequires = ["surface"]\nhorizon = 0.3\nrecord_hz = 20.0\n'
         "[start]\ndepth = 0.3\npitch = 0.6\nspeed = 1.5\n"
         "[trick]\nsegments = 2\ndurations = [0.1, 0.3]\n"
-        '[[terms]]\nkind = "apex_above_surface"\nweight = -1.0\n')  # fmt: skip
+        '[[terms]]\nkind = "apex_above_surface"\nweight = -1.0\n'
+    )
     here = discover(dolphin, rep, load_trick(tmp_path / "hop.toml"), "anneal", budget=32, seed=1)
     batches: list[int] = []
     ray_map = RayPool.map
@@ -170,9 +201,27 @@ def test_stunt_search_on_ray_matches_in_process(local_ray, tmp_path, monkeypatch
 
     monkeypatch.setattr(RayPool, "map", counted)
     out = tmp_path / "ray"
-    code = main(["stunt", "dolphin", "--memory", str(tmp_path / "memory"), "--trick",
-                 str(tmp_path / "hop.toml"), "--budget", "32", "--seed", "1", "--no-video",
-                 "--out", str(out), "--evaluator", "ray", "--ray-address", local_ray])  # fmt: skip
+    code = main(
+        [
+            "stunt",
+            "dolphin",
+            "--memory",
+            str(tmp_path / "memory"),
+            "--trick",
+            str(tmp_path / "hop.toml"),
+            "--budget",
+            "32",
+            "--seed",
+            "1",
+            "--no-video",
+            "--out",
+            str(out),
+            "--evaluator",
+            "ray",
+            "--ray-address",
+            local_ray,
+        ]
+    )
     assert code == 0 and batches == [16, 16]  # both steps' plans went to the Ray actors
     s = json.loads((out / "summary.json").read_text())
     assert [n for n, _ in here.result.history] == [16, 32]

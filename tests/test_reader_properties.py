@@ -24,12 +24,35 @@ from zoetic.control import from_dict, time_domain
 from zoetic.errors import ZoeticError
 from zoetic.io import load_json, load_toml
 
-SETTINGS = settings(max_examples=60, deadline=None, derandomize=True,
-                    suppress_health_check=[HealthCheck.too_slow])  # fmt: skip
+SETTINGS = settings(
+    max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
 
 DELETE = object()
-VALUES = [DELETE, "x", "", True, None, [], {}, [1, 2], math.nan, math.inf, -math.inf, 1e308,
-          -1e308, 10**30, -1, 0, 0.0, 1e-300, "nan", 2**63, [[[[1]]]], {"a": 1}]  # fmt: skip
+VALUES = [
+    DELETE,
+    "x",
+    "",
+    True,
+    None,
+    [],
+    {},
+    [1, 2],
+    math.nan,
+    math.inf,
+    -math.inf,
+    1e308,
+    -1e308,
+    10**30,
+    -1,
+    0,
+    0.0,
+    1e-300,
+    "nan",
+    2**63,
+    [[[[1]]]],
+    {"a": 1},
+]
 
 
 def _locations(obj, prefix=()):
@@ -134,8 +157,11 @@ def test_mutated_networks(data):
 def test_mutated_repertoire_indexes(data):
     from zoetic.behavior.repertoire import INDEX, Repertoire
 
-    index = {"animal": "shark", "actuators": list(_BODY.actuator_names),
-             "entries": [{"name": "a", "file": "a.json", "duration": 2.0}]}  # fmt: skip
+    index = {
+        "animal": "shark",
+        "actuators": list(_BODY.actuator_names),
+        "entries": [{"name": "a", "file": "a.json", "duration": 2.0}],
+    }
     with tempfile.TemporaryDirectory() as tmp:
         (Path(tmp) / "a.json").write_text(json.dumps(_CTRL))
         (Path(tmp) / INDEX).write_text(json.dumps(_mutate(index, data)))
@@ -147,8 +173,16 @@ def test_mutated_repertoire_indexes(data):
 def test_mutated_run_configs(data):
     from zoetic.runs import check_learn_config
 
-    run = {"animal": "shark", "task": "swim-straight", "optimizer": "cmaes", "budget": 48,
-           "seed": 0, "controller": "time", "nodes": 8, "chains": 1}  # fmt: skip
+    run = {
+        "animal": "shark",
+        "task": "swim-straight",
+        "optimizer": "cmaes",
+        "budget": 48,
+        "seed": 0,
+        "controller": "time",
+        "nodes": 8,
+        "chains": 1,
+    }
     _only_zoetic_errors(check_learn_config, _mutate({"run": run}, data).get("run"), "c.toml")
 
 
@@ -167,8 +201,20 @@ def test_text_edits_of_an_animal_file_are_read_or_refused(data):
     text = (ZOO_DIR / "shark.toml").read_text()
     lines = text.splitlines()
     i = data.draw(st.integers(0, len(lines) - 1))
-    lines[i] = data.draw(st.sampled_from(["", "x = ", "[[nodes]]", "mass = 'a'", lines[i][::-1],
-                                          lines[i] + lines[i], "\x00", "é"]))  # fmt: skip
+    lines[i] = data.draw(
+        st.sampled_from(
+            [
+                "",
+                "x = ",
+                "[[nodes]]",
+                "mass = 'a'",
+                lines[i][::-1],
+                lines[i] + lines[i],
+                "\x00",
+                "é",
+            ]
+        )
+    )
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "a.toml"
         path.write_text("\n".join(lines))

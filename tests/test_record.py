@@ -29,32 +29,74 @@ def _record() -> Record:
     rng = np.random.default_rng(0)
     t, n = 5, 4
     times = np.linspace(0.0, 0.4, t)
-    fish = Animal("fish 1", "minnow", np.array([[0, 1, 2], [1, 2, 3]], np.int32),
-                  rng.normal(size=(t, n, 3)).astype(np.float32),
-                  np.array([1, 2, 1, 2], np.float32), (200, 100, 50), ("left", "right"),
-                  rng.uniform(size=(t, 2)).astype(np.float32))  # fmt: skip
-    shark = Animal("shark", "shark", np.array([[0, 1, 2]], np.int32),
-                   rng.normal(size=(t, 3, 3)).astype(np.float32), np.ones(3, np.float32))
-    link = Link("torso", (10, 20, 30), rng.normal(size=(6, 3)).astype(np.float32),
-                np.array([[0, 1, 2], [3, 4, 5]], np.int32),
-                rng.normal(size=(t, 3)).astype(np.float32),
-                rng.normal(size=t).astype(np.float32), "z")  # fmt: skip
-    walker = Creature("walker", (link,), rng.normal(size=(t, 3)).astype(np.float32), ("hip",),
-                      rng.uniform(size=(t, 1)).astype(np.float32))  # fmt: skip
+    fish = Animal(
+        "fish 1",
+        "minnow",
+        np.array([[0, 1, 2], [1, 2, 3]], np.int32),
+        rng.normal(size=(t, n, 3)).astype(np.float32),
+        np.array([1, 2, 1, 2], np.float32),
+        (200, 100, 50),
+        ("left", "right"),
+        rng.uniform(size=(t, 2)).astype(np.float32),
+    )
+    shark = Animal(
+        "shark",
+        "shark",
+        np.array([[0, 1, 2]], np.int32),
+        rng.normal(size=(t, 3, 3)).astype(np.float32),
+        np.ones(3, np.float32),
+    )
+    link = Link(
+        "torso",
+        (10, 20, 30),
+        rng.normal(size=(6, 3)).astype(np.float32),
+        np.array([[0, 1, 2], [3, 4, 5]], np.int32),
+        rng.normal(size=(t, 3)).astype(np.float32),
+        rng.normal(size=t).astype(np.float32),
+        "z",
+    )
+    walker = Creature(
+        "walker",
+        (link,),
+        rng.normal(size=(t, 3)).astype(np.float32),
+        ("hip",),
+        rng.uniform(size=(t, 1)).astype(np.float32),
+    )
     things = (
-        Thing("food", "food 1", "sphere", (0.1,), rng.normal(size=(t, 3)).astype(np.float32),
-              visible=np.array([True, True, False, False, False])),
+        Thing(
+            "food",
+            "food 1",
+            "sphere",
+            (0.1,),
+            rng.normal(size=(t, 3)).astype(np.float32),
+            visible=np.array([True, True, False, False, False]),
+        ),
         Thing("rock", "rock0", "box", (0.5, 0.4, 0.3), np.array([[1, 2, 3]], np.float32)),
         Thing("seaweed", "seaweed1", "cylinder", (0.04, 1.2), np.zeros((1, 3), np.float32), "y"),
         Thing("target", "target 1", "point", (), np.ones((1, 3), np.float32)),
-    )  # fmt: skip
-    scalars = {"fish 1": {"hunger": rng.uniform(size=3).astype(np.float32),
-                          "intention": np.array([0, 2, 1], np.float32)},
-               "shark": {"gaze": rng.normal(size=(3, 4)).astype(np.float32)}}  # fmt: skip
-    return Record("aquarium", "a tank", "water", times, (fish, shark), (walker,), things,
-                  (Event(0.1, "shark", "eat", "food 1"), Event(0.3, "fish 1", "escape")),
-                  np.array([0.0, 0.2, 0.4]), scalars, {"intention": ["wander", "eat", "flee"]},
-                  {"hunger": "", "gaze": "rad"}, {"survivors": 2, "note": "x", "ok": True})
+    )
+    scalars = {
+        "fish 1": {
+            "hunger": rng.uniform(size=3).astype(np.float32),
+            "intention": np.array([0, 2, 1], np.float32),
+        },
+        "shark": {"gaze": rng.normal(size=(3, 4)).astype(np.float32)},
+    }
+    return Record(
+        "aquarium",
+        "a tank",
+        "water",
+        times,
+        (fish, shark),
+        (walker,),
+        things,
+        (Event(0.1, "shark", "eat", "food 1"), Event(0.3, "fish 1", "escape")),
+        np.array([0.0, 0.2, 0.4]),
+        scalars,
+        {"intention": ["wander", "eat", "flee"]},
+        {"hunger": "", "gaze": "rad"},
+        {"survivors": 2, "note": "x", "ok": True},
+    )
 
 
 def _equal(a, b, where: str = "record") -> None:
@@ -99,23 +141,35 @@ def _rewrite(path, change) -> None:
     path.write_bytes(buf.getvalue())
 
 
-@pytest.mark.parametrize(("change", "message"), [
-    (lambda m, a: m.update(format="something-else"), "format = 'zoetic-record'"),
-    (lambda m, a: m.update(version=99), "record version 99"),
-    (lambda m, a: a.pop("animal/0/positions"), "no array 'animal/0/positions'"),
-    (lambda m, a: a.update({"animal/0/faces": np.array([[0, 1, 9]], np.int32)}),
-     "animal/0/faces indexes vertices outside 0..3"),
-    (lambda m, a: a.update({"animal/1/mass": np.ones(7, np.float32)}), "animal/1/mass has shape"),
-    (lambda m, a: a.update({"times": np.array([0.0, 0.2, 0.1, 0.3, 0.4])}), "non-decreasing"),
-    (lambda m, a: a.update({"animal/0/mass": np.float32([1, np.nan, 1, 2])}),
-     "animal/0/mass holds non-finite values"),
-    (lambda m, a: m["objects"][1].update(shape="cone"), "objects[1]: shape must be"),
-    (lambda m, a: m["objects"][1].update(size=[0.5, -1, 0.3]), "3 positive sizes"),
-    (lambda m, a: m["events"].append(["soon", "x", "y", "z"]), "an event must be"),
-    (lambda m, a: a.update({"scalar/shark/gaze": np.ones((2, 4), np.float32)}),
-     "scalar/shark/gaze must be float with 3 rows"),
-    (lambda m, a: m.pop("numbers"), "the header needs"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (lambda m, a: m.update(format="something-else"), "format = 'zoetic-record'"),
+        (lambda m, a: m.update(version=99), "record version 99"),
+        (lambda m, a: a.pop("animal/0/positions"), "no array 'animal/0/positions'"),
+        (
+            lambda m, a: a.update({"animal/0/faces": np.array([[0, 1, 9]], np.int32)}),
+            "animal/0/faces indexes vertices outside 0..3",
+        ),
+        (
+            lambda m, a: a.update({"animal/1/mass": np.ones(7, np.float32)}),
+            "animal/1/mass has shape",
+        ),
+        (lambda m, a: a.update({"times": np.array([0.0, 0.2, 0.1, 0.3, 0.4])}), "non-decreasing"),
+        (
+            lambda m, a: a.update({"animal/0/mass": np.float32([1, np.nan, 1, 2])}),
+            "animal/0/mass holds non-finite values",
+        ),
+        (lambda m, a: m["objects"][1].update(shape="cone"), "objects[1]: shape must be"),
+        (lambda m, a: m["objects"][1].update(size=[0.5, -1, 0.3]), "3 positive sizes"),
+        (lambda m, a: m["events"].append(["soon", "x", "y", "z"]), "an event must be"),
+        (
+            lambda m, a: a.update({"scalar/shark/gaze": np.ones((2, 4), np.float32)}),
+            "scalar/shark/gaze must be float with 3 rows",
+        ),
+        (lambda m, a: m.pop("numbers"), "the header needs"),
+    ],
+)
 def test_a_damaged_record_is_refused_naming_the_file(tmp_path, change, message):
     path = write_record(tmp_path, _record())
     _rewrite(path, change)
@@ -182,7 +236,8 @@ def test_a_simulate_run_records_its_motion_as_measured_from_its_positions(tmp_pa
     depth = got["depth"]
     assert depth[-1] > depth[0] + 0.05 and np.all(np.diff(depth[:20]) > 0)  # it sinks
     assert np.abs(got["roll"]).max() < 0.5  # deg: upright, a symmetric body at rest
-    want = motion_scalars(load_animal("shark"), rec.animals[0].positions[None], rec.times,
-                          get_medium("sea"))  # fmt: skip
+    want = motion_scalars(
+        load_animal("shark"), rec.animals[0].positions[None], rec.times, get_medium("sea")
+    )
     for q, v in want.items():
         np.testing.assert_allclose(got[q], v[0], atol=1e-5)

@@ -12,8 +12,9 @@ from zoetic.render import Cameras, look_rotation, project, render, world_mesh
 
 
 def _cam(size=64, fov=np.pi / 2, eye=(0.0, 0.0, 0.0), forward=(1.0, 0.0, 0.0)):
-    return Cameras(np.array([eye]), look_rotation(np.array([forward])), np.array([fov]),
-                   (size, size))  # fmt: skip
+    return Cameras(
+        np.array([eye]), look_rotation(np.array([forward])), np.array([fov]), (size, size)
+    )
 
 
 def test_a_point_projects_to_the_expected_pixel_and_a_triangle_covers_it():
@@ -49,10 +50,16 @@ def test_an_animal_shows_in_its_colour_among_rocks_and_seaweed_with_fog():
     shark = load_animal("shark")
     pos = placed_pose(shark, (0.0, 0.0, 0.0))
     com = pos.mean(0)
-    mesh = world_mesh([shark], [pos], [(0.9, 0.15, 0.1)],
-                      [Box((com[0], -1.5, com[2] + 3), (0.5, 0.5, 0.5)),
-                       Cylinder((com[0] + 1, -1.0, com[2] - 3), 0.05, 2.0)],
-                      floor=(0.0, 0.0, -2.0, 20.0))  # fmt: skip
+    mesh = world_mesh(
+        [shark],
+        [pos],
+        [(0.9, 0.15, 0.1)],
+        [
+            Box((com[0], -1.5, com[2] + 3), (0.5, 0.5, 0.5)),
+            Cylinder((com[0] + 1, -1.0, com[2] - 3), 0.05, 2.0),
+        ],
+        floor=(0.0, 0.0, -2.0, 20.0),
+    )
     eye = com + np.array([0.0, 0.5, 2.5])
     cam = _cam(96, np.radians(60), eye, com - eye)
     clear = render(mesh.vertices, mesh.triangles, mesh.colors, cam)[0].astype(int)

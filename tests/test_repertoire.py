@@ -32,7 +32,10 @@ def trained(tmp_path_factory):
 
 def test_plans_follow_the_medium():
     assert [e.name for e in plan_for(load_animal("shark"))] == [
-        "go-straight", "sharp-turn-left", "wide-turn-left"]  # fmt: skip
+        "go-straight",
+        "sharp-turn-left",
+        "wide-turn-left",
+    ]
     snake = plan_for(load_animal("snake"))
     assert snake[0].task.name == "crawl-straight"
     dolphin = plan_for(load_animal("dolphin"))  # the five basic motor tasks (right: mirrored)
@@ -42,8 +45,14 @@ def test_plans_follow_the_medium():
 
 def test_training_writes_a_reloadable_mirrored_repertoire(trained, shark):
     rep = Repertoire.load(trained, shark)
-    assert rep.names == ["do-nothing", "go-straight", "sharp-turn-left", "sharp-turn-right",
-                         "wide-turn-left", "wide-turn-right"]  # fmt: skip
+    assert rep.names == [
+        "do-nothing",
+        "go-straight",
+        "sharp-turn-left",
+        "sharp-turn-right",
+        "wide-turn-left",
+        "wide-turn-right",
+    ]
     assert all(isinstance(c, AbstractController) for c in rep.controllers.values())
     t = np.linspace(0, 3, 50)
     left, right = rep.controllers["sharp-turn-left"], rep.controllers["sharp-turn-right"]
@@ -91,7 +100,7 @@ def test_the_plan_digest_changes_with_the_body_or_a_task(tmp_path):
     mine = tmp_path / "shark.toml"
     shutil.copy(ZOO_DIR / "shark.toml", mine)
     copy_digest = plan_digest(str(mine))
-    mine.write_text(mine.read_text().replace("name = \"shark\"", "name = \"shark2\"", 1))
+    mine.write_text(mine.read_text().replace('name = "shark"', 'name = "shark2"', 1))
     assert plan_digest(str(mine)) != copy_digest
 
 
@@ -104,8 +113,9 @@ def test_repertoire_round_trip(tmp_path, shark):
     assert again.info["extra"] == {"note": "kept", "kept": 0.9}
     t = np.linspace(0, 4, 40)
     for name in rep.names:
-        np.testing.assert_allclose(again.controllers[name].raw(t), rep.controllers[name].raw(t),
-                                   atol=1e-5)  # fmt: skip
+        np.testing.assert_allclose(
+            again.controllers[name].raw(t), rep.controllers[name].raw(t), atol=1e-5
+        )
 
 
 def test_show_prints_and_plots(trained, capsys):
@@ -113,8 +123,9 @@ def test_show_prints_and_plots(trained, capsys):
     rows = json.loads(capsys.readouterr().out)
     by = {r["entry"]: r for r in rows}
     assert by["do-nothing"]["modes"] == 0 and by["do-nothing"]["forward_m"] == pytest.approx(0)
-    assert by["sharp-turn-right"]["turn_deg"] == pytest.approx(-by["sharp-turn-left"]["turn_deg"],
-                                                               abs=0.2)  # fmt: skip
+    assert by["sharp-turn-right"]["turn_deg"] == pytest.approx(
+        -by["sharp-turn-left"]["turn_deg"], abs=0.2
+    )
     assert (trained / "repertoire.png").stat().st_size > 10_000
 
 
@@ -155,7 +166,7 @@ def test_sequence_command_simulates_a_cross_faded_controller(tmp_path, capsys):
         str(tmp_path / "s"),
         "--no-video",
     ]
-    assert main(args) == 0  # fmt: skip
+    assert main(args) == 0
     seq = load_controller(tmp_path / "s" / "sequence.json", shark)
     assert isinstance(seq, SequenceController)
     assert seq.duration == pytest.approx(2 + 2 * 0.95)

@@ -31,8 +31,24 @@ def cart():
 @pytest.fixture(scope="module")
 def search_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("san") / "cart"
-    argv = ["san", "search", "cart", "--trials", "8", "--top", "3", "--seed", "0", "--seconds",
-            str(SECONDS), "--workers", "2", "--out", str(out), "--no-video"]  # fmt: skip
+    argv = [
+        "san",
+        "search",
+        "cart",
+        "--trials",
+        "8",
+        "--top",
+        "3",
+        "--seed",
+        "0",
+        "--seconds",
+        str(SECONDS),
+        "--workers",
+        "2",
+        "--out",
+        str(out),
+        "--no-video",
+    ]
     assert main(argv) == 0
     return out
 
@@ -70,8 +86,18 @@ def test_fixed_seed_search_is_reproducible(cart):
 
 def test_tuned_network_is_at_least_as_fast_and_replays(search_run, cart, tmp_path):
     out = tmp_path / "cart1"
-    argv = ["san", "tune", str(search_run / "sans" / "01.json"), "--method", "sga",
-            "--trials", "6", "--out", str(out), "--no-video"]  # fmt: skip
+    argv = [
+        "san",
+        "tune",
+        str(search_run / "sans" / "01.json"),
+        "--method",
+        "sga",
+        "--trials",
+        "6",
+        "--out",
+        str(out),
+        "--no-video",
+    ]
     assert main(argv) == 0
     summary = json.loads((out / "summary.json").read_text())
     net = load_network(out / "san.json", cart)
@@ -150,8 +176,22 @@ def test_a_san_found_for_a_creature_file_is_tuned_shown_and_evolved(tmp_path):
     mine = tmp_path / "my_creature.toml"
     mine.write_text(text)
     run = tmp_path / "r"
-    search_argv = ["san", "search", str(mine), "--trials", "3", "--top", "2", "--seconds", "0.5",
-                   "--workers", "1", "--out", str(run), "--no-video"]
+    search_argv = [
+        "san",
+        "search",
+        str(mine),
+        "--trials",
+        "3",
+        "--top",
+        "2",
+        "--seconds",
+        "0.5",
+        "--workers",
+        "1",
+        "--out",
+        str(run),
+        "--no-video",
+    ]
     assert main(search_argv) == 0
     mine.unlink()  # the SAN file alone is enough from here on
     san = run / "sans" / "01.json"
@@ -161,11 +201,27 @@ def test_a_san_found_for_a_creature_file_is_tuned_shown_and_evolved(tmp_path):
     argv = ["san", "tune", str(san), "--trials", "2", "--out", str(tuned), "--no-video"]
     assert main(argv) == 0
     assert load_with_creature(tuned / "san.json")[1].links[0].length == 0.14
-    show = ["san", "show", str(tuned / "san.json"), "--seconds", "0.2", "--out",
-            str(tmp_path / "show.mp4")]
+    show = [
+        "san",
+        "show",
+        str(tuned / "san.json"),
+        "--seconds",
+        "0.2",
+        "--out",
+        str(tmp_path / "show.mp4"),
+    ]
     assert main(show) == 0
-    evolve = ["san", "evolve", "--network", str(san), "--trials", "2", "--out",
-              str(tmp_path / "e"), "--no-video"]
+    evolve = [
+        "san",
+        "evolve",
+        "--network",
+        str(san),
+        "--trials",
+        "2",
+        "--out",
+        str(tmp_path / "e"),
+        "--no-video",
+    ]
     assert main(evolve) == 0
 
 

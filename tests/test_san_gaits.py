@@ -34,20 +34,38 @@ def cart():
 def _gait(rng, direction, speed, turns, airborne, bounce, contact, periodicity, noise):
     j = lambda v, s=1.0: float(v + noise * s * rng.standard_normal())  # noqa: E731
     return {
-        "direction": direction, "speed_cm_s": speed, "log2_speed": math.log2(speed),
-        "turns": j(turns), "airborne": min(max(j(airborne, 0.3), 0.0), 1.0),
-        "bounce": j(bounce, 0.05), "periodicity": j(periodicity),
+        "direction": direction,
+        "speed_cm_s": speed,
+        "log2_speed": math.log2(speed),
+        "turns": j(turns),
+        "airborne": min(max(j(airborne, 0.3), 0.0), 1.0),
+        "bounce": j(bounce, 0.05),
+        "periodicity": j(periodicity),
         "contact": {k: min(max(j(v), 0.0), 1.0) for k, v in contact.items()},
         "period_s": 0.5,
-    }  # fmt: skip
+    }
 
 
 def test_clustering_separates_distinct_gaits_and_merges_near_identical_ones():
     rng = np.random.default_rng(0)
-    hop = dict(direction=1, speed=20.0, turns=0.1, airborne=0.4, bounce=0.08,
-               contact={"L1": 0.3, "L2": 0.3}, periodicity=0.9)  # fmt: skip
-    roll = dict(direction=1, speed=20.0, turns=3.0, airborne=0.0, bounce=0.01,
-                contact={"L1": 0.6, "L2": 0.6}, periodicity=0.8)  # fmt: skip
+    hop = dict(
+        direction=1,
+        speed=20.0,
+        turns=0.1,
+        airborne=0.4,
+        bounce=0.08,
+        contact={"L1": 0.3, "L2": 0.3},
+        periodicity=0.9,
+    )
+    roll = dict(
+        direction=1,
+        speed=20.0,
+        turns=3.0,
+        airborne=0.0,
+        bounce=0.01,
+        contact={"L1": 0.6, "L2": 0.6},
+        periodicity=0.8,
+    )
     gaits = [_gait(rng, **hop, noise=0.02) for _ in range(6)]
     gaits += [_gait(rng, **roll, noise=0.02) for _ in range(5)]
     modes = describe_gaits(gaits)
@@ -71,9 +89,17 @@ def _rollout(cart, angles, heights, seconds=2.0):
     poses[:, :, 1] = np.asarray(heights)[:, None]
     poses[:, 0, 2] = angles
     poses[:, 1, 2] = np.asarray(angles) + 1.2
-    return Rollout(metric=0.2, fell=False, distance=0.2, seconds=seconds,
-                   times=np.linspace(0, seconds, n), poses=poses, sensors=np.zeros((n, 6), bool),
-                   commands=np.zeros((n, 1)), targets=np.zeros((n, 1)))  # fmt: skip
+    return Rollout(
+        metric=0.2,
+        fell=False,
+        distance=0.2,
+        seconds=seconds,
+        times=np.linspace(0, seconds, n),
+        poses=poses,
+        sensors=np.zeros((n, 6), bool),
+        commands=np.zeros((n, 1)),
+        targets=np.zeros((n, 1)),
+    )
 
 
 def test_gait_features_see_rolling_hopping_and_direction(cart):
@@ -93,8 +119,23 @@ def test_gait_features_see_rolling_hopping_and_direction(cart):
 
 def test_search_gaits_cli_writes_modes_with_a_count(tmp_path):
     out = tmp_path / "cart"
-    argv = ["san", "search", "cart", "--trials", "6", "--top", "4", "--seconds", "0.6",
-            "--workers", "1", "--out", str(out), "--no-video", "--gaits"]  # fmt: skip
+    argv = [
+        "san",
+        "search",
+        "cart",
+        "--trials",
+        "6",
+        "--top",
+        "4",
+        "--seconds",
+        "0.6",
+        "--workers",
+        "1",
+        "--out",
+        str(out),
+        "--no-video",
+        "--gaits",
+    ]
     assert main(argv) == 0
     doc = json.loads((out / "modes.json").read_text())
     assert doc["creature"] == "cart" and 1 <= doc["modes_found"] <= doc["gaits"] <= 4
@@ -140,8 +181,14 @@ def test_evolve_improves_its_objective_and_resumes_to_the_same_result(cart):
     assert full.creature.links[0].length > cart.links[0].length
     assert full.creature.links[0].mass > cart.links[0].mass  # longer, so heavier
     saved = {}
-    evolve(net, cart, trials=20, seed=2, evaluate=_reach(0.2),
-           checkpoint=lambda t, _sa, h: saved.update({t: h}))  # fmt: skip
+    evolve(
+        net,
+        cart,
+        trials=20,
+        seed=2,
+        evaluate=_reach(0.2),
+        checkpoint=lambda t, _sa, h: saved.update({t: h}),
+    )
     again = evolve(net, cart, trials=40, seed=2, evaluate=_reach(0.2), resume=saved[20])
     assert again.after == full.after
     np.testing.assert_array_equal(again.best, full.best)
@@ -157,9 +204,16 @@ def test_evolve_writes_a_valid_creature_file(cart, tmp_path):
     rows = {r["parameter"]: r for r in summary["changes"]}
     assert rows["L1 length (m)"]["before"] == cart.links[0].length
     # the checkpoint round-trips and refuses another run's
-    history = {"before": 1.0, "accepted": 2, "done": 3, "temperature": 0.1,
-               "current": [1.0, 1.0, 2.0], "best": [1.0, 1.0, 2.0], "tried": [np.nan, 1.0, 2.0],
-               "state": {"x": np.ones((1, 3)), "T": 0.1, "rng": {"a": 1}}}  # fmt: skip
+    history = {
+        "before": 1.0,
+        "accepted": 2,
+        "done": 3,
+        "temperature": 0.1,
+        "current": [1.0, 1.0, 2.0],
+        "best": [1.0, 1.0, 2.0],
+        "tried": [np.nan, 1.0, 2.0],
+        "state": {"x": np.ones((1, 3)), "T": 0.1, "rng": {"a": 1}},
+    }
     save_checkpoint(tmp_path / "c.npz", {"seed": 0}, history)
     back = load_checkpoint(tmp_path / "c.npz", {"seed": 0})
     assert back["done"] == 3 and back["state"]["rng"] == {"a": 1}
@@ -169,16 +223,43 @@ def test_evolve_writes_a_valid_creature_file(cart, tmp_path):
 
 def test_evolve_cli_end_to_end_and_bad_input_exits_2(tmp_path, capsys):
     out = tmp_path / "ev"
-    argv = ["san", "evolve", "cart", "--search", "4", "--trials", "4", "--out", str(out),
-            "--no-video", "--workers", "1"]  # fmt: skip
+    argv = [
+        "san",
+        "evolve",
+        "cart",
+        "--search",
+        "4",
+        "--trials",
+        "4",
+        "--out",
+        str(out),
+        "--no-video",
+        "--workers",
+        "1",
+    ]
     assert main(argv) == 0
     assert strict_load(out / "creature.toml").name == "cart-evolved"
     assert "what evolution changed" in capsys.readouterr().out
     assert main(argv + ["--resume"]) == 0  # a finished run resumes to the same result
     assert main(["san", "evolve", "nosuch"]) == 2
     assert "unknown creature 'nosuch'" in capsys.readouterr().err
-    assert main(["san", "evolve", "crawler", "--search", "2", "--trials", "2", "--out",
-                 str(tmp_path / "cr"), "--no-video"]) == 2  # fmt: skip
+    assert (
+        main(
+            [
+                "san",
+                "evolve",
+                "crawler",
+                "--search",
+                "2",
+                "--trials",
+                "2",
+                "--out",
+                str(tmp_path / "cr"),
+                "--no-video",
+            ]
+        )
+        == 2
+    )
     assert "slide joints" in capsys.readouterr().err
     bad = argv[:-3] + ["--seed", "5", "--resume", "--no-video", "--workers", "1"]
     assert main(bad) == 2

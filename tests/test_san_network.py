@@ -56,20 +56,28 @@ class FakeCreature:
 
     def tuning(self) -> dict[str, np.ndarray]:
         return {
-            "actuator_lo": np.array(self.lo), "actuator_hi": np.array(self.hi),
-            "ks": np.array(self.ks), "kd": np.array(self.kd),
-            "sensor_lo": np.array(self.slo), "sensor_hi": np.array(self.shi),
-        }  # fmt: skip
+            "actuator_lo": np.array(self.lo),
+            "actuator_hi": np.array(self.hi),
+            "ks": np.array(self.ks),
+            "kd": np.array(self.kd),
+            "sensor_lo": np.array(self.slo),
+            "sensor_hi": np.array(self.shi),
+        }
 
-    def with_tuning(self, actuator_lo=None, actuator_hi=None, ks=None, kd=None,
-                    sensor_lo=None, sensor_hi=None) -> FakeCreature:  # fmt: skip
+    def with_tuning(
+        self, actuator_lo=None, actuator_hi=None, ks=None, kd=None, sensor_lo=None, sensor_hi=None
+    ) -> FakeCreature:
         t = self.tuning()
         pick = lambda v, k: tuple(float(x) for x in (t[k] if v is None else v))  # noqa: E731
         return replace(
-            self, lo=pick(actuator_lo, "actuator_lo"), hi=pick(actuator_hi, "actuator_hi"),
-            ks=pick(ks, "ks"), kd=pick(kd, "kd"), slo=pick(sensor_lo, "sensor_lo"),
+            self,
+            lo=pick(actuator_lo, "actuator_lo"),
+            hi=pick(actuator_hi, "actuator_hi"),
+            ks=pick(ks, "ks"),
+            kd=pick(kd, "kd"),
+            slo=pick(sensor_lo, "sensor_lo"),
             shi=pick(sensor_hi, "sensor_hi"),
-        )  # fmt: skip
+        )
 
 
 @dataclass(frozen=True)
@@ -209,8 +217,9 @@ def test_a_san_is_a_policy_of_the_one_protocol_and_acts_as_it_steps():
     pol = SanPolicy(net, creature)
     assert isinstance(pol, Policy) and pol.sensors == ("san_sensors",)
     pol.reset(seed=0)
-    cmds = [pol.act({"san_sensors": s[None]}, Period(k, 1, 1 / 64))[0].copy()
-            for k, s in enumerate(seq)]  # fmt: skip
+    cmds = [
+        pol.act({"san_sensors": s[None]}, Period(k, 1, 1 / 64))[0].copy() for k, s in enumerate(seq)
+    ]
     np.testing.assert_array_equal(np.array(cmds), ref_cmds)
 
 
@@ -354,8 +363,9 @@ def test_tuning_runs_on_the_one_annealing_of_learn(monkeypatch):
 
     told = []
     tell = Annealing.tell
-    monkeypatch.setattr(Annealing, "tell", lambda self, X, f, grad=None: (told.append(len(f)),
-                                                                          tell(self, X, f)))
+    monkeypatch.setattr(
+        Annealing, "tell", lambda self, X, f, grad=None: (told.append(len(f)), tell(self, X, f))
+    )
     creature = FakeCreature()
     net = random_network(creature, np.random.default_rng(0), n_hidden=2)
     for method in ("anneal", "sga"):

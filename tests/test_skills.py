@@ -107,8 +107,10 @@ def test_the_skills_bench_compares_every_entry_of_the_dolphins_plan_with_a_hand_
         assert v["starts"]["rest"] == 0.0 and v["starts"]["cruising"] > 1.0  # m/s
         assert v["learned"]["E"] != v["learned_cruising"]["E"]
         assert v["hand_made"]["E"] != v["hand_made_cruising"]["E"]
-    assert (got["move-forward"]["hand_made_cruising"]["speed_bl_s"]
-            > got["move-forward"]["hand_made"]["speed_bl_s"])  # fmt: skip
+    assert (
+        got["move-forward"]["hand_made_cruising"]["speed_bl_s"]
+        > got["move-forward"]["hand_made"]["speed_bl_s"]
+    )
 
 
 def test_a_steered_wave_biases_the_muscles_and_tilts_the_fins():

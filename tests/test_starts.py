@@ -14,9 +14,11 @@ from zoetic.errors import TaskError
 from zoetic.learning.objective import Objective
 from zoetic.tasks import cruise_speed, parse_task, start_state, start_states
 
-TERMS = [{"kind": "distance_along_heading", "weight": -1.0},
-         {"kind": "heading_change", "weight": 1.0, "target": 0.5},
-         {"kind": "roll_keeping", "weight": 2.0}]  # fmt: skip
+TERMS = [
+    {"kind": "distance_along_heading", "weight": -1.0},
+    {"kind": "heading_change", "weight": 1.0, "target": 0.5},
+    {"kind": "roll_keeping", "weight": 2.0},
+]
 REST = {"name": "rest"}
 MOVING = {"name": "moving", "speed": 0.8, "heading": 0.4}
 
@@ -27,10 +29,12 @@ def _doc(**extra) -> dict:
 
 def test_a_task_with_two_starts_loads_and_round_trips(tmp_path):
     path = tmp_path / "two.toml"
-    path.write_text('name = "two"\nhorizon = 0.4\n'
-                    '[[starts]]\nname = "rest"\n'
-                    '[[starts]]\nname = "cruising"\nspeed = "cruise"\npitch = 0.1\n'
-                    '[[terms]]\nkind = "distance_along_heading"\n')  # fmt: skip
+    path.write_text(
+        'name = "two"\nhorizon = 0.4\n'
+        '[[starts]]\nname = "rest"\n'
+        '[[starts]]\nname = "cruising"\nspeed = "cruise"\npitch = 0.1\n'
+        '[[terms]]\nkind = "distance_along_heading"\n'
+    )
     from zoetic.tasks import load_task
 
     task = load_task(path)
@@ -43,20 +47,32 @@ def test_a_task_with_two_starts_loads_and_round_trips(tmp_path):
     assert np.all(st.velocities[0] == 0.0)
     # the cruising start moves at the speed the shark's own wave sustains, along its heading
     v = st.velocities[1, 0]
-    assert np.linalg.norm(v) == pytest.approx(cruise_speed(shark, None, start_state(
-        parse_task(_doc(start={"pitch": 0.1})), shark)), rel=1e-9)  # fmt: skip
+    assert np.linalg.norm(v) == pytest.approx(
+        cruise_speed(shark, None, start_state(parse_task(_doc(start={"pitch": 0.1})), shark)),
+        rel=1e-9,
+    )
     assert v[1] == pytest.approx(np.tan(0.1) * v[0], rel=1e-6) and v[0] > 0.3
 
 
-@pytest.mark.parametrize(("extra", "message"), [
-    ({"start": REST, "starts": [REST]}, r"bad.toml: give one \[start\] table or \[\[starts\]\]"),
-    ({"starts": []}, r"bad.toml: 'starts' must be one or more"),
-    ({"starts": [REST, {"speed": 1.0, "headng": 0.2}]},
-     r"bad.toml: starts\[1\]: unknown key 'headng' \(did you mean 'heading'"),
-    ({"starts": [REST, {"name": "rest", "speed": 1.0}]},
-     r"bad.toml: starts\[1\]: the name 'rest' is given to 2 starts"),
-    ({"starts": [REST, {"speed": "fast"}]}, r"bad.toml: starts\[1\]: 'speed' must be m/s or"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (
+            {"start": REST, "starts": [REST]},
+            r"bad.toml: give one \[start\] table or \[\[starts\]\]",
+        ),
+        ({"starts": []}, r"bad.toml: 'starts' must be one or more"),
+        (
+            {"starts": [REST, {"speed": 1.0, "headng": 0.2}]},
+            r"bad.toml: starts\[1\]: unknown key 'headng' \(did you mean 'heading'",
+        ),
+        (
+            {"starts": [REST, {"name": "rest", "speed": 1.0}]},
+            r"bad.toml: starts\[1\]: the name 'rest' is given to 2 starts",
+        ),
+        ({"starts": [REST, {"speed": "fast"}]}, r"bad.toml: starts\[1\]: 'speed' must be m/s or"),
+    ],
+)
 def test_a_bad_start_is_refused_naming_the_file_and_entry(extra, message):
     with pytest.raises(TaskError, match=message):
         parse_task(_doc(**extra), "bad.toml")
@@ -64,10 +80,26 @@ def test_a_bad_start_is_refused_naming_the_file_and_entry(extra, message):
 
 def test_the_cli_refuses_a_bad_start_with_exit_2(tmp_path, capsys):
     path = tmp_path / "bad.toml"
-    path.write_text('name = "bad"\nhorizon = 0.4\n[[starts]]\nspeed = "fast"\n'
-                    '[[terms]]\nkind = "distance_along_heading"\n')  # fmt: skip
-    assert main(["learn", "shark", "--task", str(path), "--budget", "4", "--no-video",
-                 "--out", str(tmp_path / "run")]) == 2  # fmt: skip
+    path.write_text(
+        'name = "bad"\nhorizon = 0.4\n[[starts]]\nspeed = "fast"\n'
+        '[[terms]]\nkind = "distance_along_heading"\n'
+    )
+    assert (
+        main(
+            [
+                "learn",
+                "shark",
+                "--task",
+                str(path),
+                "--budget",
+                "4",
+                "--no-video",
+                "--out",
+                str(tmp_path / "run"),
+            ]
+        )
+        == 2
+    )
     err = capsys.readouterr().err
     assert "bad.toml: starts[0]: 'speed' must be m/s" in err and "Traceback" not in err
 
@@ -78,8 +110,9 @@ def objectives():
     body = load_animal("shark")
     template = frequency_domain(body, 5, 0.4, base=body.wave_frequency)
     both = Objective(parse_task(_doc(starts=[REST, MOVING])), body, template, fins="free")
-    each = [Objective(parse_task(_doc(start=s)), body, template, fins="free")
-            for s in (REST, MOVING)]  # fmt: skip
+    each = [
+        Objective(parse_task(_doc(start=s)), body, template, fins="free") for s in (REST, MOVING)
+    ]
     rng = np.random.default_rng(3)
     lo, hi = both.bounds()
     X = rng.uniform(lo, hi, (3, both.dimension))
@@ -91,12 +124,14 @@ def test_the_two_start_objective_is_the_mean_of_the_single_start_ones(objectives
     ev = both.evaluate(X)
     singles = [o.evaluate(X) for o in each]
     assert not np.allclose(singles[0].E, singles[1].E, rtol=0.05)  # the starts matter
-    np.testing.assert_allclose(ev.per_start, np.stack([s.E for s in singles], axis=1),
-                               rtol=1e-12, atol=1e-12)  # fmt: skip
+    np.testing.assert_allclose(
+        ev.per_start, np.stack([s.E for s in singles], axis=1), rtol=1e-12, atol=1e-12
+    )
     np.testing.assert_allclose(ev.E, (singles[0].E + singles[1].E) / 2, rtol=1e-12, atol=1e-12)
     for name in ev.terms:
-        np.testing.assert_allclose(ev.terms[name], (singles[0].terms[name]
-                                                    + singles[1].terms[name]) / 2, rtol=1e-12)
+        np.testing.assert_allclose(
+            ev.terms[name], (singles[0].terms[name] + singles[1].terms[name]) / 2, rtol=1e-12
+        )
     # one kernel call plays every candidate from every start: 3 candidates x 2 starts
     assert both.simulate(X).positions.shape[0] == 6
 

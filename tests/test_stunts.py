@@ -28,8 +28,15 @@ def _beat(body) -> AbstractController:
     """A 2 Hz tail beat as a one-mode abstract controller (the zoo's wave phases)."""
     a = len(body.actuator_names)
     ph = -2 * np.pi * np.array([0, 0.5, 0.1, 0.6, 0.2, 0.7, 0, 0])[:, None]
-    return AbstractController(body.name, tuple(body.actuator_names), np.full(a, 0.5),
-                              np.full((a, 1), 2.0), np.full((a, 1), 0.5), ph, 1.0)  # fmt: skip
+    return AbstractController(
+        body.name,
+        tuple(body.actuator_names),
+        np.full(a, 0.5),
+        np.full((a, 1), 2.0),
+        np.full((a, 1), 0.5),
+        ph,
+        1.0,
+    )
 
 
 @pytest.fixture(scope="module")
@@ -56,8 +63,17 @@ def _lifted(body, heights, angles=None) -> np.ndarray:
 
 def _signals(body, pos, dt=0.05, contacts=None, balls=None) -> Signals:
     r = pos.shape[1]
-    return Signals(np, BodyFrame.of(body), pos, np.zeros((1, r, body.n_actuators)),
-                   np.arange(r) * dt, 0.0, r * dt, contacts, balls)  # fmt: skip
+    return Signals(
+        np,
+        BodyFrame.of(body),
+        pos,
+        np.zeros((1, r, body.n_actuators)),
+        np.arange(r) * dt,
+        0.0,
+        r * dt,
+        contacts,
+        balls,
+    )
 
 
 def _term(name, s, target=0.0, goal=(0.0, 0.0, 0.0)) -> float:
@@ -86,8 +102,7 @@ def test_trick_files_are_strict():
     with pytest.raises(TaskError, match=r"my\.toml: trick: unknown key"):
         parse_trick(base | {"trick": {"segmants": 3}}, "my.toml")
     with pytest.raises(TaskError, match=r"my\.toml: objects\[0\]: unknown key"):
-        parse_trick(base | {"objects": [{"kind": "ball", "radius": 0.2, "colour": 1}]},
-                    "my.toml")  # fmt: skip
+        parse_trick(base | {"objects": [{"kind": "ball", "radius": 0.2, "colour": 1}]}, "my.toml")
     with pytest.raises(TaskError, match="durations"):
         parse_trick(base | {"trick": {"durations": [2.0, 1.0]}}, "my.toml")
     with pytest.raises(TaskError, match="kind = ball, box or cylinder"):
@@ -141,14 +156,23 @@ def test_a_ball_struck_from_below_rises_and_the_terms_see_contact(dolphin, reper
     """The dolphin nose-up under a floating ball: shot upward it strikes the ball (contacts,
     the ball rises); at rest beside it, the ball stays."""
     doc = {
-        "name": "strike", "horizon": 0.6, "record_hz": 50.0, "requires": ["surface"],
-        "start": {"position": [0.0, 0.0, 0.0], "pitch": math.pi / 2,
-                  "depth": 0.87 * float(np.ptp(dolphin.rest_pos[:, 0])),  # nose under the ball
-                  "speed": 4.0},
+        "name": "strike",
+        "horizon": 0.6,
+        "record_hz": 50.0,
+        "requires": ["surface"],
+        "start": {
+            "position": [0.0, 0.0, 0.0],
+            "pitch": math.pi / 2,
+            "depth": 0.87 * float(np.ptp(dolphin.rest_pos[:, 0])),  # nose under the ball
+            "speed": 4.0,
+        },
         "objects": [{"kind": "ball", "radius": 0.2, "mass": 0.3, "position": [0.0, 0.2, 0.0]}],
-        "terms": [{"kind": "ball_rise", "weight": -1.0}, {"kind": "contact_count"},
-                  {"kind": "ball_head_distance"}],
-    }  # fmt: skip
+        "terms": [
+            {"kind": "ball_rise", "weight": -1.0},
+            {"kind": "contact_count"},
+            {"kind": "ball_head_distance"},
+        ],
+    }
     struck = StuntProblem(dolphin, repertoire, parse_trick(doc, "strike"))
     rec = struck.record(np.zeros((1, 1), int), np.ones((1, 1)))
     got = struck.scores(rec)
@@ -165,8 +189,7 @@ def test_a_ball_struck_from_below_rises_and_the_terms_see_contact(dolphin, reper
     assert mk.shape == (rec.balls.shape[1], 1, 3) and np.allclose(mk[:, 0], rec.balls[0, :, 0])
 
 
-def test_stunt_cli_writes_its_files_and_the_macro_replays(tmp_path, capsys, dolphin,
-                                                          repertoire):
+def test_stunt_cli_writes_its_files_and_the_macro_replays(tmp_path, capsys, dolphin, repertoire):
     memory = tmp_path / "memory"
     repertoire.save(memory)
     trick = tmp_path / "short-leap.toml"
@@ -174,10 +197,25 @@ def test_stunt_cli_writes_its_files_and_the_macro_replays(tmp_path, capsys, dolp
         'name = "short-leap"\nrequires = ["surface"]\nhorizon = 0.5\nrecord_hz = 20.0\n'
         "[start]\ndepth = 0.6\nspeed = 1.0\npitch = 0.6\n"
         "[trick]\nsegments = 2\ndurations = [0.1, 0.4]\n"
-        '[[terms]]\nkind = "apex_above_surface"\nweight = -1.0\n')  # fmt: skip
+        '[[terms]]\nkind = "apex_above_surface"\nweight = -1.0\n'
+    )
     out = tmp_path / "leap"
-    code = main(["stunt", "dolphin", "--memory", str(memory), "--trick", str(trick),
-                 "--budget", "6", "--out", str(out), "--fps", "8"])  # fmt: skip
+    code = main(
+        [
+            "stunt",
+            "dolphin",
+            "--memory",
+            str(memory),
+            "--trick",
+            str(trick),
+            "--budget",
+            "6",
+            "--out",
+            str(out),
+            "--fps",
+            "8",
+        ]
+    )
     assert code == 0
     for f in ("macro.json", "summary.json", "score.png", "video.mp4"):
         assert (out / f).stat().st_size > 0, f
@@ -185,8 +223,17 @@ def test_stunt_cli_writes_its_files_and_the_macro_replays(tmp_path, capsys, dolp
     assert s["evaluations"] == 6 and len(s["plan"]) == 2
     assert s["E"] == pytest.approx(-s["apex_above_surface_m"], abs=1e-3)
     assert s["seconds"] == pytest.approx(0.5)
-    code = main(["simulate", "dolphin", "--controller", str(out / "macro.json"), "--out",
-                 str(tmp_path / "replay"), "--no-video"])  # fmt: skip
+    code = main(
+        [
+            "simulate",
+            "dolphin",
+            "--controller",
+            str(out / "macro.json"),
+            "--out",
+            str(tmp_path / "replay"),
+            "--no-video",
+        ]
+    )
     assert code == 0
     from zoetic.record import read_record
 
@@ -195,17 +242,34 @@ def test_stunt_cli_writes_its_files_and_the_macro_replays(tmp_path, capsys, dolp
     assert times[-1] == pytest.approx(0.5)  # the stunt's own duration by default
     com_y = pos[..., 1] @ (dolphin.mass / dolphin.total_mass)
     assert com_y.max() == pytest.approx(s["apex_above_surface_m"], abs=2e-3)
-    code = main(["stunt", "dolphin", "--memory", str(memory), "--trick", "backflop",
-                 "--budget", "2", "--out", str(tmp_path / "no")])  # fmt: skip
+    code = main(
+        [
+            "stunt",
+            "dolphin",
+            "--memory",
+            str(memory),
+            "--trick",
+            "backflop",
+            "--budget",
+            "2",
+            "--out",
+            str(tmp_path / "no"),
+        ]
+    )
     assert code == 2 and not (tmp_path / "no").exists()
     assert "unknown trick 'backflop'" in capsys.readouterr().err.replace("\n", " ")
 
 
 def test_a_tiny_stunt_search_improves_on_its_first_plans(dolphin, repertoire):
-    doc = {"name": "up", "horizon": 0.5, "record_hz": 20.0, "requires": ["surface"],
-           "start": {"depth": 0.6, "pitch": 0.6, "speed": 1.0},
-           "trick": {"segments": 2, "durations": [0.1, 0.4]},
-           "terms": [{"kind": "apex_above_surface", "weight": -1.0}]}  # fmt: skip
+    doc = {
+        "name": "up",
+        "horizon": 0.5,
+        "record_hz": 20.0,
+        "requires": ["surface"],
+        "start": {"depth": 0.6, "pitch": 0.6, "speed": 1.0},
+        "trick": {"segments": 2, "durations": [0.1, 0.4]},
+        "terms": [{"kind": "apex_above_surface", "weight": -1.0}],
+    }
     from zoetic.behavior.macro import search
 
     problem = StuntProblem(dolphin, repertoire, parse_trick(doc, "up"))
@@ -219,8 +283,9 @@ def test_a_tiny_stunt_search_improves_on_its_first_plans(dolphin, repertoire):
 def test_final_height_is_zero_only_once_the_whole_body_is_back_in_the_water(dolphin):
     """A leap still in the air at the end pays its highest node's height; one whose nose alone
     has re-entered still pays; one wholly back under water pays nothing."""
-    top = float(np.max(dolphin.rest_pos[:, 1]) - dolphin.mass @ dolphin.rest_pos[:, 1]
-                / dolphin.total_mass)  # fmt: skip
+    top = float(
+        np.max(dolphin.rest_pos[:, 1]) - dolphin.mass @ dolphin.rest_pos[:, 1] / dolphin.total_mass
+    )
     for end, want in ((1.0, 1.0 + top), (-0.1, top - 0.1), (-1.0, 0.0)):
         s = _signals(dolphin, _lifted(dolphin, np.array([-2.0, 1.5, end])))
         assert _term("final_height", s) == pytest.approx(want, abs=1e-9)

@@ -49,8 +49,9 @@ def _turned(body, pitch: float) -> np.ndarray:
 
 def _signals(frame, pos, dt, level=0.0, balls=None, touch=None) -> Signals:
     k, r = pos.shape[:2]
-    return Signals(np, frame, pos, np.zeros((k, r, 1)), np.arange(r) * dt, level, r * dt,
-                   None, balls, touch)  # fmt: skip
+    return Signals(
+        np, frame, pos, np.zeros((k, r, 1)), np.arange(r) * dt, level, r * dt, None, balls, touch
+    )
 
 
 def test_flight_in_the_air_is_a_parabola_and_keeps_its_angular_momentum(dolphin):
@@ -63,8 +64,9 @@ def test_flight_in_the_air_is_a_parabola_and_keeps_its_angular_momentum(dolphin)
     st = State((rel + [0.0, 4.0, 0.0])[None], vel[None])
     steps = int(round(0.6 / body.dt))
     t = np.arange(steps) * body.dt
-    act = np.clip(0.5 + 0.5 * np.sin(2 * np.pi * 3 * t[:, None] + np.arange(body.n_actuators)),
-                  0, 1)  # fmt: skip
+    act = np.clip(
+        0.5 + 0.5 * np.sin(2 * np.pi * 3 * t[:, None] + np.arange(body.n_actuators)), 0, 1
+    )
     tr = simulate(body, act, medium="sea", state=st, record_every=5)
     pos = tr.positions[0]
     assert pos[:, :, 1].min() > 1.0  # all of it in the air all along
@@ -87,8 +89,14 @@ def _plate(edge_on: bool, heights, face_up: bool = False) -> tuple[BodyFrame, np
         corners = corners[::-1]
     if edge_on:
         corners = corners[:, [0, 2, 1]]  # the plate in the vertical x-y plane
-    frame = BodyFrame(np.full(4, 0.25), 0, np.zeros(0, int), np.zeros(0, int),
-                      np.array([[0, 1, 2, 3]]), np.full((1, 4), 0.25))  # fmt: skip
+    frame = BodyFrame(
+        np.full(4, 0.25),
+        0,
+        np.zeros(0, int),
+        np.zeros(0, int),
+        np.array([[0, 1, 2, 3]]),
+        np.full((1, 4), 0.25),
+    )
     pos = corners[None, None] + np.asarray(heights)[None, :, None, None] * [0.0, 1.0, 0.0]
     return frame, pos
 
@@ -116,8 +124,7 @@ def _drop(body, pitch: float, speed: float = 5.0, gap: float = 0.1):
     rel = rel + [0.0, gap - rel[:, 1].min(), 0.0]
     st = State(rel[None], np.tile([0.0, -speed, 0.0], (body.n_nodes, 1))[None])
     steps = int(round(0.5 / body.dt))
-    tr = simulate(body, np.zeros((steps, body.n_actuators)), medium="sea", state=st,
-                  record_every=5)  # fmt: skip
+    tr = simulate(body, np.zeros((steps, body.n_actuators)), medium="sea", state=st, record_every=5)
     return tr
 
 
@@ -143,8 +150,15 @@ def test_a_bellyflop_splashes_more_than_a_nose_first_dive_in_numpy_and_jax(dolph
     v = np.sqrt(5.0**2 + 2 * 9.81 * 0.1)
     assert got[0] == pytest.approx(_area_facing_down(dolphin, 0.0) * v, rel=0.15)
     assert got[0] > 1.4 * got[1] > 0.0
-    s = Signals(jnp, frame, jnp.asarray(pos, jnp.float32), jnp.zeros((2, pos.shape[1], 1)),
-                np.arange(pos.shape[1]) * dt, 0.0, 1.0)  # fmt: skip
+    s = Signals(
+        jnp,
+        frame,
+        jnp.asarray(pos, jnp.float32),
+        jnp.zeros((2, pos.shape[1], 1)),
+        np.arange(pos.shape[1]) * dt,
+        0.0,
+        1.0,
+    )
     assert np.allclose(np.asarray(TERMS["splash"].fn(jnp, s, TermParams())), got, rtol=1e-4)
     spray = surface_crossings(dolphin, flop.positions[0], flop.times, 0.0)
     assert spray.flux.sum() == pytest.approx(got[0], rel=1e-9)
@@ -165,14 +179,29 @@ def _strike(dolphin, repertoire, tail_first: bool):
     backward) tail first; returns the problem, its record and the terms."""
     pitch = -math.pi / 2 if tail_first else math.pi / 2
     doc = {
-        "name": "strike", "horizon": 0.6, "record_hz": 50.0, "requires": ["surface"],
-        "start": {"position": [0.0, 0.0, 0.0], "depth": 1.1, "pitch": pitch,
-                  "speed": 8.0 if tail_first else 4.5},
-        "objects": [{"kind": "ball", "radius": 0.2, "mass": 0.3, "position": [0.0, 0.3, 0.0]},
-                    {"kind": "cylinder", "center": [0.0, -0.2, 0.0], "radius": 0.03,
-                     "length": 0.6, "axis": "y", "name": "post"}],
+        "name": "strike",
+        "horizon": 0.6,
+        "record_hz": 50.0,
+        "requires": ["surface"],
+        "start": {
+            "position": [0.0, 0.0, 0.0],
+            "depth": 1.1,
+            "pitch": pitch,
+            "speed": 8.0 if tail_first else 4.5,
+        },
+        "objects": [
+            {"kind": "ball", "radius": 0.2, "mass": 0.3, "position": [0.0, 0.3, 0.0]},
+            {
+                "kind": "cylinder",
+                "center": [0.0, -0.2, 0.0],
+                "radius": 0.03,
+                "length": 0.6,
+                "axis": "y",
+                "name": "post",
+            },
+        ],
         "terms": [{"kind": "ball_moved_by_nose"}, {"kind": "ball_moved_by_tail"}],
-    }  # fmt: skip
+    }
     problem = StuntProblem(dolphin, repertoire, parse_trick(doc, "strike"))
     if tail_first:  # the start state swims nose down: send it the other way, tail up
         problem.start = dataclasses.replace(problem.start, velocities=-problem.start.velocities)
@@ -180,21 +209,31 @@ def _strike(dolphin, repertoire, tail_first: bool):
     return problem, rec, problem.scores(rec)
 
 
-def test_the_contact_record_names_the_nose_or_the_tail_that_struck_the_ball(dolphin,
-                                                                            repertoire):
+def test_the_contact_record_names_the_nose_or_the_tail_that_struck_the_ball(dolphin, repertoire):
     problem, rec, nose = _strike(dolphin, repertoire, tail_first=False)
     m = measures(problem, rec)
     assert m["ball_contact"] == "yes" and m["ball_parts"][0] == "nose"
     assert nose["ball_moved_by_nose"][0] > 0.2 and nose["ball_moved_by_tail"][0] == 0.0
     jnp = pytest.importorskip("jax.numpy")  # one definition for NumPy and JAX
     s = problem.signals(rec)
-    sj = Signals(jnp, s.frame, jnp.asarray(s.positions), jnp.asarray(s.activations), s.times,
-                 s.level, s.horizon, jnp.asarray(s.contacts), jnp.asarray(s.balls),
-                 jnp.asarray(s.ball_touch))  # fmt: skip
+    sj = Signals(
+        jnp,
+        s.frame,
+        jnp.asarray(s.positions),
+        jnp.asarray(s.activations),
+        s.times,
+        s.level,
+        s.horizon,
+        jnp.asarray(s.contacts),
+        jnp.asarray(s.balls),
+        jnp.asarray(s.ball_touch),
+    )
     got = float(TERMS["ball_moved_by_nose"].fn(jnp, sj, TermParams())[0])
     assert got == pytest.approx(nose["ball_moved_by_nose"][0], rel=1e-5)
-    assert targets_met("ball-nose", m, problem.trick) == {"struck_by_nose": True,
-                                                          "off_support": True}
+    assert targets_met("ball-nose", m, problem.trick) == {
+        "struck_by_nose": True,
+        "off_support": True,
+    }
     problem, rec, tail = _strike(dolphin, repertoire, tail_first=True)
     m = measures(problem, rec)
     assert m["ball_parts"][0] == "tail" and "nose" not in m["ball_parts"]
@@ -204,8 +243,10 @@ def test_the_contact_record_names_the_nose_or_the_tail_that_struck_the_ball(dolp
 
 def test_bellyflop_and_clean_dive_are_tricks_that_push_the_splash_opposite_ways(dolphin):
     assert {"bellyflop", "clean-dive"} <= set(list_tricks())
-    weight = {n: next(t.weight for t in load_trick(n).task.terms if t.kind == "splash")
-              for n in ("bellyflop", "clean-dive")}  # fmt: skip
+    weight = {
+        n: next(t.weight for t in load_trick(n).task.terms if t.kind == "splash")
+        for n in ("bellyflop", "clean-dive")
+    }
     assert weight["bellyflop"] < 0 < weight["clean-dive"]  # maximise, minimise
     out = {"most_nodes_out_of_water": 1.0}
     assert splash_ratio(out | {"splash_m3_s": 3.0}, out | {"splash_m3_s": 1.0}) == 3.0
@@ -225,9 +266,13 @@ def test_the_camera_frames_body_ball_and_bar_all_along():
     r = 60
     t = np.arange(r) * 0.05
     body = np.stack([t * 2.0, 3.0 * t - 0.5 * 9.81 * t**2 - 1.0, 0 * t], 1)[:, None]
-    pts = np.concatenate([body + rng.normal(0, 0.4, (r, 20, 3)),
-                          np.broadcast_to([[2.0, 0.3, -0.6], [2.0, 0.3, 0.6]], (r, 2, 3))],
-                         axis=1)  # fmt: skip
+    pts = np.concatenate(
+        [
+            body + rng.normal(0, 0.4, (r, 20, 3)),
+            np.broadcast_to([[2.0, 0.3, -0.6], [2.0, 0.3, 0.6]], (r, 2, 3)),
+        ],
+        axis=1,
+    )
     size, fov = (320, 180), 45.0
     direction = np.array([-0.3, 0.25, -0.92])
     direction /= np.linalg.norm(direction)
@@ -269,9 +314,17 @@ def test_spray_grows_with_the_splash_and_falls_back_into_the_water():
 
 def test_stunt_frames_show_the_ball_and_the_spray(dolphin, repertoire):
     problem, rec, _ = _strike(dolphin, repertoire, tail_first=False)
-    frames = list(stunt_frames(dolphin, rec.traj.positions[0][::6], rec.traj.times[::6],
-                               dolphin.medium, problem.trick.objects, rec.balls[0][::6],
-                               size=(160, 90)))  # fmt: skip
+    frames = list(
+        stunt_frames(
+            dolphin,
+            rec.traj.positions[0][::6],
+            rec.traj.times[::6],
+            dolphin.medium,
+            problem.trick.objects,
+            rec.balls[0][::6],
+            size=(160, 90),
+        )
+    )
     assert len(frames) == len(rec.traj.times[::6]) and frames[0].shape == (90, 160, 3)
     red = [(f[..., 0] > 150) & (f[..., 1] < 110) & (f[..., 2] < 110) for f in frames]
     assert all(m.sum() > 5 for m in red)  # the ball in view in every frame
@@ -281,8 +334,19 @@ def test_stunt_frames_show_the_ball_and_the_spray(dolphin, repertoire):
 
 def test_bench_stunts_judges_tricks_against_the_targets(tmp_path, capsys, repertoire):
     repertoire.save(tmp_path / "memory")
-    code = main(["bench", "stunts", "--memory", str(tmp_path / "memory"), "--tricks",
-                 "ball-nose,bellyflop,clean-dive", "--budget", "2", "--json"])  # fmt: skip
+    code = main(
+        [
+            "bench",
+            "stunts",
+            "--memory",
+            str(tmp_path / "memory"),
+            "--tricks",
+            "ball-nose,bellyflop,clean-dive",
+            "--budget",
+            "2",
+            "--json",
+        ]
+    )
     assert code == 0
     out = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert out["ball-nose"]["success"] is False  # a resting dolphin strikes nothing
@@ -295,15 +359,24 @@ def test_bench_stunts_judges_tricks_against_the_targets(tmp_path, capsys, repert
 
 def _record(body, pos, n_objects) -> StuntRecord:
     r = pos.shape[1]
-    traj = Trajectory(np.arange(r) * 0.05, pos, State(pos[:, -1], np.zeros_like(pos[:, -1])),
-                      np.array([-1]), 0.005)  # fmt: skip
-    return StuntRecord(traj, np.zeros((1, r, body.n_actuators)), np.zeros((1, r), int),
-                       np.zeros((1, r, 0, 3)), np.array([False]),
-                       np.zeros((1, r, body.n_nodes, n_objects)))  # fmt: skip
+    traj = Trajectory(
+        np.arange(r) * 0.05,
+        pos,
+        State(pos[:, -1], np.zeros_like(pos[:, -1])),
+        np.array([-1]),
+        0.005,
+    )
+    return StuntRecord(
+        traj,
+        np.zeros((1, r, body.n_actuators)),
+        np.zeros((1, r), int),
+        np.zeros((1, r, 0, 3)),
+        np.array([False]),
+        np.zeros((1, r, body.n_nodes, n_objects)),
+    )
 
 
-def test_a_hand_made_jump_over_the_hurdle_clears_it_and_a_low_one_does_not(dolphin,
-                                                                             repertoire):
+def test_a_hand_made_jump_over_the_hurdle_clears_it_and_a_low_one_does_not(dolphin, repertoire):
     problem = StuntProblem(dolphin, repertoire, load_trick("hurdle"))
     rel = _turned(dolphin, 0.0)
     bar = problem.trick.objects[0]
@@ -340,8 +413,9 @@ def _arc(body, rise: float, seconds: float = 4.0, hz: float = 40.0, cut: float |
     y = -1.0 + vy0 * tt - 0.5 * g * tt**2
     y = np.maximum(y, -3.0)  # under water it stops falling (drag; terms only read the crossing)
     pitch = np.arctan2(vy0 - g * tt, vx)
-    pos = np.stack([_turned(body, p) + [vx * s, h, 0.0] for p, s, h in zip(pitch, tt, y,
-                                                                           strict=True)])
+    pos = np.stack(
+        [_turned(body, p) + [vx * s, h, 0.0] for p, s, h in zip(pitch, tt, y, strict=True)]
+    )
     return pos[None]
 
 
@@ -351,8 +425,10 @@ def _trick_cost(body, name: str, pos: np.ndarray, hz: float = 40.0) -> tuple[flo
     from zoetic.tasks.terms import evaluate_terms
 
     vals = evaluate_terms(np, s, trick.task.terms)
-    return (float(sum(t.weight * v[0] for t, v in zip(trick.task.terms, vals, strict=True))),
-            {t.kind: float(v[0]) for t, v in zip(trick.task.terms, vals, strict=True)})
+    return (
+        float(sum(t.weight * v[0] for t, v in zip(trick.task.terms, vals, strict=True))),
+        {t.kind: float(v[0]) for t, v in zip(trick.task.terms, vals, strict=True)},
+    )
 
 
 def test_the_clean_dive_prefers_a_low_clean_slip_to_a_high_fast_entry(dolphin):
@@ -393,7 +469,8 @@ def test_a_face_splashes_once_at_its_re_entry_not_each_time_it_beats_across_the_
     # from under water: up and out, then back in (counted once), then beating
     leap = np.concatenate([fall[::-1], fall, beat])
     assert float(splash(np, _signals(*_plate(False, leap), 0.02), TermParams())[0]) == (
-        pytest.approx(once, rel=1e-9))
+        pytest.approx(once, rel=1e-9)
+    )
     # never out: a face beating just under the surface only
     under = _signals(*_plate(False, beat - 0.2), 0.02)
     assert float(splash(np, under, TermParams())[0]) == 0.0

@@ -59,9 +59,13 @@ def test_the_somersault_spin_rate_is_the_turn_over_the_time_in_the_air(dolphin):
 
 
 def _somersault_flags(s: Signals) -> dict[str, bool]:
-    deg = {k: float(np.degrees(_term(t, s))) for k, t in
-           (("rotation_in_air_deg", "flight_rotation"),
-            ("pitch_rotation_in_air_deg", "flight_pitch_rotation"))}  # fmt: skip
+    deg = {
+        k: float(np.degrees(_term(t, s)))
+        for k, t in (
+            ("rotation_in_air_deg", "flight_rotation"),
+            ("pitch_rotation_in_air_deg", "flight_pitch_rotation"),
+        )
+    }
     return targets_met("somersault", {"most_nodes_out_of_water": 1.0} | deg)
 
 
@@ -72,8 +76,11 @@ def test_the_somersault_flag_wants_a_full_turn_about_the_left_right_axis(dolphin
     # left-right axis) is no somersault
     spin = _signals(dolphin, _spun(dolphin, n, np.pi))
     assert _somersault_flags(spin) == {"leaves_water": True, "rotation": False}
-    old = {"most_nodes_out_of_water": 1.0, "rotation_in_air_deg": 587.0,
-           "pitch_rotation_in_air_deg": 50.0}  # fmt: skip
+    old = {
+        "most_nodes_out_of_water": 1.0,
+        "rotation_in_air_deg": 587.0,
+        "pitch_rotation_in_air_deg": 50.0,
+    }
     assert targets_met("somersault", old) == {"leaves_water": True, "rotation": False}
     flip = _signals(dolphin, _lifted(dolphin, np.full(n, 2.0), np.linspace(0, 2.1 * np.pi, n)))
     assert _somersault_flags(flip) == {"leaves_water": True, "rotation": True}
@@ -92,17 +99,29 @@ def test_the_tail_strike_counts_the_somersault_done_when_it_touches_in_the_air(d
         touch = np.zeros((1, n, dolphin.n_nodes))
         touch[0, at, tail] = 0.01  # the flukes touch the ball at record ``at``
         balls = pos[:, :, :1] * 0 + [[[[0.0, 5.0, 0.0]]]]
-        return Signals(np, frame, pos, np.zeros((1, n, dolphin.n_actuators)),
-                       np.arange(n) * 0.05, 0.0, n * 0.05, None, balls, touch)  # fmt: skip
+        return Signals(
+            np,
+            frame,
+            pos,
+            np.zeros((1, n, dolphin.n_actuators)),
+            np.arange(n) * 0.05,
+            0.0,
+            n * 0.05,
+            None,
+            balls,
+            touch,
+        )
 
     assert _term("tail_strike_rotation", strike(np.full(n, 2.0), 30)) == pytest.approx(
-        turn[30], rel=1e-6)  # fmt: skip
+        turn[30], rel=1e-6
+    )
     assert _term("tail_strike_rotation", strike(np.full(n, 2.0), 5)) == pytest.approx(turn[5])
     # with a target, only a strike after that much somersault counts (ball-tail: half a turn)
     half = float(np.radians(TAIL_STRIKE_DEG))
     assert _term("tail_strike_rotation", strike(np.full(n, 2.0), 5), half) == 0.0
     assert _term("tail_strike_rotation", strike(np.full(n, 2.0), 30), half) == pytest.approx(
-        turn[30], rel=1e-6)  # fmt: skip
+        turn[30], rel=1e-6
+    )
     low = np.full(n, 2.0)
     low[28:33] = -2.0  # back in the water when it touches: no strike in flight
     assert _term("tail_strike_rotation", strike(low, 30)) == 0.0
@@ -137,8 +156,17 @@ def test_the_tail_distance_counts_only_after_half_a_somersault_in_the_air(dolphi
     def tail_distance(heights, ball_at, xp=np):
         pos = _lifted(dolphin, heights, turn)
         ball = np.broadcast_to(pos[0, ball_at, tail[0]], (1, n, 1, 3))  # where a fluke node is
-        s = Signals(xp, frame, xp.asarray(pos), xp.zeros((1, n, dolphin.n_actuators)),
-                    xp.asarray(np.arange(n) * 0.05), 0.0, n * 0.05, None, xp.asarray(ball))
+        s = Signals(
+            xp,
+            frame,
+            xp.asarray(pos),
+            xp.zeros((1, n, dolphin.n_actuators)),
+            xp.asarray(np.arange(n) * 0.05),
+            0.0,
+            n * 0.05,
+            None,
+            xp.asarray(ball),
+        )
         return float(TERMS["ball_tail_distance"].fn(xp, s, TermParams())[0])
 
     # the ball where the flukes pass three quarters of a turn in: the plain distance (0)
@@ -168,8 +196,18 @@ def test_only_a_tail_that_strikes_the_ball_first_knocks_it_off(dolphin):
         touch = np.zeros((1, n, dolphin.n_nodes))
         touch[0, 20, frame.part_mask(first) > 0] = 0.01
         touch[0, 30, frame.part_mask(second) > 0] = 0.01
-        return Signals(np, frame, pos, np.zeros((1, n, dolphin.n_actuators)),
-                       np.arange(n) * 0.05, 0.0, n * 0.05, None, balls, touch)  # fmt: skip
+        return Signals(
+            np,
+            frame,
+            pos,
+            np.zeros((1, n, dolphin.n_actuators)),
+            np.arange(n) * 0.05,
+            0.0,
+            n * 0.05,
+            None,
+            balls,
+            touch,
+        )
 
     struck = touched("tail", "belly")  # the flukes hit it off at record 20 (half a turn)
     assert _term("ball_moved_by_tail", struck) == pytest.approx(n - 21, rel=1e-6)
@@ -179,6 +217,5 @@ def test_only_a_tail_that_strikes_the_ball_first_knocks_it_off(dolphin):
     assert _term("tail_strike_rotation", late) == 0.0
     assert _term("ball_moved_by_nose", late) == 0.0
     # the nose's term follows the same rule: first, or it did not knock the ball off
-    assert _term("ball_moved_by_nose", touched("nose", "belly")) == pytest.approx(n - 21,
-                                                                                 rel=1e-6)
+    assert _term("ball_moved_by_nose", touched("nose", "belly")) == pytest.approx(n - 21, rel=1e-6)
     assert _term("ball_moved_by_nose", touched("belly", "nose")) == 0.0

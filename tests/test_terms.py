@@ -51,8 +51,9 @@ def test_every_term_is_the_same_in_numpy_and_jax(dolphin_record, name):
     body, pos, acts, dt = dolphin_record
     task = parse_task(_task(terms=[{"kind": name, "target": 0.3, "goal": [0.5, 0.1, -0.2]}]))
     a = evaluate_terms(np, signals(task, body, pos, acts, dt), task.terms)[0]
-    s = signals(task, body, jnp.asarray(pos, jnp.float32), jnp.asarray(acts, jnp.float32), dt,
-                xp=jnp)  # fmt: skip
+    s = signals(
+        task, body, jnp.asarray(pos, jnp.float32), jnp.asarray(acts, jnp.float32), dt, xp=jnp
+    )
     b = np.asarray(evaluate_terms(jnp, s, task.terms)[0])
     assert a.shape == (2,) and np.all(np.isfinite(a))
     assert np.allclose(a, b, rtol=2e-4, atol=2e-5), (name, a, b)
@@ -67,12 +68,18 @@ def test_terms_measure_what_they_say_on_rigid_motions():
     turn = np.array([[c, 0, -s], [0, 1, 0], [s, 0, c]])
     end = (rest - com) @ turn.T + com + np.array([1.0, 0.2, 0.0])
     pos = np.stack([rest, end])[None]  # (1, 2, N, 3)
-    terms = [Term("distance_along_heading", 1), Term("lateral_deviation", 1),
-             Term("heading_change", 1, target=0.1), Term("max_height", 1),
-             Term("roll_keeping", 1), Term("goal_distance2", 1, goal=(1.0, 0.2, 0.0)),
-             Term("air_time", 1)]  # fmt: skip
-    task = parse_task(_task(terms=[{"kind": t.kind, "target": t.target, "goal": list(t.goal)}
-                                   for t in terms]))  # fmt: skip
+    terms = [
+        Term("distance_along_heading", 1),
+        Term("lateral_deviation", 1),
+        Term("heading_change", 1, target=0.1),
+        Term("max_height", 1),
+        Term("roll_keeping", 1),
+        Term("goal_distance2", 1, goal=(1.0, 0.2, 0.0)),
+        Term("air_time", 1),
+    ]
+    task = parse_task(
+        _task(terms=[{"kind": t.kind, "target": t.target, "goal": list(t.goal)} for t in terms])
+    )
     got = motion_terms(task, body, pos, medium="water")
     assert got["distance_along_heading"][0] == pytest.approx(1.0)
     assert got["lateral_deviation"][0] == pytest.approx(0.0, abs=1e-12)
@@ -95,13 +102,19 @@ def test_heading_shortfall_rewards_reaching_the_heading_early():
         return (rest - com) @ np.array([[c, 0, -s], [0, 1, 0], [s, 0, c]]).T + com
 
     early, late = [0.0, 0.2, 0.4, 0.4, 0.4], [0.0, 0.1, 0.2, 0.3, 0.4]  # rad, left
-    pos = np.stack([[turned(a) for a in early], [turned(a) for a in late],
-                    [turned(-a) for a in early]])  # fmt: skip
-    terms = [{"kind": "heading_shortfall", "target": 0.4},
-             {"kind": "heading_shortfall", "target": -0.4, "weight": 1.0},
-             {"kind": "heading_change", "target": 0.4}]  # fmt: skip
-    got = evaluate_terms(np, signals(parse_task(_task(terms=terms)), body, pos, None, 0.05),
-                         parse_task(_task(terms=terms)).terms)  # fmt: skip
+    pos = np.stack(
+        [[turned(a) for a in early], [turned(a) for a in late], [turned(-a) for a in early]]
+    )
+    terms = [
+        {"kind": "heading_shortfall", "target": 0.4},
+        {"kind": "heading_shortfall", "target": -0.4, "weight": 1.0},
+        {"kind": "heading_change", "target": 0.4},
+    ]
+    got = evaluate_terms(
+        np,
+        signals(parse_task(_task(terms=terms)), body, pos, None, 0.05),
+        parse_task(_task(terms=terms)).terms,
+    )
     left, right, final = (np.asarray(g) for g in got)
     # mean over the records of the squared shortfall: (0.4^2 + 0.2^2) / 5 for the early turn
     assert left[0] == pytest.approx((0.16 + 0.04) / 5)
@@ -114,8 +127,17 @@ def test_heading_shortfall_rewards_reaching_the_heading_early():
 
 def test_start_state_places_turns_pitches_and_launches_the_body():
     body = load_animal("dolphin")
-    task = parse_task(_task(start={"position": [1.0, 0.0, 2.0], "depth": 0.5, "heading": 0.5,
-                                   "pitch": 0.3, "speed": 2.0}))  # fmt: skip
+    task = parse_task(
+        _task(
+            start={
+                "position": [1.0, 0.0, 2.0],
+                "depth": 0.5,
+                "heading": 0.5,
+                "pitch": 0.3,
+                "speed": 2.0,
+            }
+        )
+    )
     st = start_state(task, body)
     s = signals(task, body, st.positions[:, None], None, 0.05)
     assert np.allclose(s.com[0, 0], [1.0, -0.5, 2.0])
@@ -131,11 +153,17 @@ def test_start_state_places_turns_pitches_and_launches_the_body():
 
 
 def test_task_files_are_strict_and_say_what_is_wrong():
-    with pytest.raises(TaskError, match=r"x.toml: terms\[0\]: unknown kind 'heading_chnage' "
-                                        r"\(did you mean 'heading_change'\?\)"):  # fmt: skip
+    with pytest.raises(
+        TaskError,
+        match=r"x.toml: terms\[0\]: unknown kind 'heading_chnage' "
+        r"\(did you mean 'heading_change'\?\)",
+    ):
         parse_task(_task(terms=[{"kind": "heading_chnage"}]), "x.toml")
-    with pytest.raises(TaskError, match=r"x.toml: terms\[0\]: unknown key 'wieght' \(did you "
-                                        r"mean 'weight'\?\)"):  # fmt: skip
+    with pytest.raises(
+        TaskError,
+        match=r"x.toml: terms\[0\]: unknown key 'wieght' \(did you "
+        r"mean 'weight'\?\)",
+    ):
         parse_task(_task(terms=[{"kind": "effort", "wieght": 2.0}]), "x.toml")
     with pytest.raises(TaskError, match="unknown key 'animals'"):
         parse_task(_task(animals=["shark"]), "x.toml")
@@ -196,13 +224,37 @@ def test_a_users_animal_takes_every_task_that_fits(my_eel, tmp_path, capsys):
     fitting = [n for n in list_tasks() if fits(load_task(n), eel)]
     assert {"swim-straight", "turn-left", "reach-goal"} <= set(fitting)
     short = tmp_path / "short.toml"
-    short.write_text('name = "short"\nrequires = ["water"]\nhorizon = 0.3\nnodes = 3\n'
-                     '[[terms]]\nkind = "distance_along_heading"\nweight = -1.0\n')  # fmt: skip
-    code = main(["learn", str(my_eel), "--task", str(short), "--budget", "4", "--no-video",
-                 "--out", str(tmp_path / "run")])  # fmt: skip
+    short.write_text(
+        'name = "short"\nrequires = ["water"]\nhorizon = 0.3\nnodes = 3\n'
+        '[[terms]]\nkind = "distance_along_heading"\nweight = -1.0\n'
+    )
+    code = main(
+        [
+            "learn",
+            str(my_eel),
+            "--task",
+            str(short),
+            "--budget",
+            "4",
+            "--no-video",
+            "--out",
+            str(tmp_path / "run"),
+        ]
+    )
     assert code == 0 and (tmp_path / "run" / "controller.json").exists()
-    code = main(["learn", str(my_eel), "--task", "crawl-straight", "--budget", "4",
-                 "--no-video", "--out", str(tmp_path / "no")])  # fmt: skip
+    code = main(
+        [
+            "learn",
+            str(my_eel),
+            "--task",
+            "crawl-straight",
+            "--budget",
+            "4",
+            "--no-video",
+            "--out",
+            str(tmp_path / "no"),
+        ]
+    )
     assert code == 2
     said = " ".join("".join(capsys.readouterr()).split())  # Rich wraps long lines
     assert "cannot apply to the my_eel (medium 'water'): it requires ground" in said
@@ -217,10 +269,19 @@ def test_jax_objective_scores_like_the_numpy_objective():
     from zoetic.learning.gradient import value_and_grad
 
     body = load_animal("shark")
-    task = parse_task(_task(horizon=0.3, nodes=4, nu1=0.01, mu1=1.0,
-                            start={"heading": 0.3, "speed": 0.2},
-                            terms=[{"kind": k, "target": 0.2} for k in
-                                   ("distance_along_heading", "heading_change", "effort")]))
+    task = parse_task(
+        _task(
+            horizon=0.3,
+            nodes=4,
+            nu1=0.01,
+            mu1=1.0,
+            start={"heading": 0.3, "speed": 0.2},
+            terms=[
+                {"kind": k, "target": 0.2}
+                for k in ("distance_along_heading", "heading_change", "effort")
+            ],
+        )
+    )
     obj = Objective(task, body, time_domain(body, 4, 0.3))
     X = np.random.default_rng(1).uniform(*obj.bounds(), size=(2, obj.dimension))
     ev = obj.evaluate(X)
@@ -234,10 +295,17 @@ def test_abstraction_measure_scores_like_the_objective_from_the_tasks_start():
     from zoetic.learning.abstraction import measure
 
     body = load_animal("shark")
-    task = parse_task(_task(horizon=0.6, nodes=4, start={"heading": -0.4, "speed": 0.3},
-                            terms=[{"kind": k, "target": 0.1} for k in
-                                   ("distance_along_heading", "heading_change", "effort",
-                                    "mean_speed")]))  # fmt: skip
+    task = parse_task(
+        _task(
+            horizon=0.6,
+            nodes=4,
+            start={"heading": -0.4, "speed": 0.3},
+            terms=[
+                {"kind": k, "target": 0.1}
+                for k in ("distance_along_heading", "heading_change", "effort", "mean_speed")
+            ],
+        )
+    )
     obj = Objective(task, body, time_domain(body, 4, 0.6))
     x = np.random.default_rng(2).uniform(*obj.bounds())
     ev = obj.evaluate(x[None])

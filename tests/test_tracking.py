@@ -123,8 +123,22 @@ def test_bad_inputs_raise_tracking_errors(shark):
 def test_track_command_writes_its_run(tmp_path, memory, capsys, shark):
     out = tmp_path / "t1"
     targets = ";".join(f"{x},{z}" for x, z in COURSE)
-    code = main(["track", "shark", "--memory", str(memory), "--targets", targets,
-                 "--out", str(out), "--time-limit", "30", "--fps", "10"])  # fmt: skip
+    code = main(
+        [
+            "track",
+            "shark",
+            "--memory",
+            str(memory),
+            "--targets",
+            targets,
+            "--out",
+            str(out),
+            "--time-limit",
+            "30",
+            "--fps",
+            "10",
+        ]
+    )
     assert code == 0
     text = capsys.readouterr().out
     assert "reached 2/2" in text and "real time" in text
@@ -140,8 +154,21 @@ def test_track_command_writes_its_run(tmp_path, memory, capsys, shark):
 
 
 def _run_expect_error(capsys, memory, animal="shark", targets="1,0") -> str:
-    code = main(["track", animal, "--memory", str(memory), "--targets", targets, "--no-video",
-                 "--time-limit", "1", "--out", str(memory.parent / "out")])  # fmt: skip
+    code = main(
+        [
+            "track",
+            animal,
+            "--memory",
+            str(memory),
+            "--targets",
+            targets,
+            "--no-video",
+            "--time-limit",
+            "1",
+            "--out",
+            str(memory.parent / "out"),
+        ]
+    )
     assert code == 2
     return capsys.readouterr().err.replace("\n", "")
 

@@ -26,8 +26,12 @@ from zoetic.web.server import make_server
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 # WebGL without a GPU: ANGLE on SwiftShader, Chromium's software rasteriser
-WEBGL_FLAGS = ["--use-gl=angle", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-               "--ignore-gpu-blocklist"]  # fmt: skip
+WEBGL_FLAGS = [
+    "--use-gl=angle",
+    "--use-angle=swiftshader",
+    "--enable-unsafe-swiftshader",
+    "--ignore-gpu-blocklist",
+]
 
 
 @pytest.fixture(scope="module")
@@ -54,8 +58,9 @@ def test_the_page_is_self_contained_and_carries_the_run(shark_run, tmp_path):
     assert list(plots["animals"]) == ["shark"]
     assert list(plots["animals"]["shark"])[:2] == ["speed", "height"]  # water: no surface
     np.testing.assert_allclose(plots["times"], rec.period_times - rec.times[0], atol=1e-4)
-    np.testing.assert_allclose(plots["animals"]["shark"]["roll"], rec.scalars["shark"]["roll"],
-                               atol=1e-4)  # fmt: skip
+    np.testing.assert_allclose(
+        plots["animals"]["shark"]["roll"], rec.scalars["shark"]["roll"], atol=1e-4
+    )
     assert plots["units"]["speed"] == "m/s" and plots["units"]["pitch"] == "deg"
 
 
@@ -68,8 +73,9 @@ def test_no_text_of_the_run_can_close_the_data_element(shark_run):
     assert "&lt;/script>" in text.split("</title>")[0]
 
 
-def test_without_the_built_script_the_cli_says_how_to_build_it(shark_run, tmp_path, monkeypatch,
-                                                              capsys):  # fmt: skip
+def test_without_the_built_script_the_cli_says_how_to_build_it(
+    shark_run, tmp_path, monkeypatch, capsys
+):
     import zoetic.web.page as page
 
     monkeypatch.setattr(page, "_STATIC", tmp_path / "nowhere")
@@ -140,8 +146,9 @@ def test_the_viewer_draws_and_scrubs_in_chromium(shark_run, tmp_path):
             errors: list[str] = []
             page.on("pageerror", lambda e: errors.append(str(e)))
             page.goto(html.as_uri())
-            page.wait_for_function("window.zoetic && (window.zoetic.ready || window.zoetic.error)",
-                                   timeout=30_000)  # fmt: skip
+            page.wait_for_function(
+                "window.zoetic && (window.zoetic.ready || window.zoetic.error)", timeout=30_000
+            )
             assert page.evaluate("window.zoetic.error") is None and not errors, errors
             page.keyboard.press(" ")  # pause, then move the timeline as a user would
             assert page.inner_text("#play") == "play"
@@ -194,8 +201,25 @@ def test_an_aquarium_plays_in_chromium_with_its_objects_and_events(tmp_path):
     from zoetic.record import Event, read_record, write_record
 
     run = tmp_path / "tank"
-    assert main(["aquarium", "--fishes", "2", "--food", "2", "--obstacles", "1", "--seconds",
-                 "0.5", "--no-video", "--out", str(run)]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "aquarium",
+                "--fishes",
+                "2",
+                "--food",
+                "2",
+                "--obstacles",
+                "1",
+                "--seconds",
+                "0.5",
+                "--no-video",
+                "--out",
+                str(run),
+            ]
+        )
+        == 0
+    )
     rec = read_record(run)
     fish = rec.animals[0].name
     write_record(run, dataclasses.replace(rec, events=(Event(0.2, fish, "eat", "food 1"),)))
@@ -209,8 +233,9 @@ def test_an_aquarium_plays_in_chromium_with_its_objects_and_events(tmp_path):
             errors: list[str] = []
             page.on("pageerror", lambda e: errors.append(str(e)))
             page.goto(html.as_uri())
-            page.wait_for_function("window.zoetic && (window.zoetic.ready || window.zoetic.error)",
-                                   timeout=30_000)  # fmt: skip
+            page.wait_for_function(
+                "window.zoetic && (window.zoetic.ready || window.zoetic.error)", timeout=30_000
+            )
             assert page.evaluate("window.zoetic.error") is None and not errors, errors
             page.evaluate("window.zoetic.pause(); window.zoetic.setTime(0.1)")
             assert page.inner_text("#panel .events") == ""  # nothing has happened yet
@@ -218,11 +243,11 @@ def test_an_aquarium_plays_in_chromium_with_its_objects_and_events(tmp_path):
             assert page.inner_text("#panel .events") == f"0.2 s {fish} eat food 1"
             t = page.evaluate("window.zoetic.time()")  # 0.3 s: frame 6 at 20 fps
             states = page.inner_text("#panel .states").split("\n")
-            assert states == [f"{a.name}: {scene.states[a.name]['intention'][6]}"
-                              for a in rec.animals], (t, states)
+            assert states == [
+                f"{a.name}: {scene.states[a.name]['intention'][6]}" for a in rec.animals
+            ], (t, states)
             assert _canvas(page).std() > 10, "the canvas is blank"
-            _check_plots(page, rec.animals[0].name, ["speed", "height"],
-                         len(rec.period_times))  # fmt: skip
+            _check_plots(page, rec.animals[0].name, ["speed", "height"], len(rec.period_times))
             other = rec.animals[1].name
             page.select_option("#plot-who", other)  # another fish: its own charts
             assert page.evaluate("window.zoetic.plots()")["who"] == other

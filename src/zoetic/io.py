@@ -259,15 +259,22 @@ class Table:
             return default
         return self.data[key]
 
-    def number(self, key: str, default: Any = ..., lo: float | None = None,
-               hi: float | None = None, positive: bool = False) -> float:  # fmt: skip
+    def number(
+        self,
+        key: str,
+        default: Any = ...,
+        lo: float | None = None,
+        hi: float | None = None,
+        positive: bool = False,
+    ) -> float:
         value = self.raw(key, default)
         if value is default and default is not ... and not isinstance(default, int | float):
             return value
         return number(value, f"{self.where}: {key}", self.error, lo, hi, positive)
 
-    def integer(self, key: str, default: Any = ..., lo: int | None = None,
-                hi: int | None = None) -> int:  # fmt: skip
+    def integer(
+        self, key: str, default: Any = ..., lo: int | None = None, hi: int | None = None
+    ) -> int:
         value = self.raw(key, default)
         if value is default and default is not ... and not isinstance(default, int):
             return value
@@ -297,8 +304,9 @@ class Table:
             raise self.fail(f"{len(value)} [[{key}]] entries is too many (at most {limit})")
         return value
 
-    def numbers(self, key: str, default: Any = ..., size: int | None = None,
-                limit: int | None = None) -> list[float]:  # fmt: skip
+    def numbers(
+        self, key: str, default: Any = ..., size: int | None = None, limit: int | None = None
+    ) -> list[float]:
         value = self.raw(key, default)
         if value is default and default is not ... and not isinstance(default, list):
             return value
@@ -322,8 +330,14 @@ def check_keys(data: dict, allowed: Iterable[str], where: str, error=ZoeticError
         )
 
 
-def number(value: Any, where: str, error=ZoeticError, lo: float | None = None,
-           hi: float | None = None, positive: bool = False) -> float:  # fmt: skip
+def number(
+    value: Any,
+    where: str,
+    error=ZoeticError,
+    lo: float | None = None,
+    hi: float | None = None,
+    positive: bool = False,
+) -> float:
     """Return ``value`` as a finite float in [lo, hi] (> 0 if ``positive``), else ``error``."""
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise error(f"{where} must be a number, got {abbrev(value)}")
@@ -342,8 +356,9 @@ def number(value: Any, where: str, error=ZoeticError, lo: float | None = None,
     return v
 
 
-def integer(value: Any, where: str, error=ZoeticError, lo: int | None = None,
-            hi: int | None = None) -> int:  # fmt: skip
+def integer(
+    value: Any, where: str, error=ZoeticError, lo: int | None = None, hi: int | None = None
+) -> int:
     """Return ``value`` as an int in [lo, hi] (a float with no fraction is accepted)."""
     if isinstance(value, float) and math.isfinite(value) and value == int(value):
         value = int(value)
@@ -356,8 +371,7 @@ def integer(value: Any, where: str, error=ZoeticError, lo: int | None = None,
     return value
 
 
-def string(value: Any, where: str, error=ZoeticError,
-           choices: Iterable[str] | None = None) -> str:  # fmt: skip
+def string(value: Any, where: str, error=ZoeticError, choices: Iterable[str] | None = None) -> str:
     """Return ``value`` if it is a non-empty string (one of ``choices`` when given)."""
     if not isinstance(value, str) or not value:
         raise error(f"{where} must be a non-empty string, got {abbrev(value)}")
@@ -371,8 +385,9 @@ def string(value: Any, where: str, error=ZoeticError,
     return value
 
 
-def numbers(value: Any, where: str, error=ZoeticError, size: int | None = None,
-            limit: int | None = None) -> list[float]:  # fmt: skip
+def numbers(
+    value: Any, where: str, error=ZoeticError, size: int | None = None, limit: int | None = None
+) -> list[float]:
     """Return a list of finite floats (exactly ``size`` of them, at most ``limit``)."""
     if not isinstance(value, list | tuple):
         raise error(f"{where} must be a list of numbers, got {abbrev(value)}")
@@ -384,8 +399,14 @@ def numbers(value: Any, where: str, error=ZoeticError, size: int | None = None,
     return [number(v, f"{where}[{i}]", error) for i, v in enumerate(value)]
 
 
-def matrix(value: Any, where: str, error=ZoeticError, rows: int | None = None,
-           cols: int | None = None, limit: int | None = None) -> list[list[float]]:  # fmt: skip
+def matrix(
+    value: Any,
+    where: str,
+    error=ZoeticError,
+    rows: int | None = None,
+    cols: int | None = None,
+    limit: int | None = None,
+) -> list[list[float]]:
     """Return a rectangular list of lists of finite floats (with the given shape)."""
     if not isinstance(value, list) or not all(isinstance(r, list) for r in value):
         raise error(f"{where} must be a list of rows (lists of numbers), got {abbrev(value)}")
@@ -418,8 +439,12 @@ def check_steps(seconds: float, dt: float, where: str, error=ZoeticError) -> int
     return steps
 
 
-def check_memory(nbytes: float, what: str, error=ZoeticError,
-                 fix: str = "use a shorter time, a larger dt or fewer nodes") -> None:  # fmt: skip
+def check_memory(
+    nbytes: float,
+    what: str,
+    error=ZoeticError,
+    fix: str = "use a shorter time, a larger dt or fewer nodes",
+) -> None:
     """Refuse work whose arrays would take more than ``LIMITS.memory_bytes``."""
     if nbytes > LIMITS.memory_bytes:
         raise error(

@@ -123,8 +123,10 @@ def _rgb(color) -> list[int] | None:
 
 def _arrays(rec: Record) -> dict[str, np.ndarray]:
     """Return the record's arrays under their archive names (docs/record.md)."""
-    out = {"times": np.asarray(rec.times, np.float64),
-           "period_times": np.asarray(rec.period_times, np.float64)}  # fmt: skip
+    out = {
+        "times": np.asarray(rec.times, np.float64),
+        "period_times": np.asarray(rec.period_times, np.float64),
+    }
     for i, a in enumerate(rec.animals):
         out[f"animal/{i}/faces"] = np.asarray(a.faces, np.int32)
         out[f"animal/{i}/positions"] = np.asarray(a.positions, np.float32)
@@ -152,20 +154,46 @@ def _arrays(rec: Record) -> dict[str, np.ndarray]:
 def _meta(rec: Record) -> dict:
     """Return the record's JSON header: everything but the arrays."""
     return {
-        "format": FORMAT, "version": VERSION, "kind": rec.kind, "title": rec.title,
+        "format": FORMAT,
+        "version": VERSION,
+        "kind": rec.kind,
+        "title": rec.title,
         "medium": rec.medium,
-        "animals": [{"name": a.name, "species": a.species, "color": _rgb(a.color),
-                     "actuators": list(a.actuators)} for a in rec.animals],
-        "creatures": [{"name": c.name, "actuators": list(c.actuators),
-                       "links": [{"name": ln.name, "color": _rgb(ln.color), "axis": ln.axis}
-                                 for ln in c.links]} for c in rec.creatures],
-        "objects": [{"kind": o.kind, "name": o.name, "shape": o.shape,
-                     "size": [float(s) for s in o.size], "axis": o.axis} for o in rec.objects],
+        "animals": [
+            {
+                "name": a.name,
+                "species": a.species,
+                "color": _rgb(a.color),
+                "actuators": list(a.actuators),
+            }
+            for a in rec.animals
+        ],
+        "creatures": [
+            {
+                "name": c.name,
+                "actuators": list(c.actuators),
+                "links": [
+                    {"name": ln.name, "color": _rgb(ln.color), "axis": ln.axis} for ln in c.links
+                ],
+            }
+            for c in rec.creatures
+        ],
+        "objects": [
+            {
+                "kind": o.kind,
+                "name": o.name,
+                "shape": o.shape,
+                "size": [float(s) for s in o.size],
+                "axis": o.axis,
+            }
+            for o in rec.objects
+        ],
         "events": [[float(e.t), str(e.who), str(e.what), str(e.detail)] for e in rec.events],
         "scalars": {who: sorted(q) for who, q in rec.scalars.items()},
         "labels": {k: list(v) for k, v in rec.labels.items()},
-        "units": dict(rec.units), "numbers": rec.numbers,
-    }  # fmt: skip
+        "units": dict(rec.units),
+        "numbers": rec.numbers,
+    }
 
 
 def write_record(path: str | os.PathLike, rec: Record) -> Path:
@@ -244,10 +272,18 @@ def _animals(meta: dict, ck: _Check, t: int) -> tuple[Animal, ...]:
         pos = ck.array(f"animal/{i}/positions", (t, None, 3))
         n = pos.shape[1]
         acts = ck.array(f"animal/{i}/activations", (t, len(d["actuators"])), optional=True)
-        out.append(Animal(str(d["name"]), str(d["species"]), ck.faces(f"animal/{i}/faces", n),
-                          pos, ck.array(f"animal/{i}/mass", (n,)),
-                          _color(d["color"], ck, f"animals[{i}]"),
-                          tuple(map(str, d["actuators"])), acts))  # fmt: skip
+        out.append(
+            Animal(
+                str(d["name"]),
+                str(d["species"]),
+                ck.faces(f"animal/{i}/faces", n),
+                pos,
+                ck.array(f"animal/{i}/mass", (n,)),
+                _color(d["color"], ck, f"animals[{i}]"),
+                tuple(map(str, d["actuators"])),
+                acts,
+            )
+        )
     return tuple(out)
 
 
@@ -262,13 +298,27 @@ def _creatures(meta: dict, ck: _Check, t: int) -> tuple[Creature, ...]:
                 raise ck.fail(f"creatures[{i}].links[{j}]: axis must be 'y' or 'z'")
             key = f"creature/{i}/link/{j}"
             verts = ck.array(f"{key}/vertices", (None, 3))
-            links.append(Link(str(ln["name"]), _color(ln["color"], ck, key), verts,
-                              ck.faces(f"{key}/faces", len(verts)),
-                              ck.array(f"{key}/translations", (t, 3)),
-                              ck.array(f"{key}/angles", (t,)), ln["axis"]))  # fmt: skip
+            links.append(
+                Link(
+                    str(ln["name"]),
+                    _color(ln["color"], ck, key),
+                    verts,
+                    ck.faces(f"{key}/faces", len(verts)),
+                    ck.array(f"{key}/translations", (t, 3)),
+                    ck.array(f"{key}/angles", (t,)),
+                    ln["axis"],
+                )
+            )
         acts = ck.array(f"creature/{i}/activations", (t, len(d["actuators"])), optional=True)
-        out.append(Creature(str(d["name"]), tuple(links), ck.array(f"creature/{i}/com", (t, 3)),
-                            tuple(map(str, d["actuators"])), acts))  # fmt: skip
+        out.append(
+            Creature(
+                str(d["name"]),
+                tuple(links),
+                ck.array(f"creature/{i}/com", (t, 3)),
+                tuple(map(str, d["actuators"])),
+                acts,
+            )
+        )
     return tuple(out)
 
 
@@ -280,17 +330,27 @@ def _objects(meta: dict, ck: _Check, t: int) -> tuple[Thing, ...]:
         if d["shape"] not in SHAPES or d["axis"] not in AXES:
             raise ck.fail(f"objects[{k}]: shape must be one of {SHAPES}, axis one of {AXES}")
         size = d["size"]
-        if not isinstance(size, list) or len(size) != sizes[d["shape"]] or not all(
-            isinstance(s, int | float) and np.isfinite(s) and s > 0 for s in size
+        if (
+            not isinstance(size, list)
+            or len(size) != sizes[d["shape"]]
+            or not all(isinstance(s, int | float) and np.isfinite(s) and s > 0 for s in size)
         ):
-            raise ck.fail(f"objects[{k}]: a {d['shape']} needs {sizes[d['shape']]} positive "
-                          "sizes")  # fmt: skip
+            raise ck.fail(f"objects[{k}]: a {d['shape']} needs {sizes[d['shape']]} positive sizes")
         pos = ck.array(f"object/{k}/positions", (None, 3))
         if len(pos) not in (1, t):
             raise ck.fail(f"object/{k}/positions has {len(pos)} rows, expected 1 or {t}")
         vis = ck.array(f"object/{k}/visible", (t,), "b", optional=True)
-        out.append(Thing(str(d["kind"]), str(d["name"]), d["shape"],
-                         tuple(float(s) for s in size), pos, d["axis"], vis))  # fmt: skip
+        out.append(
+            Thing(
+                str(d["kind"]),
+                str(d["name"]),
+                d["shape"],
+                tuple(float(s) for s in size),
+                pos,
+                d["axis"],
+                vis,
+            )
+        )
     return tuple(out)
 
 
@@ -313,8 +373,12 @@ def _scalars(meta: dict, ck: _Check, p: int) -> dict:
 def _events(meta: dict, ck: _Check) -> tuple[Event, ...]:
     out = []
     for e in meta["events"]:
-        if not (isinstance(e, list) and len(e) == 4 and isinstance(e[0], int | float)
-                and all(isinstance(v, str) for v in e[1:])):  # fmt: skip
+        if not (
+            isinstance(e, list)
+            and len(e) == 4
+            and isinstance(e[0], int | float)
+            and all(isinstance(v, str) for v in e[1:])
+        ):
             raise ck.fail(f"an event must be [t, who, what, detail], got {str(e)[:60]}")
         out.append(Event(float(e[0]), *e[1:]))
     return tuple(out)
@@ -323,13 +387,28 @@ def _events(meta: dict, ck: _Check) -> tuple[Event, ...]:
 def _build(meta, arrays: dict[str, np.ndarray], where: str) -> Record:
     """Return the Record that a header and arrays describe, every field checked."""
     ck = _Check(where, arrays)
-    keys = ("format", "version", "kind", "title", "medium", "animals", "creatures", "objects",
-            "events", "scalars", "labels", "units", "numbers")  # fmt: skip
+    keys = (
+        "format",
+        "version",
+        "kind",
+        "title",
+        "medium",
+        "animals",
+        "creatures",
+        "objects",
+        "events",
+        "scalars",
+        "labels",
+        "units",
+        "numbers",
+    )
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
         raise ck.fail("its header does not say format = 'zoetic-record'")
     if meta.get("version") != VERSION:
-        raise RunDirError(f"{where}: record version {meta.get('version')!r}; this zoetic reads "
-                          f"version {VERSION} (run the command again to write it)")  # fmt: skip
+        raise RunDirError(
+            f"{where}: record version {meta.get('version')!r}; this zoetic reads "
+            f"version {VERSION} (run the command again to write it)"
+        )
     ck.entry(meta, keys, "the header")
     for key in ("animals", "creatures", "objects", "events"):
         if not isinstance(meta[key], list):
@@ -339,12 +418,20 @@ def _build(meta, arrays: dict[str, np.ndarray], where: str) -> Record:
         raise ck.fail("times must be finite, non-decreasing and not empty")
     period = ck.array("period_times", (None,))
     return Record(
-        str(meta["kind"]), str(meta["title"]), str(meta["medium"]), times,
-        _animals(meta, ck, len(times)), _creatures(meta, ck, len(times)),
-        _objects(meta, ck, len(times)), _events(meta, ck), period,
-        _scalars(meta, ck, len(period)), dict(meta["labels"]), dict(meta["units"]),
+        str(meta["kind"]),
+        str(meta["title"]),
+        str(meta["medium"]),
+        times,
+        _animals(meta, ck, len(times)),
+        _creatures(meta, ck, len(times)),
+        _objects(meta, ck, len(times)),
+        _events(meta, ck),
+        period,
+        _scalars(meta, ck, len(period)),
+        dict(meta["labels"]),
+        dict(meta["units"]),
         dict(meta["numbers"]),
-    )  # fmt: skip
+    )
 
 
 def _load(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
@@ -353,8 +440,10 @@ def _load(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
         with zipfile.ZipFile(path) as zf:
             total = sum(i.file_size for i in zf.infolist())
         if total > LIMITS.memory_bytes:  # checked before anything is decompressed
-            raise RunDirError(f"{path}: {total / 2**20:.0f} MiB of arrays, more than a run "
-                              f"record may hold ({LIMITS.memory_bytes / 2**20:.0f} MiB)")
+            raise RunDirError(
+                f"{path}: {total / 2**20:.0f} MiB of arrays, more than a run "
+                f"record may hold ({LIMITS.memory_bytes / 2**20:.0f} MiB)"
+            )
         with np.load(path, allow_pickle=False) as z:
             arrays = {k: z[k] for k in z.files}
     except RunDirError:
@@ -380,9 +469,11 @@ def read_record(path: str | os.PathLike) -> Record:
     if path.is_dir():
         path = path / FILE
     if not path.is_file():
-        raise RunDirError(f"{path}: no run record; views and exports come from runs of "
-                          "simulate, learn, track, macro, sequence, stunt, aquarium, pursue "
-                          "and san (run the command again to write one)")  # fmt: skip
+        raise RunDirError(
+            f"{path}: no run record; views and exports come from runs of "
+            "simulate, learn, track, macro, sequence, stunt, aquarium, pursue "
+            "and san (run the command again to write one)"
+        )
     meta, arrays = _load(path)
     try:
         return _build(meta, arrays, str(path))

@@ -34,16 +34,29 @@ def record_stride(dt: float, rate_hz: float = 100.0) -> int:
     return max(1, int(round(1.0 / (rate_hz * dt))))
 
 
-def animal_record(body: Body, positions: np.ndarray, times: np.ndarray, ctrl=None,
-                  name: str | None = None, color=None) -> Animal:
+def animal_record(
+    body: Body,
+    positions: np.ndarray,
+    times: np.ndarray,
+    ctrl=None,
+    name: str | None = None,
+    color=None,
+) -> Animal:
     """Return the run record's entry of one animal: its surface, its node positions (T, N, 3)
     at ``times`` (T,) s, and (with ``ctrl``) the activations its controller gave then."""
     acts = None
     if ctrl is not None:
         acts = np.clip(np.asarray(ctrl.sample(np.asarray(times, float)), np.float32), 0.0, 1.0)
-    return Animal(name or body.name, body.name, np.asarray(body.faces, np.int32),
-                  np.asarray(positions, np.float32), np.asarray(body.mass, np.float32), color,
-                  tuple(body.actuator_names), acts)  # fmt: skip
+    return Animal(
+        name or body.name,
+        body.name,
+        np.asarray(body.faces, np.int32),
+        np.asarray(positions, np.float32),
+        np.asarray(body.mass, np.float32),
+        color,
+        tuple(body.actuator_names),
+        acts,
+    )
 
 
 def write_run_record(out: Path, rec: Record, bodies: Sequence[Body]) -> tuple[Path, Record]:
@@ -82,15 +95,16 @@ def run_controller(
     return traj
 
 
-def check_simulation(body: Body, ctrl: Controller, seconds: float, dt: float,
-                     where_dt: str) -> int:  # fmt: skip
+def check_simulation(body: Body, ctrl: Controller, seconds: float, dt: float, where_dt: str) -> int:
     """Return the number of steps, refusing a run too long or too big for memory."""
     steps = check_steps(seconds, dt, where_dt, SimulationError)
     n_rec = steps // record_stride(dt) + 1
     per_step = body.n_actuators * 24 + 8 * int(getattr(ctrl, "nodes", 8) or 8)
-    check_memory(steps * per_step + n_rec * body.n_nodes * 3 * 12,
-                 f"simulating {seconds:g} s of the {body.name} at dt = {dt:g} s",
-                 SimulationError)  # fmt: skip
+    check_memory(
+        steps * per_step + n_rec * body.n_nodes * 3 * 12,
+        f"simulating {seconds:g} s of the {body.name} at dt = {dt:g} s",
+        SimulationError,
+    )
     return steps
 
 
@@ -114,8 +128,13 @@ def simulate_run(
     out = Path(out)
     make_dir(out)
     traj = run_controller(body, ctrl, seconds, med, dt)
-    rec = Record("simulate", f"{body.name} ({out.name})", med.name, traj.times,
-                 (animal_record(body, traj.positions[0], traj.times, ctrl),))  # fmt: skip
+    rec = Record(
+        "simulate",
+        f"{body.name} ({out.name})",
+        med.name,
+        traj.times,
+        (animal_record(body, traj.positions[0], traj.times, ctrl),),
+    )
     path, rec = write_run_record(out, rec, [body])
     files = media(body, rec, out) if media is not None else {}
     com = traj.com(body)[0]
@@ -153,9 +172,14 @@ def finish_run(run, media: Media | None = None) -> dict:
     ev = obj.evaluate(setup.optimizer.best_x[None])
     traj = obj.simulate(setup.optimizer.best_x[None])
     best_E = round(float(ev.E[0]), 4)
-    rec = Record("learn", f"{body.name} learn ({out.name})", obj.medium.name, traj.times,
-                 (animal_record(body, traj.positions[0], traj.times, run.best_controller()),),
-                 numbers={"best_E": best_E, "task": task.name})  # fmt: skip
+    rec = Record(
+        "learn",
+        f"{body.name} learn ({out.name})",
+        obj.medium.name,
+        traj.times,
+        (animal_record(body, traj.positions[0], traj.times, run.best_controller()),),
+        numbers={"best_E": best_E, "task": task.name},
+    )
     _, rec = write_run_record(out, rec, [body])
     files = media(run, rec) if media is not None else {}
     com = traj.com(body)[0]

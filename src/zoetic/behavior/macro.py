@@ -51,8 +51,13 @@ def path_scores(com_xz: np.ndarray, record_dt: float, task: ReachTask, radius: f
     reach = np.where(hit.any(axis=1), hit.argmax(axis=1) * record_dt, np.nan)
     t_cost = np.where(np.isfinite(reach), reach, task.horizon)
     cost = d[:, -1] + task.obstacle_weight * inside + task.time_weight * t_cost
-    return {"cost": cost, "closest": d.min(axis=1), "final": d[:, -1], "inside": inside,
-            "reach": reach}  # fmt: skip
+    return {
+        "cost": cost,
+        "closest": d.min(axis=1),
+        "final": d[:, -1],
+        "inside": inside,
+        "reach": reach,
+    }
 
 
 class MacroProblem:
@@ -187,13 +192,21 @@ class PlanAnnealing(_Search):
         upper = np.concatenate([np.full(n, self.k - 1.0), np.full(n, self.hi)])
 
         def perturb(x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-            e, d = _move(x[:, :n].astype(int), x[:, n:], rng, self.k, self.lo, self.hi, step,
-                         swap)  # fmt: skip
+            e, d = _move(x[:, :n].astype(int), x[:, n:], rng, self.k, self.lo, self.hi, step, swap)
             return np.hstack([e, d])
 
-        self.sa = Annealing(np.hstack([e, d]), lower, upper, seed, t0=t0, alpha=alpha,
-                            chains=int(chains), perturb=perturb, relative=True,
-                            rng=self.rng)  # fmt: skip
+        self.sa = Annealing(
+            np.hstack([e, d]),
+            lower,
+            upper,
+            seed,
+            t0=t0,
+            alpha=alpha,
+            chains=int(chains),
+            perturb=perturb,
+            relative=True,
+            rng=self.rng,
+        )
 
     @property
     def e(self) -> np.ndarray:
@@ -314,7 +327,7 @@ class MacroResult:
                     "played": bool(t < self.horizon),
                 }
                 for n, t, d in zip(self.names, self.sequence.starts(), self.durations, strict=True)
-            ],  # fmt: skip
+            ],
         }
 
 
@@ -375,7 +388,14 @@ def search(
     e, d = opt.best
     scores = {k: float(v[0]) for k, v in problem.evaluate(e[None], d[None]).items()}
     return MacroResult(
-        method=method, names=[problem.names[i] for i in e], entries=e, durations=d,
-        sequence=problem.sequence(e, d), scores=scores, evaluations=opt.evaluations,
-        wall=wall, horizon=problem.task.horizon, history=history,
-    )  # fmt: skip
+        method=method,
+        names=[problem.names[i] for i in e],
+        entries=e,
+        durations=d,
+        sequence=problem.sequence(e, d),
+        scores=scores,
+        evaluations=opt.evaluations,
+        wall=wall,
+        horizon=problem.task.horizon,
+        history=history,
+    )

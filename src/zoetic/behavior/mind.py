@@ -26,8 +26,16 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 INTENTIONS = ("avoid", "escape", "school", "eat", "mate", "hunt", "wander", "leave")
-LEVEL = {"avoid": 0, "escape": 1, "school": 1, "eat": 2, "mate": 2, "hunt": 2,
-         "wander": 3, "leave": 3}  # fmt: skip
+LEVEL = {
+    "avoid": 0,
+    "escape": 1,
+    "school": 1,
+    "eat": 2,
+    "mate": 2,
+    "hunt": 2,
+    "wander": 3,
+    "leave": 3,
+}
 
 
 def ramp(s, q1: float, q2: float):
@@ -113,13 +121,15 @@ def drives(state: MindState, t: float, c, predator_distances=()) -> Drives:
     (a ``MindConstants``): rates p0, p1 in 1/s, the fear distance D0 in m."""
     h = hunger(state.eaten, t - state.meal_time, c.hunger_rate, c.alpha)
     return Drives(
-        h, libido(t - state.mating_time, c.libido_rate, h),
+        h,
+        libido(t - state.mating_time, c.libido_rate, h),
         fear(predator_distances, c.fear_distance),
-    )  # fmt: skip
+    )
 
 
-def drives_many(eaten, meal_time, mating_time, t: float, p0, alpha, p1, d0, predators
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+def drives_many(
+    eaten, meal_time, mating_time, t: float, p0, alpha, p1, d0, predators
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Return hunger, libido and fear (n,) of n minds at time t in one step over arrays: the
     minds' last meals (``eaten``, ``meal_time``) and matings (n,), their constants p0, alpha,
     p1, D0 (n,) or scalars, and ``predators`` (n, m): the distances (m) of the predators each
@@ -132,9 +142,11 @@ def drives_many(eaten, meal_time, mating_time, t: float, p0, alpha, p1, d0, pred
     d = np.asarray(predators, float).reshape(len(h), -1)
     if d.shape[1] == 0:
         return h, lib, np.zeros(len(h))
-    each = np.where(np.isfinite(d),
-                    np.minimum(np.asarray(d0, float).reshape(-1, 1) / np.maximum(d, 1e-9), 1.0),
-                    0.0)  # fmt: skip
+    each = np.where(
+        np.isfinite(d),
+        np.minimum(np.asarray(d0, float).reshape(-1, 1) / np.maximum(d, 1e-9), 1.0),
+        0.0,
+    )
     # a running sum adds the terms one by one in column order, as ``fear`` adds a few
     return h, lib, np.minimum(np.cumsum(each, axis=1)[:, -1], 1.0)
 
@@ -204,8 +216,15 @@ def focus(distances, previous: int | None = None, keep_within: float = 1.25) -> 
     return best
 
 
-def think(state: MindState, t: float, c, habits, sit: Situation, predator: bool = False,
-          d: Drives | None = None) -> tuple[MindState, Drives]:  # fmt: skip
+def think(
+    state: MindState,
+    t: float,
+    c,
+    habits,
+    sit: Situation,
+    predator: bool = False,
+    d: Drives | None = None,
+) -> tuple[MindState, Drives]:
     """Return the mind after one brain period at time t, and its drives (``d`` when given,
     e.g. from ``drives_many``): the intention the priorities and persistence choose (the
     target is left to the focuser)."""

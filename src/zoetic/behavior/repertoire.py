@@ -48,8 +48,14 @@ class Repertoire:
         for name, ctrl in self.controllers.items():
             file = f"{name}.json"
             save_controller(ctrl, directory / file)
-            entries.append({"name": name, "file": file, "duration": self.durations[name],
-                            **self.info.get(name, {})})  # fmt: skip
+            entries.append(
+                {
+                    "name": name,
+                    "file": file,
+                    "duration": self.durations[name],
+                    **self.info.get(name, {}),
+                }
+            )
         index = {"animal": self.animal, "actuators": list(self.actuators), "entries": entries}
         return write_json(directory / INDEX, index)
 

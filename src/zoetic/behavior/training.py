@@ -62,8 +62,9 @@ def plan_for(body: Body) -> list[Entry]:
     """Return the entries the basic training learns for this animal (tasks that allow it)."""
     caps = capabilities(body)
     kind = "water" if "water" in caps else "ground"
-    plan = [(n, t) for n, t in SURFACE_PLAN] if "surface" in caps else [
-        (n, t[kind]) for n, t in PLAN]  # fmt: skip
+    plan = (
+        [(n, t) for n, t in SURFACE_PLAN] if "surface" in caps else [(n, t[kind]) for n, t in PLAN]
+    )
     out = []
     for name, task_name in plan:
         task = load_task(task_name)
@@ -84,8 +85,9 @@ def rest_abstraction(body: Body) -> AbstractController:
     a = len(body.actuator_names)
     empty = np.zeros((a, 0))
     level = np.nan_to_num(body.wave_held)
-    return AbstractController(body.name, tuple(body.actuator_names), level, empty, empty,
-                              empty, REST_SECONDS)  # fmt: skip
+    return AbstractController(
+        body.name, tuple(body.actuator_names), level, empty, empty, empty, REST_SECONDS
+    )
 
 
 def abstraction_report(
@@ -99,7 +101,7 @@ def abstraction_report(
         "modes_per_actuator": ab.modes_per_actuator().tolist(),
         "frequencies_hz": sorted(
             {round(float(f), 4) for f in ab.controller.freq[ab.controller.amp > 0]}
-        ),  # fmt: skip
+        ),
         **cmp.to_dict(),
     }
 
@@ -116,7 +118,8 @@ def check_same_task(run_dir: Path, learned: Task, now: Task) -> None:
     if _plain(learned) != _plain(now):
         raise RunDirError(
             f"{run_dir / 'config.toml'}: entry learned for an earlier version of task "
-            f"'{now.name}'; train into a fresh --out (or delete {run_dir}) to learn it again")
+            f"'{now.name}'; train into a fresh --out (or delete {run_dir}) to learn it again"
+        )
 
 
 def plan_digest(animal: str | Path) -> str:
@@ -178,12 +181,15 @@ def train_repertoire(
         original = run.best_controller()
         ab = abstract(original, modes, threshold)
         info = abstraction_report(body, original, ab, entry.task)
-        rep.add(entry.name, ab.controller, entry.task.horizon, source=f"runs/{entry.name}",
-                **info)  # fmt: skip
+        rep.add(entry.name, ab.controller, entry.task.horizon, source=f"runs/{entry.name}", **info)
         right = mirrored_name(entry.name)
         if right:
-            rep.add(right, mirror_abstract(ab.controller, body.actuator_mirror),
-                    entry.task.horizon, source=f"mirror of {entry.name}")  # fmt: skip
+            rep.add(
+                right,
+                mirror_abstract(ab.controller, body.actuator_mirror),
+                entry.task.horizon,
+                source=f"mirror of {entry.name}",
+            )
         rep.save(out)
     return rep
 

@@ -9,9 +9,16 @@ from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live, summariz
 BOTH = "both"  # ``skills``: the built-in and the learned tank, side by side
 
 
-def bench_aquarium(fishes: int = 10, food: int = 15, obstacles: int = 5, seconds: float = 60.0,
-                   seed: int = 0, perception: str = "oracle",
-                   predator_skills: str | None = None, skills: str | None = None) -> dict:
+def bench_aquarium(
+    fishes: int = 10,
+    food: int = 15,
+    obstacles: int = 5,
+    seconds: float = 60.0,
+    seed: int = 0,
+    perception: str = "oracle",
+    predator_skills: str | None = None,
+    skills: str | None = None,
+) -> dict:
     """Return the realtime factor of the tank (brains, perception and physics together, no
     video; ``perception`` oracle, or vision for the first predator), the same world's
     physics alone, and the run's outcome figures. ``skills``: every fish's motor skills
@@ -19,16 +26,35 @@ def bench_aquarium(fishes: int = 10, food: int = 15, obstacles: int = 5, seconds
     "both": the built-in and the learned tank one after the other, each line under its name,
     with the learned tank's CPU realtime factor over the built-in's."""
     if skills == BOTH:
-        out = {k: bench_aquarium(fishes, food, obstacles, seconds, seed, perception,
-                                 predator_skills, k) for k in ("built-in", "learned")}  # fmt: skip
+        out = {
+            k: bench_aquarium(
+                fishes, food, obstacles, seconds, seed, perception, predator_skills, k
+            )
+            for k in ("built-in", "learned")
+        }
         cpu = [out[k]["cpu_realtime_factor"] for k in ("learned", "built-in")]
         return out | {"learned_over_built_in_cpu": cpu[0] / cpu[1] if all(cpu) else None}
     # no video: positions recorded once a brain period (the CLI records 20 frames a second)
-    cfg = TankConfig(fishes=fishes, food=food, obstacles=obstacles, seconds=seconds, seed=seed,
-                     record_period=0.1, perception=perception,
-                     predator_skills=predator_skills, skills=skills)  # fmt: skip
-    warm = TankConfig(fishes=2, food=1, obstacles=1, seconds=0.2, perception=perception,
-                      predator_skills=predator_skills, skills=skills)  # fmt: skip
+    cfg = TankConfig(
+        fishes=fishes,
+        food=food,
+        obstacles=obstacles,
+        seconds=seconds,
+        seed=seed,
+        record_period=0.1,
+        perception=perception,
+        predator_skills=predator_skills,
+        skills=skills,
+    )
+    warm = TankConfig(
+        fishes=2,
+        food=1,
+        obstacles=1,
+        seconds=0.2,
+        perception=perception,
+        predator_skills=predator_skills,
+        skills=skills,
+    )
     live(build_tank(warm))  # compile, calibrate the motor controllers
     tank = build_tank(cfg)
     c0 = time.process_time()

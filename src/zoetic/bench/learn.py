@@ -10,8 +10,9 @@ import numpy as np
 from zoetic.learning.run import LearnConfig, build
 
 
-def learn_until(config: LearnConfig, target: float | None = None,
-                max_seconds: float = math.inf, task=None):  # fmt: skip
+def learn_until(
+    config: LearnConfig, target: float | None = None, max_seconds: float = math.inf, task=None
+):
     """Learn ``config`` (its task, or ``task``) until its budget, E <= target or max_seconds of
     wall, the kernel compiled outside the clock; return (setup, figures)."""
     setup = build(config, task)
@@ -82,9 +83,10 @@ def bench_learn(budget: int = 3500, seed: int = 0, max_seconds: float = 60.0) ->
     }
     out["speedup_vs_paper"] = round(3600 / max(anneal["seconds"], 1e-9), 1)
     _, cm = learn_until(
-        LearnConfig(optimizer="cmaes", budget=100 * budget, popsize=24, **base), target,
+        LearnConfig(optimizer="cmaes", budget=100 * budget, popsize=24, **base),
+        target,
         max_seconds,
-    )  # fmt: skip
+    )
     out["cmaes_seconds_to_match_anneal"] = cm["seconds_to_match"]
     out["cmaes_evaluations_to_match"] = cm["evaluations"]
     try:

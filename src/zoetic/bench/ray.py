@@ -29,8 +29,12 @@ def bench_ray(
     ray = import_ray()
     started = not ray.is_initialized()
     if started:
-        ray.init(num_cpus=actors or cores(), log_to_driver=False, include_dashboard=False,
-                 configure_logging=False)  # fmt: skip
+        ray.init(
+            num_cpus=actors or cores(),
+            log_to_driver=False,
+            include_dashboard=False,
+            configure_logging=False,
+        )
     evaluators = {"in_process": BatchEvaluator(), "ray": RayEvaluator(actors=actors)}
     times: dict[str, float] = {}
     try:

@@ -70,18 +70,22 @@ def closed_loop_overhead(
     short = table[None, : max(1, int(round(window / body.dt)))]
     full = table[None]
     sliced(full), whole(full), simulate(body, full)
-    best = dict.fromkeys(("cpu_sliced", "cpu_whole", "wall_sliced", "wall_whole", "full", "sim"),
-                         np.inf)  # fmt: skip
+    best = dict.fromkeys(
+        ("cpu_sliced", "cpu_whole", "wall_sliced", "wall_whole", "full", "sim"), np.inf
+    )
     for r in range(repeats):
-        for key, clock, fn in (("cpu_sliced", time.thread_time, sliced),
-                               ("cpu_whole", time.thread_time, whole),
-                               ("wall_sliced", time.perf_counter, sliced),
-                               ("wall_whole", time.perf_counter, whole)):  # fmt: skip
+        for key, clock, fn in (
+            ("cpu_sliced", time.thread_time, sliced),
+            ("cpu_whole", time.thread_time, whole),
+            ("wall_sliced", time.perf_counter, sliced),
+            ("wall_whole", time.perf_counter, whole),
+        ):
             best[key] = min(best[key], timed(clock, fn, short))
         if r % 4 == 0:
             best["full"] = min(best["full"], _best_time(lambda: sliced(full), 1))
-            best["sim"] = min(best["sim"], _best_time(
-                lambda: simulate(body, full, record_every=full.shape[1]), 1))  # fmt: skip
+            best["sim"] = min(
+                best["sim"], _best_time(lambda: simulate(body, full, record_every=full.shape[1]), 1)
+            )
     return {
         "closed_loop_overhead": round(best["cpu_sliced"] / best["cpu_whole"], 3),
         "closed_loop_overhead_wall": round(best["wall_sliced"] / best["wall_whole"], 3),

@@ -71,13 +71,13 @@ def turn_radius(com: np.ndarray, turned: float, length: float) -> float | None:
     return round(chord / (2.0 * float(np.sin(a / 2.0))) / length, 3)
 
 
-def sustained_speed(body: Body, ctrl: Controller, seconds: float = SUSTAINED_SECONDS,
-                    state: State | None = None) -> float:
+def sustained_speed(
+    body: Body, ctrl: Controller, seconds: float = SUSTAINED_SECONDS, state: State | None = None
+) -> float:
     """Return the speed (body lengths/s) over the second half of ``seconds`` played from
     ``state`` (default: rest)."""
     steps = int(round(seconds / body.dt))
-    tr = simulate(body, ctrl.table(steps, body.dt), state=state,
-                  record_every=max(1, steps // 20))  # fmt: skip
+    tr = simulate(body, ctrl.table(steps, body.dt), state=state, record_every=max(1, steps // 20))
     com = tr.com(body)[0]
     half = com.shape[0] // 2
     dist = np.linalg.norm((com[-1] - com[half])[[0, 2]])
@@ -175,8 +175,11 @@ def bench_skills(animals=None, budget: int | None = None, seed: int = 0) -> dict
         skills = {}
         for entry in plan_for(body):
             ctrl, wall = learn_skill(name, entry.task, seed, budget)
-            hand_name = (entry.name if entry.name in hand.controllers
-                         else HAND_MADE_FOR.get(entry.name, "go-straight"))  # fmt: skip
+            hand_name = (
+                entry.name
+                if entry.name in hand.controllers
+                else HAND_MADE_FOR.get(entry.name, "go-straight")
+            )
             made = hand.controllers[hand_name]
             names = entry.task.start_names()
             skill: dict = {"task": entry.task.name, "starts": start_speeds(body, entry.task)}
@@ -187,9 +190,11 @@ def bench_skills(animals=None, budget: int | None = None, seed: int = 0) -> dict
                 skill[f"hand_made{tag}"] = skill_figures(body, made, entry.task, k)
                 beats.append(skill[f"learned{tag}"]["E"] <= skill[f"hand_made{tag}"]["E"])
             # on the task's E from every start
-            skills[entry.name] = skill | {"hand_made_entry": hand_name,
-                                          "learned_beats_hand_made": all(beats),
-                                          "learn_wall_s": round(wall, 2)}  # fmt: skip
+            skills[entry.name] = skill | {
+                "hand_made_entry": hand_name,
+                "learned_beats_hand_made": all(beats),
+                "learn_wall_s": round(wall, 2),
+            }
             if hand_name == "go-straight" and entry.name in ("go-straight", "move-forward"):
                 # the gait with the fins: depth change, burst
                 for key, fn in (("depth_change", depth_change), ("burst", burst)):

@@ -12,8 +12,9 @@ from __future__ import annotations
 from pathlib import Path
 
 
-def bench_stunts(animal: str, memory: Path | None, tricks: list[str], method: str,
-                 budget: int, seed: int) -> dict:  # fmt: skip
+def bench_stunts(
+    animal: str, memory: Path | None, tricks: list[str], method: str, budget: int, seed: int
+) -> dict:
     """Discover each trick (training the animal's repertoire once into runs/bench, keyed by
     its body and plan, when no memory is given) and return the figures as one JSON dict."""
     from zoetic.behavior.repertoire import Repertoire
@@ -35,23 +36,41 @@ def bench_stunts(animal: str, memory: Path | None, tricks: list[str], method: st
             train_repertoire(animal, memory, seed=seed)
     rep = Repertoire.load(memory, body)
     out: dict = {"animal": body.name, "method": method, "budget": budget, "seed": seed}
-    keep = ("apex_above_surface_m", "apex_body_lengths", "air_time_s", "rotation_in_air_deg",
-            "pitch_rotation_in_air_deg", "ball_contact", "ball_parts", "tail_strike_rotation_deg",
-            "ball_tail_distance_m", "striker_speed_m_s", "ball_speed_m_s", "hurdle_clearance_m",
-            "splash_m3_s", "evaluations", "wall_s")  # fmt: skip
+    keep = (
+        "apex_above_surface_m",
+        "apex_body_lengths",
+        "air_time_s",
+        "rotation_in_air_deg",
+        "pitch_rotation_in_air_deg",
+        "ball_contact",
+        "ball_parts",
+        "tail_strike_rotation_deg",
+        "ball_tail_distance_m",
+        "striker_speed_m_s",
+        "ball_speed_m_s",
+        "hurdle_clearance_m",
+        "splash_m3_s",
+        "evaluations",
+        "wall_s",
+    )
     full = {}
     for name in tricks:
         tr = load_trick(name)
         s = full[name] = discover(body, rep, tr, method, budget, seed).summary()
         flags = targets_met(name, s, tr)
-        out[name] = {"success": bool(flags) and all(flags.values()), "flags": flags,
-                     **{k: s[k] for k in keep if k in s}}  # fmt: skip
+        out[name] = {
+            "success": bool(flags) and all(flags.values()),
+            "flags": flags,
+            **{k: s[k] for k in keep if k in s},
+        }
     if "bellyflop" in out and "clean-dive" in out:
         ratio = splash_ratio(full["bellyflop"], full["clean-dive"])
         out["splash_ratio"] = None if ratio is None else round(ratio, 2)
         out["splash_ratio_met"] = ratio is not None and ratio >= SPLASH_RATIO
-    out["all_wall_s"] = round(sum(v["wall_s"] for v in out.values()
-                                  if isinstance(v, dict) and "wall_s" in v), 2)  # fmt: skip
-    out["each_within_5_min"] = all(v["wall_s"] <= 300 for v in out.values()
-                                   if isinstance(v, dict) and "wall_s" in v)  # fmt: skip
+    out["all_wall_s"] = round(
+        sum(v["wall_s"] for v in out.values() if isinstance(v, dict) and "wall_s" in v), 2
+    )
+    out["each_within_5_min"] = all(
+        v["wall_s"] <= 300 for v in out.values() if isinstance(v, dict) and "wall_s" in v
+    )
     return out

@@ -15,6 +15,7 @@ __all__ = ["app", "main"]
 
 err_console = Console(stderr=True)
 
+
 def _register() -> None:
     from zoetic.cli import (  # noqa: F401  (commands register)
         aquarium,
@@ -42,8 +43,9 @@ def main(argv: list[str] | None = None) -> int:
         if _DEBUG["on"] or "--debug" in args:
             raise
         # soft wrap: the terminal wraps long lines itself, so paths stay whole (and greppable)
-        err_console.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False,
-                          soft_wrap=True)  # fmt: skip
+        err_console.print(
+            f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True
+        )
         err_console.print("(run with --debug for the traceback)", style="dim", highlight=False)
         return int(getattr(exc, "exit_code", 2))
     except KeyboardInterrupt:

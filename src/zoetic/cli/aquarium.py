@@ -21,17 +21,25 @@ def aquarium(
     seed: int = typer.Option(0, help="Seed of the layout and of the fishes' wandering."),
     out: Path = typer.Option(Path("runs/tank"), help="Output directory."),
     perception: str = typer.Option(
-        "oracle", help="oracle (the world model) or vision (the first predator sees with "
-        "animat vision: rendered eyes, colour recognition, gaze; the rest use the oracle)."),
+        "oracle",
+        help="oracle (the world model) or vision (the first predator sees with "
+        "animat vision: rendered eyes, colour recognition, gaze; the rest use the oracle).",
+    ),
     prey: str = typer.Option("minnow", help="Prey species: a built-in name or a .toml file."),
     predator: str = typer.Option("shark", help="Predator species: a name or a .toml file."),
     predator_skills: Path = typer.Option(
-        None, "--predator-skills", help="A learned repertoire's directory (zoetic repertoire "
-        "train) the predator swims by instead of its species' motor skills."),
+        None,
+        "--predator-skills",
+        help="A learned repertoire's directory (zoetic repertoire "
+        "train) the predator swims by instead of its species' motor skills.",
+    ),
     skills: str = typer.Option(
-        None, "--skills", help="Every fish's motor skills instead of its species file's: "
+        None,
+        "--skills",
+        help="Every fish's motor skills instead of its species file's: "
         "learned (the repertoire shipped for its body, the species' default), built-in (the "
-        "calibrated wave) or a learned repertoire's directory."),
+        "calibrated wave) or a learned repertoire's directory.",
+    ),
     video: bool = typer.Option(True, help="Write video.mp4."),
     labels: bool = typer.Option(True, help="Label each fish with its intention in the video."),
     control_period: float = typer.Option(0.1, help="Brain period (s)."),
@@ -49,12 +57,21 @@ def aquarium(
     from zoetic.io import atomic_write_bytes, check_out_dir, make_dir, write_json
 
     check_out_dir(out)
-    cfg = TankConfig(fishes=fishes, predators=predators, food=food, obstacles=obstacles,
-                     seconds=seconds, seed=seed, prey_species=prey, predator_species=predator,
-                     control_period=control_period, perception=perception,
-                     record_period=min(0.05, control_period),
-                     predator_skills=None if predator_skills is None else str(predator_skills),
-                     skills=skills)  # fmt: skip
+    cfg = TankConfig(
+        fishes=fishes,
+        predators=predators,
+        food=food,
+        obstacles=obstacles,
+        seconds=seconds,
+        seed=seed,
+        prey_species=prey,
+        predator_species=predator,
+        control_period=control_period,
+        perception=perception,
+        record_period=min(0.05, control_period),
+        predator_skills=None if predator_skills is None else str(predator_skills),
+        skills=skills,
+    )
     tank = build_tank(cfg)
     with console.status("the fishes live...") as status:
         life = live(tank, progress=lambda t: status.update(f"t = {t:.1f} s"))
@@ -75,12 +92,18 @@ def aquarium(
         centers = [tank.center[k] for k, nm in enumerate(statics) if nm != "wall"]
         with console.status("rendering the video..."):
             write_tank_video(
-                out / "video.mp4", fps=1.0 / cfg.record_period,
-                bodies=[f.body for f in tank.fishes], positions=life.positions, times=life.times,
-                colors=[f.species.color for f in tank.fishes], obstacles=centers,
-                food=life.food, eaten=life.eaten,
-                labels=frame_labels(life, names) if labels else None, half_size=cfg.size(),
-            )  # fmt: skip
+                out / "video.mp4",
+                fps=1.0 / cfg.record_period,
+                bodies=[f.body for f in tank.fishes],
+                positions=life.positions,
+                times=life.times,
+                colors=[f.species.color for f in tank.fishes],
+                obstacles=centers,
+                food=life.food,
+                eaten=life.eaten,
+                labels=frame_labels(life, names) if labels else None,
+                half_size=cfg.size(),
+            )
     write_json(out / "summary.json", summary)
     _report(summary, out, video)
 
@@ -97,8 +120,9 @@ def _report(summary: dict, out: Path, video: bool) -> None:
         f"{summary['deepest_into_obstacle_m']:.3f} m, into a fish "
         f"{summary['deepest_into_fish_m']:.3f} m"
     )
-    console.print(f"wrote {out}/events.csv, mind.png, summary.json, record.npz"
-                  + (", video.mp4" * video))  # fmt: skip
+    console.print(
+        f"wrote {out}/events.csv, mind.png, summary.json, record.npz" + (", video.mp4" * video)
+    )
 
 
 @bench_app.command("aquarium")
@@ -110,11 +134,15 @@ def bench_aquarium_cmd(
     seed: int = typer.Option(0),
     perception: str = typer.Option("oracle", help="oracle, or vision for the first predator."),
     predator_skills: Path = typer.Option(
-        None, "--predator-skills", help="A learned repertoire's directory for the predator."),
+        None, "--predator-skills", help="A learned repertoire's directory for the predator."
+    ),
     skills: str = typer.Option(
-        None, "--skills", help="Every fish's motor skills: built-in, learned, a repertoire's "
+        None,
+        "--skills",
+        help="Every fish's motor skills: built-in, learned, a repertoire's "
         "directory, or both (the built-in and the learned tank side by side); default the "
-        "species files'."),
+        "species files'.",
+    ),
     json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
     """Realtime factor of a tank (oracle perception, or animat vision for one predator),

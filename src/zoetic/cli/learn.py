@@ -28,16 +28,18 @@ def tasks() -> None:
 
 def learn_bar():
     """The learning bar: evaluations, best E, status and evaluations per second."""
-    return progress_bar("E {task.fields[best]}", "{task.fields[status]}",
-                        "{task.fields[rate]}/s", width=16)
+    return progress_bar(
+        "E {task.fields[best]}", "{task.fields[status]}", "{task.fields[rate]}/s", width=16
+    )
 
 
 def run_with_progress(run, label: str, every_s: float = 2.0) -> None:
     """Learn to the run's budget with a Rich progress bar; Ctrl-C leaves a resumable run."""
     budget = run.setup.config.budget
     with learn_bar() as bar:
-        tid = bar.add_task(label, total=budget, completed=run.evaluations, best="-", status="",
-                           rate="-")  # fmt: skip
+        tid = bar.add_task(
+            label, total=budget, completed=run.evaluations, best="-", status="", rate="-"
+        )
         start_evals = run.evaluations
 
         def update(r) -> None:
@@ -45,9 +47,12 @@ def run_with_progress(run, label: str, every_s: float = 2.0) -> None:
             status = " ".join(f"{k} {v:.2g}" for k, v in opt.status().items())
             elapsed = max(bar.tasks[0].elapsed or 1e-9, 1e-9)
             bar.update(
-                tid, completed=min(r.evaluations, budget), best=f"{opt.best_f:.4g}",
-                status=status, rate=f"{(r.evaluations - start_evals) / elapsed:.0f}",
-            )  # fmt: skip
+                tid,
+                completed=min(r.evaluations, budget),
+                best=f"{opt.best_f:.4g}",
+                status=status,
+                rate=f"{(r.evaluations - start_evals) / elapsed:.0f}",
+            )
 
         try:
             run.learn(progress=update, every_s=every_s)
@@ -82,12 +87,14 @@ def learn(
         "batch", help="batch (Numba threads), process (pool) or ray (actors on a Ray cluster)."
     ),
     ray_address: str = typer.Option(
-        None, help="Ray cluster for --evaluator ray, e.g. 10.0.0.1:6379 (default: RAY_ADDRESS, "
-        "else a local Ray)."
+        None,
+        help="Ray cluster for --evaluator ray, e.g. 10.0.0.1:6379 (default: RAY_ADDRESS, "
+        "else a local Ray).",
     ),
     coupling: str = typer.Option(
-        "auto", help="auto (wave for a task that prefers neither side, else none), none, wave "
-        "(right = left, later by the animal's wave lag) or antiphase (right = 1 - left)."
+        "auto",
+        help="auto (wave for a task that prefers neither side, else none), none, wave "
+        "(right = left, later by the animal's wave lag) or antiphase (right = 1 - left).",
     ),
     fins: str = typer.Option(
         "auto", help="auto (learned for turns, else held level), held or free."
@@ -120,10 +127,21 @@ def learn(
         from zoetic.bodies import load_animal
 
         config = LearnConfig(
-            animal=animal, task=task, optimizer=optimizer, budget=budget, seed=seed,
-            controller=controller, nodes=nodes, interp=interp, popsize=popsize, chains=chains,
-            evaluator=evaluator, coupling=coupling, fins=fins, frequency=frequency,
-        )  # fmt: skip
+            animal=animal,
+            task=task,
+            optimizer=optimizer,
+            budget=budget,
+            seed=seed,
+            controller=controller,
+            nodes=nodes,
+            interp=interp,
+            popsize=popsize,
+            chains=chains,
+            evaluator=evaluator,
+            coupling=coupling,
+            fins=fins,
+            frequency=frequency,
+        )
         out = check_out_dir(out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}")
         run = Run.create(out, config, load_animal(animal))  # the run checks: learning.checks
     cfg = run.setup.config
@@ -149,9 +167,14 @@ def demo(
     clear_demo(out)  # only what an earlier demo made; anything else stays
     before = {p.name for p in out.iterdir()} if out.is_dir() else set()
     config = LearnConfig(
-        animal="shark", task="swim-straight", optimizer="cmaes", budget=budget, seed=seed,
-        popsize=24, nodes=40,
-    )  # fmt: skip
+        animal="shark",
+        task="swim-straight",
+        optimizer="cmaes",
+        budget=budget,
+        seed=seed,
+        popsize=24,
+        nodes=40,
+    )
     console.print(
         "[bold]zoetic demo[/]: a shark with random muscle signals learns to swim straight "
         f"({budget} simulations of {4.0:g} s each)."

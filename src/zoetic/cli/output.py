@@ -19,8 +19,9 @@ def emit(result: dict, as_json: bool) -> None:
             print(f"{key:40s} {value}")
 
 
-def progress_bar(*fields: str, count: str = "{task.completed:>5.0f}/{task.total:.0f}",
-                 width: int = 20) -> Progress:
+def progress_bar(
+    *fields: str, count: str = "{task.completed:>5.0f}/{task.total:.0f}", width: int = 20
+) -> Progress:
     """A bar: description, bar, count, then one text column per rich format string in fields."""
     return Progress(
         TextColumn("[bold]{task.description}"),

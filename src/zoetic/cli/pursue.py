@@ -47,6 +47,8 @@ def pursue(
         frames = chase_frames(chase.world, chase.scenery, result, width, height)
         write_mp4(frames, out / "video.mp4", fps=fps)
     verdict = f"caught in {summary['time_to_catch_s']:.1f} s" if result.caught else "not caught"
-    console.print(f"{verdict}; prey foveated {summary['foveated_fraction']:.0%} of "
-                  f"{summary['frames']} frames; distractor fixations "
-                  f"{summary['distractor_fixations']} -> {out}")  # fmt: skip
+    console.print(
+        f"{verdict}; prey foveated {summary['foveated_fraction']:.0%} of "
+        f"{summary['frames']} frames; distractor fixations "
+        f"{summary['distractor_fixations']} -> {out}"
+    )

@@ -34,37 +34,56 @@ def solid_things(objects, times: np.ndarray, balls: np.ndarray | None = None) ->
         elif isinstance(o, Box):
             out.append(Thing(_kind(o), o.name, "box", tuple(o.half_size), np.array([o.center])))
         elif isinstance(o, Cylinder):
-            out.append(Thing(_kind(o), o.name, "cylinder", (o.radius, o.length),
-                             np.array([o.center]), o.axis))  # fmt: skip
+            out.append(
+                Thing(
+                    _kind(o), o.name, "cylinder", (o.radius, o.length), np.array([o.center]), o.axis
+                )
+            )
     return out
 
 
 def targets(points_xz: np.ndarray, depth: float, kind: str = "target") -> list[Thing]:
     """Return point markers at (x, depth, z) for plane points (M, 2) m."""
     pts = np.asarray(points_xz, float).reshape(-1, 2)
-    return [Thing(kind, f"{kind} {k + 1}", "point", (), np.array([[x, depth, z]]))
-            for k, (x, z) in enumerate(pts)]  # fmt: skip
+    return [
+        Thing(kind, f"{kind} {k + 1}", "point", (), np.array([[x, depth, z]]))
+        for k, (x, z) in enumerate(pts)
+    ]
 
 
 def obstacle_discs(obstacles_xzr: np.ndarray, depth: float) -> list[Thing]:
     """Return upright cylinders for a macro task's obstacle discs (x, z, r) m, 2 m tall."""
-    return [Thing("obstacle", f"obstacle {k + 1}", "cylinder", (float(r), 2.0),
-                  np.array([[x, depth, z]])) for k, (x, z, r) in enumerate(obstacles_xzr)]
+    return [
+        Thing(
+            "obstacle", f"obstacle {k + 1}", "cylinder", (float(r), 2.0), np.array([[x, depth, z]])
+        )
+        for k, (x, z, r) in enumerate(obstacles_xzr)
+    ]
 
 
-def write_sequence_record(out: Path, kind: str, body, times, positions, ctrl, things=(),
-                          numbers: dict | None = None) -> Path:  # fmt: skip
+def write_sequence_record(
+    out: Path, kind: str, body, times, positions, ctrl, things=(), numbers: dict | None = None
+) -> Path:
     """Write the record of one animal driven by a controller (track, macro, stunt)."""
-    rec = Record(kind, f"{body.name} {kind} ({Path(out).name})", body.medium,
-                 np.asarray(times, float), (animal_record(body, positions, times, ctrl),),
-                 objects=tuple(things), numbers=numbers or {})  # fmt: skip
+    rec = Record(
+        kind,
+        f"{body.name} {kind} ({Path(out).name})",
+        body.medium,
+        np.asarray(times, float),
+        (animal_record(body, positions, times, ctrl),),
+        objects=tuple(things),
+        numbers=numbers or {},
+    )
     return write_run_record(out, rec, [body])[0]
 
 
 def figures(summary: dict) -> dict:
     """Return a summary's plain figures (finite numbers, strings, booleans) for the viewer."""
-    return {k: v for k, v in summary.items() if isinstance(v, str | bool | int)
-            or (isinstance(v, float) and np.isfinite(v))}  # fmt: skip
+    return {
+        k: v
+        for k, v in summary.items()
+        if isinstance(v, str | bool | int) or (isinstance(v, float) and np.isfinite(v))
+    }
 
 
 def write_aquarium_record(out: Path, tank, life, summary: dict) -> Path:
@@ -73,25 +92,49 @@ def write_aquarium_record(out: Path, tank, life, summary: dict) -> Path:
     from zoetic.behavior.mind import INTENTIONS
 
     fishes = tank.fishes
-    animals = tuple(animal_record(f.body, life.positions[i], life.times, name=f.name,
-                                  color=tuple(f.species.color)) for i, f in enumerate(fishes))
+    animals = tuple(
+        animal_record(
+            f.body, life.positions[i], life.times, name=f.name, color=tuple(f.species.color)
+        )
+        for i, f in enumerate(fishes)
+    )
     things = solid_things(tank.world.statics, life.times)
     for k, food in enumerate(tank.world.foods):
-        things.append(Thing("food", f"food {k + 1}", "sphere", (food.radius,),
-                            life.food[:, k], visible=~life.eaten[:, k]))  # fmt: skip
-    scalars = {f.name: {"hunger": life.drives[:, i, 0], "libido": life.drives[:, i, 1],
-                        "fear": life.drives[:, i, 2], "intention": life.intentions[:, i],
-                        "alive": life.alive[:, i], "target": life.targets[:, i]}
-               for i, f in enumerate(fishes)}  # fmt: skip
+        things.append(
+            Thing(
+                "food",
+                f"food {k + 1}",
+                "sphere",
+                (food.radius,),
+                life.food[:, k],
+                visible=~life.eaten[:, k],
+            )
+        )
+    scalars = {
+        f.name: {
+            "hunger": life.drives[:, i, 0],
+            "libido": life.drives[:, i, 1],
+            "fear": life.drives[:, i, 2],
+            "intention": life.intentions[:, i],
+            "alive": life.alive[:, i],
+            "target": life.targets[:, i],
+        }
+        for i, f in enumerate(fishes)
+    }
     rec = Record(
-        "aquarium", f"aquarium ({Path(out).name})", tank.world.medium.name, life.times,
-        animals, objects=tuple(things),
+        "aquarium",
+        f"aquarium ({Path(out).name})",
+        tank.world.medium.name,
+        life.times,
+        animals,
+        objects=tuple(things),
         events=tuple(Event(float(t), w, what, d) for t, w, what, d in life.events),
-        period_times=life.brain_times, scalars=scalars,
-        labels={"intention": list(INTENTIONS)}, numbers=figures(summary),
-        units={"hunger": "", "libido": "", "fear": "", "intention": "", "alive": "",
-               "target": ""},
-    )  # fmt: skip
+        period_times=life.brain_times,
+        scalars=scalars,
+        labels={"intention": list(INTENTIONS)},
+        numbers=figures(summary),
+        units={"hunger": "", "libido": "", "fear": "", "intention": "", "alive": "", "target": ""},
+    )
     return write_run_record(out, rec, [f.body for f in fishes])[0]
 
 
@@ -101,27 +144,46 @@ def write_chase_record(out: Path, chase, result, summary: dict) -> Path:
     world = chase.world
     roles = ["predator", "prey"] + [f"distractor {k}" for k in range(1, len(world.bodies) - 1)]
     animals = tuple(
-        animal_record(body, result.positions[a], result.times, name=roles[a],
-                      color=tuple(int(round(255 * c)) for c in chase.scenery.colors[a]))
+        animal_record(
+            body,
+            result.positions[a],
+            result.times,
+            name=roles[a],
+            color=tuple(int(round(255 * c)) for c in chase.scenery.colors[a]),
+        )
         for a, body in enumerate(world.bodies)
-    )  # fmt: skip
+    )
     log = result.log
     n = min(len(log), len(result.times))
-    scalars = {"predator": {
-        "gaze": np.array([r.angles for r in log[:n]], float).reshape(n, -1),
-        "locked": np.array([r.locked for r in log[:n]], float).reshape(n, -1),
-        "theta_p": np.array([r.theta_p for r in log[:n]], float),
-        "phi_p": np.array([r.phi_p for r in log[:n]], float),
-        "range": np.array([r.range for r in log[:n]], float),
-    }} if n else {}  # fmt: skip
-    events = (Event(float(result.time_to_catch), "predator", "catch", "prey"),) \
-        if result.caught else ()  # fmt: skip
-    rec = Record("pursuit", f"pursuit ({Path(out).name})", world.medium.name, result.times,
-                 animals, objects=tuple(solid_things(world.statics, result.times)),
-                 events=events, period_times=np.asarray(result.times[:n], float),
-                 scalars=scalars, units={"gaze": "rad", "locked": "", "theta_p": "rad",
-                                         "phi_p": "rad", "range": "m"},
-                 numbers=figures(summary))  # fmt: skip
+    scalars = (
+        {
+            "predator": {
+                "gaze": np.array([r.angles for r in log[:n]], float).reshape(n, -1),
+                "locked": np.array([r.locked for r in log[:n]], float).reshape(n, -1),
+                "theta_p": np.array([r.theta_p for r in log[:n]], float),
+                "phi_p": np.array([r.phi_p for r in log[:n]], float),
+                "range": np.array([r.range for r in log[:n]], float),
+            }
+        }
+        if n
+        else {}
+    )
+    events = (
+        (Event(float(result.time_to_catch), "predator", "catch", "prey"),) if result.caught else ()
+    )
+    rec = Record(
+        "pursuit",
+        f"pursuit ({Path(out).name})",
+        world.medium.name,
+        result.times,
+        animals,
+        objects=tuple(solid_things(world.statics, result.times)),
+        events=events,
+        period_times=np.asarray(result.times[:n], float),
+        scalars=scalars,
+        units={"gaze": "rad", "locked": "", "theta_p": "rad", "phi_p": "rad", "range": "m"},
+        numbers=figures(summary),
+    )
     return write_run_record(out, rec, world.bodies)[0]
 
 
@@ -138,10 +200,14 @@ def _prism(outline: np.ndarray, depth: float, axis: str) -> tuple[np.ndarray, np
     i = np.arange(k)
     j = (i + 1) % k
     fan = np.column_stack([np.zeros(k - 2, int), np.arange(1, k - 1), np.arange(2, k)])
-    faces = np.concatenate([
-        fan, fan[:, ::-1] + k,
-        np.column_stack([i, i + k, j]), np.column_stack([j, i + k, j + k]),
-    ])  # fmt: skip
+    faces = np.concatenate(
+        [
+            fan,
+            fan[:, ::-1] + k,
+            np.column_stack([i, i + k, j]),
+            np.column_stack([j, i + k, j + k]),
+        ]
+    )
     return np.concatenate([top, bottom]).astype(np.float32), faces
 
 
@@ -161,11 +227,18 @@ def _san_links(tuned, poses: np.ndarray) -> tuple[list[Link], np.ndarray]:
         height = np.full_like(x, link.out_of_plane / 2 if not vertical else 0.0)
         tr = np.column_stack([x, p, np.zeros_like(x)] if vertical else [x, height, p])
         colour = ImageColor.getrgb(LINK_COLOURS[li % len(LINK_COLOURS)])[:3]
-        links.append(Link(link.name, colour, verts, faces, tr.astype(np.float32),
-                          ang.astype(np.float32), axis))  # fmt: skip
+        links.append(
+            Link(
+                link.name, colour, verts, faces, tr.astype(np.float32), ang.astype(np.float32), axis
+            )
+        )
         cx, cp = x + np.cos(ang) * link.centre, p + np.sin(ang) * link.centre
-        centres.append((link.mass, np.column_stack([cx, cp, np.zeros_like(cx)] if vertical
-                                                   else [cx, height, cp])))  # fmt: skip
+        centres.append(
+            (
+                link.mass,
+                np.column_stack([cx, cp, np.zeros_like(cx)] if vertical else [cx, height, cp]),
+            )
+        )
     com = sum(m * c for m, c in centres) / sum(m for m, _ in centres)
     return links, com
 
@@ -196,9 +269,19 @@ def write_san_record(out: Path, network_file: Path, fps: float = 30.0) -> Path:
     names = tuple(a.name for a in tuned.actuators)
     creature_rec = Creature(tuned.name, tuple(links), com.astype(np.float32), names, acts)
     speed = speed_cm_s(tuned, roll.metric, roll.distance, roll.seconds)
-    numbers = {"metric": round(float(roll.metric), 4), "speed_cm_s": round(speed, 2),
-               "fell": bool(roll.fell), "network": str(network_file)}  # fmt: skip
+    numbers = {
+        "metric": round(float(roll.metric), 4),
+        "speed_cm_s": round(speed, 2),
+        "fell": bool(roll.fell),
+        "network": str(network_file),
+    }
     medium = "ground" if tuned.medium == "ground" else "water"
-    rec = Record("san", f"{tuned.name} SAN ({Path(out).name})", medium, times,
-                 creatures=(creature_rec,), numbers=numbers)  # fmt: skip
+    rec = Record(
+        "san",
+        f"{tuned.name} SAN ({Path(out).name})",
+        medium,
+        times,
+        creatures=(creature_rec,),
+        numbers=numbers,
+    )
     return write_record(out, rec)

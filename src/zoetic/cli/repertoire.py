@@ -13,8 +13,9 @@ from zoetic.cli.apps import app
 from zoetic.cli.learn import learn_bar
 from zoetic.cli.output import console
 
-repertoire_app = typer.Typer(help="Basic training: learn, abstract and keep a repertoire.",
-                             no_args_is_help=True)  # fmt: skip
+repertoire_app = typer.Typer(
+    help="Basic training: learn, abstract and keep a repertoire.", no_args_is_help=True
+)
 app.add_typer(repertoire_app, name="repertoire")
 
 
@@ -38,8 +39,10 @@ def abstract_cmd(
     info = abstract_files(source, out, parse_modes(modes), threshold, task)
     o, a = info["original"], info["abstract"]
     m = info["measure"]
-    console.print(f"modes per actuator: {info['modes_per_actuator']} ({info['rule']}), "
-                  f"frequencies {info['frequencies_hz']} Hz")  # fmt: skip
+    console.print(
+        f"modes per actuator: {info['modes_per_actuator']} ({info['rule']}), "
+        f"frequencies {info['frequencies_hz']} Hz"
+    )
     console.print(f"{m}: original {o[m]:.4g}, abstracted {a[m]:.4g} -> kept {info['kept']:.1%}")
     if "E" in o:
         console.print(f"E: original {o['E']:.4g}, abstracted {a['E']:.4g}")
@@ -50,8 +53,7 @@ def abstract_cmd(
 def train_cmd(
     animal: str = typer.Argument(..., help="Zoo animal name or animal .toml file."),
     out: Path = typer.Option(None, help="Repertoire directory (default memory/<animal>)."),
-    budget: int = typer.Option(3000, min=10, max=10_000_000,
-                              help="Evaluations per learned entry."),  # fmt: skip
+    budget: int = typer.Option(3000, min=10, max=10_000_000, help="Evaluations per learned entry."),
     optimizer: str = typer.Option("cmaes", help="anneal, simplex or cmaes."),
     modes: str = typer.Option("auto", help="Modes kept by the abstraction: auto or K."),
     threshold: float = typer.Option(0.3, help="auto keeps modes >= threshold x the strongest."),
@@ -77,20 +79,39 @@ def train_cmd(
         state: dict = {}
 
         def on_entry(name: str, run) -> None:
-            state["tid"] = bar.add_task(name, total=run.setup.config.budget,
-                                        completed=run.evaluations, best="-", status="",
-                                        rate="-")  # fmt: skip
+            state["tid"] = bar.add_task(
+                name,
+                total=run.setup.config.budget,
+                completed=run.evaluations,
+                best="-",
+                status="",
+                rate="-",
+            )
 
         def progress(run) -> None:
-            bar.update(state["tid"], completed=run.evaluations,
-                       best=f"{run.setup.optimizer.best_f:.4g}")  # fmt: skip
+            bar.update(
+                state["tid"], completed=run.evaluations, best=f"{run.setup.optimizer.best_f:.4g}"
+            )
 
         try:
-            train_repertoire(animal, out, budget, seed, optimizer, parse_modes(modes), threshold,
-                             nodes, on_entry, progress, evaluator)  # fmt: skip
+            train_repertoire(
+                animal,
+                out,
+                budget,
+                seed,
+                optimizer,
+                parse_modes(modes),
+                threshold,
+                nodes,
+                on_entry,
+                progress,
+                evaluator,
+            )
         except KeyboardInterrupt:
-            console.print(f"[yellow]interrupted; run the same command again to continue "
-                          f"({out} keeps what was learned)[/]")  # fmt: skip
+            console.print(
+                f"[yellow]interrupted; run the same command again to continue "
+                f"({out} keeps what was learned)[/]"
+            )
             raise typer.Exit(130) from None
     _print_rows(show_repertoire(out), f"{out}")
 
@@ -105,9 +126,15 @@ def _print_rows(rows: list[dict], title: str) -> None:
     for col in ("entry", "seconds", "modes", "Hz (strongest)", "forward m", "turn deg", "source"):
         table.add_column(col, no_wrap=col == "entry")
     for r in rows:
-        table.add_row(r["entry"], f"{r['seconds']:g}", str(r["modes"]),
-                      _hz(r["frequencies_hz"]), f"{r['forward_m']:.3f}",
-                      f"{r['turn_deg']:.1f}", str(r["source"]))  # fmt: skip
+        table.add_row(
+            r["entry"],
+            f"{r['seconds']:g}",
+            str(r["modes"]),
+            _hz(r["frequencies_hz"]),
+            f"{r['forward_m']:.3f}",
+            f"{r['turn_deg']:.1f}",
+            str(r["source"]),
+        )
     console.print(table)
 
 
@@ -158,10 +185,17 @@ def sequence_cmd(
     import numpy as np
 
     t = np.linspace(0.0, seq.duration, 600)
-    plot_controller(t, seq.sample(t), body.actuator_names, body.actuator_side,
-                    out / "controller.png", title=f"sequence: {entries}")  # fmt: skip
-    summary = simulate_run(animal, str(path), seq.duration, out,
-                           media=partial(simulation_media, video=video))  # fmt: skip
+    plot_controller(
+        t,
+        seq.sample(t),
+        body.actuator_names,
+        body.actuator_side,
+        out / "controller.png",
+        title=f"sequence: {entries}",
+    )
+    summary = simulate_run(
+        animal, str(path), seq.duration, out, media=partial(simulation_media, video=video)
+    )
     for key, value in summary.items():
         console.print(f"{key:>12}: {value}")
     console.print(f"{'sequence':>12}: {path}")

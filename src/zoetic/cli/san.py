@@ -69,34 +69,53 @@ def creatures_cmd() -> None:
     from zoetic.san.network import default_hidden
 
     table = Table(box=None, header_style="bold")
-    for col in ("creature", "links", "sensors", "actuators", "hidden", "metric", "seconds",
-                "paper cm/s"):  # fmt: skip
+    for col in (
+        "creature",
+        "links",
+        "sensors",
+        "actuators",
+        "hidden",
+        "metric",
+        "seconds",
+        "paper cm/s",
+    ):
         table.add_column(col, justify="left" if col in ("creature", "metric") else "right")
     for name in list_creatures():
         c = load_creature(name)
         table.add_row(
-            name, str(len(c.links)), str(c.n_sensors), str(c.n_actuators),
-            str(default_hidden(c)), c.metric, f"{c.seconds:g}",
+            name,
+            str(len(c.links)),
+            str(c.n_sensors),
+            str(c.n_actuators),
+            str(default_hidden(c)),
+            c.metric,
+            f"{c.seconds:g}",
             "-" if c.paper_speed is None else f"{c.paper_speed:g}",
-        )  # fmt: skip
+        )
     console.print(table)
 
 
 @san_app.command("search")
 def search_cmd(
     creature: str = typer.Argument(..., help="Built-in creature name or creature .toml file."),
-    trials: int = typer.Option(200, min=1, max=10_000_000,
-                              help="Random networks to generate and evaluate."),  # fmt: skip
+    trials: int = typer.Option(
+        200, min=1, max=10_000_000, help="Random networks to generate and evaluate."
+    ),
     top: int = typer.Option(10, min=1, help="How many of the best to keep (videos and files)."),
     seed: int = typer.Option(0, help="Random seed: same seed, same networks and metrics."),
     terrain: str = typer.Option("flat", help="flat, or rough (uneven ground)."),
-    seconds: float = typer.Option(None, min=0.1, max=1000.0,
-                                  help="Evaluation time (default: creature's)."),  # fmt: skip
+    seconds: float = typer.Option(
+        None, min=0.1, max=1000.0, help="Evaluation time (default: creature's)."
+    ),
     workers: int = typer.Option(None, min=1, help="Worker processes (default: all cores)."),
     out: Path = typer.Option(None, help="Output directory (default runs/<creature>)."),
     video: bool = typer.Option(True, help="Write a video of each kept gait."),
-    gaits: bool = typer.Option(False, "--gaits", help="Cluster the kept gaits into distinct "
-                               "modes: modes.json and one labelled clip per mode."),
+    gaits: bool = typer.Option(
+        False,
+        "--gaits",
+        help="Cluster the kept gaits into distinct "
+        "modes: modes.json and one labelled clip per mode.",
+    ),
     evaluator: str = typer.Option("process", help="process (this machine) or ray (a cluster)."),
     ray_address: str = typer.Option(None, help="Ray cluster for --evaluator ray."),
 ) -> None:
@@ -114,9 +133,17 @@ def search_cmd(
     out = out or Path("runs") / c.name
     bar, tid = _bar(f"{c.name} {terrain}", trials)
     with bar:
-        result = search(c, trials=trials, top=top, seed=seed, terrain=terrain, workers=workers,
-                        progress=_progress(bar, tid), seconds=seconds,
-                        evaluator=evaluator)  # fmt: skip
+        result = search(
+            c,
+            trials=trials,
+            top=top,
+            seed=seed,
+            terrain=terrain,
+            workers=workers,
+            progress=_progress(bar, tid),
+            seconds=seconds,
+            evaluator=evaluator,
+        )
     with console.status(f"writing {out}" + (" (videos)" if video else "")):
         summary = write_search(result, out, top=top)
         summary = _with_files(out, summary, draw_search(result, out, top=top, video=video))
@@ -139,31 +166,48 @@ def _gaits(result, top: int, out: Path, video: bool, workers: int | None) -> Non
         where = {"seconds": result.seconds, "terrain": result.terrain, "seed": result.seed}
         doc = write_modes(result.creature, networks, info, out, video=video, **where)
         draw_modes(result.creature, networks, doc, workers=workers, **where)
-    console.print(f"{'distinct modes':>18}: {doc['modes_found']} among {len(kept)} kept gaits "
-                  f"that did not fall (distance > {doc['threshold']:g} scaled units)")  # fmt: skip
+    console.print(
+        f"{'distinct modes':>18}: {doc['modes_found']} among {len(kept)} kept gaits "
+        f"that did not fall (distance > {doc['threshold']:g} scaled units)"
+    )
     for m in doc["modes"]:
         best = m["best"]
-        console.print(f"{'mode ' + str(m['mode']):>18}: {m['label']} ({m['count']} networks, "
-                      f"best {best['speed_cm_s']:.1f} cm/s, rank {best['rank']})")  # fmt: skip
+        console.print(
+            f"{'mode ' + str(m['mode']):>18}: {m['label']} ({m['count']} networks, "
+            f"best {best['speed_cm_s']:.1f} cm/s, rank {best['rank']})"
+        )
     console.print(f"{'modes':>18}: {out / 'modes.json'}")
 
 
 @san_app.command("evolve")
 def evolve_cmd(
-    creature: str = typer.Argument(None, help="Built-in creature name or creature .toml file "
-                                   "(default with --network: the creature its file carries)."),
-    network: Path = typer.Option(None, help="Start from this network .json (default: the best "
-                                 "of a phase-1 search of --search random networks)."),
-    search_trials: int = typer.Option(200, "--search", min=1, max=1_000_000,
-                                      help="Random networks for the start (without --network)."),
-    trials: int = typer.Option(500, min=0, max=10_000_000,
-                               help="Evolution steps (one evaluation each)."),
+    creature: str = typer.Argument(
+        None,
+        help="Built-in creature name or creature .toml file "
+        "(default with --network: the creature its file carries).",
+    ),
+    network: Path = typer.Option(
+        None,
+        help="Start from this network .json (default: the best "
+        "of a phase-1 search of --search random networks).",
+    ),
+    search_trials: int = typer.Option(
+        200,
+        "--search",
+        min=1,
+        max=1_000_000,
+        help="Random networks for the start (without --network).",
+    ),
+    trials: int = typer.Option(
+        500, min=0, max=10_000_000, help="Evolution steps (one evaluation each)."
+    ),
     seed: int = typer.Option(0, help="Random seed: same seed, same result."),
     terrain: str = typer.Option("flat", help="flat, or rough (uneven ground)."),
     out: Path = typer.Option(None, help="Output directory (default runs/<creature>-evolve)."),
     video: bool = typer.Option(True, help="Write video.mp4 of the evolved creature."),
-    resume: bool = typer.Option(False, "--resume",
-                                help="Continue from <out>/checkpoint.npz of the same run."),
+    resume: bool = typer.Option(
+        False, "--resume", help="Continue from <out>/checkpoint.npz of the same run."
+    ),
     workers: int = typer.Option(None, min=1, help="Worker processes for the start's search."),
 ) -> None:
     """Evolve the body (link lengths, sections, attachment points; masses coupled to them and
@@ -200,21 +244,39 @@ def evolve_cmd(
     elif net is None:
         bar, tid = _bar(f"{c.name} start search", search_trials)
         with bar:
-            res = search(c, trials=search_trials, seed=seed, terrain=terrain, workers=workers,
-                         progress=_progress(bar, tid))  # fmt: skip
+            res = search(
+                c,
+                trials=search_trials,
+                seed=seed,
+                terrain=terrain,
+                workers=workers,
+                progress=_progress(bar, tid),
+            )
         ok = [i for i in res.top(len(res.networks)) if not res.fell[i]]
         net = res.networks[(ok or res.top(1))[0]]
-    config = {"creature": c.name, "seed": seed, "trials": trials, "terrain": terrain,
-              "network": net.to_dict()}  # fmt: skip
+    config = {
+        "creature": c.name,
+        "seed": seed,
+        "trials": trials,
+        "terrain": terrain,
+        "network": net.to_dict(),
+    }
     if resume and ckpt.exists():
         history = load_checkpoint(ckpt, config)
         console.print(f"resuming {ckpt} at step {int(history['done'])} of {trials}")
     save_network(net, start_file, c)
     bar, tid = _bar(f"{c.name} evolve", trials)
     with bar:
-        result = evolve(net, c, trials=trials, seed=seed, terrain=terrain,
-                        progress=_progress(bar, tid), resume=history,
-                        checkpoint=lambda _t, _sa, h: save_checkpoint(ckpt, config, h))  # fmt: skip
+        result = evolve(
+            net,
+            c,
+            trials=trials,
+            seed=seed,
+            terrain=terrain,
+            progress=_progress(bar, tid),
+            resume=history,
+            checkpoint=lambda _t, _sa, h: save_checkpoint(ckpt, config, h),
+        )
     with console.status(f"writing {out}" + (" (video)" if video else "")):
         summary = write_evolve(result, out, terrain=terrain)
         summary = _with_files(out, summary, draw_evolve(result, out, terrain, video))
@@ -231,8 +293,9 @@ def _print_evolve(name: str, summary: dict) -> None:
         table.add_column(col, justify="left" if col == "parameter" else "right")
     for row in summary["changes"]:
         table.add_row(row["parameter"], f"{row['before']:.4g}", f"{row['after']:.4g}")
-    table.add_row("speed (cm/s)", f"{summary['speed_before_cm_s']:.2f}",
-                  f"{summary['speed_after_cm_s']:.2f}")  # fmt: skip
+    table.add_row(
+        "speed (cm/s)", f"{summary['speed_before_cm_s']:.2f}", f"{summary['speed_after_cm_s']:.2f}"
+    )
     console.print(table)
     for key in ("creature_file", "network", "video", "record"):
         if key in summary:
@@ -261,8 +324,15 @@ def tune_cmd(
     out = out or network.with_name(f"{network.stem}-{method}")
     bar, tid = _bar(f"{c.name} {method}", trials)
     with bar:
-        result = tune(net, c, method=method, trials=trials, seed=seed, terrain=terrain,
-                      progress=_progress(bar, tid))  # fmt: skip
+        result = tune(
+            net,
+            c,
+            method=method,
+            trials=trials,
+            seed=seed,
+            terrain=terrain,
+            progress=_progress(bar, tid),
+        )
     with console.status(f"writing {out}" + (" (video)" if video else "")):
         summary = write_tune(result, c, out, terrain=terrain)
         summary = _with_files(out, summary, draw_tune(result, c, out, terrain, video))
@@ -275,13 +345,16 @@ def tune_cmd(
 def show_cmd(
     path: Path = typer.Argument(..., help="A run directory (search or tune) or a network .json."),
     rank: int = typer.Option(1, min=1, help="For a search directory: which kept network."),
-    seconds: float = typer.Option(None, min=0.1, max=1000.0,
-                                  help="Replay time (default: creature's)."),  # fmt: skip
+    seconds: float = typer.Option(
+        None, min=0.1, max=1000.0, help="Replay time (default: creature's)."
+    ),
     terrain: str = typer.Option(None, help="flat or rough (default: the run's)."),
     out: Path = typer.Option(None, help="Video file (default <run>/show.mp4)."),
     fps: int = typer.Option(30, min=1, help="Video frame rate."),
-    creature: str = typer.Option(None, help="Creature (default: the one the file names; for "
-                                 "an evolve run, its creature.toml)."),
+    creature: str = typer.Option(
+        None,
+        help="Creature (default: the one the file names; for an evolve run, its creature.toml).",
+    ),
 ) -> None:
     """Replay a network with its sensor and node states drawn beside the creature (video)."""
     from zoetic.san.network import load_with_creature
@@ -303,8 +376,10 @@ def show_cmd(
         written, rollout = show_video(net, c, target, seconds=seconds, terrain=terrain, fps=fps)
     speed = speed_cm_s(c, rollout.metric, rollout.distance, rollout.seconds)
     console.print(f"{'network':>10}: {file}")
-    console.print(f"{'metric':>10}: {rollout.metric:.4f}  ({speed:.1f} cm/s"
-                  f"{', fell' if rollout.fell else ''})")  # fmt: skip
+    console.print(
+        f"{'metric':>10}: {rollout.metric:.4f}  ({speed:.1f} cm/s"
+        f"{', fell' if rollout.fell else ''})"
+    )
     console.print(f"{'video':>10}: {written}")
 
 

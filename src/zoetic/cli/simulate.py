@@ -24,9 +24,14 @@ def animals() -> None:
     for name in list_animals():
         b = load_animal(name)
         table.add_row(
-            name, str(b.n_nodes), str(b.n_springs), str(b.n_muscles), str(b.n_actuators),
-            b.medium, f"{b.total_mass:.2f}",
-        )  # fmt: skip
+            name,
+            str(b.n_nodes),
+            str(b.n_springs),
+            str(b.n_muscles),
+            str(b.n_actuators),
+            b.medium,
+            f"{b.total_mass:.2f}",
+        )
     console.print(table)
 
 
@@ -34,8 +39,11 @@ def animals() -> None:
 def simulate(
     animal: str = typer.Argument(..., help="A zoo animal's name or an animal .toml file."),
     controller: str = typer.Option("wave", help="wave, rest, or a controller .json file."),
-    seconds: float = typer.Option(None, min=0.01, help="Simulated time (s); default 10, or "
-                                  "a stunt's own duration for its macro.json."),  # fmt: skip
+    seconds: float = typer.Option(
+        None,
+        min=0.01,
+        help="Simulated time (s); default 10, or a stunt's own duration for its macro.json.",
+    ),
     out: Path = typer.Option(Path("runs/simulate"), help="Output directory."),
     medium: str = typer.Option(None, help="Override the medium: ground, water, sea, vacuum."),
     dt: float = typer.Option(None, help="Time step (s); default the animal's own."),
@@ -54,8 +62,9 @@ def simulate(
         result = write_replay(load_animal(animal), Path(controller), seconds, out, video, fps)
     else:
         media = partial(simulation_media, video=video, fps=fps)
-        result = simulate_run(animal, controller, 10.0 if seconds is None else seconds, out,
-                              medium, dt, media)  # fmt: skip
+        result = simulate_run(
+            animal, controller, 10.0 if seconds is None else seconds, out, medium, dt, media
+        )
     for key, value in result.items():
         console.print(f"{key:>12}: {value}")
 

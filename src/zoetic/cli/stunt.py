@@ -12,8 +12,7 @@ from zoetic.cli.output import console, emit
 from zoetic.cli.track import track_bar
 
 
-def write_replay(body, path: Path, seconds: float | None, out: Path, video: bool,
-                 fps: int) -> dict:  # fmt: skip
+def write_replay(body, path: Path, seconds: float | None, out: Path, video: bool, fps: int) -> dict:
     """Replay a stunt's macro.json; write record.npz (and video.mp4) into out."""
     from zoetic.behavior.stunts import load_macro, replay
     from zoetic.cli.records import solid_things, write_sequence_record
@@ -23,30 +22,46 @@ def write_replay(body, path: Path, seconds: float | None, out: Path, video: bool
     ctrl, info = load_macro(path, body)
     make_dir(out)
     things = solid_things(info["objects"], traj.times, balls)
-    record = write_sequence_record(out, "stunt", body, traj.times, traj.positions[0], ctrl,
-                                   things)  # fmt: skip
+    record = write_sequence_record(out, "stunt", body, traj.times, traj.positions[0], ctrl, things)
     com = traj.com(body)[0]
     files = {"record": str(record)}
     if video:
         from zoetic.viz.stunts import render_stunt_video
 
-        files["video"] = str(render_stunt_video(
-            body, traj.positions[0], traj.times, body.medium, out / "video.mp4",
-            info["objects"], balls, fps=fps))
-    return {"animal": body.name, "seconds": round(float(traj.times[-1]), 3),
-            "apex_y_m": round(float(com[:, 1].max()), 3), **files}  # fmt: skip
+        files["video"] = str(
+            render_stunt_video(
+                body,
+                traj.positions[0],
+                traj.times,
+                body.medium,
+                out / "video.mp4",
+                info["objects"],
+                balls,
+                fps=fps,
+            )
+        )
+    return {
+        "animal": body.name,
+        "seconds": round(float(traj.times[-1]), 3),
+        "apex_y_m": round(float(com[:, 1].max()), 3),
+        **files,
+    }
 
 
 @app.command()
 def stunt(
     animal: str = typer.Argument(..., help="Zoo animal name or animal .toml file."),
     memory: Path = typer.Option(..., help="Repertoire directory (zoetic repertoire train)."),
-    trick: str = typer.Option("leap", help="A built-in trick (leap, hurdle, somersault, "
-                              "ball-nose, ball-tail, bellyflop, clean-dive) or a trick .toml "
-                              "file."),  # fmt: skip
+    trick: str = typer.Option(
+        "leap",
+        help="A built-in trick (leap, hurdle, somersault, "
+        "ball-nose, ball-tail, bellyflop, clean-dive) or a trick .toml "
+        "file.",
+    ),
     method: str = typer.Option("anneal", help="anneal (simulated annealing) or ga (genetic)."),
-    budget: int = typer.Option(None, min=1, max=10_000_000,
-                              help="Plans (stunt simulations) to evaluate (default 9600)."),
+    budget: int = typer.Option(
+        None, min=1, max=10_000_000, help="Plans (stunt simulations) to evaluate (default 9600)."
+    ),
     seed: int = typer.Option(0, help="Random seed: same seed, same result."),
     segments: int = typer.Option(None, min=1, help="Entries in a plan (default: the trick's)."),
     out: Path = typer.Option(Path("runs/stunt"), help="Run directory to write."),
@@ -85,8 +100,9 @@ def stunt(
         def update(opt) -> None:
             bar.update(tid, completed=min(opt.evaluations, budget), info=f"E {opt.best_f:.3f}")
 
-        found = discover(body, rep, tr, method, budget, seed, segments, progress=update,
-                         evaluator=evaluator)  # fmt: skip
+        found = discover(
+            body, rep, tr, method, budget, seed, segments, progress=update, evaluator=evaluator
+        )
     problem, result, rec = found.problem, found.result, found.record
     make_dir(out)
     write_json(out / "macro.json", macro_document(problem, result.sequence, tr.task.source))
@@ -95,32 +111,54 @@ def stunt(
 
     summary = found.summary()
     summary |= {
-        "targets": targets_met(tr.name, summary, tr), "memory": str(memory), "seed": seed,
+        "targets": targets_met(tr.name, summary, tr),
+        "memory": str(memory),
+        "seed": seed,
         "history": [[n, round(f, 5)] for n, f in result.history],
-    }  # fmt: skip
+    }
     write_json(out / "summary.json", summary)
     times = rec.traj.times
-    write_sequence_record(out, "stunt", body, times, rec.traj.positions[0], result.sequence,
-                          solid_things(tr.objects, times, rec.balls[0]),
-                          figures(summary))  # fmt: skip
+    write_sequence_record(
+        out,
+        "stunt",
+        body,
+        times,
+        rec.traj.positions[0],
+        result.sequence,
+        solid_things(tr.objects, times, rec.balls[0]),
+        figures(summary),
+    )
     got, seconds = found.measures, summary["seconds"]
     starts = result.sequence.starts()
-    plot_score(rec.traj.times, score_series(problem, rec), out / "score.png",
-               starts[starts < seconds],
-               title=f"{body.name} {tr.name}: E = {summary['E']:.3f}, apex "
-                     f"{got['apex_above_surface_m']:.2f} m, {got['air_time_s']:.2f} s in air, "
-                     f"{got['rotation_in_air_deg']:.0f} deg in air")  # fmt: skip
+    plot_score(
+        rec.traj.times,
+        score_series(problem, rec),
+        out / "score.png",
+        starts[starts < seconds],
+        title=f"{body.name} {tr.name}: E = {summary['E']:.3f}, apex "
+        f"{got['apex_above_surface_m']:.2f} m, {got['air_time_s']:.2f} s in air, "
+        f"{got['rotation_in_air_deg']:.0f} deg in air",
+    )
     if video:
         from zoetic.viz.stunts import render_stunt_video
 
-        render_stunt_video(body, rec.traj.positions[0], rec.traj.times, body.medium,
-                           out / "video.mp4", tr.objects, rec.balls[0], fps=fps,
-                           title=f"{body.name} {tr.name}")  # fmt: skip
+        render_stunt_video(
+            body,
+            rec.traj.positions[0],
+            rec.traj.times,
+            body.medium,
+            out / "video.mp4",
+            tr.objects,
+            rec.balls[0],
+            fps=fps,
+            title=f"{body.name} {tr.name}",
+        )
     _report(tr.name, method, result, summary, got, out, video)
 
 
-def _report(name: str, method: str, result, summary: dict, got: dict, out: Path,
-            video: bool) -> None:  # fmt: skip
+def _report(
+    name: str, method: str, result, summary: dict, got: dict, out: Path, video: bool
+) -> None:
     """Print what a discovered stunt achieved and what was written."""
     console.print(
         f"{name} ({method}, {result.evaluations} plans, {result.wall:.1f} s): "
@@ -131,26 +169,37 @@ def _report(name: str, method: str, result, summary: dict, got: dict, out: Path,
         f"{got['contacts']} contacts, splash {got['splash_m3_s']:.3f} m^3/s"
     )
     if "ball_contact" in got:
-        console.print(f"ball contact: {got['ball_contact']}"
-                      + (f" ({', '.join(got['ball_parts'])})" if got["ball_parts"] else ""))
+        console.print(
+            f"ball contact: {got['ball_contact']}"
+            + (f" ({', '.join(got['ball_parts'])})" if got["ball_parts"] else "")
+        )
     if "hurdle_clearance_m" in got:
-        console.print(f"hurdle: clearance {got['hurdle_clearance_m']:.3f} m, "
-                      f"{'over' if got['bar_crossed'] else 'not over'} the bar, "
-                      f"{'touched' if got.get('hurdle_touched') else 'not touched'}")
+        console.print(
+            f"hurdle: clearance {got['hurdle_clearance_m']:.3f} m, "
+            f"{'over' if got['bar_crossed'] else 'not over'} the bar, "
+            f"{'touched' if got.get('hurdle_touched') else 'not touched'}"
+        )
     played = [f"{p['entry']} {p['duration_s']:.2f} s" for p in summary["plan"] if p["played"]]
     console.print("plan: " + ", ".join(played))
-    console.print(f"wrote {out}/ (macro.json, summary.json, record.npz, score.png"
-                  f"{', video.mp4' if video else ''})")  # fmt: skip
+    console.print(
+        f"wrote {out}/ (macro.json, summary.json, record.npz, score.png"
+        f"{', video.mp4' if video else ''})"
+    )
 
 
 @bench_app.command("stunts")
 def bench_stunts_cmd(
-    memory: Path = typer.Option(None, help="The dolphin's repertoire (zoetic repertoire train); "
-                                "default: trained once into runs/bench/dolphin-memory-<digest>, "
-                                "keyed by the body and its training tasks."),
+    memory: Path = typer.Option(
+        None,
+        help="The dolphin's repertoire (zoetic repertoire train); "
+        "default: trained once into runs/bench/dolphin-memory-<digest>, "
+        "keyed by the body and its training tasks.",
+    ),
     animal: str = typer.Option("dolphin"),
-    tricks: str = typer.Option("leap,somersault,hurdle,ball-nose,ball-tail,bellyflop,clean-dive",
-                               help="Comma-separated tricks."),  # fmt: skip
+    tricks: str = typer.Option(
+        "leap,somersault,hurdle,ball-nose,ball-tail,bellyflop,clean-dive",
+        help="Comma-separated tricks.",
+    ),
     method: str = typer.Option("anneal"),
     budget: int = typer.Option(None, min=1, help="Plans per trick (default: as zoetic stunt)."),
     seed: int = typer.Option(0),
@@ -161,6 +210,12 @@ def bench_stunts_cmd(
     from zoetic.behavior.stunts import BUDGET
     from zoetic.bench.stunts import bench_stunts
 
-    out = bench_stunts(animal, memory, [t.strip() for t in tricks.split(",") if t.strip()],
-                       method, budget or BUDGET, seed)  # fmt: skip
+    out = bench_stunts(
+        animal,
+        memory,
+        [t.strip() for t in tricks.split(",") if t.strip()],
+        method,
+        budget or BUDGET,
+        seed,
+    )
     emit(out, json)

@@ -19,8 +19,9 @@ PLANE = (
 
 def track_bar(unit: str):
     """The tracking and planning bar: count in ``unit`` and an info column."""
-    return progress_bar("{task.fields[info]}",
-                        count="{task.completed:>6.0f}/{task.total:.0f} " + unit)
+    return progress_bar(
+        "{task.fields[info]}", count="{task.completed:>6.0f}/{task.total:.0f} " + unit
+    )
 
 
 def _setup(animal: str, memory: Path):
@@ -53,8 +54,9 @@ def track(
     out: Path = typer.Option(Path("runs/track"), help="Run directory to write."),
     interval: float = typer.Option(1.0, min=0.05, help="Re-evaluation interval (s)."),
     radius: float = typer.Option(None, help="Reaching radius (m); default half a body length."),
-    time_limit: float = typer.Option(120.0, min=0.1, max=3600.0,
-                                     help="Give up after this many seconds."),  # fmt: skip
+    time_limit: float = typer.Option(
+        120.0, min=0.1, max=3600.0, help="Give up after this many seconds."
+    ),
     turn_radius: float = typer.Option(
         None,
         help="Metres per radian of bearing added to the distance in the gain (default 1.5 "
@@ -71,8 +73,9 @@ def track(
 
     pts = parse_points(targets, 2, "--targets")
     body, rep = _setup(animal, memory)
-    config = TrackConfig(interval=interval, radius=radius, time_limit=time_limit,
-                         turn_radius=turn_radius)  # fmt: skip
+    config = TrackConfig(
+        interval=interval, radius=radius, time_limit=time_limit, turn_radius=turn_radius
+    )
     with track_bar("s") as bar:
         tid = bar.add_task(f"{body.name} tracks", total=time_limit, info="")
 
@@ -85,37 +88,61 @@ def track(
     check = replay(body, result)
     drift = float(np.nanmax(np.abs(check.positions[0] - result.positions)))
     summary = result.summary() | {
-        "animal": body.name, "memory": str(memory), "targets_xz": pts.tolist(),
-        "plan": [{"entry": n, "start_s": round(float(s), 3)}
-                 for n, s in zip(result.names, result.starts, strict=True)],
+        "animal": body.name,
+        "memory": str(memory),
+        "targets_xz": pts.tolist(),
+        "plan": [
+            {"entry": n, "start_s": round(float(s), 3)}
+            for n, s in zip(result.names, result.starts, strict=True)
+        ],
         "replay_drift_m": drift,
-    }  # fmt: skip
+    }
     save_controller(result.sequence, out / "controller.json")
     write_json(out / "summary.json", summary)
     from zoetic.cli.records import targets, write_sequence_record
     from zoetic.viz.plots import plot_path
 
     reached = int(np.isfinite(result.reached).sum())
-    write_sequence_record(out, "track", body, result.times, result.positions, result.sequence,
-                          targets(pts, float(result.com[0, 1])),
-                          {"targets_reached": f"{reached}/{len(pts)}"})  # fmt: skip
-    plot_path(result.com, out / "path.png", targets=pts, starts=result.start_indices,
-              title=f"{body.name} tracking {reached}/{len(pts)} targets "
-                    f"(white: a new controller starts)")  # fmt: skip
+    write_sequence_record(
+        out,
+        "track",
+        body,
+        result.times,
+        result.positions,
+        result.sequence,
+        targets(pts, float(result.com[0, 1])),
+        {"targets_reached": f"{reached}/{len(pts)}"},
+    )
+    plot_path(
+        result.com,
+        out / "path.png",
+        targets=pts,
+        starts=result.start_indices,
+        title=f"{body.name} tracking {reached}/{len(pts)} targets (white: a new controller starts)",
+    )
     if video:
         from zoetic.viz.render3d import render_video
 
-        render_video(body, result.positions, result.times, body.medium, out / "video.mp4",
-                     fps=fps, markers=_buoys(pts, float(result.com[0, 1])),
-                     marker_colors=(220, 40, 30))  # fmt: skip
+        render_video(
+            body,
+            result.positions,
+            result.times,
+            body.medium,
+            out / "video.mp4",
+            fps=fps,
+            markers=_buoys(pts, float(result.com[0, 1])),
+            marker_colors=(220, 40, 30),
+        )
     console.print(
         f"reached {reached}/{len(pts)} targets in {result.sim_time:.1f} s simulated, "
         f"{result.wall:.2f} s wall: [bold]{result.realtime_factor:.0f}x real time[/] "
         f"({len(result.names)} controllers, {len(result.evaluations)} re-evaluations of "
         f"{len(rep.names)} entries in one batch each)"
     )
-    console.print(f"wrote {out}/ (controller.json, summary.json, record.npz, path.png"
-                  f"{', video.mp4' if video else ''})")  # fmt: skip
+    console.print(
+        f"wrote {out}/ (controller.json, summary.json, record.npz, path.png"
+        f"{', video.mp4' if video else ''})"
+    )
 
 
 @app.command()
@@ -127,12 +154,14 @@ def macro(
         [], help="Obstacle disc 'x,z,r' to keep out of (repeat for more)."
     ),
     method: str = typer.Option("ga", help="anneal (simulated annealing) or ga (genetic)."),
-    budget: int = typer.Option(2000, min=1, max=10_000_000,
-                              help="Plans (simulations) to evaluate."),  # fmt: skip
+    budget: int = typer.Option(
+        2000, min=1, max=10_000_000, help="Plans (simulations) to evaluate."
+    ),
     seed: int = typer.Option(0, help="Random seed: same seed, same result."),
     segments: int = typer.Option(6, min=1, help="Repertoire entries in a plan."),
-    horizon: float = typer.Option(60.0, min=0.1, max=3600.0,
-                                  help="Seconds the plan is judged over."),  # fmt: skip
+    horizon: float = typer.Option(
+        60.0, min=0.1, max=3600.0, help="Seconds the plan is judged over."
+    ),
     out: Path = typer.Option(Path("runs/macro"), help="Run directory to write."),
     video: bool = typer.Option(True, help="Write video.mp4 (goal and obstacle rims as buoys)."),
     fps: int = typer.Option(30, min=1),
@@ -150,8 +179,7 @@ def macro(
     from zoetic.io import write_json
 
     g = parse_points(goal, 2, "--goal")[0]
-    obs = np.concatenate([parse_points(o, 3, "--obstacle") for o in obstacle] or
-                         [np.zeros((0, 3))])  # fmt: skip
+    obs = np.concatenate([parse_points(o, 3, "--obstacle") for o in obstacle] or [np.zeros((0, 3))])
     if np.any(obs[:, 2] <= 0):
         raise TrackingError(f"--obstacle: radii must be positive, got {obs[:, 2].tolist()}")
     body, rep = _setup(animal, memory)
@@ -162,17 +190,20 @@ def macro(
 
         def update(opt) -> None:
             st = " ".join(f"{k} {v:.2g}" for k, v in opt.status().items())
-            bar.update(tid, completed=min(opt.evaluations, budget),
-                       info=f"E {opt.best_f:.3f} {st}")  # fmt: skip
+            bar.update(tid, completed=min(opt.evaluations, budget), info=f"E {opt.best_f:.3f} {st}")
 
         result = search(problem, method, budget, seed, progress=update, evaluator=evaluator)
     make_dir(out)
     save_controller(result.sequence, out / "controller.json")
     summary = result.summary() | {
-        "animal": body.name, "memory": str(memory), "goal_xz": g.tolist(),
-        "obstacles_xzr": obs.tolist(), "horizon_s": horizon, "seed": seed,
+        "animal": body.name,
+        "memory": str(memory),
+        "goal_xz": g.tolist(),
+        "obstacles_xzr": obs.tolist(),
+        "horizon_s": horizon,
+        "seed": seed,
         "history": [[n, round(f, 5)] for n, f in result.history],
-    }  # fmt: skip
+    }
     write_json(out / "summary.json", summary)
     traj = problem.rollout(result.entries, result.durations, record_every=4)
     com = traj.com(body)[0]
@@ -193,20 +224,29 @@ def macro(
 
         rims = _rings(obs, depth)
         colors = [(220, 40, 30)] + [(240, 200, 40)] * len(rims)
-        render_video(body, traj.positions[0], traj.times, body.medium, out / "video.mp4",
-                     fps=fps, markers=np.vstack([_buoys(g, depth), rims]),
-                     marker_colors=colors)  # fmt: skip
+        render_video(
+            body,
+            traj.positions[0],
+            traj.times,
+            body.medium,
+            out / "video.mp4",
+            fps=fps,
+            markers=np.vstack([_buoys(g, depth), rims]),
+            marker_colors=colors,
+        )
     _report_plan(method, s, out, video)
 
 
-def _write_plan_record(out: Path, body, traj, sequence, goal, obstacles, depth: float,
-                       summary: dict) -> None:  # fmt: skip
+def _write_plan_record(
+    out: Path, body, traj, sequence, goal, obstacles, depth: float, summary: dict
+) -> None:
     """Write a macro run's record: the planned run, its goal and obstacle discs, figures."""
     from zoetic.cli.records import figures, obstacle_discs, targets, write_sequence_record
 
     things = targets(goal, depth, "goal") + obstacle_discs(obstacles, depth)
-    write_sequence_record(out, "macro", body, traj.times, traj.positions[0], sequence, things,
-                          figures(summary))  # fmt: skip
+    write_sequence_record(
+        out, "macro", body, traj.times, traj.positions[0], sequence, things, figures(summary)
+    )
 
 
 def _report_plan(method: str, s: dict, out: Path, video: bool) -> None:
@@ -218,5 +258,7 @@ def _report_plan(method: str, s: dict, out: Path, video: bool) -> None:
     )
     played = [f"{p['entry']} {p['duration_s']:.1f} s" for p in s["plan"] if p["played"]]
     console.print("plan: " + ", ".join(played))
-    console.print(f"wrote {out}/ (controller.json, summary.json, record.npz, path.png"
-                  f"{', video.mp4' if video else ''})")  # fmt: skip
+    console.print(
+        f"wrote {out}/ (controller.json, summary.json, record.npz, path.png"
+        f"{', video.mp4' if video else ''})"
+    )

@@ -73,8 +73,14 @@ def wave_controller(body: Body) -> WaveController:
     return ctrl
 
 
-def steered_wave(body: Body, times: np.ndarray, amplitude: float = 1.0, bias: float = 0.0,
-                 fins: float = 0.0, frequency: float | None = None) -> np.ndarray:
+def steered_wave(
+    body: Body,
+    times: np.ndarray,
+    amplitude: float = 1.0,
+    bias: float = 0.0,
+    fins: float = 0.0,
+    frequency: float | None = None,
+) -> np.ndarray:
     """Return activations (T, A): the body's own wave (at ``frequency``, default its own) with
     the muscles' swing scaled by ``amplitude`` about the wave's offset, ``bias`` added to the
     left muscles and taken from the right ones (bias > 0 turns left), and ``fins`` added to

@@ -24,8 +24,14 @@ from .sensors import SENSORS, Senses
 FAR = 1e8  # m; a water level at least this far away is no surface
 # the measured quantities and their units; "depth" where the medium has a water surface,
 # "height" (of the centre of mass above y = 0) where it has none
-UNITS = {"speed": "m/s", "depth": "m", "height": "m", "heading": "deg", "pitch": "deg",
-         "roll": "deg"}  # fmt: skip
+UNITS = {
+    "speed": "m/s",
+    "depth": "m",
+    "height": "m",
+    "heading": "deg",
+    "pitch": "deg",
+    "roll": "deg",
+}
 
 
 def has_surface(medium: Medium) -> bool:
@@ -44,8 +50,9 @@ def _velocities(positions: np.ndarray, times: np.ndarray) -> np.ndarray:
         return np.gradient(positions, axis=1) * step[None, :, None, None]
 
 
-def motion_scalars(body: Body, positions: np.ndarray, times: np.ndarray,
-                   medium: Medium) -> dict[str, np.ndarray]:  # fmt: skip
+def motion_scalars(
+    body: Body, positions: np.ndarray, times: np.ndarray, medium: Medium
+) -> dict[str, np.ndarray]:
     """Return the motion of animals sharing ``body``, positions (K, T, N, 3) m at ``times``
     (T,) s, as arrays (K, T): speed (m/s along the forward axis), depth below the surface (m;
     ``height`` of the centre of mass where the medium has no surface), heading (deg, left

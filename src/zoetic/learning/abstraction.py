@@ -35,8 +35,9 @@ from zoetic.physics import Medium, get_medium, rest_state, simulate
 from zoetic.tasks import Task, parse_task, start_state
 from zoetic.tasks.terms import evaluate_terms
 
-FORWARD = parse_task({"name": "forward", "horizon": 1.0,
-                     "terms": [{"kind": "distance_along_heading"}]})  # fmt: skip
+FORWARD = parse_task(
+    {"name": "forward", "horizon": 1.0, "terms": [{"kind": "distance_along_heading"}]}
+)
 
 FLOOR = 1e-3  # modes weaker than this (activation units) are numerical noise, never kept
 
@@ -106,9 +107,11 @@ def _phasor_spectrum(ctrl: FrequencyDomainController) -> Spectrum:
     phasors = ctrl.amplitudes * np.exp(1j * ctrl.phase)[None, :]  # (A, M)
     offset = phasors[:, hz == 0].real.sum(axis=1)
     freqs = np.unique(hz[hz > 0])
-    z = np.stack([phasors[:, hz == f].sum(axis=1) for f in freqs], axis=1) if freqs.size else (
-        np.zeros((ctrl.n_actuators, 0), complex)
-    )  # fmt: skip
+    z = (
+        np.stack([phasors[:, hz == f].sum(axis=1) for f in freqs], axis=1)
+        if freqs.size
+        else (np.zeros((ctrl.n_actuators, 0), complex))
+    )
     period = float(1.0 / freqs.min()) if freqs.size else 1.0
     freq = np.broadcast_to(freqs, z.shape).copy()
     return Spectrum(offset, freq, np.abs(z), np.angle(z), period)
@@ -121,8 +124,13 @@ def spectrum(ctrl: Controller) -> Spectrum:
     if isinstance(ctrl, FrequencyDomainController):
         return _phasor_spectrum(ctrl)
     if isinstance(ctrl, AbstractController):
-        return Spectrum(ctrl.offset, ctrl.freq, np.abs(ctrl.amp),
-                        ctrl.phase + np.pi * (ctrl.amp < 0), ctrl.period)  # fmt: skip
+        return Spectrum(
+            ctrl.offset,
+            ctrl.freq,
+            np.abs(ctrl.amp),
+            ctrl.phase + np.pi * (ctrl.amp < 0),
+            ctrl.period,
+        )
     a = ctrl.n_actuators
     if isinstance(ctrl, ConstantController):
         empty = np.zeros((a, 0))
@@ -131,8 +139,9 @@ def spectrum(ctrl: Controller) -> Spectrum:
         half = np.full((a, 1), 0.5 * ctrl.amplitude)
         phase = -2 * np.pi * np.asarray(ctrl.phases, float)[:, None] - np.pi / 2
         f = np.full((a, 1), float(ctrl.frequency))
-        return Spectrum(np.full(a, ctrl.offset + 0.5 * ctrl.amplitude), f, half, phase,
-                        1.0 / ctrl.frequency)  # fmt: skip
+        return Spectrum(
+            np.full(a, ctrl.offset + 0.5 * ctrl.amplitude), f, half, phase, 1.0 / ctrl.frequency
+        )
     raise ControllerError(
         f"cannot abstract a {ctrl.kind!r} controller (time, frequency, wave, constant, abstract "
         "or mirrored ones can be)"
@@ -169,8 +178,9 @@ def from_spectrum(ctrl: Controller, spec: Spectrum, kept: np.ndarray) -> Abstrac
         freq[i, :n], amp[i, :n] = spec.freq[i, idx], spec.amp[i, idx]
         phase[i, :n] = spec.phase[i, idx]
     phase = (phase + np.pi) % (2 * np.pi) - np.pi
-    return AbstractController(ctrl.animal, tuple(ctrl.actuators), spec.offset.copy(), freq, amp,
-                              phase, float(spec.period))  # fmt: skip
+    return AbstractController(
+        ctrl.animal, tuple(ctrl.actuators), spec.offset.copy(), freq, amp, phase, float(spec.period)
+    )
 
 
 def abstract(ctrl: Controller, modes: str | int = "auto", threshold: float = 0.3) -> Abstraction:
@@ -180,13 +190,16 @@ def abstract(ctrl: Controller, modes: str | int = "auto", threshold: float = 0.3
         perm = list(ctrl.mirror)
         s = inner.spectrum
         spec = Spectrum(s.offset[perm], s.freq[perm], s.amp[perm], s.phase[perm], s.period)
-        return Abstraction(mirror_abstract(inner.controller, perm), spec, inner.kept[perm],
-                           inner.rule)  # fmt: skip
+        return Abstraction(
+            mirror_abstract(inner.controller, perm), spec, inner.kept[perm], inner.rule
+        )
     spec = spectrum(ctrl)
     kept = select_modes(spec, modes, threshold)
-    rule = f"auto (threshold {threshold:g})" if parse_modes(modes) == "auto" else (
-        f"{modes} strongest"
-    )  # fmt: skip
+    rule = (
+        f"auto (threshold {threshold:g})"
+        if parse_modes(modes) == "auto"
+        else (f"{modes} strongest")
+    )
     return Abstraction(from_spectrum(ctrl, spec, kept), spec, kept, rule)
 
 
@@ -195,8 +208,15 @@ def mirror_abstract(ctrl: AbstractController, mirror) -> AbstractController:
     p = [int(m) for m in mirror]
     if sorted(p) != list(range(ctrl.n_actuators)):
         raise ControllerError(f"mirror {p} is not a permutation of {ctrl.n_actuators} actuators")
-    return AbstractController(ctrl.animal, tuple(ctrl.actuators), ctrl.offset[p], ctrl.freq[p],
-                              ctrl.amp[p], ctrl.phase[p], ctrl.period)  # fmt: skip
+    return AbstractController(
+        ctrl.animal,
+        tuple(ctrl.actuators),
+        ctrl.offset[p],
+        ctrl.freq[p],
+        ctrl.amp[p],
+        ctrl.phase[p],
+        ctrl.period,
+    )
 
 
 def measure(
@@ -277,8 +297,12 @@ class Comparison:
 
     def to_dict(self) -> dict:
         """Return the JSON-able numbers."""
-        return {"measure": self.measure, "kept": round(self.kept, 4),
-                "original": summary(self.original), "abstract": summary(self.abstract)}  # fmt: skip
+        return {
+            "measure": self.measure,
+            "kept": round(self.kept, 4),
+            "original": summary(self.original),
+            "abstract": summary(self.abstract),
+        }
 
 
 def compare(

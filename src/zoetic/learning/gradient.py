@@ -253,9 +253,10 @@ def jax_objective(objective: Objective) -> Callable:
     basis = jnp.asarray(objective._basis, F32)  # (T, M)
     node_basis = jnp.asarray(objective._node_basis, F32)
     shape = objective.full_shape
-    starts = [(jnp.asarray(x, F32), jnp.asarray(v, F32))
-              for x, v in zip(objective.starts.positions, objective.starts.velocities,
-                              strict=True)]  # fmt: skip
+    starts = [
+        (jnp.asarray(x, F32), jnp.asarray(v, F32))
+        for x, v in zip(objective.starts.positions, objective.starts.velocities, strict=True)
+    ]
     roll = rollout_fn(body, objective.medium, objective.dt, objective.record_every)
     frame = BodyFrame.of(body)
     n_rec = objective.steps // objective.record_every + 1

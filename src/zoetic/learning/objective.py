@@ -45,15 +45,30 @@ def control_energy(u_nodes: np.ndarray, h: float, nu1: float, nu2: float) -> np.
     return control_energy_xp(np, np.asarray(u_nodes, float), h, nu1, nu2)
 
 
-def signals(task: Task, body: Body, positions, activations=None, dt: float = 0.05,
-            medium: Medium | str | None = None, xp=np, frame: BodyFrame | None = None) -> Signals:
+def signals(
+    task: Task,
+    body: Body,
+    positions,
+    activations=None,
+    dt: float = 0.05,
+    medium: Medium | str | None = None,
+    xp=np,
+    frame: BodyFrame | None = None,
+) -> Signals:
     """Return what a task's terms see of recordings (K, R, N, 3) taken ``dt`` seconds apart."""
     k, r = positions.shape[:2]
     if activations is None:
         activations = xp.zeros((k, r, body.n_actuators))
     level = get_medium(medium or body.medium).water_level
-    return Signals(xp, frame or BodyFrame.of(body), positions, activations, np.arange(r) * dt,
-                   level, task.horizon)  # fmt: skip
+    return Signals(
+        xp,
+        frame or BodyFrame.of(body),
+        positions,
+        activations,
+        np.arange(r) * dt,
+        level,
+        task.horizon,
+    )
 
 
 def heading_angles(body: Body, positions: np.ndarray) -> np.ndarray:
@@ -61,8 +76,15 @@ def heading_angles(body: Body, positions: np.ndarray) -> np.ndarray:
     return Signals(np, BodyFrame.of(body), positions, None, np.zeros(0), 0.0, 1.0).heading
 
 
-def motion_terms(task: Task, body: Body, positions: np.ndarray, horizon: float | None = None,
-                 activations=None, dt: float = 0.05, medium=None) -> dict:  # fmt: skip
+def motion_terms(
+    task: Task,
+    body: Body,
+    positions: np.ndarray,
+    horizon: float | None = None,
+    activations=None,
+    dt: float = 0.05,
+    medium=None,
+) -> dict:
     """Return each term's raw value (K,) for recorded positions (K, R, N, 3), by term name."""
     s = signals(task, body, positions, activations, dt, medium)
     if horizon is not None:
@@ -166,8 +188,11 @@ class Objective:
         right coefficients = S @ left ones: the left signal delayed by the wave's lag."""
         body = self.body
         mirror = np.asarray(body.actuator_mirror)
-        pairs = [(k, int(mirror[k])) for k, side in enumerate(body.actuator_side)
-                 if side == "right" and 0 <= mirror[k] != k and k not in self.held]  # fmt: skip
+        pairs = [
+            (k, int(mirror[k]))
+            for k, side in enumerate(body.actuator_side)
+            if side == "right" and 0 <= mirror[k] != k and k not in self.held
+        ]
         if not pairs:
             raise ZoeticError(f"the {body.name} has no mirror pairs to couple")
         phase = np.nan_to_num(np.asarray(body.wave_phase, float))
@@ -182,8 +207,9 @@ class Objective:
                     f"{self.template.kind} controller delayed by {lag:g} s is another signal"
                 )
             shift[k] = (j, S.T)
-        free = np.array([k for k in range(body.n_actuators)
-                         if k not in shift and k not in self.held], dtype=int)  # fmt: skip
+        free = np.array(
+            [k for k in range(body.n_actuators) if k not in shift and k not in self.held], dtype=int
+        )
         return free, shift
 
     @property
@@ -276,8 +302,15 @@ class Objective:
         lanes = self._lanes(self.tables(params))
         traj = self._run(lanes)  # one kernel call for every candidate from every start
         acts = lanes[:, self.record_rows(traj.positions.shape[1])]
-        s = signals(self.task, self.body, traj.positions, acts, self.record_every * self.dt,
-                    self.medium, frame=self.frame)  # fmt: skip
+        s = signals(
+            self.task,
+            self.body,
+            traj.positions,
+            acts,
+            self.record_every * self.dt,
+            self.medium,
+            frame=self.frame,
+        )
         values = evaluate_terms(np, s, self.task.terms)
         e_v = sum(t.weight * v for t, v in zip(self.task.terms, values, strict=True))
         e_u = self.control_cost(params)
@@ -290,11 +323,12 @@ class Objective:
             return Evaluation(e, e_u, np.where(failed, np.inf, e_v), terms, failed)
         k = params.shape[0]
         per, failed = e.reshape(k, n), failed.reshape(k, n).any(axis=1)
-        terms = {name: v.reshape(k, n).mean(axis=1)
-                 for name, v in zip(term_names(self.task.terms), values, strict=True)}  # fmt: skip
+        terms = {
+            name: v.reshape(k, n).mean(axis=1)
+            for name, v in zip(term_names(self.task.terms), values, strict=True)
+        }
         e_v = np.where(failed, np.inf, e_v.reshape(k, n).mean(axis=1))
-        return Evaluation(np.where(failed, np.inf, per.mean(axis=1)), e_u, e_v, terms, failed,
-                          per)  # fmt: skip
+        return Evaluation(np.where(failed, np.inf, per.mean(axis=1)), e_u, e_v, terms, failed, per)
 
     def __call__(self, params: np.ndarray) -> np.ndarray:
         """Return E (K,) for a batch of parameter vectors."""

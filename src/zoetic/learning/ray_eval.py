@@ -86,8 +86,12 @@ class RayPool:
         ray = import_ray()
         if not ray.is_initialized():
             try:
-                ray.init(address=self.address, log_to_driver=False, include_dashboard=False,
-                         configure_logging=False)  # fmt: skip
+                ray.init(
+                    address=self.address,
+                    log_to_driver=False,
+                    include_dashboard=False,
+                    configure_logging=False,
+                )
             except ConnectionError as exc:
                 raise ZoeticError(
                     f"cannot reach the Ray cluster at {self.address} ({exc})"
@@ -126,8 +130,11 @@ class RayPool:
             submit(start, k)
         if self.on_submit is not None:
             self.on_submit(self)
-        lost = (ray.exceptions.RayActorError, ray.exceptions.WorkerCrashedError,
-                ray.exceptions.ObjectLostError)  # fmt: skip
+        lost = (
+            ray.exceptions.RayActorError,
+            ray.exceptions.WorkerCrashedError,
+            ray.exceptions.ObjectLostError,
+        )
         while pending:
             ready, _ = ray.wait(list(pending), num_returns=1)
             start = pending.pop(ready[0])

@@ -40,10 +40,17 @@ class EyeSpec:
         """Return the eyes declared in the body's animal file; raise ZoeticError if it has
         none."""
         if body.eye_node is None or body.eye_offset is None:
-            raise ZoeticError(f"{body.source}: animal {body.name!r} has no eyes; add an [eyes] "
-                              "table (see docs/animals.md)")  # fmt: skip
-        return cls(int(body.eye_pixels), int(body.eye_levels), float(body.eye_fov),
-                   tuple(float(v) for v in body.eye_offset), visibility)  # fmt: skip
+            raise ZoeticError(
+                f"{body.source}: animal {body.name!r} has no eyes; add an [eyes] "
+                "table (see docs/animals.md)"
+            )
+        return cls(
+            int(body.eye_pixels),
+            int(body.eye_levels),
+            float(body.eye_fov),
+            tuple(float(v) for v in body.eye_offset),
+            visibility,
+        )
 
     @property
     def fovs(self) -> np.ndarray:
@@ -94,8 +101,7 @@ def body_frame(body: Body, positions: np.ndarray) -> HeadFrame:
     return _fitted_frame(body, positions, np.arange(len(body.rest_pos)), body.head)
 
 
-def _fitted_frame(body: Body, positions: np.ndarray, idx: np.ndarray,
-                  origin: int) -> HeadFrame:  # fmt: skip
+def _fitted_frame(body: Body, positions: np.ndarray, idx: np.ndarray, origin: int) -> HeadFrame:
     r0 = body.rest_pos[idx] - body.rest_pos[idx].mean(0)
     x = positions[idx] - positions[idx].mean(0)
     u, _, vt = np.linalg.svd(r0.T @ x)
@@ -139,12 +145,14 @@ def eye_cameras(frame: HeadFrame, angles: np.ndarray, spec: EyeSpec) -> Cameras:
     rot = look_rotation(gaze_direction(frame, a[:, 0], a[:, 1]), frame.up)  # (2, 3, 3)
     pos = eye_positions(frame, spec)
     n = spec.levels
-    return Cameras(np.repeat(pos, n, 0), np.repeat(rot, n, 0), np.tile(spec.fovs, 2),
-                   (spec.size, spec.size))  # fmt: skip
+    return Cameras(
+        np.repeat(pos, n, 0), np.repeat(rot, n, 0), np.tile(spec.fovs, 2), (spec.size, spec.size)
+    )
 
 
-def look(mesh: Mesh, frame: HeadFrame, angles: np.ndarray, spec: EyeSpec,
-         fog_color=(0.05, 0.25, 0.35)) -> tuple[np.ndarray, Cameras]:  # fmt: skip
+def look(
+    mesh: Mesh, frame: HeadFrame, angles: np.ndarray, spec: EyeSpec, fog_color=(0.05, 0.25, 0.35)
+) -> tuple[np.ndarray, Cameras]:
     """Return both eyes' component images (2, levels, size, size, 3) uint8 and their cameras."""
     cams = eye_cameras(frame, angles, spec)
     img = render(mesh.vertices, mesh.triangles, mesh.colors, cams, fog_color, spec.visibility)

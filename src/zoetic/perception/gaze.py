@@ -160,19 +160,25 @@ class GazeController:
         if state.directions is None:
             return state
         th, ph = gaze_angles(frame, state.directions)
-        a = np.stack([np.clip(th, -self.max_theta, self.max_theta),
-                      np.clip(ph, -self.max_phi, self.max_phi)], 1)  # fmt: skip
-        return GazeState(a, state.locked.copy(), list(state.fovea), state.saccades,
-                         state.directions)  # fmt: skip
+        a = np.stack(
+            [
+                np.clip(th, -self.max_theta, self.max_theta),
+                np.clip(ph, -self.max_phi, self.max_phi),
+            ],
+            1,
+        )
+        return GazeState(
+            a, state.locked.copy(), list(state.fovea), state.saccades, state.directions
+        )
 
-    def step(self, state: GazeState, frame: HeadFrame, images: np.ndarray,
-             cameras: Cameras) -> GazeState:  # fmt: skip
+    def step(
+        self, state: GazeState, frame: HeadFrame, images: np.ndarray, cameras: Cameras
+    ) -> GazeState:
         """Return the gaze state after one frame: stabilise each eye on its fovea's motion,
         re-foveate (saccade) when the target drifts or is lost, verge both eyes on it."""
         n = self.spec.levels
         s = self.spec.size
-        new = GazeState(state.angles.copy(), state.locked.copy(), list(state.fovea),
-                        state.saccades)  # fmt: skip
+        new = GazeState(state.angles.copy(), state.locked.copy(), list(state.fovea), state.saccades)
         aim: list = [None, None]  # the foveal pixel each eye now centres on, when it has one
         for eye in (LEFT, RIGHT):
             fov = images[eye, n - 1]

@@ -90,5 +90,6 @@ def locate(image: np.ndarray, model: np.ndarray, radius: int = 1, window: int = 
     if m <= 0:
         return Detection(i + 0.5, j + 0.5, 0.0, 0.0)
     yy, xx = np.mgrid[j0:j1, i0:i1]
-    return Detection(float((xx * win).sum() / m) + 0.5, float((yy * win).sum() / m) + 0.5,
-                     float(b[j, i]), m)  # fmt: skip
+    return Detection(
+        float((xx * win).sum() / m) + 0.5, float((yy * win).sum() / m) + 0.5, float(b[j, i]), m
+    )

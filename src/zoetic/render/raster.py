@@ -83,8 +83,7 @@ def project(points, cameras: Cameras) -> tuple[np.ndarray, np.ndarray]:
 
 
 @njit(cache=True, fastmath=True)
-def _raster(vert, tris, colors, eyes, rots, focal, width, height, fog_color, fog_dist,
-            out, depth):  # fmt: skip
+def _raster(vert, tris, colors, eyes, rots, focal, width, height, fog_color, fog_dist, out, depth):
     n_cam = eyes.shape[0]
     n_tri = tris.shape[0]
     for c in range(n_cam):

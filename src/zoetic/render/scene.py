@@ -16,10 +16,22 @@ ROCK = (0.45, 0.42, 0.38)
 WEED = (0.15, 0.55, 0.2)
 BALL = (0.9, 0.9, 0.85)
 SEABED = ((0.62, 0.56, 0.42), (0.48, 0.44, 0.34))
-_BOX_FACES = np.array([
-    (0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1),
-    (2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3),
-])  # fmt: skip
+_BOX_FACES = np.array(
+    [
+        (0, 1, 3),
+        (0, 3, 2),
+        (4, 6, 7),
+        (4, 7, 5),
+        (0, 4, 5),
+        (0, 5, 1),
+        (2, 3, 7),
+        (2, 7, 6),
+        (0, 2, 6),
+        (0, 6, 4),
+        (1, 5, 7),
+        (1, 7, 3),
+    ]
+)
 
 
 @dataclass(frozen=True)
@@ -139,8 +151,12 @@ def world_mesh(
     v = np.concatenate(verts) if verts else np.zeros((0, 3))
     t = np.concatenate(tris) if tris else np.zeros((0, 3), np.int64)
     c = np.concatenate(cols) if cols else np.zeros((0, 3))
-    return Mesh(v, t, shade(v, t, c) if len(t) else c, np.concatenate(owner) if owner else
-                np.zeros(0, np.int64))  # fmt: skip
+    return Mesh(
+        v,
+        t,
+        shade(v, t, c) if len(t) else c,
+        np.concatenate(owner) if owner else np.zeros(0, np.int64),
+    )
 
 
 def merge(*meshes: Mesh) -> Mesh:

@@ -102,11 +102,17 @@ def body_from_genes(
         else:
             mass = ln.mass * body
         inertia = None if ln.inertia is None else ln.inertia * (mass / ln.mass) * lf[k] ** 2
-        links.append(replace(
-            ln, length=ln.length * lf[k], start=ln.start * lf[k],
-            radius=ln.radius * math.sqrt(sf[k]), mass=mass, inertia=inertia,
-            depth=ln.depth * math.sqrt(sf[k]),
-        ))  # fmt: skip
+        links.append(
+            replace(
+                ln,
+                length=ln.length * lf[k],
+                start=ln.start * lf[k],
+                radius=ln.radius * math.sqrt(sf[k]),
+                mass=mass,
+                inertia=inertia,
+                depth=ln.depth * math.sqrt(sf[k]),
+            )
+        )
     index = {ln.name: k for k, ln in enumerate(base.links)}
     joints = []
     for j, jt in enumerate(base.joints):
@@ -121,8 +127,7 @@ def body_from_genes(
         for s in base.sensors
     )
     acts = tuple(replace(a, ks=ks[i]) for i, a in enumerate(base.actuators))
-    return replace(base, links=tuple(links), joints=tuple(joints), sensors=sensors,
-                   actuators=acts)  # fmt: skip
+    return replace(base, links=tuple(links), joints=tuple(joints), sensors=sensors, actuators=acts)
 
 
 def _body_params(creature: Creature, delta: float) -> list[Param]:
@@ -226,21 +231,44 @@ def evolve(
     def score(v: dict[str, np.ndarray]) -> float:
         return float(evaluate(*build(v)))
 
-    walk = anneal_values(values, params, score, method, trials, seed, progress,
-                         valid=_within, resume=resume, checkpoint=checkpoint)  # fmt: skip
+    walk = anneal_values(
+        values,
+        params,
+        score,
+        method,
+        trials,
+        seed,
+        progress,
+        valid=_within,
+        resume=resume,
+        checkpoint=checkpoint,
+    )
     net, body = build(walk.values)
     info = dict(network.info)
     info.update(evolved=method, trials=trials, seed=seed, before=walk.before, after=walk.after)
     name = f"{creature.name}-evolved"
-    evolved = replace(body, name=name, path=None,
-                      description=f"{creature.name} evolved (zoetic san evolve, seed {seed})")
+    evolved = replace(
+        body,
+        name=name,
+        path=None,
+        description=f"{creature.name} evolved (zoetic san evolve, seed {seed})",
+    )
     net = net.with_params(creature=name, tuning=None, info=info)
     return EvolveResult(
-        base=creature, creature=evolved, network=net, start=network,
-        genes={g: walk.values[g].copy() for g in GENES}, before=walk.before, after=walk.after,
-        trials=trials, seed=seed, best=walk.best, tried=walk.tried, accepted=walk.accepted,
+        base=creature,
+        creature=evolved,
+        network=net,
+        start=network,
+        genes={g: walk.values[g].copy() for g in GENES},
+        before=walk.before,
+        after=walk.after,
+        trials=trials,
+        seed=seed,
+        best=walk.best,
+        tried=walk.tried,
+        accepted=walk.accepted,
         elapsed=time.perf_counter() - t0,
-    )  # fmt: skip
+    )
 
 
 def changes(result: EvolveResult) -> list[dict]:
@@ -255,12 +283,22 @@ def changes(result: EvolveResult) -> list[dict]:
             {"parameter": f"{la.name} mass (kg)", "before": la.mass, "after": lb.mass},
         ]
     for ja, jb in zip(a.joints, b.joints, strict=True):
-        rows.append({"parameter": f"{ja.name} anchor x on {ja.parent} (m)",
-                     "before": ja.anchor[0], "after": jb.anchor[0]})  # fmt: skip
+        rows.append(
+            {
+                "parameter": f"{ja.name} anchor x on {ja.parent} (m)",
+                "before": ja.anchor[0],
+                "after": jb.anchor[0],
+            }
+        )
     for aa, ab in zip(a.actuators, b.actuators, strict=True):
         rows.append({"parameter": f"{aa.name} ks", "before": aa.ks, "after": ab.ks})
-    rows.append({"parameter": "total mass (kg)", "before": sum(ln.mass for ln in a.links),
-                 "after": sum(ln.mass for ln in b.links)})  # fmt: skip
+    rows.append(
+        {
+            "parameter": "total mass (kg)",
+            "before": sum(ln.mass for ln in a.links),
+            "after": sum(ln.mass for ln in b.links),
+        }
+    )
     for r in rows:
         r["before"], r["after"] = round(float(r["before"]), 5), round(float(r["after"]), 5)
     return rows
@@ -279,15 +317,16 @@ def write_evolve(result: EvolveResult, out, terrain: str = "flat") -> dict:
     out = Path(out)
     path = save_creature(result.creature, out / "creature.toml")
     evolved = load_creature(path)  # the strict reader must accept what we wrote
-    net = result.network.with_params(info={**result.network.info, "terrain": terrain,
-                                           "creature_file": str(path)})  # fmt: skip
+    net = result.network.with_params(
+        info={**result.network.info, "terrain": terrain, "creature_file": str(path)}
+    )
     check_fits(net, evolved)
     save_network(net, out / "san.json", evolved)
     save_network(result.start, out / "start.json", result.base)
     lines = ["trial,candidate,best"] + [
-        f"{i + 1},{a:.6g},{b:.6g}" for i, (a, b) in enumerate(zip(result.tried, result.best,
-                                                               strict=True))
-    ]  # fmt: skip
+        f"{i + 1},{a:.6g},{b:.6g}"
+        for i, (a, b) in enumerate(zip(result.tried, result.best, strict=True))
+    ]
     atomic_write_bytes(out / "history.csv", ("\n".join(lines) + "\n").encode())
 
     def speed(metric: float) -> float:

@@ -135,11 +135,13 @@ def gait_features(creature, rollout) -> dict:
         "turns": round(float(turns), 3),
         "airborne": round(float(np.mean(~touching.any(axis=1))), 3),
         "bounce": round(float(np.std(height) / size), 4),
-        "contact": {ln.name: round(float(v), 3)
-                    for ln, v in zip(creature.links, touching.mean(axis=0), strict=True)},
+        "contact": {
+            ln.name: round(float(v), 3)
+            for ln, v in zip(creature.links, touching.mean(axis=0), strict=True)
+        },
         "periodicity": round(period, 3),
         "period_s": round(lag, 3),
-    }  # fmt: skip
+    }
 
 
 def feature_matrix(features: list[dict]) -> tuple[np.ndarray, list[str]]:

@@ -50,9 +50,18 @@ WEIGHT_MAX = 2
 SUM_BOUND = 2.0
 # Hidden nodes per creature in Table 1 of the paper ("about as many as sensors").
 PAPER_HIDDEN = {
-    "crawler": 10, "fish": 5, "boulder": 8, "bouncer": 8, "luxo": 6, "cart": 5, "walker": 6,
-    "twolink": 5, "threelink": 7, "fourlink": 8, "star": 7,
-}  # fmt: skip
+    "crawler": 10,
+    "fish": 5,
+    "boulder": 8,
+    "bouncer": 8,
+    "luxo": 6,
+    "cart": 5,
+    "walker": 6,
+    "twolink": 5,
+    "threelink": 7,
+    "fourlink": 8,
+    "star": 7,
+}
 _EPS = 1e-9
 
 
@@ -223,9 +232,19 @@ def check_fits(network: Network, creature, source: str | os.PathLike | None = No
 
 
 NETWORK_KEYS = (
-    "format", "version", "creature", "n_sensors", "n_hidden", "n_actuators", "weights", "k1",
-    "k2", "tuning", "info", "creature_def",
-)  # fmt: skip
+    "format",
+    "version",
+    "creature",
+    "n_sensors",
+    "n_hidden",
+    "n_actuators",
+    "weights",
+    "k1",
+    "k2",
+    "tuning",
+    "info",
+    "creature_def",
+)
 
 
 def network_from_dict(data: Any, source: str | os.PathLike | None = None) -> Network:
@@ -263,8 +282,15 @@ def network_from_dict(data: Any, source: str | os.PathLike | None = None) -> Net
     if not isinstance(info, dict):
         raise NetworkError(f"{at}info must be a table, got {rd.abbrev(info)}")
     shell = object.__new__(Network)
-    fields = dict(creature=creature, weights=weights, k1=k1, k2=k2,
-                  n_hidden=n_hidden, tuning=tuning, info=dict(info))  # fmt: skip
+    fields = dict(
+        creature=creature,
+        weights=weights,
+        k1=k1,
+        k2=k2,
+        n_hidden=n_hidden,
+        tuning=tuning,
+        info=dict(info),
+    )
     for key, value in fields.items():
         object.__setattr__(shell, key, value)
     _validate(shell, source)  # errors name the file

@@ -47,8 +47,21 @@ CAPABILITIES = {
     "head": "it has a head node",
     "mirror": "it is left-right symmetric (mirrored turns)",
 }
-TOP_KEYS = ("name", "description", "requires", "horizon", "nodes", "mu1", "mu2", "nu1", "nu2",
-            "record_hz", "start", "starts", "terms")  # fmt: skip
+TOP_KEYS = (
+    "name",
+    "description",
+    "requires",
+    "horizon",
+    "nodes",
+    "mu1",
+    "mu2",
+    "nu1",
+    "nu2",
+    "record_hz",
+    "start",
+    "starts",
+    "terms",
+)
 START_KEYS = ("name", "position", "depth", "heading", "pitch", "speed")
 CRUISE = "cruise"  # a start speed: the animal's own wave's sustained speed (cruise_speed)
 CRUISE_SECONDS = 6.0  # s of the wave played to measure it (the speed of the second half)
@@ -119,16 +132,26 @@ class Task:
     def to_dict(self) -> dict:
         """Return the task as a TOML-able dict (for a run's config.toml)."""
         return {
-            "name": self.name, "description": self.description, "requires": list(self.requires),
-            "horizon": self.horizon, "nodes": self.nodes, "mu1": self.mu1, "mu2": self.mu2,
-            "nu1": self.nu1, "nu2": self.nu2, "record_hz": self.record_hz,
-            **({"start": self.start.to_dict()} if len(self.starts) == 1
-               else {"starts": [st.to_dict() for st in self.starts]}),
+            "name": self.name,
+            "description": self.description,
+            "requires": list(self.requires),
+            "horizon": self.horizon,
+            "nodes": self.nodes,
+            "mu1": self.mu1,
+            "mu2": self.mu2,
+            "nu1": self.nu1,
+            "nu2": self.nu2,
+            "record_hz": self.record_hz,
+            **(
+                {"start": self.start.to_dict()}
+                if len(self.starts) == 1
+                else {"starts": [st.to_dict() for st in self.starts]}
+            ),
             "terms": [
                 {"kind": t.kind, "weight": t.weight, "target": t.target, "goal": list(t.goal)}
                 for t in self.terms
             ],
-        }  # fmt: skip
+        }
 
 
 def _did_you_mean(word: str, choices) -> str:
@@ -164,14 +187,22 @@ def _parse_start(raw, w: str) -> Start:
     speed = raw.get("speed", 0.0)
     if not (isinstance(speed, str) and speed == CRUISE):
         if isinstance(speed, str):
-            raise TaskError(f"{w}: 'speed' must be m/s or {CRUISE!r} (the animal's own wave's "
-                            f"sustained speed), got {speed!r}")  # fmt: skip
+            raise TaskError(
+                f"{w}: 'speed' must be m/s or {CRUISE!r} (the animal's own wave's "
+                f"sustained speed), got {speed!r}"
+            )
         speed = _num(raw, "speed", w, 0.0)
     name = raw.get("name", "")
     if not isinstance(name, str):
         raise TaskError(f"{w}: 'name' must be text, got {name!r}")
-    return Start(_vec3(raw, "position", w), depth, _num(raw, "heading", w, 0.0),
-                 _num(raw, "pitch", w, 0.0), speed, name)  # fmt: skip
+    return Start(
+        _vec3(raw, "position", w),
+        depth,
+        _num(raw, "heading", w, 0.0),
+        _num(raw, "pitch", w, 0.0),
+        speed,
+        name,
+    )
 
 
 def _parse_starts(doc: dict, where: str) -> tuple[Start, ...]:
@@ -189,8 +220,10 @@ def _parse_starts(doc: dict, where: str) -> tuple[Start, ...]:
     names = [s.name for s in starts]
     for k, s in enumerate(starts):
         if s.name and s.name in names[:k]:
-            raise TaskError(f"{where}: starts[{k}]: the name {s.name!r} is given to "
-                            f"{names.count(s.name)} starts; each needs its own")  # fmt: skip
+            raise TaskError(
+                f"{where}: starts[{k}]: the name {s.name!r} is given to "
+                f"{names.count(s.name)} starts; each needs its own"
+            )
     return starts
 
 
@@ -200,8 +233,10 @@ def _parse_requires(raw, where: str) -> tuple[str, ...]:
     for r in raw:
         for alt in r.split("|"):
             if alt not in CAPABILITIES:
-                raise TaskError(f"{where}: requires: unknown capability {alt!r}"
-                                f"{_did_you_mean(alt, CAPABILITIES)}")  # fmt: skip
+                raise TaskError(
+                    f"{where}: requires: unknown capability {alt!r}"
+                    f"{_did_you_mean(alt, CAPABILITIES)}"
+                )
     return tuple(raw)
 
 
@@ -213,8 +248,9 @@ def parse_task(doc: dict, source: str = "<memory>") -> Task:
     if not isinstance(name, str):
         raise TaskError(f"{where}: missing 'name'")
     horizon = _num(doc, "horizon", where, positive=True, hi=rd.LIMITS.seconds)
-    nodes = rd.integer(doc.get("nodes", 15), f"{where}: 'nodes'", TaskError, 2,
-                       rd.LIMITS.controller_nodes)  # fmt: skip
+    nodes = rd.integer(
+        doc.get("nodes", 15), f"{where}: 'nodes'", TaskError, 2, rd.LIMITS.controller_nodes
+    )
     record_hz = _num(doc, "record_hz", where, 20.0, positive=True, hi=10_000.0)
     terms = []
     raw_terms = doc.get("terms", [])
@@ -228,8 +264,14 @@ def parse_task(doc: dict, source: str = "<memory>") -> Task:
         kind = t.get("kind")
         if kind not in TERMS:
             raise TaskError(f"{w}: unknown kind {kind!r}{_did_you_mean(kind, TERMS)}")
-        terms.append(Term(kind, _num(t, "weight", w, 1.0), _num(t, "target", w, 0.0),
-                          _vec3(t, "goal", w, [0.0, 0.0, 0.0])))  # fmt: skip
+        terms.append(
+            Term(
+                kind,
+                _num(t, "weight", w, 1.0),
+                _num(t, "target", w, 0.0),
+                _vec3(t, "goal", w, [0.0, 0.0, 0.0]),
+            )
+        )
     return Task(
         name=name,
         description=str(doc.get("description", "")),
@@ -313,8 +355,9 @@ def check_fits(task: Task, body: Body, medium: Medium | str | None = None) -> No
         )
 
 
-def start_state(task: Task, body: Body, medium: Medium | str | None = None,
-                index: int = 0) -> State:
+def start_state(
+    task: Task, body: Body, medium: Medium | str | None = None, index: int = 0
+) -> State:
     """Return one of the task's start states for a body (batch 1; default the first): placed,
     turned, pitched, moving."""
     from zoetic.physics import State, get_medium, rest_state
@@ -336,8 +379,10 @@ def start_state(task: Task, body: Body, medium: Medium | str | None = None,
     if st.depth is not None:
         level = get_medium(medium or body.medium).water_level
         if abs(level) >= FAR:
-            raise TaskError(f"{task.source}: start depth needs a water surface, and "
-                            f"{medium or body.medium} has none")  # fmt: skip
+            raise TaskError(
+                f"{task.source}: start depth needs a water surface, and "
+                f"{medium or body.medium} has none"
+            )
         target[1] = level - st.depth
     new = (pos - com) @ rot.T + target
     fwd = rot @ np.asarray(body.forward, float)
@@ -354,15 +399,20 @@ def start_states(task: Task, body: Body, medium: Medium | str | None = None) -> 
     from zoetic.physics import State
 
     each = [start_state(task, body, medium, k) for k in range(len(task.starts))]
-    return State(np.concatenate([s.positions for s in each]),
-                 np.concatenate([s.velocities for s in each]))  # fmt: skip
+    return State(
+        np.concatenate([s.positions for s in each]), np.concatenate([s.velocities for s in each])
+    )
 
 
 _CRUISE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # body -> {settings: m/s}
 
 
-def cruise_speed(body: Body, medium: Medium | str | None = None, start: State | None = None,
-                 seconds: float = CRUISE_SECONDS) -> float:
+def cruise_speed(
+    body: Body,
+    medium: Medium | str | None = None,
+    start: State | None = None,
+    seconds: float = CRUISE_SECONDS,
+) -> float:
     """Return the speed (m/s) the animal's own wave sustains: the centre of mass's top-view
     displacement over the second half of ``seconds`` of the wave played from ``start`` (default:
     rest). Measured once per body, medium and start (one simulation), then remembered."""
@@ -377,8 +427,9 @@ def cruise_speed(body: Body, medium: Medium | str | None = None, start: State | 
         return cached[key]
     steps = int(round(seconds / body.dt))
     every = max(1, steps // 40)
-    tr = simulate(body, wave_controller(body).table(steps, body.dt)[None], med, body.dt,
-                  start, every)  # fmt: skip
+    tr = simulate(
+        body, wave_controller(body).table(steps, body.dt)[None], med, body.dt, start, every
+    )
     com = tr.com(body)[0]
     half = com.shape[0] // 2
     dist = float(np.linalg.norm((com[-1] - com[half])[[0, 2]]))

@@ -53,8 +53,15 @@ def plot_abstraction(
         for keep, alpha in ((False, 0.12), (True, 0.75)):
             m = kept[a] == keep
             if m.any():
-                ax_p.scatter(phase[a, m], freq[a, m], s=scale * amp[a, m], color=colors[a],
-                             alpha=alpha, edgecolors="k" if keep else "none", lw=0.5)  # fmt: skip
+                ax_p.scatter(
+                    phase[a, m],
+                    freq[a, m],
+                    s=scale * amp[a, m],
+                    color=colors[a],
+                    alpha=alpha,
+                    edgecolors="k" if keep else "none",
+                    lw=0.5,
+                )
     fmax = float(np.max(np.where(kept, freq, 0.0), initial=0.0))
     ax_p.set_rmax(max(1.5 * fmax, float(np.min(freq, initial=1.0)) * 2, 0.5))
     ax_p.set_title("primary modes (r = Hz, angle = phase, size = amplitude)", fontsize=9)

@@ -12,9 +12,15 @@ from zoetic.bodies import Body
 from zoetic.viz.plots import save_figure
 
 INTENTION_COLORS = {
-    "avoid": "#7f7f7f", "escape": "#d62728", "school": "#1f77b4", "eat": "#2ca02c",
-    "mate": "#e377c2", "hunt": "#8c564b", "wander": "#bcbd22", "leave": "#17becf",
-}  # fmt: skip
+    "avoid": "#7f7f7f",
+    "escape": "#d62728",
+    "school": "#1f77b4",
+    "eat": "#2ca02c",
+    "mate": "#e377c2",
+    "hunt": "#8c564b",
+    "wander": "#bcbd22",
+    "leave": "#17becf",
+}
 
 
 def plot_minds(
@@ -57,11 +63,19 @@ def plot_minds(
         ax.tick_params(labelsize=7)
     axes[-1, 0].set_xlabel("time (s)")
     lines = axes[0, 0].get_legend_handles_labels()[0]
-    bands = [Patch(color=INTENTION_COLORS[k], alpha=0.4, label=k) for k in intention_names
-             if k in INTENTION_COLORS]  # fmt: skip
-    axes[0, 0].legend(handles=[*lines, *bands, Patch(color="black", alpha=0.5, label="caught")],
-                      ncol=12, fontsize=7, loc="lower left", bbox_to_anchor=(0, 1.02),
-                      frameon=False)  # fmt: skip
+    bands = [
+        Patch(color=INTENTION_COLORS[k], alpha=0.4, label=k)
+        for k in intention_names
+        if k in INTENTION_COLORS
+    ]
+    axes[0, 0].legend(
+        handles=[*lines, *bands, Patch(color="black", alpha=0.5, label="caught")],
+        ncol=12,
+        fontsize=7,
+        loc="lower left",
+        bbox_to_anchor=(0, 1.02),
+        frameon=False,
+    )
     return save_figure(fig, path, dpi=100)
 
 
@@ -82,19 +96,29 @@ def tank_frames(
     (R, n) are given."""
     from zoetic.viz.render3d import Camera, render_frames
 
-    cam = Camera(azimuth=30.0, elevation=65.0, distance=2.0 * half_size, fov=50.0,
-                 target=(0.0, 0.0, 0.0))  # fmt: skip
+    cam = Camera(
+        azimuth=30.0, elevation=65.0, distance=2.0 * half_size, fov=50.0, target=(0.0, 0.0, 0.0)
+    )
     obstacles = np.asarray(obstacles, float).reshape(-1, 3)
     for r in range(len(times)):
         left = food[r][~eaten[r]]
         mk = np.concatenate([obstacles, left]) if len(left) else obstacles
         mc = [(120, 120, 120)] * len(obstacles) + [(250, 150, 30)] * len(left)
-        yield next(render_frames(
-            list(bodies), [p[r:r + 1] for p in positions], times[r:r + 1], "water", size=size,
-            camera=cam, markers=mk if len(mk) else None, marker_colors=mc or None,
-            labels=None if labels is None else labels[r], colors=list(colors),
-            marker_radius=0.2,
-        ))  # fmt: skip
+        yield next(
+            render_frames(
+                list(bodies),
+                [p[r : r + 1] for p in positions],
+                times[r : r + 1],
+                "water",
+                size=size,
+                camera=cam,
+                markers=mk if len(mk) else None,
+                marker_colors=mc or None,
+                labels=None if labels is None else labels[r],
+                colors=list(colors),
+                marker_radius=0.2,
+            )
+        )
 
 
 def write_tank_video(path: str | os.PathLike, fps: float = 15.0, **kw) -> Path:

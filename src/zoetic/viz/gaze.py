@@ -49,8 +49,9 @@ def retina(record, eye: int = 0, size: int = 256) -> np.ndarray:
     return composite(record.images[eye], size)
 
 
-def plot_frames(log: Sequence, path: str | os.PathLike, frames: Sequence[int] | None = None,
-                size: int = 160) -> Path:  # fmt: skip
+def plot_frames(
+    log: Sequence, path: str | os.PathLike, frames: Sequence[int] | None = None, size: int = 160
+) -> Path:
     """Write Fig. 8: a strip of the left eye's retinal images at chosen frames, labelled."""
     if frames is None:
         n = len(log)
@@ -71,8 +72,9 @@ def plot_frames(log: Sequence, path: str | os.PathLike, frames: Sequence[int] | 
     return atomic_write_bytes(path, buf.getvalue())
 
 
-def video_frame(world_view: np.ndarray, record, gaze_px: Sequence | None = None,
-                size: int | None = None) -> np.ndarray:  # fmt: skip
+def video_frame(
+    world_view: np.ndarray, record, gaze_px: Sequence | None = None, size: int | None = None
+) -> np.ndarray:
     """Return one video frame: the world view (H, W, 3) with the gaze rays drawn (pairs of
     pixel points per eye in ``gaze_px``), and the two retinas beside it, H x H each."""
     h = world_view.shape[0]
@@ -88,8 +90,16 @@ def video_frame(world_view: np.ndarray, record, gaze_px: Sequence | None = None,
     return out[:, : out.shape[1] - out.shape[1] % 2]
 
 
-def chase_frames(world, scenery, result, width: int = 320, height: int = 240, every: int = 1,
-                 fog=(0.05, 0.25, 0.35), visibility: float = 12.0):  # fmt: skip
+def chase_frames(
+    world,
+    scenery,
+    result,
+    width: int = 320,
+    height: int = 240,
+    every: int = 1,
+    fog=(0.05, 0.25, 0.35),
+    visibility: float = 12.0,
+):
     """Yield video frames of a chase: the world seen from above and behind the predator
     (rasterised), the gaze rays drawn, the two retinas beside it."""
     from zoetic.render import Cameras, look_rotation, project, render
@@ -99,21 +109,31 @@ def chase_frames(world, scenery, result, width: int = 320, height: int = 240, ev
     # a camera path smoothed over about a second, so the picture does not shake
     k = max(1, int(len(centre) / max(1.0, result.times[-1] + 1e-9)))
     ker = np.ones(k) / k
-    smooth = np.stack([np.convolve(np.pad(centre[:, i], (k, k), mode="edge"), ker, "same")[k:-k]
-                       for i in range(3)], 1)  # fmt: skip
+    smooth = np.stack(
+        [
+            np.convolve(np.pad(centre[:, i], (k, k), mode="edge"), ker, "same")[k:-k]
+            for i in range(3)
+        ],
+        1,
+    )
     for i in range(0, len(result.log), every):
         rec = result.log[i]
         pos = [p[i] for p in result.positions]
         mesh = scenery.mesh(world, pos)
         gap = np.linalg.norm(pred[i].mean(0) - prey[i].mean(0))
         eye = smooth[i] + np.array([-1.5 - 0.8 * gap, 2.0 + 0.6 * gap, 0.5])
-        cam = Cameras(eye[None], look_rotation((smooth[i] - eye)[None]),
-                      np.array([np.radians(60.0)]), (width, height))  # fmt: skip
+        cam = Cameras(
+            eye[None],
+            look_rotation((smooth[i] - eye)[None]),
+            np.array([np.radians(60.0)]),
+            (width, height),
+        )
         view = render(mesh.vertices, mesh.triangles, mesh.colors, cam, fog, visibility)[0]
         reach = rec.range if np.isfinite(rec.range) else 3.0
         ends = rec.eye_pos + min(reach, 6.0) * rec.eye_dirs
         uv0, z0 = project(rec.eye_pos, cam)
         uv1, z1 = project(ends, cam)
-        rays = [(tuple(uv0[0, e]), tuple(uv1[0, e])) for e in range(2)
-                if z0[0, e] > 0 and z1[0, e] > 0]  # fmt: skip
+        rays = [
+            (tuple(uv0[0, e]), tuple(uv1[0, e])) for e in range(2) if z0[0, e] > 0 and z1[0, e] > 0
+        ]
         yield video_frame(view, rec, rays)

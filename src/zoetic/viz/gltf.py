@@ -31,12 +31,16 @@ _FLOAT, _UINT, _USHORT, _UBYTE = 5126, 5125, 5123, 5121
 _ARRAY, _ELEMENTS = 34962, 34963
 _TILE = 0.5  # m, side of a checker square (as in the videos)
 OBJECT_COLORS = {  # kind: (sRGB 0-255, opacity)
-    "ball": ((235, 235, 220), 1.0), "food": ((240, 170, 50), 1.0),
-    "rock": ((115, 107, 97), 1.0), "seaweed": ((40, 140, 50), 1.0),
-    "hurdle": ((230, 90, 40), 1.0), "target": ((220, 40, 30), 1.0),
-    "goal": ((220, 40, 30), 1.0), "obstacle": ((240, 200, 40), 0.35),
+    "ball": ((235, 235, 220), 1.0),
+    "food": ((240, 170, 50), 1.0),
+    "rock": ((115, 107, 97), 1.0),
+    "seaweed": ((40, 140, 50), 1.0),
+    "hurdle": ((230, 90, 40), 1.0),
+    "target": ((220, 40, 30), 1.0),
+    "goal": ((220, 40, 30), 1.0),
+    "obstacle": ((240, 200, 40), 0.35),
     "wall": ((150, 180, 210), 0.12),
-}  # fmt: skip
+}
 
 
 def to_gltf_axes(points: np.ndarray) -> np.ndarray:
@@ -257,10 +261,12 @@ class _Tracks:
         self.times = b.accessor(times, "SCALAR", bounds=True)
 
     def add(self, node: int, path: str, output: int, interpolation: str = "LINEAR") -> None:
-        self.samplers.append({"input": self.times, "output": output,
-                              "interpolation": interpolation})  # fmt: skip
-        self.channels.append({"sampler": len(self.samplers) - 1,
-                              "target": {"node": node, "path": path}})  # fmt: skip
+        self.samplers.append(
+            {"input": self.times, "output": output, "interpolation": interpolation}
+        )
+        self.channels.append(
+            {"sampler": len(self.samplers) - 1, "target": {"node": node, "path": path}}
+        )
 
 
 def _add_animal(b: _Builder, tracks: _Tracks, k: int, animal: Animal) -> None:
@@ -281,13 +287,19 @@ def _add_animal(b: _Builder, tracks: _Tracks, k: int, animal: Animal) -> None:
     idx = b.accessor(faces.astype(itype).ravel(), "SCALAR", _ELEMENTS)
     prim = {"attributes": attrs, "material": mat, "indices": idx}
     mesh = b.add("meshes", {"name": f"{animal.name}-surface", "primitives": [prim]})
-    joints = [b.node({"name": f"{animal.name}-{k}-node-{i}",
-                      "translation": [float(c) for c in rest[i]]}, root=False)
-              for i in range(n)]  # fmt: skip
+    joints = [
+        b.node(
+            {"name": f"{animal.name}-{k}-node-{i}", "translation": [float(c) for c in rest[i]]},
+            root=False,
+        )
+        for i in range(n)
+    ]
     ibm = np.tile(np.eye(4, dtype=np.float32), (n, 1, 1))
     ibm[:, 3, :3] = -rest  # column-major: the translation is the last column
-    skin = b.add("skins", {"name": animal.name, "joints": joints,
-                           "inverseBindMatrices": b.accessor(ibm, "MAT4")})  # fmt: skip
+    skin = b.add(
+        "skins",
+        {"name": animal.name, "joints": joints, "inverseBindMatrices": b.accessor(ibm, "MAT4")},
+    )
     b.node({"name": f"{animal.name}-{k}", "children": joints})
     b.node({"name": f"{animal.name}-{k}-surface", "mesh": mesh, "skin": skin})
     track = np.ascontiguousarray(pos.transpose(1, 0, 2))  # (N, R, 3): node-major
@@ -305,14 +317,23 @@ def _add_creature(b: _Builder, tracks: _Tracks, k: int, creature: Creature) -> N
         mat = _material(b, link.name, _linear(link.color), roughness=0.6)
         verts = to_gltf_axes(link.vertices)
         faces = np.asarray(link.faces)[:, ::-1].astype(np.uint16).ravel()
-        prim = {"attributes": {"POSITION": b.accessor(verts, "VEC3", _ARRAY, bounds=True)},
-                "indices": b.accessor(faces, "SCALAR", _ELEMENTS), "material": mat}  # fmt: skip
+        prim = {
+            "attributes": {"POSITION": b.accessor(verts, "VEC3", _ARRAY, bounds=True)},
+            "indices": b.accessor(faces, "SCALAR", _ELEMENTS),
+            "material": mat,
+        }
         mesh = b.add("meshes", {"name": link.name, "primitives": [prim]})
         tr = to_gltf_axes(np.nan_to_num(link.translations))
         rot = _quaternions(np.nan_to_num(link.angles), link.axis)
-        node = b.node({"name": f"{creature.name}-{k}-{link.name}", "mesh": mesh,
-                       "translation": tr[0].tolist(), "rotation": rot[0].tolist()},
-                      root=False)  # fmt: skip
+        node = b.node(
+            {
+                "name": f"{creature.name}-{k}-{link.name}",
+                "mesh": mesh,
+                "translation": tr[0].tolist(),
+                "rotation": rot[0].tolist(),
+            },
+            root=False,
+        )
         kids.append(node)
         tracks.add(node, "translation", b.accessor(np.ascontiguousarray(tr), "VEC3"))
         tracks.add(node, "rotation", b.accessor(np.ascontiguousarray(rot), "VEC4"))
@@ -332,15 +353,19 @@ def _solid(thing: Thing, marker: float) -> tuple[np.ndarray, np.ndarray]:
     else:  # a point (a target): an octahedron sized to the scene
         v = np.float32([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]])
         v = v * np.float32(marker)
-        f = np.array([[0, 2, 4], [4, 2, 1], [1, 2, 5], [5, 2, 0], [4, 3, 0], [1, 3, 4],
-                      [5, 3, 1], [0, 3, 5]])  # fmt: skip
+        f = np.array(
+            [[0, 2, 4], [4, 2, 1], [1, 2, 5], [5, 2, 0], [4, 3, 0], [1, 3, 4], [5, 3, 1], [0, 3, 5]]
+        )
     return to_gltf_axes(v), np.asarray(f)[:, ::-1].astype(np.uint16)
 
 
 def _add_objects(b: _Builder, tracks: _Tracks, scene: Scene) -> None:
     """Add every object: a mesh of its shape, moved where it moves, hidden once gone."""
-    sizes = [float(np.ptp(a.positions[0][np.isfinite(a.positions[0]).all(1)], axis=0).max())
-             for a in scene.animals if np.isfinite(a.positions[0]).any()]  # fmt: skip
+    sizes = [
+        float(np.ptp(a.positions[0][np.isfinite(a.positions[0]).all(1)], axis=0).max())
+        for a in scene.animals
+        if np.isfinite(a.positions[0]).any()
+    ]
     marker = 0.08 * max(max(sizes + [0.5]), 0.1)
     materials: dict[str, int] = {}
     for i, thing in enumerate(scene.objects):
@@ -349,13 +374,20 @@ def _add_objects(b: _Builder, tracks: _Tracks, scene: Scene) -> None:
             rgba = _linear(rgb)[:3] + [alpha]
             materials[thing.kind] = _material(b, thing.kind, rgba, blend=alpha < 1)
         verts, faces = _solid(thing, marker)
-        prim = {"attributes": {"POSITION": b.accessor(verts, "VEC3", _ARRAY, bounds=True)},
-                "indices": b.accessor(faces.ravel(), "SCALAR", _ELEMENTS),
-                "material": materials[thing.kind]}  # fmt: skip
+        prim = {
+            "attributes": {"POSITION": b.accessor(verts, "VEC3", _ARRAY, bounds=True)},
+            "indices": b.accessor(faces.ravel(), "SCALAR", _ELEMENTS),
+            "material": materials[thing.kind],
+        }
         mesh = b.add("meshes", {"name": thing.name, "primitives": [prim]})
         pos = to_gltf_axes(_fill_frames(thing.positions[:, None])[:, 0])
-        node = b.node({"name": f"{thing.kind}-{i + 1}-{thing.name}", "mesh": mesh,
-                       "translation": [float(c) for c in pos[0]]})  # fmt: skip
+        node = b.node(
+            {
+                "name": f"{thing.kind}-{i + 1}-{thing.name}",
+                "mesh": mesh,
+                "translation": [float(c) for c in pos[0]],
+            }
+        )
         if len(pos) > 1 and len(scene.times) > 1:
             tracks.add(node, "translation", b.accessor(np.ascontiguousarray(pos), "VEC3"))
         if thing.visible is not None and len(scene.times) > 1:
@@ -392,12 +424,17 @@ def scene_glb(scene: Scene) -> bytes:
         _add_creature(b, tracks, k, creature)
     _add_objects(b, tracks, scene)
     if len(scene.times) > 1 and tracks.channels:
-        b.add("animations", {"name": "run", "channels": tracks.channels,
-                             "samplers": tracks.samplers})  # fmt: skip
+        b.add(
+            "animations", {"name": "run", "channels": tracks.channels, "samplers": tracks.samplers}
+        )
     _add_environment(b, scene)
     b.doc["scenes"][0]["name"] = scene.title
-    b.doc["scenes"][0]["extras"] = {"fps": scene.fps, "duration_s": scene.duration,
-                                    "medium": scene.medium.name, "kind": scene.kind}  # fmt: skip
+    b.doc["scenes"][0]["extras"] = {
+        "fps": scene.fps,
+        "duration_s": scene.duration,
+        "medium": scene.medium.name,
+        "kind": scene.kind,
+    }
     return b.glb()
 
 

@@ -45,8 +45,9 @@ def best_so_far(e: np.ndarray) -> np.ndarray:
     return np.minimum.accumulate(np.where(np.isfinite(e), e, np.inf))
 
 
-def plot_learning_seeds(panels: dict[str, dict[str, list[np.ndarray]]], path: Path,
-                        title: str = "") -> Path:  # fmt: skip
+def plot_learning_seeds(
+    panels: dict[str, dict[str, list[np.ndarray]]], path: Path, title: str = ""
+) -> Path:
     """Plot, in one panel per entry of ``panels``, the best-so-far E against evaluations of
     several runs per label (one per seed): the median as a line, the range as a band.
 
@@ -59,8 +60,9 @@ def plot_learning_seeds(panels: dict[str, dict[str, list[np.ndarray]]], path: Pa
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.0), squeeze=False,
-                             sharey=True)  # fmt: skip
+    fig, axes = plt.subplots(
+        1, len(panels), figsize=(5.2 * len(panels), 4.0), squeeze=False, sharey=True
+    )
     for ax, (name, curves) in zip(axes[0], panels.items(), strict=True):
         for label, runs in curves.items():
             best = [best_so_far(e) for e in runs]
@@ -68,11 +70,18 @@ def plot_learning_seeds(panels: dict[str, dict[str, list[np.ndarray]]], path: Pa
             stack = np.stack([np.pad(b, (0, n - len(b)), mode="edge") for b in best])
             stack = np.where(np.isfinite(stack), stack, np.nan)
             x = np.arange(1, n + 1)
-            line = ax.plot(x, np.nanmedian(stack, axis=0), lw=1.5,
-                           label=f"{label} ({len(runs)} seeds)")[0]  # fmt: skip
+            line = ax.plot(
+                x, np.nanmedian(stack, axis=0), lw=1.5, label=f"{label} ({len(runs)} seeds)"
+            )[0]
             if len(runs) > 1:
-                ax.fill_between(x, np.nanmin(stack, axis=0), np.nanmax(stack, axis=0),
-                                color=line.get_color(), alpha=0.15, lw=0)  # fmt: skip
+                ax.fill_between(
+                    x,
+                    np.nanmin(stack, axis=0),
+                    np.nanmax(stack, axis=0),
+                    color=line.get_color(),
+                    alpha=0.15,
+                    lw=0,
+                )
         ax.set_xlabel("evaluations")
         ax.set_title(name, fontsize=10)
         ax.grid(alpha=0.3)

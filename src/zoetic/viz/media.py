@@ -21,8 +21,7 @@ def _motion(rec: Record) -> tuple[np.ndarray, np.ndarray]:
     return pos, np.einsum("tnk,n->tk", pos, mass / mass.sum())
 
 
-def simulation_media(body: Body, rec: Record, out: Path, video: bool = True,
-                     fps: int = 30) -> dict:  # fmt: skip
+def simulation_media(body: Body, rec: Record, out: Path, video: bool = True, fps: int = 30) -> dict:
     """Write path.png (and video.mp4) of a simulation's record; return their paths. ``body``
     (the record's animal) gives the video its display surface."""
     from zoetic.viz.plots import plot_path
@@ -32,8 +31,9 @@ def simulation_media(body: Body, rec: Record, out: Path, video: bool = True,
     if video:
         from zoetic.viz.render3d import render_video
 
-        files["video"] = render_video(body, pos, rec.times, get_medium(rec.medium),
-                                      out / "video.mp4", fps=fps)  # fmt: skip
+        files["video"] = render_video(
+            body, pos, rec.times, get_medium(rec.medium), out / "video.mp4", fps=fps
+        )
     return files
 
 
@@ -47,20 +47,26 @@ def learning_media(run, rec: Record, video: bool = True, fps: int = 30) -> dict:
     out = Path(run.out)
     files = {
         "learning": plot_learning(
-            {setup.config.optimizer: np.array(run.log.E)}, out / "learning.png",
+            {setup.config.optimizer: np.array(run.log.E)},
+            out / "learning.png",
             title=f"{body.name} {task.name}: E against evaluations",
         ),
-    }  # fmt: skip
+    }
     t = np.linspace(0.0, task.horizon, 400)
     files["controller"] = plot_controller(
-        t, run.best_controller().sample(t), body.actuator_names, body.actuator_side,
-        out / "controller.png", title=f"learned {setup.config.controller}-domain controller",
-    )  # fmt: skip
+        t,
+        run.best_controller().sample(t),
+        body.actuator_names,
+        body.actuator_side,
+        out / "controller.png",
+        title=f"learned {setup.config.controller}-domain controller",
+    )
     if video:
         from zoetic.viz.render3d import render_video
 
-        files["video"] = render_video(body, _motion(rec)[0], rec.times, obj.medium,
-                                      out / "video.mp4", fps=fps)  # fmt: skip
+        files["video"] = render_video(
+            body, _motion(rec)[0], rec.times, obj.medium, out / "video.mp4", fps=fps
+        )
     return files
 
 
@@ -70,12 +76,24 @@ def mind_media(rec: Record, out: Path) -> Path:
 
     names = [a.name for a in rec.animals]
     per = [rec.scalars[n] for n in names]
-    drives = np.stack([np.stack([np.asarray(s[k], float) for k in ("hunger", "libido", "fear")],
-                                axis=-1) for s in per], axis=1)  # fmt: skip
+    drives = np.stack(
+        [
+            np.stack([np.asarray(s[k], float) for k in ("hunger", "libido", "fear")], axis=-1)
+            for s in per
+        ],
+        axis=1,
+    )
     intentions = np.stack([np.asarray(s["intention"]).astype(int) for s in per], axis=1)
     alive = np.stack([np.asarray(s["alive"]) > 0.5 for s in per], axis=1)
-    return plot_minds(rec.period_times, drives, intentions, alive, names,
-                      rec.labels["intention"], out / "mind.png")  # fmt: skip
+    return plot_minds(
+        rec.period_times,
+        drives,
+        intentions,
+        alive,
+        names,
+        rec.labels["intention"],
+        out / "mind.png",
+    )
 
 
 def abstract_files(
@@ -101,11 +119,18 @@ def abstract_files(
     t = np.linspace(0.0, duration, 400)
     spec = ab.spectrum
     plot_abstraction(
-        t, ctrl.sample(t), ab.controller.sample(t), tuple(body.actuator_names), spec.freq,
-        spec.amp, spec.phase, ab.kept, out / "abstract.png",
+        t,
+        ctrl.sample(t),
+        ab.controller.sample(t),
+        tuple(body.actuator_names),
+        spec.freq,
+        spec.amp,
+        spec.phase,
+        ab.kept,
+        out / "abstract.png",
         title=f"{body.name}: {task_obj.name}, {ab.rule}, kept {info['kept']:.0%} of "
         f"{info['measure']}",
-    )  # fmt: skip
+    )
     return info | {"file": str(out / "abstract.json"), "figure": str(out / "abstract.png")}
 
 
@@ -139,20 +164,29 @@ def show_repertoire(directory: str | Path, plot: bool = True) -> list[dict[str, 
         m = measure(body, ctrl, seconds)
         amp = np.asarray(getattr(ctrl, "amp", np.zeros((0, 0))))
         freq = np.asarray(getattr(ctrl, "freq", np.zeros((0, 0))))
-        rows.append({
-            "entry": name, "kind": ctrl.kind, "seconds": round(seconds, 3),
-            "modes": int(np.count_nonzero(amp)),
-            "frequencies_hz": _by_strength(freq, amp),
-            "forward_m": round(m["forward"], 3),
-            "turn_deg": round(float(np.degrees(m["heading_change"])), 1),
-            "source": rep.info.get(name, {}).get("source", ""),
-        })  # fmt: skip
+        rows.append(
+            {
+                "entry": name,
+                "kind": ctrl.kind,
+                "seconds": round(seconds, 3),
+                "modes": int(np.count_nonzero(amp)),
+                "frequencies_hz": _by_strength(freq, amp),
+                "forward_m": round(m["forward"], 3),
+                "turn_deg": round(float(np.degrees(m["heading_change"])), 1),
+                "source": rep.info.get(name, {}).get("source", ""),
+            }
+        )
         t = np.linspace(0.0, seconds, 300)
         signals[name] = (t, ctrl.sample(t))
         paths[name] = measure(body, ctrl, 3 * seconds)["com"]  # played three times over
     if plot:
         from zoetic.viz.abstraction import plot_repertoire
 
-        plot_repertoire(signals, paths, tuple(body.actuator_names), directory / "repertoire.png",
-                        title=f"{rep.animal} repertoire ({len(rep.names)} entries)")  # fmt: skip
+        plot_repertoire(
+            signals,
+            paths,
+            tuple(body.actuator_names),
+            directory / "repertoire.png",
+            title=f"{rep.animal} repertoire ({len(rep.names)} entries)",
+        )
     return rows

@@ -470,8 +470,9 @@ def render_video(
     bodies, positions = _as_lists(bodies, positions, len(times))
     mk = kw.get("markers")
     moving = mk is not None and np.ndim(mk) == 3 and len(mk) == len(times)  # (R, M, 3)
-    t_new, pos_new = resample([*positions, *([np.asarray(mk, float)] if moving else [])],
-                              times, fps)  # fmt: skip
+    t_new, pos_new = resample(
+        [*positions, *([np.asarray(mk, float)] if moving else [])], times, fps
+    )
     if moving:
         kw["markers"] = pos_new.pop()
     return write_mp4(render_frames(bodies, pos_new, t_new, medium, **kw), path, fps)

@@ -93,8 +93,15 @@ def _travelled(com: np.ndarray) -> float:
 
 def _link(ln: Link, i: np.ndarray, frac: np.ndarray) -> Link:
     angles = np.unwrap(np.asarray(ln.angles, float))
-    return Link(ln.name, ln.color, ln.vertices, ln.faces, _lerp(ln.translations, i, frac),
-                _lerp(angles, i, frac), ln.axis)  # fmt: skip
+    return Link(
+        ln.name,
+        ln.color,
+        ln.vertices,
+        ln.faces,
+        _lerp(ln.translations, i, frac),
+        _lerp(angles, i, frac),
+        ln.axis,
+    )
 
 
 def _states(rec: Record, frame_times: np.ndarray) -> dict:
@@ -102,8 +109,11 @@ def _states(rec: Record, frame_times: np.ndarray) -> dict:
     scalars) at the frames, as held since the last control period began."""
     if not len(rec.period_times):
         return {}
-    k = np.clip(np.searchsorted(rec.period_times, frame_times + 1e-9, side="right") - 1, 0,
-                len(rec.period_times) - 1)  # fmt: skip
+    k = np.clip(
+        np.searchsorted(rec.period_times, frame_times + 1e-9, side="right") - 1,
+        0,
+        len(rec.period_times) - 1,
+    )
     out: dict = {}
     for who, quantities in rec.scalars.items():
         for what, values in quantities.items():
@@ -124,28 +134,58 @@ def scene_of(rec: Record, fps: float = 30.0) -> Scene:
         pos = _lerp(a.positions, i, frac)
         com = np.einsum("rnk,n->rk", pos, np.asarray(a.mass, float) / float(np.sum(a.mass)))
         act = None if a.activations is None else np.clip(_lerp(a.activations, i, frac), 0, 1)
-        animals.append(Animal(a.name, a.color or name_color(a.species),
-                              np.asarray(a.faces, np.int64), pos, com.astype(np.float32),
-                              a.actuators, act))  # fmt: skip
+        animals.append(
+            Animal(
+                a.name,
+                a.color or name_color(a.species),
+                np.asarray(a.faces, np.int64),
+                pos,
+                com.astype(np.float32),
+                a.actuators,
+                act,
+            )
+        )
     creatures = tuple(
-        Creature(c.name, tuple(_link(ln, i, frac) for ln in c.links), _lerp(c.com, i, frac),
-                 c.actuators, None if c.activations is None else c.activations[near])
+        Creature(
+            c.name,
+            tuple(_link(ln, i, frac) for ln in c.links),
+            _lerp(c.com, i, frac),
+            c.actuators,
+            None if c.activations is None else c.activations[near],
+        )
         for c in rec.creatures
-    )  # fmt: skip
+    )
     objects = tuple(
-        Thing(o.kind, o.name, o.shape, o.size, _lerp(o.positions, i, frac), o.axis,
-              None if o.visible is None else o.visible[near])
+        Thing(
+            o.kind,
+            o.name,
+            o.shape,
+            o.size,
+            _lerp(o.positions, i, frac),
+            o.axis,
+            None if o.visible is None else o.visible[near],
+        )
         for o in rec.objects
-    )  # fmt: skip
+    )
     movers = tuple(animals) + creatures
     numbers = dict(rec.numbers)
     if movers and "distance_m" not in numbers:
         numbers["distance_m"] = round(_travelled(movers[0].com), 3)
     t0 = float(t_new[0])
     events = tuple(Event(e.t - t0, e.who, e.what, e.detail) for e in rec.events)
-    return Scene(rec.title, rec.kind, t_new - t0, float(fps), get_medium(rec.medium),
-                 tuple(animals), objects, numbers, creatures, events,
-                 _states(rec, t_new))  # fmt: skip
+    return Scene(
+        rec.title,
+        rec.kind,
+        t_new - t0,
+        float(fps),
+        get_medium(rec.medium),
+        tuple(animals),
+        objects,
+        numbers,
+        creatures,
+        events,
+        _states(rec, t_new),
+    )
 
 
 def load_scene(run_dir: str | Path, fps: float = 30.0) -> Scene:

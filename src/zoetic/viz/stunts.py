@@ -33,8 +33,16 @@ def plot_score(
         ax.plot(times, y, lw=1.5)
         ax.set_ylabel(label, fontsize=8)
         if out.shape == np.shape(times):
-            ax.fill_between(times, 0, 1, where=out >= 1.0, color="tab:orange", alpha=0.2,
-                            transform=ax.get_xaxis_transform(), lw=0)  # fmt: skip
+            ax.fill_between(
+                times,
+                0,
+                1,
+                where=out >= 1.0,
+                color="tab:orange",
+                alpha=0.2,
+                transform=ax.get_xaxis_transform(),
+                lw=0,
+            )
         for s in starts:
             ax.axvline(s, color="0.5", ls=":", lw=0.8)
         ax.grid(alpha=0.3)
@@ -90,8 +98,9 @@ def surface_crossings(body, positions: np.ndarray, times: np.ndarray, level: flo
 
     pos = np.asarray(positions, float)[None]
     r = pos.shape[1]
-    s = Signals(np, BodyFrame.of(body), pos, np.zeros((1, r, 0)), np.asarray(times, float),
-                level, 1.0)  # fmt: skip
+    s = Signals(
+        np, BodyFrame.of(body), pos, np.zeros((1, r, 0)), np.asarray(times, float), level, 1.0
+    )
     flux = np.abs(np.nan_to_num(s.crossing_flux[0]))  # (R-1, P)
     rows, faces = np.nonzero(flux > 0)
     c = s.face_centres[0]
@@ -101,8 +110,9 @@ def surface_crossings(body, positions: np.ndarray, times: np.ndarray, level: flo
     return Splash(t, pts, flux[rows, faces])
 
 
-def spray_particles(splash: Splash, level: float, gravity: float = 9.81, per_flux: float = 150.0,
-                    seed: int = 0):  # fmt: skip
+def spray_particles(
+    splash: Splash, level: float, gravity: float = 9.81, per_flux: float = 150.0, seed: int = 0
+):
     """Return a function of time t giving the spray drops (D, 3) in the air then: each
     crossing throws round(per_flux x its area x normal speed) drops (at most 60) up and out
     at speeds that grow with it; they fly ballistically until they fall back in."""
@@ -166,8 +176,9 @@ def subdivision(faces: np.ndarray, n_nodes: int, levels: int = 2) -> tuple[np.nd
         mid = n + inv.reshape(3, -1).T  # (F, 3): edge points of (01, 12, 20)
         a, b, c = f.T
         ab, bc, ca = mid.T
-        f = np.concatenate([np.stack(x, 1) for x in
-                            ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])  # fmt: skip
+        f = np.concatenate(
+            [np.stack(x, 1) for x in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))]
+        )
         s = m @ s
     return s, f
 
@@ -185,9 +196,16 @@ def countershading(body, sub: np.ndarray, faces: np.ndarray, color) -> np.ndarra
     return (0.6 * base) * (1 - t) + np.array([232.0, 234, 238]) * t
 
 
-def stunt_camera(points: np.ndarray, times: np.ndarray, size: tuple[int, int], fov: float,
-                 direction: np.ndarray, window: float = 0.5, smoothing: float = 0.4,
-                 level: float = 0.0) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def stunt_camera(
+    points: np.ndarray,
+    times: np.ndarray,
+    size: tuple[int, int],
+    fov: float,
+    direction: np.ndarray,
+    window: float = 0.5,
+    smoothing: float = 0.4,
+    level: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray]:
     """Return (R, 3) eyes and targets of a camera that frames the whole stunt: at each record
     the bounding box of ``points`` (R, M, 3: body, balls, hurdle) over the surrounding
     ``window`` s, its centre smoothed over ``smoothing`` s, seen from ``direction`` (unit, from
@@ -256,10 +274,20 @@ def _pool_quads(lo: np.ndarray, hi: np.ndarray, pool: Pool, level: float, eye: n
     return quads, colors, (x0, x1, min(zfar, znear), max(zfar, znear))
 
 
-def stunt_frames(body, positions: np.ndarray, times: np.ndarray, medium, objects=(),
-                 balls: np.ndarray | None = None, size: tuple[int, int] = (640, 360),
-                 pool: Pool | None = None, title: str = "", azimuth: float = 75.0,
-                 elevation: float = 14.0, fov: float = 45.0):  # fmt: skip
+def stunt_frames(
+    body,
+    positions: np.ndarray,
+    times: np.ndarray,
+    medium,
+    objects=(),
+    balls: np.ndarray | None = None,
+    size: tuple[int, int] = (640, 360),
+    pool: Pool | None = None,
+    title: str = "",
+    azimuth: float = 75.0,
+    elevation: float = 14.0,
+    fov: float = 45.0,
+):
     """Yield (H, W, 3) uint8 frames of a stunt: the dolphin as a smooth shaded surface over its
     lattice, the pool (floor, walls, a translucent tinted surface), the trick's ball, post and
     bar, and spray where the body crosses the surface; the camera frames the whole stunt.
@@ -291,8 +319,9 @@ def stunt_frames(body, positions: np.ndarray, times: np.ndarray, medium, objects
     fp = _fixed_points(fixed)
     radii = np.array([ball_objs[k].radius if k < len(ball_objs) else 0.15 for k in range(nb)])
     ball_box = [bl + radii[:, None] * np.eye(3)[i] * sign for i in range(3) for sign in (-1, 1)]
-    frame_pts = np.concatenate([pos, *ball_box, np.broadcast_to(fp, (len(times), *fp.shape))],
-                               axis=1)  # fmt: skip
+    frame_pts = np.concatenate(
+        [pos, *ball_box, np.broadcast_to(fp, (len(times), *fp.shape))], axis=1
+    )
     az, el = np.radians(azimuth), np.radians(elevation)
     direction = np.array([-np.cos(el) * np.cos(az), np.sin(el), -np.cos(el) * np.sin(az)])
     eyes, targets = stunt_camera(frame_pts, times, size, fov, direction, level=level)
@@ -301,8 +330,9 @@ def stunt_frames(body, positions: np.ndarray, times: np.ndarray, medium, objects
     hi = np.max(np.where(fin[..., None], frame_pts, -np.inf), axis=(0, 1))
     quads, qcols, (px0, px1, pz0, pz1) = _pool_quads(lo, hi, pool, level, eyes[0])
     sub, faces = subdivision(body.faces, body.n_nodes)
-    mesh = SceneMesh(faces, countershading(body, sub, faces, body_color(body)),
-                 np.ones(len(faces), bool))  # fmt: skip
+    mesh = SceneMesh(
+        faces, countershading(body, sub, faces, body_color(body)), np.ones(len(faces), bool)
+    )
     spray = spray_particles(surface_crossings(body, pos, times, level), level, medium.gravity)
     w, h = size
     focal = 0.5 * h / np.tan(np.radians(fov) / 2)
@@ -326,8 +356,9 @@ def stunt_frames(body, positions: np.ndarray, times: np.ndarray, medium, objects
         for p in spray(times[r]):
             scr, z = project_points(p[None], eye, rot, focal, size)
             if z[0] > 0.05:
-                above.append((float(z[0]), 3, (scr[0, 0], scr[0, 1],
-                                               max(1.5, focal * 0.025 / z[0])), _SPRAY))
+                above.append(
+                    (float(z[0]), 3, (scr[0, 0], scr[0, 1], max(1.5, focal * 0.025 / z[0])), _SPRAY)
+                )
         label = f"t = {times[r]:.2f} s" + (f"   {title}" if title else "")
         yield _compose(img, below, above, np.asarray(sheet, float), view, label, font)
 
@@ -376,13 +407,18 @@ def _fixed_items(fixed, view: tuple, floor: float, below: list, above: list) -> 
             if (z > 0.05).all():
                 tint = water_tint(col[None], part.mean(0)[None], eye, medium)[0]
                 wpx = max(2.0, 2 * focal * o.radius / z.mean())
-                it = (float(z.mean()), 2, (scr.ravel().tolist(), wpx),
-                      tuple(np.clip(tint, 0, 255).astype(int)))  # fmt: skip
+                it = (
+                    float(z.mean()),
+                    2,
+                    (scr.ravel().tolist(), wpx),
+                    tuple(np.clip(tint, 0, 255).astype(int)),
+                )
                 (above if part[:, 1].mean() >= level else below).append(it)
 
 
-def _ball_items(balls: np.ndarray, radii: np.ndarray, view: tuple, below: list,
-                above: list) -> None:  # fmt: skip
+def _ball_items(
+    balls: np.ndarray, radii: np.ndarray, view: tuple, below: list, above: list
+) -> None:
     """Append painter items of the balls at one frame ((K, 3) m) to ``below``/``above``."""
     from zoetic.viz.render3d import project_points, water_tint
 
@@ -396,8 +432,9 @@ def _ball_items(balls: np.ndarray, radii: np.ndarray, view: tuple, below: list,
             (above if balls[k, 1] >= level else below).append(it)
 
 
-def _compose(img, below: list, above: list, sheet: np.ndarray, view: tuple, label: str,
-             font) -> np.ndarray:  # fmt: skip
+def _compose(
+    img, below: list, above: list, sheet: np.ndarray, view: tuple, label: str, font
+) -> np.ndarray:
     """Return the frame: what is under water, the translucent surface sheet, what is above,
     and the label."""
     from PIL import Image, ImageDraw
@@ -442,9 +479,17 @@ def _paint(draw, items: list[tuple], draw_ball) -> None:
             draw.ellipse((x - rr, y - rr, x + rr, y + rr), fill=c)
 
 
-def render_stunt_video(body, positions: np.ndarray, times: np.ndarray, medium,
-                       path: str | Path, objects=(), balls: np.ndarray | None = None,
-                       fps: float = 30, **kw) -> Path:  # fmt: skip
+def render_stunt_video(
+    body,
+    positions: np.ndarray,
+    times: np.ndarray,
+    medium,
+    path: str | Path,
+    objects=(),
+    balls: np.ndarray | None = None,
+    fps: float = 30,
+    **kw,
+) -> Path:
     """Write the stunt's video (``stunt_frames`` at ``fps``) to an MP4; returns the path."""
     from zoetic.viz.render3d import resample
     from zoetic.viz.video import write_mp4

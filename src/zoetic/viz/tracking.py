@@ -29,14 +29,32 @@ def plot_plan(
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     for k, (x, z, r) in enumerate(np.asarray(obstacles, float).reshape(-1, 3)):
-        ax.add_patch(Circle((x, z), r, fc="0.75", ec="0.35", hatch="//", lw=1,
-                            label="obstacle" if k == 0 else None))  # fmt: skip
+        ax.add_patch(
+            Circle(
+                (x, z),
+                r,
+                fc="0.75",
+                ec="0.35",
+                hatch="//",
+                lw=1,
+                label="obstacle" if k == 0 else None,
+            )
+        )
     for i, (p, label) in enumerate(zip(paths, labels, strict=True)):
         (line,) = ax.plot(p[:, 0], p[:, 2], lw=1.8, label=label)
         if starts is not None and len(starts[i]):
             idx = np.clip(np.asarray(starts[i], int), 0, len(p) - 1)
-            ax.plot(p[idx, 0], p[idx, 2], "o", mfc="white", mec=line.get_color(), ms=6,
-                    mew=1.3, ls="none", zorder=4)  # fmt: skip
+            ax.plot(
+                p[idx, 0],
+                p[idx, 2],
+                "o",
+                mfc="white",
+                mec=line.get_color(),
+                ms=6,
+                mew=1.3,
+                ls="none",
+                zorder=4,
+            )
     ax.plot(*paths[0][0, [0, 2]], "s", color="0.2", ms=7, label="start", zorder=5)
     ax.plot(*goal, "o", color="black", ms=8, label="goal", zorder=5)
     ax.set_aspect("equal", adjustable="datalim")

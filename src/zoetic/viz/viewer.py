@@ -54,8 +54,11 @@ def plots_data(rec: Record) -> dict:
             animals[who] = series
     if not animals:
         return {}
-    return {"times": _round(periods[keep] - float(rec.times[0]), 4),
-            "units": {k: str(v) for k, v in rec.units.items()}, "animals": animals}  # fmt: skip
+    return {
+        "times": _round(periods[keep] - float(rec.times[0]), 4),
+        "units": {k: str(v) for k, v in rec.units.items()},
+        "animals": animals,
+    }
 
 
 def viewer_data(scene: Scene, rec: Record | None = None) -> dict:
@@ -64,8 +67,12 @@ def viewer_data(scene: Scene, rec: Record | None = None) -> dict:
     if scene.animals:
         first = scene.animals[0].positions[0]
     else:  # rigid links: their frames' origins and far ends
-        first = np.concatenate([[ln.translations[0], ln.translations[0] + ln.vertices.max(0)]
-                                for ln in scene.creatures[0].links])  # fmt: skip
+        first = np.concatenate(
+            [
+                [ln.translations[0], ln.translations[0] + ln.vertices.max(0)]
+                for ln in scene.creatures[0].links
+            ]
+        )
     first = first[np.isfinite(first).all(axis=1)]
     extent = float(np.linalg.norm(first - first.mean(0), axis=1).max()) if len(first) else 1.0
     sea = abs(scene.medium.water_level) < 1e8
@@ -75,18 +82,27 @@ def viewer_data(scene: Scene, rec: Record | None = None) -> dict:
     if "distance_m" in scene.numbers:
         numbers["final distance (m)"] = scene.numbers["distance_m"]
     return {
-        "title": scene.title, "kind": scene.kind, "medium": scene.medium.name,
-        "fps": scene.fps, "frames": len(scene.times), "duration": scene.duration,
-        "extent": max(extent, 0.05), "elevation": 12.0 if sea else 25.0, "numbers": numbers,
+        "title": scene.title,
+        "kind": scene.kind,
+        "medium": scene.medium.name,
+        "fps": scene.fps,
+        "frames": len(scene.times),
+        "duration": scene.duration,
+        "extent": max(extent, 0.05),
+        "elevation": 12.0 if sea else 25.0,
+        "numbers": numbers,
         "azimuth": 80.0 if side_view else 40.0,
-        "animals": [{
-            "name": a.name,
-            "com": _round(to_gltf_axes(np.nan_to_num(a.com)), 4),
-            "actuators": list(a.actuators),
-            "activations": None if a.activations is None else _round(a.activations, 3),
-        } for a in scene.movers],
+        "animals": [
+            {
+                "name": a.name,
+                "com": _round(to_gltf_axes(np.nan_to_num(a.com)), 4),
+                "actuators": list(a.actuators),
+                "activations": None if a.activations is None else _round(a.activations, 3),
+            }
+            for a in scene.movers
+        ],
         "states": scene.states,
         "events": [[round(e.t, 3), e.who, e.what, e.detail] for e in events],
         "plots": {} if rec is None else plots_data(rec),
         "glb": base64.b64encode(scene_glb(scene)).decode("ascii"),
-    }  # fmt: skip
+    }
