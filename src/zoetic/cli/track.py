@@ -8,6 +8,17 @@ import numpy as np
 import typer
 
 from zoetic.cli.apps import app
+from zoetic.cli.options import (
+    Animal,
+    Evaluator,
+    Fps,
+    Memory,
+    Method,
+    RayAddress,
+    RunDir,
+    Seed,
+    use_ray_address,
+)
 from zoetic.cli.output import console, progress_bar
 from zoetic.io import make_dir
 
@@ -48,10 +59,10 @@ def _rings(obstacles: np.ndarray, depth: float, per: int = 16) -> np.ndarray:
 
 @app.command()
 def track(
-    animal: str = typer.Argument(..., help="Zoo animal name or animal .toml file."),
-    memory: Path = typer.Option(..., help="Repertoire directory (zoetic repertoire train)."),
+    animal: Animal,
+    memory: Memory,
     targets: str = typer.Option(..., help=f"Targets 'x,z;x,z;...' visited in order. {PLANE}"),
-    out: Path = typer.Option(Path("runs/track"), help="Run directory to write."),
+    out: RunDir = Path("runs/track"),
     interval: float = typer.Option(1.0, min=0.05, help="Re-evaluation interval (s)."),
     radius: float = typer.Option(None, help="Reaching radius (m); default half a body length."),
     time_limit: float = typer.Option(
@@ -63,63 +74,19 @@ def track(
         "body lengths); 0 for the distance alone.",
     ),
     video: bool = typer.Option(True, help="Write video.mp4 with the targets as buoys."),
-    fps: int = typer.Option(30, min=1),
+    fps: Fps = 30,
 ) -> None:
     """Track targets greedily with a repertoire (Fig. 5, Plate 4); writes path.png and video."""
-    from zoetic.behavior.tracking import TrackConfig, parse_points, replay
-    from zoetic.behavior.tracking import track as run_track
-    from zoetic.control import save_controller
-    from zoetic.io import write_json
+    from zoetic.behavior.tracking import TrackConfig, parse_points
 
     pts = parse_points(targets, 2, "--targets")
     body, rep = _setup(animal, memory)
     config = TrackConfig(
         interval=interval, radius=radius, time_limit=time_limit, turn_radius=turn_radius
     )
-    with track_bar("s") as bar:
-        tid = bar.add_task(f"{body.name} tracks", total=time_limit, info="")
-
-        def update(t: float, reached: int) -> None:
-            bar.update(tid, completed=min(t, time_limit), info=f"targets {reached}/{len(pts)}")
-
-        result = run_track(body, rep, pts, config, progress=update)
-        bar.update(tid, total=result.sim_time, completed=result.sim_time)
+    result = _run_track(body, rep, pts, config)
     make_dir(out)
-    check = replay(body, result)
-    drift = float(np.nanmax(np.abs(check.positions[0] - result.positions)))
-    summary = result.summary() | {
-        "animal": body.name,
-        "memory": str(memory),
-        "targets_xz": pts.tolist(),
-        "plan": [
-            {"entry": n, "start_s": round(float(s), 3)}
-            for n, s in zip(result.names, result.starts, strict=True)
-        ],
-        "replay_drift_m": drift,
-    }
-    save_controller(result.sequence, out / "controller.json")
-    write_json(out / "summary.json", summary)
-    from zoetic.cli.records import targets, write_sequence_record
-    from zoetic.viz.plots import plot_path
-
-    reached = int(np.isfinite(result.reached).sum())
-    write_sequence_record(
-        out,
-        "track",
-        body,
-        result.times,
-        result.positions,
-        result.sequence,
-        targets(pts, float(result.com[0, 1])),
-        {"targets_reached": f"{reached}/{len(pts)}"},
-    )
-    plot_path(
-        result.com,
-        out / "path.png",
-        targets=pts,
-        starts=result.start_indices,
-        title=f"{body.name} tracking {reached}/{len(pts)} targets (white: a new controller starts)",
-    )
+    reached = _write_track(out, body, result, pts, memory)
     if video:
         from zoetic.viz.render3d import render_video
 
@@ -139,60 +106,103 @@ def track(
         f"({len(result.names)} controllers, {len(result.evaluations)} re-evaluations of "
         f"{len(rep.names)} entries in one batch each)"
     )
-    console.print(
-        f"wrote {out}/ (controller.json, summary.json, record.npz, path.png"
-        f"{', video.mp4' if video else ''})"
+    _report_files(out, video)
+
+
+def _run_track(body, rep, pts: np.ndarray, config):
+    """Track the targets ``pts`` (M, 2) under a progress bar; return the tracking result."""
+    from zoetic.behavior.tracking import track as run_track
+
+    with track_bar("s") as bar:
+        tid = bar.add_task(f"{body.name} tracks", total=config.time_limit, info="")
+
+        def update(t: float, reached: int) -> None:
+            done = min(t, config.time_limit)
+            bar.update(tid, completed=done, info=f"targets {reached}/{len(pts)}")
+
+        result = run_track(body, rep, pts, config, progress=update)
+        bar.update(tid, total=result.sim_time, completed=result.sim_time)
+    return result
+
+
+def _write_track(out: Path, body, result, pts: np.ndarray, memory: Path) -> int:
+    """Write a tracking run's controller, summary, record and path plot; return how many
+    targets it reached."""
+    from zoetic.behavior.tracking import replay
+    from zoetic.cli.records import targets, write_sequence_record
+    from zoetic.control import save_controller
+    from zoetic.io import write_json
+    from zoetic.viz.plots import plot_path
+
+    check = replay(body, result)
+    drift = float(np.nanmax(np.abs(check.positions[0] - result.positions)))
+    summary = result.summary() | {
+        "animal": body.name,
+        "memory": str(memory),
+        "targets_xz": pts.tolist(),
+        "plan": [
+            {"entry": n, "start_s": round(float(s), 3)}
+            for n, s in zip(result.names, result.starts, strict=True)
+        ],
+        "replay_drift_m": drift,
+    }
+    save_controller(result.sequence, out / "controller.json")
+    write_json(out / "summary.json", summary)
+    reached = int(np.isfinite(result.reached).sum())
+    write_sequence_record(
+        out,
+        "track",
+        body,
+        result.times,
+        result.positions,
+        result.sequence,
+        targets(pts, float(result.com[0, 1])),
+        {"targets_reached": f"{reached}/{len(pts)}"},
     )
+    plot_path(
+        result.com,
+        out / "path.png",
+        targets=pts,
+        starts=result.start_indices,
+        title=f"{body.name} tracking {reached}/{len(pts)} targets (white: a new controller starts)",
+    )
+    return reached
 
 
 @app.command()
 def macro(
-    animal: str = typer.Argument(..., help="Zoo animal name or animal .toml file."),
-    memory: Path = typer.Option(..., help="Repertoire directory (zoetic repertoire train)."),
+    animal: Animal,
+    memory: Memory,
     goal: str = typer.Option(..., help=f"Goal 'x,z'. {PLANE}"),
     obstacle: list[str] = typer.Option(
         [], help="Obstacle disc 'x,z,r' to keep out of (repeat for more)."
     ),
-    method: str = typer.Option("ga", help="anneal (simulated annealing) or ga (genetic)."),
+    method: Method = "ga",
     budget: int = typer.Option(
         2000, min=1, max=10_000_000, help="Plans (simulations) to evaluate."
     ),
-    seed: int = typer.Option(0, help="Random seed: same seed, same result."),
+    seed: Seed = 0,
     segments: int = typer.Option(6, min=1, help="Repertoire entries in a plan."),
     horizon: float = typer.Option(
         60.0, min=0.1, max=3600.0, help="Seconds the plan is judged over."
     ),
-    out: Path = typer.Option(Path("runs/macro"), help="Run directory to write."),
+    out: RunDir = Path("runs/macro"),
     video: bool = typer.Option(True, help="Write video.mp4 (goal and obstacle rims as buoys)."),
-    fps: int = typer.Option(30, min=1),
-    evaluator: str = typer.Option("batch", help="batch (this machine) or ray (a cluster)."),
-    ray_address: str = typer.Option(None, help="Ray cluster for --evaluator ray."),
+    fps: Fps = 30,
+    evaluator: Evaluator = "batch",
+    ray_address: RayAddress = None,
 ) -> None:
     """Search for a macro controller (selection, order, durations of entries) to reach a goal."""
-    if ray_address:  # ray.init() reads it
-        import os
-
-        os.environ["RAY_ADDRESS"] = ray_address
-    from zoetic.behavior.macro import MacroProblem, ReachTask, search
-    from zoetic.behavior.tracking import TrackingError, parse_points
+    use_ray_address(ray_address)
+    from zoetic.behavior.macro import MacroProblem, ReachTask
     from zoetic.control import save_controller
     from zoetic.io import write_json
 
-    g = parse_points(goal, 2, "--goal")[0]
-    obs = np.concatenate([parse_points(o, 3, "--obstacle") for o in obstacle] or [np.zeros((0, 3))])
-    if np.any(obs[:, 2] <= 0):
-        raise TrackingError(f"--obstacle: radii must be positive, got {obs[:, 2].tolist()}")
+    g, obs = _goal_and_obstacles(goal, obstacle)
     body, rep = _setup(animal, memory)
     task = ReachTask(tuple(g), tuple(map(tuple, obs)), horizon)
     problem = MacroProblem(body, rep, task, segments=segments)
-    with track_bar("plans") as bar:
-        tid = bar.add_task(f"{body.name} {method}", total=budget, info="")
-
-        def update(opt) -> None:
-            st = " ".join(f"{k} {v:.2g}" for k, v in opt.status().items())
-            bar.update(tid, completed=min(opt.evaluations, budget), info=f"E {opt.best_f:.3f} {st}")
-
-        result = search(problem, method, budget, seed, progress=update, evaluator=evaluator)
+    result = _search_plan(problem, body.name, method, budget, seed, evaluator)
     make_dir(out)
     save_controller(result.sequence, out / "controller.json")
     summary = result.summary() | {
@@ -206,23 +216,57 @@ def macro(
     }
     write_json(out / "summary.json", summary)
     traj = problem.rollout(result.entries, result.durations, record_every=4)
+    depth = float(traj.com(body)[0][0, 1])
+    _write_plan_record(out, body, traj, result.sequence, g, obs, depth, summary)
+    _draw_plan(out, body, traj, result, g, obs, video, fps)
+    _report_plan(method, result.summary(), out, video)
+
+
+def _goal_and_obstacles(goal: str, obstacle: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Parse --goal 'x,z' and each --obstacle 'x,z,r' (radii must be positive)."""
+    from zoetic.behavior.tracking import TrackingError, parse_points
+
+    g = parse_points(goal, 2, "--goal")[0]
+    obs = np.concatenate([parse_points(o, 3, "--obstacle") for o in obstacle] or [np.zeros((0, 3))])
+    if np.any(obs[:, 2] <= 0):
+        raise TrackingError(f"--obstacle: radii must be positive, got {obs[:, 2].tolist()}")
+    return g, obs
+
+
+def _search_plan(problem, name: str, method: str, budget: int, seed: int, evaluator: str):
+    """Search the macro problem under a progress bar; return the search's result."""
+    from zoetic.behavior.macro import search
+
+    with track_bar("plans") as bar:
+        tid = bar.add_task(f"{name} {method}", total=budget, info="")
+
+        def update(opt) -> None:
+            st = " ".join(f"{k} {v:.2g}" for k, v in opt.status().items())
+            bar.update(tid, completed=min(opt.evaluations, budget), info=f"E {opt.best_f:.3f} {st}")
+
+        return search(problem, method, budget, seed, progress=update, evaluator=evaluator)
+
+
+def _draw_plan(
+    out: Path, body, traj, result, goal: np.ndarray, obstacles: np.ndarray, video: bool, fps: int
+) -> None:
+    """Write a macro run's path.png (and video.mp4, goal and obstacle rims as buoys)."""
+    from zoetic.viz.tracking import plot_plan
+
     com = traj.com(body)[0]
     depth = float(com[0, 1])
-    _write_plan_record(out, body, traj, result.sequence, g, obs, depth, summary)
     starts = result.sequence.starts()
-    idx = np.searchsorted(traj.times, starts[starts < horizon] - 1e-9)
-    s = result.summary()
+    idx = np.searchsorted(traj.times, starts[starts < result.horizon] - 1e-9)
+    s, method = result.summary(), result.method
     title = (
         f"{body.name} macro controller ({method}): final distance {s['final_m']:.2f} m, "
         f"{s['inside_obstacle_s']:.1f} s in obstacles"
     )
-    from zoetic.viz.tracking import plot_plan
-
-    plot_plan([com], [f"{method} plan"], out / "path.png", g, obs, [idx], title=title)
+    plot_plan([com], [f"{method} plan"], out / "path.png", goal, obstacles, [idx], title=title)
     if video:
         from zoetic.viz.render3d import render_video
 
-        rims = _rings(obs, depth)
+        rims = _rings(obstacles, depth)
         colors = [(220, 40, 30)] + [(240, 200, 40)] * len(rims)
         render_video(
             body,
@@ -231,10 +275,9 @@ def macro(
             body.medium,
             out / "video.mp4",
             fps=fps,
-            markers=np.vstack([_buoys(g, depth), rims]),
+            markers=np.vstack([_buoys(goal, depth), rims]),
             marker_colors=colors,
         )
-    _report_plan(method, s, out, video)
 
 
 def _write_plan_record(
@@ -258,6 +301,11 @@ def _report_plan(method: str, s: dict, out: Path, video: bool) -> None:
     )
     played = [f"{p['entry']} {p['duration_s']:.1f} s" for p in s["plan"] if p["played"]]
     console.print("plan: " + ", ".join(played))
+    _report_files(out, video)
+
+
+def _report_files(out: Path, video: bool) -> None:
+    """Print what a tracking or macro run wrote: its controller, summary, record and path."""
     console.print(
         f"wrote {out}/ (controller.json, summary.json, record.npz, path.png"
         f"{', video.mp4' if video else ''})"

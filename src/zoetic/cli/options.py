@@ -1,0 +1,51 @@
+"""Options that several commands declare alike, each declared once as an annotated type.
+
+A command gives the default in its signature (``seed: Seed = 0``), so the same option may
+default differently in different commands while its flag and help text stay one."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+Animal = Annotated[str, typer.Argument(help="Zoo animal name or animal .toml file.")]
+"""The animal: a zoo name or an animal .toml file."""
+
+Memory = Annotated[Path, typer.Option(help="Repertoire directory (zoetic repertoire train).")]
+"""The learned repertoire a command's animal acts with."""
+
+Seed = Annotated[int, typer.Option(help="Random seed: same seed, same result.")]
+"""The run's random seed."""
+
+RunDir = Annotated[Path, typer.Option(help="Run directory to write.")]
+"""The directory a run writes its files into."""
+
+Method = Annotated[str, typer.Option(help="anneal (simulated annealing) or ga (genetic).")]
+"""The search method of a macro controller."""
+
+Evaluator = Annotated[str, typer.Option(help="batch (this machine) or ray (a cluster).")]
+"""Where a search evaluates its candidates."""
+
+RayAddress = Annotated[str, typer.Option(help="Ray cluster for --evaluator ray.")]
+"""The Ray cluster an ``--evaluator ray`` search uses."""
+
+Fps = Annotated[int, typer.Option(min=1)]
+"""The video's frame rate."""
+
+Terrain = Annotated[str, typer.Option(help="flat, or rough (uneven ground).")]
+"""The ground a SAN creature moves over."""
+
+Workers = Annotated[int, typer.Option(min=1, help="Worker processes (default: all cores).")]
+"""How many worker processes evaluate in parallel."""
+
+Json = Annotated[bool, typer.Option("--json", help="Print one JSON object.")]
+"""Whether a benchmark prints one JSON object instead of aligned lines."""
+
+
+def use_ray_address(address: str | None) -> None:
+    """Point Ray at the cluster of ``--ray-address`` (``ray.init()`` reads RAY_ADDRESS)."""
+    if address:
+        os.environ["RAY_ADDRESS"] = address
