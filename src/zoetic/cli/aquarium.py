@@ -8,6 +8,7 @@ import typer
 
 from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
+from zoetic.cli.options import Json
 from zoetic.cli.output import console, emit
 
 
@@ -143,7 +144,7 @@ def bench_aquarium_cmd(
         "directory, or both (the built-in and the learned tank side by side); default the "
         "species files'.",
     ),
-    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    json: Json = False,
 ) -> None:
     """Realtime factor of a tank (oracle perception, or animat vision for one predator),
     against its physics alone."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 import typer
 
 from zoetic.cli.apps import app
+from zoetic.cli.options import Json
 from zoetic.cli.output import emit
 
 bench_app = typer.Typer(help="Benchmarks; figures are ratios measured side by side.")
@@ -16,7 +17,7 @@ def bench_gym_cmd(
     env_id: str = typer.Option("zoetic/SharkSwim-v0", "--env", help="A zoetic environment id."),
     num_envs: int = typer.Option(64, min=1, help="Environments stepped together."),
     steps: int = typer.Option(100, min=1, help="Vector steps timed."),
-    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    json: Json = False,
 ) -> None:
     """Env steps per second: the native vector env against SyncVectorEnv, same actions."""
     from zoetic.bench.gym import bench_gym
@@ -27,7 +28,7 @@ def bench_gym_cmd(
 @bench_app.command("vision")
 def bench_vision_cmd(
     frames: int = typer.Option(150, min=10, help="Vision frames timed."),
-    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    json: Json = False,
 ) -> None:
     """Animat vision: retina frames/s (2 eyes x 4 levels) and the whole pursuit loop's."""
     from zoetic.bench.vision import bench_vision
@@ -42,7 +43,7 @@ def bench_jax_cmd(
     seconds: float = typer.Option(10.0, min=0.01, help="Simulated seconds per candidate."),
     repeats: int = typer.Option(2, min=1, help="Timed runs; the best counts."),
     numba: bool = typer.Option(False, "--numba", help="Also run the Numba kernel's bench."),
-    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    json: Json = False,
 ) -> None:
     """The JAX backend on whatever device JAX sees: sim-s/s of a batch, compile time apart."""
     from zoetic.bench.jax_sim import benchmark

@@ -5,6 +5,7 @@ from __future__ import annotations
 import typer
 
 from zoetic.cli.bench import bench_app
+from zoetic.cli.options import Json
 from zoetic.cli.output import emit
 
 
@@ -14,7 +15,7 @@ def bench_ray_cmd(
     population: int = typer.Option(64, min=1, help="Candidates per generation."),
     generations: int = typer.Option(5, min=1),
     actors: int = typer.Option(None, min=1, help="Ray actors (default: one per core)."),
-    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    json: Json = False,
 ) -> None:
     """Seconds per generation on a local Ray against in-process batches, side by side."""
     from zoetic.bench.ray import bench_ray

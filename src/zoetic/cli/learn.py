@@ -9,6 +9,7 @@ import typer
 
 from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
+from zoetic.cli.options import Json
 from zoetic.cli.output import console, emit, progress_bar
 from zoetic.io import check_out_dir
 
@@ -192,7 +193,7 @@ def demo(
 @bench_app.command("learn")
 def bench_learn_cmd(
     budget: int = typer.Option(3500, min=10),
-    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    json: Json = False,
 ) -> None:
     """Annealing's wall time for the paper's budget, and how fast CMA-ES/gradient match it."""
     from zoetic.bench.learn import bench_learn
@@ -205,7 +206,7 @@ def bench_skills_cmd(
     animal: list[str] = typer.Option(None, help="Animals to learn (default: the whole zoo)."),
     budget: int = typer.Option(None, min=10, help="Evaluations per skill (default: learn's)."),
     seed: int = typer.Option(0),
-    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    json: Json = False,
 ) -> None:
     """Learn each basic skill with defaults; print it beside the hand-made entry, and the time."""
     from zoetic.bench.skills import bench_skills

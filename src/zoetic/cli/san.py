@@ -9,6 +9,7 @@ from rich.progress import Progress
 
 from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
+from zoetic.cli.options import Json
 from zoetic.cli.output import console, emit, progress_bar
 
 san_app = typer.Typer(
@@ -388,7 +389,7 @@ def bench_san_cmd(
     creature: str = typer.Option("walker", help="Creature to time."),
     trials: int = typer.Option(200, min=1, help="Random networks."),
     workers: int = typer.Option(None, min=1, help="Worker processes (default: all cores)."),
-    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    json: Json = False,
 ) -> None:
     """Wall time of a phase-1 search (random SANs x the creature's seconds, all cores)."""
     from zoetic.bench.san import bench_search

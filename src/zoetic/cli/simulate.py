@@ -10,6 +10,7 @@ from rich.table import Table
 
 from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
+from zoetic.cli.options import Json
 from zoetic.cli.output import console, emit
 
 
@@ -74,7 +75,7 @@ def bench_simulate_cmd(
     animal: str = typer.Option("shark"),
     seconds: float = typer.Option(10.0, min=0.1),
     batch: int = typer.Option(512, min=1),
-    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    json: Json = False,
 ) -> None:
     """Simulated seconds per second: one candidate, a batch on all cores, and NumPy."""
     from zoetic.bench.simulate import bench_simulate

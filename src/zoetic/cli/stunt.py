@@ -8,6 +8,18 @@ import typer
 
 from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
+from zoetic.cli.options import (
+    Animal,
+    Evaluator,
+    Fps,
+    Json,
+    Memory,
+    Method,
+    RayAddress,
+    RunDir,
+    Seed,
+    use_ray_address,
+)
 from zoetic.cli.output import console, emit
 from zoetic.cli.track import track_bar
 
@@ -50,44 +62,34 @@ def write_replay(body, path: Path, seconds: float | None, out: Path, video: bool
 
 @app.command()
 def stunt(
-    animal: str = typer.Argument(..., help="Zoo animal name or animal .toml file."),
-    memory: Path = typer.Option(..., help="Repertoire directory (zoetic repertoire train)."),
+    animal: Animal,
+    memory: Memory,
     trick: str = typer.Option(
         "leap",
         help="A built-in trick (leap, hurdle, somersault, "
         "ball-nose, ball-tail, bellyflop, clean-dive) or a trick .toml "
         "file.",
     ),
-    method: str = typer.Option("anneal", help="anneal (simulated annealing) or ga (genetic)."),
+    method: Method = "anneal",
     budget: int = typer.Option(
         None, min=1, max=10_000_000, help="Plans (stunt simulations) to evaluate (default 9600)."
     ),
-    seed: int = typer.Option(0, help="Random seed: same seed, same result."),
+    seed: Seed = 0,
     segments: int = typer.Option(None, min=1, help="Entries in a plan (default: the trick's)."),
-    out: Path = typer.Option(Path("runs/stunt"), help="Run directory to write."),
+    out: RunDir = Path("runs/stunt"),
     video: bool = typer.Option(True, help="Write video.mp4 (objects drawn as buoys)."),
-    fps: int = typer.Option(30, min=1),
-    evaluator: str = typer.Option("batch", help="batch (this machine) or ray (a cluster)."),
-    ray_address: str = typer.Option(None, help="Ray cluster for --evaluator ray."),
+    fps: Fps = 30,
+    evaluator: Evaluator = "batch",
+    ray_address: RayAddress = None,
 ) -> None:
     """Discover a stunt: a macro controller of repertoire entries that scores the trick's style
     terms best; writes macro.json (replay: zoetic simulate ANIMAL --controller macro.json),
     video.mp4, score.png, record.npz and summary.json."""
-    if ray_address:  # ray.init() reads it
-        import os
-
-        os.environ["RAY_ADDRESS"] = ray_address
+    use_ray_address(ray_address)
     from zoetic.behavior.repertoire import Repertoire
-    from zoetic.behavior.stunts import (
-        BUDGET,
-        discover,
-        load_trick,
-        macro_document,
-        score_series,
-    )
+    from zoetic.behavior.stunts import BUDGET, discover, load_trick
     from zoetic.bodies import load_animal
-    from zoetic.io import check_out_dir, make_dir, write_json
-    from zoetic.viz.stunts import plot_score
+    from zoetic.io import check_out_dir
 
     check_out_dir(out)
     body = load_animal(animal)
@@ -103,12 +105,20 @@ def stunt(
         found = discover(
             body, rep, tr, method, budget, seed, segments, progress=update, evaluator=evaluator
         )
+    summary = _write_stunt(out, body, tr, found, memory, seed)
+    _draw_stunt(out, body, tr, found, summary, video, fps)
+    _report(tr.name, method, found.result, summary, found.measures, out, video)
+
+
+def _write_stunt(out: Path, body, tr, found, memory: Path, seed: int) -> dict:
+    """Write a discovered stunt's macro.json, summary.json and record; return its summary."""
+    from zoetic.behavior.stunts import macro_document, targets_met
+    from zoetic.cli.records import figures, solid_things, write_sequence_record
+    from zoetic.io import make_dir, write_json
+
     problem, result, rec = found.problem, found.result, found.record
     make_dir(out)
     write_json(out / "macro.json", macro_document(problem, result.sequence, tr.task.source))
-    from zoetic.behavior.stunts import targets_met
-    from zoetic.cli.records import figures, solid_things, write_sequence_record
-
     summary = found.summary()
     summary |= {
         "targets": targets_met(tr.name, summary, tr),
@@ -128,11 +138,19 @@ def stunt(
         solid_things(tr.objects, times, rec.balls[0]),
         figures(summary),
     )
-    got, seconds = found.measures, summary["seconds"]
-    starts = result.sequence.starts()
+    return summary
+
+
+def _draw_stunt(out: Path, body, tr, found, summary: dict, video: bool, fps: int) -> None:
+    """Write a discovered stunt's score.png (its style terms over time) and video.mp4."""
+    from zoetic.behavior.stunts import score_series
+    from zoetic.viz.stunts import plot_score
+
+    rec, got, seconds = found.record, found.measures, summary["seconds"]
+    starts = found.result.sequence.starts()
     plot_score(
         rec.traj.times,
-        score_series(problem, rec),
+        score_series(found.problem, rec),
         out / "score.png",
         starts[starts < seconds],
         title=f"{body.name} {tr.name}: E = {summary['E']:.3f}, apex "
@@ -153,7 +171,6 @@ def stunt(
             fps=fps,
             title=f"{body.name} {tr.name}",
         )
-    _report(tr.name, method, result, summary, got, out, video)
 
 
 def _report(
@@ -203,7 +220,7 @@ def bench_stunts_cmd(
     method: str = typer.Option("anneal"),
     budget: int = typer.Option(None, min=1, help="Plans per trick (default: as zoetic stunt)."),
     seed: int = typer.Option(0),
-    json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    json: Json = False,
 ) -> None:
     """Each trick discovered: its success flags against the issue's targets, what it achieved,
     evaluations and wall time (target: each trick in <= 5 minutes on 2 cores)."""
