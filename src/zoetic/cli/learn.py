@@ -9,7 +9,7 @@ import typer
 
 from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
-from zoetic.cli.options import Json
+from zoetic.cli.options import Animal, Json, Seed, use_ray_address
 from zoetic.cli.output import console, emit, progress_bar
 from zoetic.io import check_out_dir
 
@@ -67,11 +67,11 @@ def run_with_progress(run, label: str, every_s: float = 2.0) -> None:
 
 @app.command()
 def learn(
-    animal: str = typer.Argument(None, help="Zoo animal name or animal .toml file."),
+    animal: Animal = None,
     task: str = typer.Option("swim-straight", help="Task name (see `zoetic tasks`) or .toml file."),
     optimizer: str = typer.Option("cmaes", help="cmaes, anneal, simplex or gradient."),
     budget: int = typer.Option(3500, min=1, max=10_000_000, help="Evaluations to spend."),
-    seed: int = typer.Option(0, help="Random seed: same seed, same result."),
+    seed: Seed = 0,
     controller: str = typer.Option(
         "periodic", help="Representation: periodic (a gait that repeats), time or frequency."
     ),
@@ -106,27 +106,16 @@ def learn(
     checkpoint_every: float = typer.Option(2.0, min=0.0, help="Seconds between checkpoints."),
 ) -> None:
     """Learn a controller for an animal and a task; writes a resumable run directory."""
-    from zoetic.learning.run import LearnConfig, Run
+    from zoetic.learning.run import LearnConfig
     from zoetic.runs import finish_run
     from zoetic.viz.media import learning_media
 
-    if ray_address:  # ray.init() reads it; the run's config keeps only the evaluator's name
-        import os
-
-        os.environ["RAY_ADDRESS"] = ray_address
+    use_ray_address(ray_address)  # the run's config keeps only the evaluator's name
     if resume is not None:
-        from zoetic.errors import ZoeticError, naming
-
-        try:
-            run = Run.resume(resume)
-        except ZoeticError as exc:
-            raise naming(resume, exc) from None
-        console.print(f"resuming {resume} at {run.evaluations} evaluations")
+        run = _resume(resume)
     else:
         if animal is None:
             raise typer.BadParameter("give an ANIMAL (or --resume RUN_DIR)")
-        from zoetic.bodies import load_animal
-
         config = LearnConfig(
             animal=animal,
             task=task,
@@ -143,11 +132,38 @@ def learn(
             fins=fins,
             frequency=frequency,
         )
-        out = check_out_dir(out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}")
-        run = Run.create(out, config, load_animal(animal))  # the run checks: learning.checks
+        run = _create(config, out)
     cfg = run.setup.config
     run_with_progress(run, f"{cfg.animal} {cfg.optimizer}", checkpoint_every)
     summary = finish_run(run, partial(learning_media, video=video))
+    _print_summary(summary)
+
+
+def _resume(resume: Path):
+    """Open the run in ``resume`` where it stopped (errors name the directory)."""
+    from zoetic.errors import ZoeticError, naming
+    from zoetic.learning.run import Run
+
+    try:
+        run = Run.resume(resume)
+    except ZoeticError as exc:
+        raise naming(resume, exc) from None
+    console.print(f"resuming {resume} at {run.evaluations} evaluations")
+    return run
+
+
+def _create(config, out: Path | None):
+    """Start a new run of ``config`` in ``out`` (default runs/<animal>-<task>)."""
+    from zoetic.bodies import load_animal
+    from zoetic.learning.run import Run
+
+    animal, task = config.animal, config.task
+    out = check_out_dir(out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}")
+    return Run.create(out, config, load_animal(animal))  # the run checks: learning.checks
+
+
+def _print_summary(summary: dict) -> None:
+    """Print a finished learning run's summary, one aligned ``key: value`` line each."""
     for key, value in summary.items():
         console.print(f"{key:>14}: {value}")
 
@@ -186,8 +202,7 @@ def demo(
         summary = finish_run(run, partial(learning_media, video=video))
     finally:  # also when interrupted: the next demo may then clear what this one made
         mark_demo(out, before)
-    for key, value in summary.items():
-        console.print(f"{key:>14}: {value}")
+    _print_summary(summary)
 
 
 @bench_app.command("learn")
