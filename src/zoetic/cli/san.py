@@ -9,7 +9,7 @@ from rich.progress import Progress
 
 from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
-from zoetic.cli.options import Json
+from zoetic.cli.options import Json, RayAddress, Seed, Terrain, Workers, use_ray_address
 from zoetic.cli.output import console, emit, progress_bar
 
 san_app = typer.Typer(
@@ -104,11 +104,11 @@ def search_cmd(
     ),
     top: int = typer.Option(10, min=1, help="How many of the best to keep (videos and files)."),
     seed: int = typer.Option(0, help="Random seed: same seed, same networks and metrics."),
-    terrain: str = typer.Option("flat", help="flat, or rough (uneven ground)."),
+    terrain: Terrain = "flat",
     seconds: float = typer.Option(
         None, min=0.1, max=1000.0, help="Evaluation time (default: creature's)."
     ),
-    workers: int = typer.Option(None, min=1, help="Worker processes (default: all cores)."),
+    workers: Workers = None,
     out: Path = typer.Option(None, help="Output directory (default runs/<creature>)."),
     video: bool = typer.Option(True, help="Write a video of each kept gait."),
     gaits: bool = typer.Option(
@@ -118,13 +118,10 @@ def search_cmd(
         "modes: modes.json and one labelled clip per mode.",
     ),
     evaluator: str = typer.Option("process", help="process (this machine) or ray (a cluster)."),
-    ray_address: str = typer.Option(None, help="Ray cluster for --evaluator ray."),
+    ray_address: RayAddress = None,
 ) -> None:
     """Phase 1: random SANs, evaluated in parallel; keeps the best (sans/*.json, videos)."""
-    if ray_address:  # ray.init() reads it
-        import os
-
-        os.environ["RAY_ADDRESS"] = ray_address
+    use_ray_address(ray_address)
     from zoetic.san import load_creature
     from zoetic.san.search import search, write_search
     from zoetic.viz.san import draw_search
@@ -202,8 +199,8 @@ def evolve_cmd(
     trials: int = typer.Option(
         500, min=0, max=10_000_000, help="Evolution steps (one evaluation each)."
     ),
-    seed: int = typer.Option(0, help="Random seed: same seed, same result."),
-    terrain: str = typer.Option("flat", help="flat, or rough (uneven ground)."),
+    seed: Seed = 0,
+    terrain: Terrain = "flat",
     out: Path = typer.Option(None, help="Output directory (default runs/<creature>-evolve)."),
     video: bool = typer.Option(True, help="Write video.mp4 of the evolved creature."),
     resume: bool = typer.Option(
@@ -213,29 +210,11 @@ def evolve_cmd(
 ) -> None:
     """Evolve the body (link lengths, sections, attachment points; masses coupled to them and
     to actuator strength) together with the network's Fig. 8 parameters (paper, 6.3)."""
-    from zoetic.san import load_creature
-    from zoetic.san.creature import CreatureError
-    from zoetic.san.evolve import (
-        check_evolvable,
-        evolve,
-        load_checkpoint,
-        save_checkpoint,
-        write_evolve,
-    )
+    from zoetic.san.evolve import evolve, load_checkpoint, save_checkpoint, write_evolve
     from zoetic.san.network import load_with_creature, save_network
-    from zoetic.san.search import TERRAINS, search
     from zoetic.viz.san import draw_evolve
 
-    if terrain not in TERRAINS:
-        raise CreatureError(f"unknown terrain {terrain!r} (expected 'flat' or 'rough')")
-    if creature is None and network is None:
-        raise typer.BadParameter("give a CREATURE (or --network FILE, whose creature it is)")
-    net = None
-    if network is not None:
-        net, c = load_with_creature(network, creature)
-    else:
-        c = load_creature(creature)
-    check_evolvable(c)
+    net, c = _evolve_subject(creature, network, terrain)
     out = out or Path("runs") / f"{c.name}-evolve"
     ckpt = out / "checkpoint.npz"
     start_file = out / "start.json"
@@ -243,18 +222,7 @@ def evolve_cmd(
     if resume and ckpt.exists() and start_file.exists():
         net = load_with_creature(start_file, c)[0]
     elif net is None:
-        bar, tid = _bar(f"{c.name} start search", search_trials)
-        with bar:
-            res = search(
-                c,
-                trials=search_trials,
-                seed=seed,
-                terrain=terrain,
-                workers=workers,
-                progress=_progress(bar, tid),
-            )
-        ok = [i for i in res.top(len(res.networks)) if not res.fell[i]]
-        net = res.networks[(ok or res.top(1))[0]]
+        net = _start_network(c, search_trials, seed, terrain, workers)
     config = {
         "creature": c.name,
         "seed": seed,
@@ -285,6 +253,47 @@ def evolve_cmd(
     _print_evolve(c.name, summary)
 
 
+def _evolve_subject(creature: str | None, network: Path | None, terrain: str):
+    """Return (the starting network or None, the creature) evolution works on, refusing an
+    unknown terrain, a missing creature and a creature that cannot evolve."""
+    from zoetic.san import load_creature
+    from zoetic.san.creature import CreatureError
+    from zoetic.san.evolve import check_evolvable
+    from zoetic.san.network import load_with_creature
+    from zoetic.san.search import TERRAINS
+
+    if terrain not in TERRAINS:
+        raise CreatureError(f"unknown terrain {terrain!r} (expected 'flat' or 'rough')")
+    if creature is None and network is None:
+        raise typer.BadParameter("give a CREATURE (or --network FILE, whose creature it is)")
+    net = None
+    if network is not None:
+        net, c = load_with_creature(network, creature)
+    else:
+        c = load_creature(creature)
+    check_evolvable(c)
+    return net, c
+
+
+def _start_network(c, trials: int, seed: int, terrain: str, workers: int | None):
+    """Return the best of a phase-1 search of ``trials`` random networks (one that did not
+    fall, when any), evolution's starting point."""
+    from zoetic.san.search import search
+
+    bar, tid = _bar(f"{c.name} start search", trials)
+    with bar:
+        res = search(
+            c,
+            trials=trials,
+            seed=seed,
+            terrain=terrain,
+            workers=workers,
+            progress=_progress(bar, tid),
+        )
+    ok = [i for i in res.top(len(res.networks)) if not res.fell[i]]
+    return res.networks[(ok or res.top(1))[0]]
+
+
 def _print_evolve(name: str, summary: dict) -> None:
     """Print what evolution changed in the creature ``name`` (before and after) and its files."""
     from rich.table import Table
@@ -308,8 +317,8 @@ def tune_cmd(
     network: Path = typer.Argument(..., help="A network .json (e.g. runs/cart/sans/01.json)."),
     method: str = typer.Option("sga", help="sga (stochastic gradient ascent) or anneal."),
     trials: int = typer.Option(1000, min=1, max=10_000_000, help="Evaluations to spend."),
-    seed: int = typer.Option(0, help="Random seed: same seed, same result."),
-    terrain: str = typer.Option("flat", help="flat, or rough (uneven ground)."),
+    seed: Seed = 0,
+    terrain: Terrain = "flat",
     creature: str = typer.Option(None, help="Creature (default: the one the file names)."),
     out: Path = typer.Option(None, help="Output directory (default: <file>-<method>)."),
     video: bool = typer.Option(True, help="Write video.mp4 of the tuned gait."),
@@ -388,7 +397,7 @@ def show_cmd(
 def bench_san_cmd(
     creature: str = typer.Option("walker", help="Creature to time."),
     trials: int = typer.Option(200, min=1, help="Random networks."),
-    workers: int = typer.Option(None, min=1, help="Worker processes (default: all cores)."),
+    workers: Workers = None,
     json: Json = False,
 ) -> None:
     """Wall time of a phase-1 search (random SANs x the creature's seconds, all cores)."""
