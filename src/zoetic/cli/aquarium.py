@@ -47,15 +47,11 @@ def aquarium(
 ) -> None:
     """Let a tank of fishes live: write events.csv, mind.png, summary.json, record.npz and
     video.mp4."""
-    from zoetic.behavior.aquarium.tank import (
-        TankConfig,
-        build_tank,
-        events_csv,
-        frame_labels,
-        live,
-        summarize,
-    )
+    from zoetic.behavior.aquarium.tank import TankConfig, build_tank, events_csv, live, summarize
+    from zoetic.cli.records import write_aquarium_record
     from zoetic.io import atomic_write_bytes, check_out_dir, make_dir, write_json
+    from zoetic.record import read_record
+    from zoetic.viz.media import mind_media
 
     check_out_dir(out)
     cfg = TankConfig(
@@ -77,36 +73,38 @@ def aquarium(
     with console.status("the fishes live...") as status:
         life = live(tank, progress=lambda t: status.update(f"t = {t:.1f} s"))
     make_dir(out)
-    names = [f.name for f in tank.fishes]
     atomic_write_bytes(out / "events.csv", events_csv(life).encode())
     summary = summarize(tank, life)
-    from zoetic.cli.records import write_aquarium_record
-
     record = write_aquarium_record(out, tank, life, summary)
-    from zoetic.record import read_record
-    from zoetic.viz.aquarium import write_tank_video
-    from zoetic.viz.media import mind_media
-
     mind_media(read_record(record), out)
     if video:
-        statics = [s for s in tank.static_names]
-        centers = [tank.center[k] for k, nm in enumerate(statics) if nm != "wall"]
-        with console.status("rendering the video..."):
-            write_tank_video(
-                out / "video.mp4",
-                fps=1.0 / cfg.record_period,
-                bodies=[f.body for f in tank.fishes],
-                positions=life.positions,
-                times=life.times,
-                colors=[f.species.color for f in tank.fishes],
-                obstacles=centers,
-                food=life.food,
-                eaten=life.eaten,
-                labels=frame_labels(life, names) if labels else None,
-                half_size=cfg.size(),
-            )
+        _write_video(out / "video.mp4", cfg, tank, life, labels)
     write_json(out / "summary.json", summary)
     _report(summary, out, video)
+
+
+def _write_video(path: Path, cfg, tank, life, labels: bool) -> None:
+    """Render the tank's life (fishes, rocks and seaweed, food; each fish's intention as a
+    label when ``labels``) into an MP4 at ``path``."""
+    from zoetic.behavior.aquarium.tank import frame_labels
+    from zoetic.viz.aquarium import write_tank_video
+
+    names = [f.name for f in tank.fishes]
+    centers = [tank.center[k] for k, nm in enumerate(tank.static_names) if nm != "wall"]
+    with console.status("rendering the video..."):
+        write_tank_video(
+            path,
+            fps=1.0 / cfg.record_period,
+            bodies=[f.body for f in tank.fishes],
+            positions=life.positions,
+            times=life.times,
+            colors=[f.species.color for f in tank.fishes],
+            obstacles=centers,
+            food=life.food,
+            eaten=life.eaten,
+            labels=frame_labels(life, names) if labels else None,
+            half_size=cfg.size(),
+        )
 
 
 def _report(summary: dict, out: Path, video: bool) -> None:
