@@ -22,14 +22,8 @@ from zoetic.physics import State, Trajectory, simulate
 from zoetic.physics.objects import Cylinder
 from zoetic.tasks.terms import PARTS, TERMS, BodyFrame, Signals, TermParams, body_parts
 from zoetic.viz.render3d import look_at, project_points
-from zoetic.viz.stunts import (
-    Splash,
-    spray_particles,
-    stunt_camera,
-    stunt_frames,
-    subdivision,
-    surface_crossings,
-)
+from zoetic.viz.spray import Splash, spray_particles, surface_crossings
+from zoetic.viz.stunts import stunt_camera, stunt_frames, subdivision
 
 
 @pytest.fixture(scope="module")

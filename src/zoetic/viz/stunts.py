@@ -81,65 +81,6 @@ def deep_enough(pool: Pool, deepest: float, room: float = 1.0) -> Pool:
     return replace(pool, depth=max(pool.depth, deepest + room))
 
 
-@dataclass(frozen=True)
-class Splash:
-    """Spray launched where body faces crossed the surface: time (s), point (3,), and the
-    crossing's area x normal speed (m^3/s; going in or coming out)."""
-
-    times: np.ndarray  # (E,)
-    points: np.ndarray  # (E, 3)
-    flux: np.ndarray  # (E,)
-
-
-def surface_crossings(body, positions: np.ndarray, times: np.ndarray, level: float) -> Splash:
-    """Return the faces' surface crossings of one recorded motion (R, N, 3) as spray sources
-    (the splash measure's own per-face crossings, ``Signals.crossing_flux``)."""
-    from zoetic.tasks.terms import BodyFrame, Signals
-
-    pos = np.asarray(positions, float)[None]
-    r = pos.shape[1]
-    s = Signals(
-        np, BodyFrame.of(body), pos, np.zeros((1, r, 0)), np.asarray(times, float), level, 1.0
-    )
-    flux = np.abs(np.nan_to_num(s.crossing_flux[0]))  # (R-1, P)
-    rows, faces = np.nonzero(flux > 0)
-    c = s.face_centres[0]
-    pts = 0.5 * (c[rows, faces] + c[rows + 1, faces])
-    pts[:, 1] = level
-    t = 0.5 * (np.asarray(times)[rows] + np.asarray(times)[rows + 1])
-    return Splash(t, pts, flux[rows, faces])
-
-
-def spray_particles(
-    splash: Splash, level: float, gravity: float = 9.81, per_flux: float = 150.0, seed: int = 0
-):
-    """Return a function of time t giving the spray drops (D, 3) in the air then: each
-    crossing throws round(per_flux x its area x normal speed) drops (at most 60) up and out
-    at speeds that grow with it; they fly ballistically until they fall back in."""
-    rng = np.random.default_rng(seed)
-    t0, p0, v0 = [], [], []
-    for t, p, f in zip(splash.times, splash.points, splash.flux, strict=True):
-        n = int(min(60, round(per_flux * f)))
-        if n == 0:
-            continue
-        up = (1.0 + 2.0 * min(1.0, f)) * rng.uniform(0.6, 1.4, n)
-        side = 0.5 * up[:, None] * rng.normal(0.0, 0.6, (n, 2))
-        t0.append(np.full(n, t))
-        p0.append(p + rng.normal(0.0, 0.05, (n, 3)) * [1, 0, 1])
-        v0.append(np.stack([side[:, 0], up, side[:, 1]], axis=1))
-    if not t0:
-        return lambda t: np.zeros((0, 3))
-    t0a, p0a, v0a = np.concatenate(t0), np.concatenate(p0), np.concatenate(v0)
-
-    def at(t: float) -> np.ndarray:
-        dt = t - t0a
-        p = p0a + v0a * dt[:, None]
-        p[:, 1] -= 0.5 * gravity * dt**2
-        return p[(dt >= 0) & (p[:, 1] >= level)]
-
-    return at
-
-
 def subdivision(faces: np.ndarray, n_nodes: int, levels: int = 2) -> tuple[np.ndarray, np.ndarray]:
     """Return (S, faces') of ``levels`` Loop subdivisions of a triangle mesh: the display
     surface's vertices are S @ nodes (a fixed linear map, so each frame costs one product)
@@ -296,7 +237,6 @@ def stunt_frames(
     from PIL import Image
 
     from zoetic.physics.media import get_medium
-    from zoetic.physics.objects import Ball, Box, Cylinder
     from zoetic.viz.render3d import (
         SceneMesh,
         background,
@@ -304,24 +244,16 @@ def stunt_frames(
         face_items,
         label_font,
         look_at,
-        project_points,
     )
+    from zoetic.viz.spray import spray_particles, surface_crossings
 
     medium = get_medium(medium)
     level = medium.water_level if abs(medium.water_level) < 1e8 else 0.0
     times = np.asarray(times, float)
     pos = np.asarray(positions, float)
     pool = pool or deep_enough(Pool(), level - float(pos[..., 1].min()))
-    nb = 0 if balls is None else np.asarray(balls).shape[1]
-    bl = np.zeros((len(times), 0, 3)) if balls is None else np.asarray(balls, float)
-    ball_objs = [o for o in objects if isinstance(o, Ball)]
-    fixed = [o for o in objects if isinstance(o, Cylinder | Box)]
-    fp = _fixed_points(fixed)
-    radii = np.array([ball_objs[k].radius if k < len(ball_objs) else 0.15 for k in range(nb)])
-    ball_box = [bl + radii[:, None] * np.eye(3)[i] * sign for i in range(3) for sign in (-1, 1)]
-    frame_pts = np.concatenate(
-        [pos, *ball_box, np.broadcast_to(fp, (len(times), *fp.shape))], axis=1
-    )
+    bl, radii, fixed = _stunt_objects(objects, balls, len(times))
+    frame_pts = _framed_points(pos, bl, radii, fixed)
     az, el = np.radians(azimuth), np.radians(elevation)
     direction = np.array([-np.cos(el) * np.cos(az), np.sin(el), -np.cos(el) * np.sin(az)])
     eyes, targets = stunt_camera(frame_pts, times, size, fov, direction, level=level)
@@ -344,23 +276,58 @@ def stunt_frames(
         eye, rot = eyes[r], look_at(eyes[r], targets[r])
         img = Image.fromarray(background(medium, eye, rot, xs, ys, level - pool.depth))
         verts = sub @ np.nan_to_num(pos[r])
-        below, above = [], []
-        for q, c in zip(quads, qcols, strict=True):
-            for it in _quad_items([q], [c], eye, rot, focal, size, medium):
-                (above if np.mean(np.asarray(q)[:, 1]) >= level else below).append(it)
         view = (eye, rot, focal, size, medium, level)
+        below, above = [], []
+        _wall_items(quads, qcols, view, below, above)
         _fixed_items(fixed, view, level - pool.depth, below, above)
         _ball_items(bl[r], radii, view, below, above)
         below += face_items(verts, mesh, eye, rot, focal, size, medium, side=-1)
         above += face_items(verts, mesh, eye, rot, focal, size, medium, side=1)
-        for p in spray(times[r]):
-            scr, z = project_points(p[None], eye, rot, focal, size)
-            if z[0] > 0.05:
-                above.append(
-                    (float(z[0]), 3, (scr[0, 0], scr[0, 1], max(1.5, focal * 0.025 / z[0])), _SPRAY)
-                )
+        _spray_items(spray(times[r]), view, above)
         label = f"t = {times[r]:.2f} s" + (f"   {title}" if title else "")
         yield _compose(img, below, above, np.asarray(sheet, float), view, label, font)
+
+
+def _stunt_objects(objects, balls: np.ndarray | None, records: int) -> tuple:
+    """Return the balls' recorded centres (R, K, 3), their radii (K,) (0.15 m for a ball
+    without an object) and the fixed objects (posts, bars, boxes) of a trick's ``objects``."""
+    from zoetic.physics.objects import Ball, Box, Cylinder
+
+    nb = 0 if balls is None else np.asarray(balls).shape[1]
+    bl = np.zeros((records, 0, 3)) if balls is None else np.asarray(balls, float)
+    ball_objs = [o for o in objects if isinstance(o, Ball)]
+    fixed = [o for o in objects if isinstance(o, Cylinder | Box)]
+    radii = np.array([ball_objs[k].radius if k < len(ball_objs) else 0.15 for k in range(nb)])
+    return bl, radii, fixed
+
+
+def _framed_points(pos: np.ndarray, bl: np.ndarray, radii: np.ndarray, fixed) -> np.ndarray:
+    """Return (R, M, 3) points the camera keeps in view: the body's nodes, each ball's extent
+    along the axes and the fixed objects' ends."""
+    fp = _fixed_points(fixed)
+    ball_box = [bl + radii[:, None] * np.eye(3)[i] * sign for i in range(3) for sign in (-1, 1)]
+    return np.concatenate([pos, *ball_box, np.broadcast_to(fp, (len(pos), *fp.shape))], axis=1)
+
+
+def _wall_items(quads, colors, view: tuple, below: list, above: list) -> None:
+    """Append painter items of the pool's walls to ``below`` and ``above`` the water."""
+    eye, rot, focal, size, medium, level = view
+    for q, c in zip(quads, colors, strict=True):
+        for it in _quad_items([q], [c], eye, rot, focal, size, medium):
+            (above if np.mean(np.asarray(q)[:, 1]) >= level else below).append(it)
+
+
+def _spray_items(drops: np.ndarray, view: tuple, above: list) -> None:
+    """Append painter items of the spray drops in the air (D, 3) to ``above``."""
+    from zoetic.viz.render3d import project_points
+
+    eye, rot, focal, size, _, _ = view
+    for p in drops:
+        scr, z = project_points(p[None], eye, rot, focal, size)
+        if z[0] > 0.05:
+            above.append(
+                (float(z[0]), 3, (scr[0, 0], scr[0, 1], max(1.5, focal * 0.025 / z[0])), _SPRAY)
+            )
 
 
 def _fixed_points(fixed) -> np.ndarray:
