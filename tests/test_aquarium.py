@@ -162,8 +162,8 @@ def test_cli_aquarium_skills_built_in_swims_every_fish_by_the_wave(tmp_path):
 
 
 def test_a_fish_that_just_mated_is_not_willing_again_until_its_libido_returns():
+    from zoetic.behavior.aquarium.brain import FishBrain, Thought
     from zoetic.behavior.aquarium.species import load_species
-    from zoetic.behavior.aquarium.tank import FishBrain, Thought
     from zoetic.bodies import load_animal
 
     sp = load_species("minnow")
