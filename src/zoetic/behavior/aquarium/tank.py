@@ -335,6 +335,29 @@ def live(
     return recorder.life(events.log, state, time.perf_counter() - t_start)
 
 
+@dataclass(frozen=True)
+class Aquarium:
+    """A tank's run: the tank as built, what it recorded and its figures (``summarize``)."""
+
+    tank: Tank
+    life: Life
+    summary: dict
+
+
+def aquarium(progress: Callable[[float], None] | None = None, **options) -> Aquarium:
+    """Build a tank and let it live; return the tank, its ``Life`` and its summary.
+
+    options: ``TankConfig`` fields (fishes, predators, food, obstacles, seconds, seed,
+    perception, skills, ...); progress: told the tank's time after each control period.
+    """
+    unknown = sorted(set(options) - set(TankConfig.__dataclass_fields__))
+    if unknown:
+        raise SimulationError(f"unknown aquarium option(s) {unknown}")
+    tank = build_tank(TankConfig(**options))
+    life = live(tank, progress=progress)
+    return Aquarium(tank, life, summarize(tank, life))
+
+
 def summarize(tank: Tank, life: Life) -> dict:
     """Return the run's figures: events by kind, food eaten, catches, survivors, timing."""
     kinds = ("eat", "catch", "escape", "mate", "collision")
