@@ -140,6 +140,12 @@ def fish_depth(
     return out
 
 
+def rest_reach(body: Body) -> float:
+    """Return how far (m) the body's nodes reach from its centre of mass at rest."""
+    r0 = body.rest_pos - body.mass @ body.rest_pos / body.total_mass
+    return float(np.linalg.norm(r0, axis=1).max())
+
+
 class FishBodies(Observer):
     """Every fish's body state: node positions (``nodes``, read once a step), per fish node
     positions ``pos``, and (n, 3) centres ``com``, unit headings ``fwd``, centre velocities
@@ -160,13 +166,8 @@ class FishBodies(Observer):
         self.heads = [b.head for b in bodies]
         self.pairs = roll_pairs(bodies, off)
         self.bends = bend_indices(bodies, off)
-        # how far a fish's nodes reach from its centre (the bounding sphere of fish_depth)
-        self.extent = np.array(
-            [
-                1.25 * np.linalg.norm(b.rest_pos - b.mass @ b.rest_pos / b.total_mass, axis=1).max()
-                for b in bodies
-            ]
-        )
+        # the bounding spheres of fish_depth
+        self.extent = np.array([1.25 * rest_reach(b) for b in bodies])
         self.deepest = 0.0
         self.deepest_fish = 0.0
         self.last_roll: tuple[np.ndarray, float] | None = None  # rolls at the last reading
