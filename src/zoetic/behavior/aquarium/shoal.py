@@ -52,9 +52,11 @@ class Shoal:
         ]
         # each fish's kinds of fishes (rows: same species, hunters, prey), habits and constants
         kinds = [b.kinds(self.names) for b in brains]
-        self.same, self.hunters, self.prey = (np.array([k[x] for k in kinds]) for x in range(3))
-        self.space = np.array([s.habits.personal_space for s in species], float)
-        self.crowd = np.array([s.habits.crowd for s in species])
+        self.masks = tuple(np.array([k[x] for k in kinds]) for x in range(3))
+        self.habits = (
+            np.array([s.habits.personal_space for s in species], float),
+            np.array([s.habits.crowd for s in species]),
+        )
         self.constants = [
             np.array([getattr(b.constants, k) for b in brains], float)
             for k in ("hunger_rate", "alpha", "libido_rate", "fear_distance")
@@ -68,15 +70,7 @@ class Shoal:
         selves, meals = self._selves(pc)
         hits, aways = self._ahead(pc, selves, meals)
         sits, predators = situations(
-            pc.fish,
-            pc.food,
-            pc.obstacles,
-            self.same,
-            self.hunters,
-            self.prey,
-            self.space,
-            self.crowd,
-            hits,
+            pc.fish, pc.food, pc.obstacles, *self.masks, *self.habits, hits
         )
         drives = self._drives(period.t0, predators)
         roll, rate, bend = (x.tolist() for x in self.bodies.posture(world, period.t0))
@@ -84,17 +78,17 @@ class Shoal:
         demands: list[Demand | None] = []
         for i, brain in enumerate(self.brains):
             view = View(
-                selves[i],
-                pc.fish[i],
-                seen.get(i, b.com),
-                b.fwd,
-                b.vel,
-                self.names,
-                pc.food[i],
-                food,
-                pc.obstacles[i],
-                hits[i],
-                aways[i],
+                me=selves[i],
+                fish_distance=pc.fish[i],
+                fish_com=seen.get(i, b.com),
+                fish_forward=b.fwd,
+                fish_velocity=b.vel,
+                fish_species=self.names,
+                food_distance=pc.food[i],
+                food=food,
+                obstacle_distance=pc.obstacles[i],
+                collision=hits[i],
+                away=aways[i],
             )
             d = brain.decide({**obs, "view": view}, period, sits[i], drives[i])
             demands.append(
@@ -163,17 +157,9 @@ class Shoal:
     def _drives(self, t: float, predators: np.ndarray) -> list[Drives]:
         """Return every fish's drives at time ``t`` s in one step over arrays."""
         minds = [b.mind for b in self.brains]
-        hunger, libido, fear = (
-            x.tolist()
-            for x in drives_many(
-                [m.eaten for m in minds],
-                [m.meal_time for m in minds],
-                [m.mating_time for m in minds],
-                t,
-                *self.constants,
-                predators,
-            )
-        )
+        meals = [m.eaten for m in minds], [m.meal_time for m in minds]
+        arrays = drives_many(*meals, [m.mating_time for m in minds], t, *self.constants, predators)
+        hunger, libido, fear = (x.tolist() for x in arrays)
         return [Drives(h, lib, f) for h, lib, f in zip(hunger, libido, fear, strict=True)]
 
 
