@@ -9,6 +9,10 @@ and the sharp turns; ``swim`` and ``turn`` invert those tables by interpolation.
 holds the pectoral fins (actuators of kind "fin") at the activation of an angle on top of the
 go-straight gait. Every result is an ordinary AbstractController: playable, savable, and an
 entry a repertoire (and so greedy tracking) can use (``motor_repertoire``).
+
+The fins' activations (``fin_activation``), the righting reflex (``righting``) and the table
+helpers here serve the aquarium's two motors too: ``wave_motor.WaveMotor`` (the body's own
+steered wave) and ``learned_motor.LearnedMotor`` (a learned repertoire's gaits).
 """
 
 from __future__ import annotations

@@ -140,59 +140,14 @@ def build_tank(cfg: TankConfig) -> Tank:
     _check(cfg)
     rng = np.random.default_rng(cfg.seed)
     half = cfg.size()
-    prey, pred = load_species(cfg.prey_species), load_species(cfg.predator_species)
-    if not pred.predator:
-        raise SpeciesError(f"{pred.source}: species {pred.name!r} is not a predator")
-    if cfg.skills is not None:
-        where = f"--skills {str(cfg.skills)!r}"
-        prey, pred = with_skills(prey, cfg.skills, where), with_skills(pred, cfg.skills, where)
-    if cfg.predator_skills is not None:
-        pred = with_skills(
-            pred, cfg.predator_skills, f"--predator-skills {str(cfg.predator_skills)!r}"
-        )
-    statics: list[Box | Cylinder] = []
-    for sx, sz in ((1, 0), (-1, 0), (0, 1), (0, -1)):
-        c = (sx * (half + WALL), 0.0, sz * (half + WALL))
-        hs = (WALL if sx else half + 2 * WALL, HEIGHT, WALL if sz else half + 2 * WALL)
-        statics.append(Box(c, hs, name="wall"))
-    rocks: list[np.ndarray] = []
-
-    def clear_of_rocks(p, gap):
-        return all(np.hypot(*(p - r)[[0, 2]]) > gap for r in rocks)
-
-    for k in range(cfg.obstacles):
-        p = _place(rng, half, lambda p: clear_of_rocks(p, 3.0), 1.5)
-        rocks.append(p)
-        r = float(rng.uniform(0.35, 0.7))
-        if k % 2 == 0:
-            statics.append(Box(tuple(p), (r, HEIGHT, float(rng.uniform(0.35, 0.7))), name="rock"))
-        else:
-            statics.append(Cylinder(tuple(p), r, 2 * HEIGHT, "y", name="seaweed"))
+    prey, pred = _tank_species(cfg)
+    statics = _statics(rng, half, cfg.obstacles)
     kind, center, size = pack_statics(statics)
 
-    def free(p, gap):
+    def free(p: np.ndarray, gap: float) -> bool:
         return len(kind) == 0 or obstacle_distance(p, kind, center, size).min() > gap
 
-    placed: list[np.ndarray] = []
-    fishes, animals = [], []
-    for i in range(cfg.fishes):
-        spec = pred if i < cfg.predators else prey
-        body = load_animal(spec.body)
-        if body.medium not in ("water", "sea"):
-            raise SpeciesError(f"{spec.source}: body {spec.body!r} does not live in water")
-        p = _place(
-            rng,
-            half,
-            lambda p: free(p, 1.5) and all(np.linalg.norm(p - q) > 2.0 for q in placed),
-            1.0,
-        )
-        placed.append(p)
-        yaw = float(rng.uniform(-np.pi, np.pi))
-        # the offset places the rest pose; shift it so that the body's centre lands on p
-        com0 = body.mass @ body.rest_pos / body.total_mass
-        v0 = spec.motor.cruise_speed * np.array([np.cos(yaw), 0.0, np.sin(yaw)])
-        animals.append(Animal(body, tuple(p - com0), yaw, tuple(v0)))
-        fishes.append(Fish(f"{spec.name}_{i}", spec, body))
+    fishes, animals = _fishes(rng, half, cfg, prey, pred, free)
     foods = [
         Food(tuple(_place(rng, half, lambda p: free(p, 0.6), cfg.food_margin)), cfg.food_radius)
         for _ in range(cfg.food)
@@ -205,6 +160,75 @@ def build_tank(cfg: TankConfig) -> Tank:
     )
     names = [s.name for s in statics]
     return Tank(cfg, world, fishes, kind, center, size, names)
+
+
+def _tank_species(cfg: TankConfig) -> tuple[Species, Species]:
+    """Return the prey and predator species, with the motor skills the config asks for."""
+    prey, pred = load_species(cfg.prey_species), load_species(cfg.predator_species)
+    if not pred.predator:
+        raise SpeciesError(f"{pred.source}: species {pred.name!r} is not a predator")
+    if cfg.skills is not None:
+        where = f"--skills {str(cfg.skills)!r}"
+        prey, pred = with_skills(prey, cfg.skills, where), with_skills(pred, cfg.skills, where)
+    if cfg.predator_skills is not None:
+        where = f"--predator-skills {str(cfg.predator_skills)!r}"
+        pred = with_skills(pred, cfg.predator_skills, where)
+    return prey, pred
+
+
+def _statics(rng: np.random.Generator, half: float, obstacles: int) -> list[Box | Cylinder]:
+    """Return the four walls and the obstacles (rocks and seaweed by turns, 3 m apart)."""
+    statics: list[Box | Cylinder] = []
+    for sx, sz in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+        c = (sx * (half + WALL), 0.0, sz * (half + WALL))
+        hs = (WALL if sx else half + 2 * WALL, HEIGHT, WALL if sz else half + 2 * WALL)
+        statics.append(Box(c, hs, name="wall"))
+    rocks: list[np.ndarray] = []
+
+    def clear_of_rocks(p: np.ndarray) -> bool:
+        return all(np.hypot(*(p - r)[[0, 2]]) > 3.0 for r in rocks)
+
+    for k in range(obstacles):
+        p = _place(rng, half, clear_of_rocks, 1.5)
+        rocks.append(p)
+        r = float(rng.uniform(0.35, 0.7))
+        if k % 2 == 0:
+            statics.append(Box(tuple(p), (r, HEIGHT, float(rng.uniform(0.35, 0.7))), name="rock"))
+        else:
+            statics.append(Cylinder(tuple(p), r, 2 * HEIGHT, "y", name="seaweed"))
+    return statics
+
+
+def _fishes(
+    rng: np.random.Generator,
+    half: float,
+    cfg: TankConfig,
+    prey: Species,
+    pred: Species,
+    free: Callable[[np.ndarray, float], bool],
+) -> tuple[list[Fish], list[Animal]]:
+    """Return the fishes (the predators first) and their animals, each placed clear of the
+    obstacles (``free``) and 2 m from the others, at a random heading, swimming at cruise."""
+    placed: list[np.ndarray] = []
+    fishes, animals = [], []
+
+    def apart(p: np.ndarray) -> bool:
+        return free(p, 1.5) and all(np.linalg.norm(p - q) > 2.0 for q in placed)
+
+    for i in range(cfg.fishes):
+        spec = pred if i < cfg.predators else prey
+        body = load_animal(spec.body)
+        if body.medium not in ("water", "sea"):
+            raise SpeciesError(f"{spec.source}: body {spec.body!r} does not live in water")
+        p = _place(rng, half, apart, 1.0)
+        placed.append(p)
+        yaw = float(rng.uniform(-np.pi, np.pi))
+        # the offset places the rest pose; shift it so that the body's centre lands on p
+        com0 = body.mass @ body.rest_pos / body.total_mass
+        v0 = spec.motor.cruise_speed * np.array([np.cos(yaw), 0.0, np.sin(yaw)])
+        animals.append(Animal(body, tuple(p - com0), yaw, tuple(v0)))
+        fishes.append(Fish(f"{spec.name}_{i}", spec, body))
+    return fishes, animals
 
 
 @dataclass
