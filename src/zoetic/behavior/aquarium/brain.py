@@ -192,17 +192,19 @@ class FishBrain:
             self.mind, period.t0, self.constants, sp.habits, sit, sp.predator, d
         )
         intention = self.mind.intention
-        target = self._focus(v, intention)
-        around = self._around(v, intention, target)
+        masks = self.kinds(v.fish_species)
+        target = self._focus(v, intention, masks)
+        around = self._around(v, intention, target, masks)
         demand = self._routine(intention, v.me, around)
         demand = keep_depth(v.me, demand, None if around.target is None else around.target[1])
         self.thought = Thought(drives.hunger, drives.libido, drives.fear, intention, target)
         return demand
 
-    def _focus(self, v: View, intention: str) -> int | None:
+    def _focus(self, v: View, intention: str, masks: tuple[np.ndarray, ...]) -> int | None:
         """Return the target the focuser picks for the intention (a food particle, a mate or
-        a prey: its index; None for an intention without one), kept in the mind."""
-        same, _, prey = self.kinds(v.fish_species)
+        a prey: its index; None for an intention without one), kept in the mind; masks: the
+        fishes' ``kinds``."""
+        same, _, prey = masks
         if intention == "eat":
             candidates = reach_cost(v.me, v.food, v.food_distance)
         elif intention == "mate":
@@ -216,11 +218,13 @@ class FishBrain:
             self.mind = replace(self.mind, target=target)
         return target
 
-    def _around(self, v: View, intention: str, target: int | None) -> Around:
+    def _around(
+        self, v: View, intention: str, target: int | None, masks: tuple[np.ndarray, ...]
+    ) -> Around:
         """Return what the routines read of the fish's surroundings: the fishes it sees, the
         predators among them, its target (and the target fish's velocity), the way out of a
-        collision and the nearest obstacle's distance."""
-        same, hunters, _ = self.kinds(v.fish_species)
+        collision and the nearest obstacle's distance; masks: the fishes' ``kinds``."""
+        same, hunters, _ = masks
         seen = np.isfinite(v.fish_distance)
         food = intention == "eat"
         return Around(
