@@ -121,11 +121,8 @@ class FishBrain:
         """Return True when the fish would mate at time t: its libido (which a mating resets)
         above the desire threshold, and it is not fleeing or avoiding."""
         lib = drives(self.mind, t, self.constants).libido
-        return lib > self.species.mind.desire_threshold and self.thought.intention not in (
-            "escape",
-            "school",
-            "avoid",
-        )
+        busy = self.thought.intention in ("escape", "school", "avoid")
+        return lib > self.species.mind.desire_threshold and not busy
 
     def ate(self, t: float, particles: float = 1.0) -> None:
         """Record a meal at time t."""
