@@ -21,15 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
+from zoetic.behavior.aquarium.bodystate import heading_weights
 from zoetic.behavior.aquarium.locomotion import FOLDED, bend, learned_motor
 from zoetic.behavior.aquarium.species import BUILT_IN, LEARNED, SKILLS_DIR, load_species
-from zoetic.behavior.aquarium.tank import (
-    TankConfig,
-    build_tank,
-    heading_weights,
-    live,
-    summarize,
-)
+from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live, summarize
 from zoetic.bodies import load_animal
 from zoetic.tasks.terms import BodyFrame, roll_angle
 

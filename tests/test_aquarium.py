@@ -162,8 +162,8 @@ def test_cli_aquarium_skills_built_in_swims_every_fish_by_the_wave(tmp_path):
 
 
 def test_a_fish_that_just_mated_is_not_willing_again_until_its_libido_returns():
+    from zoetic.behavior.aquarium.brain import FishBrain, Thought
     from zoetic.behavior.aquarium.species import load_species
-    from zoetic.behavior.aquarium.tank import FishBrain, Thought
     from zoetic.bodies import load_animal
 
     sp = load_species("minnow")
@@ -260,3 +260,16 @@ def test_the_summary_names_each_species_motor_skills(skills):
     got = summarize(tank, live(tank))["motor_skills"]
     assert set(got) == {f.species.name for f in tank.fishes} == {"minnow", "shark"}
     assert set(got.values()) == {skills or "learned"}
+
+
+def test_the_aquarium_lives_through_the_public_api():
+    import zoetic
+
+    scene = dict(fishes=2, predators=1, food=2, obstacles=1, seconds=1.0, seed=2)
+    run = zoetic.aquarium(**scene)
+    assert run.summary["fishes"] == 2 and run.summary["seconds"] == pytest.approx(1.0)
+    again = live(build_tank(TankConfig(**scene)))  # the same run as the module's own calls
+    assert np.array_equal(run.life.positions[1], again.positions[1])
+    assert run.life.events == again.events
+    with pytest.raises(zoetic.ZoeticError, match="fishs"):
+        zoetic.aquarium(fishs=2)

@@ -186,9 +186,9 @@ def _situation_of(brain, d, food, obst, masks, collision):
 
 
 def test_situations_of_all_fishes_equal_each_fishs_own():
+    from zoetic.behavior.aquarium.brain import FishBrain, View, situations
     from zoetic.behavior.aquarium.routines import Me
     from zoetic.behavior.aquarium.species import load_species
-    from zoetic.behavior.aquarium.tank import FishBrain, View, situations
     from zoetic.bodies import load_animal
 
     minnow, shark = load_species("minnow"), load_species("shark")
@@ -207,7 +207,7 @@ def test_situations_of_all_fishes_equal_each_fishs_own():
                         np.inf)[:, : trial % 5]  # fmt: skip
         obst = rng.uniform(0.0, 3.0, (n, 3))
         hits = (rng.random(n) < 0.3).tolist()
-        masks = [b._kinds(names) for b in brains]
+        masks = [b.kinds(names) for b in brains]
         sits, pred = situations(fish, food, obst, *(np.array([m[k] for m in masks])
                                                     for k in range(3)),
                                 np.array([b.species.habits.personal_space for b in brains]),

@@ -18,7 +18,7 @@ from zoetic.behavior.aquarium.species import (
     with_skills,
 )
 from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live
-from zoetic.behavior.motor import LEARNED_SWIM
+from zoetic.behavior.learned_motor import LEARNED_SWIM
 from zoetic.behavior.tracking import handmade_repertoire
 from zoetic.bodies import load_animal
 from zoetic.learning.objective import heading_angles
@@ -184,7 +184,7 @@ def test_the_shipped_repertoire_swims_and_turns_sharply():
 
 def test_the_shipped_steer_turns_while_swimming_at_the_rate_asked():
     from zoetic.behavior.aquarium.locomotion import STEER_MAX, TURN_SECONDS
-    from zoetic.behavior.motor import STEER_WEIGHTS
+    from zoetic.behavior.learned_motor import STEER_WEIGHTS
 
     body = load_animal("shark")
     motor = learned_motor(body, SKILLS_DIR / "shark")
@@ -240,7 +240,7 @@ def test_fishes_sharing_a_learned_motor_get_what_each_would_alone():
     bit for bit, while turns start and end and swims and steers mix."""
     from types import SimpleNamespace
 
-    from zoetic.behavior.aquarium.tank import _activations
+    from zoetic.behavior.aquarium.shoal import activations
     from zoetic.control.policy import Period
 
     body = load_animal("shark")
@@ -255,7 +255,7 @@ def test_fishes_sharing_a_learned_motor_get_what_each_would_alone():
     for k in range(8):
         # every third period the turns reverse: sharp turns end, rests and steers follow
         now = [d if d is None or k % 3 else Demand(d.speed, -d.turn, d.pitch) for d in demands]
-        rows = _activations(shared, now, Period(k * per, per, body.dt))
+        rows = activations(shared, now, Period(k * per, per, body.dt))
         t = (k * per + np.arange(per)) * body.dt
         for row, loco, d in zip(rows, alone, now, strict=True):
             want = np.zeros((per, body.n_actuators)) if d is None else loco.activations(d, t)
@@ -269,8 +269,8 @@ def test_fishes_sharing_a_learned_motor_get_what_each_would_alone():
 
 
 def test_the_bend_is_one_at_rest_and_falls_as_the_tail_comes_forward():
+    from zoetic.behavior.aquarium.bodystate import bend_indices, fish_bends
     from zoetic.behavior.aquarium.locomotion import FOLDED, TAIL_NODE, bend
-    from zoetic.behavior.aquarium.tank import bend_indices, fish_bends
 
     body = load_animal("shark")
     rest = np.asarray(body.rest_pos, float)

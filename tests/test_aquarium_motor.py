@@ -8,7 +8,7 @@ import pytest
 
 from zoetic.behavior.aquarium.locomotion import Demand
 from zoetic.behavior.aquarium.routines import Me, keep_depth
-from zoetic.behavior.motor import WAVE_SETTLE, WaveMotor
+from zoetic.behavior.wave_motor import WAVE_SETTLE, WaveMotor
 from zoetic.bodies import load_animal
 from zoetic.learning.objective import heading_angles
 from zoetic.physics import simulate

@@ -86,3 +86,17 @@ def test_the_record_period_does_not_change_an_aquarium_run(seed):
         for p, q in zip(life.positions, base.positions, strict=True):
             np.testing.assert_array_equal(p[i], q[j])
         np.testing.assert_array_equal(life.intentions, base.intentions)
+
+
+def test_an_aquarium_records_on_its_grid_and_at_its_end_and_decides_every_period():
+    cfg = TankConfig(
+        fishes=2, predators=1, food=1, obstacles=0, seconds=0.37, record_period=0.03
+    )
+    tank = build_tank(cfg)
+    dt, end = tank.world.dt, tank.world.steps_for(cfg.seconds)
+    every, period = round(cfg.record_period / dt), round(cfg.control_period / dt)
+    assert end % every and end % period  # the run ends between records and mid-period
+    life = live(tank)
+    assert np.round(life.times / dt).astype(int).tolist() == [*range(0, end, every), end]
+    assert np.round(life.brain_times / dt).astype(int).tolist() == list(range(0, end, period))
+    assert all(len(p) == len(life.times) for p in [*life.positions, life.food, life.eaten])

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from zoetic.behavior.aquarium.bodystate import fish_rolls, heading_weights, roll_pairs
 from zoetic.behavior.aquarium.locomotion import (
     Demand,
     LearnedLocomotion,
@@ -14,7 +15,6 @@ from zoetic.behavior.aquarium.locomotion import (
     learned_motor,
 )
 from zoetic.behavior.aquarium.species import SKILLS_DIR
-from zoetic.behavior.aquarium.tank import fish_rolls, heading_weights, roll_pairs
 from zoetic.behavior.motor import RIGHTING_MAX, fin_activation, righting
 from zoetic.bodies import load_animal
 from zoetic.physics import simulate

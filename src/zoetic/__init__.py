@@ -7,6 +7,7 @@ no JAX, no matplotlib, no Numba until a simulation runs)::
     traj = zoetic.simulate(shark, "wave", seconds=4)
     result = zoetic.learn(shark, "swim-straight", optimizer="cmaes", budget=2000, seed=0)
     world = zoetic.World([shark, zoetic.Ball(position=(1, 0, 0))], medium="water")
+    run = zoetic.aquarium(fishes=6, predators=1, seconds=20, seed=0)  # run.summary, run.life
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ _EXPORTS: dict[str, str] = {
     "load_controller": "zoetic.control",
     "wave_controller": "zoetic.control",
     "ZoeticError": "zoetic.errors",
+    "aquarium": "zoetic.behavior.aquarium.tank",
 }
 
 __all__ = [
@@ -57,6 +59,7 @@ __all__ = [
     "World",
     "WorldState",
     "ZoeticError",
+    "aquarium",
     "learn",
     "list_animals",
     "list_tasks",
@@ -72,6 +75,7 @@ __all__ = [
 if TYPE_CHECKING:  # for type checkers and IDEs; at run time the names load lazily
     import numpy as np
 
+    from zoetic.behavior.aquarium.tank import aquarium
     from zoetic.bodies import Body, list_animals, load_animal
     from zoetic.control import Controller, load_controller, wave_controller
     from zoetic.control.policy import OpenLoopPolicy, Policy

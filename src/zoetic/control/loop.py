@@ -86,6 +86,8 @@ def as_rows(u, world: World, animal: int, steps: int) -> np.ndarray:
     """Return one animal's activations for a period as a (B, steps, A) array, checked."""
     u = np.asarray(u, dtype=float)
     na = world.bodies[animal].n_actuators
+    if u.shape == (world.batch, steps, na):  # already one row a step for every lane
+        return u
     if u.ndim == 1:
         u = u[None]
     if u.ndim == 2:  # held over the period

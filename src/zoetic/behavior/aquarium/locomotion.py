@@ -2,7 +2,7 @@
 
 ``Locomotion`` is the small interface the behaviour routines' demands go through;
 ``MotorLocomotion`` is the built-in motor skill: the parameterised controllers of
-``behavior.motor.WaveMotor`` (swim at a speed, turn by an angle, pitch with the fins), the
+``behavior.wave_motor.WaveMotor`` (swim at a speed, turn by an angle, pitch with the fins), the
 body's own steered wave calibrated once per body and frequency, so that a demanded speed is
 the speed swum and a demanded turn the angle turned (in ``TURN_SECONDS``, or as fast as the
 body can).
@@ -17,8 +17,10 @@ from typing import Protocol
 
 import numpy as np
 
-from zoetic.behavior.motor import LearnedMotor, WaveMotor, righting
+from zoetic.behavior.learned_motor import LearnedMotor
+from zoetic.behavior.motor import righting
 from zoetic.behavior.repertoire import Repertoire
+from zoetic.behavior.wave_motor import WaveMotor
 from zoetic.bodies import Body
 
 TURN_SECONDS = 1.0  # s a demanded heading change is to take (the routines re-aim every period)
@@ -83,8 +85,13 @@ class MotorLocomotion:
     """The built-in motor skill: ``WaveMotor.calibrate(body, frequency)``'s swim, turn and
     pitch controllers (``turn_seconds``: the time a demanded turn is to take)."""
 
-    def __init__(self, body: Body, frequency: float | None = None,
-                 turn_seconds: float = TURN_SECONDS, righting: bool = True) -> None:  # fmt: skip
+    def __init__(
+        self,
+        body: Body,
+        frequency: float | None = None,
+        turn_seconds: float = TURN_SECONDS,
+        righting: bool = True,
+    ) -> None:
         self.body = body
         self.motor = WaveMotor.calibrate(body, frequency)
         self.turn_seconds = float(turn_seconds)
@@ -107,52 +114,38 @@ class MotorLocomotion:
     def activations_many(self, demands: list[Demand], times: np.ndarray) -> np.ndarray:
         """Return activations (D, T, A) for several demands at once (one wave evaluation)."""
         return self.motor.activations_many(
-            times, [d.speed for d in demands], [d.turn for d in demands],
-            [d.fin_pitch for d in demands], self.turn_seconds,
+            times,
+            [d.speed for d in demands],
+            [d.turn for d in demands],
+            [d.fin_pitch for d in demands],
+            self.turn_seconds,
             [righting(d.roll, d.roll_rate) if self.righting else 0.0 for d in demands],
-        )  # fmt: skip
+        )
 
 
 TURN_MIN = 0.1  # rad: a smaller demanded turn swims on (the next period corrects it)
-# s: the longest a learned turn is played at once. The zoo shark's learned sharp turn, played
-# for 0.75 s or more (or repeated), can fold its tail fin forward through the peduncle for
-# good, and the fish then swims backwards; 0.3 s bursts fold it far less often. Blending the
-# turn at 0.7 with the swim did not fold it in 8 trials but rolled the fish over, and it ate
-# 13-20 % of the food (seeds 0-2) against 40 % and 67 % (seeds 0, 1) with the bursts.
+# s: the longest a learned sharp turn is played at once; played longer (or repeated) it can
+# fold the tail fin forward through the peduncle for good, and the fish then swims backwards
 TURN_BURST = 0.3
-# s of swimming after a turn before the next may start, to either side. In the tank the folds
-# came when a burst one way was cut short by a turn the other way (a fish bent hard to one
-# side starting the other side's sharp turn at once). A burst restarted at once to the same
-# side plays the sharp turn's opening again and again: with the shipped repertoire a fish
-# asked to turn left every period turned 22 degrees right at 0.1 m/s over 8 s, and 162
-# degrees left with the rest; the all-learned tank ate 56 % of the food (seeds 0-9) with the
-# rest after either side's turn, 39 % with it after the other side's only.
+# s of swimming after a turn before the next may start, to either side: a burst cut short by
+# a turn the other way folds the tail, and one restarted at once to the same side replays the
+# sharp turn's opening (which turns the other way) again and again
 TURN_REST = 0.3
 # rad: with a learned steering gait, a demanded turn under this is steered while swimming
 # (``LearnedMotor.steer``: go-straight blended with steer-left/right at the weight whose
-# calibrated rate turns it in ``STEER_SECONDS``); the sharp turn only for larger ones. The
-# all-learned tank's food over seeds 0-9 (default scene, shipped repertoire): 60 % with 1 rad,
-# 68 % with 2, 67 % with 3.2 (never the sharp turn); 65 % with 3.2 and STEER_SECONDS 0.5, 64 %
-# with 2 and STEER_SECONDS 1.5
+# calibrated rate turns it in ``STEER_SECONDS``); the sharp turn only for larger ones
 STEER_MAX = 2.0
 STEER_SECONDS = TURN_SECONDS  # s a steered turn is to take (the rate asked: turn over this)
 # The fold guard: a fish asked to swim slower than GUARD_SPEED and bent under BEND_GUARD
 # (``Demand.bend``, measured by the tank at the period's start) swims straight this period,
-# any turn under way ended. The tank's folds (seeds 10 and 17, 20-29: 3 more) came at 0.15 m/s
-# while steering, upright or rolled 50-70 degrees after back-to-back sharp turns: the bend,
-# 0.85-0.92 period after period, dropped within one period to 0.66-0.69 and stayed. The
-# all-learned tank over seeds 0-9 / 10-19 / 20-29 (food, folded tails): no guard 87.3 / 76.7
-# / 76.7 %, 0 / 2 / 3; guard at any speed 80.0 / 83.3 / 81.3 %, no folds, but a fish 5 mm
-# into a rock (an avoiding turn straightened); guard 0.85 or 0.83 folded 1-3 a decade (a fold
-# comes within a period, unannounced); under 0.2 m/s 1 a decade; under 0.3 m/s 86.0 / 78.0 /
-# 82.7 %, no folds, 0 m into rocks. A steady steer bends the shark to 0.85-0.88 (isolated,
-# 0.15 or 0.3 m/s, never folding): the guard then alternates steer and swim.
+# any turn under way ended: a slow fish bent that far folds its tail within a period. A
+# steady steer bends the shark to 0.85-0.88, so the guard then alternates steer and swim.
 BEND_GUARD = 0.87
 GUARD_SPEED = 0.3  # m/s
 
 
 class LearnedLocomotion:
-    """A learned motor skill: ``behavior.motor.LearnedMotor`` calibrated on a repertoire.
+    """A learned motor skill: ``behavior.learned_motor.LearnedMotor`` calibrated on a repertoire.
 
     swim(speed) plays the blend of do-nothing and go-straight that swims the speed. With a
     learned steering gait in the repertoire (steer-left/right), a demanded turn under
@@ -185,8 +178,7 @@ class LearnedLocomotion:
     @property
     def turn_radius(self) -> float:
         """Return the radius (m) of the sharp turn from a cruise (the routines plan with the
-        sharpest turn; planning with the full steer's, 1.7 m, the all-learned tank ate 43 % of
-        the food over seeds 0-9, not 60 %)."""
+        sharpest turn, not the wider full steer)."""
         return self.motor.turn_radius
 
     def activations(self, demand: Demand, times: np.ndarray) -> np.ndarray:

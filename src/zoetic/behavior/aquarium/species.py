@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from zoetic.behavior.motor import LEARNED_BASES
+from zoetic.behavior.learned_motor import LEARNED_BASES
 from zoetic.errors import ZoeticError
 from zoetic.io import Table, is_path, load_toml, suggest, write_toml
 
@@ -26,7 +26,7 @@ BUILT_IN = "built-in"  # the calibrated steered wave (``locomotion.MotorLocomoti
 # scripts/train_aquarium_skills.py (``zoetic repertoire train <body>``, seed 0)
 LEARNED = "learned"
 SKILLS_DIR = Path(__file__).parent / "skills"
-# a learned repertoire's entries the motor controllers play (``behavior.motor.LearnedMotor``)
+# the learned repertoire entries the motor controllers play (``learned_motor.LearnedMotor``)
 SKILL_ENTRIES = LEARNED_BASES
 
 

@@ -1,0 +1,316 @@
+"""A fish's brain as a Policy: its percept in, its motor demand and activations out.
+
+Every control period the brain's mind (drives, intention generator) thinks over the fish's
+situation, the focuser picks a target, a behaviour routine turns intention and target into a
+motor demand (speed, turn, pitch) and the motor layer (``locomotion``) into muscle activations.
+``situations`` reads every fish's situation from all the percepts at once.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from zoetic.behavior.aquarium.locomotion import (
+    Demand,
+    LearnedLocomotion,
+    MotorLocomotion,
+    learned_motor,
+)
+from zoetic.behavior.aquarium.routines import (
+    Around,
+    Me,
+    avoid,
+    escape,
+    go_to,
+    keep_depth,
+    leave,
+    reach_cost,
+    school,
+    wander,
+)
+from zoetic.behavior.aquarium.species import BUILT_IN, Species
+from zoetic.behavior.mind import (
+    Drives,
+    MindState,
+    Situation,
+    ate,
+    drives,
+    focus,
+    initial_mind,
+    think,
+)
+from zoetic.behavior.mind import mated as mind_mated
+from zoetic.bodies import Body
+from zoetic.control.policy import Period
+
+# how ``go_to`` approaches each intention's target: eat it, court beside a mate (0.6 m), aim
+# 0.5 s ahead of a prey
+GO_TO: dict[str, dict[str, float]] = {"eat": {}, "mate": {"beside": 0.6}, "hunt": {"lead": 0.5}}
+
+
+@dataclass(frozen=True)
+class View:
+    """One fish's percept for one control period (what the brain's ``act`` reads)."""
+
+    me: Me
+    fish_distance: np.ndarray  # (n,) inf where not perceived (itself included)
+    fish_com: np.ndarray  # (n, 3)
+    fish_forward: np.ndarray  # (n, 3)
+    fish_velocity: np.ndarray  # (n, 3)
+    fish_species: tuple[str, ...]
+    food_distance: np.ndarray  # (F,)
+    food: np.ndarray  # (F, 3)
+    obstacle_distance: np.ndarray  # (S,)
+    collision: bool
+    away: np.ndarray | None
+
+
+@dataclass(frozen=True)
+class Thought:
+    """What a brain decided in one period: its drives, intention and target."""
+
+    hunger: float
+    libido: float
+    fear: float
+    intention: str
+    target: int | None
+
+
+class FishBrain:
+    """A fish's brain as a Policy: percept in (``observation["view"]``), activations out.
+
+    Mind (drives, intention generator), focuser, behaviour routine and motor layer in one
+    control period. A dead fish (``alive = False``) stops moving its muscles.
+    """
+
+    sensors: tuple[str, ...] = ()
+
+    def __init__(
+        self, species: Species, body: Body, hunted_by: frozenset[str], righting: bool = True
+    ) -> None:
+        self.species, self.body, self.hunted_by = species, body, hunted_by
+        m = species.motor
+        self.locomotion: MotorLocomotion | LearnedLocomotion
+        if m.skills == BUILT_IN:
+            self.locomotion = MotorLocomotion(body, m.frequency, righting=righting)
+        else:  # a learned repertoire (checked when the species was read)
+            self.locomotion = LearnedLocomotion(body, learned_motor(body, m.skills), righting)
+        self.top = min(m.max_speed, self.locomotion.top_speed)
+        self.cruise = min(m.cruise_speed, self.top)
+        self.radius = self.locomotion.turn_radius
+        self.constants = species.fear_constants()
+        self.alive = True
+        self.avoid_side = 0
+        self.reset(0)
+
+    def reset(self, seed: int | None = None) -> None:
+        """Start a life: a fresh mind with the species' initial hunger, a reseeded wander."""
+        self.rng = np.random.default_rng(seed)
+        self.mind: MindState = initial_mind(
+            self.species.mind.initial_hunger, self.species.mind.hunger_rate
+        )
+        self.alive = True
+        self.thought = Thought(0.0, 0.0, 0.0, self.mind.intention, None)
+        if isinstance(self.locomotion, LearnedLocomotion):
+            self.locomotion.turning, self.locomotion.last = None, (0, -np.inf)
+
+    def willing(self, t: float) -> bool:
+        """Return True when the fish would mate at time t: its libido (which a mating resets)
+        above the desire threshold, and it is not fleeing or avoiding."""
+        lib = drives(self.mind, t, self.constants).libido
+        busy = self.thought.intention in ("escape", "school", "avoid")
+        return lib > self.species.mind.desire_threshold and not busy
+
+    def ate(self, t: float, particles: float = 1.0) -> None:
+        """Record a meal at time t."""
+        self.mind = ate(self.mind, t, particles)
+
+    def mated(self, t: float) -> None:
+        """Record a mating at time t."""
+        self.mind = mind_mated(self.mind, t)
+
+    def kinds(self, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Return (same species, hunters, prey) masks over the tank's fishes (cached)."""
+        if getattr(self, "_names", None) != names:
+            arr = np.array(names)
+            self._names = names
+            self._masks = (
+                arr == self.species.name,
+                np.isin(arr, list(self.hunted_by)),
+                np.isin(arr, list(self.species.prey)),
+            )
+        return self._masks
+
+    def _situation(self, v: View) -> Situation:
+        """The fish's ``Situation`` from its own view (``situations`` for one fish)."""
+        same, hunters, prey = self.kinds(v.fish_species)
+        h = self.species.habits
+        sits, _ = situations(
+            v.fish_distance[None],
+            v.food_distance[None],
+            v.obstacle_distance[None],
+            same[None],
+            hunters[None],
+            prey[None],
+            np.array([h.personal_space]),
+            np.array([h.crowd]),
+            [v.collision],
+        )
+        return sits[0]
+
+    def act(self, observation: Mapping, period: Period) -> np.ndarray:
+        """Return activations (1, T, A) for the period from the fish's percept (the percept
+        holds no roll, so the righting reflex rests here: the tank measures the rolls)."""
+        demand = self.decide(observation, period)
+        if demand is None:
+            return np.zeros((1, period.steps, self.body.n_actuators))
+        return self.locomotion.activations(demand, period.times)[None]
+
+    def decide(
+        self,
+        observation: Mapping,
+        period: Period,
+        sit: Situation | None = None,
+        d: Drives | None = None,
+    ) -> Demand | None:
+        """Return the motor demand for the period from the fish's percept (None: dead).
+        ``sit`` and ``d``: the situation and drives when already computed for all the fishes
+        at once (``situations``, ``mind.drives_many``); by default from the percept."""
+        if not self.alive:
+            return None
+        v: View = observation["view"]
+        sp = self.species
+        if sit is None:
+            sit = self._situation(v)
+        self.mind, drives = think(
+            self.mind, period.t0, self.constants, sp.habits, sit, sp.predator, d
+        )
+        intention = self.mind.intention
+        masks = self.kinds(v.fish_species)
+        target = self._focus(v, intention, masks)
+        around = self._around(v, intention, target, masks)
+        demand = self._routine(intention, v.me, around)
+        demand = keep_depth(v.me, demand, None if around.target is None else around.target[1])
+        self.thought = Thought(drives.hunger, drives.libido, drives.fear, intention, target)
+        return demand
+
+    def _focus(self, v: View, intention: str, masks: tuple[np.ndarray, ...]) -> int | None:
+        """Return the target the focuser picks for the intention (a food particle, a mate or
+        a prey: its index; None for an intention without one), kept in the mind; masks: the
+        fishes' ``kinds``."""
+        same, _, prey = masks
+        if intention == "eat":
+            candidates = reach_cost(v.me, v.food, v.food_distance)
+        elif intention == "mate":
+            candidates = np.where(same, v.fish_distance, np.inf)
+        elif intention == "hunt":
+            candidates = np.where(prey, v.fish_distance, np.inf)
+        else:
+            candidates = None
+        target = None if candidates is None else focus(candidates, self.mind.target)
+        if target != self.mind.target:
+            self.mind = replace(self.mind, target=target)
+        return target
+
+    def _around(
+        self, v: View, intention: str, target: int | None, masks: tuple[np.ndarray, ...]
+    ) -> Around:
+        """Return what the routines read of the fish's surroundings: the fishes it sees, the
+        predators among them, its target (and the target fish's velocity), the way out of a
+        collision and the nearest obstacle's distance; masks: the fishes' ``kinds``."""
+        same, hunters, _ = masks
+        seen = np.isfinite(v.fish_distance)
+        food = intention == "eat"
+        return Around(
+            fish=v.fish_com[seen],
+            fish_forward=v.fish_forward[seen],
+            same=same[seen],
+            predators=v.fish_com[seen & hunters],
+            target=None if target is None else (v.food if food else v.fish_com)[target],
+            target_velocity=None if target is None or food else v.fish_velocity[target],
+            away=v.away,
+            obstacle=float(v.obstacle_distance.min()) if len(v.obstacle_distance) else np.inf,
+        )
+
+    def _routine(self, intention: str, me: Me, around: Around) -> Demand:
+        """Return the motor demand of the behaviour routine that serves the intention."""
+        if intention in GO_TO:
+            return go_to(me, around, self.rng, **GO_TO[intention])
+        if intention == "avoid":
+            return avoid(me, around)
+        if intention == "escape":
+            return escape(me, around)
+        if intention == "school":
+            return school(me, around)
+        if intention == "leave":
+            return leave(me, around)
+        return wander(me, around, self.rng)
+
+
+def situations(
+    fish: np.ndarray,
+    food: np.ndarray,
+    obstacles: np.ndarray,
+    same: np.ndarray,
+    hunters: np.ndarray,
+    prey: np.ndarray,
+    personal_space: np.ndarray,
+    crowd: np.ndarray,
+    collision: np.ndarray,
+) -> tuple[list[Situation], np.ndarray]:
+    """Return every fish's ``Situation`` from all the percepts at once, and (n, n) the
+    distances of the predators each perceives (inf elsewhere, for ``mind.drives_many``).
+
+    fish (n, M), food (n, F), obstacles (n, S): the distances perceived by each of n fishes
+    (inf: not perceived, ``Percepts``; M = n in the tank, one row for ``FishBrain._situation``);
+    same, hunters, prey (n, M): row i the masks of ``FishBrain.kinds`` of fish i;
+    personal_space, crowd (n,): the habits; collision (n,) bools."""
+    n = len(fish)
+    inf = np.full(n, np.inf)
+    seen = np.isfinite(fish)
+    predators = np.where(hunters, fish, np.inf)
+    food_near = food.min(axis=1) if food.shape[1] else inf
+    mate = np.where(same, fish, np.inf).min(axis=1) if n else inf
+    prey_near = np.where(prey, fish, np.inf).min(axis=1) if n else inf
+    crowded = ((fish < personal_space[:, None]).sum(axis=1) > crowd).tolist()
+    alone = (~seen.any(axis=1)).tolist()
+    near_obstacle = (
+        (obstacles.min(axis=1) < personal_space).tolist() if obstacles.shape[1] else [False] * n
+    )
+    near_predators: list[list[float]] = [[] for _ in range(n)]
+    ii, jj = np.nonzero(np.isfinite(predators))
+    for i, x in zip(ii.tolist(), predators[ii, jj].tolist(), strict=True):
+        near_predators[i].append(x)
+    out = [
+        Situation(bool(c), tuple(pd), f, m, q, bool(cr), bool(al), bool(no))
+        for c, pd, f, m, q, cr, al, no in zip(
+            collision,
+            near_predators,
+            food_near.tolist(),
+            mate.tolist(),
+            prey_near.tolist(),
+            crowded,
+            alone,
+            near_obstacle,
+            strict=True,
+        )
+    ]
+    return out, predators
+
+
+def tank_brains(
+    species: list[Species], bodies: list[Body], righting: bool, seed: int
+) -> list[FishBrain]:
+    """Return a brain for each fish of a tank (its species and body), each knowing which of
+    the tank's species hunt it, reset for a life from the tank's seed (fish i: seed * 1000 + i)."""
+    kinds = {s.name: s for s in species}.values()
+    hunted_by = {s.name: frozenset(h.name for h in species if s.name in h.prey) for s in kinds}
+    brains = [
+        FishBrain(s, b, hunted_by[s.name], righting) for s, b in zip(species, bodies, strict=True)
+    ]
+    for i, brain in enumerate(brains):
+        brain.reset(seed * 1000 + i)
+    return brains

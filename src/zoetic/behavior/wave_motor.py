@@ -1,0 +1,172 @@
+"""The built-in motor controllers: swim / turn / pitch from the body's own travelling wave.
+
+Without a learned repertoire a fish swims by its body's wave (``control.steered_wave``), its
+swing scaled by an amplitude and a left/right bias added to the muscles; ``WaveMotor`` is that
+wave calibrated once per body and frequency, so that swim(speed) and turn(angle) mean what
+they say.
+"""
+
+from __future__ import annotations
+
+import weakref
+from bisect import bisect_left
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from zoetic.behavior.motor import fin_activation, fin_rows, grid_rates, interp
+from zoetic.bodies import Body
+from zoetic.learning.objective import heading_angles
+from zoetic.physics import simulate
+
+WAVE_AMPLITUDES = np.array([0.2, 0.4, 0.6, 0.8, 1.0])
+WAVE_BIASES = np.array([0.0, 0.1, 0.2, 0.3, 0.4, 0.5])
+WAVE_SETTLE = 2.0  # s from rest before the speed and turning rate are measured
+WAVE_MEASURE = 3.0  # s over which they are measured
+# calibrations per body object (an edited body is another object), then per frequency
+_WAVE_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_AMPS, _BIASES = WAVE_AMPLITUDES.tolist(), WAVE_BIASES.tolist()
+
+
+@dataclass(frozen=True)
+class WaveMotor:
+    """swim / turn / pitch for one body from its own steered wave, calibrated (``calibrate``).
+
+    speeds (K,): m/s of the straight wave at each of ``WAVE_AMPLITUDES``; rates (K, J):
+    rad/s (left positive) of the wave at each amplitude with each of ``WAVE_BIASES`` (the
+    rate at a negative bias is the mirror image).
+    """
+
+    body: Body
+    frequency: float
+    speeds: np.ndarray
+    rates: np.ndarray
+
+    @classmethod
+    def calibrate(cls, body: Body, frequency: float | None = None) -> WaveMotor:
+        """Measure the wave's speed per amplitude and turning rate per (amplitude, bias) in one
+        batched run from rest (settled ``WAVE_SETTLE`` s, measured over ``WAVE_MEASURE`` s);
+        cached per body and frequency for the process."""
+        freq = float(frequency or body.wave_frequency)
+        cached = _WAVE_CACHE.setdefault(body, {})
+        if freq in cached:
+            return cached[freq]
+        from zoetic.control import steered_wave
+
+        steps = int(round((WAVE_SETTLE + WAVE_MEASURE) / body.dt))
+        times = np.arange(steps) * body.dt
+        grid = [(a, b) for a in WAVE_AMPLITUDES for b in WAVE_BIASES]
+        acts = np.stack([steered_wave(body, times, a, b, 0.0, freq) for a, b in grid])
+        every = max(1, int(round(0.05 / body.dt)))
+        tr = simulate(body, acts, record_every=every)
+        t = np.arange(tr.positions.shape[1]) * every * body.dt
+        sel = t >= WAVE_SETTLE
+        com = tr.com(body)[:, sel][..., [0, 2]]
+        heading = heading_angles(body, tr.positions)[:, sel]
+        shape = (len(WAVE_AMPLITUDES), len(WAVE_BIASES))
+        speed, rate = grid_rates(com, heading, t[sel], shape)
+        motor = cls(body, freq, speed[:, 0].copy(), rate)
+        cached[freq] = motor
+        return motor
+
+    @property
+    def top_speed(self) -> float:
+        """Return the fastest straight speed (m/s) the wave reaches."""
+        return float(self.speeds.max())
+
+    @cached_property
+    def _tables(self) -> tuple[list, list, list, list]:
+        """The tables as Python lists (the per-demand scalar work skips numpy's overhead):
+        speeds sorted, their amplitudes, the sharpest turn per amplitude, the rate rows."""
+        order = np.argsort(self.speeds)
+        return (
+            self.speeds[order].tolist(),
+            WAVE_AMPLITUDES[order].tolist(),
+            self.rates[:, -1].tolist(),
+            self.rates.tolist(),
+        )
+
+    def swim(self, speed: float) -> float:
+        """Return the amplitude that swims ``speed`` m/s (clipped to the calibrated range)."""
+        speeds, amps = self._tables[0], self._tables[1]
+        return interp(float(speed), speeds, amps)
+
+    def turn(
+        self, angle: float, seconds: float = 1.0, amplitude: float = 1.0
+    ) -> tuple[float, float]:
+        """Return (amplitude, bias) turning ``angle`` rad (left positive) in ``seconds`` s at
+        least at ``amplitude``: the smallest bias whose rate turns it in time; a wave too weak
+        to turn that fast beats harder (up to amplitude 1), beyond that the sharpest turn."""
+        need = abs(angle) / max(seconds, 1e-9)
+        amps, biases = _AMPS, _BIASES
+        amp = min(max(float(amplitude), amps[0]), 1.0)
+        reach, rates = self._tables[2], self._tables[3]
+        if need > interp(amp, amps, reach):
+            # the smallest amplitude whose sharpest turn is fast enough (or full amplitude)
+            ok = [a for a, r in zip(amps, reach, strict=True) if r >= need]
+            amp = max(amp, ok[0] if ok else 1.0)
+        k = min(max(bisect_left(amps, amp) - 1, 0), len(amps) - 2)
+        w = (amp - amps[k]) / (amps[k + 1] - amps[k])
+        row = [(1 - w) * a + w * b for a, b in zip(rates[k], rates[k + 1], strict=True)]
+        bias = interp(need, row, biases) if row[-1] > row[0] else 0.0
+        return amp, bias if angle >= 0 else -bias
+
+    def fins(self, pitch: float, lean: float = 0.0) -> np.ndarray:
+        """Return (A,) what to add to each fin's held (level) activation to pitch it ``pitch``
+        rad, the left fins ``lean`` rad more and the right ones less (``fin_activation`` of
+        the angle less that of level; 0 on the muscles and without fins)."""
+        out = np.zeros(self.body.n_actuators)
+        level = fin_activation(self.body, 0.0, self._fin_rows)
+        for act, v in fin_activation(self.body, pitch, self._fin_rows, lean).items():
+            out[act] = v - level[act]
+        return out
+
+    @cached_property
+    def _fin_rows(self) -> list[tuple[int, float, float, float]]:
+        """``fin_rows(body)``, kept (``fins`` runs once a fish and control period)."""
+        return fin_rows(self.body)
+
+    def activations(
+        self,
+        times: np.ndarray,
+        speed: float,
+        turn: float = 0.0,
+        pitch: float = 0.0,
+        seconds: float = 1.0,
+    ) -> np.ndarray:
+        """Return activations (T, A): swim at ``speed`` m/s while turning ``turn`` rad in
+        ``seconds`` s, fins pitched ``pitch`` rad (nose up positive)."""
+        from zoetic.control import steered_wave
+
+        amp, bias = self.turn(turn, seconds, self.swim(speed))
+        return steered_wave(self.body, times, amp, bias, self.fins(pitch), self.frequency)
+
+    def activations_many(
+        self, times: np.ndarray, speeds, turns, pitches, seconds: float = 1.0, leans=None
+    ) -> np.ndarray:
+        """Return activations (D, T, A) of ``activations`` for D (speed, turn, pitch) demands
+        at once (``leans``: each one's fin lean, ``fins``; default none): one
+        ``steered_wave`` evaluation broadcast over the demands."""
+        from zoetic.control import steered_wave
+
+        ab = [self.turn(t, seconds, self.swim(v)) for v, t in zip(speeds, turns, strict=True)]
+        amp = np.array([a for a, _ in ab])[:, None, None]
+        bias = np.array([b for _, b in ab])[:, None, None]
+        leans = [0.0] * len(pitches) if leans is None else leans
+        fins = np.array([self.fins(p, q) for p, q in zip(pitches, leans, strict=True)])[:, None]
+        return steered_wave(self.body, times, amp, bias, fins, self.frequency)
+
+    def summary(self) -> dict:
+        """Return the calibration tables (speeds in m/s, turning rates in deg/s)."""
+        return {
+            "frequency_hz": self.frequency,
+            "amplitudes": WAVE_AMPLITUDES.tolist(),
+            "biases": WAVE_BIASES.tolist(),
+            "speed_m_s": self.speeds.round(3).tolist(),
+            "turn_deg_s": np.degrees(self.rates).round(1).tolist(),
+        }
+
+
+# ============================================================ learned motor controllers
+# With a learned repertoire, as the artificial fish's motor controllers: swim(speed) plays the
