@@ -127,7 +127,7 @@ def test_the_api_and_the_cli_refuse_the_same_runs_alike(tmp_path, capsys, option
 def test_caches_key_by_the_body_not_its_name(tmp_path, heavy):
     """An edited body with the same name gets its own calibration, cruise speed and compiled
     file: a cache keyed by the name (and counts) would hand it the zoo shark's."""
-    from zoetic.behavior.motor import WaveMotor
+    from zoetic.behavior.wave_motor import WaveMotor
     from zoetic.tasks import cruise_speed
 
     shark = zoetic.load_animal("shark")
