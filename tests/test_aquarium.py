@@ -20,12 +20,14 @@ def _statics(*objs):
 
 def test_obstacle_distance_of_boxes_cylinders_and_spheres():
     kind, center, size = _statics(Box((0, 0, 0), (1, 1, 1)), Cylinder((5, 0, 0), 0.5, 2.0))
-    d = obstacle_distance(np.array([[2.0, 0, 0], [0, 0, 0], [5, 0, 1.5], [5, 2, 0]]),
-                          kind, center, size)  # fmt: skip
+    d = obstacle_distance(
+        np.array([[2.0, 0, 0], [0, 0, 0], [5, 0, 1.5], [5, 2, 0]]), kind, center, size
+    )
     assert d[0, 0] == pytest.approx(1.0) and d[1, 0] == pytest.approx(-1.0)
     assert d[2, 1] == pytest.approx(1.0) and d[3, 1] == pytest.approx(1.0)
-    ball = obstacle_distance(np.array([[0.0, 3, 0]]), np.array([2]), np.zeros((1, 3)),
-                             np.array([[1.0, 0, 0]]))  # fmt: skip
+    ball = obstacle_distance(
+        np.array([[0.0, 3, 0]]), np.array([2]), np.zeros((1, 3)), np.array([[1.0, 0, 0]])
+    )
     assert ball[0, 0] == pytest.approx(2.0)
 
 
@@ -35,8 +37,20 @@ def test_oracle_sees_within_300_degrees_and_range_and_not_through_a_rock():
     fwd = np.array([[1.0, 0, 0]])
     fish = np.array([[0, 0, 0], [3, 0, 0], [-3, 0, 0.3], [0, 0, 8], [20, 0, 0], [-3, 0, 3]])
     alive = np.ones(6, bool)
-    pc = perceive(eyes, fwd, fish, alive, np.zeros((0, 3)), np.zeros(0, bool), kind, center,
-                  size, 300.0, 10.0, 0.0)  # fmt: skip
+    pc = perceive(
+        eyes,
+        fwd,
+        fish,
+        alive,
+        np.zeros((0, 3)),
+        np.zeros(0, bool),
+        kind,
+        center,
+        size,
+        300.0,
+        10.0,
+        0.0,
+    )
     d = pc.fish[0]
     assert np.isfinite(d[1]) and d[1] == pytest.approx(3.0)  # ahead
     assert np.isinf(d[2])  # straight behind: in the 60-degree blind cone
@@ -45,14 +59,27 @@ def test_oracle_sees_within_300_degrees_and_range_and_not_through_a_rock():
     assert np.isfinite(d[5])  # behind-left, but inside the 300 degrees
     assert blocked(eyes, fish[3:4], kind, center, size)[0, 0]
     # food is smelled within the smell range whatever the view
-    pc = perceive(eyes, fwd, fish[:1], alive[:1], np.array([[-1.0, 0, 0]]), np.ones(1, bool),
-                  kind, center, size, 300.0, 10.0, 2.0)  # fmt: skip
+    pc = perceive(
+        eyes,
+        fwd,
+        fish[:1],
+        alive[:1],
+        np.array([[-1.0, 0, 0]]),
+        np.ones(1, bool),
+        kind,
+        center,
+        size,
+        300.0,
+        10.0,
+        2.0,
+    )
     assert pc.food[0, 0] == pytest.approx(1.0)
 
 
 def _one_fish_tank(seconds: float, **kw):
-    cfg = TankConfig(fishes=1, predators=0, food=0, obstacles=0, seconds=seconds, seed=1,
-                     half_size=12.0, **kw)  # fmt: skip
+    cfg = TankConfig(
+        fishes=1, predators=0, food=0, obstacles=0, seconds=seconds, seed=1, half_size=12.0, **kw
+    )
     return cfg
 
 
@@ -88,8 +115,9 @@ def test_a_fish_between_a_wall_and_a_rock_turns_clear_of_the_rock(skills):
     from zoetic.behavior.aquarium import tank as tk
     from zoetic.physics.world import Animal, World
 
-    t = build_tank(TankConfig(fishes=1, predators=0, food=0, obstacles=0, seed=1,
-                              half_size=9.5, skills=skills))  # fmt: skip
+    t = build_tank(
+        TankConfig(fishes=1, predators=0, food=0, obstacles=0, seed=1, half_size=9.5, skills=skills)
+    )
     rock = Box((7.5, 0.0, 2.9), (0.5, 2.0, 0.4), name="rock")
     fish = Animal(t.fishes[0].body, (7.27, 0.0, 5.7), -0.66, (0.19, 0.0, -0.17))
     walls = list(t.world.statics)
@@ -129,8 +157,21 @@ def test_a_tank_run_is_reproducible_from_its_seed():
 
 def test_cli_aquarium_writes_its_files(tmp_path):
     out = tmp_path / "tank"
-    args = ["aquarium", "--fishes", "3", "--food", "3", "--obstacles", "1", "--seconds", "2",
-            "--seed", "0", "--out", str(out)]  # fmt: skip
+    args = [
+        "aquarium",
+        "--fishes",
+        "3",
+        "--food",
+        "3",
+        "--obstacles",
+        "1",
+        "--seconds",
+        "2",
+        "--seed",
+        "0",
+        "--out",
+        str(out),
+    ]
     assert main(args) == 0
     for name in ("video.mp4", "mind.png", "events.csv", "summary.json"):
         assert (out / name).stat().st_size > 0
@@ -145,8 +186,9 @@ def test_cli_aquarium_refuses_unknown_perception_and_bad_counts_cleanly(tmp_path
     assert main(["aquarium", "--perception", "sonar", "--out", str(tmp_path / "a")]) == 2
     err = capsys.readouterr().err
     assert "oracle, vision" in err and "sonar" in err and "Traceback" not in err
-    assert main(["aquarium", "--fishes", "2", "--predators", "3",
-                 "--out", str(tmp_path / "b")]) == 2  # fmt: skip
+    assert (
+        main(["aquarium", "--fishes", "2", "--predators", "3", "--out", str(tmp_path / "b")]) == 2
+    )
     capsys.readouterr()
     assert main(["aquarium", "--skills", "lerned", "--out", str(tmp_path / "c")]) == 2
     err = capsys.readouterr().err
@@ -155,8 +197,27 @@ def test_cli_aquarium_refuses_unknown_perception_and_bad_counts_cleanly(tmp_path
 
 def test_cli_aquarium_skills_built_in_swims_every_fish_by_the_wave(tmp_path):
     out = tmp_path / "tank"
-    assert main(["aquarium", "--fishes", "2", "--food", "1", "--obstacles", "0", "--seconds",
-                 "0.5", "--skills", "built-in", "--no-video", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "aquarium",
+                "--fishes",
+                "2",
+                "--food",
+                "1",
+                "--obstacles",
+                "0",
+                "--seconds",
+                "0.5",
+                "--skills",
+                "built-in",
+                "--no-video",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     summary = json.loads((out / "summary.json").read_text())
     assert summary["motor_skills"] == {"minnow": "built-in", "shark": "built-in"}
 
@@ -181,8 +242,15 @@ def test_a_fish_that_just_mated_is_not_willing_again_until_its_libido_returns():
 def test_go_to_turns_towards_a_target_even_inside_the_turning_circle():
     from zoetic.behavior.aquarium.routines import Around, Me, go_to
 
-    me = Me(np.zeros(3), np.array([0.5, 0.0, 0.0]), np.array([1.0, 0.0, 0.0]), np.zeros(3),
-            0.2, 0.4, radius=2.0)  # fmt: skip
+    me = Me(
+        np.zeros(3),
+        np.array([0.5, 0.0, 0.0]),
+        np.array([1.0, 0.0, 0.0]),
+        np.zeros(3),
+        0.2,
+        0.4,
+        radius=2.0,
+    )
     rng = np.random.default_rng(0)
     beside = go_to(me, Around(target=np.array([1.0, 0.0, 1.5])), rng)
     assert beside.turn > 1.0  # inside the circle on the left: turn left to it, not swim on
@@ -198,16 +266,19 @@ def test_fishes_driven_nose_to_nose_do_not_pass_through_each_other(contact):
 
     from zoetic.physics.world import placed_pose
 
-    cfg = TankConfig(fishes=2, predators=0, food=0, obstacles=0, seconds=1.5, seed=0,
-                     fish_contact=contact)  # fmt: skip
+    cfg = TankConfig(
+        fishes=2, predators=0, food=0, obstacles=0, seconds=1.5, seed=0, fish_contact=contact
+    )
     tank = build_tank(cfg)
     world, body = tank.world, tank.fishes[0].body
     # two minnows 0.3 m apart nose to nose, 0.1 m aside, closing at 2 m/s
     a = placed_pose(body, (0.0, 0.0, 0.0), 0.0)
     b = placed_pose(body, (1.3, 0.0, 0.1), np.pi)
     state = world.state
-    vel = (np.full_like(state.velocities[0], 0.0) + [1.0, 0.0, 0.0],
-           np.full_like(state.velocities[1], 0.0) + [-1.0, 0.0, 0.0])
+    vel = (
+        np.full_like(state.velocities[0], 0.0) + [1.0, 0.0, 0.0],
+        np.full_like(state.velocities[1], 0.0) + [-1.0, 0.0, 0.0],
+    )
     world.restore(replace(state, positions=(a[None], b[None]), velocities=vel))
     life = live(tank)
     touches = [e for e in life.events if e[2] == "collision"]
@@ -222,8 +293,7 @@ def test_the_focuser_weighs_food_by_the_way_to_it_not_the_distance():
     from zoetic.behavior.aquarium.routines import Me, reach_cost, turn_paths
     from zoetic.behavior.mind import focus
 
-    me = Me(np.zeros(3), np.zeros(3), np.array([1.0, 0.0, 0.0]), np.zeros(3), 0.2, 0.4,
-            radius=2.0)  # fmt: skip
+    me = Me(np.zeros(3), np.zeros(3), np.array([1.0, 0.0, 0.0]), np.zeros(3), 0.2, 0.4, radius=2.0)
     ahead, beside = np.array([4.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.5])
     left, right = turn_paths(me, np.stack([ahead, beside]))  # rows: left, right first
     assert left[0] == pytest.approx(4.0) and right[0] == pytest.approx(4.0)

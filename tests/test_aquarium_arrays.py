@@ -21,14 +21,19 @@ from zoetic.physics.objects import Box, Cylinder, pack_statics
 
 
 def _scene(rng, n=7, m=9, f=6):
-    kind, center, size = pack_statics([
-        Box((0.0, 0.0, 0.0), (1.0, 2.0, 0.6)), Cylinder((3.0, 0.0, -2.0), 0.7, 4.0, "y"),
-        Box((-3.0, 0.0, 2.5), (0.4, 2.0, 1.2)), Box((9.25, 0.0, 0.0), (0.25, 2.0, 9.5)),
-    ])  # fmt: skip
+    kind, center, size = pack_statics(
+        [
+            Box((0.0, 0.0, 0.0), (1.0, 2.0, 0.6)),
+            Cylinder((3.0, 0.0, -2.0), 0.7, 4.0, "y"),
+            Box((-3.0, 0.0, 2.5), (0.4, 2.0, 1.2)),
+            Box((9.25, 0.0, 0.0), (0.25, 2.0, 9.5)),
+        ]
+    )
 
     def points(k):
-        return np.column_stack([rng.uniform(-6, 6, k), rng.uniform(-1, 1, k),
-                                rng.uniform(-6, 6, k)])  # fmt: skip
+        return np.column_stack(
+            [rng.uniform(-6, 6, k), rng.uniform(-1, 1, k), rng.uniform(-6, 6, k)]
+        )
 
     fwd = rng.normal(size=(n, 3))
     fwd /= np.linalg.norm(fwd, axis=1, keepdims=True)
@@ -97,8 +102,7 @@ def test_blocked_with_bounding_boxes_equals_every_point_against_every_obstacle()
     e = np.array([[-3.0, 0.0, 0.0], [-3.0, 0.0, 0.6 + 1e-6]])
     t = np.array([[-1.0 - 1e-6, 0.0, 0.0], [3.0, 0.0, 0.6 + 1e-6], [3.0, 0.0, 0.0]])
     got = blocked(e, t, kind, center, size)
-    assert np.array_equal(got, _blocked_by_points(e, t, np.ones((2, 3), bool), kind, center,
-                                                  size))  # fmt: skip
+    assert np.array_equal(got, _blocked_by_points(e, t, np.ones((2, 3), bool), kind, center, size))
     assert not got[0, 0] and not got[1, 1] and got[0, 2]
 
 
@@ -106,15 +110,21 @@ def test_sight_lines_just_inside_a_face_are_blocked():
     # a box (half sizes 1, 0.5, 0.6) at the origin and a cylinder (radius 0.7) at x = 4:
     # (half length 0.5): lines parallel to their sides, 5 cm inside each side (the bounding
     # boxes must keep them)
-    kind, center, size = pack_statics([Box((0.0, 0.0, 0.0), (1.0, 0.5, 0.6)),
-                                       Cylinder((4.0, 0.0, 0.0), 0.7, 1.0, "y")])  # fmt: skip
+    kind, center, size = pack_statics(
+        [Box((0.0, 0.0, 0.0), (1.0, 0.5, 0.6)), Cylinder((4.0, 0.0, 0.0), 0.7, 1.0, "y")]
+    )
     segments = [
-        ((-0.95, 0.0, -3.0), (-0.95, 0.0, 3.0)), ((0.95, 0.0, -3.0), (0.95, 0.0, 3.0)),
-        ((-3.0, 0.0, -0.55), (1.4, 0.0, -0.55)), ((-3.0, 0.0, 0.55), (1.4, 0.0, 0.55)),
-        ((-3.0, -0.45, 0.0), (1.4, -0.45, 0.0)), ((-3.0, 0.45, 0.0), (1.4, 0.45, 0.0)),
-        ((3.35, 0.0, -3.0), (3.35, 0.0, 3.0)), ((4.65, 0.0, -3.0), (4.65, 0.0, 3.0)),
-        ((2.5, 0.0, -0.3), (5.4, 0.0, -0.3)), ((2.5, 0.45, 0.3), (5.4, 0.45, 0.3)),
-    ]  # fmt: skip
+        ((-0.95, 0.0, -3.0), (-0.95, 0.0, 3.0)),
+        ((0.95, 0.0, -3.0), (0.95, 0.0, 3.0)),
+        ((-3.0, 0.0, -0.55), (1.4, 0.0, -0.55)),
+        ((-3.0, 0.0, 0.55), (1.4, 0.0, 0.55)),
+        ((-3.0, -0.45, 0.0), (1.4, -0.45, 0.0)),
+        ((-3.0, 0.45, 0.0), (1.4, 0.45, 0.0)),
+        ((3.35, 0.0, -3.0), (3.35, 0.0, 3.0)),
+        ((4.65, 0.0, -3.0), (4.65, 0.0, 3.0)),
+        ((2.5, 0.0, -0.3), (5.4, 0.0, -0.3)),
+        ((2.5, 0.45, 0.3), (5.4, 0.45, 0.3)),
+    ]
     eyes, targets = (np.array(x, float) for x in zip(*segments, strict=True))
     got = blocked(eyes, targets, kind, center, size, np.eye(len(eyes), dtype=bool))
     assert got.diagonal().all()
@@ -138,16 +148,30 @@ class _C:  # mind constants
 def test_drives_many_equals_drives_of_each_mind():
     rng = np.random.default_rng(1)
     n = 9
-    minds = [MindState(eaten=float(rng.integers(0, 4)), meal_time=float(rng.uniform(-80, 30)),
-                       mating_time=float(rng.uniform(-40, 30))) for _ in range(n)]  # fmt: skip
+    minds = [
+        MindState(
+            eaten=float(rng.integers(0, 4)),
+            meal_time=float(rng.uniform(-80, 30)),
+            mating_time=float(rng.uniform(-40, 30)),
+        )
+        for _ in range(n)
+    ]
     # perceived predators: up to three a fish, the rest of each row unperceived
     pred = np.where(rng.random((n, 6)) < 0.35, rng.uniform(0.0, 9.0, (n, 6)), np.inf)
     pred[0] = np.inf
     pred[1, :3] = [0.5, 4.0, 1e-12]
     c = _C()
-    h, lib, f = drives_many([m.eaten for m in minds], [m.meal_time for m in minds],
-                            [m.mating_time for m in minds], 30.0, c.hunger_rate, c.alpha,
-                            c.libido_rate, c.fear_distance, pred)  # fmt: skip
+    h, lib, f = drives_many(
+        [m.eaten for m in minds],
+        [m.meal_time for m in minds],
+        [m.mating_time for m in minds],
+        30.0,
+        c.hunger_rate,
+        c.alpha,
+        c.libido_rate,
+        c.fear_distance,
+        pred,
+    )
     for i, m in enumerate(minds):
         row = tuple(float(x) for x in pred[i] if np.isfinite(x))
         want = drives(m, 30.0, c, row)
@@ -203,21 +227,41 @@ def test_situations_of_all_fishes_equal_each_fishs_own():
         np.fill_diagonal(fish, np.inf)
         if trial == 0:
             fish[2] = np.inf  # a fish that sees no one
-        food = np.where(rng.random((n, 4)) < 0.5, rng.uniform(0.5, 9.0, (n, 4)),
-                        np.inf)[:, : trial % 5]  # fmt: skip
+        food = np.where(rng.random((n, 4)) < 0.5, rng.uniform(0.5, 9.0, (n, 4)), np.inf)[
+            :, : trial % 5
+        ]
         obst = rng.uniform(0.0, 3.0, (n, 3))
         hits = (rng.random(n) < 0.3).tolist()
         masks = [b.kinds(names) for b in brains]
-        sits, pred = situations(fish, food, obst, *(np.array([m[k] for m in masks])
-                                                    for k in range(3)),
-                                np.array([b.species.habits.personal_space for b in brains]),
-                                np.array([b.species.habits.crowd for b in brains]), hits)
+        sits, pred = situations(
+            fish,
+            food,
+            obst,
+            *(np.array([m[k] for m in masks]) for k in range(3)),
+            np.array([b.species.habits.personal_space for b in brains]),
+            np.array([b.species.habits.crowd for b in brains]),
+            hits,
+        )
         me = Me(np.zeros(3), np.zeros(3), np.array([1.0, 0, 0]), np.zeros(3), 0.2, 0.4)
         for i, b in enumerate(brains):
-            v = View(me, fish[i], np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)), names,
-                     food[i], np.zeros((food.shape[1], 3)), obst[i], hits[i], None)
-            assert sits[i] == b._situation(v) == _situation_of(b, fish[i], food[i], obst[i],
-                                                               masks[i], hits[i])
+            v = View(
+                me,
+                fish[i],
+                np.zeros((n, 3)),
+                np.zeros((n, 3)),
+                np.zeros((n, 3)),
+                names,
+                food[i],
+                np.zeros((food.shape[1], 3)),
+                obst[i],
+                hits[i],
+                None,
+            )
+            assert (
+                sits[i]
+                == b._situation(v)
+                == _situation_of(b, fish[i], food[i], obst[i], masks[i], hits[i])
+            )
             assert np.array_equal(pred[i], np.where(masks[i][1], fish[i], np.inf))
 
 
@@ -231,14 +275,16 @@ def test_world_reads_all_positions_at_once_and_names_the_animals_it_tested_for_c
     size = np.ptp(body.rest_pos, axis=0)
     # one minnow swimming into a rock just ahead of its nose, one far from everything
     rock = Box((com[0] + 0.6 * size[0], com[1], com[2]), (0.1, 1.0, 1.0), name="rock")
-    world = World([Animal(body, (0.0, 0.0, 0.0), 0.0, (1.5, 0.0, 0.0)),
-                   Animal(body, (0.0, 0.0, 6.0)), rock], medium="water")  # fmt: skip
+    world = World(
+        [Animal(body, (0.0, 0.0, 0.0), 0.0, (1.5, 0.0, 0.0)), Animal(body, (0.0, 0.0, 6.0)), rock],
+        medium="water",
+    )
     touched = []
     for _ in range(10):
         c = world.step(0.05)
         all_pos, off = world.node_positions(), world.offsets
         for a in range(2):
-            assert np.array_equal(all_pos[off[a]:off[a + 1]], world.positions(a)[0])
+            assert np.array_equal(all_pos[off[a] : off[a + 1]], world.positions(a)[0])
         touched.append(c.touching[0])
         assert c.near is not None and 1 not in c.near
         for a in range(2):  # an animal not tested got no impulse

@@ -109,8 +109,20 @@ def test_bad_skills_references_are_refused_naming_the_file(tmp_path, skills):
 def test_cli_refuses_bad_predator_skills_with_exit_2(tmp_path, capsys):
     from zoetic.cli import main
 
-    code = main(["aquarium", "--fishes", "2", "--seconds", "0.2", "--no-video",
-                 "--predator-skills", str(tmp_path / "none"), "--out", str(tmp_path / "o")])
+    code = main(
+        [
+            "aquarium",
+            "--fishes",
+            "2",
+            "--seconds",
+            "0.2",
+            "--no-video",
+            "--predator-skills",
+            str(tmp_path / "none"),
+            "--out",
+            str(tmp_path / "o"),
+        ]
+    )
     assert code == 2
     err = capsys.readouterr().err
     assert "not a directory" in err
@@ -208,7 +220,8 @@ def test_the_shipped_steer_turns_while_swimming_at_the_rate_asked():
     rate = (head[-1] - head[k]) / ((len(head) - 1 - k) * rec)
     assert rate > 0.5 * min(turn / TURN_SECONDS, motor.steer_top)
     speed = np.linalg.norm(np.diff(com[k:, [0, 2]], axis=0), axis=1).sum() / (
-        (len(head) - 1 - k) * rec)
+        (len(head) - 1 - k) * rec
+    )
     assert speed > 0.15  # m/s: swimming, not spinning on the spot
     _, right = _swim(LearnedLocomotion(body, motor), Demand(0.3, turn=-turn), 5.0)
     assert right[-1] - right[k] < -0.5 * rate * (len(head) - 1 - k) * rec
@@ -228,8 +241,7 @@ def test_length_keeping_measures_the_head_to_tail_shortfall():
     longer = rest.copy()
     longer[tail] -= 0.2 * towards  # stretched: no shortfall
     pos = np.stack([np.stack([rest, shorter]), np.stack([rest, longer])])  # (2, 2, N, 3)
-    s = Signals(np, frame, pos, np.zeros((2, 2, body.n_actuators)), np.array([0.0, 0.1]),
-                0.0, 0.1)  # fmt: skip
+    s = Signals(np, frame, pos, np.zeros((2, 2, body.n_actuators)), np.array([0.0, 0.1]), 0.0, 0.1)
     got = TERMS["length_keeping"].fn(np, s, TermParams())
     np.testing.assert_allclose(got, [0.2**2 / 2, 0.0], atol=1e-6)
 
@@ -246,10 +258,17 @@ def test_fishes_sharing_a_learned_motor_get_what_each_would_alone():
     body = load_animal("shark")
     motor = learned_motor(body, SKILLS_DIR / "shark")
     assert motor.steers  # the shipped repertoire steers while swimming
-    demands = [Demand(0.3), Demand(0.5, 0.4, 0.2), Demand(0.2, -1.0), Demand(0.4, 2.5),
-               Demand(0.1, -2.8, -0.3), None]  # fmt: skip
-    shared = [SimpleNamespace(body=body, locomotion=LearnedLocomotion(body, motor))
-              for _ in demands]  # fmt: skip
+    demands = [
+        Demand(0.3),
+        Demand(0.5, 0.4, 0.2),
+        Demand(0.2, -1.0),
+        Demand(0.4, 2.5),
+        Demand(0.1, -2.8, -0.3),
+        None,
+    ]
+    shared = [
+        SimpleNamespace(body=body, locomotion=LearnedLocomotion(body, motor)) for _ in demands
+    ]
     alone = [LearnedLocomotion(body, replace(motor)) for _ in demands]
     per = int(round(0.1 / body.dt))
     for k in range(8):

@@ -44,12 +44,10 @@ def test_swim_at_a_speed_swims_that_speed(shark_motor):
 
 def test_turn_by_an_angle_turns_that_angle_to_the_side_asked(shark_motor):
     angle, seconds = np.radians(30.0), 4.0
-    t, _, heading = _run(shark_motor, WAVE_SETTLE + seconds, speed=0.3, turn=angle,
-                         seconds=seconds)  # fmt: skip
+    t, _, heading = _run(shark_motor, WAVE_SETTLE + seconds, speed=0.3, turn=angle, seconds=seconds)
     k0 = np.searchsorted(t, WAVE_SETTLE)
     assert heading[-1] - heading[k0] == pytest.approx(angle, rel=0.3)
-    _, _, right = _run(shark_motor, WAVE_SETTLE + seconds, speed=0.3, turn=-angle,
-                       seconds=seconds)  # fmt: skip
+    _, _, right = _run(shark_motor, WAVE_SETTLE + seconds, speed=0.3, turn=-angle, seconds=seconds)
     assert right[-1] - right[k0] == pytest.approx(-angle, rel=0.3)
 
 

@@ -14,8 +14,16 @@ from zoetic.physics.world import Animal, World
 
 def _two_fish_tank(prey_at, seconds=1.0):
     """A predator at the origin heading +x and one prey at ``prey_at``, in an empty tank."""
-    cfg = TankConfig(fishes=2, predators=1, food=0, obstacles=0, seconds=seconds, seed=2,
-                     half_size=10.0, perception="vision")  # fmt: skip
+    cfg = TankConfig(
+        fishes=2,
+        predators=1,
+        food=0,
+        obstacles=0,
+        seconds=seconds,
+        seed=2,
+        half_size=10.0,
+        perception="vision",
+    )
     t = build_tank(cfg)
     animals = []
     for f, p in zip(t.fishes, [np.zeros(3), np.asarray(prey_at, float)], strict=True):

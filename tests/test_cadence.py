@@ -17,9 +17,11 @@ def _busy_world() -> tuple[World, np.ndarray]:
     """Two sharks swimming nose to nose, a third into a rock, food on the first's way and
     drifting in a current; return the world and a wave (T, A) for 0.6 s."""
     body = load_animal("shark")
-    sharks = [Animal(body, (0.0, 0.0, 0.0), 0.0, (1.0, 0.0, 0.0)),
-              Animal(body, (1.3, 0.0, 0.1), np.pi, (-1.0, 0.0, 0.0)),
-              Animal(body, (0.0, 0.0, 3.0), 0.0, (1.5, 0.0, 0.0))]  # fmt: skip
+    sharks = [
+        Animal(body, (0.0, 0.0, 0.0), 0.0, (1.0, 0.0, 0.0)),
+        Animal(body, (1.3, 0.0, 0.1), np.pi, (-1.0, 0.0, 0.0)),
+        Animal(body, (0.0, 0.0, 3.0), 0.0, (1.5, 0.0, 0.0)),
+    ]
     rock = Box((0.9, 0.0, 3.0), (0.2, 1.0, 1.0), name="rock")
     food = [Food((0.25, 0.02, -0.05), 0.1), Food((0.45, 0.0, 2.96), 0.1)]
     world = World([*sharks, rock, *food], medium="water", current=(0.0, 0.0, 0.13))
@@ -36,7 +38,7 @@ def _run(slices: list[float]):
     for seconds in slices:
         t0 = world.step_count
         steps = world.steps_for(seconds)
-        c = world.step(seconds, [table[None, t0:t0 + steps]] * 3)
+        c = world.step(seconds, [table[None, t0 : t0 + steps]] * 3)
         touched |= {tuple(x) for x in np.argwhere(c.touching[0])}
         if c.between is not None:
             between |= c.between[0] > 0.0
@@ -66,8 +68,16 @@ def test_splitting_the_steps_changes_nothing_in_the_world():
 @pytest.mark.parametrize("seed", [1, 2])
 def test_the_record_period_does_not_change_an_aquarium_run(seed):
     def run(record):
-        cfg = TankConfig(fishes=6, food=8, obstacles=3, half_size=5.0, food_margin=2.0,
-                         seconds=4.0, seed=seed, record_period=record)  # fmt: skip
+        cfg = TankConfig(
+            fishes=6,
+            food=8,
+            obstacles=3,
+            half_size=5.0,
+            food_margin=2.0,
+            seconds=4.0,
+            seed=seed,
+            record_period=record,
+        )
         tank = build_tank(cfg)
         life = live(tank)
         return life, summarize(tank, life)
@@ -77,8 +87,9 @@ def test_the_record_period_does_not_change_an_aquarium_run(seed):
     assert "collision" in kinds and ("eat" in kinds or seed != 2)
     for life, s in others:
         assert life.events == base.events
-        assert {k: v for k, v in s.items() if k not in ("wall_seconds", "realtime_factor")} == \
-            {k: v for k, v in s0.items() if k not in ("wall_seconds", "realtime_factor")}
+        assert {k: v for k, v in s.items() if k not in ("wall_seconds", "realtime_factor")} == {
+            k: v for k, v in s0.items() if k not in ("wall_seconds", "realtime_factor")
+        }
         # positions at the record times the runs share, bit for bit
         steps = [np.round(x.times / 0.005).astype(int) for x in (life, base)]
         common, i, j = np.intersect1d(*steps, return_indices=True)
@@ -89,9 +100,7 @@ def test_the_record_period_does_not_change_an_aquarium_run(seed):
 
 
 def test_an_aquarium_records_on_its_grid_and_at_its_end_and_decides_every_period():
-    cfg = TankConfig(
-        fishes=2, predators=1, food=1, obstacles=0, seconds=0.37, record_period=0.03
-    )
+    cfg = TankConfig(fishes=2, predators=1, food=1, obstacles=0, seconds=0.37, record_period=0.03)
     tank = build_tank(cfg)
     dt, end = tank.world.dt, tank.world.steps_for(cfg.seconds)
     every, period = round(cfg.record_period / dt), round(cfg.control_period / dt)

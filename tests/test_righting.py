@@ -42,7 +42,8 @@ def test_roll_angle_reads_the_roll_and_with_the_heading_tells_upside_down():
     for deg in (0.0, 45.0, -30.0, 100.0, -150.0):
         p = rolled(body, deg)
         assert np.degrees(roll_angle(np, p, frame.left, frame.right, fwd)) == pytest.approx(
-            deg, abs=1e-6)
+            deg, abs=1e-6
+        )
         folded = np.degrees(roll_angle(np, p, frame.left, frame.right))
         assert folded == pytest.approx(np.sign(deg) * min(abs(deg), 180 - abs(deg)), abs=1e-6)
     # the tank's per-fish rolls: the same definition, the heading from the nodes
@@ -50,7 +51,8 @@ def test_roll_angle_reads_the_roll_and_with_the_heading_tells_upside_down():
     fwd2 = np.array([heading_weights(body) @ p for p in pos])
     pairs = roll_pairs([body, body], np.array([0, body.n_nodes]))
     assert np.degrees(fish_rolls(np.concatenate(pos), fwd2, pairs)) == pytest.approx(
-        [60.0, -170.0], abs=0.5)
+        [60.0, -170.0], abs=0.5
+    )
 
 
 def test_the_fins_lean_against_the_roll_within_their_range():
@@ -110,8 +112,9 @@ def test_the_right_steer_beats_in_phase_with_the_swim_so_switching_sides_keeps_u
     gait = motor.bases[1]  # go-straight: its mirror image is itself half a stroke later
     assert motor.steer_lag == pytest.approx(gait.period / 2, abs=body.dt / 2)
     t = np.arange(40) * body.dt
-    np.testing.assert_allclose(body.mirror_actuators(gait.raw(t)),
-                               gait.raw(t + motor.steer_lag), atol=1e-6)  # fmt: skip
+    np.testing.assert_allclose(
+        body.mirror_actuators(gait.raw(t)), gait.raw(t + motor.steer_lag), atol=1e-6
+    )
     # steering right is steering left mirrored: the same swim, the other side
     a, w = motor.swim(0.4), 0.75
     right = motor.steer_signal(t, a, w, 1, 0.0)

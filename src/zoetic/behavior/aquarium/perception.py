@@ -98,8 +98,10 @@ def _blocked(eyes, targets, ask, kind, center, size, step, out) -> None:
             for s in range(kind.shape[0]):
                 apart = False
                 for c in range(3):
-                    if (max(eyes[e, c], targets[t, c]) < lo[s, c]
-                            or min(eyes[e, c], targets[t, c]) > hi[s, c]):
+                    if (
+                        max(eyes[e, c], targets[t, c]) < lo[s, c]
+                        or min(eyes[e, c], targets[t, c]) > hi[s, c]
+                    ):
                         apart = True
                 if not apart:
                     near[m] = s
@@ -136,8 +138,9 @@ def obstacle_distance(points: np.ndarray, kind, center, size) -> np.ndarray:
     return out.reshape(*pts.shape[:-1], len(kind))
 
 
-def blocked(eyes: np.ndarray, targets: np.ndarray, kind, center, size,
-            pairs: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+def blocked(
+    eyes: np.ndarray, targets: np.ndarray, kind, center, size, pairs: np.ndarray | None = None
+) -> np.ndarray:
     """Return (n, m) bools: is the segment from each eye (n, 3) to each target (m, 3) blocked
     by an obstacle (probed every ``STEP`` m, the end points excluded)? Only the ``pairs``
     (n, m) asked about are tested (default all)."""
@@ -147,9 +150,16 @@ def blocked(eyes: np.ndarray, targets: np.ndarray, kind, center, size,
         return out
     ask = np.ones((n, m), bool) if pairs is None else np.ascontiguousarray(pairs, bool)
     # every pair's k - 1 points against the obstacles in one compiled loop
-    _blocked(np.ascontiguousarray(eyes, float), np.ascontiguousarray(targets, float), ask,
-             np.asarray(kind, np.int64), np.ascontiguousarray(center, float),
-             np.ascontiguousarray(size, float), STEP, out)  # fmt: skip
+    _blocked(
+        np.ascontiguousarray(eyes, float),
+        np.ascontiguousarray(targets, float),
+        ask,
+        np.asarray(kind, np.int64),
+        np.ascontiguousarray(center, float),
+        np.ascontiguousarray(size, float),
+        STEP,
+        out,
+    )
     return out
 
 
@@ -164,7 +174,8 @@ def _in_view(eyes, forwards, targets, cos_half, view_range, d, ok) -> None:
             r2 = targets[j, 2] - eyes[i, 2]
             dist = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
             cos = (r0 * forwards[i, 0] + r1 * forwards[i, 1] + r2 * forwards[i, 2]) / max(
-                dist, 1e-9)
+                dist, 1e-9
+            )
             d[i, j] = dist
             ok[i, j] = dist <= view_range[i] and cos >= cos_half[i]
 
@@ -177,8 +188,15 @@ def in_view(eyes, forwards, targets, view_angle, view_range) -> tuple[np.ndarray
     cos_half = np.broadcast_to(np.cos(np.radians(np.asarray(view_angle, float)) / 2), (n,))
     rng = np.broadcast_to(np.asarray(view_range, float), (n,))
     d, ok = np.empty((n, m)), np.empty((n, m), bool)
-    _in_view(eyes, np.ascontiguousarray(np.broadcast_to(forwards, (n, 3)), float), targets,
-             np.ascontiguousarray(cos_half), np.ascontiguousarray(rng), d, ok)  # fmt: skip
+    _in_view(
+        eyes,
+        np.ascontiguousarray(np.broadcast_to(forwards, (n, 3)), float),
+        targets,
+        np.ascontiguousarray(cos_half),
+        np.ascontiguousarray(rng),
+        d,
+        ok,
+    )
     return d, ok
 
 
@@ -217,13 +235,24 @@ def perceive(
     fish, food_d = np.empty((n, len(fish_centers))), np.empty((n, len(food)))
     kind = np.asarray(kind, np.int64)
     obst = np.empty((n, len(kind)))
-    _perceive(np.ascontiguousarray(eyes, float), np.ascontiguousarray(forwards, float),
-              np.ascontiguousarray(fish_centers, float), np.asarray(alive, bool), food,
-              np.asarray(food_left, bool).reshape(-1), kind,
-              np.ascontiguousarray(center, float).reshape(-1, 3),
-              np.ascontiguousarray(size, float).reshape(-1, 3), np.ascontiguousarray(cos_half),
-              np.ascontiguousarray(vr), np.ascontiguousarray(sr), STEP, fish, food_d,
-              obst)  # fmt: skip
+    _perceive(
+        np.ascontiguousarray(eyes, float),
+        np.ascontiguousarray(forwards, float),
+        np.ascontiguousarray(fish_centers, float),
+        np.asarray(alive, bool),
+        food,
+        np.asarray(food_left, bool).reshape(-1),
+        kind,
+        np.ascontiguousarray(center, float).reshape(-1, 3),
+        np.ascontiguousarray(size, float).reshape(-1, 3),
+        np.ascontiguousarray(cos_half),
+        np.ascontiguousarray(vr),
+        np.ascontiguousarray(sr),
+        STEP,
+        fish,
+        food_d,
+        obst,
+    )
     return Percepts(fish, food_d, obst)
 
 
@@ -246,8 +275,24 @@ def _seen(eyes, forwards, targets, present, kind, center, size, cos_half, vr, st
 
 
 @njit(cache=True)
-def _perceive(eyes, forwards, centers, alive, food, left, kind, center, size, cos_half, vr, sr,
-              step, fish, food_d, obst) -> None:  # fmt: skip
+def _perceive(
+    eyes,
+    forwards,
+    centers,
+    alive,
+    food,
+    left,
+    kind,
+    center,
+    size,
+    cos_half,
+    vr,
+    sr,
+    step,
+    fish,
+    food_d,
+    obst,
+) -> None:
     """``perceive`` compiled: fill fish (n, n), food_d (n, F) and obst (n, S) with the
     distances perceived (inf where not)."""
     n, m, f = eyes.shape[0], centers.shape[0], food.shape[0]
@@ -269,6 +314,7 @@ def _perceive(eyes, forwards, centers, alive, food, left, kind, center, size, co
             c1 = center[s, 1] - eyes[i, 1]
             c2 = center[s, 2] - eyes[i, 2]
             cos = (c0 * forwards[i, 0] + c1 * forwards[i, 1] + c2 * forwards[i, 2]) / max(
-                math.sqrt(c0 * c0 + c1 * c1 + c2 * c2), 1e-9)
+                math.sqrt(c0 * c0 + c1 * c1 + c2 * c2), 1e-9
+            )
             seen = do <= vr[i] and (cos >= cos_half[i] or do < 1.0)
             obst[i, s] = do if seen else np.inf

@@ -137,9 +137,16 @@ def side_room(me: Me, kind, center, size, reach: float) -> tuple[float, float]:
     return float(d[0]), float(d[1])
 
 
-def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int = 0,
-                    target: float | None = None, ahead: np.ndarray | None = None
-                    ) -> tuple[bool, np.ndarray | None]:  # fmt: skip
+def collision_ahead(
+    me: Me,
+    kind,
+    center,
+    size,
+    others: np.ndarray,
+    prefer: int = 0,
+    target: float | None = None,
+    ahead: np.ndarray | None = None,
+) -> tuple[bool, np.ndarray | None]:
     """Return (imminent?, the unit way out): probes along the heading (``probes_ahead`` up to
     ``probe_reach``) against the obstacles (clearance CLEARANCE m) and other fishes' centres
     ahead. prefer: +1 (left) or -1 (right) keeps the side an avoidance already turns to,
@@ -161,8 +168,11 @@ def collision_ahead(me: Me, kind, center, size, others: np.ndarray, prefer: int 
         return side * (-sgn if mine < CLEARANCE <= other else sgn)
 
     if len(kind):
-        d = obstacle_distance(probes_ahead(me, reach), kind, center, size) if ahead is None \
-            else ahead  # fmt: skip
+        d = (
+            obstacle_distance(probes_ahead(me, reach), kind, center, size)
+            if ahead is None
+            else ahead
+        )
         if d.min() < CLEARANCE:
             if prefer:
                 return True, way_out(prefer)
@@ -246,15 +256,17 @@ def reach_cost(me: Me, points: np.ndarray, distances: np.ndarray) -> np.ndarray:
     return out
 
 
-def go_to(me: Me, around: Around, rng: np.random.Generator, lead: float = 0.0,
-          beside: float = 0.0) -> Demand:  # fmt: skip
+def go_to(
+    me: Me, around: Around, rng: np.random.Generator, lead: float = 0.0, beside: float = 0.0
+) -> Demand:
     """Swim to the focused target (eat, mate, hunt; ahead of a moving one by ``lead`` s, or
     to a point ``beside`` m to its side, a suitor's place); wander in search of one when
     none is perceived."""
     if around.target is None:
         return wander(me, around, rng)
-    aim = around.target + (lead * around.target_velocity
-                           if around.target_velocity is not None else 0.0)  # fmt: skip
+    aim = around.target + (
+        lead * around.target_velocity if around.target_velocity is not None else 0.0
+    )
     if beside:
         off = _flat(me.com - aim)
         aim = aim + beside * _unit(off)

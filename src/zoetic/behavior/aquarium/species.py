@@ -150,35 +150,29 @@ def _ramp(t: Table, key: str, default) -> tuple[float, float]:
     return (q[0], q[1])
 
 
-def parse_species(doc: dict[str, Any], source: str = "<memory>") -> Species:
-    """Return the Species a parsed TOML document describes; SpeciesError if malformed."""
-    top = Table(doc, f"{source}: top level", SpeciesError)
-    name = top.string("name")
-    description = top.raw("description", "")
-    if not isinstance(description, str):
-        raise top.fail(f"'description' must be text, got {description!r}")
-    body = top.string("body")
-    color = top.numbers("color", size=3)
-    if not all(0 <= c <= 255 for c in color):
-        raise top.fail(f"'color' = {color}: each of red, green, blue must be in 0..255")
-    predator = top.boolean("predator", False)
-    prey = top.raw("prey", [])
-    if not isinstance(prey, list) or not all(isinstance(p, str) and p for p in prey):
-        raise top.fail(f"'prey' must be a list of species names, got {prey!r}")
-    if prey and not predator:
-        raise top.fail("'prey' is given but 'predator' is false; a prey list needs predator = true")
+def _section(top: Table, key: str, source: str) -> Table:
+    """Return the sub-table ``[key]`` of a species file, its errors naming it."""
+    t = top.table(key)
+    t.where = f"{source}: [{key}]"
+    return t
 
-    h = top.table("habits")
-    h.where = f"{source}: [habits]"
+
+def _habits(h: Table) -> Habits:
+    """Return the [habits] of a species file."""
     habits = Habits(
-        h.boolean("schooling", False), h.boolean("coward", False), _words(h, "likes"),
-        _words(h, "dislikes"), h.integer("crowd", 4, lo=0),
+        h.boolean("schooling", False),
+        h.boolean("coward", False),
+        _words(h, "likes"),
+        _words(h, "dislikes"),
+        h.integer("crowd", 4, lo=0),
         h.number("personal_space", 1.5, positive=True),
-    )  # fmt: skip
+    )
     h.finish()
+    return habits
 
-    m = top.table("mind")
-    m.where = f"{source}: [mind]"
+
+def _mind(m: Table) -> MindConstants:
+    """Return the [mind] constants of a species file (defaults: ``MindConstants``)."""
     d = MindConstants()
     mind = MindConstants(
         alpha=m.number("alpha", d.alpha, positive=True),
@@ -199,33 +193,61 @@ def parse_species(doc: dict[str, Any], source: str = "<memory>") -> Species:
             f"({mind.fear_threshold:g})"
         )
     m.finish()
+    return mind
 
-    s = top.table("senses")
-    s.where = f"{source}: [senses]"
+
+def _senses(s: Table) -> Senses:
+    """Return the [senses] of a species file: view angle (deg), view and smell range (m)."""
     senses = Senses(
         s.number("view_angle", 300.0, positive=True, hi=360.0),
         s.number("view_range", 6.0, positive=True, hi=1000.0),
         s.number("smell_range", 3.0, lo=0.0, hi=1000.0),
-    )  # fmt: skip
+    )
     s.finish()
+    return senses
 
-    mo = top.table("motor")
-    mo.where = f"{source}: [motor]"
+
+def _motor(mo: Table) -> Motor:
+    """Return the [motor] of a species file: skills, frequency (Hz), speeds (m/s), catch (m)."""
     motor = Motor(
         mo.string("skills", BUILT_IN),
         mo.number("frequency", None, positive=True, hi=20.0),
         mo.number("cruise_speed", 0.25, positive=True, hi=20.0),
         mo.number("max_speed", 0.5, positive=True, hi=20.0),
         mo.number("catch_radius", 0.3, positive=True, hi=10.0),
-    )  # fmt: skip
+    )
     if motor.max_speed < motor.cruise_speed:
         raise mo.fail("'max_speed' must be at least 'cruise_speed'")
     mo.finish()
+    return motor
+
+
+def parse_species(doc: dict[str, Any], source: str = "<memory>") -> Species:
+    """Return the Species a parsed TOML document describes; SpeciesError if malformed."""
+    top = Table(doc, f"{source}: top level", SpeciesError)
+    name = top.string("name")
+    description = top.raw("description", "")
+    if not isinstance(description, str):
+        raise top.fail(f"'description' must be text, got {description!r}")
+    body = top.string("body")
+    color = top.numbers("color", size=3)
+    if not all(0 <= c <= 255 for c in color):
+        raise top.fail(f"'color' = {color}: each of red, green, blue must be in 0..255")
+    predator = top.boolean("predator", False)
+    prey = top.raw("prey", [])
+    if not isinstance(prey, list) or not all(isinstance(p, str) and p for p in prey):
+        raise top.fail(f"'prey' must be a list of species names, got {prey!r}")
+    if prey and not predator:
+        raise top.fail("'prey' is given but 'predator' is false; a prey list needs predator = true")
+    habits = _habits(_section(top, "habits", source))
+    mind = _mind(_section(top, "mind", source))
+    senses = _senses(_section(top, "senses", source))
+    motor = _motor(_section(top, "motor", source))
     top.finish()
+    rgb = (int(color[0]), int(color[1]), int(color[2]))
     return Species(
-        name, body, (int(color[0]), int(color[1]), int(color[2])), predator, tuple(prey),
-        habits, mind, senses, motor, description, source,
-    )  # fmt: skip
+        name, body, rgb, predator, tuple(prey), habits, mind, senses, motor, description, source
+    )
 
 
 def list_species() -> list[str]:
@@ -278,8 +300,11 @@ def learned_skills(spec: Species, where: str | None = None) -> Path:
     body = Path(spec.body).stem if is_path(spec.body) else spec.body
     directory = SKILLS_DIR / body
     if not (directory / "repertoire.json").is_file():
-        shipped = sorted(p.name for p in SKILLS_DIR.iterdir() if p.is_dir()) \
-            if SKILLS_DIR.is_dir() else []  # fmt: skip
+        shipped = (
+            sorted(p.name for p in SKILLS_DIR.iterdir() if p.is_dir())
+            if SKILLS_DIR.is_dir()
+            else []
+        )
         where = where or f"{spec.source}: [motor] skills"
         raise SpeciesError(
             f"{where}: no learned repertoire is shipped for body {spec.body!r} (there are for "

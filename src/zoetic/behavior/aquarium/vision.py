@@ -46,8 +46,17 @@ class FishEyes:
     frames: int = 0
 
     @classmethod
-    def build(cls, animal: int, body: Body, colors, prey_body: Body, prey_color,
-              view_range: float, floor: float, extent: float) -> FishEyes:  # fmt: skip
+    def build(
+        cls,
+        animal: int,
+        body: Body,
+        colors,
+        prey_body: Body,
+        prey_color,
+        view_range: float,
+        floor: float,
+        extent: float,
+    ) -> FishEyes:
         """Return eyes for animal ``animal`` (``body``) of a world whose animals wear
         ``colors`` (RGB in [0, 1]), hunting ``prey_body`` in ``prey_color``; the water's
         visibility is ``view_range`` m, the seabed at height ``floor`` spans ``extent`` m."""
