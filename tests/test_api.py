@@ -41,6 +41,8 @@ def test_the_readme_python_api_examples_run(tmp_path, monkeypatch, capsys):
     assert scope["touches"] > 0 and scope["scene"].ball_velocities[0, 0, 0] == 0.0
     assert scope["scene"].time == 0.0  # restored to "now"
     assert scope["run"].final.time == 2.0
+    tank = scope["tank"]
+    assert len(tank.tank.fishes) == 4 and abs(tank.life.times[-1] - 3.0) < 1e-6
     out = capsys.readouterr().out
     assert "(1, 61, 23, 3)" in out and "(64, 20) (240, 320, 3)" in out
 

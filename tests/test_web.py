@@ -193,6 +193,7 @@ def test_the_viewer_draws_and_scrubs_in_chromium(shark_run, tmp_path):
     assert (tmp_path / "viewer-1.5s.png").stat().st_size > 1000
 
 
+@pytest.mark.slow
 def test_an_aquarium_plays_in_chromium_with_its_objects_and_events(tmp_path):
     """A tiny aquarium run, opened like any other: the page loads, draws the fishes, food,
     rock and walls, and lists the events up to the time shown."""
