@@ -244,12 +244,14 @@ class Table:
         self.used: set[str] = set(known)
 
     def fail(self, problem: str) -> ZoeticError:
+        """Return (not raise) an ``error`` for ``problem``, prefixed with ``where``."""
         return self.error(f"{self.where}: {problem}")
 
     def __contains__(self, key: str) -> bool:
         return key in self.data
 
     def raw(self, key: str, default: Any = ...) -> Any:
+        """Return ``key``'s value unchecked, marking it read; missing, no default: error."""
         self.used.add(key)
         if key not in self.data:
             if default is ...:
@@ -267,6 +269,7 @@ class Table:
         hi: float | None = None,
         positive: bool = False,
     ) -> float:
+        """Return ``key`` as a finite float in [lo, hi]; a non-number default as is."""
         value = self.raw(key, default)
         if value is default and default is not ... and not isinstance(default, int | float):
             return value
@@ -275,28 +278,33 @@ class Table:
     def integer(
         self, key: str, default: Any = ..., lo: int | None = None, hi: int | None = None
     ) -> int:
+        """Return ``key`` as an int in [lo, hi]; a non-int default as is."""
         value = self.raw(key, default)
         if value is default and default is not ... and not isinstance(default, int):
             return value
         return integer(value, f"{self.where}: {key}", self.error, lo, hi)
 
     def string(self, key: str, default: Any = ..., choices: Iterable[str] | None = None) -> str:
+        """Return ``key`` as a non-empty string (one of ``choices``); a non-str default as is."""
         value = self.raw(key, default)
         if value is default and default is not ... and not isinstance(default, str):
             return value
         return string(value, f"{self.where}: {key}", self.error, choices)
 
     def boolean(self, key: str, default: Any = ...) -> bool:
+        """Return ``key`` as a bool: true or false only, else error."""
         value = self.raw(key, default)
         if not isinstance(value, bool):
             raise self.fail(f"{key!r} must be true or false, got {abbrev(value)}")
         return value
 
     def table(self, key: str, known: Iterable[str] = ()) -> Table:
+        """Return the sub-table at ``key`` (empty if absent) as a Table naming it."""
         value = self.raw(key, {})
         return Table(value, f"{self.where}: [{key}]" if self.where else key, self.error, known)
 
     def tables(self, key: str, limit: int | None = None) -> list[dict]:
+        """Return the [[key]] array of tables (empty if absent), at most ``limit``."""
         value = self.raw(key, [])
         if not isinstance(value, list) or not all(isinstance(t, dict) for t in value):
             raise self.fail(f"{key!r} must be an array of tables ([[{key}]]), got {abbrev(value)}")
@@ -307,6 +315,7 @@ class Table:
     def numbers(
         self, key: str, default: Any = ..., size: int | None = None, limit: int | None = None
     ) -> list[float]:
+        """Return ``key`` as finite floats (exactly ``size``, at most ``limit``)."""
         value = self.raw(key, default)
         if value is default and default is not ... and not isinstance(default, list):
             return value

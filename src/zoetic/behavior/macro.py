@@ -215,6 +215,7 @@ class PlanAnnealing(_Search):
 
     @property
     def T(self) -> float:
+        """The current temperature, in units of the chains' mean starting cost."""
         return self.sa.T
 
     def ask(self) -> tuple[np.ndarray, np.ndarray]:
@@ -228,6 +229,7 @@ class PlanAnnealing(_Search):
         self.sa.tell(np.hstack([e, d]).astype(float), f)
 
     def status(self):
+        """Return {"T": the temperature, "accept": running acceptance rate, 0..1}."""
         return self.sa.status()
 
 
@@ -286,6 +288,7 @@ class PlanGenetic(_Search):
         self.generation += 1
 
     def status(self):
+        """Return {"gen": the number of populations evaluated so far}."""
         return {"gen": float(self.generation)}
 
 

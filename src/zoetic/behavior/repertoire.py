@@ -30,6 +30,7 @@ class Repertoire:
 
     @property
     def names(self) -> list[str]:
+        """The entry names, in the order they were first added."""
         return list(self.controllers)
 
     def add(self, name: str, ctrl: Controller, duration: float, **info) -> None:

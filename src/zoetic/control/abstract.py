@@ -45,11 +45,13 @@ class AbstractController(Controller):
         return int(np.count_nonzero(self.amp))
 
     def raw(self, t):
+        """Return unclipped activations (T, A) at times t (s): offset plus the cosine modes."""
         t = np.asarray(t, float)[:, None, None]
         waves = self.amp * np.cos(2 * np.pi * self.freq * t + self.phase)  # (T, A, K)
         return self.offset[None, :] + waves.sum(axis=2)
 
     def to_dict(self):
+        """Return the base description plus period (s), offset, freq (Hz), amp, phase (rad)."""
         return super().to_dict() | {
             "period": self.period,
             "offset": self.offset.round(6).tolist(),
@@ -87,6 +89,7 @@ class SequenceController(Controller):
 
     @property
     def duration(self) -> float:
+        """The total time (s) from the first controller's start to the last one's end."""
         return float(self.starts()[-1] + self.items[-1][1])
 
     def weights(self, t: np.ndarray) -> np.ndarray:
@@ -108,6 +111,7 @@ class SequenceController(Controller):
         return fade_in * fade_out
 
     def raw(self, t):
+        """Return unclipped activations (T, A) at t (s): the blend-weighted item outputs."""
         t = np.asarray(t, float)
         w = self.weights(t)
         out = np.zeros((t.size, self.n_actuators))
@@ -118,6 +122,7 @@ class SequenceController(Controller):
         return out
 
     def to_dict(self):
+        """Return the base description plus overlap and each item's duration (s) and dict."""
         return super().to_dict() | {
             "overlap": self.overlap,
             "items": [{"duration": dur, "controller": c.to_dict()} for c, dur in self.items],

@@ -25,9 +25,11 @@ class Controller:
 
     @property
     def n_actuators(self) -> int:
+        """The number A of actuators it drives (columns of its activation table)."""
         return len(self.actuators)
 
     def raw(self, t: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
+        """Return unclipped activations (T, A) at times t (s); subclasses define it."""
         raise NotImplementedError
 
     def sample(self, t: np.ndarray) -> np.ndarray:
@@ -68,9 +70,11 @@ class ConstantController(Controller):
     kind = "constant"
 
     def raw(self, t):
+        """Return (T, A) copies of ``values``, one row per time in t (s)."""
         return np.broadcast_to(np.asarray(self.values, float), (len(t), self.n_actuators)).copy()
 
     def to_dict(self):
+        """Return the base description plus ``values``, JSON-able."""
         return super().to_dict() | {"values": list(self.values)}
 
 
@@ -87,6 +91,7 @@ class WaveController(Controller):
     kind = "wave"
 
     def raw(self, t):
+        """Return the unclipped wave (T, A) at times t (s), held actuators at their value."""
         ph = np.asarray(self.phases, float)
         s = np.sin(2 * np.pi * (self.frequency * t[:, None] - ph[None, :]))
         u = self.offset + self.amplitude * 0.5 * (1.0 + s)
@@ -95,6 +100,7 @@ class WaveController(Controller):
         return u
 
     def to_dict(self):
+        """Return the base description plus frequency, amplitude, offset, phases, hold."""
         out = super().to_dict() | {
             "frequency": self.frequency,
             "amplitude": self.amplitude,
@@ -130,6 +136,7 @@ class TimeDomainController(Controller):
 
     @property
     def nodes(self) -> int:
+        """The number M of nodal values per actuator."""
         return int(self.values.shape[1])
 
     def node_times(self) -> np.ndarray:
@@ -150,19 +157,24 @@ class TimeDomainController(Controller):
         return BSpline.design_matrix(tc, knots, k).toarray()
 
     def raw(self, t):
+        """Return unclipped activations (T, A) interpolated from the nodes at t (s)."""
         return self.design_matrix(t) @ self.values.T
 
     def params(self):
+        """Return a copy of the nodal values (A, M), flattened to (A*M,)."""
         return self.values.ravel().copy()
 
     def bounds(self):
+        """Return (lower, upper) of shape (A*M,): every nodal value in [0, 1]."""
         n = self.values.size
         return np.zeros(n), np.ones(n)
 
     def with_params(self, p):
+        """Return a copy with nodal values from flat p (A*M,) reshaped to (A, M)."""
         return replace(self, values=np.asarray(p, float).reshape(self.values.shape))
 
     def to_dict(self):
+        """Return the base description plus duration, interp and values (A, M)."""
         return super().to_dict() | {
             "duration": self.duration,
             "interp": self.interp,
@@ -217,6 +229,7 @@ class FrequencyDomainController(Controller):
 
     @property
     def nodes(self) -> int:
+        """The number M of cosine bases (harmonic terms) per actuator."""
         return int(self.omega.size)
 
     def design_matrix(self, t: np.ndarray) -> np.ndarray:
@@ -225,21 +238,26 @@ class FrequencyDomainController(Controller):
         return np.cos(t[:, None] * self.omega[None, :] + self.phase[None, :])
 
     def raw(self, t):
+        """Return unclipped activations (T, A): the cosine sums at times t (s)."""
         return self.design_matrix(t) @ self.amplitudes.T
 
     def params(self):
+        """Return a copy of the amplitudes (A, M), flattened to (A*M,)."""
         return self.amplitudes.ravel().copy()
 
     def bounds(self):
+        """Return (lower, upper) (A*M,): [0, 1] for the constant, else [-0.5, 0.5]."""
         lo = np.where(self.omega == 0, 0.0, -0.5)
         hi = np.where(self.omega == 0, 1.0, 0.5)
         a = len(self.actuators)
         return np.tile(lo, a), np.tile(hi, a)
 
     def with_params(self, p):
+        """Return a copy with amplitudes from flat p (A*M,) reshaped to (A, M)."""
         return replace(self, amplitudes=np.asarray(p, float).reshape(self.amplitudes.shape))
 
     def to_dict(self):
+        """Return the base description plus omega (rad/s), phase (rad), amplitudes."""
         return super().to_dict() | {
             "omega": self.omega.round(9).tolist(),
             "phase": self.phase.round(9).tolist(),
@@ -256,7 +274,9 @@ class MirroredController(Controller):
     kind = "mirrored"
 
     def raw(self, t):
+        """Return the inner controller's unclipped (T, A) with columns permuted by mirror."""
         return self.inner.raw(t)[:, list(self.mirror)]
 
     def to_dict(self):
+        """Return the base description plus the inner controller's dict and mirror."""
         return super().to_dict() | {"inner": self.inner.to_dict(), "mirror": list(self.mirror)}

@@ -87,18 +87,22 @@ class Senses:
 
     @cached_property
     def com(self) -> np.ndarray:
+        """(B, 3) m: the centre of mass of each lane's positions."""
         return np.einsum("n,bnk->bk", self.body.mass / self.body.total_mass, self.positions)
 
     @cached_property
     def com_velocity(self) -> np.ndarray:
+        """(B, 3) m/s: the mass-weighted mean velocity (the centre of mass's velocity)."""
         return np.einsum("n,bnk->bk", self.body.mass / self.body.total_mass, self.velocities)
 
     @cached_property
     def rotation(self) -> np.ndarray:
+        """(B, 3, 3): the best rotation carrying the rest pose onto the pose (``orientation``)."""
         return orientation(self.body, self.positions)
 
     @cached_property
     def frame(self) -> np.ndarray:
+        """(B, 3, 3): the best linear map carrying the rest pose onto the pose (``linear_fit``)."""
         return linear_fit(self.body, self.positions)
 
     @cached_property
@@ -114,6 +118,7 @@ class Senses:
         return _unit(u - (u * self.forward).sum(-1, keepdims=True) * self.forward)
 
     def need_target(self) -> np.ndarray:
+        """Return the target (B, 3), m; raise ControllerError when none was given."""
         if self.target is None:
             raise ControllerError("a target sensor was asked for, but no target was given")
         return self.target

@@ -219,14 +219,17 @@ class Objective:
 
     @start.setter
     def start(self, state: State) -> None:
+        """Make ``state`` (batch S) the starts every candidate is played from."""
         self.starts = state
 
     @property
     def n_starts(self) -> int:
+        """The number S of start states each candidate is played from."""
         return int(self.starts.positions.shape[0])
 
     @property
     def dimension(self) -> int:
+        """The length of a candidate vector: free actuators times parameters per actuator."""
         return int(np.prod(self.shape))
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:

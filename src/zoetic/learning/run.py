@@ -154,6 +154,7 @@ class Log:
     batches: list = field(default_factory=list)
 
     def add(self, X, ev, wall: float) -> None:
+        """Append a batch: its candidates X (k, n), E, E_u, E_v and the run's wall time (s)."""
         self.X.extend(np.asarray(X))
         self.E.extend(ev.E)
         self.E_u.extend(ev.E_u)
@@ -162,6 +163,7 @@ class Log:
         self.batches.append(len(ev.E))
 
     def history_csv(self) -> bytes:
+        """Return history.csv bytes: per evaluation E, E_u, E_v, best E so far, wall (s)."""
         best = np.minimum.accumulate(np.array(self.E)) if self.E else np.array([])
         lines = ["evaluation,E,E_u,E_v,best_E,wall_time"]
         for i, (e, eu, ev, b, w) in enumerate(
@@ -337,6 +339,7 @@ class Run:
 
     @property
     def evaluations(self) -> int:
+        """The number of candidates evaluated so far (the log's length)."""
         return len(self.log.E)
 
     def best_controller(self) -> Controller:

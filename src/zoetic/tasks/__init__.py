@@ -71,6 +71,8 @@ TERM_KEYS = ("kind", "weight", "target", "goal")
 
 @dataclass(frozen=True)
 class Term:
+    """A task's term: kind (a ``TERMS`` name), weight (E_v adds weight * value), target, goal."""
+
     kind: str
     weight: float
     target: float = 0.0

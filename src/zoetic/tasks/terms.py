@@ -5,7 +5,9 @@ A term is a function ``term(xp, s, params) -> (K,)`` written against an array mo
 (``zoetic.tasks.signals``: positions (K, R, N, 3), the activations applied at those instants
 (K, R, A), their times (R,), the medium's water level, and what is derived from them). The
 registry ``TERMS`` is what task files name; a conformance test runs every entry through both
-modules.
+modules. Each term's docstring gives its value per recording, its unit and sign: the objective
+minimises the weighted sum, so a "cost" (smaller is better) takes a positive weight and a "gain"
+(larger is better) a negative one.
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ TAIL_STRIKE_TURN = np.pi  # rad of somersault in the air a tail strike must foll
 
 @dataclass(frozen=True)
 class TermParams:
-    """A term's settings from the task file: weight, target and goal."""
+    """The settings a term's formula reads from the task file: target and goal (not the weight)."""
 
     target: float = 0.0  # or (K,), one per recording
     goal: tuple[float, float, float] = (0.0, 0.0, 0.0)  # or (K, 3), one per recording
@@ -66,6 +68,7 @@ def term(doc: str) -> Callable[[TermFn], TermFn]:
     "(rad^2, 0 once past it): reaching a heading early, not only at the end"
 )
 def heading_shortfall(xp, s: Signals, p: TermParams):
+    """Return (K,) rad^2: mean squared shortfall of the turn so far from 'target' (>= 0; cost)."""
     sign = 1.0 if p.target >= 0 else -1.0
     turned = s.heading - s.heading[:, :1]
     return xp.mean(xp.maximum(sign * (p.target - turned), 0.0) ** 2, axis=1)
@@ -73,11 +76,13 @@ def heading_shortfall(xp, s: Signals, p: TermParams):
 
 @term("metres the centre of mass travelled along the start heading")
 def distance_along_heading(xp, s: Signals, p: TermParams):
+    """Return (K,) m: centre-of-mass travel along its start heading (forward +; gain)."""
     return s.along
 
 
 @term("squared sideways displacement of the centre of mass (m^2)")
 def lateral_deviation(xp, s: Signals, p: TermParams):
+    """Return (K,) m^2: squared sideways end displacement of the centre of mass (>= 0; cost)."""
     h0 = s.heading_xz[:, 0]
     left0 = xp.stack([-h0[:, 1], h0[:, 0]], axis=-1)
     return xp.sum(s.displacement_xz * left0, axis=-1) ** 2
@@ -85,33 +90,39 @@ def lateral_deviation(xp, s: Signals, p: TermParams):
 
 @term("mean squared change of the centre of mass's height (m^2)")
 def depth_keeping(xp, s: Signals, p: TermParams):
+    """Return (K,) m^2: mean squared change of the centre of mass's height (>= 0; cost)."""
     y = s.com[:, :, 1]
     return xp.mean((y - y[:, :1]) ** 2, axis=1)
 
 
 @term("squared error of the heading change against 'target' (rad^2)")
 def heading_change(xp, s: Signals, p: TermParams):
+    """Return (K,) rad^2: squared error of end-minus-start heading vs 'target' (>= 0; cost)."""
     return (s.heading[:, -1] - s.heading[:, 0] - p.target) ** 2
 
 
 @term("squared distance of the head to 'goal', relative to its start (m^2)")
 def goal_distance2(xp, s: Signals, p: TermParams):
+    """Return (K,) m^2: squared end distance of the head from its start plus 'goal' (cost)."""
     goal = s.head[:, 0] + xp.asarray(p.goal)
     return xp.sum((s.head[:, -1] - goal) ** 2, axis=-1)
 
 
 @term("squared deviation of the mean forward speed from 'target' (m^2/s^2)")
 def speed_deviation(xp, s: Signals, p: TermParams):
+    """Return (K,) m^2/s^2: squared error of mean forward speed vs 'target' (>= 0; cost)."""
     return (s.along / s.horizon - p.target) ** 2
 
 
 @term("squared error of the final pitch against 'target' (rad^2, nose up positive)")
 def final_pitch(xp, s: Signals, p: TermParams):
+    """Return (K,) rad^2: squared error of the end pitch (nose up +) vs 'target' (>= 0; cost)."""
     return (s.pitch[:, -1] - p.target) ** 2
 
 
 @term("mean squared roll of the body's left-right axis (rad^2): staying upright")
 def roll_keeping(xp, s: Signals, p: TermParams):
+    """Return (K,) rad^2: mean squared roll over the motion (>= 0, 0 upright; cost)."""
     return xp.mean(s.roll**2, axis=1)
 
 
@@ -120,6 +131,7 @@ def roll_keeping(xp, s: Signals, p: TermParams):
     "centre) below its start, as a fraction of it: keeps a fin from folding forward"
 )
 def length_keeping(xp, s: Signals, p: TermParams):
+    """Return (K,): mean squared fractional shrink of head-to-tail length (>= 0; cost)."""
     tail = s.frame.part_mask("tail")
     tail = tail / max(float(tail.sum()), EPS)
     d = s.positions[:, :, s.frame.head] - xp.einsum("krnd,n->krd", s.positions, xp.asarray(tail))
@@ -129,24 +141,28 @@ def length_keeping(xp, s: Signals, p: TermParams):
 
 @term("greatest height of the centre of mass above its start (m): leaps")
 def max_height(xp, s: Signals, p: TermParams):
+    """Return (K,) m: greatest rise of the centre of mass above its start height (>= 0; gain)."""
     y = s.com[:, :, 1]
     return xp.max(y, axis=1) - y[:, 0]
 
 
 @term("fraction of the recorded time the body is wholly out of the water")
 def air_time(xp, s: Signals, p: TermParams):
+    """Return (K,): fraction (0..1) of records with no node in the water (gain)."""
     out = 1.0 - xp.max(s.in_water, axis=2)  # 1 when no node is wet
     return xp.mean(out, axis=1)
 
 
 @term("mean speed of the centre of mass (m/s)")
 def mean_speed(xp, s: Signals, p: TermParams):
+    """Return (K,) m/s: mean speed of the centre of mass between records (>= 0; gain)."""
     v = s.velocity
     return xp.mean(xp.sqrt(xp.sum(v * v, axis=-1) + EPS), axis=1)
 
 
 @term("mean squared muscle activation: effort")
 def effort(xp, s: Signals, p: TermParams):
+    """Return (K,): mean squared activation over records and actuators (>= 0; cost)."""
     return xp.mean(s.activations**2, axis=(1, 2))
 
 
@@ -155,11 +171,13 @@ def effort(xp, s: Signals, p: TermParams):
     "positive): turning up or down"
 )
 def pitch_change(xp, s: Signals, p: TermParams):
+    """Return (K,) rad^2: squared error of end-minus-start pitch vs 'target' (>= 0; cost)."""
     return (s.pitch[:, -1] - s.pitch[:, 0] - p.target) ** 2
 
 
 @term("greatest height of the centre of mass above the water surface (m): a leap's apex")
 def apex_above_surface(xp, s: Signals, p: TermParams):
+    """Return (K,) m: highest centre of mass above the water level (< 0 if it stays under; gain)."""
     return xp.max(s.com[:, :, 1], axis=1) - s.level
 
 
@@ -168,6 +186,7 @@ def apex_above_surface(xp, s: Signals, p: TermParams):
     "clears the water)"
 )
 def clear_fraction(xp, s: Signals, p: TermParams):
+    """Return (K,): greatest fraction (0..1) of nodes out of the water at one record (gain)."""
     return xp.max(xp.mean(1.0 - s.in_water, axis=2), axis=1)
 
 
@@ -176,6 +195,7 @@ def clear_fraction(xp, s: Signals, p: TermParams):
     "whole body is back in the water): a leap that has re-entered"
 )
 def final_height(xp, s: Signals, p: TermParams):
+    """Return (K,) m: highest node above the water at the end (>= 0, 0 back in; cost)."""
     return xp.maximum(xp.max(s.positions[:, -1, :, 1], axis=1) - s.level, 0.0)
 
 
@@ -184,6 +204,7 @@ def final_height(xp, s: Signals, p: TermParams):
     "water: somersaults"
 )
 def flight_rotation(xp, s: Signals, p: TermParams):
+    """Return (K,) rad: unsigned net turn in the vertical plane while airborne (>= 0; gain)."""
     both = s.airborne[:, 1:] * s.airborne[:, :-1]
     return xp.abs(xp.sum(xp.diff(s.body_angle, axis=1) * both, axis=1))
 
@@ -193,6 +214,7 @@ def flight_rotation(xp, s: Signals, p: TermParams):
     "horizontal over a hurdle"
 )
 def apex_pitch(xp, s: Signals, p: TermParams):
+    """Return (K,) rad^2: squared error of pitch at the centre of mass's apex vs 'target' (cost)."""
     i = xp.argmax(s.com[:, :, 1], axis=1)[:, None]
     return (xp.take_along_axis(s.pitch, i, axis=1)[:, 0] - p.target) ** 2
 
@@ -203,6 +225,7 @@ def apex_pitch(xp, s: Signals, p: TermParams):
     "less the metres it stayed short (a leap before the bar is no hurdle)"
 )
 def bar_crossing_height(xp, s: Signals, p: TermParams):
+    """Return (K,) m: centre of mass above goal[1] nearest x = goal[0] (< 0 if short; gain)."""
     x = s.com[:, :, 0]
     i = xp.argmin(xp.abs(x - p.goal[0]), axis=1)[:, None]
     h = xp.take_along_axis(s.com[:, :, 1], i, axis=1)[:, 0] - p.goal[1]
@@ -215,11 +238,13 @@ def bar_crossing_height(xp, s: Signals, p: TermParams):
     "0 without objects)"
 )
 def contact_count(xp, s: Signals, p: TermParams):
+    """Return (K,): node-object contacts summed over the records (>= 0; cost)."""
     return xp.sum(s.contacts, axis=1)
 
 
 @term("greatest rise of the first ball above its start (m; 0 without a ball): a struck ball")
 def ball_rise(xp, s: Signals, p: TermParams):
+    """Return (K,) m: greatest rise of the first ball above its start (>= 0; gain)."""
     if s.balls.shape[2] == 0:
         return xp.zeros(s.positions.shape[0])
     y = s.balls[:, :, 0, 1]
@@ -228,6 +253,7 @@ def ball_rise(xp, s: Signals, p: TermParams):
 
 @term("closest approach (m) of the head to the first ball (0 without a ball)")
 def ball_head_distance(xp, s: Signals, p: TermParams):
+    """Return (K,) m: closest approach of the head to the first ball's centre (>= 0; cost)."""
     if s.balls.shape[2] == 0:
         return xp.zeros(s.positions.shape[0])
     d = s.head - s.balls[:, :, 0]
@@ -240,6 +266,7 @@ def ball_head_distance(xp, s: Signals, p: TermParams):
     "the water), summed; large for a bellyflop, small for a clean dive"
 )
 def splash(xp, s: Signals, p: TermParams):
+    """Return (K,) m^3/s: summed re-entry flux of leading faces (>= 0; cost or gain)."""
     return xp.sum(s.entry_flux, axis=(1, 2))
 
 
@@ -249,6 +276,7 @@ def splash(xp, s: Signals, p: TermParams):
     "bounced off its support (0 without such a contact)"
 )
 def ball_moved_by_nose(xp, s: Signals, p: TermParams):
+    """Return (K,) m: greatest ball travel after a first strike by the nose (>= 0; gain)."""
     return s.ball_moved_after("nose") * xp.max(s.struck_first("nose"), axis=1)
 
 
@@ -258,6 +286,7 @@ def ball_moved_by_nose(xp, s: Signals, p: TermParams):
     "a contact, e.g. a ball another part had already knocked off its support)"
 )
 def ball_moved_by_tail(xp, s: Signals, p: TermParams):
+    """Return (K,) m: greatest ball travel after a first strike by the tail (>= 0; gain)."""
     return s.ball_moved_after("tail") * xp.max(s.struck_first("tail"), axis=1)
 
 
@@ -268,6 +297,7 @@ def ball_moved_by_tail(xp, s: Signals, p: TermParams):
     "turned 'target' rad (0 if it never does): the tail's strike in a somersault"
 )
 def tail_strike_rotation(xp, s: Signals, p: TermParams):
+    """Return (K,) rad: flight somersault turn at the tail's first strike if >= 'target' (gain)."""
     turned = xp.abs(s.flight_pitch)
     struck = (s.struck_first("tail") > 0) & (s.airborne > 0) & (turned >= p.target)
     return xp.max(xp.where(struck, turned, 0.0), axis=1)
@@ -279,6 +309,7 @@ def tail_strike_rotation(xp, s: Signals, p: TermParams):
     "also counts"
 )
 def flight_pitch_rotation(xp, s: Signals, p: TermParams):
+    """Return (K,) rad: greatest unsigned somersault turn while airborne (>= 0; gain)."""
     return xp.max(xp.abs(s.flight_pitch), axis=1)
 
 
@@ -288,6 +319,7 @@ def flight_pitch_rotation(xp, s: Signals, p: TermParams):
     "out for two records): a somersault's spin"
 )
 def flight_pitch_rate(xp, s: Signals, p: TermParams):
+    """Return (K,) rad/s: somersault turn over the seconds wholly airborne (>= 0; gain)."""
     if s.airborne.shape[1] < 2:
         return xp.zeros(s.airborne.shape[0])
     both = s.airborne[:, 1:] * s.airborne[:, :-1]
@@ -303,6 +335,7 @@ def flight_pitch_rate(xp, s: Signals, p: TermParams):
     "so that a strike late in the somersault scores best (0 without a ball)"
 )
 def ball_tail_distance(xp, s: Signals, p: TermParams):
+    """Return (K,) m: least tail-to-ball distance plus the arc left to swing (>= 0; cost)."""
     if s.balls.shape[2] == 0:
         return xp.zeros(s.positions.shape[0])
     tail = np.flatnonzero(s.frame.part_mask("tail"))
@@ -318,6 +351,7 @@ def ball_tail_distance(xp, s: Signals, p: TermParams):
     "goal still is (the Gym swim reward is its decrease over a step)"
 )
 def goal_distance_xz(xp, s: Signals, p: TermParams):
+    """Return (K,) m: top-view end distance of the centre of mass from world 'goal' (cost)."""
     return norm_xz(xp, xp.asarray(p.goal) - s.com[:, -1])
 
 
@@ -327,6 +361,7 @@ def goal_distance_xz(xp, s: Signals, p: TermParams):
     "its increase over a step)"
 )
 def position_along(xp, s: Signals, p: TermParams):
+    """Return (K,) m: top-view end centre of mass along world heading 'target' (gain)."""
     com = s.com[:, -1]
     return com[:, 0] * xp.cos(p.target) + com[:, 2] * xp.sin(p.target)
 
@@ -337,6 +372,7 @@ def position_along(xp, s: Signals, p: TermParams):
     "to go (the Gym turn reward is its decrease over a step)"
 )
 def heading_error(xp, s: Signals, p: TermParams):
+    """Return (K,) rad: |wrapped| end body heading error vs world 'target' (0..pi; cost)."""
     return xp.abs(wrap_angle(p.target - s.body_heading[:, -1]))
 
 

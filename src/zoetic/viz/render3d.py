@@ -322,6 +322,7 @@ def _marker_items(markers, colors, radius, eye, rot, focal, size, medium) -> lis
 
 
 def draw_buoy(draw: ImageDraw.ImageDraw, x: float, y: float, r: float, col: np.ndarray) -> None:
+    """Draw a shaded ball at pixel (x, y), radius r px (at least 1.5), base colour col RGB."""
     r = max(r, 1.5)
     for k, (scale, off) in enumerate(((1.0, 0.0), (0.75, 0.15), (0.4, 0.35), (0.15, 0.45))):
         c = tuple(np.clip(col * (0.55 + 0.3 * k) + 40 * (k == 3), 0, 255).astype(int).tolist())
@@ -331,6 +332,7 @@ def draw_buoy(draw: ImageDraw.ImageDraw, x: float, y: float, r: float, col: np.n
 
 @lru_cache(maxsize=8)
 def label_font(px: int) -> ImageFont.ImageFont | ImageFont.FreeTypeFont:
+    """Return Pillow's default font at ``px`` pixels (cached, 8 sizes)."""
     return ImageFont.load_default(size=px)
 
 

@@ -78,6 +78,7 @@ class Annealing(Optimizer):
         self.last_accept = np.zeros(self.chains, bool)
 
     def ask(self):
+        """Return (chains, n): the starts first, then one perturbed move per chain."""
         if self.f is None:
             return self.x.copy()
         if self.perturb is not None:
@@ -86,6 +87,7 @@ class Annealing(Optimizer):
         return np.clip(self.x + step, self.lower, self.upper)
 
     def tell(self, X, f, grad=None):
+        """Record f; accept each chain's move by the Metropolis rule; cool T on schedule."""
         f = self.record(X, f)
         if self.f is None:
             self.f = f.copy()
@@ -108,6 +110,7 @@ class Annealing(Optimizer):
             self.steps_at_T = self.accepts_at_T = 0
 
     def status(self):
+        """Return {"T": temperature, "accept": running (EMA) acceptance rate, 0..1}."""
         return {"T": self.T, "accept": self.acceptance}
 
     def _state(self):

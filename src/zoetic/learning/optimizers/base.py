@@ -43,9 +43,11 @@ class Optimizer:
 
     @property
     def dimension(self) -> int:
+        """The number n of parameters in a candidate."""
         return int(self.x0.size)
 
     def ask(self) -> np.ndarray:  # pragma: no cover - abstract
+        """Return the next batch of candidates (k, n) to evaluate, within the bounds."""
         raise NotImplementedError
 
     def record(self, X: np.ndarray, f: np.ndarray) -> np.ndarray:

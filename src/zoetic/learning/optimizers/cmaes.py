@@ -71,9 +71,11 @@ class CMAES(Optimizer):
         self.es = cma.CMAEvolutionStrategy(list(self.x0), sigma * scale.mean(), opts)
 
     def ask(self):
+        """Return the next generation (popsize, n): samples of CMA-ES's bounded normal."""
         return np.array(self.es.ask(), dtype=np.float64)
 
     def tell(self, X, f, grad=None):
+        """Record f; pass it to CMA-ES with failures scored far above the worst finite."""
         self.record(X, f)
         finite = np.isfinite(f)
         worst = np.max(f[finite]) if finite.any() else 1.0
@@ -81,9 +83,11 @@ class CMAES(Optimizer):
         self.es.tell(list(X), list(g))
 
     def done(self):
+        """Return True when CMA-ES meets a stop criterion other than the budget."""
         return bool(self.es.stop()) and "maxfevals" not in self.es.stop()
 
     def status(self):
+        """Return {"sigma": CMA-ES's current overall step size, in parameter units}."""
         return {"sigma": float(self.es.sigma)}
 
     def _state(self):

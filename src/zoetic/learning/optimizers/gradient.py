@@ -22,9 +22,11 @@ class Gradient(Optimizer):
         self.state = self.gd.init(self.x0, self.lower, self.upper, seed)
 
     def ask(self):
+        """Return the current point (1, n); its loss and gradient are needed back."""
         return self.gd.x(self.state)[None]
 
     def tell(self, X, f, grad=None):
+        """Record f; one clipped Adam step with grad (1, n), or halfway back to the best."""
         if grad is None:
             raise ValueError("the gradient optimizer needs the gradient of each point it asks")
         self.record(X, f)
@@ -32,6 +34,7 @@ class Gradient(Optimizer):
         self.state = self.gd._update(self.state, f0, g0)
 
     def status(self):
+        """Return {"|g|": the last gradient's norm in unit-box coordinates, unclipped}."""
         return {"|g|": float(self.state.grad_norm)}
 
     def _state(self):

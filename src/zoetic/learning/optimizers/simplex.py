@@ -42,6 +42,7 @@ class Simplex(Optimizer):
         return self.sim[:-1].mean(axis=0)
 
     def ask(self):
+        """Return the simplex (n+1, n), a shrink (n, n) or one trial (1, n); (0, n) done."""
         if self.done():
             return np.empty((0, self.dimension))
         xbar, worst = self._centroid(), self.sim[-1]
@@ -67,6 +68,7 @@ class Simplex(Optimizer):
         self.phase = "reflect"
 
     def tell(self, X, f, grad=None):
+        """Record f and advance Nelder-Mead: keep or reject the trial(s), re-sort."""
         f = self.record(X, f)
         phase = self.phase
         if phase == "init":
@@ -102,6 +104,7 @@ class Simplex(Optimizer):
                 self.phase = "shrink"
 
     def done(self):
+        """Return True when the simplex has collapsed below ``xatol`` and ``fatol``."""
         if self.phase != "reflect" or not np.all(np.isfinite(self.fsim)):
             return False
         return bool(
@@ -110,6 +113,7 @@ class Simplex(Optimizer):
         )
 
     def status(self):
+        """Return {"size": the simplex's largest coordinate offset from its best vertex}."""
         return {"size": float(np.max(np.abs(self.sim[1:] - self.sim[0])))}
 
     def _state(self):
