@@ -147,8 +147,23 @@ def _eyes(top: Table, source: str, index: dict[str, int], n: int) -> EyesSpec:
     return EyesSpec(node, offset, fov, levels, pixels)
 
 
-TOP_KEYS = ("name", "description", "medium", "dt", "defaults", "nodes", "springs",
-            "actuators", "faces", "fins", "wave", "head", "forward", "start_offset", "eyes")
+TOP_KEYS = (
+    "name",
+    "description",
+    "medium",
+    "dt",
+    "defaults",
+    "nodes",
+    "springs",
+    "actuators",
+    "faces",
+    "fins",
+    "wave",
+    "head",
+    "forward",
+    "start_offset",
+    "eyes",
+)
 
 
 @dataclass(frozen=True)
