@@ -74,6 +74,7 @@ def test_jax_tables_match_controller_tables():
         assert np.abs(np.asarray(table) - ctrl.table(steps, dt, t0=0.1)).max() < 1e-5, ctrl.kind
 
 
+@pytest.mark.slow
 def test_gradient_matches_finite_differences():
     body = load_animal("shark")
     steps, dt = 150, body.dt
@@ -95,6 +96,7 @@ def test_gradient_matches_finite_differences():
     assert abs(float(value) - ref) < 1e-5
 
 
+@pytest.mark.slow
 def test_adam_makes_the_shark_swim_farther():
     body = load_animal("shark")
     steps = 200
@@ -109,6 +111,7 @@ def test_adam_makes_the_shark_swim_farther():
     assert abs(float(loss(jnp.asarray(best_x, jnp.float32))) - best_f) < 1e-6
 
 
+@pytest.mark.slow
 def test_compiles_once_and_reuses_the_compiled_code():
     body = load_animal("shark")
     steps = 50
