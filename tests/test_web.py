@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import contextlib
 import dataclasses
 import json
 import re
@@ -32,6 +33,28 @@ WEBGL_FLAGS = [
     "--enable-unsafe-swiftshader",
     "--ignore-gpu-blocklist",
 ]
+
+
+@contextlib.contextmanager
+def viewer_page(html: Path):
+    """Open a viewer page in headless Chromium (800 x 500) once it says it is ready; yield the
+    page and the list its script errors are collected in (asserted empty at the start)."""
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=WEBGL_FLAGS, headless=True)
+        try:
+            page = browser.new_page(viewport={"width": 800, "height": 500})
+            errors: list[str] = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(html.as_uri())
+            page.wait_for_function(
+                "window.zoetic && (window.zoetic.ready || window.zoetic.error)", timeout=30_000
+            )
+            assert page.evaluate("window.zoetic.error") is None and not errors, errors
+            yield page, errors
+        finally:
+            browser.close()
 
 
 @pytest.fixture(scope="module")
@@ -130,7 +153,6 @@ def _check_plots(page, who: str, what: list[str], points: int) -> None:
 
 
 def test_the_viewer_draws_and_scrubs_in_chromium(shark_run, tmp_path):
-    from playwright.sync_api import sync_playwright
 
     assert Path(CHROMIUM).exists(), (
         f"{CHROMIUM} not found: the browser test needs Chromium "
@@ -139,53 +161,41 @@ def test_the_viewer_draws_and_scrubs_in_chromium(shark_run, tmp_path):
     html = tmp_path / "view.html"
     html.write_text(page_html(viewer_data(load_scene(shark_run, fps=30), read_record(shark_run))))
     glb = write_glb(load_scene(shark_run, fps=30), tmp_path / "s.glb")
-    with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=WEBGL_FLAGS, headless=True)
-        try:
-            page = browser.new_page(viewport={"width": 800, "height": 500})
-            errors: list[str] = []
-            page.on("pageerror", lambda e: errors.append(str(e)))
-            page.goto(html.as_uri())
-            page.wait_for_function(
-                "window.zoetic && (window.zoetic.ready || window.zoetic.error)", timeout=30_000
-            )
-            assert page.evaluate("window.zoetic.error") is None and not errors, errors
-            page.keyboard.press(" ")  # pause, then move the timeline as a user would
-            assert page.inner_text("#play") == "play"
-            t0 = page.evaluate("window.zoetic.time()")
-            page.keyboard.press("ArrowRight")  # one frame on
-            assert page.evaluate("window.zoetic.time()") == pytest.approx(min(t0 + 1 / 30, 2))
-            page.uncheck("#follow")  # a still camera: the shark swims across the picture
-            page.eval_on_selector(
-                "#timeline", "s => { s.value = 0; s.dispatchEvent(new Event('input')); }"
-            )
-            page.wait_for_timeout(100)
-            start = _canvas(page)
-            assert start.std() > 10, "the canvas is blank"
-            page.screenshot(path=str(tmp_path / "viewer-start.png"))
-            page.eval_on_selector(
-                "#timeline", "s => { s.value = 1.5; s.dispatchEvent(new Event('input')); }"
-            )
-            page.wait_for_timeout(100)
-            later = _canvas(page)
-            page.screenshot(path=str(tmp_path / "viewer-1.5s.png"))
-            assert "t = 1.50 s" in page.inner_text("#panel")
-            changed = np.abs(later - start).max(axis=2) > 20
-            print(f"{100 * changed.mean():.2f}% of the pixels changed")
-            assert changed.mean() > 0.005, "moving the timeline did not change the picture"
-            page.eval_on_selector(
-                "#timeline", "s => { s.value = s.max; s.dispatchEvent(new Event('input')); }"
-            )
-            page.wait_for_timeout(100)
-            end = _canvas(page)  # the last frame, not the first again (a looping clip wraps)
-            assert (np.abs(end - start).max(axis=2) > 20).mean() > 0.005
-            assert (np.abs(end - later).max(axis=2) > 20).mean() > 0.001
-            _check_plots(page, "shark", ["speed", "height"], 201)
-            # the exported .glb, read by three.js's own GLTFLoader
-            b64 = base64.b64encode(glb.read_bytes()).decode()
-            info = page.evaluate("b => window.zoetic.inspectGlb(b)", b64)
-        finally:
-            browser.close()
+    with viewer_page(html) as (page, errors):
+        page.keyboard.press(" ")  # pause, then move the timeline as a user would
+        assert page.inner_text("#play") == "play"
+        t0 = page.evaluate("window.zoetic.time()")
+        page.keyboard.press("ArrowRight")  # one frame on
+        assert page.evaluate("window.zoetic.time()") == pytest.approx(min(t0 + 1 / 30, 2))
+        page.uncheck("#follow")  # a still camera: the shark swims across the picture
+        page.eval_on_selector(
+            "#timeline", "s => { s.value = 0; s.dispatchEvent(new Event('input')); }"
+        )
+        page.wait_for_timeout(100)
+        start = _canvas(page)
+        assert start.std() > 10, "the canvas is blank"
+        page.screenshot(path=str(tmp_path / "viewer-start.png"))
+        page.eval_on_selector(
+            "#timeline", "s => { s.value = 1.5; s.dispatchEvent(new Event('input')); }"
+        )
+        page.wait_for_timeout(100)
+        later = _canvas(page)
+        page.screenshot(path=str(tmp_path / "viewer-1.5s.png"))
+        assert "t = 1.50 s" in page.inner_text("#panel")
+        changed = np.abs(later - start).max(axis=2) > 20
+        print(f"{100 * changed.mean():.2f}% of the pixels changed")
+        assert changed.mean() > 0.005, "moving the timeline did not change the picture"
+        page.eval_on_selector(
+            "#timeline", "s => { s.value = s.max; s.dispatchEvent(new Event('input')); }"
+        )
+        page.wait_for_timeout(100)
+        end = _canvas(page)  # the last frame, not the first again (a looping clip wraps)
+        assert (np.abs(end - start).max(axis=2) > 20).mean() > 0.005
+        assert (np.abs(end - later).max(axis=2) > 20).mean() > 0.001
+        _check_plots(page, "shark", ["speed", "height"], 201)
+        # the exported .glb, read by three.js's own GLTFLoader
+        b64 = base64.b64encode(glb.read_bytes()).decode()
+        info = page.evaluate("b => window.zoetic.inspectGlb(b)", b64)
     n = load_scene(shark_run).animals[0].positions.shape[1]
     assert info["skinned"] == 1 and info["meshes"] >= 2  # the shark and the sea floor
     assert info["animations"] == 1 and info["tracks"] == n
@@ -197,7 +207,6 @@ def test_the_viewer_draws_and_scrubs_in_chromium(shark_run, tmp_path):
 def test_an_aquarium_plays_in_chromium_with_its_objects_and_events(tmp_path):
     """A tiny aquarium run, opened like any other: the page loads, draws the fishes, food,
     rock and walls, and lists the events up to the time shown."""
-    from playwright.sync_api import sync_playwright
 
     from zoetic.record import Event, read_record, write_record
 
@@ -227,31 +236,19 @@ def test_an_aquarium_plays_in_chromium_with_its_objects_and_events(tmp_path):
     html = tmp_path / "tank.html"
     assert main(["view", str(run), "--html", str(html), "--fps", "20"]) == 0
     scene = load_scene(run, fps=20)
-    with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=WEBGL_FLAGS, headless=True)
-        try:
-            page = browser.new_page(viewport={"width": 800, "height": 500})
-            errors: list[str] = []
-            page.on("pageerror", lambda e: errors.append(str(e)))
-            page.goto(html.as_uri())
-            page.wait_for_function(
-                "window.zoetic && (window.zoetic.ready || window.zoetic.error)", timeout=30_000
-            )
-            assert page.evaluate("window.zoetic.error") is None and not errors, errors
-            page.evaluate("window.zoetic.pause(); window.zoetic.setTime(0.1)")
-            assert page.inner_text("#panel .events") == ""  # nothing has happened yet
-            page.evaluate("window.zoetic.setTime(0.3)")
-            assert page.inner_text("#panel .events") == f"0.2 s {fish} eat food 1"
-            t = page.evaluate("window.zoetic.time()")  # 0.3 s: frame 6 at 20 fps
-            states = page.inner_text("#panel .states").split("\n")
-            assert states == [
-                f"{a.name}: {scene.states[a.name]['intention'][6]}" for a in rec.animals
-            ], (t, states)
-            assert _canvas(page).std() > 10, "the canvas is blank"
-            _check_plots(page, rec.animals[0].name, ["speed", "height"], len(rec.period_times))
-            other = rec.animals[1].name
-            page.select_option("#plot-who", other)  # another fish: its own charts
-            assert page.evaluate("window.zoetic.plots()")["who"] == other
-            page.screenshot(path=str(tmp_path / "tank.png"))
-        finally:
-            browser.close()
+    with viewer_page(html) as (page, errors):
+        page.evaluate("window.zoetic.pause(); window.zoetic.setTime(0.1)")
+        assert page.inner_text("#panel .events") == ""  # nothing has happened yet
+        page.evaluate("window.zoetic.setTime(0.3)")
+        assert page.inner_text("#panel .events") == f"0.2 s {fish} eat food 1"
+        t = page.evaluate("window.zoetic.time()")  # 0.3 s: frame 6 at 20 fps
+        states = page.inner_text("#panel .states").split("\n")
+        assert states == [
+            f"{a.name}: {scene.states[a.name]['intention'][6]}" for a in rec.animals
+        ], (t, states)
+        assert _canvas(page).std() > 10, "the canvas is blank"
+        _check_plots(page, rec.animals[0].name, ["speed", "height"], len(rec.period_times))
+        other = rec.animals[1].name
+        page.select_option("#plot-who", other)  # another fish: its own charts
+        assert page.evaluate("window.zoetic.plots()")["who"] == other
+        page.screenshot(path=str(tmp_path / "tank.png"))
