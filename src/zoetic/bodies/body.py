@@ -172,50 +172,12 @@ def compile_body(spec: AnimalSpec) -> Body:
     act_index = {a.name: k for k, a in enumerate(spec.actuators)}
     sa = np.array([s.a for s in spec.springs], dtype=np.int64)
     sb = np.array([s.b for s in spec.springs], dtype=np.int64)
-    relaxed = np.array(
-        [
-            s.length if s.length is not None else float(np.linalg.norm(rest[s.a] - rest[s.b]))
-            for s in spec.springs
-        ]
-    )
-    contracted = np.array(
-        [
-            s.contracted_length if s.contracted_length is not None else relaxed[k]
-            for k, s in enumerate(spec.springs)
-        ]
-    )
+    relaxed, contracted = _spring_lengths(spec, rest)
     spring_act = np.array([act_index[s.actuator] if s.actuator else -1 for s in spec.springs])
-    mirror = np.array(
-        [act_index[a.mirror] if a.mirror else k for k, a in enumerate(spec.actuators)],
-        dtype=np.int64,
-    )
-    for k, m in enumerate(mirror):
-        if mirror[m] != k:
-            raise BodyError(
-                f"{spec.source}: actuator {spec.actuators[k].name!r}: mirror "
-                f"{spec.actuators[m].name!r} does not name it back as its mirror"
-            )
+    mirror = _actuator_mirror(spec, act_index)
     forward = np.array(spec.forward) / np.linalg.norm(spec.forward)
     front, back = _local_axes(rest, sa, sb, forward)
-    kf = len(spec.fins)
-    fin_nodes = -np.ones((kf, 4), dtype=np.int64)
-    for k, f in enumerate(spec.fins):
-        fin_nodes[k, : len(f.nodes)] = f.nodes
-    phase = np.zeros(len(spec.actuators))
-    wave = spec.wave
-    # an actuator missing from [wave].phases is not driven by the wave: a muscle stays relaxed
-    # (0) and a fin is held level (the activation of angle 0, clipped to its range)
-    held = np.full(len(spec.actuators), np.nan)
-    if wave is not None:
-        held[:] = 0.0
-        for nm, p in wave.phases.items():
-            phase[act_index[nm]] = p
-            held[act_index[nm]] = np.nan
-        for f in spec.fins:
-            k = act_index[f.actuator]
-            if not np.isnan(held[k]):
-                lo, hi = f.angle_range
-                held[k] = float(np.clip(-lo / (hi - lo), 0.0, 1.0)) if hi != lo else 0.0
+    panels, panel_weights = _panels(spec.faces)
     return Body(
         name=spec.name,
         medium=spec.medium,
@@ -238,9 +200,61 @@ def compile_body(spec: AnimalSpec) -> Body:
         actuator_side=tuple(a.side for a in spec.actuators),
         actuator_mirror=_frozen(mirror, np.int64),
         faces=_frozen(_triangulate(spec.faces), np.int64),
-        panels=_frozen(_panels(spec.faces)[0], np.int64),
-        panel_weights=_frozen(_panels(spec.faces)[1], np.float64),
+        panels=_frozen(panels, np.int64),
+        panel_weights=_frozen(panel_weights, np.float64),
         panel_drag=_frozen(spec.face_drag or np.ones(len(spec.faces)), np.float64),
+        axis_front=_frozen(front, np.int64),
+        axis_back=_frozen(back, np.int64),
+        node_mirror=_frozen(_node_mirror(rest), np.int64),
+        head=spec.head,
+        forward=_frozen(forward, np.float64),
+        start_offset=_frozen(spec.start_offset, np.float64),
+        **_fin_fields(spec, act_index),
+        **_wave_fields(spec, act_index),
+        **_eye_fields(spec),
+    )
+
+
+def _spring_lengths(spec: AnimalSpec, rest: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return each spring's relaxed length (the file's, else the rest-pose distance) and
+    contracted length (the relaxed one for a passive spring)."""
+    relaxed = np.array(
+        [
+            s.length if s.length is not None else float(np.linalg.norm(rest[s.a] - rest[s.b]))
+            for s in spec.springs
+        ]
+    )
+    contracted = np.array(
+        [
+            s.contracted_length if s.contracted_length is not None else relaxed[k]
+            for k, s in enumerate(spec.springs)
+        ]
+    )
+    return relaxed, contracted
+
+
+def _actuator_mirror(spec: AnimalSpec, act_index: dict[str, int]) -> np.ndarray:
+    """Return each actuator's mirror (itself if none); refuse a mirror that is not mutual."""
+    mirror = np.array(
+        [act_index[a.mirror] if a.mirror else k for k, a in enumerate(spec.actuators)],
+        dtype=np.int64,
+    )
+    for k, m in enumerate(mirror):
+        if mirror[m] != k:
+            raise BodyError(
+                f"{spec.source}: actuator {spec.actuators[k].name!r}: mirror "
+                f"{spec.actuators[m].name!r} does not name it back as its mirror"
+            )
+    return mirror
+
+
+def _fin_fields(spec: AnimalSpec, act_index: dict[str, int]) -> dict:
+    """Return the Body's fin arrays (nodes padded with -1 to four)."""
+    kf = len(spec.fins)
+    fin_nodes = -np.ones((kf, 4), dtype=np.int64)
+    for k, f in enumerate(spec.fins):
+        fin_nodes[k, : len(f.nodes)] = f.nodes
+    return dict(
         fin_nodes=_frozen(fin_nodes, np.int64),
         fin_forward=_frozen([f.forward for f in spec.fins], np.int64).reshape(kf, 2),
         fin_span=_frozen([f.span for f in spec.fins], np.int64).reshape(kf, 2),
@@ -248,18 +262,33 @@ def compile_body(spec: AnimalSpec) -> Body:
         fin_angle=_frozen([f.angle_range for f in spec.fins], np.float64).reshape(kf, 2),
         fin_actuator=_frozen([act_index[f.actuator] for f in spec.fins], np.int64),
         fin_names=tuple(f.name for f in spec.fins),
-        axis_front=_frozen(front, np.int64),
-        axis_back=_frozen(back, np.int64),
-        node_mirror=_frozen(_node_mirror(rest), np.int64),
-        head=spec.head,
-        forward=_frozen(forward, np.float64),
+    )
+
+
+def _wave_fields(spec: AnimalSpec, act_index: dict[str, int]) -> dict:
+    """Return the Body's travelling wave: frequency, amplitude, offset, each actuator's phase,
+    and the value held by an actuator the wave does not drive."""
+    phase = np.zeros(len(spec.actuators))
+    wave = spec.wave
+    # an actuator missing from [wave].phases is not driven by the wave: a muscle stays relaxed
+    # (0) and a fin is held level (the activation of angle 0, clipped to its range)
+    held = np.full(len(spec.actuators), np.nan)
+    if wave is not None:
+        held[:] = 0.0
+        for nm, p in wave.phases.items():
+            phase[act_index[nm]] = p
+            held[act_index[nm]] = np.nan
+        for f in spec.fins:
+            k = act_index[f.actuator]
+            if not np.isnan(held[k]):
+                lo, hi = f.angle_range
+                held[k] = float(np.clip(-lo / (hi - lo), 0.0, 1.0)) if hi != lo else 0.0
+    return dict(
         wave_frequency=wave.frequency if wave else 1.0,
         wave_amplitude=wave.amplitude if wave else 1.0,
         wave_offset=wave.offset if wave else 0.0,
         wave_phase=_frozen(phase, np.float64),
         wave_held=_frozen(held, np.float64),
-        start_offset=_frozen(spec.start_offset, np.float64),
-        **_eye_fields(spec),
     )
 
 
@@ -267,5 +296,10 @@ def _eye_fields(spec: AnimalSpec) -> dict:
     e = spec.eyes
     if e is None:
         return {}
-    return dict(eye_node=e.node, eye_offset=_frozen(e.offset, np.float64),
-                eye_fov=float(np.radians(e.fov)), eye_levels=e.levels, eye_pixels=e.pixels)
+    return dict(
+        eye_node=e.node,
+        eye_offset=_frozen(e.offset, np.float64),
+        eye_fov=float(np.radians(e.fov)),
+        eye_levels=e.levels,
+        eye_pixels=e.pixels,
+    )

@@ -147,8 +147,15 @@ def _eyes(top: Table, source: str, index: dict[str, int], n: int) -> EyesSpec:
     return EyesSpec(node, offset, fov, levels, pixels)
 
 
-TOP_KEYS = ("name", "description", "medium", "dt", "defaults", "nodes", "springs", "actuators",
-            "faces", "fins", "wave", "head", "forward", "start_offset", "eyes")  # fmt: skip
+TOP_KEYS = ("name", "description", "medium", "dt", "defaults", "nodes", "springs",
+            "actuators", "faces", "fins", "wave", "head", "forward", "start_offset", "eyes")
+
+
+@dataclass(frozen=True)
+class _Defaults:
+    node_damping: float
+    stiffness: float
+    spring_damping: float
 
 
 def parse_animal(doc: dict[str, Any], source: str = "<memory>") -> AnimalSpec:
@@ -165,13 +172,60 @@ def parse_animal(doc: dict[str, Any], source: str = "<memory>") -> AnimalSpec:
     dt = top.number("dt", 0.005, positive=True)
     if dt < LIMITS.min_dt:
         raise top.fail(f"'dt' = {dt:g} s is below the smallest allowed ({LIMITS.min_dt:g} s)")
+    defaults = _defaults(top, source)
+    nodes, index = _nodes(top, source, defaults)
+    n = len(nodes)
+    actuators = _actuators(top, source)
+    act_names = {a.name for a in actuators}
+    springs = tuple(_springs(top, source, nodes, index, act_names, defaults))
+    faces, face_drag = _faces(top, source, index, n)
+    fins = _fins(top, source, index, n, act_names)
+    _check_driven(source, actuators, springs, fins)
+    wave = _wave(top, source, act_names) if "wave" in doc else None
+    head = _node_ref(top, top.raw("head", 0), index, n, "'head'")
+    eyes = _eyes(top, source, index, n) if "eyes" in doc else None
+    forward = _vector(top, "forward", 3) if "forward" in doc else (1.0, 0.0, 0.0)
+    if math.hypot(*forward) < 1e-9:
+        raise top.fail("'forward' must be a non-zero vector")
+    start = _vector(top, "start_offset", 3) if "start_offset" in doc else None
+    description = top.raw("description", "")
+    if not isinstance(description, str):
+        raise top.fail(f"'description' must be a string, got {abbrev(description)}")
+    return AnimalSpec(
+        start_offset=start or (0.0, 0.0, 0.0),
+        name=name,
+        description=description,
+        medium=medium,
+        dt=dt,
+        head=head,
+        forward=forward,
+        nodes=nodes,
+        springs=springs,
+        actuators=actuators,
+        faces=faces,
+        face_drag=face_drag,
+        fins=fins,
+        wave=wave,
+        eyes=eyes,
+        source=source,
+    )
+
+
+def _defaults(top: Table, source: str) -> _Defaults:
+    """Return the file's [defaults] for nodes and springs."""
     defaults = top.table("defaults")
     defaults.where = f"{source}: [defaults]"
-    d_node_damping = defaults.number("node_damping", 0.0)
-    d_stiffness = defaults.number("stiffness", 0.0)
-    d_damping = defaults.number("spring_damping", 0.0)
+    out = _Defaults(
+        node_damping=defaults.number("node_damping", 0.0),
+        stiffness=defaults.number("stiffness", 0.0),
+        spring_damping=defaults.number("spring_damping", 0.0),
+    )
     defaults.finish()
+    return out
 
+
+def _nodes(top: Table, source: str, defaults: _Defaults):
+    """Return the [[nodes]] as NodeSpecs and each node's index by name."""
     nodes: list[NodeSpec] = []
     index: dict[str, int] = {}
     for k, raw in enumerate(top.tables("nodes", LIMITS.nodes)):
@@ -181,15 +235,18 @@ def parse_animal(doc: dict[str, Any], source: str = "<memory>") -> AnimalSpec:
         if nm in index:
             raise t.fail(f"duplicate node name {nm!r}; rename one")
         mass = t.number("mass", positive=True)
-        damping = t.number("damping", d_node_damping, lo=0.0)
+        damping = t.number("damping", defaults.node_damping, lo=0.0)
         pos = _vector(t, "pos", 3)
         t.finish()
         index[nm] = k
         nodes.append(NodeSpec(nm, pos, mass, damping))
-    n = len(nodes)
-    if n < 2:
-        raise BodyError(f"{source}: [[nodes]]: an animal needs at least 2 nodes, got {n}")
+    if len(nodes) < 2:
+        raise BodyError(f"{source}: [[nodes]]: an animal needs at least 2 nodes, got {len(nodes)}")
+    return tuple(nodes), index
 
+
+def _actuators(top: Table, source: str) -> tuple[ActuatorSpec, ...]:
+    """Return the [[actuators]], each mirror naming an actuator."""
     actuators: list[ActuatorSpec] = []
     act_names: set[str] = set()
     for k, raw in enumerate(top.tables("actuators", LIMITS.actuators)):
@@ -212,8 +269,12 @@ def parse_animal(doc: dict[str, Any], source: str = "<memory>") -> AnimalSpec:
                 f"{source}: actuator {a.name!r}: mirror {a.mirror!r} is not an actuator"
                 f"{suggest(a.mirror, act_names)}"
             )
+    return tuple(actuators)
 
-    springs: list[SpringSpec] = []
+
+def _springs(top, source, nodes, index, act_names, defaults: _Defaults):
+    """Yield the [[springs]] as SpringSpecs (no two on the same pair of nodes)."""
+    n = len(nodes)
     seen: dict[tuple[int, int], int] = {}
     for k, raw in enumerate(top.tables("springs", LIMITS.springs)):
         t = Table(raw, f"{source}: springs[{k}]", BodyError)
@@ -225,45 +286,47 @@ def parse_animal(doc: dict[str, Any], source: str = "<memory>") -> AnimalSpec:
         if key in seen:
             raise t.fail(f"duplicate spring (same nodes as springs[{seen[key]}]); remove one")
         seen[key] = k
-        stiffness = t.number("stiffness", d_stiffness)
+        stiffness = t.number("stiffness", defaults.stiffness)
         if stiffness <= 0:
             raise t.fail(f"stiffness must be positive, got {stiffness:g}")
-        damping = t.number("damping", d_damping, lo=0.0)
-        rest = math.dist(nodes[a].pos, nodes[b].pos)
+        damping = t.number("damping", defaults.spring_damping, lo=0.0)
         length = t.number("length") if "length" in t else None
-        relaxed = rest if length is None else length
+        relaxed = math.dist(nodes[a].pos, nodes[b].pos) if length is None else length
         if relaxed <= 1e-9:
             raise t.fail(f"zero-length spring (relaxed length {relaxed:g})")
         actuator = t.raw("actuator", None)
-        max_short = contracted = None
         kind = t.string("kind", "muscle" if actuator else "structural")
-        if actuator is not None:
-            if not isinstance(actuator, str) or actuator not in act_names:
-                raise t.fail(
-                    f"unknown actuator {abbrev(actuator, 40)}{suggest(str(actuator), act_names)}"
-                )
-            if "contracted_length" in t:
-                contracted = t.number("contracted_length")
-            elif "max_shortening" in t:
-                max_short = t.number("max_shortening")
-                contracted = (1.0 - max_short) * relaxed
-            else:
-                raise t.fail("a muscle needs 'max_shortening' or 'contracted_length'")
-            if not contracted < relaxed:
-                raise t.fail(
-                    f"contracted length {contracted:g} is not shorter than relaxed {relaxed:g}"
-                )
-            if contracted <= 0:
-                raise t.fail(f"contracted length {contracted:g} must be positive")
-        else:
-            t.used.update(("contracted_length", "max_shortening"))
-            if "contracted_length" in t or "max_shortening" in t:
-                raise t.fail("'max_shortening'/'contracted_length' need an 'actuator'")
+        max_short, contracted = _muscle(t, actuator, act_names, relaxed)
         t.finish()
-        springs.append(
-            SpringSpec(a, b, stiffness, damping, length, kind, actuator, max_short, contracted)
-        )
+        yield SpringSpec(a, b, stiffness, damping, length, kind, actuator, max_short, contracted)
 
+
+def _muscle(t: Table, actuator, act_names, relaxed: float):
+    """Return a spring's (max_shortening, contracted length), both None for a passive one."""
+    if actuator is None:
+        t.used.update(("contracted_length", "max_shortening"))
+        if "contracted_length" in t or "max_shortening" in t:
+            raise t.fail("'max_shortening'/'contracted_length' need an 'actuator'")
+        return None, None
+    if not isinstance(actuator, str) or actuator not in act_names:
+        raise t.fail(f"unknown actuator {abbrev(actuator, 40)}{suggest(str(actuator), act_names)}")
+    max_short = None
+    if "contracted_length" in t:
+        contracted = t.number("contracted_length")
+    elif "max_shortening" in t:
+        max_short = t.number("max_shortening")
+        contracted = (1.0 - max_short) * relaxed
+    else:
+        raise t.fail("a muscle needs 'max_shortening' or 'contracted_length'")
+    if not contracted < relaxed:
+        raise t.fail(f"contracted length {contracted:g} is not shorter than relaxed {relaxed:g}")
+    if contracted <= 0:
+        raise t.fail(f"contracted length {contracted:g} must be positive")
+    return max_short, contracted
+
+
+def _faces(top: Table, source: str, index, n: int):
+    """Return the [[faces]] (3 or 4 nodes each) and each face's drag coefficient."""
     faces, face_drag = [], []
     for k, raw in enumerate(top.tables("faces", LIMITS.springs)):
         t = Table(raw, f"{source}: faces[{k}]", BodyError)
@@ -273,7 +336,11 @@ def parse_animal(doc: dict[str, Any], source: str = "<memory>") -> AnimalSpec:
         face_drag.append(t.number("drag", 1.0, lo=0.0, hi=10.0))
         t.finish()
         faces.append(refs)
+    return tuple(faces), tuple(face_drag)
 
+
+def _fins(top: Table, source: str, index, n: int, act_names) -> tuple[FinSpec, ...]:
+    """Return the [[fins]]."""
     fins = []
     for k, raw in enumerate(top.tables("fins", LIMITS.actuators)):
         t = Table(raw, f"{source}: fins[{k}]", BodyError)
@@ -291,7 +358,11 @@ def parse_animal(doc: dict[str, Any], source: str = "<memory>") -> AnimalSpec:
         span = _node_refs(t, "span", index, n, count=(2,))
         t.finish()
         fins.append(FinSpec(nm, act, fin_nodes, fwd, span, area, (lo, hi)))
+    return tuple(fins)
 
+
+def _check_driven(source: str, actuators, springs, fins) -> None:
+    """Refuse an actuator that drives nothing, or muscles and fins both."""
     driven = {s.actuator for s in springs if s.actuator} | {f.actuator for f in fins}
     for a in actuators:
         where = f"{source}: actuator {a.name!r}"
@@ -303,54 +374,28 @@ def parse_animal(doc: dict[str, Any], source: str = "<memory>") -> AnimalSpec:
         if a.kind == "muscle" and any(f.actuator == a.name for f in fins):
             raise BodyError(f"{where}: a muscle actuator cannot drive a fin")
 
-    wave = None
-    if "wave" in doc:
-        w = top.table("wave")
-        w.where = f"{source}: [wave]"
-        phases_t = w.table("phases")
-        phases_t.where = f"{source}: [wave.phases]"
-        phases = {}
-        for key in phases_t.data:
-            if key not in act_names:
-                raise phases_t.fail(
-                    f"phase for unknown actuator {abbrev(key, 40)}{suggest(key, act_names)}"
-                )
-            phases[key] = phases_t.number(key)
-        wave = WaveSpec(
-            w.number("frequency", lo=0.0, hi=1e4),
-            w.number("amplitude", 1.0),
-            w.number("offset", 0.0),
-            phases,
-        )
-        w.finish()
 
-    head = _node_ref(top, top.raw("head", 0), index, n, "'head'")
-    eyes = _eyes(top, source, index, n) if "eyes" in doc else None
-    forward = _vector(top, "forward", 3) if "forward" in doc else (1.0, 0.0, 0.0)
-    if math.hypot(*forward) < 1e-9:
-        raise top.fail("'forward' must be a non-zero vector")
-    start = _vector(top, "start_offset", 3) if "start_offset" in doc else None
-    description = top.raw("description", "")
-    if not isinstance(description, str):
-        raise top.fail(f"'description' must be a string, got {abbrev(description)}")
-    return AnimalSpec(
-        start_offset=start or (0.0, 0.0, 0.0),
-        name=name,
-        description=description,
-        medium=medium,
-        dt=dt,
-        head=head,
-        forward=forward,
-        nodes=tuple(nodes),
-        springs=tuple(springs),
-        actuators=tuple(actuators),
-        faces=tuple(faces),
-        face_drag=tuple(face_drag),
-        fins=tuple(fins),
-        wave=wave,
-        eyes=eyes,
-        source=source,
+def _wave(top: Table, source: str, act_names) -> WaveSpec:
+    """Return the file's [wave]: frequency, amplitude, offset and each actuator's phase."""
+    w = top.table("wave")
+    w.where = f"{source}: [wave]"
+    phases_t = w.table("phases")
+    phases_t.where = f"{source}: [wave.phases]"
+    phases = {}
+    for key in phases_t.data:
+        if key not in act_names:
+            raise phases_t.fail(
+                f"phase for unknown actuator {abbrev(key, 40)}{suggest(key, act_names)}"
+            )
+        phases[key] = phases_t.number(key)
+    wave = WaveSpec(
+        w.number("frequency", lo=0.0, hi=1e4),
+        w.number("amplitude", 1.0),
+        w.number("offset", 0.0),
+        phases,
     )
+    w.finish()
+    return wave
 
 
 def read_animal_file(path: str | Path) -> AnimalSpec:
