@@ -72,13 +72,16 @@ def test_a_blow_up_that_gets_past_the_check_exits_3_naming_step_animal_and_dt(
 
     sim = importlib.import_module("zoetic.physics.simulate")  # the module, not the function
     monkeypatch.setattr(sim, "_stable_cached", lambda body, med: 1.0)  # a wrong bound
-    from zoetic.physics import multirate, world
+    import weakref
+
+    from zoetic.physics import model, multirate
 
     def no_split(body, dt):  # and no sub-stepping of the stiff springs either
         every, nodes = np.arange(body.n_springs), np.arange(body.n_nodes)
         return multirate.Split(every, every[:0], 1, nodes, nodes[:0])
 
-    monkeypatch.setattr(world, "split", no_split)
+    monkeypatch.setattr(model, "split", no_split)
+    monkeypatch.setattr(model, "_MODELS", weakref.WeakKeyDictionary())  # none built before
     code = main(["simulate", "shark", "--dt", "0.05", "--seconds", "2", "--no-video",
                  "--out", str(tmp_path / "o")])  # fmt: skip
     err = capsys.readouterr().err

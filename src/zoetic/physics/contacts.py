@@ -41,7 +41,7 @@ import math
 import numpy as np
 from numba import njit
 
-from zoetic.physics.kernel import DRAG, FLOOR, LEVEL, G
+from zoetic.physics.media import DRAG, FLOOR, LEVEL, G
 
 
 @njit(cache=True, inline="always")
@@ -98,6 +98,13 @@ def _sdf(kind, cx, cy, cz, s0, s1, s2, px, py, pz):
 
 
 @njit(cache=True, inline="always")
+def _shape_sdf(s, skind, scenter, ssize, px, py, pz):
+    """``_sdf`` of the fixed shape s of the packed shapes (``objects.pack_statics``)."""
+    return _sdf(skind[s], scenter[s, 0], scenter[s, 1], scenter[s, 2], ssize[s, 0], ssize[s, 1],
+                ssize[s, 2], px, py, pz)
+
+
+@njit(cache=True, inline="always")
 def _penalty(pen, vx, vy, vz, nx, ny, nz, m, w, zeta, mu, dt):
     """Contact force (on the side whose relative velocity is v) along normal n: spring-damper
     normal force plus capped Coulomb friction; zero when the pair separates fast enough. The
@@ -120,10 +127,7 @@ def _penalty(pen, vx, vy, vz, nx, ny, nz, m, w, zeta, mu, dt):
 def _shape_force(s, skind, scenter, ssize, px, py, pz, radius, vx, vy, vz, m, w, zeta, mu, dt):
     """Penalty force of fixed shape ``s`` on a node (a sphere of ``radius`` at p moving at v;
     zero when they do not touch)."""
-    d, nx, ny, nz = _sdf(
-        skind[s], scenter[s, 0], scenter[s, 1], scenter[s, 2],
-        ssize[s, 0], ssize[s, 1], ssize[s, 2], px, py, pz,
-    )  # fmt: skip
+    d, nx, ny, nz = _shape_sdf(s, skind, scenter, ssize, px, py, pz)
     pen = radius - d
     if pen <= 0.0:
         return 0.0, 0.0, 0.0
@@ -155,10 +159,8 @@ def contact_rows(n_nodes, n_statics):
 
 
 @njit(cache=True)
-def solve(
-    cx, cy, cz, r, mc, ux, uy, uz, b, pos, vel, mass, radius, skind, scenter, ssize, floor,
-    e, rate, dt, mu, impulse, o, rows,
-):  # fmt: skip
+def solve(cx, cy, cz, r, mc, ux, uy, uz, b, pos, vel, mass, radius, skind, scenter, ssize,
+          floor, e, rate, dt, mu, impulse, o, rows):
     """Resolve the contacts of a sphere (centre c, radius r, mass mc, velocity u) in lane b
     at the velocity level; return its new velocity and the number of contacts.
 
@@ -173,6 +175,28 @@ def solve(
     target normal speed, reduced mass, normal impulse, tangential impulse (3), the
     partner's velocity (3); the impulse on the sphere is (normal impulse) n + (tangential).
     """
+    c = _node_rows(cx, cy, cz, r, b, pos, vel, mass, radius, rows)
+    c = _shape_rows(cx, cy, cz, r, skind, scenter, ssize, floor, rows, c)
+    if c == 0:
+        return ux, uy, uz, 0
+    _targets(ux, uy, uz, mc, e, rate, dt, rows, c)
+    ux, uy, uz = _sweeps(ux, uy, uz, mc, mu, rows, c)
+    for j in range(c):
+        i = int(rows[j, 0])
+        if i < 0:
+            continue
+        vel[i, 0, b] = rows[j, 13]
+        vel[i, 1, b] = rows[j, 14]
+        vel[i, 2, b] = rows[j, 15]
+        impulse[i, o, 0, b] -= rows[j, 7] * rows[j, 1] + rows[j, 8]
+        impulse[i, o, 1, b] -= rows[j, 7] * rows[j, 2] + rows[j, 9]
+        impulse[i, o, 2, b] -= rows[j, 7] * rows[j, 3] + rows[j, 10]
+    return ux, uy, uz, c
+
+
+@njit(cache=True, inline="always")
+def _node_rows(cx, cy, cz, r, b, pos, vel, mass, radius, rows):
+    """Write a row (``solve``) for each node that overlaps the sphere; return their count."""
     c = 0
     for i in range(pos.shape[0]):
         dx = cx - pos[i, 0, b]
@@ -188,13 +212,17 @@ def solve(
         rows[c, 5] = pen
         rows[c, 13], rows[c, 14], rows[c, 15] = vel[i, 0, b], vel[i, 1, b], vel[i, 2, b]
         c += 1
+    return c
+
+
+@njit(cache=True, inline="always")
+def _shape_rows(cx, cy, cz, r, skind, scenter, ssize, floor, rows, c):
+    """Write a row (``solve``) after the first c for each fixed shape (and, with ``floor``,
+    the floor) the sphere touches; return the count of rows."""
     n_static = skind.shape[0]
     for s in range(n_static + (1 if floor else 0)):
         if s < n_static:
-            d, nx, ny, nz = _sdf(
-                skind[s], scenter[s, 0], scenter[s, 1], scenter[s, 2],
-                ssize[s, 0], ssize[s, 1], ssize[s, 2], cx, cy, cz,
-            )  # fmt: skip
+            d, nx, ny, nz = _shape_sdf(s, skind, scenter, ssize, cx, cy, cz)
         else:
             d, nx, ny, nz = cy, 0.0, 1.0, 0.0
         pen = r - d
@@ -206,18 +234,32 @@ def solve(
         rows[c, 5] = pen
         rows[c, 13], rows[c, 14], rows[c, 15] = 0.0, 0.0, 0.0
         c += 1
-    if c == 0:
-        return ux, uy, uz, 0
+    return c
+
+
+@njit(cache=True, inline="always")
+def _targets(ux, uy, uz, mc, e, rate, dt, rows, c):
+    """Set each contact's target normal speed (a bounce of ``e`` times the approach, or the
+    overlap's correction), reduced mass, and zero impulses."""
     for j in range(c):
-        vn = ((ux - rows[j, 13]) * rows[j, 1] + (uy - rows[j, 14]) * rows[j, 2]
-              + (uz - rows[j, 15]) * rows[j, 3])  # fmt: skip
+        vn = (
+            (ux - rows[j, 13]) * rows[j, 1]
+            + (uy - rows[j, 14]) * rows[j, 2]
+            + (uz - rows[j, 15]) * rows[j, 3]
+        )
         bounce = -e * vn if vn < -REST_SPEED else 0.0
         fix = min(rate * max(rows[j, 5] - SLOP, 0.0) / dt, CORRECTION_SPEED)
         rows[j, 5] = max(bounce, fix)
         rows[j, 6] = 1.0 / (1.0 / mc + rows[j, 4])
         rows[j, 7] = 0.0
         rows[j, 8], rows[j, 9], rows[j, 10] = 0.0, 0.0, 0.0
-    for _ in range(1 if c == 1 else SWEEPS):  # one contact: solved in one sweep
+
+
+@njit(cache=True, inline="always")
+def _sweeps(ux, uy, uz, mc, mu, rows, c):
+    """Projected Gauss-Seidel over the contacts (one sweep for one contact, else SWEEPS):
+    return the sphere's velocity; the partners' velocities change in rows."""
+    for _ in range(1 if c == 1 else SWEEPS):
         for j in range(c):
             nx, ny, nz = rows[j, 1], rows[j, 2], rows[j, 3]
             rx = ux - rows[j, 13]
@@ -247,24 +289,12 @@ def solve(
             rows[j, 13] -= jx * inv
             rows[j, 14] -= jy * inv
             rows[j, 15] -= jz * inv
-    for j in range(c):
-        i = int(rows[j, 0])
-        if i < 0:
-            continue
-        vel[i, 0, b] = rows[j, 13]
-        vel[i, 1, b] = rows[j, 14]
-        vel[i, 2, b] = rows[j, 15]
-        impulse[i, o, 0, b] -= rows[j, 7] * rows[j, 1] + rows[j, 8]
-        impulse[i, o, 1, b] -= rows[j, 7] * rows[j, 2] + rows[j, 9]
-        impulse[i, o, 2, b] -= rows[j, 7] * rows[j, 3] + rows[j, 10]
-    return ux, uy, uz, c
+    return ux, uy, uz
 
 
 @njit(cache=True)
-def node_contacts(
-    pos, vel, mass, radius, bpos, bvel, bpar, skind, scenter, ssize,
-    ball_obj, static_obj, dt, w, zeta, mu, bforce, impulse,
-):  # fmt: skip
+def node_contacts(pos, vel, mass, radius, bpos, bvel, bpar, skind, scenter, ssize, ball_obj,
+                  static_obj, dt, w, zeta, mu, bforce, impulse):
     """Apply one step's contacts between an animal's nodes and the objects.
 
     Each ball is solved with the nodes that overlap it and the fixed shapes it touches
@@ -287,11 +317,9 @@ def node_contacts(
             ux = bvel[k, 0, b] + h * bforce[k, 0, b]
             uy = bvel[k, 1, b] + h * bforce[k, 1, b]
             uz = bvel[k, 2, b] + h * bforce[k, 2, b]
-            nx, ny, nz, _ = solve(
-                bpos[k, 0, b], bpos[k, 1, b], bpos[k, 2, b], bpar[k, 0], mb, ux, uy, uz, b,
-                pos, vel, mass, radius, skind, scenter, ssize, False, e, rate, dt, mu,
-                impulse, ball_obj[k], rows,
-            )  # fmt: skip
+            nx, ny, nz, _ = solve(bpos[k, 0, b], bpos[k, 1, b], bpos[k, 2, b], bpar[k, 0], mb,
+                                  ux, uy, uz, b, pos, vel, mass, radius, skind, scenter, ssize,
+                                  False, e, rate, dt, mu, impulse, ball_obj[k], rows)
             bforce[k, 0, b] += (nx - ux) / h
             bforce[k, 1, b] += (ny - uy) / h
             bforce[k, 2, b] += (nz - uz) / h
@@ -304,10 +332,9 @@ def node_contacts(
             fys = 0.0
             fzs = 0.0
             for s in range(skind.shape[0]):
-                fx, fy, fz = _shape_force(
-                    s, skind, scenter, ssize, px, py, pz, radius, vel[i, 0, b], vel[i, 1, b],
-                    vel[i, 2, b], m, w, zeta, mu, dt,
-                )  # fmt: skip
+                fx, fy, fz = _shape_force(s, skind, scenter, ssize, px, py, pz, radius,
+                                          vel[i, 0, b], vel[i, 1, b], vel[i, 2, b], m, w, zeta,
+                                          mu, dt)
                 if fx == 0.0 and fy == 0.0 and fz == 0.0:
                     continue
                 o = static_obj[s]
@@ -324,9 +351,8 @@ def node_contacts(
 
 
 @njit(cache=True)
-def balls_step(
-    bpos, bvel, bpar, bforce, med, current, skind, scenter, ssize, dt, steps, w, zeta, mu
-):  # fmt: skip
+def balls_step(bpos, bvel, bpar, bforce, med, current, skind, scenter, ssize, dt, steps, w,
+               zeta, mu):
     """Advance the balls ``steps`` steps: gravity, buoyancy of the submerged cap, drag
     against the current and the constant force ``bforce``, then their contacts with the
     floor and the fixed shapes (``solve``; w and zeta as in ``node_contacts``)."""
@@ -357,10 +383,9 @@ def balls_step(
                 vx = bvel[k, 0, b] + dt * bforce[k, 0, b] / mb
                 vy = bvel[k, 1, b] + dt * fy / mb
                 vz = bvel[k, 2, b] + dt * bforce[k, 2, b] / mb
-                vx, vy, vz, _ = solve(
-                    x, y, z, r, mb, vx, vy, vz, 0, no_pos, no_pos, no_mass, 0.0, skind,
-                    scenter, ssize, floor, e, rate, dt, mu, no_impulse, 0, rows,
-                )  # fmt: skip
+                vx, vy, vz, _ = solve(x, y, z, r, mb, vx, vy, vz, 0, no_pos, no_pos, no_mass,
+                                      0.0, skind, scenter, ssize, floor, e, rate, dt, mu,
+                                      no_impulse, 0, rows)
                 if water and frac > 0.0:
                     # quadratic drag of the submerged part, at most stopping the relative motion
                     rx = vx - current[0]
@@ -402,10 +427,7 @@ def near(pos, vel, radius, bpos, bvel, bpar, skind, scenter, ssize, horizon):
                 if dx * dx + dy * dy + dz * dz < (bpar[k, 0] + reach) ** 2:
                     return True
             for s in range(skind.shape[0]):
-                d, _, _, _ = _sdf(
-                    skind[s], scenter[s, 0], scenter[s, 1], scenter[s, 2],
-                    ssize[s, 0], ssize[s, 1], ssize[s, 2], px, py, pz,
-                )  # fmt: skip
+                d, _, _, _ = _shape_sdf(s, skind, scenter, ssize, px, py, pz)
                 if d < reach:
                     return True
     return False

@@ -9,6 +9,9 @@ import numpy as np
 from zoetic.errors import SimulationError
 
 FAR = 1.0e9  # a water level this high means "everything is under water"; this low, "no water"
+# the layout of ``Medium.as_array``: gravity, water level, buoyancy, drag, floor (1 or 0),
+# floor stiffness and damping, friction forward, backward and lateral
+G, LEVEL, BUOY, DRAG, FLOOR, FLOOR_K, FLOOR_C, MU_F, MU_B, MU_L = range(10)
 
 
 @dataclass(frozen=True)
@@ -28,7 +31,8 @@ class Medium:
     friction_lateral: float = 0.0  # ... sliding sideways
 
     def as_array(self) -> np.ndarray:
-        """Return the medium as the flat float array the kernels read."""
+        """Return the medium as the flat float array the object kernels read (layout: G,
+        LEVEL, ... above)."""
         return np.array(
             [
                 self.gravity,

@@ -139,3 +139,31 @@ def pack_balls(balls: list[Ball]) -> np.ndarray:
     return np.array(
         [(b.radius, b.mass, b.buoyancy_ratio, b.drag_coefficient) for b in balls], dtype=float
     ).reshape(-1, 4)
+
+
+class Solids:
+    """A world's balls and fixed shapes as the contact kernels read them, for B lanes.
+
+    pos, vel: the balls' state (K, 3, B) in m and m/s (stepped in place); force: (K, 3, B) the
+    force the animals' contacts put on each ball over a step; par: ``pack_balls``; kind,
+    center, size: ``pack_statics``; ball_obj, static_obj: each one's index among the world's
+    objects (what the contact records are indexed by).
+    """
+
+    def __init__(self, objects: list[Thing], batch: int) -> None:
+        self.ball_obj = np.array([i for i, o in enumerate(objects) if isinstance(o, Ball)],
+                                 dtype=np.int64)
+        static = [i for i, o in enumerate(objects) if isinstance(o, Box | Cylinder)]
+        self.static_obj = np.array(static, dtype=np.int64)
+        self.balls = [objects[i] for i in self.ball_obj]
+        self.statics = [objects[i] for i in self.static_obj]
+        self.pos = np.zeros((len(self.balls), 3, batch))
+        self.vel = np.zeros_like(self.pos)
+        self.force = np.zeros_like(self.pos)
+        self.par = pack_balls(self.balls)
+        self.kind, self.center, self.size = pack_statics(self.statics)
+
+    @property
+    def any(self) -> bool:
+        """Return True if there is a ball or a fixed shape to touch."""
+        return len(self.balls) + len(self.statics) > 0

@@ -227,25 +227,6 @@ def _check(body: Body, act: np.ndarray, state: State) -> None:
         )
 
 
-def kernel_arrays(body: Body) -> tuple:
-    """Return the body's arrays in the order and precision the kernel takes them."""
-    f32 = np.float32
-    muscle = body.spring_actuator >= 0
-    # the kernel's rest length is l_r + a * shorten with a read from column scol: passive
-    # springs shorten by nothing and read column 0, so the spring loop has no branch
-    shorten = np.where(muscle, body.contracted - body.relaxed, 0.0).astype(f32)
-    scol = np.where(muscle, body.spring_actuator, 0).astype(np.int64)
-    return (
-        body.mass.astype(f32), body.node_damping.astype(f32), body.spring_a, body.spring_b,
-        body.stiffness.astype(f32), body.spring_damping.astype(f32), body.relaxed.astype(f32),
-        shorten, scol, body.panels,
-        body.panel_weights.astype(f32), body.panel_drag.astype(f32), body.fin_nodes,
-        body.fin_forward, body.fin_span, body.fin_area.astype(f32),
-        body.fin_angle.astype(f32), body.fin_actuator, body.axis_front, body.axis_back,
-        body.rest_pos.astype(f32),
-    )  # fmt: skip
-
-
 def simulate(
     body: Body,
     activations: np.ndarray,
@@ -280,7 +261,7 @@ def simulate(
         raise SimulationError("record_every must be at least 1")
 
     from zoetic.physics.kernel import simulate_chunks
-    from zoetic.physics.multirate import split
+    from zoetic.physics.model import compile_model
 
     n = body.n_nodes
     f32 = np.float32
@@ -300,13 +281,9 @@ def simulate(
     final_pos = np.empty((n, 3, batch), dtype=f32)
     final_vel = np.empty((n, 3, batch), dtype=f32)
     failed_step = -np.ones(batch, dtype=np.int64)
-    k = kernel_arrays(body)
-    sp = split(body, dt)
-    simulate_chunks(
-        pos0, vel0, act_t, f32(dt), record_every, chunk_size(batch), f32(VMAX), *k,
-        med.as_array().astype(f32), rec, final_pos, final_vel, failed_step,
-        sp.slow_springs, sp.fast_springs, sp.substeps, sp.slow_nodes, sp.fast_nodes,
-    )  # fmt: skip
+    model = compile_model(body, med, dt)
+    simulate_chunks(pos0, vel0, act_t, record_every, chunk_size(batch), f32(VMAX), model, rec,
+                    final_pos, final_vel, failed_step)
     times = np.arange(n_rec) * record_every * dt
     return Trajectory(
         times=times,

@@ -1,0 +1,114 @@
+"""A world's broad phase: which animals may touch what in the coming slice, and so how it is
+stepped.
+
+Contacts are resolved every time step, but only while some node is within reach of an object
+or of another animal; far from everything the animals run whole slices through the kernel at
+full speed. The decision for a slice of the world's grid is taken once, at the first step of
+the slice stepped, and kept however the calls split the slice (``World.step``): ``lockstep``
+(every animal one step at a time with its contacts: balls couple everything, or some node is
+near a shape), ``apart`` (no balls couple the animals: each near a fixed shape, or near another
+animal, steps one step at a time, the others the whole slice at once) or ``free``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from zoetic.physics.bodycontact import close, close_pairs
+from zoetic.physics.contacts import near
+from zoetic.physics.objects import Solids
+
+Plan = tuple[str, list[tuple[int, int]], np.ndarray | None]
+
+
+@njit(cache=True)
+def near_each(pos, vel, off, radius, bpos, bvel, bpar, skind, scenter, ssize, horizon, out):
+    """Fill out (animals,) with ``contacts.near`` of each animal (rows off[a]:off[a + 1] of
+    pos and vel): could any of its nodes touch a ball or fixed shape within ``horizon`` s."""
+    for a in range(off.shape[0] - 1):
+        o0, o1 = off[a], off[a + 1]
+        out[a] = near(pos[o0:o1], vel[o0:o1], radius, bpos, bvel, bpar, skind, scenter, ssize,
+                      horizon)
+
+
+class BroadPhase:
+    """The decisions of a world's broad phase over its animals' state (pos, vel (N_total, 3,
+    B), animal a in rows off[a]:off[a + 1], its ``views[a]``) and its ``solids``; ``reach``:
+    each animal's ``bodycontact.surface_reach``; ``touchy``: animals push each other."""
+
+    def __init__(self, pos, vel, off, views, reach: list[float], node_radius: float, dt: float,
+                 solids: Solids, touchy: bool) -> None:
+        self.pos, self.vel, self.off, self.views = pos, vel, off, views
+        self.reach = reach
+        self.reach_arr = np.array(reach, float)
+        self.node_radius = node_radius
+        self.dt = dt
+        self.solids = solids
+        self.touchy = touchy
+        self.plan: tuple[int, Plan] | None = None  # the slice ending at plan[0] and its plan
+        self.sub: tuple[int, list] | None = None  # the sub-slice ending at sub[0], its pairs
+
+    def forget(self) -> None:
+        """Decide afresh from here (after a restore)."""
+        self.plan = self.sub = None
+
+    def decide(self, end: int, now: int) -> Plan:
+        """Return the plan for the world's slice that ends at step ``end`` (the world is at
+        step ``now``): how it is stepped (``lockstep``, ``apart`` or ``free``), the pairs of
+        animals that may touch, and which animals are near a ball or a fixed shape (for
+        ``apart``). Decided once, at the first step of the slice stepped (its start, or where
+        a restore left the clock), and kept however the calls split the slice."""
+        if self.plan is not None and self.plan[0] == end:
+            return self.plan[1]
+        horizon = (end - now) * self.dt
+        pairs = self.close_pairs(horizon) if self.touchy else []
+        near_now = None
+        balls = len(self.solids.balls)
+        if pairs and balls:
+            mode = "lockstep"
+        elif pairs or (self.solids.any and not balls and len(self.views) > 1):
+            # no balls couple the animals: only those near a fixed shape step one step at a
+            # time with contacts, the others the whole slice in one kernel call
+            mode = "apart"
+            near_now = np.zeros(len(self.views), bool)
+            s = self.solids
+            near_each(self.pos, self.vel, self.off, self.node_radius, s.pos, s.vel, s.par,
+                      s.kind, s.center, s.size, horizon, near_now)
+        elif self.solids.any and self.any_near(horizon):
+            mode = "lockstep"
+        else:
+            mode = "free"
+        self.plan = (end, (mode, pairs, near_now))
+        return self.plan[1]
+
+    def close_now(self, pairs: list[tuple[int, int]], end: int, now: int) -> list:
+        """Return those of ``pairs`` that may touch before step ``end`` of the sub-slice that
+        ends there (the world at step ``now``), decided once per sub-slice."""
+        if self.sub is None or self.sub[0] != end:
+            horizon = (end - now) * self.dt
+            self.sub = (end, [p for p in pairs if self.close(*p, horizon)])
+        return self.sub[1]
+
+    def close_pairs(self, horizon: float) -> list[tuple[int, int]]:
+        """Return the pairs of animals that may touch within ``horizon`` s (every pair in one
+        kernel call, ``close`` for each)."""
+        found = close_pairs(self.pos, self.vel, self.off, self.reach_arr, self.node_radius,
+                            horizon)
+        return [(int(a), int(c)) for a, c in found]
+
+    def close(self, a: int, c: int, horizon: float) -> bool:
+        """Return True if animals a and c may touch within ``horizon`` s (``bodycontact.close``)."""
+        reach = max(self.reach[a], self.reach[c]) + self.node_radius
+        (pa, va), (pc, vc) = self.views[a], self.views[c]
+        return bool(close(pa, va, pc, vc, reach, self.node_radius, horizon))
+
+    def any_near(self, horizon: float) -> bool:
+        """Return True if some node of some animal could touch a ball or a fixed shape within
+        ``horizon`` s."""
+        s = self.solids
+        for p, v in self.views:
+            if near(p, v, self.node_radius, s.pos, s.vel, s.par, s.kind, s.center, s.size,
+                    horizon):
+                return True
+        return False

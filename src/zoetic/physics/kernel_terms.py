@@ -1,0 +1,336 @@
+"""The Numba kernel's force terms and integrator, inlined into its entry points (``kernel``).
+
+They are ``physics.law`` hand-tuned for the CPU: every per-node quantity is an array
+(nodes, lanes) and the innermost loop runs over candidates ("lanes") with unit stride, so that
+LLVM vectorises it; the conformance tests hold them equal to the law. Each term reads the
+body from the ``model.Model`` by field name and adds into the force arrays fx, fy, fz.
+
+Cost (shark, AVX2 host): springs are about 3/4 of a step, water panels 1/4. Each spring moves
+about 25 lane-vectors through memory (positions, velocities, both nodes' forces, one
+activation), so the loop is bound by loads and stores rather than arithmetic; the batched
+figure therefore scales with the host's SIMD width (twice on AVX-512).
+"""
+
+from __future__ import annotations
+
+import math
+
+import llvmlite.binding as _llvm
+import numpy as np
+from numba import njit
+
+# The inner loops read and write many node rows that LLVM cannot prove distinct; with the
+# default limit of 8 runtime alias checks it gives up on vectorising the water-face loop.
+# Raising the limits (process-wide, and only ever enabling more vectorisation) lets it check
+# at run time and take the SIMD path: about 1.4x on the shark in water.
+_llvm.set_option("", "-runtime-memory-check-threshold=128")
+_llvm.set_option("", "-vectorize-memory-check-threshold=512")
+
+# fast math without "no NaNs/infs" (the blow-up check must see NaN), and without "afn" and
+# "reassoc": with either, the SIMD body and its scalar remainder loop round differently (with
+# "reassoc" only in code loaded from the on-disk cache), so a candidate's result would depend
+# on its place in the batch: 0.3 m apart for a snake after 3 s. Dropping them cost nothing.
+FM = {"nsz", "arcp", "contract"}
+
+# The kernel works in single precision: twice the SIMD lanes of double, and the papers'
+# models need no more. Every literal goes through F so that nothing promotes to float64.
+F = np.float32
+ZERO = F(0.0)
+ONE = F(1.0)
+HALF = F(0.5)
+TINY = F(1e-12)
+TINY2 = F(1e-30)
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def weight(y, fx, fy, fz, nb, m):
+    """Set the forces to gravity and, below the water level, buoyancy."""
+    mass = m.mass
+    level = F(m.water_level)
+    g = F(m.gravity)
+    gb = g * F(m.buoyancy)
+    for i in range(mass.shape[0]):
+        wet = mass[i] * (gb - g)
+        dry = -mass[i] * g
+        for b in range(nb):
+            fx[i, b] = ZERO
+            fy[i, b] = wet if y[i, b] < level else dry
+            fz[i, b] = ZERO
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def springs(x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb, m, sidx):
+    """Add the forces of the springs listed in ``sidx``."""
+    # springs and muscles: l = a*l_c + (1-a)*l_r = l_r + a*(l_c - l_r). Branch-free: a passive
+    # spring reads column 0 and has l_c - l_r = 0 (``shorten``). A branch on "is it a muscle"
+    # here kept LLVM from vectorising the loop: removing it made the shark 2x, the snake 3.4x.
+    # (Each array is taken from the model once, outside the loops: a field read per spring
+    # costs a reference count each time.)
+    sa, sb, stiff, sdamp = m.spring_a, m.spring_b, m.stiffness, m.spring_damping
+    relaxed, shorten, scol = m.relaxed, m.shorten, m.spring_col
+    for q in range(sidx.shape[0]):
+        s = sidx[q]
+        i = sa[s]
+        j = sb[s]
+        k = stiff[s]
+        c = sdamp[s]
+        lr = relaxed[s]
+        dl = shorten[s]
+        col = scol[s]
+        for b in range(nb):
+            dx = x[j, b] - x[i, b]
+            dy = y[j, b] - y[i, b]
+            dz = z[j, b] - z[i, b]
+            length = math.sqrt(dx * dx + dy * dy + dz * dz) + TINY
+            inv = ONE / length
+            ux = dx * inv
+            uy = dy * inv
+            uz = dz * inv
+            rest = lr + act[t, col, b0 + b] * dl
+            edot = (
+                (vx[j, b] - vx[i, b]) * ux + (vy[j, b] - vy[i, b]) * uy + (vz[j, b] - vz[i, b]) * uz
+            )
+            mag = k * (length - rest) + c * edot
+            fx[i, b] += mag * ux
+            fy[i, b] += mag * uy
+            fz[i, b] += mag * uz
+            fx[j, b] -= mag * ux
+            fy[j, b] -= mag * uy
+            fz[j, b] -= mag * uz
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def water(x, y, z, vx, vy, vz, fx, fy, fz, nb, m):
+    """Hydrodynamic reaction on each surface panel (Tu & Terzopoulos): it opposes the normal
+    velocity of a panel moving outward, -c * drag * A * |v| * (n.v) * n, shared by its nodes
+    (c = ``panel_drag``, the panel's own coefficient)."""
+    mass, panels, pw, pdrag = m.mass, m.panels, m.panel_weights, m.panel_drag
+    level = F(m.water_level)
+    drag = F(m.water_drag)
+    dt = F(m.dt)
+    for f in range(panels.shape[0]):
+        half_drag = HALF * drag * pdrag[f]
+        i0 = panels[f, 0]
+        i1 = panels[f, 1]
+        i2 = panels[f, 2]
+        i3 = panels[f, 3]
+        w0 = pw[f, 0]
+        w1 = pw[f, 1]
+        w2 = pw[f, 2]
+        w3 = pw[f, 3]
+        # the panel's own mass (weights are 1/n for its n distinct nodes)
+        mf_dt = (w0 * mass[i0] + w1 * mass[i1] + w2 * mass[i2] + w3 * mass[i3]) / (w0 * dt)
+        for b in range(nb):
+            d1x = x[i2, b] - x[i0, b]
+            d1y = y[i2, b] - y[i0, b]
+            d1z = z[i2, b] - z[i0, b]
+            d2x = x[i3, b] - x[i1, b]
+            d2y = y[i3, b] - y[i1, b]
+            d2z = z[i3, b] - z[i1, b]
+            nx = d1y * d2z - d1z * d2y
+            ny = d1z * d2x - d1x * d2z
+            nz = d1x * d2y - d1y * d2x
+            # with N the unnormalised normal (|N| = 2 area), the panel force is
+            # -(N.v)/|N|^2 * min(drag * |N|/2 * |v|, m_panel/dt) * N, only while N.v > 0
+            nn = nx * nx + ny * ny + nz * nz + TINY2
+            mvx = w0 * vx[i0, b] + w1 * vx[i1, b] + w2 * vx[i2, b] + w3 * vx[i3, b]
+            mvy = w0 * vy[i0, b] + w1 * vy[i1, b] + w2 * vy[i2, b] + w3 * vy[i3, b]
+            mvz = w0 * vz[i0, b] + w1 * vz[i1, b] + w2 * vz[i2, b] + w3 * vz[i3, b]
+            q = nx * mvx + ny * mvy + nz * mvz
+            q = q if q > ZERO else ZERO
+            vv = mvx * mvx + mvy * mvy + mvz * mvz
+            cy = w0 * y[i0, b] + w1 * y[i1, b] + w2 * y[i2, b] + w3 * y[i3, b]
+            lim = half_drag * math.sqrt(nn * vv)
+            lim = lim if lim < mf_dt else mf_dt
+            mag = q / nn * lim
+            mag = mag if cy < level else ZERO
+            fx[i0, b] -= w0 * mag * nx
+            fy[i0, b] -= w0 * mag * ny
+            fz[i0, b] -= w0 * mag * nz
+            fx[i1, b] -= w1 * mag * nx
+            fy[i1, b] -= w1 * mag * ny
+            fz[i1, b] -= w1 * mag * nz
+            fx[i2, b] -= w2 * mag * nx
+            fy[i2, b] -= w2 * mag * ny
+            fz[i2, b] -= w2 * mag * nz
+            fx[i3, b] -= w3 * mag * nx
+            fy[i3, b] -= w3 * mag * ny
+            fz[i3, b] -= w3 * mag * nz
+
+
+INV_TWO_PI = F(1.0 / (2.0 * math.pi))
+TWO_PI = F(2.0 * math.pi)
+S3, S5, S7, S9, S11, S13 = (F((-1) ** k / math.factorial(2 * k + 1)) for k in range(1, 7))
+C2, C4, C6, C8, C10, C12 = (F((-1) ** k / math.factorial(2 * k)) for k in range(1, 7))
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def cos_sin(a):
+    """Return cos(a) and sin(a) for a float32 angle, from polynomials of the half angle
+    (Taylor to the 13th power, error below float32 rounding for |a| <= pi after the
+    reduction): unlike math.cos, which is a call to libm, the lane loop vectorises."""
+    r = a - np.floor(a * INV_TWO_PI + HALF) * TWO_PI  # |r| <= pi
+    h = r * HALF
+    h2 = h * h
+    s = h * (ONE + h2 * (S3 + h2 * (S5 + h2 * (S7 + h2 * (S9 + h2 * (S11 + h2 * S13))))))
+    c = ONE + h2 * (C2 + h2 * (C4 + h2 * (C6 + h2 * (C8 + h2 * (C10 + h2 * C12)))))
+    return c * c - s * s, F(2.0) * s * c
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def fins(x, y, z, vx, vy, vz, fx, fy, fz, tmp, act, t, b0, nb, m):
+    """Pectoral fins: flat plates at a controlled angle to the body, pushed on by the water.
+
+    ``tmp`` (>= 3, nb) is scratch: each fin's force per lane is found first and only then
+    added to its nodes, so that the lane loop stores into three rows rather than twelve
+    that may alias what it reads (LLVM then vectorises it)."""
+    fin_nodes, mass = m.fin_nodes, m.mass
+    for k in range(fin_nodes.shape[0]):
+        # a fin's 1-4 nodes as four slots (padding repeats the first node with weight 0), so
+        # that the lane loop has no inner loop and vectorises
+        cnt = 0
+        mf = ZERO
+        for q in range(4):
+            if fin_nodes[k, q] >= 0:
+                cnt += 1
+                mf += mass[fin_nodes[k, q]]
+        _fin_lanes(x, y, z, vx, vy, vz, tmp, act, t, b0, nb, m, k, cnt, mf)
+        for q in range(cnt):
+            i = fin_nodes[k, q]
+            for b in range(nb):
+                fx[i, b] -= tmp[0, b]
+                fy[i, b] -= tmp[1, b]
+                fz[i, b] -= tmp[2, b]
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def _fin_lanes(x, y, z, vx, vy, vz, tmp, act, t, b0, nb, m, k, cnt, mf):
+    """Write fin k's force on each of its nodes into tmp[0:3] for every lane."""
+    level = F(m.water_level)
+    drag = F(m.water_drag)
+    dt = F(m.dt)
+    share = ONE / F(cnt)
+    i0 = m.fin_nodes[k, 0]
+    i1 = m.fin_nodes[k, 1] if cnt > 1 else i0
+    i2 = m.fin_nodes[k, 2] if cnt > 2 else i0
+    i3 = m.fin_nodes[k, 3] if cnt > 3 else i0
+    w1 = share if cnt > 1 else ZERO
+    w2 = share if cnt > 2 else ZERO
+    w3 = share if cnt > 3 else ZERO
+    fa, fb = m.fin_forward[k, 0], m.fin_forward[k, 1]
+    sa_, sb_ = m.fin_span[k, 0], m.fin_span[k, 1]
+    lo = m.fin_angle[k, 0]
+    hi = m.fin_angle[k, 1]
+    col = m.fin_actuator[k]
+    area = m.fin_area[k]
+    for b in range(nb):
+        ax = x[fa, b] - x[fb, b]
+        ay = y[fa, b] - y[fb, b]
+        az = z[fa, b] - z[fb, b]
+        inv = ONE / (math.sqrt(ax * ax + ay * ay + az * az) + TINY)
+        ax *= inv
+        ay *= inv
+        az *= inv
+        sx = x[sa_, b] - x[sb_, b]
+        sy = y[sa_, b] - y[sb_, b]
+        sz = z[sa_, b] - z[sb_, b]
+        d = sx * ax + sy * ay + sz * az
+        sx -= d * ax
+        sy -= d * ay
+        sz -= d * az
+        inv = ONE / (math.sqrt(sx * sx + sy * sy + sz * sz) + TINY)
+        sx *= inv
+        sy *= inv
+        sz *= inv
+        # up = forward x span; the plate normal tilts from up toward forward by the angle
+        ux = ay * sz - az * sy
+        uy = az * sx - ax * sz
+        uz = ax * sy - ay * sx
+        ca, sn = cos_sin(lo + act[t, col, b0 + b] * (hi - lo))
+        nx = ca * ux + sn * ax
+        ny = ca * uy + sn * ay
+        nz = ca * uz + sn * az
+        mvx = share * vx[i0, b] + w1 * vx[i1, b] + w2 * vx[i2, b] + w3 * vx[i3, b]
+        mvy = share * vy[i0, b] + w1 * vy[i1, b] + w2 * vy[i2, b] + w3 * vy[i3, b]
+        mvz = share * vz[i0, b] + w1 * vz[i1, b] + w2 * vz[i2, b] + w3 * vz[i3, b]
+        cy = share * y[i0, b] + w1 * y[i1, b] + w2 * y[i2, b] + w3 * y[i3, b]
+        vn = nx * mvx + ny * mvy + nz * mvz
+        speed = math.sqrt(mvx * mvx + mvy * mvy + mvz * mvz)
+        sub = ONE if cy < level else ZERO
+        mag = drag * area * speed * vn
+        cap = mf * abs(vn) / dt
+        mag = max(min(mag, cap), -cap) * sub * share
+        tmp[0, b] = mag * nx
+        tmp[1, b] = mag * ny
+        tmp[2, b] = mag * nz
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def floor_constants(m):
+    """Return the floor's stiffness, damping and forward, backward and lateral friction as the
+    float32 array ``ground`` reads. From memory, not registers: LLVM contracts the friction's
+    multiply-adds into FMAs one way or the other depending on that, and the results (seeded
+    runs on the ground) would change in the last bit."""
+    out = np.empty(5, dtype=np.float32)
+    out[0] = m.floor_stiffness
+    out[1] = m.floor_damping
+    out[2] = m.friction_forward
+    out[3] = m.friction_backward
+    out[4] = m.friction_lateral
+    return out
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def ground(x, y, z, vx, vy, vz, fx, fy, fz, nb, m, floor):
+    """Penalty floor at y = 0 and directional Coulomb friction, solved implicitly (``floor``:
+    the model's ``floor_constants``)."""
+    kc, cc, muf, mub, mul = floor[0], floor[1], floor[2], floor[3], floor[4]
+    dt = F(m.dt)
+    masses, front, back = m.mass, m.axis_front, m.axis_back
+    for i in range(masses.shape[0]):
+        mass = masses[i]
+        fi = front[i]
+        bi = back[i]
+        for b in range(nb):
+            pen = -y[i, b]
+            normal = kc * pen - cc * vy[i, b]
+            normal = normal if (pen > ZERO and normal > ZERO) else ZERO
+            fy[i, b] += normal
+            tx = x[fi, b] - x[bi, b]
+            tz = z[fi, b] - z[bi, b]
+            inv = ONE / (math.sqrt(tx * tx + tz * tz) + TINY)
+            tx *= inv
+            tz *= inv
+            # velocity the other forces would give: friction opposes it, at most stopping it
+            px = vx[i, b] + dt * fx[i, b] / mass
+            pz = vz[i, b] + dt * fz[i, b] / mass
+            vf = px * tx + pz * tz
+            vl = pz * tx - px * tz
+            mu = muf if vf > ZERO else mub
+            ff = mu * normal
+            cap = mass * abs(vf) / dt
+            ff = ff if ff < cap else cap
+            fl = mul * normal
+            cap = mass * abs(vl) / dt
+            fl = fl if fl < cap else cap
+            ff = -ff if vf > ZERO else ff
+            fl = -fl if vl > ZERO else fl
+            fx[i, b] += ff * tx - fl * tz
+            fz[i, b] += ff * tz + fl * tx
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def advance_nodes(x, y, z, vx, vy, vz, fx, fy, fz, nb, m, h, nodes):
+    """Symplectic Euler over h of ``nodes``: velocities (nodal damping implicit), positions."""
+    mass, ndamp = m.mass, m.node_damping
+    for q in range(nodes.shape[0]):
+        i = nodes[q]
+        hm = h / mass[i]
+        damp = ONE / (ONE + hm * ndamp[i])
+        for b in range(nb):
+            vx[i, b] = (vx[i, b] + hm * fx[i, b]) * damp
+            vy[i, b] = (vy[i, b] + hm * fy[i, b]) * damp
+            vz[i, b] = (vz[i, b] + hm * fz[i, b]) * damp
+            x[i, b] += h * vx[i, b]
+            y[i, b] += h * vy[i, b]
+            z[i, b] += h * vz[i, b]

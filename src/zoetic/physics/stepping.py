@@ -1,0 +1,279 @@
+"""How a World's animals are stepped: the kernel over each animal's lanes in place (``Drive``),
+and the slices in which contacts are resolved step by step (``ContactSlices``).
+
+Each animal's lanes are stepped by the same compiled kernel as ``physics.simulate`` (a
+``kernel.Stepper`` over the world's own state arrays), so a lone animal stepped in slices
+follows the open-loop trajectory. Where the broad phase (``broadphase``) finds a node within
+reach of an object or of another animal, the contacts are resolved every time step: a node
+against a fixed shape feels a penalty force and a ball is resolved by impulses
+(``physics.contacts``), and animals push each other with dissipative penalties
+(``physics.bodycontact``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from zoetic.bodies import Body
+from zoetic.errors import SimulationError
+from zoetic.physics.bodycontact import CONTACT_STEPS, pair_contacts
+from zoetic.physics.broadphase import BroadPhase
+from zoetic.physics.contacts import balls_step, node_contacts
+from zoetic.physics.kernel import make_stepper
+from zoetic.physics.media import Medium
+from zoetic.physics.model import Model
+from zoetic.physics.objects import Solids
+from zoetic.physics.simulate import VMAX, chunk_size
+
+F32 = np.float32
+# lane-steps per kernel call from which the thread pool is worth its launch (and its barrier,
+# which is slow on a busy host): 64 gym lanes x 10 steps run faster on one thread
+PARALLEL_FROM = 8192
+SUB_SLICE = 5  # steps between the checks of animals that may touch one another
+
+
+@njit(cache=True)
+def fill_table(u, out) -> bool:
+    """Copy activations u (B|1, T|1, A) into the kernel's table out (T, A, B), clipped to
+    [0, 1]; return False if any is not finite."""
+    steps, n_act, batch = out.shape
+    one_b = u.shape[0] == 1
+    one_t = u.shape[1] == 1
+    for t in range(steps):
+        for b in range(batch):
+            for k in range(n_act):
+                x = u[0 if one_b else b, 0 if one_t else t, k]
+                if not math.isfinite(x):
+                    return False
+                out[t, k, b] = min(max(x, 0.0), 1.0)
+    return True
+
+
+_KERNELS: dict = {}
+
+
+def _kernel(parallel: bool):
+    """Return the stateful kernel's entry point, threaded or serial (compiled, or loaded from
+    numba's cache, once per process and only when first needed)."""
+    if parallel not in _KERNELS:
+        from zoetic.physics.kernel import advance_entry
+
+        _KERNELS[parallel] = advance_entry(parallel)
+    return _KERNELS[parallel]
+
+
+class Drive:
+    """The kernel side of a world: one Stepper per animal (its float32 model over its views
+    (pos, vel) of the world's state, its failure marks ``fs`` and ``failed``), the activation
+    tables they read, and the kernel entry, threaded when the work is worth the pool."""
+
+    def __init__(self, bodies: list[Body], models: list[Model], views, fs, failed,
+                 batch: int) -> None:
+        self.bodies = bodies
+        self.batch = batch
+        self.serial = _kernel(False)
+        self.parallel = _kernel(True) if batch > 8 else self.serial
+        self.chunk = chunk_size(batch)
+        self.steppers = [
+            make_stepper(m, p, v, f, fl, self.chunk, VMAX)
+            for m, (p, v), f, fl in zip(models, views, fs, failed, strict=True)
+        ]
+        self._tables: dict[tuple[int, int], tuple[np.ndarray, tuple]] = {}
+
+    def kernel(self, steps: int):
+        """Return the kernel entry for a call of ``steps`` steps of every lane."""
+        return self.parallel if self.batch * steps >= PARALLEL_FROM else self.serial
+
+    def run(self, a: int, table: np.ndarray, t0: int, t1: int, base: int) -> None:
+        """Step animal a through rows t0 .. t1 of its table (the world's step ``base`` at t0)."""
+        kernel = self.parallel if self.batch * (t1 - t0) >= PARALLEL_FROM else self.serial
+        kernel(self.steppers[a], table, t0, t1, base)
+
+    def run_all(self, tables, t0: int, t1: int, base: int) -> None:
+        """Step every animal through rows t0 .. t1 of its table."""
+        kernel = self.parallel if self.batch * (t1 - t0) >= PARALLEL_FROM else self.serial
+        for stepper, table in zip(self.steppers, tables, strict=False):
+            kernel(stepper, table, t0, t1, base)
+
+    def tables(self, activations, steps: int) -> list[np.ndarray]:
+        """Return each animal's table for ``steps`` steps (``World.step``'s activations)."""
+        return [self.table(a, u, steps) for a, u in enumerate(self._per_animal(activations))]
+
+    def table(self, a: int, acts, steps: int) -> np.ndarray:
+        """Return the (T, A, B) float32 table the kernel reads (a reused buffer)."""
+        cached = self._tables.get((a, steps))
+        if cached is not None and type(acts) is np.ndarray and acts.shape == cached[1]:
+            # the common case, checked once: (B, T, A) rows for this slice length
+            if not fill_table(acts, cached[0]):
+                raise SimulationError(
+                    f"activations for the {self.bodies[a].name} contain non-finite values"
+                )
+            return cached[0]
+        body = self.bodies[a]
+        na = body.n_actuators
+        if cached is None:
+            out = np.zeros((steps, max(1, na), self.batch), F32)
+            self._tables[(a, steps)] = (out, (self.batch, steps, na))
+        else:
+            out = cached[0]
+        if acts is None or na == 0:
+            out[...] = 0.0
+            return out
+        u3 = self._rows(body, np.asarray(acts), steps)
+        if not fill_table(u3, out):
+            raise SimulationError(f"activations for the {body.name} contain non-finite values")
+        return out
+
+    def _rows(self, body: Body, u: np.ndarray, steps: int) -> np.ndarray:
+        """Return activations (A,), (B, A) or (B, T, A) as (B|1, T|1, A), or refuse them."""
+        na = body.n_actuators
+        if u.ndim == 3 and u.shape[0] == self.batch and u.shape[2] == na and u.shape[1] != steps:
+            raise SimulationError(
+                f"the {body.name}'s activations hold {u.shape[1]} rows; this step takes "
+                f"{steps} steps"
+            )
+        if u.shape not in ((na,), (self.batch, na), (self.batch, steps, na)):
+            raise SimulationError(
+                f"activations for the {body.name} must be shaped (A,), (B, A) or (B, T, A) with "
+                f"B = {self.batch} lanes and A = {na} actuators, got {u.shape}"
+            )
+        return u if u.ndim == 3 else u[:, None, :] if u.ndim == 2 else u[None, None, :]
+
+    def _per_animal(self, activations) -> list:
+        n = len(self.bodies)
+        if n == 1 and isinstance(activations, np.ndarray):
+            return [activations]
+        if activations is None:
+            return [None] * n
+        if isinstance(activations, dict):
+            names = [b.name for b in self.bodies]
+            unknown = set(activations) - set(names)
+            if unknown:
+                raise SimulationError(f"no animal named {sorted(unknown)} in this world")
+            return [activations.get(nm) for nm in names]
+        if isinstance(activations, list | tuple):
+            if len(activations) != n:
+                raise SimulationError(f"{len(activations)} activation arrays for {n} animals")
+            return list(activations)
+        if n != 1:
+            raise SimulationError(f"this world holds {n} animals: give one array for each")
+        return [activations]
+
+
+class ContactSlices:
+    """The steps of a world in which contacts are resolved, one step at a time: the pairs of
+    animals that may touch push each other, the nodes of the animals near an object touch it,
+    the kernel takes the step, and the balls move.
+
+    contact_steps, damping_ratio, friction: a node-object contact's duration in steps, its
+    damping ratio (which also sets the balls' restitution) and Coulomb friction (``World``).
+    """
+
+    def __init__(self, drive: Drive, broad: BroadPhase, solids: Solids, bodies: list[Body],
+                 medium: Medium, current: np.ndarray, dt: float, node_radius: float,
+                 contact_steps: int, damping_ratio: float, friction: float) -> None:
+        self.drive, self.broad, self.solids = drive, broad, solids
+        self.views = broad.views
+        self.mass = [b.mass.astype(np.float64) for b in bodies]
+        self.faces = [np.ascontiguousarray(b.faces, dtype=np.int64) for b in bodies]
+        self.med64 = medium.as_array()
+        self.current = current
+        self.dt = dt
+        self.node_radius = node_radius
+        self.w = np.pi / (contact_steps * dt)
+        self.w_body = np.pi / (CONTACT_STEPS * dt)
+        self.zeta = float(damping_ratio)
+        self.mu = float(friction)
+        self.pair_buf = np.zeros((2, drive.batch))
+        self.tested: set[int] = set()  # the animals whose node contacts a step computed
+
+    def lockstep(self, tables, t: int, t1: int, n: int, impulse, pairs, between) -> None:
+        """Step steps t .. t1 of a call that started at the world's step n, every animal one
+        step at a time with its contacts (impulses into ``impulse``, those between animals
+        into ``between``)."""
+        for s in range(t, t1):
+            self.solids.force[:] = 0.0
+            for a, c in pairs:
+                self.pair(a, c, between)
+            for a in range(len(self.views)):
+                self.node_contacts(a, impulse)
+            self.drive.run_all(tables, s, s + 1, n + s)
+            if len(self.solids.balls):
+                self.balls(1)
+
+    def apart(self, tables, t: int, t1: int, n: int, impulse, near_now: np.ndarray, pairs=(),
+              between=None) -> None:
+        """Step steps t .. t1 of animals that no balls couple: each near a fixed shape
+        (``near_now``) one step at a time with its contacts, each other one in one kernel
+        call; the animals of ``pairs`` (that may touch one another) in lockstep, one step at a
+        time."""
+        drive = self.drive
+        kernel = drive.kernel(t1 - t)
+        one = drive.kernel(1)
+        busy = sorted({a for p in pairs for a in p})
+        for a, (stepper, table) in enumerate(zip(drive.steppers, tables, strict=False)):
+            if a in busy:
+                continue
+            if not near_now[a]:
+                kernel(stepper, table, t, t1, n + t)
+                continue
+            for s in range(t, t1):
+                self.node_contacts(a, impulse)
+                one(stepper, table, s, s + 1, n + s)
+        if busy:
+            self._pairs_apart(tables, t, t1, n, impulse, near_now, pairs, busy, between)
+
+    def _pairs_apart(self, tables, t, t1, n, impulse, near_now, pairs, busy, between) -> None:
+        """``apart`` for the animals of ``pairs``: the pairs are checked again every
+        SUB_SLICE steps (on the world's grid, as the slices); an animal of a pair not close
+        now takes the sub-slice in one kernel call."""
+        drive = self.drive
+        kernel = drive.kernel(t1 - t)
+        one = drive.kernel(1)
+        near_shape = [a for a in busy if self.solids.any and near_now[a]]
+        s = t
+        while s < t1:
+            end = (n + s) // SUB_SLICE * SUB_SLICE + SUB_SLICE
+            s1 = min(t1, end - n)
+            now = self.broad.close_now(pairs, end, n + s)
+            tight = sorted({a for p in now for a in p} | set(near_shape))
+            for a in busy:
+                if a not in tight:
+                    kernel(drive.steppers[a], tables[a], s, s1, n + s)
+            for u in range(s, s1):
+                for a, c in now:
+                    self.pair(a, c, between)
+                for a in near_shape:
+                    self.node_contacts(a, impulse)
+                for a in tight:
+                    one(drive.steppers[a], tables[a], u, u + 1, n + u)
+            s = s1
+
+    def pair(self, a: int, c: int, between: np.ndarray) -> None:
+        """One step's contact impulses between animals a and c (recorded in ``between``)."""
+        buf = self.pair_buf
+        buf[:] = 0.0
+        (pa, va), (pc, vc) = self.views[a], self.views[c]
+        pair_contacts(pa, va, self.mass[a], self.faces[a], pc, vc, self.mass[c], self.faces[c],
+                      self.node_radius, self.dt, self.w_body, self.zeta, buf)
+        between[:, a, c] += buf[0]
+        between[:, c, a] += buf[1]
+
+    def node_contacts(self, a: int, impulse) -> None:
+        """One step's contacts of animal a's nodes with the objects (``contacts.node_contacts``;
+        impulses recorded in ``impulse[a]``, the balls' reactions in ``solids.force``)."""
+        self.tested.add(a)
+        p, v = self.views[a]
+        s = self.solids
+        node_contacts(p, v, self.mass[a], self.node_radius, s.pos, s.vel, s.par, s.kind,
+                      s.center, s.size, s.ball_obj, s.static_obj, self.dt, self.w, self.zeta,
+                      self.mu, s.force, impulse[a])
+
+    def balls(self, steps: int) -> None:
+        """Move the balls ``steps`` steps under the force the animals put on them."""
+        s = self.solids
+        balls_step(s.pos, s.vel, s.par, s.force, self.med64, self.current, s.kind, s.center,
+                   s.size, self.dt, steps, self.w, self.zeta, self.mu)
