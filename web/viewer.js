@@ -1,10 +1,13 @@
 // The zoetic run viewer: plays the run's glTF (written by zoetic.viz.gltf) with three.js.
 // The page holds <script id="zoetic-data" type="application/json"> with the .glb in base64
-// and the run's figures (centre-of-mass paths, activations, numbers). esbuild bundles this file
-// with three.js into src/zoetic/web/static/viewer.js (see web/package.json).
+// and the run's figures (centre-of-mass paths, activations, numbers, plots). esbuild bundles
+// this file, kinds.js (what each kind of run draws beside the bodies) and panels.js (the plots
+// beside the view) with three.js into src/zoetic/web/static/viewer.js (see web/package.json).
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
 import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
+import { addGaze, addLabels, addSplash, setLayer, tagLayers } from "./kinds.js";
+import { el, makeActivations, makeHistory, makeMind } from "./panels.js";
 
 const SKY = 0x9ec2e6;
 const BACKGROUNDS = { ground: SKY, sea: SKY, water: 0x1f4f74, vacuum: 0x14151f };
@@ -18,13 +21,6 @@ function decodeBase64(text) {
 
 function parseGlb(buffer) {
   return new Promise((resolve, reject) => new GLTFLoader().parse(buffer, "", resolve, reject));
-}
-
-function el(tag, attrs = {}, parent = null) {
-  const e = document.createElement(tag);
-  Object.assign(e, attrs);
-  if (parent) parent.appendChild(e);
-  return e;
 }
 
 function fmt(v) {
@@ -48,6 +44,7 @@ function makePlots(plots, root, duration) {
   if (!who.length) return null;
   const box = el("div", { id: "plots" }, root);
   const head = el("div", { className: "head" }, box);
+  el("span", { className: "name", textContent: "time plots" }, head);
   const pick = el("select", { id: "plot-who" }, head);
   for (const w of who) el("option", { value: w, textContent: w }, pick);
   const chips = el("div", { className: "chips" }, box);
@@ -161,6 +158,7 @@ async function main() {
 
   const gltf = await parseGlb(decodeBase64(data.glb));
   scene.add(gltf.scene);
+  tagLayers(gltf.scene, data.objects);
   gltf.scene.traverse((o) => {
     if (o.isSkinnedMesh || o.isMesh) o.frustumCulled = false; // skinned bounds are the rest pose
   });
@@ -175,6 +173,7 @@ async function main() {
     geo.setAttribute("position", new THREE.Float32BufferAttribute(com, 3));
     const line = new THREE.Line(geo, new THREE.LineBasicMaterial({ color: 0xffd040 }));
     line.frustumCulled = false;
+    line.userData.layer = "paths";
     scene.add(line);
   }
   const comAt = (k, i) => new THREE.Vector3(coms[k][3 * i], coms[k][3 * i + 1], coms[k][3 * i + 2]);
@@ -200,19 +199,19 @@ async function main() {
     return el("td", { textContent: value }, tr);
   };
   dynamic.distance = addRow("distance (m)", "");
-  for (const [key, value] of Object.entries(data.numbers)) addRow(key.replaceAll("_", " "), fmt(value));
-  const bars = [];
-  data.animals.forEach((a) => {
-    if (!a.activations) return;
-    el("div", { className: "sub", textContent: `${a.name}: activations` }, panel);
-    a.actuators.forEach((name, j) => {
-      const row = el("div", { className: "bar" }, panel);
-      el("span", { textContent: name }, row);
-      const track = el("div", { className: "track" }, row);
-      bars.push({ fill: el("div", { className: "fill" }, track), values: a.activations, j,
-        n: a.actuators.length });
-    });
-  });
+  // the run's figures: a long list folds away so that it does not hide the animal
+  const figures = Object.entries(data.numbers);
+  let figureRows = rows;
+  if (figures.length > 5) {
+    const fold = el("details", { id: "figures" }, panel);
+    el("summary", { textContent: `figures (${figures.length})` }, fold);
+    figureRows = el("table", {}, fold);
+  }
+  for (const [key, value] of figures) {
+    const tr = el("tr", {}, figureRows);
+    el("td", { textContent: key.replaceAll("_", " ") }, tr);
+    el("td", { textContent: fmt(value) }, tr);
+  }
   // each animal's named states (an aquarium fish's intention) at the frame shown
   const states = Object.entries(data.states || {});
   const stateBox = states.length ? el("div", { className: "sub states" }, panel) : null;
@@ -225,7 +224,21 @@ async function main() {
     step: 1 / data.fps, value: 0 }, bar);
   const speed = el("select", { id: "speed" }, bar);
   for (const s of [0.25, 0.5, 1, 2, 4]) el("option", { value: s, textContent: `${s}x`, selected: s === 1 }, speed);
-  const plots = makePlots(data.plots || {}, root, data.duration);
+  // the plots beside the view, and what this kind of run draws beside the bodies
+  const side = el("div", { id: "side" }, document.body);
+  const plots = makePlots(data.plots || {}, side, data.duration);
+  const panels = {
+    activations: makeActivations(side, data.animals, data.fps, data.duration),
+    mind: makeMind(side, data.mind || {}, (data.plots || {}).times || [], data.duration),
+    history: makeHistory(side, data.history || {}),
+  };
+  if (!side.childElementCount) side.remove();
+  else document.body.classList.add("with-side");
+  const extras = {
+    gaze: addGaze(scene, data.gaze),
+    spray: addSplash(scene, data.splash),
+    labels: addLabels(root, camera, data.states, data.animals, 0.6 * data.extent),
+  };
   const followLabel = el("label", { textContent: " follow" }, bar);
   const follow = el("input", { id: "follow", type: "checkbox", checked: true });
   followLabel.prepend(follow);
@@ -255,7 +268,8 @@ async function main() {
         .map((e) => `${e[0].toFixed(1)} s ${e[1]} ${e[2]} ${e[3]}`).join("\n");
     }
     if (plots) plots.draw(t);
-    for (const b of bars) b.fill.style.width = `${(100 * b.values[i * b.n + b.j]).toFixed(1)}%`;
+    for (const p of Object.values(panels)) if (p) p.draw(t);
+    for (const x of Object.values(extras)) if (x) x.update(t, i);
   };
   play.onclick = () => { playing = !playing; play.textContent = playing ? "pause" : "play"; };
   slider.oninput = () => setTime(parseFloat(slider.value));
@@ -291,6 +305,19 @@ async function main() {
     pause: () => { playing = false; play.textContent = "play"; },
     // for tests and tools: the animal and the quantities plotted, with their sample counts
     plots: () => (plots ? plots.info() : null),
+    // for tests and tools: what the side bar's panels show, and what each kind's extras hold
+    panels: () => Object.fromEntries(Object.entries(panels).filter(([, p]) => p)
+      .map(([k, p]) => [k, p.info()])),
+    extras: () => ({ gaze: !!extras.gaze, drops: extras.spray ? extras.spray.drops() : 0,
+      labels: extras.labels ? extras.labels.texts() : [] }),
+    // for tests and tools: show or hide one kind of thing (animals, objects, environment,
+    // paths, gaze, spray; returns how many there are), and where animal k's centre is drawn
+    setLayer: (layer, visible) => { const n = setLayer(scene, layer, visible); render(); return n; },
+    project: (k) => {
+      const i = Math.min(Math.round(t * data.fps), data.frames - 1);
+      const v = comAt(k, i).project(camera), c = renderer.domElement;
+      return { x: ((v.x + 1) / 2) * c.clientWidth, y: ((1 - v.y) / 2) * c.clientHeight };
+    },
     // for tests and tools: parse any .glb (base64) with three.js's GLTFLoader and count its parts
     inspectGlb: async (b64) => {
       const g = await parseGlb(decodeBase64(b64));

@@ -112,6 +112,7 @@ class Record:
     labels: dict = field(default_factory=dict)  # quantity -> names of its integer codes
     units: dict = field(default_factory=dict)  # quantity -> unit ("m", "m/s", "rad", "")
     numbers: dict = field(default_factory=dict)  # the run's figures (JSON values)
+    history: dict = field(default_factory=dict)  # quantity -> (K,) float32 per evaluation
 
 
 # ------------------------------------------------------------------------------------ writing
@@ -148,6 +149,8 @@ def _arrays(rec: Record) -> dict[str, np.ndarray]:
     for who, quantities in rec.scalars.items():
         for what, values in quantities.items():
             out[f"scalar/{who}/{what}"] = np.asarray(values, np.float32)
+    for what, values in rec.history.items():
+        out[f"history/{what}"] = np.asarray(values, np.float32)
     return out
 
 
@@ -193,6 +196,7 @@ def _meta(rec: Record) -> dict:
         "labels": {k: list(v) for k, v in rec.labels.items()},
         "units": dict(rec.units),
         "numbers": rec.numbers,
+        "history": sorted(rec.history),
     }
 
 
@@ -370,6 +374,20 @@ def _scalars(meta: dict, ck: _Check, p: int) -> dict:
     return out
 
 
+def _history(meta: dict, ck: _Check) -> dict:
+    """Return a search's progress per evaluation (optional: records before it have none)."""
+    names = meta.get("history", [])
+    if not isinstance(names, list):
+        raise ck.fail("history must list quantities")
+    out = {}
+    for what in names:
+        a = ck.arrays.get(f"history/{what}")
+        if a is None or a.ndim != 1 or a.dtype.kind != "f":
+            raise ck.fail(f"history/{what} must be a float array (K,)")
+        out[str(what)] = a
+    return out
+
+
 def _events(meta: dict, ck: _Check) -> tuple[Event, ...]:
     out = []
     for e in meta["events"]:
@@ -431,6 +449,7 @@ def _build(meta, arrays: dict[str, np.ndarray], where: str) -> Record:
         dict(meta["labels"]),
         dict(meta["units"]),
         dict(meta["numbers"]),
+        _history(meta, ck),
     )
 
 

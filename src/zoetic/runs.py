@@ -152,6 +152,14 @@ def simulate_run(
     }
 
 
+def search_history(E) -> dict:
+    """Return a search's progress for its record: E of each candidate evaluated, in order
+    (inf where one blew up), and the best E found by then."""
+    e = np.asarray(E, float).reshape(-1)
+    e = np.where(np.isfinite(e), e, np.inf)
+    return {"E": e, "best_E": np.minimum.accumulate(e)} if len(e) else {}
+
+
 def finish_run(run, media: Media | None = None) -> dict:
     """Write the run record of a finished learning run's best controller (record.npz), and
     what ``media`` draws of it (``media(run, record)`` returns the files it wrote).
@@ -179,6 +187,7 @@ def finish_run(run, media: Media | None = None) -> dict:
         traj.times,
         (animal_record(body, traj.positions[0], traj.times, run.best_controller()),),
         numbers={"best_E": best_E, "task": task.name},
+        history=search_history(run.log.E),
     )
     _, rec = write_run_record(out, rec, [body])
     files = media(run, rec) if media is not None else {}

@@ -62,19 +62,56 @@ def obstacle_discs(obstacles_xzr: np.ndarray, depth: float) -> list[Thing]:
 
 
 def write_sequence_record(
-    out: Path, kind: str, body, times, positions, ctrl, things=(), numbers: dict | None = None
+    out: Path,
+    kind: str,
+    body,
+    times,
+    positions,
+    ctrl,
+    things=(),
+    numbers: dict | None = None,
+    splash: bool = False,
 ) -> Path:
-    """Write the record of one animal driven by a controller (track, macro, stunt)."""
+    """Write the record of one animal driven by a controller (track, macro, stunt); with
+    ``splash``, its surface crossings per recorded instant (``splash_scalars``)."""
+    times = np.asarray(times, float)
+    animal = animal_record(body, positions, times, ctrl)
+    extra = {animal.name: splash_scalars(body, positions, times)} if splash else {}
     rec = Record(
         kind,
         f"{body.name} {kind} ({Path(out).name})",
         body.medium,
-        np.asarray(times, float),
-        (animal_record(body, positions, times, ctrl),),
+        times,
+        (animal,),
         objects=tuple(things),
         numbers=numbers or {},
+        period_times=times if splash else np.zeros(0),
+        scalars=extra,
+        units={"splash": "m^3/s", "splash_at": "m"} if splash else {},
     )
     return write_run_record(out, rec, [body])[0]
+
+
+def splash_scalars(body, positions, times: np.ndarray) -> dict:
+    """Return the body's splash at each recorded instant: the surface crossings of its faces
+    from that instant to the next (``viz.spray.surface_crossings``, the stunt video's spray
+    sources) as their summed area x normal speed (m^3/s; 0 at the last instant or without a
+    surface) and where they were (flux-weighted mean point, m; NaN where none)."""
+    from zoetic.physics import get_medium
+    from zoetic.viz.spray import surface_crossings
+
+    t = len(times)
+    flux, at = np.zeros(t), np.full((t, 3), np.nan)
+    level = get_medium(body.medium).water_level
+    if abs(level) < 1e8 and t > 1:
+        s = surface_crossings(body, positions, times, level)
+        row = np.clip(np.searchsorted(times, s.times) - 1, 0, t - 2)
+        np.add.at(flux, row, s.flux)
+        weighted = np.zeros((t, 3))
+        np.add.at(weighted, row, s.points * s.flux[:, None])
+        some = flux > 0
+        at[some] = weighted[some] / flux[some, None]
+    return {"splash": flux, "splash_at": at}
 
 
 def figures(summary: dict) -> dict:
@@ -163,6 +200,8 @@ def write_chase_record(out: Path, chase, result, summary: dict) -> Path:
                 "theta_p": np.array([r.theta_p for r in log[:n]], float),
                 "phi_p": np.array([r.phi_p for r in log[:n]], float),
                 "range": np.array([r.range for r in log[:n]], float),
+                "eye_pos": np.array([r.eye_pos for r in log[:n]], float).reshape(n, 2, 3),
+                "eye_dirs": np.array([r.eye_dirs for r in log[:n]], float).reshape(n, 2, 3),
             }
         }
         if n
@@ -181,7 +220,15 @@ def write_chase_record(out: Path, chase, result, summary: dict) -> Path:
         events=events,
         period_times=np.asarray(result.times[:n], float),
         scalars=scalars,
-        units={"gaze": "rad", "locked": "", "theta_p": "rad", "phi_p": "rad", "range": "m"},
+        units={
+            "gaze": "rad",
+            "locked": "",
+            "theta_p": "rad",
+            "phi_p": "rad",
+            "range": "m",
+            "eye_pos": "m",
+            "eye_dirs": "",
+        },
         numbers=figures(summary),
     )
     return write_run_record(out, rec, world.bodies)[0]

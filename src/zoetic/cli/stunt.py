@@ -34,7 +34,9 @@ def write_replay(body, path: Path, seconds: float | None, out: Path, video: bool
     ctrl, info = load_macro(path, body)
     make_dir(out)
     things = solid_things(info["objects"], traj.times, balls)
-    record = write_sequence_record(out, "stunt", body, traj.times, traj.positions[0], ctrl, things)
+    record = write_sequence_record(
+        out, "stunt", body, traj.times, traj.positions[0], ctrl, things, splash=True
+    )
     com = traj.com(body)[0]
     files = {"record": str(record)}
     if video:
@@ -137,6 +139,7 @@ def _write_stunt(out: Path, body, tr, found, memory: Path, seed: int) -> dict:
         result.sequence,
         solid_things(tr.objects, times, rec.balls[0]),
         figures(summary),
+        splash=True,
     )
     return summary
 

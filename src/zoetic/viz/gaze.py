@@ -14,6 +14,14 @@ from zoetic.perception.eyes import composite
 from zoetic.viz.plots import save_figure
 
 
+def gaze_ends(eye_pos: np.ndarray, eye_dirs: np.ndarray, distance) -> np.ndarray:
+    """Return where the drawn gaze rays end (..., 2, 3) m: from each eye along its direction
+    to the triangulated range (``distance``, m; 3 m where there is none), at most 6 m."""
+    d = np.asarray(distance, float)
+    reach = np.minimum(np.where(np.isfinite(d), d, 3.0), 6.0)
+    return np.asarray(eye_pos, float) + reach[..., None, None] * np.asarray(eye_dirs, float)
+
+
 def plot_gaze(log: Sequence, path: str | os.PathLike) -> Path:
     """Write Fig. 7: left and right theta and phi, the vergence angle theta_V and the turn
     angles theta_P, phi_P (degrees) over the frames of a pursuit."""
@@ -129,8 +137,7 @@ def chase_frames(
             (width, height),
         )
         view = render(mesh.vertices, mesh.triangles, mesh.colors, cam, fog, visibility)[0]
-        reach = rec.range if np.isfinite(rec.range) else 3.0
-        ends = rec.eye_pos + min(reach, 6.0) * rec.eye_dirs
+        ends = gaze_ends(rec.eye_pos, rec.eye_dirs, rec.range)
         uv0, z0 = project(rec.eye_pos, cam)
         uv1, z1 = project(ends, cam)
         rays = [

@@ -104,16 +104,19 @@ def _link(ln: Link, i: np.ndarray, frac: np.ndarray) -> Link:
     )
 
 
+def period_index(rec: Record, frame_times: np.ndarray) -> np.ndarray:
+    """Return, for each time (s, the record's clock), the control period running then: the
+    last that began by it (0 before the first)."""
+    k = np.searchsorted(rec.period_times, np.asarray(frame_times) + 1e-9, side="right") - 1
+    return np.clip(k, 0, max(len(rec.period_times) - 1, 0))
+
+
 def _states(rec: Record, frame_times: np.ndarray) -> dict:
     """Return each animal's named states (an intention: the labels of integer-coded per-period
     scalars) at the frames, as held since the last control period began."""
     if not len(rec.period_times):
         return {}
-    k = np.clip(
-        np.searchsorted(rec.period_times, frame_times + 1e-9, side="right") - 1,
-        0,
-        len(rec.period_times) - 1,
-    )
+    k = period_index(rec, frame_times)
     out: dict = {}
     for who, quantities in rec.scalars.items():
         for what, values in quantities.items():

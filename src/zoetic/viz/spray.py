@@ -36,14 +36,14 @@ def surface_crossings(body, positions: np.ndarray, times: np.ndarray, level: flo
     return Splash(t, pts, flux[rows, faces])
 
 
-def spray_particles(
-    splash: Splash, level: float, gravity: float = 9.81, per_flux: float = 150.0, seed: int = 0
-):
-    """Return a function of time t giving the spray drops (D, 3) in the air then: each
-    crossing throws round(per_flux x its area x normal speed) drops (at most 60) up and out
-    at speeds that grow with it; they fly ballistically until they fall back in."""
+def spray_launches(
+    splash: Splash, per_flux: float = 150.0, seed: int = 0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return the spray drops' launch times (D,) s, points (D, 3) m and velocities (D, 3) m/s:
+    each crossing throws round(per_flux x its area x normal speed) drops (at most 60) up and
+    out at speeds that grow with it."""
     rng = np.random.default_rng(seed)
-    t0, p0, v0 = [], [], []
+    t0, p0, v0 = [np.zeros(0)], [np.zeros((0, 3))], [np.zeros((0, 3))]
     for t, p, f in zip(splash.times, splash.points, splash.flux, strict=True):
         n = int(min(60, round(per_flux * f)))
         if n == 0:
@@ -53,9 +53,15 @@ def spray_particles(
         t0.append(np.full(n, t))
         p0.append(p + rng.normal(0.0, 0.05, (n, 3)) * [1, 0, 1])
         v0.append(np.stack([side[:, 0], up, side[:, 1]], axis=1))
-    if not t0:
-        return lambda t: np.zeros((0, 3))
-    t0a, p0a, v0a = np.concatenate(t0), np.concatenate(p0), np.concatenate(v0)
+    return np.concatenate(t0), np.concatenate(p0), np.concatenate(v0)
+
+
+def spray_particles(
+    splash: Splash, level: float, gravity: float = 9.81, per_flux: float = 150.0, seed: int = 0
+):
+    """Return a function of time t giving the spray drops (D, 3) in the air then: the drops
+    of ``spray_launches`` fly ballistically until they fall back in."""
+    t0a, p0a, v0a = spray_launches(splash, per_flux, seed)
 
     def at(t: float) -> np.ndarray:
         dt = t - t0a

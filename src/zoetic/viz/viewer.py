@@ -1,6 +1,8 @@
 """What the web viewer's page reads of a run: its glTF in base64, the centre-of-mass paths,
-activations, events and figures, built from a Scene (``zoetic.viz.scene``), and the time
-plots of its per-period scalars, taken from the record itself."""
+activations, events and figures, built from a Scene (``zoetic.viz.scene``), and, taken from
+the record itself, the time plots of its per-period scalars, a search's E history, the
+animals' minds (drives and intentions) and what each kind of run draws beside the bodies:
+a predator's gaze rays, a stunt's spray."""
 
 from __future__ import annotations
 
@@ -16,6 +18,10 @@ MAX_EVENTS = 2000  # events listed in the page (a long aquarium run has many)
 MAX_POINTS = 2000  # samples per plotted scalar: more than a strip chart's pixels
 # the motion every record carries (``control.measure``), plotted before the other scalars
 FIRST = ("speed", "depth", "height", "heading", "pitch", "roll")
+# per-period places in the world (drawn in the scene, not plotted): a predator's eyes and
+# their directions, where a stunt's body crossed the surface
+PLACES = ("eye_pos", "eye_dirs", "splash_at")
+DRIVES = ("hunger", "libido", "fear")  # an aquarium fish's drives, drawn with its intention
 
 
 def _round(a: np.ndarray, digits: int) -> list:
@@ -24,7 +30,7 @@ def _round(a: np.ndarray, digits: int) -> list:
 
 def _series(values: np.ndarray) -> list:
     """Return plotted values as a JSON list: rounded, with null where not finite."""
-    v = np.round(np.asarray(values, np.float64), 4)
+    v = np.round(np.asarray(values, np.float64), 4).ravel()
     return [float(x) if np.isfinite(x) else None for x in v]
 
 
@@ -43,7 +49,7 @@ def plots_data(rec: Record) -> dict:
         series: dict = {}
         for what in sorted(quantities, key=lambda q: (order.get(q, len(FIRST)), q)):
             values = np.asarray(quantities[what])
-            if what in rec.labels or values.ndim > 2:
+            if what in rec.labels or what in PLACES or values.ndim > 2:
                 continue
             if values.ndim == 1:
                 series[what] = _series(values[keep])
@@ -58,6 +64,85 @@ def plots_data(rec: Record) -> dict:
         "times": _round(periods[keep] - float(rec.times[0]), 4),
         "units": {k: str(v) for k, v in rec.units.items()},
         "animals": animals,
+    }
+
+
+def history_data(rec: Record) -> dict:
+    """Return a search's progress for the page's E plot: per evaluation (thinned to at most
+    MAX_POINTS, the last kept) each recorded quantity (E, best_E), null where not finite."""
+    if not rec.history:
+        return {}
+    n = max(len(v) for v in rec.history.values())
+    keep = np.unique(np.r_[np.arange(0, n, int(np.ceil(n / MAX_POINTS))), n - 1])
+    return {
+        "evaluations": (keep + 1).tolist(),
+        "series": {what: _series(np.asarray(v)[keep]) for what, v in rec.history.items()},
+    }
+
+
+def mind_data(rec: Record, plots: dict) -> dict:
+    """Return each animal's mind over the run at the time plots' periods: its labelled state
+    (an intention's index into ``labels``) and its drives (0..1), for the page's mind chart."""
+    periods = np.asarray(rec.period_times, float)
+    if not plots or "intention" not in rec.labels:
+        return {}
+    keep = np.arange(0, len(periods), int(np.ceil(len(periods) / MAX_POINTS)))
+    animals = {}
+    for who, q in rec.scalars.items():
+        if "intention" not in q:
+            continue
+        codes = np.nan_to_num(np.asarray(q["intention"])[keep], nan=-1).astype(int)
+        drives = {d: _series(np.asarray(q[d])[keep]) for d in DRIVES if d in q}
+        animals[who] = {"intention": codes.tolist(), "drives": drives}
+    return {"labels": list(rec.labels["intention"]), "animals": animals} if animals else {}
+
+
+def gaze_data(rec: Record, scene: Scene) -> list:
+    """Return each animal's gaze rays per frame of the scene, in glTF axes: per animal with
+    eyes (a predator's ``eye_pos`` and ``eye_dirs``) its name and, flat per frame, both
+    eyes' start and end points (R x 2 x 2 x 3 m; null where not finite)."""
+    from zoetic.viz.gaze import gaze_ends
+    from zoetic.viz.scene import period_index
+
+    out = []
+    k = period_index(rec, scene.times + float(rec.times[0]))
+    for who, q in rec.scalars.items():
+        if "eye_pos" not in q or "eye_dirs" not in q or not len(k):
+            continue
+        pos = np.asarray(q["eye_pos"], float)[k]
+        far = np.full(len(pos), np.inf) if "range" not in q else np.asarray(q["range"])[k]
+        rays = np.stack([pos, gaze_ends(pos, np.asarray(q["eye_dirs"])[k], far)], axis=2)
+        out.append({"name": who, "rays": _series(to_gltf_axes(rays))})
+    return out
+
+
+def splash_data(rec: Record, scene: Scene) -> dict:
+    """Return a stunt's spray for the page: each drop's launch time (s from the record's
+    start), point and velocity (glTF axes), thrown by the spray model of the stunt videos
+    (``viz.spray``) from the surface crossings recorded (``splash``, ``splash_at``)."""
+    from zoetic.viz.spray import Splash, spray_launches
+
+    times, points, flux = [], [], []
+    step = np.diff(rec.period_times, append=rec.period_times[-1:]) if len(rec.period_times) else []
+    for q in rec.scalars.values():
+        if "splash" not in q or "splash_at" not in q:
+            continue
+        f = np.nan_to_num(np.asarray(q["splash"], float))
+        rows = np.nonzero(f > 0)[0]
+        times.append(rec.period_times[rows] + 0.5 * step[rows] - rec.times[0])
+        points.append(np.asarray(q["splash_at"], float)[rows])
+        flux.append(f[rows])
+    if not times or not sum(len(t) for t in times):
+        return {}
+    t0, p0, v0 = spray_launches(
+        Splash(np.concatenate(times), np.concatenate(points), np.concatenate(flux))
+    )
+    return {
+        "t0": _round(t0, 4),
+        "p0": _round(to_gltf_axes(p0), 4),
+        "v0": _round(to_gltf_axes(v0), 4),
+        "gravity": float(scene.medium.gravity),
+        "level": float(scene.medium.water_level),
     }
 
 
@@ -101,8 +186,21 @@ def viewer_data(scene: Scene, rec: Record | None = None) -> dict:
             }
             for a in scene.movers
         ],
+        "objects": [{"kind": o.kind, "name": o.name} for o in scene.objects],
         "states": scene.states,
         "events": [[round(e.t, 3), e.who, e.what, e.detail] for e in events],
-        "plots": {} if rec is None else plots_data(rec),
+        **({} if rec is None else _record_data(rec, scene)),
         "glb": base64.b64encode(scene_glb(scene)).decode("ascii"),
+    }
+
+
+def _record_data(rec: Record, scene: Scene) -> dict:
+    """Return what the page draws from the record itself beside the scene."""
+    plots = plots_data(rec)
+    return {
+        "plots": plots,
+        "history": history_data(rec),
+        "mind": mind_data(rec, plots),
+        "gaze": gaze_data(rec, scene),
+        "splash": splash_data(rec, scene),
     }

@@ -29,23 +29,29 @@ html, body { margin: 0; height: 100%; overflow: hidden; background: #222;
 #panel .sub { margin-top: 6px; color: #bcd; }
 #panel .events, #panel .states { white-space: pre-line; font-size: 11px; }
 #panel table { border-collapse: collapse; width: 100%; }
+#panel details { margin-top: 2px; max-height: 60vh; overflow-y: auto; }
+#panel summary { cursor: pointer; color: #bcd; }
 #panel td:last-child { text-align: right; font-variant-numeric: tabular-nums; }
-.bar { display: flex; align-items: center; gap: 6px; margin: 1px 0; }
-.bar span { width: 110px; overflow: hidden; white-space: nowrap; font-size: 11px; }
-.bar .track { flex: 1; height: 8px; background: #444; border-radius: 2px; }
-.bar .fill { height: 100%; background: #e8a33c; border-radius: 2px; }
 #controls { position: fixed; left: 0; right: 0; bottom: 0; height: 44px; display: flex;
   align-items: center; gap: 10px; padding: 0 12px; background: #1a1d24; box-sizing: border-box; }
 #timeline { flex: 1; }
-#plots { position: absolute; right: 8px; bottom: 8px; width: 300px; padding: 6px 8px;
-  background: rgba(20, 24, 32, 0.72); border-radius: 6px; font-size: 11px; }
-#plots .head { display: flex; gap: 6px; align-items: center; margin-bottom: 3px; }
-#plots select { flex: 1; font-size: 11px; }
+#side { position: absolute; top: 0; right: 0; bottom: 44px; width: 320px; overflow-y: auto;
+  padding: 4px 8px; box-sizing: border-box; background: #1a1d24; font-size: 11px; }
+body.with-side #zoetic { right: 320px; }
+#side > div { margin-bottom: 8px; }
+#side .head { display: flex; gap: 6px; align-items: center; margin-bottom: 3px; }
+#side .head .name { font-weight: 600; color: #cde; }
+#side select { flex: 1; font-size: 11px; }
+#side canvas { display: block; margin-top: 2px; }
+#side .legend { display: flex; flex-wrap: wrap; gap: 1px 8px; color: #bcd; font-size: 10px; }
+#side .legend span { padding-left: 3px; }
 #plots .chips { display: flex; flex-wrap: wrap; gap: 2px 8px; margin-bottom: 3px; }
 #plots .chip { white-space: nowrap; color: #bcd; }
 #plots .chip input { margin: 0 2px 0 0; vertical-align: middle; }
-#plots canvas { display: block; margin-top: 2px; }
-@media (max-width: 600px) { #plots { display: none; } }  /* no room beside the panel */
+#zoetic .label { position: absolute; transform: translate(-50%, -100%); padding: 1px 4px;
+  background: rgba(20, 24, 32, 0.7); border-radius: 3px; font-size: 11px; white-space: nowrap;
+  pointer-events: none; }
+@media (max-width: 600px) { #side { display: none; } body.with-side #zoetic { right: 0; } }
 #error { position: absolute; top: 40%; left: 10%; color: #f88; white-space: pre-wrap; }
 """
 
