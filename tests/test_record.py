@@ -96,6 +96,7 @@ def _record() -> Record:
         {"intention": ["wander", "eat", "flee"]},
         {"hunger": "", "gaze": "rad"},
         {"survivors": 2, "note": "x", "ok": True},
+        {"E": np.float32([3, np.inf, 1, 2]), "best_E": np.float32([3, 3, 1, 1])},
     )
 
 
@@ -128,6 +129,12 @@ def test_what_is_written_is_read_field_by_field(tmp_path):
     assert back.animals[0].positions.dtype == np.float32 and back.times.dtype == np.float64
     assert back.objects[0].visible.dtype == bool
     assert not list(tmp_path.glob("*.tmp"))  # written through a temporary file and a rename
+
+
+def test_a_record_without_a_search_history_reads_with_none(tmp_path):
+    path = write_record(tmp_path, _record())
+    _rewrite(path, lambda m, a: [m.pop("history"), a.pop("history/E"), a.pop("history/best_E")])
+    assert read_record(path).history == {}
 
 
 def _rewrite(path, change) -> None:
@@ -168,6 +175,7 @@ def _rewrite(path, change) -> None:
             "scalar/shark/gaze must be float with 3 rows",
         ),
         (lambda m, a: m.pop("numbers"), "the header needs"),
+        (lambda m, a: a.pop("history/E"), "history/E must be a float array (K,)"),
     ],
 )
 def test_a_damaged_record_is_refused_naming_the_file(tmp_path, change, message):

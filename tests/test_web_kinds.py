@@ -70,10 +70,20 @@ def _covered(page, layer: str) -> np.ndarray:
 
 @contextlib.contextmanager
 def _open(run: Path, tmp_path: Path, t: float, fps: int = 20):
-    """Write the run's page with the CLI and open it, paused at time ``t`` (s)."""
+    """Write the run's page and its .glb with the CLI; open the page, check that three.js
+    reads the .glb, and pause at time ``t`` (s)."""
     html = tmp_path / f"{run.name}.html"
     assert main(["view", str(run), "--html", str(html), "--fps", str(fps)]) == 0
+    glb = tmp_path / f"{run.name}.glb"
+    assert main(["export", str(run), "--gltf", str(glb), "--fps", str(fps)]) == 0
     with viewer_page(html) as (page, _):
+        # the exported .glb, read by three.js's GLTFLoader: every body and object, animated
+        b64 = base64.b64encode(glb.read_bytes()).decode()
+        info = page.evaluate("b => window.zoetic.inspectGlb(b)", b64)
+        rec = read_record(run)
+        links = sum(len(c.links) for c in rec.creatures)
+        assert info["meshes"] >= len(rec.animals) + links + len(rec.objects), info
+        assert info["skinned"] == len(rec.animals) and info["animations"] == 1, info
         page.evaluate(f"window.zoetic.pause(); window.zoetic.setTime({t})")
         yield page
 

@@ -65,7 +65,8 @@ export function addSplash(scene, splash) {
   return { update, drops: () => shown };
 }
 
-// each animal's named states at the frame shown, in a label over its centre of mass
+// each animal's named states at the frame shown, in a label over its centre of mass; place()
+// moves the labels where the camera sees the animals (after the camera moved)
 export function addLabels(root, camera, states, animals, lift) {
   const who = Object.keys(states || {});
   if (!who.length) return null;
@@ -77,19 +78,25 @@ export function addLabels(root, camera, states, animals, lift) {
     return { name, com: k >= 0 ? animals[k].com : null, q: Object.values(states[name]), div };
   });
   const v = new THREE.Vector3();
-  const update = (t, i) => {
-    const w = root.clientWidth, h = root.clientHeight;
+  let frame = 0;
+  const place = () => { // over each animal as the camera sees it now
+    camera.updateMatrixWorld();
+    const w = root.clientWidth, h = root.clientHeight, i = frame;
     for (const l of labels) {
       if (!l.com) { l.div.style.display = "none"; continue; }
       v.set(l.com[3 * i], l.com[3 * i + 1] + lift, l.com[3 * i + 2]).project(camera);
-      const on = v.z < 1 && Math.abs(v.x) < 1.1 && Math.abs(v.y) < 1.1;
+      const on = v.z < 1 && Math.abs(v.x) < 1 && Math.abs(v.y) < 1;
       l.div.style.display = on ? "" : "none";
-      l.div.textContent = l.q.map((s) => s[i]).join(", ");
       l.div.style.left = `${((v.x + 1) / 2) * w}px`;
       l.div.style.top = `${((1 - v.y) / 2) * h}px`;
     }
   };
-  return { update, texts: () => labels.map((l) => l.div.textContent) };
+  const update = (t, i) => {
+    frame = i;
+    for (const l of labels) l.div.textContent = l.q.map((s) => s[i]).join(", ");
+    place();
+  };
+  return { update, place, texts: () => labels.map((l) => l.div.textContent) };
 }
 
 // tag the glTF's nodes by what they are: the environment (ground, sea floor, surface), the

@@ -202,7 +202,7 @@ async function main() {
   // the run's figures: a long list folds away so that it does not hide the animal
   const figures = Object.entries(data.numbers);
   let figureRows = rows;
-  if (figures.length > 5) {
+  if (figures.length > 4) {
     const fold = el("details", { id: "figures" }, panel);
     el("summary", { textContent: `figures (${figures.length})` }, fold);
     figureRows = el("table", {}, fold);
@@ -290,7 +290,11 @@ async function main() {
   };
   window.addEventListener("resize", resize);
   resize();
-  const render = () => { controls.update(); renderer.render(scene, camera); };
+  const render = () => {
+    controls.update();
+    if (extras.labels) extras.labels.place();
+    renderer.render(scene, camera);
+  };
   renderer.setAnimationLoop((now) => {
     const step = (now - last) / 1000;
     last = now;

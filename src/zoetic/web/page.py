@@ -22,7 +22,7 @@ html, body { margin: 0; height: 100%; overflow: hidden; background: #222;
   font: 13px system-ui, sans-serif; color: #eee; }
 #zoetic { position: absolute; inset: 0 0 44px 0; }
 #zoetic canvas { display: block; }
-#panel { position: absolute; top: 8px; left: 8px; width: 230px; padding: 8px 10px;
+#panel { position: absolute; top: 8px; left: 8px; width: 230px; padding: 8px 10px; z-index: 2;
   background: rgba(20, 24, 32, 0.72); border-radius: 6px; }
 #panel .title { font-weight: 600; margin-bottom: 2px; }
 #panel .time { font-variant-numeric: tabular-nums; margin-bottom: 4px; }
