@@ -184,6 +184,7 @@ def test_repertoire_runs_draw_the_body_and_their_targets_and_obstacles(kind, mem
             assert _covered(page, "objects").mean() > 0.0005
 
 
+@pytest.mark.slow
 def test_an_aquarium_draws_fishes_food_rocks_intentions_and_minds(tmp_path):
     args = ["--fishes", "2", "--food", "2", "--obstacles", "1", "--seconds", "0.5"]
     run = _run(tmp_path, "tank", ["aquarium", *args, "--no-video"])
@@ -237,7 +238,13 @@ def test_a_stunt_draws_the_dolphin_ball_bar_and_splash(tmp_path):
     with _open(run, tmp_path, hit + 0.08) as page:
         _body_drawn(page)
         assert _covered(page, "objects").mean() > 0.002  # the ball and the bar
-        assert page.evaluate("window.zoetic.extras()")["drops"] > 0
+        drops = page.evaluate("window.zoetic.extras()")["drops"]
+        assert drops > 0
+        # as many drops in the air as the spray model's ballistics give from the page's data
+        sp = page.evaluate("JSON.parse(document.getElementById('zoetic-data').textContent).splash")
+        dt = hit + 0.08 - np.array(sp["t0"])
+        y = np.array(sp["p0"]).reshape(-1, 3)[:, 1] + np.array(sp["v0"]).reshape(-1, 3)[:, 1] * dt
+        assert drops == np.sum((dt >= 0) & (y - 0.5 * sp["gravity"] * dt**2 >= sp["level"]))
         spray = _covered(page, "spray")
         assert spray.mean() > 0.0002, f"the spray covers {100 * spray.mean():.3f}%"
         page.evaluate("window.zoetic.setTime(0)")  # before it fell in: no drops
