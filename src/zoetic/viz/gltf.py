@@ -36,6 +36,8 @@ OBJECT_COLORS = {  # kind: (sRGB 0-255, opacity)
     "rock": ((115, 107, 97), 1.0),
     "seaweed": ((40, 140, 50), 1.0),
     "hurdle": ((230, 90, 40), 1.0),
+    "bar": ((230, 90, 40), 1.0),  # a hurdle's bar (the hurdle trick)
+    "post": ((150, 110, 70), 1.0),  # a ball trick's post
     "target": ((220, 40, 30), 1.0),
     "goal": ((220, 40, 30), 1.0),
     "obstacle": ((240, 200, 40), 0.35),

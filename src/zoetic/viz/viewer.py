@@ -123,13 +123,14 @@ def splash_data(rec: Record, scene: Scene) -> dict:
     from zoetic.viz.spray import Splash, spray_launches
 
     times, points, flux = [], [], []
-    step = np.diff(rec.period_times, append=rec.period_times[-1:]) if len(rec.period_times) else []
+    periods = np.asarray(rec.period_times, float)
+    step = np.diff(periods, append=periods[-1:])  # to the next instant: the crossings' midst
     for q in rec.scalars.values():
         if "splash" not in q or "splash_at" not in q:
             continue
         f = np.nan_to_num(np.asarray(q["splash"], float))
         rows = np.nonzero(f > 0)[0]
-        times.append(rec.period_times[rows] + 0.5 * step[rows] - rec.times[0])
+        times.append(periods[rows] + 0.5 * step[rows] - rec.times[0])
         points.append(np.asarray(q["splash_at"], float)[rows])
         flux.append(f[rows])
     if not times or not sum(len(t) for t in times):
@@ -148,7 +149,8 @@ def splash_data(rec: Record, scene: Scene) -> dict:
 
 def viewer_data(scene: Scene, rec: Record | None = None) -> dict:
     """Return what the page's script reads: the .glb in base64, the run's figures, events,
-    and (given the record the scene came from) the time plots of its scalars."""
+    and (given the record the scene came from) the time plots of its scalars, its search
+    history, its animals' minds, gaze rays and spray (``_record_data``)."""
     if scene.animals:
         first = scene.animals[0].positions[0]
     else:  # rigid links: their frames' origins and far ends
