@@ -39,7 +39,12 @@ export function addSplash(scene, splash) {
   const geo = new THREE.BufferGeometry();
   geo.setAttribute("position", new THREE.Float32BufferAttribute(new Float32Array(3 * n), 3));
   geo.setDrawRange(0, 0);
-  const mat = new THREE.PointsMaterial({ color: 0xeef6ff, size: 0.06, sizeAttenuation: true });
+  const dot = document.createElement("canvas"); // a round drop, not a square
+  dot.width = dot.height = 32;
+  const g = dot.getContext("2d");
+  g.fillStyle = "#fff"; g.beginPath(); g.arc(16, 16, 14, 0, 2 * Math.PI); g.fill();
+  const mat = new THREE.PointsMaterial({ color: 0xeef6ff, size: 0.07, sizeAttenuation: true,
+    map: new THREE.CanvasTexture(dot), alphaTest: 0.5 });
   const drops = new THREE.Points(geo, mat);
   drops.frustumCulled = false;
   drops.userData.layer = "spray";
