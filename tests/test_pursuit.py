@@ -8,9 +8,10 @@ import json
 import numpy as np
 import pytest
 
+from zoetic.behavior.wave_motor import WaveMotor
 from zoetic.bodies import load_animal
 from zoetic.cli import main
-from zoetic.perception.pursuit import make_chase, run_chase, steer, summarize
+from zoetic.perception.pursuit import gazed_range, make_chase, run_chase, steer, summarize
 from zoetic.physics.world import Animal, World
 
 
@@ -45,7 +46,7 @@ def test_a_short_pursuit_keeps_the_prey_foveated_and_closes_in():
     assert s["foveated_fraction"] > 0.95
     assert s["final_distance_m"] < s["start_distance_m"] - 0.3
     # verged on the prey: the triangulated range is near the true one
-    assert s["mean_range_error"] is not None and s["mean_range_error"] < 0.4
+    assert s["median_range_error"] is not None and s["median_range_error"] < 0.15
 
 
 def test_the_fins_pitch_the_predator_toward_a_prey_above_it():
@@ -77,3 +78,41 @@ def test_a_chase_stops_at_the_catch_with_the_frames_the_eyes_saw():
     assert len(result.times) == len(result.log) == len(result.positions[0])
     np.testing.assert_allclose([r.time for r in result.log], result.times)
     assert result.time_to_catch == pytest.approx(result.times[-1] + 1 / 15.0, abs=0.006)
+
+
+def test_the_predator_steers_through_its_turn_motor_controller_with_theta_p(monkeypatch):
+    asked = []
+    real = WaveMotor.turn
+
+    def spy(self, angle, seconds=1.0, amplitude=1.0):
+        asked.append(angle)
+        return real(self, angle, seconds, amplitude)
+
+    monkeypatch.setattr(WaveMotor, "turn", spy)
+    chase = make_chase(0, distractors=0, rocks=False, start_distance=2.0)
+    run_chase(chase, 1.0, fps=15.0)
+    log = chase.predator.log
+    assert len(asked) == len(log)
+    # locked on: the turn asked is theta_P itself above the threshold, nothing below it
+    for angle, rec in zip(asked, log, strict=True):
+        if rec.locked.any():
+            big = abs(rec.theta_p) >= chase.predator.threshold
+            assert angle == pytest.approx(rec.theta_p if big else 0.0)
+    assert any(abs(a) > 0 for a in asked)
+
+
+def test_the_gazed_range_is_where_the_gaze_ray_meets_the_surface():
+    # a square wall of two triangles 2 m ahead of eyes 0.1 m apart, looking straight at it
+    nodes = np.array([[2.0, -1, -1], [2.0, 1, -1], [2.0, 1, 1], [2.0, -1, 1]])
+    faces = np.array([[0, 1, 2], [0, 2, 3]])
+    eyes = np.array([[0.0, 0.0, -0.05], [0.0, 0.0, 0.05]])
+    # the left eye's ray meets the wall at (2, 0, -0.05): its range from the eyes' midpoint
+    assert gazed_range(faces, nodes, eyes, np.array([1.0, 0, 0])) == pytest.approx(
+        np.hypot(2, 0.05)
+    )
+    tilted = np.array([2.0, 0.0, 0.5]) / np.linalg.norm([2.0, 0.0, 0.5])
+    assert gazed_range(faces, nodes, eyes, tilted) == pytest.approx(np.hypot(2.0, 0.45), abs=1e-9)
+    # looking away: the node nearest the ray
+    assert gazed_range(faces, nodes, eyes, np.array([-1.0, 0, 0])) == pytest.approx(
+        np.linalg.norm(nodes[0] - eyes.mean(0))
+    )

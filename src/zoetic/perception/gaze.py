@@ -22,7 +22,7 @@ from zoetic.perception.eyes import (
     gaze_direction,
     pixel_direction,
 )
-from zoetic.perception.recognition import histogram, intersection, locate
+from zoetic.perception.recognition import backproject, histogram, intersection, locate
 from zoetic.render import Cameras
 
 
@@ -114,6 +114,13 @@ def correlate(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
     u = (i + w // 2) % w - w // 2 + di
     v = (j + h // 2) % h - h // 2 + dj
     return float(u), float(v), float(r[j, i])
+
+
+def target_image(image: np.ndarray, model: np.ndarray) -> np.ndarray:
+    """Return the gray image (H, W) weighted by the backprojection of the target's colour
+    ``model``: what the correlation of the two foveas should match, the target's own pixels,
+    not the background behind it (which lies at another disparity)."""
+    return _gray(image) * backproject(image, model, radius=2)
 
 
 @dataclass
@@ -213,8 +220,10 @@ class GazeController:
                 new.locked[eye] = True
             new.fovea[eye] = fov
         if self.verge and new.locked.all() and aim[LEFT] is not None:
-            # vergence: the right eye fixates what the left fovea centres on (correlation)
-            u, v, peak = correlate(images[LEFT, n - 1], images[RIGHT, n - 1])
+            # vergence: the right eye fixates what the left fovea centres on (the correlation
+            # of the target's pixels in the two foveas)
+            left, right = (target_image(images[e, n - 1], self.model) for e in (LEFT, RIGHT))
+            u, v, peak = correlate(left, right)
             if peak >= self.verge_peak and np.hypot(u, v) < 0.25 * s:
                 col, row = aim[LEFT][0] + u, aim[LEFT][1] + v
                 new.angles[RIGHT] = saccade(frame, cameras, RIGHT * n + n - 1, col, row)

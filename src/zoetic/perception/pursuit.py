@@ -1,11 +1,12 @@
 """Vision-guided pursuit (seed 003, section 3.2): a predator fish that sees with its eyes,
 a reddish prey that wanders and flees, and a yellowish distractor that passes behind it.
 
-Turning uses the animal's own muscles: its travelling wave with a left/right bias added to
-one side's muscles (a minimal local turn controller; the behaviour layer's turn motor
-controllers may replace it); pitching uses the pectoral fins, tilted from level by the
-up/down turn angle phi_P. Both turn angles are the gaze direction relative to the body's
-mean heading (``eyes.body_frame``), so the head's wag does not feed back into the steering.
+Steering is the paper's: the left/right turn angle theta_P, when above threshold, is handed to
+the fish's turn motor controller (``behavior.wave_motor.WaveMotor.turn``: the body's own wave,
+calibrated once per body, asked to turn theta_P within ``turn_seconds``), with |theta_P| as its
+parameter; the up/down turn angle phi_P tilts the pectoral fins from level. Both turn angles
+are the gaze direction relative to the body's mean heading (``eyes.body_frame``), so the head's
+wag does not feed back into the steering.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from zoetic.behavior.wave_motor import WaveMotor
 from zoetic.bodies import Body, load_animal
 from zoetic.control import steered_wave
 from zoetic.control.loop import Observer, Schedule, drive
@@ -83,8 +85,10 @@ class PredatorPolicy:
     """A Policy: the predator renders what its eyes see each control period, foveates the
     prey by its colour model, and turns toward the gaze direction (theta_P) with its muscles.
 
-    gain: turn bias per rad of theta_P; threshold: |theta_P| (rad) below which it swims
-    straight; search_bias: the turn bias while nothing is in sight; fin_gain: fin tilt
+    turn_seconds: the time (s) in which the turn motor controller is asked to turn theta_P (the
+    gaze is re-read every frame, so this sets how hard it steers); threshold: |theta_P| (rad)
+    below which it swims straight; search_turn: the turn (rad, left positive) asked of the
+    motor controller while nothing is in sight; fin_gain: fin tilt
     (fraction of the fins' range) per rad of phi_P, up to max_pitch; vor: hold the eyes'
     world directions against the head's own rotation between frames (``GazeController.hold``).
     """
@@ -93,10 +97,9 @@ class PredatorPolicy:
     animal: int
     scenery: Scenery
     gaze: GazeController
-    gain: float = 1.2
-    max_bias: float = 0.4
+    turn_seconds: float = 0.6
     threshold: float = np.radians(3.0)
-    search_bias: float = 0.25
+    search_turn: float = np.radians(20.0)
     vor: bool = True
     fin_gain: float = 2.0
     max_pitch: float = 0.5
@@ -108,6 +111,11 @@ class PredatorPolicy:
         """Start with the eyes looking ahead and an empty log."""
         self.state = GazeState()
         self.log = []
+
+    @property
+    def motor(self) -> WaveMotor:
+        """The fish's swim/turn motor controllers (calibrated once per body)."""
+        return WaveMotor.calibrate(self.world.bodies[self.animal])
 
     def act(self, observation: Mapping[str, np.ndarray], period: Period) -> np.ndarray:
         """Return (1, T, A) activations: see, move the eyes, steer."""
@@ -126,10 +134,10 @@ class PredatorPolicy:
         theta_p, phi_p = float(th_p), float(ph_p)
         _, rng = fixation(frame, a, spec) if self.state.locked.all() else (None, np.inf)
         if self.state.locked.any():
-            bias = 0.0 if abs(theta_p) < self.threshold else self.gain * theta_p
+            turn = 0.0 if abs(theta_p) < self.threshold else theta_p
         else:
-            bias = self.search_bias
-        bias = float(np.clip(bias, -self.max_bias, self.max_bias))
+            turn = self.search_turn
+        amplitude, bias = self.motor.turn(turn, self.turn_seconds)
         pitch = 0.0
         if self.state.locked.any() and abs(phi_p) >= self.threshold:
             pitch = float(np.clip(self.fin_gain * phi_p, -self.max_pitch, self.max_pitch))
@@ -147,7 +155,7 @@ class PredatorPolicy:
                 cams.eye[::n].copy(),
             )
         )
-        return steer(body, period.times, bias, pitch=pitch)[None]
+        return steer(body, period.times, bias, amplitude, pitch)[None]
 
 
 @dataclass
@@ -296,7 +304,8 @@ def make_chase(
 @dataclass
 class ChaseResult:
     """What a chase recorded: times (R,), positions per animal (R, N, 3), the predator's
-    vision log (one record per frame), caught and when (s, or None)."""
+    vision log (one record per frame), caught and when (s, or None), the prey's surface
+    triangles (F, 3) (what its range is measured to)."""
 
     times: np.ndarray
     positions: list
@@ -304,6 +313,34 @@ class ChaseResult:
     caught: bool
     time_to_catch: float | None
     catch_radius: float
+    prey_faces: np.ndarray
+
+
+def gazed_range(faces: np.ndarray, nodes: np.ndarray, eyes: np.ndarray, gaze: np.ndarray) -> float:
+    """Return the range (m, from the midpoint of the eyes ``eyes`` (2, 3)) of the point the
+    left eye looks at on an animal: the nearest crossing of its gaze ray (unit ``gaze`` (3,))
+    with the animal's surface triangles ``faces`` on ``nodes`` (Moller-Trumbore); a ray that
+    misses the body takes the node nearest to it."""
+    o = eyes[0]
+    a, b, c = nodes[faces[:, 0]], nodes[faces[:, 1]], nodes[faces[:, 2]]
+    e1, e2 = b - a, c - a
+    p = np.cross(gaze, e2)
+    det = np.einsum("fk,fk->f", e1, p)
+    ok = np.abs(det) > 1e-12
+    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+    s = o - a
+    u = np.einsum("fk,fk->f", s, p) * inv
+    q = np.cross(s, e1)
+    v = (q @ gaze) * inv
+    t = np.einsum("fk,fk->f", e2, q) * inv
+    hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
+    if hit.any():
+        point = o + t[hit].min() * gaze
+    else:
+        rel = nodes - o
+        miss = np.linalg.norm(rel - (rel @ gaze)[:, None] * gaze, axis=1)
+        point = nodes[np.argmin(miss)]
+    return float(np.linalg.norm(point - eyes.mean(0)))
 
 
 def _off_gaze(dirs: np.ndarray, eyes: np.ndarray, nodes: np.ndarray) -> np.ndarray:
@@ -368,6 +405,7 @@ def run_chase(
         catch.time is not None,
         catch.time,
         catch_radius,
+        world.bodies[1].faces,
     )
 
 
@@ -376,10 +414,11 @@ def summarize(result: ChaseResult, spec: EyeSpec) -> dict:
     foveated (some node of it inside both foveas' field of view), distractor fixations
     (frames on which the eyes, aimed by a lock when the image was taken, held a distractor,
     not the prey, in a fovea: frame 0, seen straight ahead before any lock, does not count),
-    the relative error of the triangulated range (against the prey node nearest the left
-    gaze ray) while foveated."""
+    the relative error of the triangulated range (against ``gazed_range``: where the left
+    gaze ray meets the prey's surface) while foveated, as mean and median."""
     half = 0.5 * spec.fovs[-1]
     prey = result.positions[1].mean(1)
+    faces = result.prey_faces
     fov, distr, rng_err = [], 0, []
     for i, rec in enumerate(result.log):
         off = _off_gaze(rec.eye_dirs, rec.eye_pos, result.positions[1][i])
@@ -390,12 +429,7 @@ def summarize(result: ChaseResult, spec: EyeSpec) -> dict:
             if aimed and (o < half).any() and not (off < half).any():
                 distr += 1
         if np.isfinite(rec.range) and fov[-1]:
-            # the truth: the distance to the prey's node nearest the left eye's gaze ray
-            nodes = result.positions[1][i]
-            rel = nodes - rec.eye_pos[0]
-            along = rel @ rec.eye_dirs[0]
-            miss = np.linalg.norm(rel - along[:, None] * rec.eye_dirs[0], axis=1)
-            true = np.linalg.norm(nodes[np.argmin(miss)] - rec.eye_pos.mean(0))
+            true = gazed_range(faces, result.positions[1][i], rec.eye_pos, rec.eye_dirs[0])
             rng_err.append(abs(rec.range - true) / true)
     head = result.positions[0][:, 0]
     dist = np.linalg.norm(prey - head, axis=-1)
@@ -411,6 +445,7 @@ def summarize(result: ChaseResult, spec: EyeSpec) -> dict:
         "start_distance_m": float(dist[0]),
         "final_distance_m": float(dist[-1]),
         "mean_range_error": float(np.mean(rng_err)) if rng_err else None,
+        "median_range_error": float(np.median(rng_err)) if rng_err else None,
         "max_vergence_deg": float(np.degrees(np.max(verg))) if verg else 0.0,
         "gaze_correlation_theta": corr,
     }
