@@ -20,10 +20,8 @@ from PIL import Image, ImageColor, ImageDraw, ImageFont
 from zoetic.bodies import Body
 from zoetic.errors import ZoeticError
 from zoetic.physics.media import Medium, get_medium
+from zoetic.render.skin import Look, Skin, body_skin, make_skin, name_color, skin_vertices
 
-ANIMAL_COLORS = {"shark": (122, 136, 152), "dolphin": (150, 160, 178), "snake": (104, 150, 60)}
-ANIMAL_COLORS["ray"] = (184, 146, 96)
-_PALETTE = [(200, 120, 80), (110, 160, 200), (150, 110, 180), (90, 160, 120), (200, 170, 80)]
 _LIGHT = np.array([-0.2, 1.0, -0.7]) / np.linalg.norm([-0.2, 1.0, -0.7])
 _SKY_TOP, _SKY_LOW = np.array([96.0, 150, 214]), np.array([214.0, 228, 240])
 _GROUND = (np.array([186.0, 176, 150]), np.array([150.0, 140, 116]))
@@ -61,13 +59,6 @@ class Camera:
             el = 12.0 if abs(medium.water_level) < 1e8 else 25.0
         az, el = np.radians(self.azimuth), np.radians(np.clip(el, -89.0, 89.0))
         return np.array([-np.cos(el) * np.cos(az), np.sin(el), -np.cos(el) * np.sin(az)])
-
-
-def name_color(name: str) -> tuple[int, int, int]:
-    """Return the display colour (RGB 0-255) of an animal by its species' name."""
-    if name in ANIMAL_COLORS:
-        return ANIMAL_COLORS[name]
-    return _PALETTE[sum(map(ord, name)) % len(_PALETTE)]
 
 
 def body_color(body: Body) -> tuple[int, int, int]:
@@ -255,22 +246,42 @@ class SceneMesh:
     closed: np.ndarray  # (F,) bool: the animal's surface is closed (back faces can be culled)
 
 
-def _closed(faces: np.ndarray) -> bool:
-    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), 1)
-    _, counts = np.unique(edges, axis=0, return_counts=True)
-    return bool(np.all(counts == 2))
+def plain_look(name: str, color) -> Look:
+    """Return a look of one colour (RGB 0-255 or a colour name), the belly paler."""
+    c = ImageColor.getrgb(color) if isinstance(color, str) else color
+    c = np.asarray(c, float)[:3] / 255.0
+    return Look(name, tuple(c), tuple(0.6 * c + 0.4))
 
 
-def _mesh(bodies: Sequence[Body], colors) -> SceneMesh:
-    faces, color, closed, base = [], [], [], 0
+def animal_skins(bodies: Sequence[Body], colors=None, looks=None) -> list[Skin]:
+    """Return each animal's display skin: in the look named ``looks[i]``, else one of colour
+    ``colors[i]``, else the body's own look."""
+    out = []
     for i, body in enumerate(bodies):
-        c = colors[i] if colors is not None else body_color(body)
-        c = ImageColor.getrgb(c) if isinstance(c, str) else c
-        faces.append(np.asarray(body.faces) + base)
-        color.append(np.tile(np.asarray(c, float)[:3], (len(body.faces), 1)))
-        closed.append(np.full(len(body.faces), _closed(np.asarray(body.faces))))
-        base += body.n_nodes
-    return SceneMesh(np.concatenate(faces), np.concatenate(color), np.concatenate(closed))
+        if looks is not None and looks[i]:
+            out.append(body_skin(body, looks[i]))
+        elif colors is not None:
+            look = plain_look(body.name, colors[i])
+            out.append(make_skin(body.faces, body.rest_pos, look, None, body.forward))
+        else:
+            out.append(body_skin(body))
+    return out
+
+
+def skins_mesh(skins: Sequence[Skin]) -> SceneMesh:
+    """Return the skins' triangles in one index space (their vertices concatenated), coloured
+    RGB 0-255 per triangle."""
+    base = np.cumsum([0] + [len(s.index) for s in skins[:-1]])
+    return SceneMesh(
+        np.concatenate([s.triangles + b for s, b in zip(skins, base, strict=True)]),
+        np.concatenate([255.0 * s.face_colors for s in skins]),
+        np.concatenate([s.closed for s in skins]),
+    )
+
+
+def skins_vertices(skins: Sequence[Skin], positions: Sequence[np.ndarray]) -> np.ndarray:
+    """Return the skins' vertices (V, 3) concatenated, for each animal's nodes (N_i, 3)."""
+    return np.concatenate([skin_vertices(s, p) for s, p in zip(skins, positions, strict=True)])
 
 
 def face_items(pos, mesh: SceneMesh, eye, rot, focal, size, medium, side: int = 0) -> list[tuple]:
@@ -389,13 +400,15 @@ def render_frames(
     labels: Sequence[str] | None = None,
     colors: Sequence | None = None,
     marker_radius: float | None = None,
+    looks: Sequence[str] | None = None,
 ) -> Iterator[np.ndarray]:
     """Yield one (H, W, 3) uint8 picture per recorded time of the animals in their medium.
 
     positions: per animal (R, N, 3) m, or one (B, R, N, 3) array of B animals of one body;
     markers: (M, 3) fixed world points drawn as buoys, or (R, M, 3) moving ones;
     labels: one text per animal;
-    colors: one RGB tuple or colour name per animal (default by animal name).
+    colors: one RGB tuple or colour name per animal (default: the animal's look);
+    looks: one look name per animal (``render/looks``), before ``colors``.
     """
     times = np.asarray(times, float).reshape(-1)
     bodies, positions = _as_lists(bodies, positions, len(times))
@@ -410,7 +423,8 @@ def render_frames(
     eyes, targets = camera_path(com, times, camera, medium, extent)
     base = medium.water_level if abs(medium.water_level) < 1e8 else 0.0
     seabed = min(base - _SEABED_DEPTH, targets[:, 1].min() - 2 * extent - 1.0)  # under them all
-    mesh = _mesh(bodies, colors)
+    skins = animal_skins(bodies, colors, looks)
+    mesh = skins_mesh(skins)
     mk = None if markers is None else np.asarray(markers, float)
     if mk is not None and not (mk.ndim == 3 and len(mk) == len(times)):  # (R, M, 3): moving
         mk = np.broadcast_to(mk.reshape(-1, 3), (len(times), *mk.reshape(-1, 3).shape))
@@ -421,7 +435,7 @@ def render_frames(
         eye, rot = eyes[r], look_at(eyes[r], targets[r])
         img = Image.fromarray(background(medium, eye, rot, xs, ys, seabed))
         draw = ImageDraw.Draw(img)
-        pos = np.concatenate([p[r] for p in positions])
+        pos = skins_vertices(skins, [p[r] for p in positions])
         items = face_items(pos, mesh, eye, rot, focal, size, medium)
         if mk is not None and mk.shape[1]:
             items += _marker_items(mk[r], mk_col, radius, eye, rot, focal, size, medium)
