@@ -144,7 +144,13 @@ def fresnel(sin_elevation: np.ndarray) -> np.ndarray:
 
 
 def background(
-    medium: Medium, eye: np.ndarray, rot: np.ndarray, xs, ys, seabed: float | None = None
+    medium: Medium,
+    eye: np.ndarray,
+    rot: np.ndarray,
+    xs,
+    ys,
+    seabed: float | None = None,
+    fog: float = _WATER_FOG,
 ) -> np.ndarray:
     """Return the (H, W, 3) uint8 environment seen by a camera at ``eye`` with rotation ``rot``.
 
@@ -164,8 +170,8 @@ def background(
     if medium.floor and eye[1] > 0:
         out[up] = _u8(sky[up])[:, None]
         t = -eye[1] / dd
-        fog = 1 - np.exp(-t * nd / _AIR_FOG)
-        ca, cb = (_lerp(c, _SKY_LOW, fog) for c in _GROUND)
+        haze = 1 - np.exp(-t * nd / _AIR_FOG)
+        ca, cb = (_lerp(c, _SKY_LOW, haze) for c in _GROUND)
         _fill_checker(out[down], eye, rot, xs, yd, t, ca, cb)
     elif abs(level) > 1e8:  # open water, or empty space
         hi, lo = (_WATER_UP, _WATER_DOWN) if level > 1e8 else (_SPACE_UP, _SPACE_DOWN)
@@ -176,18 +182,18 @@ def background(
         out[up] = _u8(bg[up])[:, None]
         if eye[1] > seabed:
             t = (seabed - eye[1]) / dd
-            fog = 1 - np.exp(-t * nd / _WATER_FOG)
+            haze = 1 - np.exp(-t * nd / fog)
             pair = _SEABED if level > 1e8 else (lo + 30, lo + 14)
-            ca, cb = (_lerp(c, bg[down], fog) for c in pair)
+            ca, cb = (_lerp(c, bg[down], haze) for c in pair)
             _fill_checker(out[down], eye, rot, xs, yd, t, ca, cb)
     else:  # the sea seen from the air (the camera never goes under a finite surface)
         out[up] = _u8(sky[up])[:, None]
         t_s = (level - eye[1]) / dd
         t_f = ((level - _SEABED_DEPTH if seabed is None else seabed) - eye[1]) / dd
-        fog = 1 - np.exp(-(t_f - t_s) * nd / _WATER_FOG)
+        haze = 1 - np.exp(-(t_f - t_s) * nd / fog)
         grazing = 1 - np.abs(sin_el[down])
         surf = _lerp(_SURFACE, _SKY_LOW, 0.8 * grazing**8)
-        ca, cb = (_lerp(_lerp(c, _WATER_DOWN, fog), surf, fresnel(sin_el[down])) for c in _SEABED)
+        ca, cb = (_lerp(_lerp(c, _WATER_DOWN, haze), surf, fresnel(sin_el[down])) for c in _SEABED)
         _fill_checker(out[down], eye, rot, xs, yd, t_f, ca, cb)
         ripple = _parity(eye, rot, xs, yd, t_s, _SURFACE_TILE)
         out[down] += ripple[..., None].astype(np.uint8) * np.uint8(7)
@@ -208,15 +214,18 @@ def project_points(pts: np.ndarray, eye, rot, focal: float, size) -> tuple[np.nd
     return np.stack([sx, sy], axis=-1), z
 
 
-def water_tint(col: np.ndarray, pts: np.ndarray, eye: np.ndarray, medium: Medium) -> np.ndarray:
-    """Return colours (K, 3) of points (K, 3) seen through water: fog and the surface."""
+def water_tint(
+    col: np.ndarray, pts: np.ndarray, eye: np.ndarray, medium: Medium, fog: float = _WATER_FOG
+) -> np.ndarray:
+    """Return colours (K, 3) of points (K, 3) seen through water: fog (e-folding ``fog`` m
+    in open water, half that under a surface) and the surface."""
     level = medium.water_level
     if level < -1e8:
         return col
     d = pts - eye
     dist = np.linalg.norm(d, axis=1) + 1e-9
     if level > 1e8:
-        return _lerp(col, 0.5 * (_WATER_UP + _WATER_DOWN), 1 - np.exp(-dist / (2 * _WATER_FOG)))
+        return _lerp(col, 0.5 * (_WATER_UP + _WATER_DOWN), 1 - np.exp(-dist / (2 * fog)))
     below = pts[:, 1] < level  # the eye is always above a finite surface
     wet = np.clip((level - pts[:, 1]) / np.maximum(eye[1] - pts[:, 1], 1e-9), 0, 1)
     col = _lerp(col, _WATER_DOWN, 1 - np.exp(-dist * wet / _WATER_FOG))
@@ -284,7 +293,9 @@ def skins_vertices(skins: Sequence[Skin], positions: Sequence[np.ndarray]) -> np
     return np.concatenate([skin_vertices(s, p) for s, p in zip(skins, positions, strict=True)])
 
 
-def face_items(pos, mesh: SceneMesh, eye, rot, focal, size, medium, side: int = 0) -> list[tuple]:
+def face_items(
+    pos, mesh: SceneMesh, eye, rot, focal, size, medium, side: int = 0, fog: float = _WATER_FOG
+) -> list[tuple]:
     """Return (depth, kind 0, flat screen coords, RGB) items for the visible triangles; with
     ``side`` 1 only their parts above a finite water surface, -1 only those below."""
     scr, z = project_points(pos, eye, rot, focal, size)
@@ -304,7 +315,7 @@ def face_items(pos, mesh: SceneMesh, eye, rot, focal, size, medium, side: int = 
     if abs(level) < 1e8:
         ty = tri[:, :, 1] - level
         straddle = keep & (ty.min(axis=1) < 0) & (ty.max(axis=1) > 0)
-    tinted = water_tint(col, cen, eye, medium)
+    tinted = water_tint(col, cen, eye, medium, fog)
     if side and abs(level) < 1e8:
         keep = keep & (straddle | ((cen[:, 1] >= level) == (side > 0)))
     idx = np.flatnonzero(keep & ~straddle)
@@ -315,7 +326,7 @@ def face_items(pos, mesh: SceneMesh, eye, rot, focal, size, medium, side: int = 
         for k, part in enumerate(split_at_level(tri[f], level)):
             if len(part) < 3 or (side and (k == 0) != (side > 0)):
                 continue
-            pc = water_tint(col[f][None], part.mean(axis=0)[None], eye, medium)[0]
+            pc = water_tint(col[f][None], part.mean(axis=0)[None], eye, medium, fog)[0]
             flat = project_points(part, eye, rot, focal, size)[0].ravel().tolist()
             items.append((depth[f], 0, flat, tuple(np.clip(pc, 0, 255).astype(int).tolist())))
     return items
@@ -339,6 +350,21 @@ def draw_buoy(draw: ImageDraw.ImageDraw, x: float, y: float, r: float, col: np.n
         c = tuple(np.clip(col * (0.55 + 0.3 * k) + 40 * (k == 3), 0, 255).astype(int).tolist())
         cx, cy, rr = x - off * r, y - off * r, scale * r
         draw.ellipse((cx - rr, cy - rr, cx + rr, cy + rr), fill=c)
+
+
+def paint_items(draw: ImageDraw.ImageDraw, items: list[tuple]) -> None:
+    """Draw painter items far to near: 0 polygons, 1 balls, 2 thick segments, 3 drops."""
+    for _, kind, geom, col in sorted(items, key=lambda it: -it[0]):
+        if kind == 0:
+            draw.polygon(geom, fill=col, outline=col)
+        elif kind == 1:
+            draw_buoy(draw, *geom, np.asarray(col, float))
+        elif kind == 2:
+            draw.line(geom[0], fill=col, width=int(round(geom[1])))
+        else:
+            x, y, rr = geom
+            c = tuple(int(v) for v in col)
+            draw.ellipse((x - rr, y - rr, x + rr, y + rr), fill=c)
 
 
 @lru_cache(maxsize=8)

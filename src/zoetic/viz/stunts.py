@@ -354,17 +354,17 @@ def _compose(
     and the label."""
     from PIL import Image, ImageDraw
 
-    from zoetic.viz.render3d import TEXT_STYLE, draw_buoy, project_points
+    from zoetic.viz.render3d import TEXT_STYLE, paint_items, project_points
 
     eye, rot, focal, size, _, _ = view
-    _paint(ImageDraw.Draw(img), below, draw_buoy)
+    paint_items(ImageDraw.Draw(img), below)
     layer = Image.new("RGBA", img.size, (0, 0, 0, 0))
     scr, z = project_points(sheet, eye, rot, focal, size)
     if (z > 0.05).all():
         ImageDraw.Draw(layer).polygon(scr.ravel().tolist(), fill=_WATER_SHEET)
     img = Image.alpha_composite(img.convert("RGBA"), layer).convert("RGB")
     draw = ImageDraw.Draw(img)
-    _paint(draw, above, draw_buoy)
+    paint_items(draw, above)
     draw.text((8, 6), label, font=font, **TEXT_STYLE)
     return np.array(img)
 
@@ -377,21 +377,6 @@ def _segment_split(ends: np.ndarray, level: float) -> list[np.ndarray]:
         return [ends]
     p = a + (b - a) * (sa / (sa - sb))
     return [np.stack([a, p]), np.stack([p, b])]
-
-
-def _paint(draw, items: list[tuple], draw_ball) -> None:
-    """Draw painter items far to near: 0 polygons, 1 balls, 2 thick segments, 3 drops."""
-    for _, kind, geom, col in sorted(items, key=lambda it: -it[0]):
-        if kind == 0:
-            draw.polygon(geom, fill=col, outline=col)
-        elif kind == 1:
-            draw_ball(draw, *geom, np.asarray(col, float))
-        elif kind == 2:
-            draw.line(geom[0], fill=col, width=int(round(geom[1])))
-        else:
-            x, y, rr = geom
-            c = tuple(int(v) for v in col)
-            draw.ellipse((x - rr, y - rr, x + rr, y + rr), fill=c)
 
 
 def render_stunt_video(
