@@ -269,6 +269,7 @@ def body_coordinates(rest: np.ndarray, forward=(1.0, 0.0, 0.0), bins: int = 16) 
         hi = np.full(bins, -np.inf)
         np.minimum.at(lo, k, y)
         np.maximum.at(hi, k, y)
+        lo, hi = np.where(np.isfinite(lo), lo, 0.0), np.where(np.isfinite(hi), hi, 0.0)
         mid, half = 0.5 * (lo + hi)[k], np.maximum(0.5 * (hi - lo)[k], 1e-6)
         out.append(np.clip((y - mid) / half, -1.0, 1.0))
     return np.stack(out, axis=1)
@@ -380,3 +381,20 @@ def _body_skin(body, look: str, levels: int) -> Skin:
 def body_skin(body, look: str | None = None, levels: int = LEVELS) -> Skin:
     """Return the skin of a Body in the look named ``look`` (default: the body's own name)."""
     return _body_skin(body, look or body.name, levels)
+
+
+def record_skin(name: str, species: str, faces, rest) -> Skin:
+    """Return the skin of a recorded animal: its zoo body's (with fins) when ``species`` is a
+    built-in animal with these faces, else one made on ``rest`` (N, 3) (a pose of the
+    animal, e.g. its first recorded frame) without fins; in the look ``look_name`` picks."""
+    from zoetic.bodies import load_animal
+
+    look = look_name(name, species)
+    try:
+        body = load_animal(species)
+    except ZoeticError:
+        body = None
+    if body is not None and np.array_equal(np.asarray(body.faces), np.asarray(faces)):
+        return body_skin(body, look)
+    rest = np.nan_to_num(np.asarray(rest, float))
+    return make_skin(faces, rest, look_of(look), None)

@@ -427,6 +427,7 @@ def render_frames(
     colors: Sequence | None = None,
     marker_radius: float | None = None,
     looks: Sequence[str] | None = None,
+    skins: Sequence[Skin] | None = None,
 ) -> Iterator[np.ndarray]:
     """Yield one (H, W, 3) uint8 picture per recorded time of the animals in their medium.
 
@@ -434,7 +435,8 @@ def render_frames(
     markers: (M, 3) fixed world points drawn as buoys, or (R, M, 3) moving ones;
     labels: one text per animal;
     colors: one RGB tuple or colour name per animal (default: the animal's look);
-    looks: one look name per animal (``render/looks``), before ``colors``.
+    looks: one look name per animal (``render/looks``), before ``colors``;
+    skins: one display skin per animal, before both.
     """
     times = np.asarray(times, float).reshape(-1)
     bodies, positions = _as_lists(bodies, positions, len(times))
@@ -449,7 +451,7 @@ def render_frames(
     eyes, targets = camera_path(com, times, camera, medium, extent)
     base = medium.water_level if abs(medium.water_level) < 1e8 else 0.0
     seabed = min(base - _SEABED_DEPTH, targets[:, 1].min() - 2 * extent - 1.0)  # under them all
-    skins = animal_skins(bodies, colors, looks)
+    skins = list(skins) if skins is not None else animal_skins(bodies, colors, looks)
     mesh = skins_mesh(skins)
     mk = None if markers is None else np.asarray(markers, float)
     if mk is not None and not (mk.ndim == 3 and len(mk) == len(times)):  # (R, M, 3): moving
