@@ -387,14 +387,20 @@ def record_skin(name: str, species: str, faces, rest) -> Skin:
     """Return the skin of a recorded animal: its zoo body's (with fins) when ``species`` is a
     built-in animal with these faces, else one made on ``rest`` (N, 3) (a pose of the
     animal, e.g. its first recorded frame) without fins; in the look ``look_name`` picks."""
-    from zoetic.bodies import load_animal
-
     look = look_name(name, species)
-    try:
-        body = load_animal(species)
-    except ZoeticError:
-        body = None
+    body = _zoo_body(species)
     if body is not None and np.array_equal(np.asarray(body.faces), np.asarray(faces)):
         return body_skin(body, look)
     rest = np.nan_to_num(np.asarray(rest, float))
     return make_skin(faces, rest, look_of(look), None)
+
+
+@lru_cache(maxsize=16)
+def _zoo_body(species: str):
+    """Return the built-in animal of that name, or None."""
+    from zoetic.bodies import load_animal
+
+    try:
+        return load_animal(species)
+    except ZoeticError:
+        return None
