@@ -83,41 +83,66 @@ def plot_minds(
 
 
 FOOD = (250.0, 150, 30)
-ROCK = np.array([128.0, 118, 104])
+ROCK = np.array([150.0, 132, 108])
 WEED = np.array([46.0, 132, 64])
 FOG = 14.0  # m: the tank's water is clear (the fishes' view range is 6 m)
 BOX, CYLINDER = 0, 1  # physics.objects' kinds of fixed shape
 
 
-def follow_camera(points: np.ndarray, times: np.ndarray, half_size: float, distance: float):
-    """Return (R, 3) eyes and targets of a camera following ``points`` (R, 3) (smoothed over
-    a second, kept inside the tank) from behind-right and above, ``distance`` m away."""
+def follow_camera(
+    nodes: np.ndarray, times: np.ndarray, half_size: float, distance: float, side: float = 65.0
+):
+    """Return (R, 3) eyes and targets of a camera following a fish (its nodes (R, N, 3), the
+    nose first): aimed at its centre smoothed over a second and kept inside the tank, from
+    ``side`` degrees off its heading (smoothed over two seconds, so the fish is seen from the
+    side and the view turns slowly), 48 degrees above, ``distance`` m away."""
     from scipy.ndimage import gaussian_filter1d
 
     from zoetic.viz.render3d import _fill_nan
 
-    target = _fill_nan(np.asarray(points, float))
+    nodes = np.asarray(nodes, float)
+    target = _fill_nan(nodes.mean(axis=1))
+    fwd = _fill_nan(nodes[:, 0] - nodes.mean(axis=1))
+    heading = np.unwrap(np.arctan2(-fwd[:, 2], fwd[:, 0]))  # radians toward the fish's right
     dt = float(np.median(np.diff(times))) if len(times) > 1 else 1.0
     if len(times) > 1:
         target = gaussian_filter1d(target, 1.0 / max(dt, 1e-6), axis=0, mode="nearest")
+        heading = gaussian_filter1d(heading, 2.0 / max(dt, 1e-6), mode="nearest")
     target[:, [0, 2]] = np.clip(target[:, [0, 2]], -0.8 * half_size, 0.8 * half_size)
-    az, el = np.radians(35.0), np.radians(38.0)
-    direction = np.array([-np.cos(el) * np.cos(az), np.sin(el), -np.cos(el) * np.sin(az)])
+    az, el = heading + np.radians(side), np.radians(48.0)
+    direction = np.stack(
+        [-np.cos(el) * np.cos(az), np.full_like(az, np.sin(el)), -np.cos(el) * np.sin(az)], 1
+    )
     return target + distance * direction, target
 
 
-def _static_items(statics, view: tuple, times_r: float) -> list[tuple]:
-    """Painter items of the rocks (shaded boxes) and seaweed (swaying blades)."""
+def _blocks(c: np.ndarray, half: np.ndarray, a: np.ndarray, b: np.ndarray) -> bool:
+    """Return whether the box (centre, half sizes) crosses the segment from a to b."""
+    d = b - a
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t0 = (c - half - a) / d
+        t1 = (c + half - a) / d
+    lo = np.where(d == 0, np.where(np.abs(a - c) <= half, -np.inf, np.inf), np.minimum(t0, t1))
+    hi = np.where(d == 0, np.where(np.abs(a - c) <= half, np.inf, -np.inf), np.maximum(t0, t1))
+    return bool(max(lo.max(), 0.0) <= min(hi.min(), 1.0))
+
+
+def _static_items(statics, view: tuple, times_r: float, focus=None) -> tuple[list, list]:
+    """Painter items of the rocks (shaded boxes) and seaweed (swaying blades), and apart the
+    faces of rocks that stand between the eye and the point ``focus`` (drawn see-through)."""
     from zoetic.viz.render3d import project_points, water_tint
 
     eye, rot, focal, size, medium = view
     kinds, centers, sizes, names = statics
     items: list[tuple] = []
+    ghosts: list[tuple] = []
     for kind, c, sz, name in zip(kinds, centers, sizes, names, strict=True):
         if name == "wall":
             continue
         if kind == BOX:
-            items += _box_items(np.asarray(c, float), np.asarray(sz, float), view)
+            c, sz = np.asarray(c, float), np.asarray(sz, float)
+            hides = focus is not None and _blocks(c, sz, eye, np.asarray(focus, float))
+            (ghosts if hides else items).extend(_box_items(c, sz, view))
             continue
         r, half = float(sz[0]), float(sz[1])
         for k in range(7):
@@ -133,7 +158,20 @@ def _static_items(statics, view: tuple, times_r: float) -> list[tuple]:
             wpx = max(2.0, focal * 0.12 / float(z.mean()))
             rgb = tuple(np.clip(col[0], 0, 255).astype(int))
             items.append((float(z.mean()), 2, (scr.ravel().tolist(), wpx), rgb))
-    return items
+    return items, ghosts
+
+
+def _see_through(img, items: list[tuple], alpha: int = 90):
+    """Return the picture with polygon items laid over it, mostly transparent."""
+    from PIL import Image, ImageDraw
+
+    if not items:
+        return img
+    layer = Image.new("RGBA", img.size, (0, 0, 0, 0))
+    d = ImageDraw.Draw(layer)
+    for _, _, geom, col in sorted(items, key=lambda it: -it[0]):
+        d.polygon(geom, fill=(*col, alpha), outline=(*col, 200))
+    return Image.alpha_composite(img.convert("RGBA"), layer).convert("RGB")
 
 
 def _box_items(c: np.ndarray, half: np.ndarray, view: tuple) -> list[tuple]:
@@ -176,7 +214,7 @@ def tank_frames(
     eaten: np.ndarray,
     labels: Sequence[Sequence[str]] | None,
     half_size: float,
-    size: tuple[int, int] = (800, 450),
+    size: tuple[int, int] = (768, 432),
     looks: Sequence[str] | None = None,
     statics=None,
     focus: int = 0,
@@ -209,8 +247,7 @@ def tank_frames(
     focal = 0.5 * h / np.tan(np.radians(fov) / 2)
     xs = ((np.arange(w) + 0.5 - w / 2) / focal).astype(np.float32)
     ys = ((h / 2 - np.arange(h) - 0.5) / focal).astype(np.float32)
-    coms = np.asarray(positions[focus], float).mean(axis=1)
-    eyes, targets = follow_camera(coms, times, half_size, distance=7.5)
+    eyes, targets = follow_camera(positions[focus], times, half_size, distance=7.0)
     floor = -2.0 if statics is None else float(np.min(statics[1][:, 1] - statics[2][:, 1]))
     obstacles = np.asarray(obstacles, float).reshape(-1, 3)
     font, small = label_font(max(12, h // 26)), label_font(max(11, h // 32))
@@ -223,15 +260,19 @@ def tank_frames(
         items = face_items(skins_vertices(skins, pos), mesh, *view, fog=FOG)
         left = food[r][~eaten[r]]
         items += _buoys(left, FOOD, 0.1, view)
+        ghosts: list[tuple] = []
         if statics is not None:
-            items += _static_items(statics, view, float(times[r]))
+            solid, ghosts = _static_items(statics, view, float(times[r]), pos[focus].mean(0))
+            items += solid
         else:
             items += _buoys(obstacles, (120.0, 120, 120), 0.4, view)
+        paint_items(ImageDraw.Draw(img), items)
+        img = _see_through(img, ghosts)
         draw = ImageDraw.Draw(img)
-        paint_items(draw, items)
         if labels is not None:
             _tags(draw, labels[r], pos, view, small)
             _legend(draw, labels, h, small)
+        _species_key(draw, looks, fish_rgb, w, size[1] // 3 + 20, small)
         _minimap(img, pos, fish_rgb, left, statics, obstacles, half_size, targets[r])
         caught = 0 if labels is None else sum(lb.endswith(": caught") for lb in labels[r])
         text = f"t = {times[r]:5.1f} s" + (f"    caught {caught}" if labels is not None else "")
@@ -305,6 +346,19 @@ def _legend(draw, labels, height: int, font) -> None:
         draw.rectangle((x, y + 3, x + 12, y + 15), fill=col, outline=(255, 255, 255))
         draw.text((x + 16, y), name, font=font, **_STYLE)
         x += 26 + int(draw.textlength(name, font=font))
+
+
+def _species_key(draw, looks, fish_rgb, width: int, top: int, font) -> None:
+    """Name each species under the map, with a swatch of its mean colour."""
+    if not looks:
+        return
+    y = top
+    for name in dict.fromkeys(looks):
+        rgb = tuple(np.clip(fish_rgb[list(looks).index(name)], 0, 255).astype(int).tolist())
+        x = width - 8 - 18 - int(draw.textlength(name, font=font))
+        draw.rectangle((x, y + 3, x + 12, y + 15), fill=rgb, outline=(255, 255, 255))
+        draw.text((x + 16, y), name, font=font, **_STYLE)
+        y += 18
 
 
 def _minimap(img, pos, fish_rgb, food, statics, obstacles, half: float, target) -> None:

@@ -306,6 +306,9 @@ def face_items(
     front = np.einsum("fk,fk->f", n, cen - eye) < 0
     keep = np.isfinite(tri).all(axis=(1, 2)) & (z[mesh.faces] > 0.05).all(axis=1)
     keep &= front | ~mesh.closed
+    fs = scr[mesh.faces]  # (F, 3, 2): triangles wholly off the picture are not drawn
+    keep &= (fs[..., 0].max(1) >= 0) & (fs[..., 0].min(1) <= size[0])
+    keep &= (fs[..., 1].max(1) >= 0) & (fs[..., 1].min(1) <= size[1])
     n = np.where(front[:, None], n, -n)
     shade = 0.3 + 0.12 * n[:, 1] + 0.7 * np.maximum(n @ _LIGHT, 0.0)
     col = mesh.color * shade[:, None]
