@@ -270,7 +270,8 @@ def tank_frames(
         img = _see_through(img, ghosts)
         draw = ImageDraw.Draw(img)
         if labels is not None:
-            _tags(draw, labels[r], pos, view, small)
+            corner = (w - h // 3 - 16, 0, w, h // 3 + 60)  # the map and the species key
+            _tags(draw, labels[r], pos, view, small, [(0, 0, 260, 34), corner, (0, h - 26, w, h)])
             _legend(draw, labels, h, small)
         _species_key(draw, looks, fish_rgb, w, size[1] // 3 + 20, small)
         _minimap(img, pos, fish_rgb, left, statics, obstacles, half_size, targets[r])
@@ -299,36 +300,16 @@ def _buoys(points: np.ndarray, color, radius: float, view: tuple) -> list[tuple]
     ]
 
 
-def _tags(draw, labels: Sequence[str], pos: list[np.ndarray], view: tuple, font) -> None:
-    """Write each visible fish's intention over it, in its intention's colour, each tag moved
-    up until it overlaps no tag already placed (nearest fishes first)."""
+def _tags(draw, labels: Sequence[str], pos: list[np.ndarray], view: tuple, font, taken) -> None:
+    """Write each visible fish's intention over it in its intention's colour, clear of the
+    other tags and of the boxes ``taken`` (``render3d.place_tags``)."""
     from PIL import ImageColor
 
-    from zoetic.viz.render3d import project_points
+    from zoetic.viz.render3d import place_tags
 
-    eye, rot, focal, size, _ = view
-    placed: list[tuple[float, float, float, float]] = []
-    order = np.argsort([float(np.linalg.norm(np.nanmean(p, 0) - eye)) for p in pos])
-    for i in order:
-        scr, z = project_points(pos[i], eye, rot, focal, size)
-        good = (z > 0.1) & np.isfinite(scr).all(axis=1)
-        if not good.any():
-            continue
-        text = labels[i].split(": ", 1)[-1]
-        x, y = float(scr[good, 0].mean()), float(scr[good, 1].min()) - 6
-        if not (0 <= x <= size[0] and 0 <= y <= size[1]):
-            continue
-        l, t, rr, b = draw.textbbox((x, y), text, font=font, anchor="md", stroke_width=2)
-        for _ in range(6):
-            if not any(l < q[2] and rr > q[0] and t < q[3] and b > q[1] for q in placed):
-                break
-            shift = b - t + 2
-            y, t, b = y - shift, t - shift, b - shift
-        else:
-            continue
-        placed.append((l, t, rr, b))
-        col = ImageColor.getrgb(INTENTION_COLORS.get(text, "#ffffff"))
-        draw.text((x, y), text, font=font, anchor="md", fill=col, stroke_width=2, stroke_fill=0)
+    texts = [lb.split(": ", 1)[-1] for lb in labels]
+    tags = [(t, ImageColor.getrgb(INTENTION_COLORS.get(t, "#ffffff"))) for t in texts]
+    place_tags(draw, tags, pos, view, font, taken)
 
 
 def _legend(draw, labels, height: int, font) -> None:

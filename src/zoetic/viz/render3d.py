@@ -370,6 +370,45 @@ def paint_items(draw: ImageDraw.ImageDraw, items: list[tuple]) -> None:
             draw.ellipse((x - rr, y - rr, x + rr, y + rr), fill=c)
 
 
+def place_tags(draw, tags, points, view: tuple, font, taken=()) -> list[tuple]:
+    """Write each text over its animal (tags: (text, RGB); points: (N_i, 3) nodes each), the
+    nearest animals' first, each moved up until it overlaps no tag already placed nor the
+    boxes ``taken`` (l, t, r, b px); a tag with no room left is not written. Returns the
+    boxes used."""
+    eye, rot, focal, size = view[:4]
+    placed = [tuple(b) for b in taken]
+    dist = [float(np.linalg.norm(np.nanmean(p, 0) - eye)) for p in points]
+    for i in np.argsort(dist):
+        scr, z = project_points(np.asarray(points[i], float), eye, rot, focal, size)
+        good = (z > 0.05) & np.isfinite(scr).all(axis=1)
+        if not good.any() or not tags[i][0]:
+            continue
+        x, y = float(scr[good, 0].mean()), float(scr[good, 1].min()) - 5
+        if not (0 <= x <= size[0] and 0 <= y <= size[1]):
+            continue
+        box = list(draw.textbbox((x, y), tags[i][0], font=font, anchor="md", stroke_width=2))
+        for _ in range(8):
+            if not any(
+                box[0] < q[2] and box[2] > q[0] and box[1] < q[3] and box[3] > q[1] for q in placed
+            ):
+                break
+            shift = box[3] - box[1] + 2
+            y, box[1], box[3] = y - shift, box[1] - shift, box[3] - shift
+        else:
+            continue
+        placed.append(tuple(box))
+        draw.text(
+            (x, y),
+            tags[i][0],
+            font=font,
+            anchor="md",
+            fill=tags[i][1],
+            stroke_width=2,
+            stroke_fill=(0, 0, 0),
+        )
+    return placed
+
+
 @lru_cache(maxsize=8)
 def label_font(px: int) -> ImageFont.ImageFont | ImageFont.FreeTypeFont:
     """Return Pillow's default font at ``px`` pixels (cached, 8 sizes)."""
@@ -476,12 +515,11 @@ def render_frames(
                 draw.polygon(geom, fill=col, outline=col)
             else:
                 draw_buoy(draw, *geom, col)
-        for i, label in enumerate(labels or ()):
-            scr, z = project_points(positions[i][r], eye, rot, focal, size)
-            good = (z > 0.05) & np.isfinite(scr).all(axis=1)
-            if good.any():
-                x, y = scr[good, 0].mean(), scr[good, 1].min() - 4
-                draw.text((x, y), str(label), font=small, anchor="md", **TEXT_STYLE)
+        t_box = draw.textbbox((8, 6), f"t = {times[r]:.2f} s", font=font, stroke_width=2)
+        if labels:
+            view = (eye, rot, focal, size)
+            tags = [(str(lb), (255, 255, 255)) for lb in labels]
+            place_tags(draw, tags, [p[r] for p in positions], view, small, [t_box])
         draw.text((8, 6), f"t = {times[r]:.2f} s", font=font, **TEXT_STYLE)
         yield np.array(img)
 
