@@ -128,3 +128,27 @@ def test_a_clip_that_ends_in_the_air_is_not_settled():
     assert settled_after(pos, t, 0.0) == pytest.approx(1.2)
     pos[-1, :, 1] = 0.5  # still in the air at the end
     assert settled_after(pos, t, 0.0) is None
+
+
+def test_tags_of_animals_on_top_of_each_other_do_not_overlap():
+    from PIL import Image, ImageDraw
+
+    from zoetic.viz.render3d import label_font, look_at, place_tags
+
+    draw = ImageDraw.Draw(Image.new("RGB", (320, 180)))
+    eye = np.array([0.0, 0.0, 5.0])
+    view = (eye, look_at(eye, np.zeros(3)), 160.0, (320, 180))
+    fish = [np.array([[0.0, 0.0, 0.0], [0.1 * k, 0.05, 0.0]]) for k in range(5)]  # a huddle
+    clock = (0, 0, 120, 30)
+    boxes = place_tags(
+        draw,
+        [(f"fish {k}", (255, 255, 255)) for k in range(5)],
+        fish,
+        view,
+        label_font(12),
+        [clock],
+    )
+    assert len(boxes) == 6  # every tag found room, beside the clock's box
+    for i, a in enumerate(boxes):
+        for b in boxes[i + 1 :]:
+            assert not (a[0] < b[2] and a[2] > b[0] and a[1] < b[3] and a[3] > b[1])
