@@ -103,7 +103,7 @@ def follow_camera(
     nodes = np.asarray(nodes, float)
     target = _fill_nan(nodes.mean(axis=1))
     fwd = _fill_nan(nodes[:, 0] - nodes.mean(axis=1))
-    heading = np.unwrap(np.arctan2(-fwd[:, 2], fwd[:, 0]))  # radians toward the fish's right
+    heading = np.unwrap(np.arctan2(fwd[:, 2], fwd[:, 0]))  # forward = (cos, 0, sin)
     dt = float(np.median(np.diff(times))) if len(times) > 1 else 1.0
     if len(times) > 1:
         target = gaussian_filter1d(target, 1.0 / max(dt, 1e-6), axis=0, mode="nearest")
