@@ -133,7 +133,8 @@ def test_a_clip_that_ends_in_the_air_is_not_settled():
 def test_tags_of_animals_on_top_of_each_other_do_not_overlap():
     from PIL import Image, ImageDraw
 
-    from zoetic.viz.render3d import label_font, look_at, place_tags
+    from zoetic.viz.paint import label_font, place_tags
+    from zoetic.viz.render3d import look_at
 
     draw = ImageDraw.Draw(Image.new("RGB", (320, 180)))
     eye = np.array([0.0, 0.0, 5.0])

@@ -227,13 +227,12 @@ def tank_frames(
     from PIL import Image, ImageDraw
 
     from zoetic.physics.media import get_medium
+    from zoetic.viz.paint import label_font, paint_items
     from zoetic.viz.render3d import (
         animal_skins,
         background,
         face_items,
-        label_font,
         look_at,
-        paint_items,
         skins_mesh,
         skins_vertices,
     )
@@ -305,7 +304,7 @@ def _tags(draw, labels: Sequence[str], pos: list[np.ndarray], view: tuple, font,
     other tags and of the boxes ``taken`` (``render3d.place_tags``)."""
     from PIL import ImageColor
 
-    from zoetic.viz.render3d import place_tags
+    from zoetic.viz.paint import place_tags
 
     texts = [lb.split(": ", 1)[-1] for lb in labels]
     tags = [(t, ImageColor.getrgb(INTENTION_COLORS.get(t, "#ffffff"))) for t in texts]

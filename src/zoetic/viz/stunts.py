@@ -185,7 +185,8 @@ def stunt_frames(
 
     from zoetic.physics.media import get_medium
     from zoetic.render.skin import skin_vertices
-    from zoetic.viz.render3d import background, face_items, label_font, look_at, skins_mesh
+    from zoetic.viz.paint import label_font
+    from zoetic.viz.render3d import background, face_items, look_at, skins_mesh
     from zoetic.viz.spray import spray_particles, surface_crossings
 
     medium = get_medium(medium)
@@ -354,7 +355,8 @@ def _compose(
     and the label."""
     from PIL import Image, ImageDraw
 
-    from zoetic.viz.render3d import TEXT_STYLE, paint_items, project_points
+    from zoetic.viz.paint import paint_items
+    from zoetic.viz.render3d import TEXT_STYLE, project_points
 
     eye, rot, focal, size, _, _ = view
     paint_items(ImageDraw.Draw(img), below)
@@ -448,7 +450,8 @@ def frame_strip(frames: Sequence[np.ndarray], path: str | Path, labels: Sequence
     from PIL import Image, ImageDraw
 
     from zoetic.io import atomic_write_bytes
-    from zoetic.viz.render3d import TEXT_STYLE, label_font
+    from zoetic.viz.paint import label_font
+    from zoetic.viz.render3d import TEXT_STYLE
 
     h, w = frames[0].shape[:2]
     strip = Image.new("RGB", (w * len(frames), h))
