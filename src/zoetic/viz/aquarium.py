@@ -86,6 +86,7 @@ FOOD = (250.0, 150, 30)
 ROCK = np.array([150.0, 132, 108])
 WEED = np.array([46.0, 132, 64])
 FOG = 14.0  # m: the tank's water is clear (the fishes' view range is 6 m)
+NEAR = 9.0  # m: fishes nearer the camera are drawn with the finer skin (16x the lattice's)
 BOX, CYLINDER = 0, 1  # physics.objects' kinds of fixed shape
 
 
@@ -240,7 +241,7 @@ def tank_frames(
     medium = get_medium("water")
     times = np.asarray(times, float)
     skins = animal_skins(bodies, colors, looks)
-    mesh = skins_mesh(skins)
+    coarse = animal_skins(bodies, colors, looks, levels=1)  # for fishes far from the camera
     w, h = size
     fov = 50.0
     focal = 0.5 * h / np.tan(np.radians(fov) / 2)
@@ -256,7 +257,9 @@ def tank_frames(
         view = (eye, rot, focal, size, medium)
         img = Image.fromarray(background(medium, eye, rot, xs, ys, floor, FOG))
         pos = [np.asarray(p[r], float) for p in positions]
-        items = face_items(skins_vertices(skins, pos), mesh, *view, fog=FOG)
+        near = [float(np.linalg.norm(np.nanmean(p, 0) - eye)) < NEAR for p in pos]
+        drawn = [s if n else c for s, c, n in zip(skins, coarse, near, strict=True)]
+        items = face_items(skins_vertices(drawn, pos), skins_mesh(drawn), *view, fog=FOG)
         left = food[r][~eaten[r]]
         items += _buoys(left, FOOD, 0.1, view)
         ghosts: list[tuple] = []

@@ -251,18 +251,18 @@ def plain_look(name: str, color) -> Look:
     return Look(name, tuple(c), tuple(0.6 * c + 0.4))
 
 
-def animal_skins(bodies: Sequence[Body], colors=None, looks=None) -> list[Skin]:
-    """Return each animal's display skin: in the look named ``looks[i]``, else one of colour
-    ``colors[i]``, else the body's own look."""
+def animal_skins(bodies: Sequence[Body], colors=None, looks=None, levels: int = 2) -> list[Skin]:
+    """Return each animal's display skin (``levels`` subdivisions): in the look named
+    ``looks[i]``, else one of colour ``colors[i]``, else the body's own look."""
     out = []
     for i, body in enumerate(bodies):
         if looks is not None and looks[i]:
-            out.append(body_skin(body, looks[i]))
+            out.append(body_skin(body, looks[i], levels))
         elif colors is not None:
             look = plain_look(body.name, colors[i])
-            out.append(make_skin(body.faces, body.rest_pos, look, None, body.forward))
+            out.append(make_skin(body.faces, body.rest_pos, look, None, body.forward, levels))
         else:
-            out.append(body_skin(body))
+            out.append(body_skin(body, None, levels))
     return out
 
 
