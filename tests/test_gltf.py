@@ -47,6 +47,9 @@ def _load(path: Path) -> tuple[pygltflib.GLTF2, bytes]:
 
 
 def test_the_glb_holds_the_run_frame_by_frame(shark_run, tmp_path):
+    from zoetic.render.skin import skin_vertices
+    from zoetic.viz.gltf import skin_joints
+
     scene = load_scene(shark_run, fps=20)
     path = write_glb(scene, tmp_path / "s.glb")
     g, blob = _load(path)
@@ -54,36 +57,68 @@ def test_the_glb_holds_the_run_frame_by_frame(shark_run, tmp_path):
     animal = scene.animals[0]
     n, frames = animal.positions.shape[1], len(scene.times)
     assert frames == 21
-    (skin,) = g.skins
-    assert len(skin.joints) == n
+    skin = animal.skin
+    _, _, extra = skin_joints(skin)
+    assert len(extra) > 0  # the fins' tips stand out of the lattice: joints of their own
+    (gskin,) = g.skins
+    assert len(gskin.joints) == n + len(extra)
     (anim,) = g.animations
-    assert len(anim.channels) == n and {c.target.path for c in anim.channels} == {"translation"}
+    assert len(anim.channels) == len(gskin.joints)
+    assert {c.target.path for c in anim.channels} == {"translation"}
     times = _read(g, blob, anim.samplers[0].input)[:, 0]
     np.testing.assert_allclose(times, np.arange(frames) / 20, atol=1e-6)
     assert g.accessors[anim.samplers[0].input].max == [pytest.approx(1.0)]
-    for ch in anim.channels:  # every node's track is its node's positions, z mirrored
-        i = skin.joints.index(ch.target.node)
-        track = _read(g, blob, anim.samplers[ch.sampler].output)
-        np.testing.assert_allclose(track, animal.positions[:, i] * MIRROR, atol=1e-6)
-    # the mesh: rest vertices at frame 0 with exact bounds, faces reversed, one joint per vertex
+    tracks = np.zeros((len(gskin.joints), frames, 3))
+    for ch in anim.channels:
+        tracks[gskin.joints.index(ch.target.node)] = _read(
+            g, blob, anim.samplers[ch.sampler].output
+        )
+    # the first n joints are the nodes, z mirrored
+    np.testing.assert_allclose(tracks[:n].transpose(1, 0, 2), animal.positions * MIRROR, atol=1e-6)
+    # the mesh: the skin at frame 0, exact bounds, triangles reversed, coloured per vertex
     (mesh_node,) = [nd for nd in g.nodes if nd.skin is not None]
     prim = g.meshes[mesh_node.mesh].primitives[0]
     rest = _read(g, blob, prim.attributes.POSITION)
-    np.testing.assert_allclose(rest, animal.positions[0] * MIRROR, atol=1e-6)
+    want = skin_vertices(skin, animal.positions.astype(float)) * MIRROR  # (R, V, 3)
+    np.testing.assert_allclose(rest, want[0], atol=1e-5)
     acc = g.accessors[prim.attributes.POSITION]
     assert acc.min == pytest.approx(rest.min(0).tolist()) and acc.max == pytest.approx(
         rest.max(0).tolist()
     )
     faces = _read(g, blob, prim.indices).reshape(-1, 3)
-    np.testing.assert_array_equal(faces, animal.faces[:, ::-1])
-    np.testing.assert_array_equal(_read(g, blob, prim.attributes.JOINTS_0)[:, 0], np.arange(n))
-    ibm = _read(g, blob, skin.inverseBindMatrices).reshape(n, 4, 4)  # column-major
-    np.testing.assert_allclose(ibm[:, 3, :3], -rest, atol=1e-6)
-    colour = g.materials[prim.material].pbrMetallicRoughness.baseColorFactor
-    np.testing.assert_allclose(colour[:3], (np.array(animal.color) / 255) ** 2.2, atol=1e-4)
+    np.testing.assert_array_equal(faces, skin.triangles[:, ::-1])
+    colours = _read(g, blob, prim.attributes.COLOR_0)
+    np.testing.assert_allclose(colours, skin.colors**2.2, atol=1e-5)
+    # skinning as a glTF viewer does it (translation-only joints) gives the skin at every frame
+    ids = np.concatenate(
+        [_read(g, blob, prim.attributes.JOINTS_0), _sets(g, blob, prim, "JOINTS")], 1
+    )
+    w = np.concatenate(
+        [_read(g, blob, prim.attributes.WEIGHTS_0), _sets(g, blob, prim, "WEIGHTS")], 1
+    )
+    assert (w >= 0).all()
+    np.testing.assert_allclose(w.sum(axis=1), 1.0, atol=1e-6)
+    ibm = _read(g, blob, gskin.inverseBindMatrices).reshape(-1, 4, 4)  # column-major
+    bind = -ibm[:, 3, :3]
+    for r in (0, frames // 2, frames - 1):
+        moved = rest + np.einsum(
+            "vk,vkc->vc", w, tracks[ids.astype(int), r] - bind[ids.astype(int)]
+        )
+        np.testing.assert_allclose(moved, want[r], atol=1e-4)
     assert g.scenes[0].extras["fps"] == 20
     names = {nd.name for nd in g.nodes}
     assert "sea floor" in names and "ground" not in names  # the shark swims in open water
+
+
+def _sets(g, blob, prim, what: str) -> np.ndarray:
+    """Return the JOINTS_n or WEIGHTS_n sets after the first, side by side (V, 4 (s - 1))."""
+    attrs = prim.attributes.__dict__ | getattr(prim.attributes, "_extra", {})
+    more = []
+    k = 1
+    while attrs.get(f"{what}_{k}") is not None:
+        more.append(_read(g, blob, attrs[f"{what}_{k}"]))
+        k += 1
+    return np.concatenate(more, 1) if more else np.zeros((len(_read(g, blob, prim.indices)), 0))
 
 
 def test_ground_and_targets_of_a_tracking_record(tmp_path):

@@ -68,3 +68,49 @@ def test_an_animal_shows_in_its_colour_among_rocks_and_seaweed_with_fog():
     assert reddish[40:56, 30:66].mean() > 0.3  # the fish in the middle of the picture
     assert reddish.sum() > 50 and (foggy[..., 0] > 2 * foggy[..., 1]).sum() < reddish.sum()
     assert (mesh.owner == 0).sum() == len(shark.faces)
+
+
+# ---------------------------------------------------------------- display skins
+
+
+def test_a_skin_moves_rigidly_with_its_lattice_and_covers_it_smoothly():
+    from zoetic.render.skin import body_skin, skin_vertices
+
+    shark = load_animal("shark")
+    skin = body_skin(shark)
+    np.testing.assert_allclose(skin.weight.sum(axis=1), 1.0, atol=1e-6)
+    assert len(skin.triangles) > 10 * len(shark.faces)  # subdivided, plus fins
+    a = 0.7
+    rot = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1.0]])
+    moved = shark.rest_pos @ rot.T + [1.0, -2.0, 0.5]
+    both = skin_vertices(skin, np.stack([shark.rest_pos, moved]))  # batched over frames
+    np.testing.assert_allclose(both[1], both[0] @ rot.T + [1.0, -2.0, 0.5], atol=1e-5)
+    # the dorsal fin stands above the lattice's back (an affine extension of the nodes)
+    assert both[0][:, 1].max() > shark.rest_pos[:, 1].max() + 0.05
+
+
+def test_species_on_one_lattice_look_different():
+    from zoetic.render.skin import body_skin
+
+    shark = load_animal("shark")
+    pred, prey = body_skin(shark, "shark"), body_skin(shark, "minnow")
+    # the minnow is golden, the shark grey: their mean colours differ clearly
+    assert np.linalg.norm(pred.colors.mean(0) - prey.colors.mean(0)) > 0.15
+    assert prey.colors[:, 0].mean() > prey.colors[:, 2].mean() + 0.2  # warm
+    for name in ("dolphin", "ray", "snake"):
+        skin = body_skin(load_animal(name))
+        assert np.ptp(skin.colors, axis=0).max() > 0.3  # a belly and markings, not one colour
+
+
+def test_a_bad_look_file_names_the_file_and_the_fin(tmp_path):
+    import pytest
+
+    from zoetic.render.skin import LookError, read_look
+
+    bad = tmp_path / "bad.toml"
+    bad.write_text(
+        'name = "bad"\ncolor = [1, 2, 3]\nbelly = [4, 5, 6]\n'
+        '[[fin]]\nname = "dorsal"\npoints = [{a = 1.0}, {b = 0.5}, {c = 1.0}]\n'
+    )
+    with pytest.raises(LookError, match=r"bad\.toml: fin 1.*corner 2.*sum to 0\.5"):
+        read_look(bad)

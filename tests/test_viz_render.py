@@ -107,3 +107,49 @@ def test_plot_path_writes_a_png(tmp_path):
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 5000
     two = plot_path([com, com + 1], tmp_path / "two.png")
     assert two.exists() and not list(tmp_path.glob("*.tmp"))
+
+
+def test_a_controller_plot_shows_a_few_periods_of_its_rhythm():
+    from zoetic.viz.learning import shown_window
+
+    t = np.linspace(0.0, 10.0, 400)
+    u = (np.sin(2 * np.pi * 3.0 * t) > 0).astype(float)[:, None]
+    assert 0.8 < shown_window(t, u) < 1.3  # three 3 Hz strokes, not thirty
+    assert shown_window(t, np.full((400, 1), 0.5)) == 10.0  # no rhythm: all of it
+
+
+def test_a_clip_that_ends_in_the_air_is_not_settled():
+    from zoetic.viz.stunts import settled_after
+
+    t = np.linspace(0.0, 2.0, 21)
+    y = np.where((t > 0.5) & (t < 1.2), 1.0, -1.0)  # out of the water from 0.6 to 1.1 s
+    pos = np.zeros((21, 3, 3))
+    pos[..., 1] = y[:, None]
+    assert settled_after(pos, t, 0.0) == pytest.approx(1.2)
+    pos[-1, :, 1] = 0.5  # still in the air at the end
+    assert settled_after(pos, t, 0.0) is None
+
+
+def test_tags_of_animals_on_top_of_each_other_do_not_overlap():
+    from PIL import Image, ImageDraw
+
+    from zoetic.viz.paint import label_font, place_tags
+    from zoetic.viz.render3d import look_at
+
+    draw = ImageDraw.Draw(Image.new("RGB", (320, 180)))
+    eye = np.array([0.0, 0.0, 5.0])
+    view = (eye, look_at(eye, np.zeros(3)), 160.0, (320, 180))
+    fish = [np.array([[0.0, 0.0, 0.0], [0.1 * k, 0.05, 0.0]]) for k in range(5)]  # a huddle
+    clock = (0, 0, 120, 30)
+    boxes = place_tags(
+        draw,
+        [(f"fish {k}", (255, 255, 255)) for k in range(5)],
+        fish,
+        view,
+        label_font(12),
+        [clock],
+    )
+    assert len(boxes) == 6  # every tag found room, beside the clock's box
+    for i, a in enumerate(boxes):
+        for b in boxes[i + 1 :]:
+            assert not (a[0] < b[2] and a[2] > b[0] and a[1] < b[3] and a[3] > b[1])

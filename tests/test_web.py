@@ -164,6 +164,7 @@ def test_the_viewer_draws_and_scrubs_in_chromium(shark_run, tmp_path):
     with viewer_page(html) as (page, errors):
         page.keyboard.press(" ")  # pause, then move the timeline as a user would
         assert page.inner_text("#play") == "play"
+        assert page.evaluate("window.zoetic.displaySkins()") == 1  # the shark's skin, drawn here
         t0 = page.evaluate("window.zoetic.time()")
         page.keyboard.press("ArrowRight")  # one frame on
         assert page.evaluate("window.zoetic.time()") == pytest.approx(min(t0 + 1 / 30, 2))
@@ -196,9 +197,12 @@ def test_the_viewer_draws_and_scrubs_in_chromium(shark_run, tmp_path):
         # the exported .glb, read by three.js's own GLTFLoader
         b64 = base64.b64encode(glb.read_bytes()).decode()
         info = page.evaluate("b => window.zoetic.inspectGlb(b)", b64)
-    n = load_scene(shark_run).animals[0].positions.shape[1]
+    from zoetic.viz.gltf import skin_joints
+
+    animal = load_scene(shark_run).animals[0]
+    joints = animal.positions.shape[1] + len(skin_joints(animal.skin)[2])  # nodes, fin tips
     assert info["skinned"] == 1 and info["meshes"] >= 2  # the shark and the sea floor
-    assert info["animations"] == 1 and info["tracks"] == n
+    assert info["animations"] == 1 and info["tracks"] == joints
     assert info["duration"] == pytest.approx(2.0, abs=1e-3)
     assert (tmp_path / "viewer-1.5s.png").stat().st_size > 1000
 

@@ -135,6 +135,80 @@ function short(v) { // three significant digits, no trailing zeros: an axis rang
   return String(Number(v.toPrecision(3)));
 }
 
+// ---- display skins: an animal's surface is a fixed linear map of its nodes (zoetic.render.skin),
+// written in the glTF as a skinned mesh with more than four joints per vertex (JOINTS_1, ...).
+// three.js skins with four, so such a mesh is drawn here instead: each frame every vertex is the
+// weighted sum of its joints' positions (the nodes, keyframed by the animation), then smoothly
+// shaded with its own colour.
+function skinSets(geometry) { // [[joints, weights], ...] attribute pairs, four influences each
+  const sets = [[geometry.attributes.skinIndex, geometry.attributes.skinWeight]];
+  for (let s = 1; geometry.attributes[`joints_${s}`]; s++) {
+    sets.push([geometry.attributes[`joints_${s}`], geometry.attributes[`weights_${s}`]]);
+  }
+  return sets;
+}
+
+function makeDisplaySkins(root, scene) {
+  const skins = [];
+  root.traverse((o) => {
+    if (!o.isSkinnedMesh || !o.geometry.attributes.joints_1) return;
+    const sets = skinSets(o.geometry);
+    const n = o.geometry.attributes.position.count, k = 4 * sets.length;
+    const index = new Uint16Array(n * k), weight = new Float32Array(n * k);
+    sets.forEach(([j, w], s) => {
+      for (let v = 0; v < n; v++) {
+        for (let c = 0; c < 4; c++) {
+          index[v * k + 4 * s + c] = j.getComponent(v, c);
+          weight[v * k + 4 * s + c] = w.getComponent(v, c);
+        }
+      }
+    });
+    // GLTFLoader rescales the first four weights to sum to 1; all of them did, so set 0's
+    // share is 1 minus the other sets'
+    for (let v = 0; v < n; v++) {
+      let first = 0, others = 0;
+      for (let c = 0; c < k; c++) (c < 4 ? (first += weight[v * k + c]) : (others += weight[v * k + c]));
+      if (first > 0) for (let c = 0; c < 4; c++) weight[v * k + c] *= (1 - others) / first;
+    }
+    const geo = new THREE.BufferGeometry();
+    geo.setIndex(o.geometry.index);
+    geo.setAttribute("position", o.geometry.attributes.position.clone());
+    if (o.geometry.attributes.color) geo.setAttribute("color", o.geometry.attributes.color);
+    const material = o.material.clone();
+    material.vertexColors = Boolean(o.geometry.attributes.color);
+    material.side = THREE.DoubleSide;
+    const mesh = new THREE.Mesh(geo, material);
+    mesh.name = `${o.name} (display skin)`;
+    mesh.frustumCulled = false;
+    o.visible = false;
+    scene.add(mesh);
+    skins.push({ bones: o.skeleton.bones, index, weight, k, n, geo });
+  });
+  const p = new THREE.Vector3();
+  const update = () => {
+    if (!skins.length) return;
+    root.updateMatrixWorld(true);
+    for (const s of skins) {
+      const joints = new Float32Array(3 * s.bones.length);
+      s.bones.forEach((b, j) => { p.setFromMatrixPosition(b.matrixWorld); p.toArray(joints, 3 * j); });
+      const out = s.geo.attributes.position.array;
+      for (let v = 0; v < s.n; v++) {
+        let x = 0, y = 0, z = 0;
+        for (let c = v * s.k; c < (v + 1) * s.k; c++) {
+          const w = s.weight[c];
+          if (w === 0) continue;
+          const j = 3 * s.index[c];
+          x += w * joints[j]; y += w * joints[j + 1]; z += w * joints[j + 2];
+        }
+        out[3 * v] = x; out[3 * v + 1] = y; out[3 * v + 2] = z;
+      }
+      s.geo.attributes.position.needsUpdate = true;
+      s.geo.computeVertexNormals();
+    }
+  };
+  return { count: skins.length, update };
+}
+
 async function main() {
   const data = JSON.parse(document.getElementById("zoetic-data").textContent);
   const api = { ready: false, error: null, frames: data.frames, duration: data.duration };
@@ -165,6 +239,7 @@ async function main() {
   const mixer = new THREE.AnimationMixer(gltf.scene);
   if (gltf.animations.length) mixer.clipAction(gltf.animations[0]).play();
   const clipEnd = gltf.animations.length ? gltf.animations[0].duration * (1 - 1e-6) : 0;
+  const displaySkins = makeDisplaySkins(gltf.scene, scene);
 
   // centre-of-mass paths, in glTF axes, flat [x, y, z, ...] per frame
   const coms = data.animals.map((a) => a.com);
@@ -247,6 +322,7 @@ async function main() {
   const setTime = (time) => {
     t = Math.min(Math.max(time, 0), data.duration);
     mixer.setTime(Math.min(t, clipEnd)); // a repeating clip wraps to its start at its end
+    displaySkins.update();
     const i = Math.min(Math.round(t * data.fps), data.frames - 1);
     if (follow.checked) {
       const delta = comAt(0, i).sub(controls.target);
@@ -304,6 +380,7 @@ async function main() {
 
   Object.assign(api, {
     scene, camera, controls,
+    displaySkins: () => displaySkins.count,
     time: () => t,
     setTime: (time) => { setTime(time); render(); },
     pause: () => { playing = false; play.textContent = "play"; },

@@ -54,3 +54,16 @@ def bench_jax_cmd(
 
         out["numba"] = bench_simulate(animal, seconds, batch, repeats)
     emit(out, json)
+
+
+@bench_app.command("render")
+def bench_render_cmd(
+    animal: str = typer.Option("shark", help="A built-in animal."),
+    frames: int = typer.Option(30, min=2, help="Video frames per timed render."),
+    repeats: int = typer.Option(5, min=1, help="Timed renders of each kind, alternated."),
+    json: Json = False,
+) -> None:
+    """A video frame's cost: the display skin against the raw lattice, same motion."""
+    from zoetic.bench.render import bench_render
+
+    emit(bench_render(animal, frames, repeats), json)

@@ -52,6 +52,7 @@ def write_replay(body, path: Path, seconds: float | None, out: Path, video: bool
                 info["objects"],
                 balls,
                 fps=fps,
+                macro=path,
             )
         )
     return {
@@ -172,6 +173,7 @@ def _draw_stunt(out: Path, body, tr, found, summary: dict, video: bool, fps: int
             tr.objects,
             rec.balls[0],
             fps=fps,
+            macro=out / "macro.json",
             title=f"{body.name} {tr.name}",
         )
 

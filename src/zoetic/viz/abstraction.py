@@ -33,20 +33,37 @@ def plot_abstraction(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig = plt.figure(figsize=(12.0, 4.0))
-    ax_t = fig.add_subplot(1, 3, 1)
-    ax_p = fig.add_subplot(1, 3, 2, projection="polar")
-    ax_a = fig.add_subplot(1, 3, 3, sharey=ax_t)
-    colors = plt.get_cmap("tab10")(np.arange(len(names)) % 10)
+    from zoetic.viz.learning import shown_window
+
+    groups: dict[str, list[int]] = {}
     for a, name in enumerate(names):
-        ax_t.plot(original_t, original_u[:, a], color=colors[a], lw=1.2, label=name)
-        ax_a.plot(original_t, abstract_u[:, a], color=colors[a], lw=1.2)
-    for ax, what in ((ax_t, "learned controller"), (ax_a, "abstracted controller")):
-        ax.set_xlabel("time (s)")
-        ax.set_title(what, fontsize=10)
-        ax.grid(alpha=0.3)
-    ax_t.set_ylabel("activation")
-    ax_t.legend(fontsize=7, loc="upper right", ncols=2)
+        stem, _, side = name.rpartition("_")
+        groups.setdefault(stem if side in ("left", "right") and stem else name, []).append(a)
+    t = np.asarray(original_t, float)
+    end = shown_window(t, original_u)
+    keep = t <= end + 1e-9
+    rows = max(len(groups), 1)
+    fig = plt.figure(figsize=(12.0, max(4.0, 0.8 * rows + 1.4)))
+    grid = fig.add_gridspec(rows, 2, width_ratios=(1.6, 1.0))
+    ax_p = fig.add_subplot(grid[:, 1], projection="polar")
+    colors = plt.get_cmap("tab10")(np.arange(len(names)) % 10)
+    for r, (stem, ids) in enumerate(groups.items()):
+        ax = fig.add_subplot(grid[r, 0])
+        for j, a in enumerate(ids):
+            off = 1.15 * (len(ids) - 1 - j)  # left above right
+            ax.plot(t[keep], off + original_u[keep, a], color="0.6", lw=1.0)
+            ax.plot(t[keep], off + abstract_u[keep, a], color=colors[a], lw=1.6, label=names[a])
+        ax.set_ylim(-0.08, 1.15 * len(ids) - 0.1)
+        ax.set_yticks([])
+        ax.set_ylabel(stem, rotation=0, ha="right", va="center", fontsize=8)
+        ax.legend(fontsize=6, loc="center left", bbox_to_anchor=(1.0, 0.5), frameon=False)
+        if r < rows - 1:
+            ax.set_xticklabels([])
+        else:
+            ax.set_xlabel("time (s)")
+        if r == 0:
+            shown = "" if end >= t[-1] - 1e-9 else f", first {end:.2f} s"
+            ax.set_title(f"learned (grey) and abstracted (colour){shown}", fontsize=10)
 
     scale = 350.0 / max(float(np.max(amp, initial=0.0)), 1e-9)
     for a in range(len(names)):
@@ -78,7 +95,8 @@ def plot_repertoire(
     path: Path,
     title: str = "",
 ) -> Path:
-    """Write a repertoire's entries to ``path``: each one's activations and all their paths.
+    """Write a repertoire's entries to ``path``: each one's activations (one row per actuator,
+    shade = activation) and all their paths (an arrow at each end).
 
     signals: entry -> (t (T,) s, u (T, A)); paths: entry -> centre-of-mass path (R, 3) m from
     rest, drawn from above (x right, z up, the animal starting at the origin facing +x).
@@ -91,24 +109,35 @@ def plot_repertoire(
     n = max(len(signals), 1)
     fig = plt.figure(figsize=(11.0, 1.7 * n + 1.0))
     grid = fig.add_gridspec(n, 2, width_ratios=(1.3, 1.0))
-    colors = plt.get_cmap("tab10")(np.arange(len(names)) % 10)
     for i, (entry, (t, u)) in enumerate(signals.items()):
         ax = fig.add_subplot(grid[i, 0])
-        for a in range(u.shape[1]):
-            ax.plot(t, u[:, a], color=colors[a], lw=1.0, label=names[a] if i == 0 else None)
-        ax.set_ylabel(entry, fontsize=8)
-        ax.set_ylim(-0.05, 1.05)
+        t = np.asarray(t, float)
+        ax.imshow(
+            np.asarray(u, float).T,
+            aspect="auto",
+            cmap="magma",
+            vmin=0.0,
+            vmax=1.0,
+            extent=(float(t[0]), float(t[-1]), len(names) - 0.5, -0.5),
+            interpolation="nearest",
+        )
+        ax.set_yticks(range(len(names)), names, fontsize=6)
+        key = "   (activation: black 0 ... yellow 1)" if i == 0 else ""
+        ax.set_title(entry + key, fontsize=8, loc="left")
         ax.tick_params(labelsize=7)
-        ax.grid(alpha=0.3)
-        if i == 0:
-            ax.legend(fontsize=6, ncols=3, loc="upper right")
         if i == n - 1:
             ax.set_xlabel("time (s)")
     ax_p = fig.add_subplot(grid[:, 1])
     for entry, com in paths.items():
         xz = np.asarray(com, float)[:, [0, 2]] - np.asarray(com, float)[0, [0, 2]]
         ax_p.plot(xz[:, 0], xz[:, 1], lw=1.5, label=entry)
-        ax_p.plot(xz[-1, 0], xz[-1, 1], "o", ms=3, color=ax_p.lines[-1].get_color())
+        end, before = xz[-1], xz[max(0, len(xz) - 4)]
+        ax_p.annotate(  # an arrow head: where the entry leaves the animal heading
+            "",
+            xy=end,
+            xytext=before,
+            arrowprops={"arrowstyle": "-|>", "color": ax_p.lines[-1].get_color(), "lw": 1.5},
+        )
     ax_p.plot(0, 0, "k^", ms=7)
     ax_p.set_aspect("equal", adjustable="datalim")
     ax_p.set_xlabel("x (m)")

@@ -1,9 +1,12 @@
 """A Scene as an animated glTF 2.0 binary (.glb) that Blender, three.js and other tools load.
 
-Each animal is a skinned mesh with one joint per node: a joint's translation is its node's
-position, keyframed at the scene's frame rate (LINEAR), and each vertex follows its own joint
-with weight 1. The file grows as frames x nodes x 12 bytes, like morph targets would, without
-the frames^2 weights table and the per-shader limits on morph target counts. A rigid-link
+Each animal is its display skin (``render.skin``) as a skinned mesh with one joint per node:
+a joint's translation is its node's position, keyframed at the scene's frame rate (LINEAR),
+and each vertex is its skin's weighted sum of joints (JOINTS_n/WEIGHTS_n in sets of four;
+a fin tip, an affine extension of the nodes, is a joint of its own keyframed where it is),
+coloured per vertex (COLOR_0). The file grows as frames x joints x 12 bytes, like morph
+targets would, without the frames^2 weights table and the per-shader limits on morph target
+counts. A rigid-link
 creature's links are meshes posed per frame. Objects are meshes of their shapes (spheres,
 boxes, cylinders; a target a small octahedron), moved where they move and scaled to nothing
 once gone (food eaten). Ground, sea floor and sea surface are static quads (checkered by a
@@ -24,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from zoetic.io import atomic_write_bytes
+from zoetic.render.skin import Skin, look_of, make_skin, skin_vertices
 from zoetic.viz.scene import Animal, Creature, Scene, Thing
 
 MIRROR = np.array([1.0, 1.0, -1.0], np.float32)  # zoetic (x, y, z left) -> glTF (z right)
@@ -271,21 +275,48 @@ class _Tracks:
         )
 
 
+def skin_joints(skin: Skin) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return a skin as glTF skinning: per vertex joint ids and weights (V, 4 s) in s sets of
+    four (weights >= 0, summing to 1), the joints being the N nodes followed by one joint per
+    vertex the nodes cannot carry with weights >= 0 (a fin's tip, keyframed where it is);
+    and the indices (E,) of those vertices."""
+    v, k = skin.index.shape
+    sets = -(-k // 4)
+    extra = np.flatnonzero((skin.weight < 0).any(axis=1))
+    ids = np.zeros((v, 4 * sets), np.int64)
+    w = np.zeros((v, 4 * sets), np.float64)
+    ids[:, :k], w[:, :k] = skin.index, skin.weight
+    ids[extra], w[extra] = 0, 0.0
+    ids[extra, 0], w[extra, 0] = skin.n_nodes + np.arange(len(extra)), 1.0
+    w[w < 0] = 0.0
+    ids[w == 0] = 0  # glTF: an unused slot names joint 0
+    return ids, (w / w.sum(axis=1, keepdims=True)).astype(np.float32), extra
+
+
 def _add_animal(b: _Builder, tracks: _Tracks, k: int, animal: Animal) -> None:
-    """Add an animal as a skinned mesh, one joint per node keyframed at its node's positions."""
-    pos = to_gltf_axes(_fill_frames(animal.positions))  # (R, N, 3)
+    """Add an animal as its display skin (``render.skin``): a skinned mesh whose joints are
+    its nodes (and its fins' tips), keyframed at their positions, with vertex colours."""
+    nodes = _fill_frames(animal.positions)  # (R, N, 3)
+    skin = animal.skin or make_skin(animal.faces, np.nan_to_num(nodes[0]), look_of(animal.name))
+    ids, weights, extra = skin_joints(skin)
+    pos = to_gltf_axes(np.concatenate([nodes, skin_vertices(skin, nodes)[:, extra]], axis=1))
     n = pos.shape[1]
     rest = pos[0]
-    faces = np.asarray(animal.faces)[:, ::-1]
-    itype = np.uint16 if n < 65535 else np.uint32
-    joint_ids = np.zeros((n, 4), np.uint8 if n <= 256 else np.uint16)  # JOINTS_0: 8/16 bit
-    joint_ids[:, 0] = np.arange(n)
-    mat = _material(b, animal.name, _linear(animal.color), roughness=0.6)
+    verts = to_gltf_axes(skin_vertices(skin, nodes[0])).astype(np.float32)
+    faces = np.asarray(skin.triangles)[:, ::-1]
+    itype = np.uint16 if len(verts) < 65535 else np.uint32
+    jtype = np.uint8 if n <= 256 else np.uint16
+    mat = _material(b, animal.name, [1.0, 1.0, 1.0, 1.0], roughness=0.6)
+    colors = np.asarray(skin.colors, np.float32) ** 2.2  # linear, as glTF's colours are
     attrs = {
-        "POSITION": b.accessor(rest, "VEC3", _ARRAY, bounds=True),
-        "JOINTS_0": b.accessor(joint_ids, "VEC4", _ARRAY),
-        "WEIGHTS_0": b.accessor(np.tile(np.float32([1, 0, 0, 0]), (n, 1)), "VEC4", _ARRAY),
+        "POSITION": b.accessor(verts, "VEC3", _ARRAY, bounds=True),
+        "COLOR_0": b.accessor(np.ascontiguousarray(colors), "VEC3", _ARRAY),
     }
+    for s in range(ids.shape[1] // 4):
+        part = slice(4 * s, 4 * s + 4)
+        attrs[f"JOINTS_{s}"] = b.accessor(ids[:, part].astype(jtype), "VEC4", _ARRAY)
+        w = np.ascontiguousarray(weights[:, part])
+        attrs[f"WEIGHTS_{s}"] = b.accessor(w, "VEC4", _ARRAY)
     idx = b.accessor(faces.astype(itype).ravel(), "SCALAR", _ELEMENTS)
     prim = {"attributes": attrs, "material": mat, "indices": idx}
     mesh = b.add("meshes", {"name": f"{animal.name}-surface", "primitives": [prim]})
@@ -298,13 +329,13 @@ def _add_animal(b: _Builder, tracks: _Tracks, k: int, animal: Animal) -> None:
     ]
     ibm = np.tile(np.eye(4, dtype=np.float32), (n, 1, 1))
     ibm[:, 3, :3] = -rest  # column-major: the translation is the last column
-    skin = b.add(
+    gskin = b.add(
         "skins",
         {"name": animal.name, "joints": joints, "inverseBindMatrices": b.accessor(ibm, "MAT4")},
     )
     b.node({"name": f"{animal.name}-{k}", "children": joints})
-    b.node({"name": f"{animal.name}-{k}-surface", "mesh": mesh, "skin": skin})
-    track = np.ascontiguousarray(pos.transpose(1, 0, 2))  # (N, R, 3): node-major
+    b.node({"name": f"{animal.name}-{k}-surface", "mesh": mesh, "skin": gskin})
+    track = np.ascontiguousarray(pos.transpose(1, 0, 2))  # (J, R, 3): joint-major
     view = b.view(track.tobytes())
     for i, joint in enumerate(joints):
         out = b.accessor(track[i], "VEC3", view=view, offset=i * track[i].nbytes)

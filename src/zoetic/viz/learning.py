@@ -92,6 +92,22 @@ def plot_learning_seeds(
     return save_figure(fig, path, dpi=110)
 
 
+def shown_window(times: np.ndarray, u: np.ndarray, cycles: float = 3.0) -> float:
+    """Return the end time (s) of the stretch of ``u`` (T, A) a controller plot shows: about
+    ``cycles`` periods of its slowest strong rhythm (all of it when it is short or aperiodic)."""
+    t = np.asarray(times, float)
+    if len(t) < 8:
+        return float(t[-1])
+    x = np.asarray(u, float) - np.mean(u, axis=0)
+    spec = np.abs(np.fft.rfft(x, axis=0)).sum(axis=1)
+    freq = np.fft.rfftfreq(len(t), d=float(t[1] - t[0]))
+    spec[0] = 0.0
+    if not spec.any():
+        return float(t[-1])
+    f = float(freq[int(np.argmax(spec))])
+    return float(min(t[-1], t[0] + cycles / f)) if f > 0 else float(t[-1])
+
+
 def plot_controller(
     times: np.ndarray,
     u: np.ndarray,
@@ -100,7 +116,9 @@ def plot_controller(
     path: Path,
     title: str = "",
 ) -> Path:
-    """Plot u(t) per actuator: left side dotted, right side solid, paired by segment (Fig. 9)."""
+    """Plot u(t) per actuator as Fig. 9 does: one panel per segment, its left actuator (blue)
+    drawn over its right one (red) on two lanes so neither hides the other; the first few
+    periods of the rhythm only, so the strokes can be told apart."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -110,15 +128,27 @@ def plot_controller(
     for k, name in enumerate(names):
         key = name.rsplit("_", 1)[0] if sides[k] in ("left", "right") else name
         groups.setdefault(key, []).append(k)
+    t = np.asarray(times, float)
+    end = shown_window(t, u)
+    keep = t <= end + 1e-9
     rows = len(groups)
-    fig, axes = plt.subplots(rows, 1, figsize=(6.4, 0.9 * rows + 1.0), sharex=True, squeeze=False)
+    fig, axes = plt.subplots(rows, 1, figsize=(7.0, 0.75 * rows + 1.2), sharex=True, squeeze=False)
+    lane = {"left": 1.15, "right": 0.0}
+    color = {"left": "tab:blue", "right": "tab:red"}
     for ax, (key, ids) in zip(axes[:, 0], groups.items(), strict=True):
         for k in ids:
-            style = ":" if sides[k] == "left" else "-"
-            ax.plot(times, u[:, k], style, color="k", lw=1.2, label=names[k])
-        ax.set_ylim(-0.05, 1.05)
+            s = sides[k] if sides[k] in lane else "right"
+            off = lane[s] if len(ids) > 1 else 0.0
+            c = color[s] if len(ids) > 1 else "k"
+            ax.plot(t[keep], off + u[keep, k], color=c, lw=1.3, label=names[k])
+            ax.axhline(off, color="0.85", lw=0.6, zorder=0)
+        top = 2.2 if len(ids) > 1 else 1.05
+        ax.set_ylim(-0.08, top)
+        ax.set_yticks([])
         ax.set_ylabel(key, rotation=0, ha="right", va="center", fontsize=8)
-        ax.set_yticks([0, 1])
+        for side in ("top", "right"):
+            ax.spines[side].set_visible(False)
     axes[-1, 0].set_xlabel("t (s)")
-    axes[0, 0].set_title(title + "  (left dotted, right solid)")
+    shown = "" if end >= t[-1] - 1e-9 else f"; first {end:.2f} s of {t[-1]:.1f} s"
+    axes[0, 0].set_title(f"{title}  (left actuator blue, above; right red{shown})", fontsize=9)
     return save_figure(fig, path, dpi=110)

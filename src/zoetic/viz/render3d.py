@@ -10,20 +10,18 @@ from __future__ import annotations
 import os
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from functools import lru_cache
 from numbers import Real
 from pathlib import Path
 
 import numpy as np
-from PIL import Image, ImageColor, ImageDraw, ImageFont
+from PIL import Image, ImageColor, ImageDraw
 
 from zoetic.bodies import Body
 from zoetic.errors import ZoeticError
 from zoetic.physics.media import Medium, get_medium
+from zoetic.render.skin import Look, Skin, body_skin, make_skin, name_color, skin_vertices
+from zoetic.viz.paint import draw_buoy, label_font, place_tags, project_points
 
-ANIMAL_COLORS = {"shark": (122, 136, 152), "dolphin": (150, 160, 178), "snake": (104, 150, 60)}
-ANIMAL_COLORS["ray"] = (184, 146, 96)
-_PALETTE = [(200, 120, 80), (110, 160, 200), (150, 110, 180), (90, 160, 120), (200, 170, 80)]
 _LIGHT = np.array([-0.2, 1.0, -0.7]) / np.linalg.norm([-0.2, 1.0, -0.7])
 _SKY_TOP, _SKY_LOW = np.array([96.0, 150, 214]), np.array([214.0, 228, 240])
 _GROUND = (np.array([186.0, 176, 150]), np.array([150.0, 140, 116]))
@@ -61,13 +59,6 @@ class Camera:
             el = 12.0 if abs(medium.water_level) < 1e8 else 25.0
         az, el = np.radians(self.azimuth), np.radians(np.clip(el, -89.0, 89.0))
         return np.array([-np.cos(el) * np.cos(az), np.sin(el), -np.cos(el) * np.sin(az)])
-
-
-def name_color(name: str) -> tuple[int, int, int]:
-    """Return the display colour (RGB 0-255) of an animal by its species' name."""
-    if name in ANIMAL_COLORS:
-        return ANIMAL_COLORS[name]
-    return _PALETTE[sum(map(ord, name)) % len(_PALETTE)]
 
 
 def body_color(body: Body) -> tuple[int, int, int]:
@@ -153,7 +144,13 @@ def fresnel(sin_elevation: np.ndarray) -> np.ndarray:
 
 
 def background(
-    medium: Medium, eye: np.ndarray, rot: np.ndarray, xs, ys, seabed: float | None = None
+    medium: Medium,
+    eye: np.ndarray,
+    rot: np.ndarray,
+    xs,
+    ys,
+    seabed: float | None = None,
+    fog: float = _WATER_FOG,
 ) -> np.ndarray:
     """Return the (H, W, 3) uint8 environment seen by a camera at ``eye`` with rotation ``rot``.
 
@@ -173,8 +170,8 @@ def background(
     if medium.floor and eye[1] > 0:
         out[up] = _u8(sky[up])[:, None]
         t = -eye[1] / dd
-        fog = 1 - np.exp(-t * nd / _AIR_FOG)
-        ca, cb = (_lerp(c, _SKY_LOW, fog) for c in _GROUND)
+        haze = 1 - np.exp(-t * nd / _AIR_FOG)
+        ca, cb = (_lerp(c, _SKY_LOW, haze) for c in _GROUND)
         _fill_checker(out[down], eye, rot, xs, yd, t, ca, cb)
     elif abs(level) > 1e8:  # open water, or empty space
         hi, lo = (_WATER_UP, _WATER_DOWN) if level > 1e8 else (_SPACE_UP, _SPACE_DOWN)
@@ -185,18 +182,18 @@ def background(
         out[up] = _u8(bg[up])[:, None]
         if eye[1] > seabed:
             t = (seabed - eye[1]) / dd
-            fog = 1 - np.exp(-t * nd / _WATER_FOG)
+            haze = 1 - np.exp(-t * nd / fog)
             pair = _SEABED if level > 1e8 else (lo + 30, lo + 14)
-            ca, cb = (_lerp(c, bg[down], fog) for c in pair)
+            ca, cb = (_lerp(c, bg[down], haze) for c in pair)
             _fill_checker(out[down], eye, rot, xs, yd, t, ca, cb)
     else:  # the sea seen from the air (the camera never goes under a finite surface)
         out[up] = _u8(sky[up])[:, None]
         t_s = (level - eye[1]) / dd
         t_f = ((level - _SEABED_DEPTH if seabed is None else seabed) - eye[1]) / dd
-        fog = 1 - np.exp(-(t_f - t_s) * nd / _WATER_FOG)
+        haze = 1 - np.exp(-(t_f - t_s) * nd / fog)
         grazing = 1 - np.abs(sin_el[down])
         surf = _lerp(_SURFACE, _SKY_LOW, 0.8 * grazing**8)
-        ca, cb = (_lerp(_lerp(c, _WATER_DOWN, fog), surf, fresnel(sin_el[down])) for c in _SEABED)
+        ca, cb = (_lerp(_lerp(c, _WATER_DOWN, haze), surf, fresnel(sin_el[down])) for c in _SEABED)
         _fill_checker(out[down], eye, rot, xs, yd, t_f, ca, cb)
         ripple = _parity(eye, rot, xs, yd, t_s, _SURFACE_TILE)
         out[down] += ripple[..., None].astype(np.uint8) * np.uint8(7)
@@ -206,26 +203,18 @@ def background(
 # ---------------------------------------------------------------- animals and buoys
 
 
-def project_points(pts: np.ndarray, eye, rot, focal: float, size) -> tuple[np.ndarray, np.ndarray]:
-    """Return screen coordinates (..., 2) and camera depths (...) of world points."""
-    cam = (pts - eye) @ rot.T
-    z = cam[..., 2]
-    zs = np.where(z > 1e-3, z, 1e-3)
-    lim = 4.0 * max(size)
-    sx = np.clip(size[0] / 2 + focal * cam[..., 0] / zs, -lim, lim)
-    sy = np.clip(size[1] / 2 - focal * cam[..., 1] / zs, -lim, lim)
-    return np.stack([sx, sy], axis=-1), z
-
-
-def water_tint(col: np.ndarray, pts: np.ndarray, eye: np.ndarray, medium: Medium) -> np.ndarray:
-    """Return colours (K, 3) of points (K, 3) seen through water: fog and the surface."""
+def water_tint(
+    col: np.ndarray, pts: np.ndarray, eye: np.ndarray, medium: Medium, fog: float = _WATER_FOG
+) -> np.ndarray:
+    """Return colours (K, 3) of points (K, 3) seen through water: fog (e-folding ``fog`` m
+    in open water, half that under a surface) and the surface."""
     level = medium.water_level
     if level < -1e8:
         return col
     d = pts - eye
     dist = np.linalg.norm(d, axis=1) + 1e-9
     if level > 1e8:
-        return _lerp(col, 0.5 * (_WATER_UP + _WATER_DOWN), 1 - np.exp(-dist / (2 * _WATER_FOG)))
+        return _lerp(col, 0.5 * (_WATER_UP + _WATER_DOWN), 1 - np.exp(-dist / (2 * fog)))
     below = pts[:, 1] < level  # the eye is always above a finite surface
     wet = np.clip((level - pts[:, 1]) / np.maximum(eye[1] - pts[:, 1], 1e-9), 0, 1)
     col = _lerp(col, _WATER_DOWN, 1 - np.exp(-dist * wet / _WATER_FOG))
@@ -255,25 +244,47 @@ class SceneMesh:
     closed: np.ndarray  # (F,) bool: the animal's surface is closed (back faces can be culled)
 
 
-def _closed(faces: np.ndarray) -> bool:
-    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), 1)
-    _, counts = np.unique(edges, axis=0, return_counts=True)
-    return bool(np.all(counts == 2))
+def plain_look(name: str, color) -> Look:
+    """Return a look of one colour (RGB 0-255 or a colour name), the belly paler."""
+    c = ImageColor.getrgb(color) if isinstance(color, str) else color
+    c = np.asarray(c, float)[:3] / 255.0
+    return Look(name, tuple(c), tuple(0.6 * c + 0.4))
 
 
-def _mesh(bodies: Sequence[Body], colors) -> SceneMesh:
-    faces, color, closed, base = [], [], [], 0
+def animal_skins(bodies: Sequence[Body], colors=None, looks=None, levels: int = 2) -> list[Skin]:
+    """Return each animal's display skin (``levels`` subdivisions): in the look named
+    ``looks[i]``, else one of colour ``colors[i]``, else the body's own look."""
+    out = []
     for i, body in enumerate(bodies):
-        c = colors[i] if colors is not None else body_color(body)
-        c = ImageColor.getrgb(c) if isinstance(c, str) else c
-        faces.append(np.asarray(body.faces) + base)
-        color.append(np.tile(np.asarray(c, float)[:3], (len(body.faces), 1)))
-        closed.append(np.full(len(body.faces), _closed(np.asarray(body.faces))))
-        base += body.n_nodes
-    return SceneMesh(np.concatenate(faces), np.concatenate(color), np.concatenate(closed))
+        if looks is not None and looks[i]:
+            out.append(body_skin(body, looks[i], levels))
+        elif colors is not None:
+            look = plain_look(body.name, colors[i])
+            out.append(make_skin(body.faces, body.rest_pos, look, None, body.forward, levels))
+        else:
+            out.append(body_skin(body, None, levels))
+    return out
 
 
-def face_items(pos, mesh: SceneMesh, eye, rot, focal, size, medium, side: int = 0) -> list[tuple]:
+def skins_mesh(skins: Sequence[Skin]) -> SceneMesh:
+    """Return the skins' triangles in one index space (their vertices concatenated), coloured
+    RGB 0-255 per triangle."""
+    base = np.cumsum([0] + [len(s.index) for s in skins[:-1]])
+    return SceneMesh(
+        np.concatenate([s.triangles + b for s, b in zip(skins, base, strict=True)]),
+        np.concatenate([255.0 * s.face_colors for s in skins]),
+        np.concatenate([s.closed for s in skins]),
+    )
+
+
+def skins_vertices(skins: Sequence[Skin], positions: Sequence[np.ndarray]) -> np.ndarray:
+    """Return the skins' vertices (V, 3) concatenated, for each animal's nodes (N_i, 3)."""
+    return np.concatenate([skin_vertices(s, p) for s, p in zip(skins, positions, strict=True)])
+
+
+def face_items(
+    pos, mesh: SceneMesh, eye, rot, focal, size, medium, side: int = 0, fog: float = _WATER_FOG
+) -> list[tuple]:
     """Return (depth, kind 0, flat screen coords, RGB) items for the visible triangles; with
     ``side`` 1 only their parts above a finite water surface, -1 only those below."""
     scr, z = project_points(pos, eye, rot, focal, size)
@@ -284,6 +295,9 @@ def face_items(pos, mesh: SceneMesh, eye, rot, focal, size, medium, side: int = 
     front = np.einsum("fk,fk->f", n, cen - eye) < 0
     keep = np.isfinite(tri).all(axis=(1, 2)) & (z[mesh.faces] > 0.05).all(axis=1)
     keep &= front | ~mesh.closed
+    fs = scr[mesh.faces]  # (F, 3, 2): triangles wholly off the picture are not drawn
+    keep &= (fs[..., 0].max(1) >= 0) & (fs[..., 0].min(1) <= size[0])
+    keep &= (fs[..., 1].max(1) >= 0) & (fs[..., 1].min(1) <= size[1])
     n = np.where(front[:, None], n, -n)
     shade = 0.3 + 0.12 * n[:, 1] + 0.7 * np.maximum(n @ _LIGHT, 0.0)
     col = mesh.color * shade[:, None]
@@ -293,7 +307,7 @@ def face_items(pos, mesh: SceneMesh, eye, rot, focal, size, medium, side: int = 
     if abs(level) < 1e8:
         ty = tri[:, :, 1] - level
         straddle = keep & (ty.min(axis=1) < 0) & (ty.max(axis=1) > 0)
-    tinted = water_tint(col, cen, eye, medium)
+    tinted = water_tint(col, cen, eye, medium, fog)
     if side and abs(level) < 1e8:
         keep = keep & (straddle | ((cen[:, 1] >= level) == (side > 0)))
     idx = np.flatnonzero(keep & ~straddle)
@@ -304,7 +318,7 @@ def face_items(pos, mesh: SceneMesh, eye, rot, focal, size, medium, side: int = 
         for k, part in enumerate(split_at_level(tri[f], level)):
             if len(part) < 3 or (side and (k == 0) != (side > 0)):
                 continue
-            pc = water_tint(col[f][None], part.mean(axis=0)[None], eye, medium)[0]
+            pc = water_tint(col[f][None], part.mean(axis=0)[None], eye, medium, fog)[0]
             flat = project_points(part, eye, rot, focal, size)[0].ravel().tolist()
             items.append((depth[f], 0, flat, tuple(np.clip(pc, 0, 255).astype(int).tolist())))
     return items
@@ -319,21 +333,6 @@ def _marker_items(markers, colors, radius, eye, rot, focal, size, medium) -> lis
         for i in range(len(markers))
         if z[i] > 0.05 + radius
     ]
-
-
-def draw_buoy(draw: ImageDraw.ImageDraw, x: float, y: float, r: float, col: np.ndarray) -> None:
-    """Draw a shaded ball at pixel (x, y), radius r px (at least 1.5), base colour col RGB."""
-    r = max(r, 1.5)
-    for k, (scale, off) in enumerate(((1.0, 0.0), (0.75, 0.15), (0.4, 0.35), (0.15, 0.45))):
-        c = tuple(np.clip(col * (0.55 + 0.3 * k) + 40 * (k == 3), 0, 255).astype(int).tolist())
-        cx, cy, rr = x - off * r, y - off * r, scale * r
-        draw.ellipse((cx - rr, cy - rr, cx + rr, cy + rr), fill=c)
-
-
-@lru_cache(maxsize=8)
-def label_font(px: int) -> ImageFont.ImageFont | ImageFont.FreeTypeFont:
-    """Return Pillow's default font at ``px`` pixels (cached, 8 sizes)."""
-    return ImageFont.load_default(size=px)
 
 
 # ---------------------------------------------------------------- public API
@@ -389,13 +388,17 @@ def render_frames(
     labels: Sequence[str] | None = None,
     colors: Sequence | None = None,
     marker_radius: float | None = None,
+    looks: Sequence[str] | None = None,
+    skins: Sequence[Skin] | None = None,
 ) -> Iterator[np.ndarray]:
     """Yield one (H, W, 3) uint8 picture per recorded time of the animals in their medium.
 
     positions: per animal (R, N, 3) m, or one (B, R, N, 3) array of B animals of one body;
     markers: (M, 3) fixed world points drawn as buoys, or (R, M, 3) moving ones;
     labels: one text per animal;
-    colors: one RGB tuple or colour name per animal (default by animal name).
+    colors: one RGB tuple or colour name per animal (default: the animal's look);
+    looks: one look name per animal (``render/looks``), before ``colors``;
+    skins: one display skin per animal, before both.
     """
     times = np.asarray(times, float).reshape(-1)
     bodies, positions = _as_lists(bodies, positions, len(times))
@@ -410,7 +413,8 @@ def render_frames(
     eyes, targets = camera_path(com, times, camera, medium, extent)
     base = medium.water_level if abs(medium.water_level) < 1e8 else 0.0
     seabed = min(base - _SEABED_DEPTH, targets[:, 1].min() - 2 * extent - 1.0)  # under them all
-    mesh = _mesh(bodies, colors)
+    skins = list(skins) if skins is not None else animal_skins(bodies, colors, looks)
+    mesh = skins_mesh(skins)
     mk = None if markers is None else np.asarray(markers, float)
     if mk is not None and not (mk.ndim == 3 and len(mk) == len(times)):  # (R, M, 3): moving
         mk = np.broadcast_to(mk.reshape(-1, 3), (len(times), *mk.reshape(-1, 3).shape))
@@ -421,7 +425,7 @@ def render_frames(
         eye, rot = eyes[r], look_at(eyes[r], targets[r])
         img = Image.fromarray(background(medium, eye, rot, xs, ys, seabed))
         draw = ImageDraw.Draw(img)
-        pos = np.concatenate([p[r] for p in positions])
+        pos = skins_vertices(skins, [p[r] for p in positions])
         items = face_items(pos, mesh, eye, rot, focal, size, medium)
         if mk is not None and mk.shape[1]:
             items += _marker_items(mk[r], mk_col, radius, eye, rot, focal, size, medium)
@@ -431,12 +435,11 @@ def render_frames(
                 draw.polygon(geom, fill=col, outline=col)
             else:
                 draw_buoy(draw, *geom, col)
-        for i, label in enumerate(labels or ()):
-            scr, z = project_points(positions[i][r], eye, rot, focal, size)
-            good = (z > 0.05) & np.isfinite(scr).all(axis=1)
-            if good.any():
-                x, y = scr[good, 0].mean(), scr[good, 1].min() - 4
-                draw.text((x, y), str(label), font=small, anchor="md", **TEXT_STYLE)
+        t_box = draw.textbbox((8, 6), f"t = {times[r]:.2f} s", font=font, stroke_width=2)
+        if labels:
+            view = (eye, rot, focal, size)
+            tags = [(str(lb), (255, 255, 255)) for lb in labels]
+            place_tags(draw, tags, [p[r] for p in positions], view, small, [t_box])
         draw.text((8, 6), f"t = {times[r]:.2f} s", font=font, **TEXT_STYLE)
         yield np.array(img)
 

@@ -189,6 +189,9 @@ def plot_ranking(result, path, top: int = 10):
             label=f"useful ({use.sum()}/{len(m)})",
         )
     ax.set_xlabel("rank of the random network")
+    from matplotlib.ticker import MaxNLocator
+
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # ranks are whole numbers
     unit = {"distance": "|x| (m), 0 if fallen", "follow": "∫ v·F dt (m)", "hop": "∫ ẋ + k y² dt"}
     ax.set_ylabel(f"metric: {unit.get(c.metric, c.metric)}")
     ax.set_title(

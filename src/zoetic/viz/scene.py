@@ -17,6 +17,7 @@ import numpy as np
 from zoetic.errors import RunDirError
 from zoetic.physics import Medium, get_medium
 from zoetic.record import Creature, Event, Link, Record, Thing, read_record
+from zoetic.render.skin import Skin, record_skin
 from zoetic.viz.render3d import name_color
 
 __all__ = ["Animal", "Creature", "Event", "Link", "Scene", "Thing", "load_scene", "scene_of"]
@@ -33,6 +34,7 @@ class Animal:
     com: np.ndarray  # (R, 3) float32 m, centre of mass
     actuators: tuple[str, ...] = ()
     activations: np.ndarray | None = None  # (R, A) in [0, 1], the controller at each frame
+    skin: Skin | None = None  # the display surface over the nodes (render.skin)
 
 
 @dataclass(frozen=True)
@@ -146,6 +148,7 @@ def scene_of(rec: Record, fps: float = 30.0) -> Scene:
                 com.astype(np.float32),
                 a.actuators,
                 act,
+                record_skin(a.name, a.species, a.faces, a.positions[0]),
             )
         )
     creatures = tuple(

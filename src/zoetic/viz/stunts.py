@@ -8,6 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
+from zoetic.render.skin import body_skin
+from zoetic.render.skin import subdivision as subdivision  # the display surface's map
+
 
 def plot_score(
     times: np.ndarray,
@@ -79,62 +82,6 @@ def deep_enough(pool: Pool, deepest: float, room: float = 1.0) -> Pool:
     """Return the pool with its floor at least ``room`` m below the deepest point drawn
     (``deepest``: m below the surface), so a dive from a deep start stays above the floor."""
     return replace(pool, depth=max(pool.depth, deepest + room))
-
-
-def subdivision(faces: np.ndarray, n_nodes: int, levels: int = 2) -> tuple[np.ndarray, np.ndarray]:
-    """Return (S, faces') of ``levels`` Loop subdivisions of a triangle mesh: the display
-    surface's vertices are S @ nodes (a fixed linear map, so each frame costs one product)
-    and its triangles faces'. Vertices on an open edge keep their place."""
-    s = np.eye(n_nodes)
-    f = np.asarray(faces, int)
-    for _ in range(levels):
-        n = s.shape[0]
-        e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
-        opp = np.concatenate([f[:, 2], f[:, 0], f[:, 1]])
-        edges, inv = np.unique(e, axis=0, return_inverse=True)
-        inv = inv.reshape(-1)
-        m = np.zeros((n + len(edges), n))
-        nbr = [set() for _ in range(n)]
-        boundary = np.zeros(n, bool)
-        for k, (a, b) in enumerate(edges):
-            nbr[a].add(b)
-            nbr[b].add(a)
-            others = opp[inv == k]
-            if len(others) == 2:
-                m[n + k, [a, b]] = 3 / 8
-                m[n + k, others] += 1 / 8
-            else:
-                m[n + k, [a, b]] = 1 / 2
-                boundary[[a, b]] = True
-        for v in range(n):
-            k = len(nbr[v])
-            if boundary[v] or k == 0:
-                m[v, v] = 1.0
-                continue
-            beta = 3 / (8 * k) if k > 3 else 3 / 16
-            m[v, v] = 1 - k * beta
-            m[v, list(nbr[v])] = beta
-        mid = n + inv.reshape(3, -1).T  # (F, 3): edge points of (01, 12, 20)
-        a, b, c = f.T
-        ab, bc, ca = mid.T
-        f = np.concatenate(
-            [np.stack(x, 1) for x in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))]
-        )
-        s = m @ s
-    return s, f
-
-
-def countershading(body, sub: np.ndarray, faces: np.ndarray, color) -> np.ndarray:
-    """Return (F, 3) colours of the display surface's triangles: a dolphin's countershading,
-    the animal's colour darkened on its back, blending to a pale belly (by the height of each
-    triangle in the rest pose relative to the centre of mass)."""
-    rest = sub @ np.asarray(body.rest_pos, float)
-    com_y = float(body.mass @ body.rest_pos[:, 1] / body.total_mass)
-    y = rest[faces].mean(axis=1)[:, 1] - com_y
-    span = max(float(np.abs(y).max()), 1e-9)
-    t = np.clip(0.5 - 1.2 * y / span, 0.0, 1.0)[:, None]  # 0 on the back, 1 on the belly
-    base = np.asarray(color, float)[:3]
-    return (0.6 * base) * (1 - t) + np.array([232.0, 234, 238]) * t
 
 
 def stunt_camera(
@@ -237,14 +184,9 @@ def stunt_frames(
     from PIL import Image
 
     from zoetic.physics.media import get_medium
-    from zoetic.viz.render3d import (
-        SceneMesh,
-        background,
-        body_color,
-        face_items,
-        label_font,
-        look_at,
-    )
+    from zoetic.render.skin import skin_vertices
+    from zoetic.viz.paint import label_font
+    from zoetic.viz.render3d import background, face_items, look_at, skins_mesh
     from zoetic.viz.spray import spray_particles, surface_crossings
 
     medium = get_medium(medium)
@@ -257,14 +199,13 @@ def stunt_frames(
     az, el = np.radians(azimuth), np.radians(elevation)
     direction = np.array([-np.cos(el) * np.cos(az), np.sin(el), -np.cos(el) * np.sin(az)])
     eyes, targets = stunt_camera(frame_pts, times, size, fov, direction, level=level)
-    fin = np.isfinite(frame_pts).all(axis=2)
-    lo = np.min(np.where(fin[..., None], frame_pts, np.inf), axis=(0, 1))
-    hi = np.max(np.where(fin[..., None], frame_pts, -np.inf), axis=(0, 1))
+    every = _framed_points(pos, bl, radii, fixed, near=np.inf)  # the pool holds them all
+    fin = np.isfinite(every).all(axis=2)
+    lo = np.min(np.where(fin[..., None], every, np.inf), axis=(0, 1))
+    hi = np.max(np.where(fin[..., None], every, -np.inf), axis=(0, 1))
     quads, qcols, (px0, px1, pz0, pz1) = _pool_quads(lo, hi, pool, level, eyes[0])
-    sub, faces = subdivision(body.faces, body.n_nodes)
-    mesh = SceneMesh(
-        faces, countershading(body, sub, faces, body_color(body)), np.ones(len(faces), bool)
-    )
+    skin = body_skin(body)
+    mesh = skins_mesh([skin])
     spray = spray_particles(surface_crossings(body, pos, times, level), level, medium.gravity)
     w, h = size
     focal = 0.5 * h / np.tan(np.radians(fov) / 2)
@@ -275,7 +216,7 @@ def stunt_frames(
     for r in range(len(times)):
         eye, rot = eyes[r], look_at(eyes[r], targets[r])
         img = Image.fromarray(background(medium, eye, rot, xs, ys, level - pool.depth))
-        verts = sub @ np.nan_to_num(pos[r])
+        verts = skin_vertices(skin, np.nan_to_num(pos[r]))
         view = (eye, rot, focal, size, medium, level)
         below, above = [], []
         _wall_items(quads, qcols, view, below, above)
@@ -301,12 +242,20 @@ def _stunt_objects(objects, balls: np.ndarray | None, records: int) -> tuple:
     return bl, radii, fixed
 
 
-def _framed_points(pos: np.ndarray, bl: np.ndarray, radii: np.ndarray, fixed) -> np.ndarray:
-    """Return (R, M, 3) points the camera keeps in view: the body's nodes, each ball's extent
-    along the axes and the fixed objects' ends."""
+def _framed_points(
+    pos: np.ndarray, bl: np.ndarray, radii: np.ndarray, fixed, near: float = 3.0
+) -> np.ndarray:
+    """Return (R, M, 3) points the camera keeps in view: the body's nodes, and each ball's
+    extent along the axes and the fixed objects' ends while within ``near`` body lengths of
+    the body (NaN when farther, so the body is never framed out for a distant object)."""
     fp = _fixed_points(fixed)
     ball_box = [bl + radii[:, None] * np.eye(3)[i] * sign for i in range(3) for sign in (-1, 1)]
-    return np.concatenate([pos, *ball_box, np.broadcast_to(fp, (len(pos), *fp.shape))], axis=1)
+    objs = np.concatenate([*ball_box, np.broadcast_to(fp, (len(pos), *fp.shape))], axis=1)
+    centre = np.nanmean(pos, axis=1, keepdims=True)
+    first = pos[int(np.argmax(np.isfinite(pos).all(axis=(1, 2))))]
+    length = float(np.ptp(np.nan_to_num(first), axis=0).max())
+    far = np.linalg.norm(objs - centre, axis=2) > near * max(length, 0.1)
+    return np.concatenate([pos, np.where(far[..., None], np.nan, objs)], axis=1)
 
 
 def _wall_items(quads, colors, view: tuple, below: list, above: list) -> None:
@@ -406,17 +355,18 @@ def _compose(
     and the label."""
     from PIL import Image, ImageDraw
 
-    from zoetic.viz.render3d import TEXT_STYLE, draw_buoy, project_points
+    from zoetic.viz.paint import paint_items
+    from zoetic.viz.render3d import TEXT_STYLE, project_points
 
     eye, rot, focal, size, _, _ = view
-    _paint(ImageDraw.Draw(img), below, draw_buoy)
+    paint_items(ImageDraw.Draw(img), below)
     layer = Image.new("RGBA", img.size, (0, 0, 0, 0))
     scr, z = project_points(sheet, eye, rot, focal, size)
     if (z > 0.05).all():
         ImageDraw.Draw(layer).polygon(scr.ravel().tolist(), fill=_WATER_SHEET)
     img = Image.alpha_composite(img.convert("RGBA"), layer).convert("RGB")
     draw = ImageDraw.Draw(img)
-    _paint(draw, above, draw_buoy)
+    paint_items(draw, above)
     draw.text((8, 6), label, font=font, **TEXT_STYLE)
     return np.array(img)
 
@@ -431,21 +381,6 @@ def _segment_split(ends: np.ndarray, level: float) -> list[np.ndarray]:
     return [np.stack([a, p]), np.stack([p, b])]
 
 
-def _paint(draw, items: list[tuple], draw_ball) -> None:
-    """Draw painter items far to near: 0 polygons, 1 balls, 2 thick segments, 3 drops."""
-    for _, kind, geom, col in sorted(items, key=lambda it: -it[0]):
-        if kind == 0:
-            draw.polygon(geom, fill=col, outline=col)
-        elif kind == 1:
-            draw_ball(draw, *geom, np.asarray(col, float))
-        elif kind == 2:
-            draw.line(geom[0], fill=col, width=int(round(geom[1])))
-        else:
-            x, y, rr = geom
-            c = tuple(int(v) for v in col)
-            draw.ellipse((x - rr, y - rr, x + rr, y + rr), fill=c)
-
-
 def render_stunt_video(
     body,
     positions: np.ndarray,
@@ -455,12 +390,17 @@ def render_stunt_video(
     objects=(),
     balls: np.ndarray | None = None,
     fps: float = 30,
+    macro: str | Path | None = None,
     **kw,
 ) -> Path:
-    """Write the stunt's video (``stunt_frames`` at ``fps``) to an MP4; returns the path."""
+    """Write the stunt's video (``stunt_frames`` at ``fps``) to an MP4; returns the path.
+    With the stunt's ``macro`` (macro.json), a record that ends with the body out of the
+    water is replayed further, so the clip runs on until after re-entry."""
     from zoetic.viz.render3d import resample
     from zoetic.viz.video import write_mp4
 
+    if macro is not None:
+        times, positions, balls = through_reentry(body, macro, times, positions, balls, medium)
     times = np.asarray(times, float)
     arrays = [np.asarray(positions, float)]
     if balls is not None and np.asarray(balls).shape[1]:
@@ -468,6 +408,38 @@ def render_stunt_video(
     t_new, res = resample(arrays, times, fps)
     bl = res[1] if len(res) > 1 else None
     return write_mp4(stunt_frames(body, res[0], t_new, medium, objects, bl, **kw), path, fps)
+
+
+def settled_after(positions: np.ndarray, times: np.ndarray, level: float) -> float | None:
+    """Return the time (s) the body was last wholly back under the surface after its last
+    moment with a node in the air, or None if it is still (partly) out at the end."""
+    out = np.nanmax(np.asarray(positions, float)[..., 1], axis=1) > level
+    if not out.any():
+        return float(times[0])
+    last = int(np.flatnonzero(out)[-1])
+    return None if last == len(times) - 1 else float(times[last + 1])
+
+
+def through_reentry(
+    body, macro, times, positions, balls, medium, after: float = 0.8, most: float = 4.0
+) -> tuple:
+    """Return (times, positions, balls) of the stunt, replayed from ``macro`` for up to
+    ``most`` s more when the record ends less than ``after`` s past the body's re-entry, and
+    cut ``after`` s past it (the record as it is when it already shows the re-entry)."""
+    from zoetic.behavior.stunts import replay
+    from zoetic.physics.media import get_medium
+
+    level = get_medium(medium).water_level
+    level = level if abs(level) < 1e8 else 0.0
+    times = np.asarray(times, float)
+    back = settled_after(positions, times, level)
+    if back is not None and times[-1] >= back + after:
+        return times, positions, balls
+    traj, bl = replay(body, macro, float(times[-1] - times[0]) + most)
+    t, pos = np.asarray(traj.times, float), np.asarray(traj.positions[0], float)
+    back = settled_after(pos, t, level)
+    keep = t <= (t[-1] if back is None else back + after)
+    return t[keep], pos[keep], None if bl is None or not np.shape(bl)[1] else bl[keep]
 
 
 def frame_strip(frames: Sequence[np.ndarray], path: str | Path, labels: Sequence[str] = ()) -> Path:
@@ -478,7 +450,8 @@ def frame_strip(frames: Sequence[np.ndarray], path: str | Path, labels: Sequence
     from PIL import Image, ImageDraw
 
     from zoetic.io import atomic_write_bytes
-    from zoetic.viz.render3d import TEXT_STYLE, label_font
+    from zoetic.viz.paint import label_font
+    from zoetic.viz.render3d import TEXT_STYLE
 
     h, w = frames[0].shape[:2]
     strip = Image.new("RGB", (w * len(frames), h))
