@@ -19,6 +19,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+from zoetic.reproduce import figures_dir
 
 from zoetic.bodies import load_animal
 from zoetic.learning.abstraction import abstract, compare, spectrum
@@ -27,7 +28,7 @@ from zoetic.physics import get_medium, rest_state, simulate
 from zoetic.tasks import load_task
 from zoetic.viz.media import abstract_files
 
-FIGS = Path(__file__).resolve().parents[1] / "docs" / "figures"
+FIGS = figures_dir()
 CASES = (  # animal, task, nodes
     ("shark", "swim-straight", 40),
     ("shark", "sharp-turn-left", 30),

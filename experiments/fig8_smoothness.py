@@ -13,14 +13,14 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
 
 import numpy as np
+from zoetic.reproduce import figures_dir
 
 from zoetic.learning.run import LearnConfig, build
 from zoetic.tasks import parse_task
 
-OUT = Path(__file__).resolve().parents[1] / "docs" / "figures"
+OUT = figures_dir()
 
 
 def learn(nu1: float, nu2: float, budget: int, optimizer: str, seed: int):

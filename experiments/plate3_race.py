@@ -13,14 +13,14 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
 
 import numpy as np
+from zoetic.reproduce import figures_dir
 
 from zoetic.learning.run import LearnConfig, build
 from zoetic.physics import State, rest_state
 
-OUT = Path(__file__).resolve().parents[1] / "docs" / "figures"
+OUT = figures_dir()
 LANE = 0.7  # metres between lanes
 
 

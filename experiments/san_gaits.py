@@ -29,6 +29,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
+from zoetic.reproduce import figures_dir
 
 from zoetic.san import load_creature
 from zoetic.san.evolve import changes, evolve, write_evolve
@@ -39,7 +40,7 @@ from zoetic.san.tune import tune
 from zoetic.viz.san import draw_modes
 
 ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "docs" / "figures"
+OUT = figures_dir()
 RUNS = ROOT / "runs" / "san_gaits"
 
 
