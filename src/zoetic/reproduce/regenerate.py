@@ -31,14 +31,12 @@ from zoetic.reproduce.provenance import (
 from zoetic.reproduce.registry import Claim, Experiment, Registry
 
 FIGURES = REPO / "docs" / "figures"
-RUNS = FIGURES / "runs"
-QUICK_FIGURES = FIGURES / "quick"
 MAX_NUMBERS = 200_000  # characters of an output JSON kept in the record
 
 
-def record_path(exp: str, quick: bool) -> Path:
-    """Where the run record of ``exp`` in that mode lives."""
-    return RUNS / f"{exp}{'.quick' if quick else ''}.json"
+def record_path(exp: str, quick: bool, figures: Path = FIGURES) -> Path:
+    """Where the run record of ``exp`` in that mode lives (under ``figures``/runs)."""
+    return figures / "runs" / f"{exp}{'.quick' if quick else ''}.json"
 
 
 def commit() -> str:
@@ -81,9 +79,12 @@ def _numbers(exp: Experiment, out_dir: Path, stdout: str) -> dict[str, Any]:
     return numbers
 
 
-def run_experiment(exp: Experiment, quick: bool, timeout: float | None = None) -> dict:
-    """Run ``exp`` (quick or full), write its run record and return it."""
-    out_dir = QUICK_FIGURES if quick else FIGURES
+def run_experiment(
+    exp: Experiment, quick: bool, timeout: float | None = None, figures: Path = FIGURES
+) -> dict:
+    """Run ``exp`` (quick or full), write its run record and return it. Its figures go to
+    ``figures`` (docs/figures), a quick run's to ``figures``/quick."""
+    out_dir = figures / "quick" if quick else figures
     out_dir.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="zoetic-reproduce-") as tmp:
         log = str(Path(tmp) / "loaded.txt")
@@ -116,22 +117,23 @@ def run_experiment(exp: Experiment, quick: bool, timeout: float | None = None) -
         "numbers": _numbers(exp, out_dir, proc.stdout),
         "output_tail": proc.stdout[-1500:],
     }
-    write_json(record_path(exp.name, quick), rec)
+    write_json(record_path(exp.name, quick, figures), rec)
     return rec
 
 
-def load_record(exp: str, quick: bool) -> dict | None:
+def load_record(exp: str, quick: bool, figures: Path = FIGURES) -> dict | None:
     """Return the run record of ``exp`` in that mode, or None if it was never made."""
-    p = record_path(exp, quick)
+    p = record_path(exp, quick, figures)
     return json.loads(p.read_text()) if p.is_file() else None
 
 
-def latest_fresh(exp: str | None) -> tuple[dict | None, bool]:
+def latest_fresh(exp: str | None, figures: Path = FIGURES) -> tuple[dict | None, bool]:
     """Return (the best record of ``exp``, stale?): a full record is preferred to a quick
     one, a fresh one (inputs unchanged) to a stale one; no record at all is stale."""
     if exp is None:
         return None, False
-    recs = [r for r in (load_record(exp, False), load_record(exp, True)) if r is not None]
+    recs = [load_record(exp, False, figures), load_record(exp, True, figures)]
+    recs = [r for r in recs if r is not None]
     for r in recs:
         if not changed_files(r["files"]):
             return r, False
@@ -152,9 +154,9 @@ def lookup(numbers: dict, key: str) -> Any:
     return value
 
 
-def claim_row(reg: Registry, c: Claim) -> dict:
+def claim_row(reg: Registry, c: Claim, figures: Path = FIGURES) -> dict:
     """The claim as one JSON-able row: the registry's fields, stale, and the latest run."""
-    rec, stale = latest_fresh(c.experiment)
+    rec, stale = latest_fresh(c.experiment, figures)
     row = {
         "id": c.id,
         "paper": c.paper,
