@@ -14,7 +14,7 @@ from zoetic.reproduce.provenance import REPO, changed_files, sha256
 from zoetic.reproduce.regenerate import FIGURES, claim_row, run_experiment
 from zoetic.reproduce.registry import STATUSES, Experiment, load_registry
 
-RUNS = sorted((FIGURES / "runs").glob("*.json"))
+RUNS = sorted((FIGURES / "records").glob("*.json"))
 
 
 def test_registry_has_40_claims_each_with_status_and_command_or_reason():
@@ -97,7 +97,7 @@ def test_rerun_records_the_files_it_loaded_and_goes_stale_when_they_change(tmp_p
     row = claim_row(reg, claim, figures=tmp_path / "figs")
     assert row["stale"] is False and row["run"]["values"] == {"tiny.json:a/b/1": 2.5}
 
-    path = tmp_path / "figs" / "runs" / "tiny.quick.json"
+    path = tmp_path / "figs" / "records" / "tiny.quick.json"
     doc = json.loads(path.read_text())
     doc["files"]["src/zoetic/bodies/zoo/shark.toml"]["sha256"] = "0" * 64
     path.write_text(json.dumps(doc))
@@ -112,7 +112,7 @@ def test_failing_experiment_is_a_clear_error(tmp_path):
     exp = Experiment("broken", (str(script),), (), (), (), False, "")
     with pytest.raises(ZoeticError, match=r"(?s)broken: exited with 1.*kraken"):
         run_experiment(exp, quick=True, figures=tmp_path / "figs")
-    assert not (tmp_path / "figs" / "runs" / "broken.quick.json").exists()
+    assert not (tmp_path / "figs" / "records" / "broken.quick.json").exists()
 
 
 @pytest.mark.slow

@@ -1,6 +1,6 @@
 """Regenerate an experiment's figures and numbers, and the run record that says what made them.
 
-A run record (``docs/figures/runs/<experiment>[.quick].json``) holds the commit, the exact
+A run record (``docs/figures/records/<experiment>[.quick].json``) holds the commit, the exact
 command, the mode, the wall time, the content hash of every animal, creature, task, trick and
 species file the run loaded (:mod:`zoetic.reproduce.provenance`), the hash of every output,
 the numbers of its JSON outputs (or the JSON lines it printed) and the tail of its output.
@@ -35,8 +35,8 @@ MAX_NUMBERS = 200_000  # characters of an output JSON kept in the record
 
 
 def record_path(exp: str, quick: bool, figures: Path = FIGURES) -> Path:
-    """Where the run record of ``exp`` in that mode lives (under ``figures``/runs)."""
-    return figures / "runs" / f"{exp}{'.quick' if quick else ''}.json"
+    """Where the run record of ``exp`` in that mode lives (under ``figures``/records)."""
+    return figures / "records" / f"{exp}{'.quick' if quick else ''}.json"
 
 
 def commit() -> str:
