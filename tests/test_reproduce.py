@@ -61,6 +61,11 @@ def test_unknown_claim_exits_2_with_a_suggestion(capsys):
     assert "gt95-fig7a-time-convex" in capsys.readouterr().err
 
 
+def test_claim_without_experiment_says_why(capsys):
+    assert main(["reproduce", "gt95-fig8-energy"]) == 2
+    assert "muscle-work" in capsys.readouterr().err
+
+
 def test_bad_registry_names_file_and_claim(tmp_path):
     text = (REPO / "src/zoetic/reproduce/claims.toml").read_text()
     bad = tmp_path / "claims.toml"

@@ -9,6 +9,7 @@ import typer
 from zoetic.cli.apps import app
 from zoetic.cli.options import Json
 from zoetic.cli.output import console
+from zoetic.errors import ZoeticError
 
 
 @app.command("reproduce")
@@ -35,8 +36,7 @@ def reproduce(
     if claim is not None:
         c = reg.claim(claim)
         if c.experiment is None:
-            console.print(f"{c.id}: no experiment regenerates it ({c.absent})")
-            raise typer.Exit(2)
+            raise ZoeticError(f"{c.id}: no experiment regenerates it: {c.absent}")
         exp = reg.experiments[c.experiment]
         console.print(f"{c.id}: running {c.experiment} ({'quick' if quick else 'full'}) ...")
         rec = run_experiment(exp, quick=quick, timeout=timeout)
