@@ -83,7 +83,8 @@ def _table(rows: list[dict], n: dict) -> None:
                 + r["run"]["mode"]
                 + ": "
                 + "; ".join(
-                    f"{k.rsplit('/', 1)[-1]} {fmt(v)}" for k, v in r["run"]["values"].items()
+                    f"{'/'.join(k.split(':')[-1].split('/')[-2:])} {fmt(v)}"
+                    for k, v in r["run"]["values"].items()
                 )
             )
         ours = r["ours"] if len(r["ours"]) <= 80 else r["ours"][:77] + "..."
