@@ -13,7 +13,7 @@ from typing import Any
 
 from zoetic.io import atomic_write_bytes
 from zoetic.reproduce.provenance import REPO
-from zoetic.reproduce.regenerate import FIGURES, claim_row
+from zoetic.reproduce.regenerate import claim_row
 from zoetic.reproduce.registry import STATUSES, Registry
 
 DOC = REPO / "docs" / "reproduction.md"
@@ -62,10 +62,15 @@ def counts(rows: list[dict]) -> dict[str, int]:
 
 
 def _figure(name: str, row: dict) -> str | None:
+    """The figure's Markdown, captioned by whether the latest run made it or it is older."""
     run = row["run"]
-    if run is not None and run["mode"] == "quick" and (FIGURES / "quick" / name).is_file():
-        return f"figures/quick/{name}"
-    return f"figures/{name}" if (FIGURES / name).is_file() else None
+    made = run["outputs"] if run is not None else []
+    for folder in ("quick/", ""):
+        rel = f"docs/figures/{folder}{name}"
+        if (REPO / rel).is_file() and (folder == "" or rel in made):
+            caption = f"{run['mode']} run" if rel in made else "made before the registry (stale)"
+            return f"![{name}](figures/{folder}{name})\n\n*{name}: {caption}*"
+    return None
 
 
 def _claim_md(reg: Registry, row: dict) -> list[str]:
@@ -100,9 +105,9 @@ def _claim_md(reg: Registry, row: dict) -> list[str]:
     if c.text:
         out += ["", c.text]
     for name in c.figures:
-        path = _figure(name, row)
-        if path is not None:
-            out += ["", f"![{name}]({path})"]
+        md = _figure(name, row)
+        if md is not None:
+            out += ["", md]
     out.append("")
     return out
 

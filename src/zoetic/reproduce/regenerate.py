@@ -181,6 +181,7 @@ def claim_row(reg: Registry, c: Claim, figures: Path = FIGURES) -> dict:
             "commit": rec["commit"],
             "finished_utc": rec["finished_utc"],
             "changed_inputs": changed_files(rec["files"]),
+            "outputs": sorted(rec["outputs"]),
             "values": {k: lookup(rec["numbers"], k) for k in c.keys},
         }
     return row
