@@ -130,3 +130,11 @@ def test_quick_regenerate_of_a_real_claim(tmp_path):
     assert "src/zoetic/bodies/zoo/shark.toml" in rec["files"]
     assert "src/zoetic/tasks/reach-goal.toml" in rec["files"]
     assert set(rec["numbers"]["fig7.json"]) == {"time", "frequency"}
+
+
+def test_rerun_past_its_timeout_is_stopped(tmp_path):
+    script = tmp_path / "slow.py"
+    script.write_text("import time\ntime.sleep(60)\n")
+    exp = Experiment("slow", (str(script),), (), (), (), False, "")
+    with pytest.raises(ZoeticError, match="slow: did not finish within 2 s"):
+        run_experiment(exp, quick=True, timeout=2, figures=tmp_path / "figs")

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -79,6 +80,21 @@ def _numbers(exp: Experiment, out_dir: Path, stdout: str) -> dict[str, Any]:
     return numbers
 
 
+def _run(cmd: list[str], env: dict, timeout: float | None, name: str):
+    """Run ``cmd`` in its own process group; on timeout end the group (workers included)."""
+    proc = subprocess.Popen(
+        cmd, cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        start_new_session=True,
+    )  # fmt: skip
+    try:
+        out, err = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGTERM)
+        proc.communicate()
+        raise ZoeticError(f"{name}: did not finish within {timeout:.0f} s") from None
+    return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
+
+
 def run_experiment(
     exp: Experiment, quick: bool, timeout: float | None = None, figures: Path = FIGURES
 ) -> dict:
@@ -91,12 +107,7 @@ def run_experiment(
         cmd = argv(exp, quick, log)
         env = os.environ | {"ZOETIC_FIGURES": str(out_dir), "PYTHONPATH": str(REPO / "src")}
         t0 = time.time()
-        try:
-            proc = subprocess.run(
-                cmd, cwd=REPO, env=env, capture_output=True, text=True, timeout=timeout
-            )
-        except subprocess.TimeoutExpired:
-            raise ZoeticError(f"{exp.name}: did not finish within {timeout:.0f} s") from None
+        proc = _run(cmd, env, timeout, exp.name)
         wall = time.time() - t0
         if proc.returncode != 0:
             tail = (proc.stdout + proc.stderr)[-2000:]
