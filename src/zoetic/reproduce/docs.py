@@ -98,7 +98,10 @@ def _claim_md(reg: Registry, row: dict) -> list[str]:
         )
         out.append(
             f"- **Latest run:** {run['mode']}, {run['finished_utc']}, commit "
-            f"`{run['commit'][:12]}`{changed}" + (f"; {vals}" if vals else "")
+            f"`{run['commit'][:12]}`, {run['wall_s']:.0f} s wall"
+            + (f" at load {run['load_average']}" if run["load_average"] is not None else "")
+            + f"{changed}"
+            + (f"; {vals}" if vals else "")
         )
     elif c.experiment is not None:
         out.append("- **Latest run:** none recorded; the figures shown predate the registry")

@@ -123,6 +123,7 @@ def run_experiment(
         "command": " ".join(["python", *exp.command, *(exp.quick if quick else exp.full)]),
         "finished_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "wall_s": round(wall, 1),
+        "load_average": round(os.getloadavg()[0], 1),  # timings mean little on a busy machine
         "files": files,
         "outputs": outputs,
         "numbers": _numbers(exp, out_dir, proc.stdout),
@@ -191,6 +192,8 @@ def claim_row(reg: Registry, c: Claim, figures: Path = FIGURES) -> dict:
             "mode": rec["mode"],
             "commit": rec["commit"],
             "finished_utc": rec["finished_utc"],
+            "wall_s": rec["wall_s"],
+            "load_average": rec.get("load_average"),
             "changed_inputs": changed_files(rec["files"]),
             "outputs": sorted(rec["outputs"]),
             "values": {k: lookup(rec["numbers"], k) for k in c.keys},
