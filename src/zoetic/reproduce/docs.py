@@ -100,7 +100,7 @@ def _claim_md(reg: Registry, row: dict) -> list[str]:
             f"- **Latest run:** {run['mode']}, {run['finished_utc']}, commit "
             f"`{run['commit'][:12]}`, {run['wall_s']:.0f} s wall"
             + (f" at load {run['load_average']}" if run["load_average"] is not None else "")
-            + f"{changed}"
+            + f", `{run['command']}`{changed}"
             + (f"; {vals}" if vals else "")
         )
     elif c.experiment is not None:

@@ -120,7 +120,7 @@ def run_experiment(
         "experiment": exp.name,
         "mode": "quick" if quick else "full",
         "commit": commit(),
-        "command": " ".join(["python", *exp.command, *(exp.quick if quick else exp.full)]),
+        "command": command_line(exp, quick),
         "finished_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "wall_s": round(wall, 1),
         "load_average": round(os.getloadavg()[0], 1),  # timings mean little on a busy machine
@@ -139,15 +139,22 @@ def load_record(exp: str, quick: bool, figures: Path = FIGURES) -> dict | None:
     return json.loads(p.read_text()) if p.is_file() else None
 
 
-def latest_fresh(exp: str | None, figures: Path = FIGURES) -> tuple[dict | None, bool]:
+def command_line(exp: Experiment, quick: bool) -> str:
+    """The command a run record of ``exp`` in that mode names."""
+    return " ".join(["python", *exp.command, *(exp.quick if quick else exp.full)])
+
+
+def latest_fresh(exp: Experiment | None, figures: Path = FIGURES) -> tuple[dict | None, bool]:
     """Return (the best record of ``exp``, stale?): a full record is preferred to a quick
-    one, a fresh one (inputs unchanged) to a stale one; no record at all is stale."""
+    one, a fresh one to a stale one. A record is fresh when its inputs are unchanged and it
+    ran the experiment's command as the registry now gives it; no record at all is stale."""
     if exp is None:
         return None, False
-    recs = [load_record(exp, False, figures), load_record(exp, True, figures)]
+    recs = [load_record(exp.name, False, figures), load_record(exp.name, True, figures)]
     recs = [r for r in recs if r is not None]
     for r in recs:
-        if not changed_files(r["files"]):
+        same = r["command"] == command_line(exp, r["mode"] == "quick")
+        if same and not changed_files(r["files"]):
             return r, False
     return (recs[0] if recs else None), True
 
@@ -168,7 +175,8 @@ def lookup(numbers: dict, key: str) -> Any:
 
 def claim_row(reg: Registry, c: Claim, figures: Path = FIGURES) -> dict:
     """The claim as one JSON-able row: the registry's fields, stale, and the latest run."""
-    rec, stale = latest_fresh(c.experiment, figures)
+    exp = reg.experiments[c.experiment] if c.experiment is not None else None
+    rec, stale = latest_fresh(exp, figures)
     row = {
         "id": c.id,
         "paper": c.paper,
@@ -183,8 +191,7 @@ def claim_row(reg: Registry, c: Claim, figures: Path = FIGURES) -> dict:
         "absent": c.absent,
         "run": None,
     }
-    if c.experiment is not None:
-        exp = reg.experiments[c.experiment]
+    if exp is not None:
         row["command"] = f"zoetic reproduce {c.id}"
         row["script"] = " ".join(exp.command)
     if rec is not None:
@@ -195,6 +202,7 @@ def claim_row(reg: Registry, c: Claim, figures: Path = FIGURES) -> dict:
             "wall_s": rec["wall_s"],
             "load_average": rec.get("load_average"),
             "changed_inputs": changed_files(rec["files"]),
+            "command": rec["command"],
             "outputs": sorted(rec["outputs"]),
             "values": {k: lookup(rec["numbers"], k) for k in c.keys},
         }
