@@ -148,6 +148,7 @@ def main() -> None:
     ap.add_argument("--only", choices=("modes", "evolve"), default=None)
     ap.add_argument("--creatures", default="cart,twolink,bouncer,walker")
     ap.add_argument("--cart-trials", type=int, default=1000)
+    ap.add_argument("--modes-file", default="san_modes.json", help="JSON the modes merge into")
     ap.add_argument("--trials", type=int, default=200)
     ap.add_argument("--cart-keep", type=int, default=40)
     ap.add_argument("--keep", type=int, default=20)
@@ -165,7 +166,7 @@ def main() -> None:
                 args.cart_keep if cart else args.keep, args.seed, args.workers,
                 args.tune_trials if cart else 0,
             )  # fmt: skip
-        path = OUT / "san_modes.json"
+        path = OUT / args.modes_file
         old = json.loads(path.read_text()) if path.exists() else {}
         path.write_text(json.dumps({**old, **rows}, indent=2) + "\n")
     if args.only != "modes":
