@@ -29,8 +29,8 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from zoetic.reproduce import figures_dir
 
+from zoetic.reproduce import figures_dir
 from zoetic.san import load_creature
 from zoetic.san.evolve import changes, evolve, write_evolve
 from zoetic.san.gaits import THRESHOLD, describe_gaits, feature_matrix, gait_features, write_modes
