@@ -24,10 +24,11 @@ from zoetic.bodies import load_animal
 from zoetic.learning.abstraction import abstract, compare, spectrum
 from zoetic.learning.run import LearnConfig, Run
 from zoetic.physics import get_medium, rest_state, simulate
+from zoetic.reproduce import figures_dir
 from zoetic.tasks import load_task
 from zoetic.viz.media import abstract_files
 
-FIGS = Path(__file__).resolve().parents[1] / "docs" / "figures"
+FIGS = figures_dir()
 CASES = (  # animal, task, nodes
     ("shark", "swim-straight", 40),
     ("shark", "sharp-turn-left", 30),
@@ -43,7 +44,7 @@ def learn(animal: str, task: str, nodes: int, budget: int, out: Path, seed: int)
         run = Run.resume(run_dir)
     else:
         cfg = LearnConfig(animal=animal, task=task, optimizer="cmaes", budget=budget, seed=seed,
-                          nodes=nodes, popsize=24)  # fmt: skip
+                          nodes=nodes, popsize=24, controller="time")  # fmt: skip
         run = Run.create(run_dir, cfg)
     run.learn()
     return run_dir, run.best_controller()
@@ -135,7 +136,9 @@ def main() -> None:
             fig.tight_layout()
             fig.savefig(FIGS / "abstraction_snake_turn_bend.png", dpi=110)
     print(json.dumps({k: v for k, v in results.items() if "/" not in k}, indent=1))
-    (args.out / "claims.json").write_text(json.dumps(results, indent=1, default=float))
+    text = json.dumps(results, indent=1, default=float)
+    (args.out / "claims.json").write_text(text)
+    (FIGS / "abstraction.json").write_text(text + "\n")
 
 
 if __name__ == "__main__":

@@ -42,6 +42,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from zoetic.reproduce import figures_dir
 
 from zoetic.bodies import load_animal
 from zoetic.control import wave_controller
@@ -52,7 +53,7 @@ from zoetic.physics import simulate
 from zoetic.tasks import Task, load_task, parse_task
 from zoetic.viz.learning import best_so_far, plot_learning_seeds
 
-OUT = Path(__file__).resolve().parents[1] / "docs" / "figures"
+OUT = figures_dir()
 PAPER_ALPHA = 0.9  # the footnote's usual schedule, used in panel (a)
 COOLING_RATES = (0.8, 0.85, 0.9)  # Fig. 6(b-c)'s caption
 PANEL_CONTROLLER = {"b": "time", "c": "frequency"}

@@ -13,13 +13,13 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
 
 import numpy as np
+from zoetic.reproduce import figures_dir
 
 from zoetic.learning.run import LearnConfig, build
 
-OUT = Path(__file__).resolve().parents[1] / "docs" / "figures"
+OUT = figures_dir()
 
 
 def local_minima(z: np.ndarray) -> int:

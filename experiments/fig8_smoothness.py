@@ -13,20 +13,21 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
 
 import numpy as np
 
 from zoetic.learning.run import LearnConfig, build
+from zoetic.reproduce import figures_dir
 from zoetic.tasks import parse_task
 
-OUT = Path(__file__).resolve().parents[1] / "docs" / "figures"
+OUT = figures_dir()
 
 
 def learn(nu1: float, nu2: float, budget: int, optimizer: str, seed: int):
     """Return the learned controller's (times, u) and its summary numbers."""
     cfg = LearnConfig(animal="shark", task="reach-goal", nodes=15, coupling="antiphase",
-                      optimizer=optimizer, budget=budget, seed=seed, popsize=16)  # fmt: skip
+                      optimizer=optimizer, budget=budget, seed=seed, popsize=16,
+                      controller="time")  # fmt: skip
     from zoetic.tasks import load_task
 
     task = parse_task({**load_task("reach-goal").to_dict(), "mu1": 1.0, "nu1": nu1, "nu2": nu2})

@@ -13,9 +13,9 @@ Run: python experiments/integrator_stability.py  (a minute or two)
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
+from zoetic.reproduce import figures_dir
 
 from zoetic.bodies import list_animals, load_animal
 from zoetic.control import wave_controller
@@ -23,7 +23,7 @@ from zoetic.physics import get_medium, rest_state, simulate
 from zoetic.physics.reference import step_semi_implicit
 from zoetic.physics.simulate import stable_dt
 
-OUT = Path(__file__).resolve().parents[1] / "docs" / "figures" / "integrator_stability.json"
+OUT = figures_dir() / "integrator_stability.json"
 STEPS = (0.0025, 0.005, 0.0075, 0.01, 0.015, 0.02, 0.03, 0.04)
 SECONDS = 5.0
 

@@ -18,6 +18,7 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+from zoetic.reproduce import figures_dir
 
 from zoetic.behavior.macro import MacroProblem, ReachTask, path_scores, search
 from zoetic.behavior.repertoire import Repertoire
@@ -25,7 +26,7 @@ from zoetic.behavior.tracking import TrackConfig, handmade_repertoire, track
 from zoetic.bodies import load_animal
 from zoetic.io import write_json
 
-OUT = Path(__file__).resolve().parents[1] / "docs" / "figures"
+OUT = figures_dir()
 COURSE = np.array([[2.0, 0.5], [4.0, 2.0], [5.0, 4.5], [3.5, 6.5], [1.0, 7.0]])
 GOAL, OBSTACLE, HORIZON = (-4.0, 1.0), (0.5, 2.5, 1.0), 60.0
 COLORS = {"greedy": "C0", "SA": "C1", "GA": "C2"}

@@ -13,21 +13,22 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
 
 import numpy as np
 
 from zoetic.learning.run import LearnConfig, build
 from zoetic.physics import State, rest_state
+from zoetic.reproduce import figures_dir
 
-OUT = Path(__file__).resolve().parents[1] / "docs" / "figures"
+OUT = figures_dir()
 LANE = 0.7  # metres between lanes
 
 
-def train(budget: int, optimizer: str, seed: int):
+def train(budget: int, optimizer: str, seed: int, controller: str):
     """Return (objective, best parameters) after ``budget`` evaluations."""
     setup = build(LearnConfig(animal="shark", task="swim-straight", optimizer=optimizer,
-                              budget=budget, seed=seed, popsize=16))  # fmt: skip
+                              budget=budget, seed=seed, popsize=16,
+                              controller=controller))  # fmt: skip
     opt, obj = setup.optimizer, setup.objective
     while opt.evaluations < budget and not opt.done():
         X = opt.ask()
@@ -40,6 +41,8 @@ def main() -> None:
     ap.add_argument("--budgets", default="16,400,1500,6000")
     ap.add_argument("--optimizer", default="cmaes")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--controller", default="time",
+                    help="time (the paper's Plate 3), or periodic (zoetic learn's default)")
     args = ap.parse_args()
     from zoetic.viz.plots import plot_path
     from zoetic.viz.render3d import render_video
@@ -48,7 +51,7 @@ def main() -> None:
     OUT.mkdir(parents=True, exist_ok=True)
     positions, coms, report = [], [], {}
     for lane, budget in enumerate(budgets):
-        obj, x = train(budget, args.optimizer, args.seed)
+        obj, x = train(budget, args.optimizer, args.seed, args.controller)
         body = obj.body
         start = rest_state(body, 1, offset=(0.0, 0.0, LANE * (len(budgets) - 1 - lane)))
         obj.start = State(start.positions, start.velocities)

@@ -79,13 +79,15 @@ def main() -> None:
     ap.add_argument("--launch", type=float, default=None, help="start speed (m/s) for all")
     ap.add_argument("--launch-pitch", type=float, default=0.9)
     ap.add_argument("--launch-depth", type=float, default=0.8)
+    ap.add_argument("--train-budget", type=int, default=3000,
+                    help="evaluations per entry when the repertoire must be trained")
     args = ap.parse_args()
     body = load_animal("dolphin")
     if args.memory is None:
         args.memory = Path("runs/bench") / f"{body.name}-memory-{plan_digest('dolphin')}"
     if not (args.memory / "repertoire.json").exists():
         t0 = time.perf_counter()
-        train_repertoire("dolphin", args.memory, seed=args.seed)
+        train_repertoire("dolphin", args.memory, budget=args.train_budget, seed=args.seed)
         print(f"trained the repertoire in {time.perf_counter() - t0:.0f} s")
     rep = Repertoire.load(args.memory, body)
     make_dir(args.out)

@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from zoetic.reproduce import figures_dir
 from zoetic.san import load_creature
 from zoetic.san.evolve import changes, evolve, write_evolve
 from zoetic.san.gaits import THRESHOLD, describe_gaits, feature_matrix, gait_features, write_modes
@@ -39,7 +40,7 @@ from zoetic.san.tune import tune
 from zoetic.viz.san import draw_modes
 
 ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "docs" / "figures"
+OUT = figures_dir()
 RUNS = ROOT / "runs" / "san_gaits"
 
 
@@ -147,6 +148,7 @@ def main() -> None:
     ap.add_argument("--only", choices=("modes", "evolve"), default=None)
     ap.add_argument("--creatures", default="cart,twolink,bouncer,walker")
     ap.add_argument("--cart-trials", type=int, default=1000)
+    ap.add_argument("--modes-file", default="san_modes.json", help="JSON the modes merge into")
     ap.add_argument("--trials", type=int, default=200)
     ap.add_argument("--cart-keep", type=int, default=40)
     ap.add_argument("--keep", type=int, default=20)
@@ -164,7 +166,7 @@ def main() -> None:
                 args.cart_keep if cart else args.keep, args.seed, args.workers,
                 args.tune_trials if cart else 0,
             )  # fmt: skip
-        path = OUT / "san_modes.json"
+        path = OUT / args.modes_file
         old = json.loads(path.read_text()) if path.exists() else {}
         path.write_text(json.dumps({**old, **rows}, indent=2) + "\n")
     if args.only != "modes":

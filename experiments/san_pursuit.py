@@ -17,13 +17,14 @@ import json
 from pathlib import Path
 
 import numpy as np
+from zoetic.reproduce import figures_dir
 
 from zoetic.san import load_creature
 from zoetic.san.search import search, speed_cm_s
 from zoetic.san.show import replay
 from zoetic.san.tune import tune
 
-OUT = Path(__file__).resolve().parents[1] / "docs" / "figures"
+OUT = figures_dir()
 SEEDS = (0, 1, 2)
 
 

@@ -24,9 +24,9 @@ import argparse
 import dataclasses
 import json
 import time
-from pathlib import Path
 
 import numpy as np
+from zoetic.reproduce import figures_dir
 
 from zoetic.san import load_creature
 from zoetic.san.network import SanPolicy
@@ -34,7 +34,7 @@ from zoetic.san.search import search, speed_cm_s
 from zoetic.san.tune import tune
 from zoetic.san.world import World
 
-OUT = Path(__file__).resolve().parents[1] / "docs" / "figures"
+OUT = figures_dir()
 ROUGH_SEEDS = (1, 2, 3)
 FRICTION_CHAINS = ("threelink", "fourlink")
 DELAY_CREATURES = ("cart", "twolink", "threelink", "fourlink", "luxo", "bouncer")

@@ -8,15 +8,15 @@ Run: python experiments/vision_pursuit.py [--seeds 20] [--first 0] [--seconds 60
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 import numpy as np
+from zoetic.reproduce import figures_dir
 
 from zoetic.io import write_json
 from zoetic.perception.pursuit import make_chase, run_chase, summarize
 from zoetic.viz.gaze import plot_frames, plot_gaze
 
-OUT = Path(__file__).resolve().parents[1] / "docs" / "figures"
+OUT = figures_dir()
 
 
 def main() -> None:

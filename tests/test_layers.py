@@ -32,6 +32,7 @@ LAYERS = {
     "viz": 9,
     "cli": 10,
     "bench": 10,
+    "reproduce": 10,  # zoetic reproduce: runs experiments, may import anything
     "__init__": 10,  # the package's face
     "__main__": 10,  # the entry point
 }

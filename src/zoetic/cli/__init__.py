@@ -25,6 +25,7 @@ def _register() -> None:
         learn,
         pursue,
         repertoire,
+        reproduce,
         san,
         simulate,
         stunt,
