@@ -286,7 +286,7 @@ def locomotion(body: Body, positions: np.ndarray, times: np.ndarray) -> dict[str
     recorded at ``times`` (R,) s (``control.measure``)."""
     pos = np.asarray(positions, float)
     m = motion_scalars(body, pos[None], np.asarray(times, float), get_medium(body.medium))
-    y = pos @ (body.mass / body.total_mass)
+    y = np.einsum("rnk,n->rk", pos, body.mass / body.total_mass)
     y = y[:, 1] - y[0, 1]
     return {
         "depth_change_m": round(float(y[-1]), 3),
