@@ -178,6 +178,22 @@ def _outside(p: Promise, value: float) -> float:
     return float(max(p.low - value, value - p.high))
 
 
+def judge_repertoire(directory: str | Path, body: Body) -> dict[str, dict]:
+    """Return the verdict (``judge_entry``) of every learned entry of the repertoire of
+    ``body`` in ``directory`` whose task makes promises, by entry name; a mirrored entry
+    shares its original's ("mirror_of": the original)."""
+    rep = Repertoire.load(directory, body)
+    out: dict[str, dict] = {}
+    for name in rep.names:
+        task = rep.info[name].get("task")
+        if isinstance(task, str) and load_task(task).promises:
+            out[name] = judge_entry(body, rep.controllers[name], load_task(task))
+            right = mirrored_name(name)
+            if right in rep.controllers:
+                out[right] = out[name] | {"mirror_of": name}
+    return out
+
+
 def unmet_text(name: str, verdict: dict) -> str:
     """Return a line naming the promises an entry does not keep, with the worst value."""
     bad = [
