@@ -242,6 +242,13 @@ def sequence_cmd(
     summary = simulate_run(
         animal, str(path), seq.duration, out, media=partial(simulation_media, video=video)
     )
+    from zoetic.behavior.tracking import locomotion
+    from zoetic.cli.track import motion_line
+    from zoetic.record import read_record
+
+    rec = read_record(summary["record"])
+    motion = locomotion(body, np.asarray(rec.animals[0].positions, float), rec.times)
     for key, value in summary.items():
         console.print(f"{key:>12}: {value}")
     console.print(f"{'sequence':>12}: {path}")
+    console.print(f"{'locomotion':>12}: {motion_line(motion)}")

@@ -227,6 +227,7 @@ def macro(
     """Search for a macro controller (selection, order, durations of entries) to reach a goal."""
     use_ray_address(ray_address)
     from zoetic.behavior.macro import MacroProblem, ReachTask
+    from zoetic.behavior.tracking import locomotion
     from zoetic.control import save_controller
     from zoetic.io import write_json
 
@@ -246,12 +247,15 @@ def macro(
         "seed": seed,
         "history": [[n, round(f, 5)] for n, f in result.history],
     }
-    write_json(out / "summary.json", summary)
     traj = problem.rollout(result.entries, result.durations, record_every=4)
+    motion = locomotion(body, traj.positions[0], traj.times)
+    summary |= motion
+    write_json(out / "summary.json", summary)
     depth = float(traj.com(body)[0][0, 1])
     _write_plan_record(out, body, traj, result.sequence, g, obs, depth, summary)
     _draw_plan(out, body, traj, result, g, obs, video, fps)
     _report_plan(method, result.summary(), out, video)
+    console.print(motion_line(motion))
 
 
 def _goal_and_obstacles(goal: str, obstacle: list[str]) -> tuple[np.ndarray, np.ndarray]:
@@ -294,7 +298,9 @@ def _draw_plan(
         f"{body.name} macro controller ({method}): final distance {s['final_m']:.2f} m, "
         f"{s['inside_obstacle_s']:.1f} s in obstacles"
     )
-    plot_plan([com], [f"{method} plan"], out / "path.png", goal, obstacles, [idx], title=title)
+    plot_plan(
+        [com], [f"{method} plan"], out / "path.png", goal, obstacles, [idx], title=title, band=0.5
+    )
     if video:
         from zoetic.viz.render3d import render_video
 
