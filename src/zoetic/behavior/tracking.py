@@ -37,6 +37,8 @@ from zoetic.learning.abstraction import mirror_abstract
 from zoetic.physics import State, Trajectory, get_medium, rest_state, simulate
 from zoetic.physics.world import World
 
+FIN_TILT = 0.05  # the hand-made swim-up's fin setting above level (swim-down: below)
+RESTART = 2.0  # s an entry plays before the tracker restarts it (keeps cross-fades short)
 OVERLAP = 0.05  # cross-fade: fraction of each controller's length shared with the next
 
 
@@ -92,12 +94,15 @@ def as_targets(targets) -> np.ndarray:
     return t
 
 
-def wave_abstraction(body: Body, right_scale: float = 1.0, left_bias: float = 0.0):
+def wave_abstraction(
+    body: Body, right_scale: float = 1.0, left_bias: float = 0.0, fin_tilt: float = 0.0
+):
     """Return the animal's travelling wave as an AbstractController, right side scaled.
 
     The wave offset + a (1 + sin(2 pi (f t - p))) / 2 is one cosine mode per actuator; scaling
     the right actuators' signal down and adding a bias to the left ones bends and turns the
-    animal to the left (+z).
+    animal to the left (+z); ``fin_tilt`` is added to the fins' level setting (positive
+    pitches the shark's nose up, so it climbs).
     """
     a = body.wave_amplitude
     right = np.array([s == "right" for s in body.actuator_side])
@@ -107,7 +112,7 @@ def wave_abstraction(body: Body, right_scale: float = 1.0, left_bias: float = 0.
     amp = (0.5 * a * scale)[:, None]
     phase = (-2 * np.pi * np.asarray(body.wave_phase, float) - np.pi / 2)[:, None]
     held = ~np.isnan(body.wave_held)  # not driven by the wave: relaxed muscles, level fins
-    offset = np.where(held, np.nan_to_num(body.wave_held), offset)
+    offset = np.where(held, np.nan_to_num(body.wave_held) + fin_tilt, offset)
     amp[held] = 0.0
     freq = np.full_like(amp, body.wave_frequency)
     return AbstractController(
@@ -116,11 +121,13 @@ def wave_abstraction(body: Body, right_scale: float = 1.0, left_bias: float = 0.
 
 
 def handmade_repertoire(body: Body) -> Repertoire:
-    """Return six hand-made entries (not learned): do-nothing, go-straight and four turns.
+    """Return hand-made entries (not learned): do-nothing, go-straight and four turns, and
+    for an animal with fins swim-up and swim-down.
 
     Turns weaken one side's wave and bias the other (sharp: right x0.2, left +0.3; wide:
-    right x0.5, left +0.1); right turns mirror left ones. For the shark: straight about
-    0.37 m/s, sharp turns about 6 deg/s (radius ~1.6 m), wide turns about 4 deg/s.
+    right x0.5, left +0.1); right turns mirror left ones; swim-up and swim-down tilt the fins
+    by +-0.05 from level. For the shark: straight about 0.37 m/s, sharp turns about 6 deg/s
+    (radius ~1.6 m), wide turns about 4 deg/s, swim-up and -down about 0.25 m in 3 s.
     """
     rep = Repertoire(body.name, tuple(body.actuator_names))
     period = 1.0 / body.wave_frequency
@@ -146,6 +153,9 @@ def handmade_repertoire(body: Body) -> Repertoire:
         ("wide-turn-right", mirror_abstract(wide, mirror)),
     ):
         rep.add(name, ctrl, 4 * period, source="hand-made")
+    if body.fin_area is not None and len(body.fin_area):
+        for name, tilt in (("swim-up", FIN_TILT), ("swim-down", -FIN_TILT)):
+            rep.add(name, wave_abstraction(body, fin_tilt=tilt), 4 * period, source="hand-made")
     return rep
 
 
@@ -296,8 +306,9 @@ def locomotion(body: Body, positions: np.ndarray, times: np.ndarray) -> dict[str
     }
 
 
-def _candidate_tables(ctrls, current, t, steps, dt) -> np.ndarray:
-    """Return (K, steps, A): each entry started at time t, cross-faded from the current one."""
+def _candidate_tables(ctrls, current, t, steps, dt, restart: bool = False) -> np.ndarray:
+    """Return (K, steps, A): each entry started at time t, cross-faded from the current one;
+    the current one carries on, or with ``restart`` starts afresh like the others."""
     tables = []
     for k, ctrl in enumerate(ctrls):
         if current is None:
@@ -305,7 +316,7 @@ def _candidate_tables(ctrls, current, t, steps, dt) -> np.ndarray:
             continue
         ci, start = current
         held = t - start
-        if k == ci:
+        if k == ci and not restart:
             tables.append(ctrls[ci].table(steps, dt, t0=held))
             continue
         window = steps * dt
@@ -374,7 +385,10 @@ class _Greedy:
         """Return the activations (1, T, A) of the entry of greatest gain over ``period``."""
         body, dt, rec, k = self.body, self.body.dt, int(self.config.record_every), len(self.ctrls)
         current = None if not self.items else (self.items[-1][0], self.items[-1][1])
-        tables = _candidate_tables(self.ctrls, current, self.t, period.steps, dt)
+        # an entry held long is restarted at each choice, so that the cross-fade into the next
+        # one (a share of the held time) stays short and a correction takes effect at once
+        restart = current is not None and self.t - current[1] >= RESTART
+        tables = _candidate_tables(self.ctrls, current, self.t, period.steps, dt, restart)
         state = State(world.positions(0), world.velocities(0))
         traj = simulate(body, tables, state=_repeat(state, k), record_every=rec)
         com3 = np.einsum("brnk,n->brk", traj.positions, body.mass / body.total_mass)
@@ -396,7 +410,7 @@ class _Greedy:
             raise SimulationError(f"every repertoire entry blew up at t = {self.t:.2f} s")
         best = int(np.argmax(gain))
         self.chosen.append(self.names[best])
-        if current is None or best != current[0]:
+        if current is None or best != current[0] or restart:
             if current is not None:
                 self.fade_end = self.t + (self.t - current[1]) * OVERLAP / (1 - OVERLAP)
             self.items.append([best, self.t])
