@@ -178,6 +178,22 @@ def _outside(p: Promise, value: float) -> float:
     return float(max(p.low - value, value - p.high))
 
 
+class PromiseError(ZoeticError):
+    """Entries of a repertoire do not do what their tasks promise (``--strict``)."""
+
+    exit_code = 1
+
+
+def check_promises(verdicts: dict[str, dict], where: str) -> None:
+    """Raise PromiseError naming the learned entries of ``where`` that break a promise."""
+    unmet = [n for n, v in verdicts.items() if not v["met"] and "mirror_of" not in v]
+    if unmet:
+        raise PromiseError(
+            f"{where}: {len(unmet)} entr{'y' if len(unmet) == 1 else 'ies'} "
+            f"({', '.join(unmet)}) do not do what their tasks promise (--strict)"
+        )
+
+
 def judge_repertoire(directory: str | Path, body: Body) -> dict[str, dict]:
     """Return the verdict (``judge_entry``) of every learned entry of the repertoire of
     ``body`` in ``directory`` whose task makes promises, by entry name; a mirrored entry

@@ -131,7 +131,7 @@ def _report_promises(memory: Path, strict: bool) -> dict[str, dict]:
     """Judge every learned entry against its task's promises; print the ones it does not
     keep (and exit 1 under ``strict`` if any); return the verdicts by entry."""
     from zoetic.behavior.repertoire import Repertoire
-    from zoetic.behavior.training import judge_repertoire, unmet_text
+    from zoetic.behavior.training import check_promises, judge_repertoire, unmet_text
     from zoetic.runs import repertoire_body
 
     animal = Repertoire.load(memory).animal
@@ -143,8 +143,8 @@ def _report_promises(memory: Path, strict: bool) -> dict[str, dict]:
         console.print(f"[yellow]warning: {unmet_text(name, verdicts[name])}{also}[/]")
     if verdicts and not unmet:
         console.print(f"every learned entry keeps its task's promises ({len(verdicts)} judged)")
-    if strict and unmet:
-        raise typer.Exit(1)
+    if strict:
+        check_promises(verdicts, str(memory))
     return verdicts
 
 
@@ -178,7 +178,7 @@ def show_cmd(
 ) -> None:
     """Print a repertoire's entries and what each does; writes repertoire.png beside them.
     Each learned entry is judged against its task's promises (from every start of the task)."""
-    from zoetic.behavior.training import judge_repertoire
+    from zoetic.behavior.training import check_promises, judge_repertoire
     from zoetic.errors import ZoeticError, naming
     from zoetic.runs import repertoire_body
     from zoetic.viz.media import show_repertoire
@@ -195,9 +195,8 @@ def show_cmd(
         for r in rows:
             r["promise"] = verdicts.get(r["entry"])
         print(json.dumps(rows, indent=1))
-        unmet = any(not v["met"] for v in verdicts.values())
-        if strict and unmet:
-            raise typer.Exit(1)
+        if strict:
+            check_promises(verdicts, str(memory))
         return
     _print_rows(rows, str(memory))
     console.print(f"plot: {memory / 'repertoire.png'}")
