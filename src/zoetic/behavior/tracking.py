@@ -225,11 +225,13 @@ class TrackConfig:
     obstacles: np.ndarray | None = None  # (O, 3) discs x, z, r that the gain penalises
     obstacle_weight: float = 1.0  # m of gain lost per second inside an obstacle
     allowed: tuple[str, ...] | None = None  # entries it may use (default: all)
-    depth_band: float = 0.25  # m above or below the target's depth that costs nothing
-    depth_weight: float = 3.0  # m of cost per m of depth error past the band
-    roll_ok: float = 20.0  # deg of roll that costs nothing
+    # the depth and attitude terms, set so that the default shark repertoire holds depth
+    # within 0.5 m and roll within about 30 degrees over the courses of ``zoetic bench track``
+    depth_band: float = 0.15  # m above or below the target's depth that costs nothing
+    depth_weight: float = 6.0  # m of cost per m of depth error past the band
+    roll_ok: float = 15.0  # deg of roll that costs nothing
     pitch_ok: float = 30.0  # deg of pitch that costs nothing (climbing and diving need some)
-    attitude_weight: float = 2.0  # m of cost per rad of roll or pitch past those
+    attitude_weight: float = 6.0  # m of cost per rad of roll or pitch past those
 
     def radius_or(self, body: Body) -> float:
         """Return the reaching radius (m): the configured one, else half the body length."""
