@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from zoetic.behavior.tracking import (
+    RESTART,
     TrackConfig,
     TrackingError,
     handmade_repertoire,
@@ -77,7 +78,9 @@ def test_tracking_reaches_every_target_and_replays(shark):
     idx = result.start_indices
     assert idx[0] == 0 and np.all(np.diff(idx) > 0)
     assert isinstance(result.sequence, SequenceController)
-    assert all(a != b for a, b in zip(result.names, result.names[1:], strict=False))
+    # an entry follows itself only where the tracker restarted it after holding it RESTART s
+    for i, (a, b) in enumerate(zip(result.names, result.names[1:], strict=False)):
+        assert a != b or result.starts[i + 1] - result.starts[i] >= RESTART - 1e-9
 
 
 def test_the_driver_asks_the_planner_for_each_window_and_cuts_the_last(shark):
@@ -159,7 +162,7 @@ def test_track_command_writes_its_run(tmp_path, memory, capsys, shark):
         ]
     )
     assert code == 0
-    text = capsys.readouterr().out
+    text = " ".join(capsys.readouterr().out.split())
     assert "reached 2/2" in text and "real time" in text and "worst roll" in text
     summary = json.loads((out / "summary.json").read_text())
     assert summary["reached"] == 2 and summary["realtime_factor"] > 1
