@@ -35,6 +35,8 @@ def test_plans_follow_the_medium():
         "go-straight",
         "sharp-turn-left",
         "wide-turn-left",
+        "swim-up",
+        "swim-down",
     ]
     snake = plan_for(load_animal("snake"))
     assert snake[0].task.name == "crawl-straight"
@@ -52,6 +54,8 @@ def test_training_writes_a_reloadable_mirrored_repertoire(trained, shark):
         "sharp-turn-right",
         "wide-turn-left",
         "wide-turn-right",
+        "swim-up",
+        "swim-down",
     ]
     assert all(isinstance(c, AbstractController) for c in rep.controllers.values())
     t = np.linspace(0, 3, 50)
@@ -184,3 +188,49 @@ def test_parse_sequence_defaults_and_errors(shark):
     for bad in ("", "go-straight:-1", "go-straight:abc"):
         with pytest.raises(ZoeticError):
             parse_sequence(bad, rep)
+
+
+def _judged_memory(tmp_path, shark, promise: str):
+    """A hand-made repertoire whose go-straight claims a task promising ``promise``."""
+    tmp_path.mkdir(parents=True, exist_ok=True)
+    task = tmp_path / "claim.toml"
+    task.write_text(
+        'name = "claim"\nrequires = ["water"]\nhorizon = 2.0\n'
+        '[[terms]]\nkind = "distance_along_heading"\nweight = -1.0\n'
+        f"[promise]\n{promise}\n"
+    )
+    rep = handmade_repertoire(shark)
+    memory = tmp_path / "memory"
+    rep.add("go-straight", rep.controllers["go-straight"], 2.0, task=str(task))
+    rep.save(memory)
+    return memory
+
+
+def test_show_flags_an_entry_that_breaks_its_promise_and_strict_exits_1(tmp_path, shark, capsys):
+    # the hand-made go-straight turns less than 15 degrees in 2 s, not past 90
+    broken = _judged_memory(tmp_path / "a", shark, "turn_deg = [90.0, inf]")
+    assert main(["repertoire", "show", str(broken)]) == 0  # a warning, not a failure
+    text = capsys.readouterr().out.replace("\n", " ")
+    assert "'go-straight' does not do what task 'claim' promises" in text
+    assert "turn_deg >= 90" in text
+    assert main(["repertoire", "show", str(broken), "--strict"]) == 1
+    kept = _judged_memory(tmp_path / "b", shark, "turn_deg = [-15.0, 15.0]")
+    assert main(["repertoire", "show", str(kept), "--strict"]) == 0
+    assert "keeps its task's promises" in capsys.readouterr().out
+    assert main(["repertoire", "show", str(broken), "--json", "--strict"]) == 1
+    rows = json.loads(capsys.readouterr().out)
+    row = next(r for r in rows if r["entry"] == "go-straight")
+    assert row["promise"]["met"] is False and row["promise"]["promises"][0]["worst"] < 90
+
+
+def test_a_promise_must_be_a_known_quantity_and_a_range(tmp_path):
+    from zoetic.errors import TaskError
+    from zoetic.tasks import load_task
+
+    assert {p.quantity for p in load_task("quick-turn-left").promises} >= {"turn_deg", "roll_deg"}
+    base = 'name = "x"\nhorizon = 1.0\n[[terms]]\nkind = "effort"\n[promise]\n'
+    for bad, words in (("turn = [1, 2]", "turn"), ("turn_deg = [2, 1]", "low <= high")):
+        f = tmp_path / "bad.toml"
+        f.write_text(base + bad + "\n")
+        with pytest.raises(TaskError, match=words):
+            load_task(f)

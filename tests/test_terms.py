@@ -260,7 +260,13 @@ def test_a_users_animal_takes_every_task_that_fits(my_eel, tmp_path, capsys):
     assert "cannot apply to the my_eel (medium 'water'): it requires ground" in said
     from zoetic.behavior.training import plan_for
 
-    assert [e.name for e in plan_for(eel)] == ["go-straight", "sharp-turn-left", "wide-turn-left"]
+    assert [e.name for e in plan_for(eel)] == [
+        "go-straight",
+        "sharp-turn-left",
+        "wide-turn-left",
+        "swim-up",
+        "swim-down",
+    ]
 
 
 @pytest.mark.slow

@@ -5,7 +5,9 @@ A plan is a fixed number L of segments, each an entry of the repertoire and how 
 if the plan is shorter than the horizon. The objective of a reach-a-goal task is
     E = distance (m) of the centre of mass from the goal at the end of the horizon
         + obstacle_weight (m/s) * seconds spent inside any obstacle disc
-        + time_weight (m/s) * time to reach the goal (the horizon when never reached).
+        + time_weight (m/s) * time to reach the goal (the horizon when never reached)
+        + depth_weight * the centre of mass's greatest depth change past depth_band (m),
+so a plan that reaches the goal by sinking or rising away from the start depth costs more.
 Two searches share an ask/tell interface and evaluate whole batches in one simulation:
 simulated annealing (the paper's schedule, adapted to entries and durations) and a genetic
 algorithm (tournaments, crossover of segment blocks, mutation of entries and durations),
@@ -38,6 +40,8 @@ class ReachTask:
     radius: float | None = None  # reaching radius (m); default half a body length
     obstacle_weight: float = 1.0
     time_weight: float = 0.01
+    depth_band: float = 0.5  # m above or below the start depth that costs nothing
+    depth_weight: float = 2.0  # m of cost per m of depth change past the band
 
 
 def path_scores(com_xz: np.ndarray, record_dt: float, task: ReachTask, radius: float) -> dict:
@@ -126,8 +130,16 @@ class MacroProblem:
 
     def scores(self, traj: Trajectory) -> dict:
         """Return path_scores of a trajectory of this problem's animal."""
-        com = traj.com(self.body)[..., [0, 2]]
-        return path_scores(com, float(traj.times[1] - traj.times[0]), self.task, self.radius)
+        com3 = traj.com(self.body)
+        out = path_scores(
+            com3[..., [0, 2]], float(traj.times[1] - traj.times[0]), self.task, self.radius
+        )
+        dy = np.max(np.abs(com3[..., 1] - com3[:, :1, 1]), axis=1)
+        out["depth"] = dy
+        out["cost"] = out["cost"] + self.task.depth_weight * np.maximum(
+            dy - self.task.depth_band, 0.0
+        )
+        return out
 
 
 def _move(e, d, rng, k, lo, hi, step, swap):
@@ -319,6 +331,7 @@ class MacroResult:
             "closest_m": round(float(s["closest"]), 3),
             "final_m": round(float(s["final"]), 3),
             "inside_obstacle_s": round(float(s["inside"]), 2),
+            "worst_depth_change_m": round(float(s["depth"]), 3),
             "reached_s": None if not np.isfinite(s["reach"]) else round(float(s["reach"]), 2),
             "evaluations": self.evaluations,
             "wall_s": round(self.wall, 2),

@@ -2,14 +2,18 @@
 
 At each re-evaluation point the animal simulates every repertoire entry forward from its
 current state over the next interval, all entries as one batch, and keeps the one with the
-greatest immediate gain: the drop in the distance from its centre of mass to the current
-target (less a penalty for time spent inside obstacle discs). When the centre of mass comes
-within the reaching radius it moves on to the next target.
+greatest immediate gain: the drop in its cost to go, which is the 3D distance from its centre
+of mass to the current target, plus the bearing of the target off its heading, plus a depth
+term once it is further than a band above or below the target's depth, plus an attitude term
+once it rolls or pitches past what swimming needs (less a penalty for time spent inside
+obstacle discs). When the centre of mass comes within the reaching radius of the target, in
+3D, it moves on to the next target.
 
-Targets live in the horizontal plane as (x, z): x forward, z to the animal's left.
-The chosen entries are recorded as a SequenceController: a newly chosen entry starts at its
-own t = 0 and is cross-faded with the previous one over 5% of the previous one's length, so
-the recorded controller, played from rest, reproduces the tracked motion.
+Targets are (x, y, z): x forward, z to the animal's left, both m from the origin where the
+animal starts, and y m above the depth it starts at (0: hold the start depth; negative:
+deeper). The chosen entries are recorded as a SequenceController: a newly chosen entry starts
+at its own t = 0 and is cross-faded with the previous one over 5% of the previous one's
+length, so the recorded controller, played from rest, reproduces the tracked motion.
 """
 
 from __future__ import annotations
@@ -25,13 +29,16 @@ from zoetic.bodies import Body
 from zoetic.control import Controller
 from zoetic.control.abstract import AbstractController, SequenceController
 from zoetic.control.loop import Observer, Schedule, drive
+from zoetic.control.measure import motion_scalars
 from zoetic.control.policy import Period
 from zoetic.control.rollout import rollout
 from zoetic.errors import SimulationError, ZoeticError
 from zoetic.learning.abstraction import mirror_abstract
-from zoetic.physics import State, Trajectory, rest_state, simulate
+from zoetic.physics import State, Trajectory, get_medium, rest_state, simulate
 from zoetic.physics.world import World
 
+FIN_TILT = 0.05  # the hand-made swim-up's fin setting above level (swim-down: below)
+RESTART = 2.0  # s an entry plays before the tracker restarts it (keeps cross-fades short)
 OVERLAP = 0.05  # cross-fade: fraction of each controller's length shared with the next
 
 
@@ -59,12 +66,43 @@ def parse_points(text: str, per: int, what: str) -> np.ndarray:
     return pts
 
 
-def wave_abstraction(body: Body, right_scale: float = 1.0, left_bias: float = 0.0):
+def parse_targets(text: str, what: str = "--targets") -> np.ndarray:
+    """Return the targets of ``"x,z;x,y,z;..."`` as (M, 3) x, y, z: a two-number item is a
+    point at the start depth (y = 0); a TrackingError if malformed."""
+    rows = []
+    for chunk in (c for c in text.split(";") if c.strip()):
+        n = len(chunk.split(","))
+        if n not in (2, 3):
+            raise TrackingError(
+                f"{what} {text!r}: item {chunk.strip()!r} needs 'x,z' or 'x,y,z' (m)"
+            )
+        p = parse_points(chunk, n, what)[0]
+        rows.append(p if n == 3 else np.array([p[0], 0.0, p[1]]))
+    if not rows:
+        raise TrackingError(f"{what} {text!r}: give at least one target 'x,z' or 'x,y,z'")
+    return np.array(rows)
+
+
+def as_targets(targets) -> np.ndarray:
+    """Return targets (M, 2) x, z or (M, 3) x, y, z as (M, 3), y = 0 for the 2-number form."""
+    t = np.asarray(targets, float)
+    t = t.reshape(-1, t.shape[-1] if t.ndim > 1 else 2)
+    if t.shape[1] == 2:
+        return np.column_stack([t[:, 0], np.zeros(len(t)), t[:, 1]])
+    if t.shape[1] != 3:
+        raise TrackingError(f"targets must be (x, z) or (x, y, z) points, got shape {t.shape}")
+    return t
+
+
+def wave_abstraction(
+    body: Body, right_scale: float = 1.0, left_bias: float = 0.0, fin_tilt: float = 0.0
+):
     """Return the animal's travelling wave as an AbstractController, right side scaled.
 
     The wave offset + a (1 + sin(2 pi (f t - p))) / 2 is one cosine mode per actuator; scaling
     the right actuators' signal down and adding a bias to the left ones bends and turns the
-    animal to the left (+z).
+    animal to the left (+z); ``fin_tilt`` is added to the fins' level setting (positive
+    pitches the shark's nose up, so it climbs).
     """
     a = body.wave_amplitude
     right = np.array([s == "right" for s in body.actuator_side])
@@ -74,7 +112,7 @@ def wave_abstraction(body: Body, right_scale: float = 1.0, left_bias: float = 0.
     amp = (0.5 * a * scale)[:, None]
     phase = (-2 * np.pi * np.asarray(body.wave_phase, float) - np.pi / 2)[:, None]
     held = ~np.isnan(body.wave_held)  # not driven by the wave: relaxed muscles, level fins
-    offset = np.where(held, np.nan_to_num(body.wave_held), offset)
+    offset = np.where(held, np.nan_to_num(body.wave_held) + fin_tilt, offset)
     amp[held] = 0.0
     freq = np.full_like(amp, body.wave_frequency)
     return AbstractController(
@@ -83,11 +121,13 @@ def wave_abstraction(body: Body, right_scale: float = 1.0, left_bias: float = 0.
 
 
 def handmade_repertoire(body: Body) -> Repertoire:
-    """Return six hand-made entries (not learned): do-nothing, go-straight and four turns.
+    """Return hand-made entries (not learned): do-nothing, go-straight and four turns, and
+    for an animal with fins swim-up and swim-down.
 
     Turns weaken one side's wave and bias the other (sharp: right x0.2, left +0.3; wide:
-    right x0.5, left +0.1); right turns mirror left ones. For the shark: straight about
-    0.37 m/s, sharp turns about 6 deg/s (radius ~1.6 m), wide turns about 4 deg/s.
+    right x0.5, left +0.1); right turns mirror left ones; swim-up and swim-down tilt the fins
+    by +-0.05 from level. For the shark: straight about 0.37 m/s, sharp turns about 6 deg/s
+    (radius ~1.6 m), wide turns about 4 deg/s, swim-up and -down about 0.25 m in 3 s.
     """
     rep = Repertoire(body.name, tuple(body.actuator_names))
     period = 1.0 / body.wave_frequency
@@ -113,6 +153,9 @@ def handmade_repertoire(body: Body) -> Repertoire:
         ("wide-turn-right", mirror_abstract(wide, mirror)),
     ):
         rep.add(name, ctrl, 4 * period, source="hand-made")
+    if body.fin_area is not None and len(body.fin_area):
+        for name, tilt in (("swim-up", FIN_TILT), ("swim-down", -FIN_TILT)):
+            rep.add(name, wave_abstraction(body, fin_tilt=tilt), 4 * period, source="hand-made")
     return rep
 
 
@@ -127,25 +170,47 @@ def obstacle_seconds(com_xz: np.ndarray, obstacles: np.ndarray, dt: float) -> np
 
 
 def cost_to_go(
-    body: Body, positions: np.ndarray, target: np.ndarray, turn_radius: float, record_dt: float
+    body: Body,
+    positions: np.ndarray,
+    target: np.ndarray,
+    turn_radius: float,
+    record_dt: float,
+    config: TrackConfig,
+    attitude: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> np.ndarray:
-    """Return the distance (m) still to swim at the end of each path (B, R, N, 3) to target.
+    """Return the distance (m) still to swim at the end of each path (B, R, N, 3) to ``target``
+    (x, y, z in the world).
 
-    That is the centre of mass's distance to the target plus ``turn_radius`` times the bearing
-    (rad) of the target off the heading; the heading (nose minus centre of mass) is averaged
-    over the last half second, so one gait cycle's head swing cancels out.
+    That is the centre of mass's 3D distance to the target, plus ``turn_radius`` times the
+    bearing (rad) of the target off the heading in the horizontal plane (faded out within a
+    reaching radius or two of the target's x, z, where any heading will do), plus
+    ``config.depth_weight`` times the depth error past ``config.depth_band``, plus
+    ``config.attitude_weight`` times the worst roll and pitch (rad) past what swimming needs
+    (``attitude``: roll and pitch (B, R) in degrees over each path). The heading (nose minus
+    centre of mass) is averaged over the last half second, so one gait cycle's head swing
+    cancels out.
     """
     w = body.mass / body.total_mass
     tail = positions[:, -max(1, int(round(0.5 / record_dt))) :]
-    com = np.einsum("brnk,n->brk", tail, w)[..., [0, 2]]
-    d = np.linalg.norm(com[:, -1] - target, axis=-1)
+    com3 = np.einsum("brnk,n->brk", tail, w)
+    com = com3[..., [0, 2]]
+    goal = np.asarray(target, float)
+    d = np.linalg.norm(com3[:, -1] - goal, axis=-1)
+    dy = np.abs(com3[:, -1, 1] - goal[1])
+    cost = d + config.depth_weight * np.maximum(dy - config.depth_band, 0.0)
+    if attitude is not None:
+        roll, pitch = (np.nanmax(np.abs(a), axis=1) for a in attitude)
+        over = np.maximum(roll - config.roll_ok, 0) + np.maximum(pitch - config.pitch_ok, 0)
+        cost = cost + config.attitude_weight * np.radians(over)
     if turn_radius <= 0:
-        return d
+        return cost
     h = tail[:, :, body.head, :][..., [0, 2]] - com
     h = (h / (np.linalg.norm(h, axis=-1, keepdims=True) + 1e-12)).mean(axis=1)
-    g = target - com[:, -1]
-    cos = np.sum(h * g, axis=-1) / (np.linalg.norm(h, axis=-1) * d + 1e-12)
-    return d + turn_radius * np.arccos(np.clip(cos, -1.0, 1.0))
+    g = goal[[0, 2]] - com[:, -1]
+    dxz = np.linalg.norm(g, axis=-1)
+    cos = np.sum(h * g, axis=-1) / (np.linalg.norm(h, axis=-1) * dxz + 1e-12)
+    fade = np.clip(dxz / (2.0 * config.radius_or(body)), 0.0, 1.0)
+    return cost + fade * turn_radius * np.arccos(np.clip(cos, -1.0, 1.0))
 
 
 @dataclass(frozen=True)
@@ -160,6 +225,17 @@ class TrackConfig:
     obstacles: np.ndarray | None = None  # (O, 3) discs x, z, r that the gain penalises
     obstacle_weight: float = 1.0  # m of gain lost per second inside an obstacle
     allowed: tuple[str, ...] | None = None  # entries it may use (default: all)
+    # the depth and attitude terms, set so that the default shark repertoire holds depth
+    # within 0.5 m and roll within about 30 degrees over the courses of ``zoetic bench track``
+    depth_band: float = 0.15  # m above or below the target's depth that costs nothing
+    depth_weight: float = 6.0  # m of cost per m of depth error past the band
+    roll_ok: float = 15.0  # deg of roll that costs nothing
+    pitch_ok: float = 30.0  # deg of pitch that costs nothing (climbing and diving need some)
+    attitude_weight: float = 6.0  # m of cost per rad of roll or pitch past those
+
+    def radius_or(self, body: Body) -> float:
+        """Return the reaching radius (m): the configured one, else half the body length."""
+        return float(self.radius) if self.radius is not None else 0.5 * body_length(body)
 
 
 @dataclass
@@ -169,7 +245,7 @@ class TrackResult:
     times: np.ndarray  # (R,) s
     positions: np.ndarray  # (R, N, 3) m
     com: np.ndarray  # (R, 3) m
-    targets: np.ndarray  # (M, 2) x, z
+    targets: np.ndarray  # (M, 3) x, y, z in the world (y: the target's height, m)
     radius: float
     sequence: SequenceController
     names: list[str]  # the entry name of each sequence item
@@ -179,6 +255,7 @@ class TrackResult:
     wall: float = 0.0  # s spent tracking (simulation and choice; no compile, no video)
     compile_wall: float = 0.0
     record_every: int = 1  # simulation steps between recorded positions
+    motion: dict = field(default_factory=dict)  # locomotion(): depth change, worst roll, pitch
 
     @property
     def sim_time(self) -> float:
@@ -209,11 +286,31 @@ class TrackResult:
             "controllers": len(self.names),
             "re_evaluations": len(self.evaluations),
             "radius_m": round(self.radius, 3),
+            "reached_in": "3D",
+            **self.motion,
         }
 
 
-def _candidate_tables(ctrls, current, t, steps, dt) -> np.ndarray:
-    """Return (K, steps, A): each entry started at time t, cross-faded from the current one."""
+def locomotion(body: Body, positions: np.ndarray, times: np.ndarray) -> dict[str, object]:
+    """Return what a locomotion run did to the animal's depth and attitude: the centre of
+    mass's height change end minus start and its lowest and highest (m, up positive, relative
+    to the start), and the worst roll and pitch (deg, either way) over ``positions`` (R, N, 3)
+    recorded at ``times`` (R,) s (``control.measure``)."""
+    pos = np.asarray(positions, float)
+    m = motion_scalars(body, pos[None], np.asarray(times, float), get_medium(body.medium))
+    y = np.einsum("rnk,n->rk", pos, body.mass / body.total_mass)
+    y = y[:, 1] - y[0, 1]
+    return {
+        "depth_change_m": round(float(y[-1]), 3),
+        "depth_span_m": [round(float(y.min()), 3), round(float(y.max()), 3)],
+        "worst_roll_deg": round(float(np.nanmax(np.abs(m["roll"]))), 1),
+        "worst_pitch_deg": round(float(np.nanmax(np.abs(m["pitch"]))), 1),
+    }
+
+
+def _candidate_tables(ctrls, current, t, steps, dt, restart: bool = False) -> np.ndarray:
+    """Return (K, steps, A): each entry started at time t, cross-faded from the current one;
+    the current one carries on, or with ``restart`` starts afresh like the others."""
     tables = []
     for k, ctrl in enumerate(ctrls):
         if current is None:
@@ -221,7 +318,7 @@ def _candidate_tables(ctrls, current, t, steps, dt) -> np.ndarray:
             continue
         ci, start = current
         held = t - start
-        if k == ci:
+        if k == ci and not restart:
             tables.append(ctrls[ci].table(steps, dt, t0=held))
             continue
         window = steps * dt
@@ -277,6 +374,7 @@ class _Greedy:
 
     def __post_init__(self) -> None:
         self.reached = np.full(len(self.targets), np.nan)
+        self.medium = get_medium(self.body.medium)
 
     def window(self, world: World) -> int:
         """Return the steps of the next window: the interval, or to the end of a cross-fade,
@@ -289,13 +387,24 @@ class _Greedy:
         """Return the activations (1, T, A) of the entry of greatest gain over ``period``."""
         body, dt, rec, k = self.body, self.body.dt, int(self.config.record_every), len(self.ctrls)
         current = None if not self.items else (self.items[-1][0], self.items[-1][1])
-        tables = _candidate_tables(self.ctrls, current, self.t, period.steps, dt)
+        # an entry held long is restarted at each choice, so that the cross-fade into the next
+        # one (a share of the held time) stays short and a correction takes effect at once
+        restart = current is not None and self.t - current[1] >= RESTART
+        tables = _candidate_tables(self.ctrls, current, self.t, period.steps, dt, restart)
         state = State(world.positions(0), world.velocities(0))
         traj = simulate(body, tables, state=_repeat(state, k), record_every=rec)
-        com = np.einsum("brnk,n->brk", traj.positions, body.mass / body.total_mass)[..., [0, 2]]
+        com3 = np.einsum("brnk,n->brk", traj.positions, body.mass / body.total_mass)
+        com = com3[..., [0, 2]]
+        m = motion_scalars(body, traj.positions, traj.times, self.medium)
         # the cost-to-go at the start is the same for every entry, so the gain ranks as its drop
         gain = -cost_to_go(
-            body, traj.positions, self.targets[self.goal], self.turn_radius, rec * dt
+            body,
+            traj.positions,
+            self.targets[self.goal],
+            self.turn_radius,
+            rec * dt,
+            self.config,
+            (m["roll"], m["pitch"]),
         )
         gain -= self.config.obstacle_weight * obstacle_seconds(com, self.config.obstacles, rec * dt)
         gain[traj.failed] = -np.inf
@@ -303,14 +412,14 @@ class _Greedy:
             raise SimulationError(f"every repertoire entry blew up at t = {self.t:.2f} s")
         best = int(np.argmax(gain))
         self.chosen.append(self.names[best])
-        if current is None or best != current[0]:
+        if current is None or best != current[0] or restart:
             if current is not None:
                 self.fade_end = self.t + (self.t - current[1]) * OVERLAP / (1 - OVERLAP)
             self.items.append([best, self.t])
         for r in range(1, traj.positions.shape[1]):
             while (
                 self.goal < len(self.targets)
-                and np.linalg.norm(com[best, r] - self.targets[self.goal]) < self.radius
+                and np.linalg.norm(com3[best, r] - self.targets[self.goal]) < self.radius
             ):
                 self.reached[self.goal] = self.t + r * rec * dt
                 self.goal += 1
@@ -332,22 +441,24 @@ def track(
     config: TrackConfig = TrackConfig(),
     progress: Callable[[float, int], None] | None = None,
 ) -> TrackResult:
-    """Return the path of the animal greedily tracking ``targets`` (M, 2) in turn, its World
-    run through the one closed-loop driver (each window one control period).
+    """Return the path of the animal greedily tracking ``targets`` in turn, its World run
+    through the one closed-loop driver (each window one control period).
 
-    progress(t, reached) is called after every re-evaluation.
+    targets: (M, 3) x, y, z, y relative to the start depth, or (M, 2) x, z at the start
+    depth. progress(t, reached) is called after every re-evaluation.
     """
-    targets = np.asarray(targets, float).reshape(-1, 2)
+    targets = as_targets(targets)
     if len(targets) == 0:
         raise TrackingError("give at least one target")
     names, ctrls = _entries(repertoire, config.allowed)
-    radius = config.radius if config.radius is not None else 0.5 * body_length(body)
+    radius = config.radius_or(body)
     if not radius > 0 or not config.interval > 0 or not config.time_limit > 0:
         raise TrackingError("radius, interval and time limit must be positive")
     dt, rec = body.dt, int(config.record_every)
     lam = 1.5 * body_length(body) if config.turn_radius is None else float(config.turn_radius)
     t0 = time.perf_counter()
     state = rest_state(body, 1)
+    targets = targets + [0.0, float(state.positions[0].T[1] @ body.mass / body.total_mass), 0.0]
     simulate(body, np.zeros((len(ctrls), rec, body.n_actuators)), state=_repeat(state, len(ctrls)))
     compile_wall = time.perf_counter() - t0
 
@@ -378,6 +489,7 @@ def track(
         wall=wall,
         compile_wall=compile_wall,
         record_every=rec,
+        motion=locomotion(body, positions, np.array(greedy.times)),
     )
 
 

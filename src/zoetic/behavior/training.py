@@ -27,13 +27,16 @@ from zoetic.control.abstract import AbstractController, SequenceController
 from zoetic.errors import RunDirError, ZoeticError
 from zoetic.io import read_json, read_toml
 from zoetic.learning.abstraction import Abstraction, abstract, compare, mirror_abstract
-from zoetic.tasks import Task, capabilities, fits, load_task
+from zoetic.tasks import Promise, Task, capabilities, fits, load_task, start_states
 
 # (entry name, task per medium kind): the paper's basic training, in order
 PLAN = (
     ("go-straight", {"ground": "crawl-straight", "water": "swim-straight"}),
     ("sharp-turn-left", {"ground": "sharp-turn-left", "water": "quick-turn-left"}),
     ("wide-turn-left", {"ground": "wide-turn-left", "water": "wide-turn-left"}),
+    # a fish in open water holds and changes its depth with these (the tracker's 3D targets)
+    ("swim-up", {"water": "swim-up"}),
+    ("swim-down", {"water": "swim-down"}),
 )
 # an animal with a water surface above it (the dolphin): the five basic motor tasks of the
 # paper's section 3.2 (turn-right is the mirror of turn-left)
@@ -63,7 +66,9 @@ def plan_for(body: Body) -> list[Entry]:
     caps = capabilities(body)
     kind = "water" if "water" in caps else "ground"
     plan = (
-        [(n, t) for n, t in SURFACE_PLAN] if "surface" in caps else [(n, t[kind]) for n, t in PLAN]
+        [(n, t) for n, t in SURFACE_PLAN]
+        if "surface" in caps
+        else [(n, t[kind]) for n, t in PLAN if kind in t]
     )
     out = []
     for name, task_name in plan:
@@ -88,6 +93,131 @@ def rest_abstraction(body: Body) -> AbstractController:
     return AbstractController(
         body.name, tuple(body.actuator_names), level, empty, empty, empty, REST_SECONDS
     )
+
+
+def arc_radius(com: np.ndarray, turned: float) -> float:
+    """Return the radius (m) of the circular arc that turns the heading by ``turned`` rad
+    between the first and last centre-of-mass positions ``com`` (R, 3): a chord c of an arc
+    of angle a has radius c / (2 sin(a / 2)), the angle capped at 180 degrees; inf under a
+    degree of turn (a straight line)."""
+    a = min(abs(float(turned)), np.pi)
+    if a < np.radians(1.0):
+        return float("inf")
+    chord = float(np.linalg.norm((com[-1] - com[0])[[0, 2]]))
+    return chord / (2.0 * float(np.sin(a / 2.0)))
+
+
+def entry_motion(body: Body, ctrl: Controller, task: Task) -> list[dict[str, float]]:
+    """Return the ``tasks.PROMISES`` quantities of a controller played from each of the task's
+    starts over its horizon (one simulation, a row per start)."""
+    from zoetic.behavior.tracking import body_length
+    from zoetic.control.measure import motion_scalars
+    from zoetic.physics import get_medium, simulate
+
+    starts = start_states(task, body)
+    k = len(task.starts)
+    steps = int(round(task.horizon / body.dt))
+    every = max(1, int(round(0.05 / body.dt)))
+    table = np.repeat(ctrl.table(steps, body.dt)[None], k, axis=0)
+    tr = simulate(body, table, state=starts, record_every=every)
+    m = motion_scalars(body, tr.positions, tr.times, get_medium(body.medium))
+    com = tr.com(body)
+    length = body_length(body)
+    rows = []
+    for i in range(k):
+        turned = float(m["heading"][i, -1] - m["heading"][i, 0])
+        path = np.linalg.norm(np.diff(com[i], axis=0), axis=1).sum()
+        rows.append(
+            {
+                "turn_deg": turned,
+                "climb_m": float(com[i, -1, 1] - com[i, 0, 1]),
+                "speed_bl_s": float(path / task.horizon / length),
+                "radius_bl": arc_radius(com[i], np.radians(turned)) / length,
+                "roll_deg": float(np.nanmax(np.abs(m["roll"][i]))),
+                "pitch_change_deg": float(m["pitch"][i, -1] - m["pitch"][i, 0]),
+                "failed": bool(tr.failed[i]),
+            }
+        )
+    return rows
+
+
+def judge_entry(body: Body, ctrl: Controller, task: Task) -> dict[str, object]:
+    """Return how a learned entry keeps its task's promises, from every start of the task.
+
+    {"task", "met": bool, "promises": [{"promise": text, "worst": value, "start": name,
+    "met": bool}]}: for each promise the value furthest outside (or nearest the edge of) its
+    range over the starts; an entry that blows up meets nothing.
+    """
+    rows = entry_motion(body, ctrl, task)
+    names = task.start_names()
+    out = []
+    for p in task.promises:
+        values = [r[p.quantity] for r in rows]
+        miss = [
+            _outside(p, v) if not r["failed"] else np.inf for v, r in zip(values, rows, strict=True)
+        ]
+        worst = int(np.argmax(miss))
+        out.append(
+            {
+                "promise": p.text(),
+                "worst": round(float(values[worst]), 3),
+                "start": names[worst],
+                "met": bool(miss[worst] <= 0.0),
+            }
+        )
+    return {"task": task.name, "met": all(o["met"] for o in out), "promises": out}
+
+
+def _outside(p: Promise, value: float) -> float:
+    """Return how far ``value`` lies outside the promise's range (negative: inside)."""
+    inside = p.low <= value <= p.high
+    if not np.isfinite(value):  # an infinite radius (no turn) or a NaN
+        return -1e9 if inside else 1e9
+    if inside:
+        return -float(min(value - p.low, p.high - value))
+    return float(max(p.low - value, value - p.high))
+
+
+class PromiseError(ZoeticError):
+    """Entries of a repertoire do not do what their tasks promise (``--strict``)."""
+
+    exit_code = 1
+
+
+def check_promises(verdicts: dict[str, dict], where: str) -> None:
+    """Raise PromiseError naming the learned entries of ``where`` that break a promise."""
+    unmet = [n for n, v in verdicts.items() if not v["met"] and "mirror_of" not in v]
+    if unmet:
+        raise PromiseError(
+            f"{where}: {len(unmet)} entr{'y' if len(unmet) == 1 else 'ies'} "
+            f"({', '.join(unmet)}) do not do what their tasks promise (--strict)"
+        )
+
+
+def judge_repertoire(directory: str | Path, body: Body) -> dict[str, dict]:
+    """Return the verdict (``judge_entry``) of every learned entry of the repertoire of
+    ``body`` in ``directory`` whose task makes promises, by entry name; a mirrored entry
+    shares its original's ("mirror_of": the original)."""
+    rep = Repertoire.load(directory, body)
+    out: dict[str, dict] = {}
+    for name in rep.names:
+        task = rep.info[name].get("task")
+        if isinstance(task, str) and load_task(task).promises:
+            out[name] = judge_entry(body, rep.controllers[name], load_task(task))
+            right = mirrored_name(name)
+            if right in rep.controllers:
+                out[right] = out[name] | {"mirror_of": name}
+    return out
+
+
+def unmet_text(name: str, verdict: dict) -> str:
+    """Return a line naming the promises an entry does not keep, with the worst value."""
+    bad = [
+        f"{o['promise']} but {o['worst']:g} (from {o['start']})"
+        for o in verdict["promises"]
+        if not o["met"]
+    ]
+    return f"entry {name!r} does not do what task {verdict['task']!r} promises: " + "; ".join(bad)
 
 
 def abstraction_report(

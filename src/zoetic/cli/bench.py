@@ -67,3 +67,20 @@ def bench_render_cmd(
     from zoetic.bench.render import bench_render
 
     emit(bench_render(animal, frames, repeats), json)
+
+
+@bench_app.command("track")
+def bench_track_cmd(
+    animal: str = typer.Option("shark", help="A built-in animal that swims or crawls."),
+    memory: str = typer.Option(
+        None,
+        help="Repertoire directory (default: the animal's default repertoire, trained "
+        "once into runs/bench).",
+    ),
+    time_limit: float = typer.Option(60.0, min=1.0, max=3600.0, help="Seconds per course."),
+    json: Json = False,
+) -> None:
+    """Tracking courses in 3D: targets reached, depth drift, worst roll and pitch per course."""
+    from zoetic.bench.track import bench_track
+
+    emit(bench_track(animal, memory, time_limit), json)

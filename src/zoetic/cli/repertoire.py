@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from functools import partial
 from pathlib import Path
+from typing import Annotated
 
 import typer
 from rich.table import Table
@@ -12,6 +13,13 @@ from rich.table import Table
 from zoetic.cli.apps import app
 from zoetic.cli.learn import learn_bar
 from zoetic.cli.output import console
+
+Strict = Annotated[
+    bool,
+    typer.Option(
+        "--strict", help="Exit with status 1 if any entry does not do what its task promises."
+    ),
+]
 
 repertoire_app = typer.Typer(
     help="Basic training: learn, abstract and keep a repertoire.", no_args_is_help=True
@@ -61,8 +69,10 @@ def train_cmd(
     seed: int = typer.Option(0, help="Random seed: same seed, same repertoire."),
     evaluator: str = typer.Option("batch", help="batch, process or ray (see zoetic learn)."),
     ray_address: str = typer.Option(None, help="Ray cluster for --evaluator ray."),
+    strict: Strict = False,
 ) -> None:
-    """Learn the basic repertoire (straight, sharp and wide turns, mirrored); resumable."""
+    """Learn the basic repertoire (straight, sharp and wide turns, mirrored; a fish's swim-up
+    and swim-down); resumable. Each entry is judged against its task's promises."""
     if ray_address:  # ray.init() reads it
         import os
 
@@ -114,6 +124,28 @@ def train_cmd(
             )
             raise typer.Exit(130) from None
     _print_rows(show_repertoire(out), f"{out}")
+    _report_promises(out, strict)
+
+
+def _report_promises(memory: Path, strict: bool) -> dict[str, dict]:
+    """Judge every learned entry against its task's promises; print the ones it does not
+    keep (and exit 1 under ``strict`` if any); return the verdicts by entry."""
+    from zoetic.behavior.repertoire import Repertoire
+    from zoetic.behavior.training import check_promises, judge_repertoire, unmet_text
+    from zoetic.runs import repertoire_body
+
+    animal = Repertoire.load(memory).animal
+    verdicts = judge_repertoire(memory, repertoire_body(memory, animal))
+    unmet = [n for n, v in verdicts.items() if not v["met"] and "mirror_of" not in v]
+    for name in unmet:
+        mirror = [m for m, v in verdicts.items() if v.get("mirror_of") == name]
+        also = f" (nor does its mirror {', '.join(mirror)})" if mirror else ""
+        console.print(f"[yellow]warning: {unmet_text(name, verdicts[name])}{also}[/]")
+    if verdicts and not unmet:
+        console.print(f"every learned entry keeps its task's promises ({len(verdicts)} judged)")
+    if strict:
+        check_promises(verdicts, str(memory))
+    return verdicts
 
 
 def _hz(freqs: list[float], most: int = 3) -> str:
@@ -142,9 +174,13 @@ def _print_rows(rows: list[dict], title: str) -> None:
 def show_cmd(
     memory: Path = typer.Argument(..., help="Repertoire directory."),
     json_out: bool = typer.Option(False, "--json", help="Print the rows as JSON."),
+    strict: Strict = False,
 ) -> None:
-    """Print a repertoire's entries and what each does; writes repertoire.png beside them."""
+    """Print a repertoire's entries and what each does; writes repertoire.png beside them.
+    Each learned entry is judged against its task's promises (from every start of the task)."""
+    from zoetic.behavior.training import check_promises, judge_repertoire
     from zoetic.errors import ZoeticError, naming
+    from zoetic.runs import repertoire_body
     from zoetic.viz.media import show_repertoire
 
     try:
@@ -152,10 +188,19 @@ def show_cmd(
     except ZoeticError as exc:  # e.g. the index names an unknown animal
         raise naming(memory, exc) from None
     if json_out:
+        from zoetic.behavior.repertoire import Repertoire
+
+        body = repertoire_body(memory, Repertoire.load(memory).animal)
+        verdicts = judge_repertoire(memory, body)
+        for r in rows:
+            r["promise"] = verdicts.get(r["entry"])
         print(json.dumps(rows, indent=1))
+        if strict:
+            check_promises(verdicts, str(memory))
         return
     _print_rows(rows, str(memory))
     console.print(f"plot: {memory / 'repertoire.png'}")
+    _report_promises(memory, strict)
 
 
 @app.command("sequence")
@@ -196,6 +241,13 @@ def sequence_cmd(
     summary = simulate_run(
         animal, str(path), seq.duration, out, media=partial(simulation_media, video=video)
     )
+    from zoetic.behavior.tracking import locomotion
+    from zoetic.cli.track import motion_line
+    from zoetic.record import read_record
+
+    rec = read_record(summary["record"])
+    motion = locomotion(body, np.asarray(rec.animals[0].positions, float), rec.times)
     for key, value in summary.items():
         console.print(f"{key:>12}: {value}")
     console.print(f"{'sequence':>12}: {path}")
+    console.print(f"{'locomotion':>12}: {motion_line(motion)}")

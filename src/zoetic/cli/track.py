@@ -26,6 +26,11 @@ PLANE = (
     "Points are x,z (m) in the horizontal plane: the animal starts at the origin facing +x "
     "and +z is its left."
 )
+SPACE = (
+    "Points are x,z (m, at the start depth) or x,y,z with y m above the start depth "
+    "(negative: deeper): the animal starts at the origin facing +x and +z is its left; a "
+    "target counts as reached when the centre of mass comes within the radius of it in 3D."
+)
 
 
 def track_bar(unit: str):
@@ -61,7 +66,7 @@ def _rings(obstacles: np.ndarray, depth: float, per: int = 16) -> np.ndarray:
 def track(
     animal: Animal,
     memory: Memory,
-    targets: str = typer.Option(..., help=f"Targets 'x,z;x,z;...' visited in order. {PLANE}"),
+    targets: str = typer.Option(..., help=f"Targets 'x,z;x,y,z;...' visited in order. {SPACE}"),
     out: RunDir = Path("runs/track"),
     interval: float = typer.Option(1.0, min=0.05, help="Re-evaluation interval (s)."),
     radius: float = typer.Option(None, help="Reaching radius (m); default half a body length."),
@@ -77,9 +82,9 @@ def track(
     fps: Fps = 30,
 ) -> None:
     """Track targets greedily with a repertoire (Fig. 5, Plate 4); writes path.png and video."""
-    from zoetic.behavior.tracking import TrackConfig, parse_points
+    from zoetic.behavior.tracking import TrackConfig, parse_targets
 
-    pts = parse_points(targets, 2, "--targets")
+    pts = parse_targets(targets)
     body, rep = _setup(animal, memory)
     config = TrackConfig(
         interval=interval, radius=radius, time_limit=time_limit, turn_radius=turn_radius
@@ -97,20 +102,31 @@ def track(
             body.medium,
             out / "video.mp4",
             fps=fps,
-            markers=_buoys(pts, float(result.com[0, 1])),
+            markers=result.targets,
             marker_colors=(220, 40, 30),
         )
     console.print(
-        f"reached {reached}/{len(pts)} targets in {result.sim_time:.1f} s simulated, "
-        f"{result.wall:.2f} s wall: [bold]{result.realtime_factor:.0f}x real time[/] "
-        f"({len(result.names)} controllers, {len(result.evaluations)} re-evaluations of "
-        f"{len(rep.names)} entries in one batch each)"
+        f"reached {reached}/{len(pts)} targets (in 3D, within {result.radius:.2f} m) in "
+        f"{result.sim_time:.1f} s simulated, {result.wall:.2f} s wall: "
+        f"[bold]{result.realtime_factor:.0f}x real time[/] ({len(result.names)} controllers, "
+        f"{len(result.evaluations)} re-evaluations of {len(rep.names)} entries in one batch each)"
     )
+    console.print(motion_line(result.motion))
     _report_files(out, video)
 
 
+def motion_line(m: dict) -> str:
+    """Return a locomotion summary's depth and attitude figures in words."""
+    lo, hi = m["depth_span_m"]
+    return (
+        f"depth: {m['depth_change_m']:+.2f} m at the end (between {lo:+.2f} and {hi:+.2f} m "
+        f"of the start depth); worst roll {m['worst_roll_deg']:.0f} deg, worst pitch "
+        f"{m['worst_pitch_deg']:.0f} deg"
+    )
+
+
 def _run_track(body, rep, pts: np.ndarray, config):
-    """Track the targets ``pts`` (M, 2) under a progress bar; return the tracking result."""
+    """Track the targets ``pts`` (M, 3) under a progress bar; return the tracking result."""
     from zoetic.behavior.tracking import track as run_track
 
     with track_bar("s") as bar:
@@ -129,17 +145,17 @@ def _write_track(out: Path, body, result, pts: np.ndarray, memory: Path) -> int:
     """Write a tracking run's controller, summary, record and path plot; return how many
     targets it reached."""
     from zoetic.behavior.tracking import replay
-    from zoetic.cli.records import targets, write_sequence_record
+    from zoetic.cli.records import figures, write_sequence_record
     from zoetic.control import save_controller
     from zoetic.io import write_json
-    from zoetic.viz.plots import plot_path
+    from zoetic.viz.tracking import plot_plan
 
     check = replay(body, result)
     drift = float(np.nanmax(np.abs(check.positions[0] - result.positions)))
     summary = result.summary() | {
         "animal": body.name,
         "memory": str(memory),
-        "targets_xz": pts.tolist(),
+        "targets_xyz": pts.tolist(),
         "plan": [
             {"entry": n, "start_s": round(float(s), 3)}
             for n, s in zip(result.names, result.starts, strict=True)
@@ -156,17 +172,33 @@ def _write_track(out: Path, body, result, pts: np.ndarray, memory: Path) -> int:
         result.times,
         result.positions,
         result.sequence,
-        targets(pts, float(result.com[0, 1])),
-        {"targets_reached": f"{reached}/{len(pts)}"},
+        _target_things(result.targets),
+        {"targets_reached": f"{reached}/{len(pts)}"} | figures(result.motion),
     )
-    plot_path(
-        result.com,
+    plot_plan(
+        [result.com],
+        ["path"],
         out / "path.png",
-        targets=pts,
-        starts=result.start_indices,
-        title=f"{body.name} tracking {reached}/{len(pts)} targets (white: a new controller starts)",
+        result.targets,
+        np.zeros((0, 3)),
+        [result.start_indices],
+        title=f"{body.name} tracking: {reached}/{len(pts)} targets reached in 3D "
+        f"(white: a new controller starts)",
+        band=0.5,
     )
     return reached
+
+
+def _target_things(world: np.ndarray) -> list:
+    """Return the record's target markers at their world points (M, 3)."""
+    import dataclasses
+
+    from zoetic.cli.records import targets
+
+    return [
+        dataclasses.replace(targets(p[[0, 2]], float(p[1]))[0], name=f"target {k + 1}")
+        for k, p in enumerate(np.asarray(world, float))
+    ]
 
 
 @app.command()
@@ -195,6 +227,7 @@ def macro(
     """Search for a macro controller (selection, order, durations of entries) to reach a goal."""
     use_ray_address(ray_address)
     from zoetic.behavior.macro import MacroProblem, ReachTask
+    from zoetic.behavior.tracking import locomotion
     from zoetic.control import save_controller
     from zoetic.io import write_json
 
@@ -214,12 +247,15 @@ def macro(
         "seed": seed,
         "history": [[n, round(f, 5)] for n, f in result.history],
     }
-    write_json(out / "summary.json", summary)
     traj = problem.rollout(result.entries, result.durations, record_every=4)
+    motion = locomotion(body, traj.positions[0], traj.times)
+    summary |= motion
+    write_json(out / "summary.json", summary)
     depth = float(traj.com(body)[0][0, 1])
     _write_plan_record(out, body, traj, result.sequence, g, obs, depth, summary)
     _draw_plan(out, body, traj, result, g, obs, video, fps)
     _report_plan(method, result.summary(), out, video)
+    console.print(motion_line(motion))
 
 
 def _goal_and_obstacles(goal: str, obstacle: list[str]) -> tuple[np.ndarray, np.ndarray]:
@@ -262,7 +298,9 @@ def _draw_plan(
         f"{body.name} macro controller ({method}): final distance {s['final_m']:.2f} m, "
         f"{s['inside_obstacle_s']:.1f} s in obstacles"
     )
-    plot_plan([com], [f"{method} plan"], out / "path.png", goal, obstacles, [idx], title=title)
+    plot_plan(
+        [com], [f"{method} plan"], out / "path.png", goal, obstacles, [idx], title=title, band=0.5
+    )
     if video:
         from zoetic.viz.render3d import render_video
 

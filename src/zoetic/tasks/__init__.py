@@ -61,12 +61,23 @@ TOP_KEYS = (
     "start",
     "starts",
     "terms",
+    "promise",
 )
 START_KEYS = ("name", "position", "depth", "heading", "pitch", "speed")
 CRUISE = "cruise"  # a start speed: the animal's own wave's sustained speed (cruise_speed)
 CRUISE_SECONDS = 6.0  # s of the wave played to measure it (the speed of the second half)
 MAX_STARTS = 16
 TERM_KEYS = ("kind", "weight", "target", "goal")
+# what a learned entry must do, judged from each of its task's starts over the horizon
+# (``behavior.training.judge_entry``): a task's [promise] table gives [low, high] per quantity
+PROMISES = {
+    "turn_deg": "heading change, end minus start (deg, left positive)",
+    "climb_m": "rise of the centre of mass, end minus start (m, up positive)",
+    "speed_bl_s": "mean speed of the centre of mass (body lengths/s)",
+    "radius_bl": "radius of the arc the centre of mass turns on (body lengths)",
+    "roll_deg": "greatest roll over the motion (deg, either way)",
+    "pitch_change_deg": "pitch change, end minus start (deg, nose up positive)",
+}
 
 
 @dataclass(frozen=True)
@@ -77,6 +88,23 @@ class Term:
     weight: float
     target: float = 0.0
     goal: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class Promise:
+    """What a learned entry must do: ``quantity`` (a ``PROMISES`` name) within [low, high]."""
+
+    quantity: str
+    low: float
+    high: float
+
+    def text(self) -> str:
+        """Return the promise in words, e.g. "turn_deg >= 90" or "roll_deg <= 30"."""
+        if math.isinf(self.high):
+            return f"{self.quantity} >= {self.low:g}"
+        if math.isinf(self.low) or (self.low == 0 and self.quantity == "roll_deg"):
+            return f"{self.quantity} <= {self.high:g}"
+        return f"{self.quantity} in [{self.low:g}, {self.high:g}]"
 
 
 @dataclass(frozen=True)
@@ -119,6 +147,7 @@ class Task:
     source: str = "<memory>"
     starts: tuple[Start, ...] = (Start(),)
     record_hz: float = 20.0
+    promises: tuple[Promise, ...] = ()
 
     @property
     def start(self) -> Start:
@@ -153,6 +182,11 @@ class Task:
                 {"kind": t.kind, "weight": t.weight, "target": t.target, "goal": list(t.goal)}
                 for t in self.terms
             ],
+            **(
+                {"promise": {p.quantity: [p.low, p.high] for p in self.promises}}
+                if self.promises
+                else {}
+            ),
         }
 
 
@@ -229,6 +263,26 @@ def _parse_starts(doc: dict, where: str) -> tuple[Start, ...]:
     return starts
 
 
+def _parse_promises(raw, where: str) -> tuple[Promise, ...]:
+    """Return the promises of a [promise] table: quantity = [low, high] (inf allowed)."""
+    if raw is None:
+        return ()
+    w = f"{where}: promise"
+    if not isinstance(raw, dict):
+        raise TaskError(f"{w} must be a table of quantity = [low, high]")
+    _check_keys(raw, tuple(PROMISES), w)
+    out = []
+    for q, v in raw.items():
+        ok = isinstance(v, list) and len(v) == 2
+        if not ok or any(isinstance(x, bool) or not isinstance(x, int | float) for x in v):
+            raise TaskError(f"{w}: '{q}' must be [low, high] (numbers, inf allowed), got {v!r}")
+        lo, hi = float(v[0]), float(v[1])
+        if math.isnan(lo) or math.isnan(hi) or not lo <= hi:
+            raise TaskError(f"{w}: '{q}' must be [low, high] with low <= high, got {v!r}")
+        out.append(Promise(q, lo, hi))
+    return tuple(out)
+
+
 def _parse_requires(raw, where: str) -> tuple[str, ...]:
     if not isinstance(raw, list) or not all(isinstance(r, str) for r in raw):
         raise TaskError(f"{where}: 'requires' must be a list of capabilities, got {raw!r}")
@@ -288,6 +342,7 @@ def parse_task(doc: dict, source: str = "<memory>") -> Task:
         source=source,
         starts=_parse_starts(doc, where),
         record_hz=record_hz,
+        promises=_parse_promises(doc.get("promise"), where),
     )
 
 

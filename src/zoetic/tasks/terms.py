@@ -95,6 +95,13 @@ def depth_keeping(xp, s: Signals, p: TermParams):
     return xp.mean((y - y[:, :1]) ** 2, axis=1)
 
 
+@term("squared error of the rise of the centre of mass, end minus start, against 'target' (m^2)")
+def height_change(xp, s: Signals, p: TermParams):
+    """Return (K,) m^2: squared error of the end-minus-start height vs 'target' (>= 0; cost)."""
+    y = s.com[:, :, 1]
+    return (y[:, -1] - y[:, 0] - p.target) ** 2
+
+
 @term("squared error of the heading change against 'target' (rad^2)")
 def heading_change(xp, s: Signals, p: TermParams):
     """Return (K,) rad^2: squared error of end-minus-start heading vs 'target' (>= 0; cost)."""
