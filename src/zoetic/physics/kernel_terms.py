@@ -61,7 +61,8 @@ def weight(s, m):
     level = F(m.water_level)
     g = F(m.gravity)
     gb = g * F(m.buoyancy)
-    for i in range(mass.shape[0]):
+    for n in range(mass.shape[0]):
+        i = np.uint64(n)
         wet = mass[i] * (gb - g)
         dry = -mass[i] * g
         for b in range(s.shape[2]):
@@ -83,8 +84,8 @@ def springs(s, fo, arow, m, sidx):
     relaxed, shorten, scol = m.relaxed, m.shorten, m.spring_col
     for q in range(sidx.shape[0]):
         e = sidx[q]
-        i = sa[e]
-        j = sb[e]
+        i = np.uint64(sa[e])  # unsigned: no wrap-around select per address
+        j = np.uint64(sb[e])
         k = stiff[e]
         c = sdamp[e]
         lr = relaxed[e]
@@ -124,10 +125,10 @@ def water(s, m):
     dt = F(m.dt)
     for f in range(panels.shape[0]):
         half_drag = HALF * drag * pdrag[f]
-        i0 = panels[f, 0]
-        i1 = panels[f, 1]
-        i2 = panels[f, 2]
-        i3 = panels[f, 3]
+        i0 = np.uint64(panels[f, 0])
+        i1 = np.uint64(panels[f, 1])
+        i2 = np.uint64(panels[f, 2])
+        i3 = np.uint64(panels[f, 3])
         w = (pw[f, 0], pw[f, 1], pw[f, 2], pw[f, 3])
         # the panel's own mass (weights are 1/n for its n distinct nodes)
         mf_dt = (w[0] * mass[i0] + w[1] * mass[i1] + w[2] * mass[i2] + w[3] * mass[i3]) / (
@@ -356,7 +357,7 @@ def advance_nodes(s, fo, m, h, nodes):
     GX): velocities (nodal damping implicit), then positions."""
     mass, ndamp = m.mass, m.node_damping
     for q in range(nodes.shape[0]):
-        i = nodes[q]
+        i = np.uint64(nodes[q])
         hm = h / mass[i]
         damp = ONE / (ONE + hm * ndamp[i])
         for b in range(s.shape[2]):
