@@ -33,21 +33,8 @@ from numba.extending import typeof_impl
 
 from zoetic.physics.kernel_terms import (
     FM,
-    FX,
-    GX,
-    GY,
-    GZ,
-    NF,
-    VX,
-    VY,
-    VZ,
     ZERO,
     F,
-    X,
-    Y,
-    Z,
-    FY,
-    FZ,
     advance_nodes,
     fins,
     floor_constants,
@@ -59,27 +46,20 @@ from zoetic.physics.kernel_terms import (
 from zoetic.physics.model import INDEX, NO_WATER, Model, field_kinds
 
 
-# Lanes a block steps together: a compile-time constant, so that every lane loop has a known
-# length (no remainder loop) and a block's state (nodes, NF, LANES) stays in L1. 16 is two
-# AVX2 vectors or one AVX-512 vector.
-LANES = 16
-WIDE = 4  # from this many lanes the wide blocks step them (fewer: one lane a block)
-
-
 @njit(cache=True, fastmath=FM, inline="always")
-def _block_steps(
-    s, arow, tmp, pos0, vel0, act, record_every, vmax, b0, nb, m, rec, final_pos, final_vel,
-    failed_step,
+def _chunk_steps(
+    s, pos0, vel0, act, record_every, vmax, b0, nb, m, rec, final_pos, final_vel, failed_step
 ):
-    """Step lanes b0 .. b0 + nb of model ``m`` through all rows of ``act`` in the block state
-    s (nodes, NF, lanes >= nb; lanes past nb repeat lane b0): load them from pos0/vel0,
-    record every ``record_every`` steps (never if 0), store the final state (NaN for failed
-    lanes) in final_pos/final_vel. ``arow`` (A, lanes) and ``tmp`` (3, lanes) are scratch.
+    """Step lanes b0 .. b0 + nb of model ``m`` through all rows of ``act`` in s (twelve (nodes,
+    >= nb) arrays): load them from pos0/vel0, record every ``record_every`` steps (never if 0),
+    store the final state (NaN for failed lanes) in final_pos/final_vel.
 
     A step: every force but the stiff springs, the floor last, then the nodes no fast spring
     touches advance once, exactly as without a split, and the others take their sub-steps."""
-    _put(s, X, pos0, b0, nb)
-    _put(s, VX, vel0, b0, nb)
+    x, y, z, vx, vy, vz, fx, fy, fz, gx = s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9]
+    arow = np.empty((act.shape[1], nb), dtype=np.float32)  # this step's activations
+    _put(x, y, z, pos0, b0, nb)
+    _put(vx, vy, vz, vel0, b0, nb)
     # what the steps share, decided once
     dt = F(m.dt)
     water_on = F(m.water_drag) > 0.0 and F(m.water_level) > NO_WATER
@@ -90,146 +70,176 @@ def _block_steps(
     r = 0
     for t in range(n_steps + 1):
         if record_every > 0 and t % record_every == 0:
-            _take(rec[r], s, X, failed_step, b0, nb)
+            _take(rec[r], x, y, z, failed_step, b0, nb)
             r += 1
         if t == n_steps:
             break
         _act_row(arow, act, t, b0, nb)
-        weight(s, m)
-        springs(s, FX, arow, m, m.slow_springs)
+        weight(y, fx, fy, fz, nb, m)
+        springs(x, y, z, vx, vy, vz, fx, fy, fz, arow, nb, m, m.slow_springs)
         if water_on:
-            water(s, m)
+            water(x, y, z, vx, vy, vz, fx, fy, fz, nb, m)
         if fins_on:
-            fins(s, tmp, arow, m)
+            fins(x, y, z, vx, vy, vz, fx, fy, fz, gx, arow, nb, m)
         if m.floor:
-            ground(s, m, floor)
-        advance_nodes(s, FX, m, dt, m.slow_nodes)
+            ground(x, y, z, vx, vy, vz, fx, fy, fz, nb, m, floor)
+        advance_nodes(x, y, z, vx, vy, vz, fx, fy, fz, nb, m, dt, m.slow_nodes)
         if split:
-            _substeps(s, arow, m)
+            _substeps(s, arow, nb, m)
         if t % 8 == 7 or t == n_steps - 1:
-            _check_lanes(s, tmp, m, vmax, t, b0, nb, failed_step)
-    _take(final_pos, s, X, failed_step, b0, nb)
-    _take(final_vel, s, VX, failed_step, b0, nb)
+            _check_lanes(s, m, vmax, t, b0, nb, failed_step)
+    _take(final_pos, x, y, z, failed_step, b0, nb)
+    _take(final_vel, vx, vy, vz, failed_step, b0, nb)
 
 
 @njit(cache=True, fastmath=FM, inline="always")
 def _act_row(arow, act, t, b0, nb):
-    """Copy step t's activations of lanes b0 .. b0 + nb into arow (A, lanes), the lanes past
-    nb repeating lane b0, so that the force terms read them with unit stride from lane 0.
-    The index is unsigned: a signed b0 + b is checked for wrap-around lane by lane, which
-    turned the load of each spring's activation into eight scalar loads."""
+    """Copy step t's activations of lanes b0 .. b0 + nb into arow (A, >= nb), so that the
+    force terms read them with unit stride from lane 0. The index is unsigned: a signed
+    b0 + b is checked for wrap-around lane by lane, which made the load of each spring's
+    activation in the lane loop eight scalar loads and inserts (about 40 instructions of a
+    spring's 100 per 8 lanes on AVX2)."""
     for c in range(act.shape[1]):
         for b in range(nb):
             arow[c, b] = act[t, c, np.uint64(b0 + b)]
-        for b in range(nb, arow.shape[1]):
-            arow[c, b] = arow[c, 0]
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def _put(s, f, src, b0, nb):
-    """Load lanes b0 .. b0 + nb of src (nodes, 3, lanes) into fields f .. f + 2 of the block
-    s, the block's lanes past nb repeating lane b0."""
-    for i in range(s.shape[0]):
-        for b in range(s.shape[2]):
-            lane = np.uint64(b0 + (b if b < nb else 0))
-            s[i, f, b] = src[i, 0, lane]
-            s[i, f + 1, b] = src[i, 1, lane]
-            s[i, f + 2, b] = src[i, 2, lane]
-
-
-@njit(cache=True, fastmath=FM, inline="always")
-def _take(dst, s, f, failed_step, b0, nb):
-    """Write fields f .. f + 2 of the block's first nb lanes into lanes b0 .. b0 + nb of dst
-    (nodes, 3, lanes), NaN in the lanes that failed."""
-    for i in range(s.shape[0]):
+def _put(x, y, z, src, b0, nb):
+    """Load lanes b0 .. b0 + nb of src (nodes, 3, lanes) into (x, y, z) (nodes, >= nb)."""
+    for i in range(x.shape[0]):
         for b in range(nb):
-            lane = np.uint64(b0 + b)
-            dead = failed_step[lane] >= 0
-            dst[i, 0, lane] = np.nan if dead else s[i, f, b]
-            dst[i, 1, lane] = np.nan if dead else s[i, f + 1, b]
-            dst[i, 2, lane] = np.nan if dead else s[i, f + 2, b]
+            x[i, b] = src[i, 0, b0 + b]
+            y[i, b] = src[i, 1, b0 + b]
+            z[i, b] = src[i, 2, b0 + b]
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def _substeps(s, arow, m):
-    """The fast nodes of a split (``multirate.split``): the step's other forces (fields FX ..
-    FZ) kick their velocities once, then the stiff springs (into GX .. GZ) drive
-    ``m.substeps`` sub-steps.
+def _take(dst, x, y, z, failed_step, b0, nb):
+    """Write lanes b0 .. b0 + nb of (x, y, z) (nodes, >= nb) into dst (nodes, 3, lanes), NaN
+    in the lanes that failed."""
+    for i in range(x.shape[0]):
+        for b in range(nb):
+            dead = failed_step[b0 + b] >= 0
+            dst[i, 0, b0 + b] = np.nan if dead else x[i, b]
+            dst[i, 1, b0 + b] = np.nan if dead else y[i, b]
+            dst[i, 2, b0 + b] = np.nan if dead else z[i, b]
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def _substeps(s, arow, nb, m):
+    """The fast nodes of a split (``multirate.split``): the step's other forces (in fx, fy,
+    fz) kick their velocities once, then the stiff springs drive ``m.substeps`` sub-steps.
 
     Impulse (RESPA) order: holding the slow forces over the sub-steps instead is not
     symplectic and grows energy (det of the step map > 1)."""
+    x, y, z, vx, vy, vz, fx, fy, fz, gx, gy, gz = (
+        s[0],
+        s[1],
+        s[2],
+        s[3],
+        s[4],
+        s[5],
+        s[6],
+        s[7],
+        s[8],
+        s[9],
+        s[10],
+        s[11],
+    )
     dt = F(m.dt)
     hsub = dt / F(max(m.substeps, 1))
     fast_nodes, mass = m.fast_nodes, m.mass
     for q in range(fast_nodes.shape[0]):
         i = fast_nodes[q]
         hm = dt / mass[i]
-        for b in range(s.shape[2]):
-            s[i, VX, b] += hm * s[i, FX, b]
-            s[i, VY, b] += hm * s[i, FY, b]
-            s[i, VZ, b] += hm * s[i, FZ, b]
+        for b in range(nb):
+            vx[i, b] += hm * fx[i, b]
+            vy[i, b] += hm * fy[i, b]
+            vz[i, b] += hm * fz[i, b]
     for _sub in range(m.substeps):
         for q in range(fast_nodes.shape[0]):
             i = fast_nodes[q]
-            for b in range(s.shape[2]):
-                s[i, GX, b] = ZERO
-                s[i, GY, b] = ZERO
-                s[i, GZ, b] = ZERO
-        springs(s, GX, arow, m, m.fast_springs)
-        advance_nodes(s, GX, m, hsub, fast_nodes)
+            for b in range(nb):
+                gx[i, b] = ZERO
+                gy[i, b] = ZERO
+                gz[i, b] = ZERO
+        springs(x, y, z, vx, vy, vz, gx, gy, gz, arow, nb, m, m.fast_springs)
+        advance_nodes(x, y, z, vx, vy, vz, gx, gy, gz, nb, m, hsub, fast_nodes)
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def _check_lanes(s, tmp, m, vmax, t, b0, nb, failed_step):
+def _check_lanes(s, m, vmax, t, b0, nb, failed_step):
     """Mark the lanes faster than vmax (or not finite) as failed at step t + 1, and put every
-    failed lane back to rest so that it cannot slow or poison the others (``tmp`` (1, lanes)
-    scratch)."""
+    failed lane back to rest so that it cannot slow or poison the others."""
+    x, y, z, vx, vy, vz = s[0], s[1], s[2], s[3], s[4], s[5]
     rest_pos = m.rest_pos
     n_nodes = rest_pos.shape[0]
-    lanes = s.shape[2]
-    worst = tmp[0]
-    for b in range(lanes):
-        worst[b] = ZERO
-    for i in range(n_nodes):
-        for b in range(lanes):
-            s2 = s[i, VX, b] * s[i, VX, b] + s[i, VY, b] * s[i, VY, b] + s[i, VZ, b] * s[i, VZ, b]
-            worst[b] = s2 if s2 > worst[b] else worst[b]
-    for b in range(lanes):
-        bad = not (worst[b] < vmax * vmax)
-        if b < nb:
-            lane = np.uint64(b0 + b)
-            if bad and failed_step[lane] < 0:
-                failed_step[lane] = t + 1
-            bad = failed_step[lane] >= 0
-        if bad:
+    for b in range(nb):
+        worst = ZERO
+        for i in range(n_nodes):
+            s2 = vx[i, b] * vx[i, b] + vy[i, b] * vy[i, b] + vz[i, b] * vz[i, b]
+            worst = s2 if s2 > worst else worst
+        if not (worst < vmax * vmax) and failed_step[b0 + b] < 0:
+            failed_step[b0 + b] = t + 1
+        if failed_step[b0 + b] >= 0:
             for i in range(n_nodes):
-                s[i, X, b] = rest_pos[i, 0]
-                s[i, Y, b] = rest_pos[i, 1]
-                s[i, Z, b] = rest_pos[i, 2]
-                s[i, VX, b] = ZERO
-                s[i, VY, b] = ZERO
-                s[i, VZ, b] = ZERO
+                x[i, b] = rest_pos[i, 0]
+                y[i, b] = rest_pos[i, 1]
+                z[i, b] = rest_pos[i, 2]
+                vx[i, b] = ZERO
+                vy[i, b] = ZERO
+                vz[i, b] = ZERO
+
+
+@njit(cache=True, inline="always")
+def _scratch(n_nodes, nb):
+    """Twelve fresh (nodes, nb) float32 arrays for one chunk's state and forces: separate
+    allocations, not views of one block, so that LLVM knows they do not alias (one block
+    measured 1.3x slower a step, one lane)."""
+    f32 = np.float32
+    return (
+        np.empty((n_nodes, nb), dtype=f32),
+        np.empty((n_nodes, nb), dtype=f32),
+        np.empty((n_nodes, nb), dtype=f32),
+        np.empty((n_nodes, nb), dtype=f32),
+        np.empty((n_nodes, nb), dtype=f32),
+        np.empty((n_nodes, nb), dtype=f32),
+        np.empty((n_nodes, nb), dtype=f32),
+        np.empty((n_nodes, nb), dtype=f32),
+        np.empty((n_nodes, nb), dtype=f32),
+        np.empty((n_nodes, nb), dtype=f32),
+        np.empty((n_nodes, nb), dtype=f32),
+        np.empty((n_nodes, nb), dtype=f32),
+    )
 
 
 @njit(cache=True, fastmath=FM, parallel=True, error_model="numpy")
-def simulate_chunks(pos0, vel0, act, record_every, chunk, vmax, m, rec, final_pos, final_vel,
-                    failed_step):
+def simulate_chunks(
+    pos0, vel0, act, record_every, chunk, vmax, m, rec, final_pos, final_vel, failed_step
+):
     """Step every candidate of model ``m`` through all activation rows; fills rec (R, N, 3, B),
-    final_pos and final_vel (N, 3, B) and failed_step (B,). Each thread takes chunks of
-    ``chunk`` lanes and steps them in blocks of LANES lanes (``_block_steps``), one block
-    through all its steps at a time, its state in L1."""
+    final_pos and final_vel (N, 3, B) and failed_step (B,) (``_chunk_steps``)."""
     n_lanes = pos0.shape[2]
-    f32 = np.float32
     for c in prange((n_lanes + chunk - 1) // chunk):
-        c0 = c * chunk
-        c1 = min(c0 + chunk, n_lanes)
-        # fresh per chunk: the lane count is a constant that LLVM sees in every loop
-        s = np.empty((m.mass.shape[0], NF, LANES), dtype=f32)
-        arow = np.empty((act.shape[1], LANES), dtype=f32)
-        tmp = np.empty((3, LANES), dtype=f32)
-        for b0 in range(c0, c1, LANES):
-            _block_steps(s, arow, tmp, pos0, vel0, act, record_every, vmax, b0,
-                         min(LANES, c1 - b0), m, rec, final_pos, final_vel, failed_step)
+        b0 = c * chunk
+        nb = min(chunk, n_lanes - b0)
+        s = _scratch(m.mass.shape[0], nb)
+        _chunk_steps(
+            s,
+            pos0,
+            vel0,
+            act,
+            record_every,
+            vmax,
+            b0,
+            nb,
+            m,
+            rec,
+            final_pos,
+            final_vel,
+            failed_step,
+        )
 
 
 # ---- a stateful entry point: one animal's lanes stepped in place, slice after slice ----------
@@ -279,8 +289,15 @@ def _typeof_stepper(val, c):
 
 
 _STEPPER = StepperType(
-    [("model", MODEL), ("pos", _F3), ("vel", _F3), ("fs", _I1), ("failed", _I1),
-     ("chunk", types.int64), ("vmax", types.float32)]
+    [
+        ("model", MODEL),
+        ("pos", _F3),
+        ("vel", _F3),
+        ("fs", _I1),
+        ("failed", _I1),
+        ("chunk", types.int64),
+        ("vmax", types.float32),
+    ]
 )
 
 
@@ -308,28 +325,19 @@ def make_stepper(model: Model, pos, vel, fs, failed, chunk: int, vmax: float) ->
     return _new_stepper(model, pos, vel, fs, failed, int(chunk), F(vmax))
 
 
-def variant(fn, name: str, parallel: bool, lanes: int):
-    """Return a copy of ``fn`` (an njit(parallel=True) function of this module) under its own
-    name (numba keys its on-disk cache by the qualified name) with blocks of ``lanes`` lanes,
-    compiled for the thread pool or for this thread alone (its ``prange`` runs as ``range``:
-    no thread-pool launch, which costs more than a short slice of one animal)."""
+def serial(fn):
+    """Return ``fn`` (an njit(parallel=True) function of this module) compiled for one thread
+    (its ``prange`` runs as ``range``): no thread-pool launch, which costs more than a short
+    slice of one animal. A copy under its own name, so that its on-disk cache entry is apart
+    from the parallel one's (numba keys the cache by the function's qualified name)."""
     py = fn.py_func
-    copy = pytypes.FunctionType(
-        py.__code__, {**py.__globals__, "LANES": lanes}, name, py.__defaults__, py.__closure__
-    )
+    name = f"{py.__name__}_serial"
+    copy = pytypes.FunctionType(py.__code__, py.__globals__, name, py.__defaults__, py.__closure__)
     copy.__qualname__ = name
-    return njit(cache=True, fastmath=FM, parallel=parallel, error_model="numpy")(copy)
+    return njit(cache=True, fastmath=FM, error_model="numpy")(copy)
 
 
-# one lane a block, for fewer lanes than WIDE: a wide block would step mostly copies
-simulate_chunks_serial = variant(simulate_chunks, "simulate_chunks_serial", False, LANES)
-simulate_narrow = variant(simulate_chunks, "simulate_narrow", True, 1)
-simulate_narrow_serial = variant(simulate_chunks, "simulate_narrow_serial", False, 1)
-
-
-def simulate_entry(lanes: int):
-    """Return the threaded kernel entry for ``lanes`` candidates (wide or narrow blocks)."""
-    return simulate_chunks if lanes >= WIDE else simulate_narrow
+simulate_chunks_serial = serial(simulate_chunks)
 
 
 @njit(cache=True, error_model="numpy")
@@ -339,12 +347,7 @@ def advance(st, table, t0, t1, base):
     in the call."""
     pos, vel = st.pos, st.vel
     no_rec = np.empty((0, pos.shape[0], 3, pos.shape[2]), dtype=np.float32)  # no records
-    if pos.shape[2] >= WIDE:
-        simulate_chunks(pos, vel, table[t0:t1], 0, st.chunk, st.vmax, st.model, no_rec, pos,
-                        vel, st.fs)
-    else:
-        simulate_narrow(pos, vel, table[t0:t1], 0, st.chunk, st.vmax, st.model, no_rec, pos,
-                        vel, st.fs)
+    simulate_chunks(pos, vel, table[t0:t1], 0, st.chunk, st.vmax, st.model, no_rec, pos, vel, st.fs)
     _mark_failed(st.fs, st.failed, base)
 
 
@@ -353,12 +356,9 @@ def advance_serial(st, table, t0, t1, base):
     """``advance`` on this thread alone (``serial``)."""
     pos, vel = st.pos, st.vel
     no_rec = np.empty((0, pos.shape[0], 3, pos.shape[2]), dtype=np.float32)  # no records
-    if pos.shape[2] >= WIDE:
-        simulate_chunks_serial(pos, vel, table[t0:t1], 0, st.chunk, st.vmax, st.model, no_rec,
-                               pos, vel, st.fs)
-    else:
-        simulate_narrow_serial(pos, vel, table[t0:t1], 0, st.chunk, st.vmax, st.model, no_rec,
-                               pos, vel, st.fs)
+    simulate_chunks_serial(
+        pos, vel, table[t0:t1], 0, st.chunk, st.vmax, st.model, no_rec, pos, vel, st.fs
+    )
     _mark_failed(st.fs, st.failed, base)
 
 

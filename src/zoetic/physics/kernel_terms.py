@@ -5,10 +5,11 @@ They are ``physics.law`` hand-tuned for the CPU: every per-node quantity is an a
 LLVM vectorises it; the conformance tests hold them equal to the law. Each term reads the
 body from the ``model.Model`` by field name and adds into the force arrays fx, fy, fz.
 
-Cost (shark, AVX2 host): springs are about 3/4 of a step, water panels 1/4. Each spring moves
-about 25 lane-vectors through memory (positions, velocities, both nodes' forces, one
-activation), so the loop is bound by loads and stores rather than arithmetic; the batched
-figure therefore scales with the host's SIMD width (twice on AVX-512).
+Cost (shark): springs are about 3/4 of a step, water panels 1/4. Each spring moves about 25
+lane-vectors through memory (positions, velocities, both nodes' forces, one activation); a
+512-lane chunk's state spills from L1 to L2, and each lane loop pays LLVM's runtime overlap
+tests on entry, so the kernel runs near the L2 bound and well below its arithmetic and
+square-root bounds (the roofline is in docs/performance.md).
 """
 
 from __future__ import annotations
@@ -42,39 +43,26 @@ TINY = F(1e-12)
 TINY2 = F(1e-30)
 
 
-# The state of one block of lanes is one array s (nodes, NF, lanes): each node's fields (its
-# position, velocity, force and the sub-steps' force, each a row of lanes) lie together, and
-# the lane count is a compile-time constant (the entry point allocates s). Then every access
-# of one node is one base pointer plus a constant offset, so LLVM proves that a force row
-# written never overlaps a position or velocity row read in the same node, and it checks the
-# two (or four) nodes of a spring (panel) against each other with one test each at run time;
-# with a row per quantity it needed about a hundred such tests per spring and lost the SIMD
-# path on short rows. A block of 16 lanes (about 18 kB for the shark) stays in L1.
-X, Y, Z, VX, VY, VZ, FX, FY, FZ, GX, GY, GZ = range(12)
-NF = 12  # fields a node holds
-
-
 @njit(cache=True, fastmath=FM, inline="always")
-def weight(s, m):
+def weight(y, fx, fy, fz, nb, m):
     """Set the forces to gravity and, below the water level, buoyancy."""
     mass = m.mass
     level = F(m.water_level)
     g = F(m.gravity)
     gb = g * F(m.buoyancy)
-    for n in range(mass.shape[0]):
-        i = np.uint64(n)
+    for i in range(mass.shape[0]):
         wet = mass[i] * (gb - g)
         dry = -mass[i] * g
-        for b in range(s.shape[2]):
-            s[i, FX, b] = ZERO
-            s[i, FY, b] = wet if s[i, Y, b] < level else dry
-            s[i, FZ, b] = ZERO
+        for b in range(nb):
+            fx[i, b] = ZERO
+            fy[i, b] = wet if y[i, b] < level else dry
+            fz[i, b] = ZERO
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def springs(s, fo, arow, m, sidx):
-    """Add the forces of the springs listed in ``sidx`` to the force fields fo, fo + 1,
-    fo + 2 (FX or GX) (``arow`` (A, lanes): this step's activations of the block's lanes)."""
+def springs(x, y, z, vx, vy, vz, fx, fy, fz, arow, nb, m, sidx):
+    """Add the forces of the springs listed in ``sidx`` (``arow`` (A, >= nb): this step's
+    activations of the chunk's lanes)."""
     # springs and muscles: l = a*l_c + (1-a)*l_r = l_r + a*(l_c - l_r). Branch-free: a passive
     # spring reads column 0 and has l_c - l_r = 0 (``shorten``). A branch on "is it a muscle"
     # here kept LLVM from vectorising the loop: removing it made the shark 2x, the snake 3.4x.
@@ -83,18 +71,18 @@ def springs(s, fo, arow, m, sidx):
     sa, sb, stiff, sdamp = m.spring_a, m.spring_b, m.stiffness, m.spring_damping
     relaxed, shorten, scol = m.relaxed, m.shorten, m.spring_col
     for q in range(sidx.shape[0]):
-        e = sidx[q]
-        i = np.uint64(sa[e])  # unsigned: no wrap-around select per address
-        j = np.uint64(sb[e])
-        k = stiff[e]
-        c = sdamp[e]
-        lr = relaxed[e]
-        dl = shorten[e]
-        col = scol[e]
-        for b in range(s.shape[2]):
-            dx = s[j, X, b] - s[i, X, b]
-            dy = s[j, Y, b] - s[i, Y, b]
-            dz = s[j, Z, b] - s[i, Z, b]
+        s = sidx[q]
+        i = sa[s]
+        j = sb[s]
+        k = stiff[s]
+        c = sdamp[s]
+        lr = relaxed[s]
+        dl = shorten[s]
+        col = scol[s]
+        for b in range(nb):
+            dx = x[j, b] - x[i, b]
+            dy = y[j, b] - y[i, b]
+            dz = z[j, b] - z[i, b]
             length = math.sqrt(dx * dx + dy * dy + dz * dz) + TINY
             inv = ONE / length
             ux = dx * inv
@@ -102,93 +90,74 @@ def springs(s, fo, arow, m, sidx):
             uz = dz * inv
             rest = lr + arow[col, b] * dl
             edot = (
-                (s[j, VX, b] - s[i, VX, b]) * ux
-                + (s[j, VY, b] - s[i, VY, b]) * uy
-                + (s[j, VZ, b] - s[i, VZ, b]) * uz
+                (vx[j, b] - vx[i, b]) * ux + (vy[j, b] - vy[i, b]) * uy + (vz[j, b] - vz[i, b]) * uz
             )
             mag = k * (length - rest) + c * edot
-            s[i, fo, b] += mag * ux
-            s[i, fo + 1, b] += mag * uy
-            s[i, fo + 2, b] += mag * uz
-            s[j, fo, b] -= mag * ux
-            s[j, fo + 1, b] -= mag * uy
-            s[j, fo + 2, b] -= mag * uz
+            fx[i, b] += mag * ux
+            fy[i, b] += mag * uy
+            fz[i, b] += mag * uz
+            fx[j, b] -= mag * ux
+            fy[j, b] -= mag * uy
+            fz[j, b] -= mag * uz
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def water(s, m):
+def water(x, y, z, vx, vy, vz, fx, fy, fz, nb, m):
     """Hydrodynamic reaction on each surface panel (Tu & Terzopoulos): it opposes the normal
     velocity of a panel moving outward, -c * drag * A * |v| * (n.v) * n, shared by its nodes
     (c = ``panel_drag``, the panel's own coefficient)."""
     mass, panels, pw, pdrag = m.mass, m.panels, m.panel_weights, m.panel_drag
+    level = F(m.water_level)
     drag = F(m.water_drag)
     dt = F(m.dt)
     for f in range(panels.shape[0]):
         half_drag = HALF * drag * pdrag[f]
-        i0 = np.uint64(panels[f, 0])
-        i1 = np.uint64(panels[f, 1])
-        i2 = np.uint64(panels[f, 2])
-        i3 = np.uint64(panels[f, 3])
-        w = (pw[f, 0], pw[f, 1], pw[f, 2], pw[f, 3])
+        i0 = panels[f, 0]
+        i1 = panels[f, 1]
+        i2 = panels[f, 2]
+        i3 = panels[f, 3]
+        w0 = pw[f, 0]
+        w1 = pw[f, 1]
+        w2 = pw[f, 2]
+        w3 = pw[f, 3]
         # the panel's own mass (weights are 1/n for its n distinct nodes)
-        mf_dt = (w[0] * mass[i0] + w[1] * mass[i1] + w[2] * mass[i2] + w[3] * mass[i3]) / (
-            w[0] * dt
-        )
-        # a triangle repeats its third node with weight 0: its own loop, which neither reads
-        # nor writes that node twice, so that the node cannot alias itself and stop the SIMD
-        if i3 == i2:
-            _panel_lanes(s, m, i0, i1, i2, i2, w, half_drag, mf_dt, True)
-        else:
-            _panel_lanes(s, m, i0, i1, i2, i3, w, half_drag, mf_dt, False)
-
-
-@njit(cache=True, fastmath=FM, inline="always")
-def _panel_lanes(s, m, i0, i1, i2, i3, w, half_drag, mf_dt, tri):
-    """One panel's force on its nodes in every lane (``water``); ``tri``: i3 is i2 again."""
-    level = F(m.water_level)
-    w0, w1, w2, w3 = w
-    for b in range(s.shape[2]):
-        d1x = s[i2, X, b] - s[i0, X, b]
-        d1y = s[i2, Y, b] - s[i0, Y, b]
-        d1z = s[i2, Z, b] - s[i0, Z, b]
-        d2x = s[i3, X, b] - s[i1, X, b]
-        d2y = s[i3, Y, b] - s[i1, Y, b]
-        d2z = s[i3, Z, b] - s[i1, Z, b]
-        nx = d1y * d2z - d1z * d2y
-        ny = d1z * d2x - d1x * d2z
-        nz = d1x * d2y - d1y * d2x
-        # with N the unnormalised normal (|N| = 2 area), the panel force is
-        # -(N.v)/|N|^2 * min(drag * |N|/2 * |v|, m_panel/dt) * N, only while N.v > 0
-        nn = nx * nx + ny * ny + nz * nz + TINY2
-        mvx = w0 * s[i0, VX, b] + w1 * s[i1, VX, b] + w2 * s[i2, VX, b]
-        mvy = w0 * s[i0, VY, b] + w1 * s[i1, VY, b] + w2 * s[i2, VY, b]
-        mvz = w0 * s[i0, VZ, b] + w1 * s[i1, VZ, b] + w2 * s[i2, VZ, b]
-        cy = w0 * s[i0, Y, b] + w1 * s[i1, Y, b] + w2 * s[i2, Y, b]
-        if not tri:  # a triangle's fourth weight is 0, and + 0 * v changes no bit
-            mvx += w3 * s[i3, VX, b]
-            mvy += w3 * s[i3, VY, b]
-            mvz += w3 * s[i3, VZ, b]
-            cy += w3 * s[i3, Y, b]
-        q = nx * mvx + ny * mvy + nz * mvz
-        q = q if q > ZERO else ZERO
-        vv = mvx * mvx + mvy * mvy + mvz * mvz
-        lim = half_drag * math.sqrt(nn * vv)
-        lim = lim if lim < mf_dt else mf_dt
-        mag = q / nn * lim
-        mag = mag if cy < level else ZERO
-        s[i0, FX, b] -= w0 * mag * nx
-        s[i0, FY, b] -= w0 * mag * ny
-        s[i0, FZ, b] -= w0 * mag * nz
-        s[i1, FX, b] -= w1 * mag * nx
-        s[i1, FY, b] -= w1 * mag * ny
-        s[i1, FZ, b] -= w1 * mag * nz
-        s[i2, FX, b] -= w2 * mag * nx
-        s[i2, FY, b] -= w2 * mag * ny
-        s[i2, FZ, b] -= w2 * mag * nz
-        if not tri:
-            s[i3, FX, b] -= w3 * mag * nx
-            s[i3, FY, b] -= w3 * mag * ny
-            s[i3, FZ, b] -= w3 * mag * nz
+        mf_dt = (w0 * mass[i0] + w1 * mass[i1] + w2 * mass[i2] + w3 * mass[i3]) / (w0 * dt)
+        for b in range(nb):
+            d1x = x[i2, b] - x[i0, b]
+            d1y = y[i2, b] - y[i0, b]
+            d1z = z[i2, b] - z[i0, b]
+            d2x = x[i3, b] - x[i1, b]
+            d2y = y[i3, b] - y[i1, b]
+            d2z = z[i3, b] - z[i1, b]
+            nx = d1y * d2z - d1z * d2y
+            ny = d1z * d2x - d1x * d2z
+            nz = d1x * d2y - d1y * d2x
+            # with N the unnormalised normal (|N| = 2 area), the panel force is
+            # -(N.v)/|N|^2 * min(drag * |N|/2 * |v|, m_panel/dt) * N, only while N.v > 0
+            nn = nx * nx + ny * ny + nz * nz + TINY2
+            mvx = w0 * vx[i0, b] + w1 * vx[i1, b] + w2 * vx[i2, b] + w3 * vx[i3, b]
+            mvy = w0 * vy[i0, b] + w1 * vy[i1, b] + w2 * vy[i2, b] + w3 * vy[i3, b]
+            mvz = w0 * vz[i0, b] + w1 * vz[i1, b] + w2 * vz[i2, b] + w3 * vz[i3, b]
+            q = nx * mvx + ny * mvy + nz * mvz
+            q = q if q > ZERO else ZERO
+            vv = mvx * mvx + mvy * mvy + mvz * mvz
+            cy = w0 * y[i0, b] + w1 * y[i1, b] + w2 * y[i2, b] + w3 * y[i3, b]
+            lim = half_drag * math.sqrt(nn * vv)
+            lim = lim if lim < mf_dt else mf_dt
+            mag = q / nn * lim
+            mag = mag if cy < level else ZERO
+            fx[i0, b] -= w0 * mag * nx
+            fy[i0, b] -= w0 * mag * ny
+            fz[i0, b] -= w0 * mag * nz
+            fx[i1, b] -= w1 * mag * nx
+            fy[i1, b] -= w1 * mag * ny
+            fz[i1, b] -= w1 * mag * nz
+            fx[i2, b] -= w2 * mag * nx
+            fy[i2, b] -= w2 * mag * ny
+            fz[i2, b] -= w2 * mag * nz
+            fx[i3, b] -= w3 * mag * nx
+            fy[i3, b] -= w3 * mag * ny
+            fz[i3, b] -= w3 * mag * nz
 
 
 INV_TWO_PI = F(1.0 / (2.0 * math.pi))
@@ -211,11 +180,12 @@ def cos_sin(a):
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def fins(s, tmp, arow, m):
+def fins(x, y, z, vx, vy, vz, fx, fy, fz, tmp, arow, nb, m):
     """Pectoral fins: flat plates at a controlled angle to the body, pushed on by the water.
 
-    ``tmp`` (>= 3, lanes) is scratch: each fin's force per lane is found first and only then
-    added to its nodes, so that the lane loop reads up to eight nodes and writes one row."""
+    ``tmp`` (>= 3, nb) is scratch: each fin's force per lane is found first and only then
+    added to its nodes, so that the lane loop stores into three rows rather than twelve
+    that may alias what it reads (LLVM then vectorises it)."""
     fin_nodes, mass = m.fin_nodes, m.mass
     for k in range(fin_nodes.shape[0]):
         # a fin's 1-4 nodes as four slots (padding repeats the first node with weight 0), so
@@ -226,17 +196,17 @@ def fins(s, tmp, arow, m):
             if fin_nodes[k, q] >= 0:
                 cnt += 1
                 mf += mass[fin_nodes[k, q]]
-        _fin_lanes(s, tmp, arow, m, k, cnt, mf)
+        _fin_lanes(x, y, z, vx, vy, vz, tmp, arow, nb, m, k, cnt, mf)
         for q in range(cnt):
             i = fin_nodes[k, q]
-            for b in range(s.shape[2]):
-                s[i, FX, b] -= tmp[0, b]
-                s[i, FY, b] -= tmp[1, b]
-                s[i, FZ, b] -= tmp[2, b]
+            for b in range(nb):
+                fx[i, b] -= tmp[0, b]
+                fy[i, b] -= tmp[1, b]
+                fz[i, b] -= tmp[2, b]
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def _fin_lanes(s, tmp, arow, m, k, cnt, mf):
+def _fin_lanes(x, y, z, vx, vy, vz, tmp, arow, nb, m, k, cnt, mf):
     """Write fin k's force on each of its nodes into tmp[0:3] for every lane."""
     level = F(m.water_level)
     drag = F(m.water_drag)
@@ -255,17 +225,17 @@ def _fin_lanes(s, tmp, arow, m, k, cnt, mf):
     hi = m.fin_angle[k, 1]
     col = m.fin_actuator[k]
     area = m.fin_area[k]
-    for b in range(s.shape[2]):
-        ax = s[fa, X, b] - s[fb, X, b]
-        ay = s[fa, Y, b] - s[fb, Y, b]
-        az = s[fa, Z, b] - s[fb, Z, b]
+    for b in range(nb):
+        ax = x[fa, b] - x[fb, b]
+        ay = y[fa, b] - y[fb, b]
+        az = z[fa, b] - z[fb, b]
         inv = ONE / (math.sqrt(ax * ax + ay * ay + az * az) + TINY)
         ax *= inv
         ay *= inv
         az *= inv
-        sx = s[sa_, X, b] - s[sb_, X, b]
-        sy = s[sa_, Y, b] - s[sb_, Y, b]
-        sz = s[sa_, Z, b] - s[sb_, Z, b]
+        sx = x[sa_, b] - x[sb_, b]
+        sy = y[sa_, b] - y[sb_, b]
+        sz = z[sa_, b] - z[sb_, b]
         d = sx * ax + sy * ay + sz * az
         sx -= d * ax
         sy -= d * ay
@@ -282,10 +252,10 @@ def _fin_lanes(s, tmp, arow, m, k, cnt, mf):
         nx = ca * ux + sn * ax
         ny = ca * uy + sn * ay
         nz = ca * uz + sn * az
-        mvx = share * s[i0, VX, b] + w1 * s[i1, VX, b] + w2 * s[i2, VX, b] + w3 * s[i3, VX, b]
-        mvy = share * s[i0, VY, b] + w1 * s[i1, VY, b] + w2 * s[i2, VY, b] + w3 * s[i3, VY, b]
-        mvz = share * s[i0, VZ, b] + w1 * s[i1, VZ, b] + w2 * s[i2, VZ, b] + w3 * s[i3, VZ, b]
-        cy = share * s[i0, Y, b] + w1 * s[i1, Y, b] + w2 * s[i2, Y, b] + w3 * s[i3, Y, b]
+        mvx = share * vx[i0, b] + w1 * vx[i1, b] + w2 * vx[i2, b] + w3 * vx[i3, b]
+        mvy = share * vy[i0, b] + w1 * vy[i1, b] + w2 * vy[i2, b] + w3 * vy[i3, b]
+        mvz = share * vz[i0, b] + w1 * vz[i1, b] + w2 * vz[i2, b] + w3 * vz[i3, b]
+        cy = share * y[i0, b] + w1 * y[i1, b] + w2 * y[i2, b] + w3 * y[i3, b]
         vn = nx * mvx + ny * mvy + nz * mvz
         speed = math.sqrt(mvx * mvx + mvy * mvy + mvz * mvz)
         sub = ONE if cy < level else ZERO
@@ -313,7 +283,7 @@ def floor_constants(m):
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def ground(s, m, floor):
+def ground(x, y, z, vx, vy, vz, fx, fy, fz, nb, m, floor):
     """Penalty floor at y = 0 and directional Coulomb friction, solved implicitly (``floor``:
     the model's ``floor_constants``)."""
     kc, cc, muf, mub, mul = floor[0], floor[1], floor[2], floor[3], floor[4]
@@ -323,19 +293,19 @@ def ground(s, m, floor):
         mass = masses[i]
         fi = front[i]
         bi = back[i]
-        for b in range(s.shape[2]):
-            pen = -s[i, Y, b]
-            normal = kc * pen - cc * s[i, VY, b]
+        for b in range(nb):
+            pen = -y[i, b]
+            normal = kc * pen - cc * vy[i, b]
             normal = normal if (pen > ZERO and normal > ZERO) else ZERO
-            s[i, FY, b] += normal
-            tx = s[fi, X, b] - s[bi, X, b]
-            tz = s[fi, Z, b] - s[bi, Z, b]
+            fy[i, b] += normal
+            tx = x[fi, b] - x[bi, b]
+            tz = z[fi, b] - z[bi, b]
             inv = ONE / (math.sqrt(tx * tx + tz * tz) + TINY)
             tx *= inv
             tz *= inv
             # velocity the other forces would give: friction opposes it, at most stopping it
-            px = s[i, VX, b] + dt * s[i, FX, b] / mass
-            pz = s[i, VZ, b] + dt * s[i, FZ, b] / mass
+            px = vx[i, b] + dt * fx[i, b] / mass
+            pz = vz[i, b] + dt * fz[i, b] / mass
             vf = px * tx + pz * tz
             vl = pz * tx - px * tz
             mu = muf if vf > ZERO else mub
@@ -347,23 +317,22 @@ def ground(s, m, floor):
             fl = fl if fl < cap else cap
             ff = -ff if vf > ZERO else ff
             fl = -fl if vl > ZERO else fl
-            s[i, FX, b] += ff * tx - fl * tz
-            s[i, FZ, b] += ff * tz + fl * tx
+            fx[i, b] += ff * tx - fl * tz
+            fz[i, b] += ff * tz + fl * tx
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def advance_nodes(s, fo, m, h, nodes):
-    """Symplectic Euler over h of ``nodes`` under the forces in fields fo .. fo + 2 (FX or
-    GX): velocities (nodal damping implicit), then positions."""
+def advance_nodes(x, y, z, vx, vy, vz, fx, fy, fz, nb, m, h, nodes):
+    """Symplectic Euler over h of ``nodes``: velocities (nodal damping implicit), positions."""
     mass, ndamp = m.mass, m.node_damping
     for q in range(nodes.shape[0]):
-        i = np.uint64(nodes[q])
+        i = nodes[q]
         hm = h / mass[i]
         damp = ONE / (ONE + hm * ndamp[i])
-        for b in range(s.shape[2]):
-            s[i, VX, b] = (s[i, VX, b] + hm * s[i, fo, b]) * damp
-            s[i, VY, b] = (s[i, VY, b] + hm * s[i, fo + 1, b]) * damp
-            s[i, VZ, b] = (s[i, VZ, b] + hm * s[i, fo + 2, b]) * damp
-            s[i, X, b] += h * s[i, VX, b]
-            s[i, Y, b] += h * s[i, VY, b]
-            s[i, Z, b] += h * s[i, VZ, b]
+        for b in range(nb):
+            vx[i, b] = (vx[i, b] + hm * fx[i, b]) * damp
+            vy[i, b] = (vy[i, b] + hm * fy[i, b]) * damp
+            vz[i, b] = (vz[i, b] + hm * fz[i, b]) * damp
+            x[i, b] += h * vx[i, b]
+            y[i, b] += h * vy[i, b]
+            z[i, b] += h * vz[i, b]

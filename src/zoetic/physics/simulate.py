@@ -260,7 +260,7 @@ def simulate(
     if record_every < 1:
         raise SimulationError("record_every must be at least 1")
 
-    from zoetic.physics.kernel import simulate_entry
+    from zoetic.physics.kernel import simulate_chunks
     from zoetic.physics.model import compile_model
 
     n = body.n_nodes
@@ -282,7 +282,7 @@ def simulate(
     final_vel = np.empty((n, 3, batch), dtype=f32)
     failed_step = -np.ones(batch, dtype=np.int64)
     model = compile_model(body, med, dt)
-    simulate_entry(batch)(pos0, vel0, act_t, record_every, chunk_size(batch), f32(VMAX), model, rec,
+    simulate_chunks(pos0, vel0, act_t, record_every, chunk_size(batch), f32(VMAX), model, rec,
                     final_pos, final_vel, failed_step)
     times = np.arange(n_rec) * record_every * dt
     return Trajectory(
