@@ -314,3 +314,49 @@ def test_per_face_drag_coefficients_scale_the_water_force_in_kernel_and_referenc
     damped = np.exp(-body.node_damping.sum() / body.total_mass * steps * body.dt)
     assert speed["dry"] == pytest.approx(damped, abs=0.01)
     assert speed["wet"] < 0.7
+
+
+def test_each_chunk_of_lanes_reads_its_own_activations():
+    """The kernel steps lanes in chunks and copies each step's activations for a chunk into
+    a row of its own: a lane stepped in a chunk that starts at lane 8 or 16 must move exactly
+    as it does in one chunk of all lanes, and as it does alone."""
+    from zoetic.physics.kernel import simulate_chunks_serial
+    from zoetic.physics.model import compile_model
+
+    body = load_animal("shark")
+    model = compile_model(body)
+    steps, lanes = 120, 20
+    act = np.random.default_rng(5).uniform(0, 1, (steps, body.n_actuators, lanes))
+    act = np.ascontiguousarray(act, dtype=np.float32)
+    pos0 = np.ascontiguousarray(
+        rest_state(body, lanes).positions.transpose(1, 2, 0), dtype=np.float32
+    )
+    vel0 = np.zeros_like(pos0)
+
+    def run(chunk, a):
+        n = a.shape[2]
+        out = np.empty((body.n_nodes, 3, n), np.float32)
+        rec = np.empty((0, body.n_nodes, 3, n), np.float32)
+        failed = -np.ones(n, np.int64)
+        simulate_chunks_serial(
+            pos0[..., :n].copy(),
+            vel0[..., :n].copy(),
+            a,
+            0,
+            chunk,
+            np.float32(200.0),
+            model,
+            rec,
+            out,
+            np.empty_like(out),
+            failed,
+        )
+        assert (failed < 0).all()
+        return out
+
+    whole = run(32, act)
+    assert np.array_equal(run(8, act), whole)
+    alone = run(8, np.ascontiguousarray(act[..., 13:14]))
+    assert np.array_equal(alone[..., 0], whole[..., 13])
+    # and the lanes did differ: each followed its own activations
+    assert np.abs(whole[..., 13] - whole[..., 3]).max() > 1e-3

@@ -22,12 +22,46 @@ def host_cpu() -> dict:
     return {"cpu": llvm.get_host_cpu_name(), "simd_float32_lanes": lanes}
 
 
-def _best_time(fn, repeats: int) -> float:
+def host_peak(repeats: int = 5) -> dict:
+    """Return this core's float32 FMA rate (GFLOP/s, a vectorised loop in L1) and the kernel's
+    square root plus division rate (G lanes/s), by this thread's CPU time (so that other
+    jobs on the host do not lower them): the ceilings of docs/performance.md's roofline."""
+    from numba import njit
+
+    @njit(fastmath={"nsz", "arcp", "contract"}, error_model="numpy")
+    def fma(a, reps, b, c):  # 16 dependent multiply-adds per element, elements independent
+        for _ in range(reps):
+            for k in range(a.shape[0]):
+                x = a[k]
+                for _ in range(16):
+                    x = x * b + c
+                a[k] = x
+
+    @njit(fastmath={"nsz", "arcp", "contract"}, error_model="numpy")
+    def sqrt_div(a, reps, c):  # a spring's 1 / (length + TINY)
+        for _ in range(reps):
+            for k in range(a.shape[0]):
+                a[k] = np.float32(1.0) / (np.sqrt(a[k]) + c)
+
+    a = np.ones(1024, dtype=np.float32)
+    b, c = np.float32(0.999), np.float32(1e-3)
+    fma(a, 1, b, c), sqrt_div(a, 1, c)
+    reps = 4000
+    t_fma = _best_time(lambda: fma(a, reps, b, c), repeats, time.thread_time)
+    a[:] = 1.5
+    t_sd = _best_time(lambda: sqrt_div(a, reps, c), repeats, time.thread_time)
+    return {
+        "peak_fma_gflops_per_core": round(a.size * reps * 32 / t_fma / 1e9, 1),
+        "peak_sqrt_div_glanes_per_core": round(a.size * reps / t_sd / 1e9, 2),
+    }
+
+
+def _best_time(fn, repeats: int, clock=time.perf_counter) -> float:
     best = float("inf")
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0 = clock()
         fn()
-        best = min(best, time.perf_counter() - t0)
+        best = min(best, clock() - t0)
     return best
 
 
@@ -130,6 +164,7 @@ def bench_simulate(
         out["sim_seconds_per_second_batched"] / out["numpy_reference_sim_seconds_per_second"], 1
     )
     out["realtime_factor_batched"] = out["sim_seconds_per_second_batched"]
+    out |= host_peak()
     # one animal in 1/30 s slices through a World (closed-loop stepping) over open-loop
     out |= closed_loop_overhead(body, wave)
     out["closed_loop_period_s"] = round(1 / 30, 4)

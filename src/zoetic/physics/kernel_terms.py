@@ -5,10 +5,11 @@ They are ``physics.law`` hand-tuned for the CPU: every per-node quantity is an a
 LLVM vectorises it; the conformance tests hold them equal to the law. Each term reads the
 body from the ``model.Model`` by field name and adds into the force arrays fx, fy, fz.
 
-Cost (shark, AVX2 host): springs are about 3/4 of a step, water panels 1/4. Each spring moves
-about 25 lane-vectors through memory (positions, velocities, both nodes' forces, one
-activation), so the loop is bound by loads and stores rather than arithmetic; the batched
-figure therefore scales with the host's SIMD width (twice on AVX-512).
+Cost (shark): springs are about 3/4 of a step, water panels 1/4. Each spring moves about 25
+lane-vectors through memory (positions, velocities, both nodes' forces, one activation); a
+512-lane chunk's state spills from L1 to L2, and each lane loop pays LLVM's runtime overlap
+tests on entry, so the kernel runs near the L2 bound and well below its arithmetic and
+square-root bounds (the roofline is in docs/performance.md).
 """
 
 from __future__ import annotations
@@ -59,8 +60,9 @@ def weight(y, fx, fy, fz, nb, m):
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def springs(x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb, m, sidx):
-    """Add the forces of the springs listed in ``sidx``."""
+def springs(x, y, z, vx, vy, vz, fx, fy, fz, arow, nb, m, sidx):
+    """Add the forces of the springs listed in ``sidx`` (``arow`` (A, >= nb): this step's
+    activations of the chunk's lanes)."""
     # springs and muscles: l = a*l_c + (1-a)*l_r = l_r + a*(l_c - l_r). Branch-free: a passive
     # spring reads column 0 and has l_c - l_r = 0 (``shorten``). A branch on "is it a muscle"
     # here kept LLVM from vectorising the loop: removing it made the shark 2x, the snake 3.4x.
@@ -86,7 +88,7 @@ def springs(x, y, z, vx, vy, vz, fx, fy, fz, act, t, b0, nb, m, sidx):
             ux = dx * inv
             uy = dy * inv
             uz = dz * inv
-            rest = lr + act[t, col, b0 + b] * dl
+            rest = lr + arow[col, b] * dl
             edot = (
                 (vx[j, b] - vx[i, b]) * ux + (vy[j, b] - vy[i, b]) * uy + (vz[j, b] - vz[i, b]) * uz
             )
@@ -178,7 +180,7 @@ def cos_sin(a):
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def fins(x, y, z, vx, vy, vz, fx, fy, fz, tmp, act, t, b0, nb, m):
+def fins(x, y, z, vx, vy, vz, fx, fy, fz, tmp, arow, nb, m):
     """Pectoral fins: flat plates at a controlled angle to the body, pushed on by the water.
 
     ``tmp`` (>= 3, nb) is scratch: each fin's force per lane is found first and only then
@@ -194,7 +196,7 @@ def fins(x, y, z, vx, vy, vz, fx, fy, fz, tmp, act, t, b0, nb, m):
             if fin_nodes[k, q] >= 0:
                 cnt += 1
                 mf += mass[fin_nodes[k, q]]
-        _fin_lanes(x, y, z, vx, vy, vz, tmp, act, t, b0, nb, m, k, cnt, mf)
+        _fin_lanes(x, y, z, vx, vy, vz, tmp, arow, nb, m, k, cnt, mf)
         for q in range(cnt):
             i = fin_nodes[k, q]
             for b in range(nb):
@@ -204,7 +206,7 @@ def fins(x, y, z, vx, vy, vz, fx, fy, fz, tmp, act, t, b0, nb, m):
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def _fin_lanes(x, y, z, vx, vy, vz, tmp, act, t, b0, nb, m, k, cnt, mf):
+def _fin_lanes(x, y, z, vx, vy, vz, tmp, arow, nb, m, k, cnt, mf):
     """Write fin k's force on each of its nodes into tmp[0:3] for every lane."""
     level = F(m.water_level)
     drag = F(m.water_drag)
@@ -246,7 +248,7 @@ def _fin_lanes(x, y, z, vx, vy, vz, tmp, act, t, b0, nb, m, k, cnt, mf):
         ux = ay * sz - az * sy
         uy = az * sx - ax * sz
         uz = ax * sy - ay * sx
-        ca, sn = cos_sin(lo + act[t, col, b0 + b] * (hi - lo))
+        ca, sn = cos_sin(lo + arow[col, b] * (hi - lo))
         nx = ca * ux + sn * ax
         ny = ca * uy + sn * ay
         nz = ca * uz + sn * az
