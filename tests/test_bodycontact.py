@@ -75,8 +75,19 @@ def test_close_pairs_finds_the_pairs_close_finds_one_by_one():
     vel = np.ascontiguousarray(0.1 * rng.normal(size=pos.shape))
     reach = np.array([0.1, 0.2, 0.1, 0.15])
     found = [tuple(p) for p in close_pairs(pos, vel, off, reach, 0.03, 0.1).tolist()]
-    one_by_one = [(a, c) for a in range(4) for c in range(a + 1, 4)
-                  if close(pos[off[a]:off[a + 1]], vel[off[a]:off[a + 1]], pos[off[c]:off[c + 1]],
-                           vel[off[c]:off[c + 1]], max(reach[a], reach[c]) + 0.03, 0.03, 0.1)]
+    one_by_one = [
+        (a, c)
+        for a in range(4)
+        for c in range(a + 1, 4)
+        if close(
+            pos[off[a] : off[a + 1]],
+            vel[off[a] : off[a + 1]],
+            pos[off[c] : off[c + 1]],
+            vel[off[c] : off[c + 1]],
+            max(reach[a], reach[c]) + 0.03,
+            0.03,
+            0.1,
+        )
+    ]
     assert found == one_by_one
     assert (0, 1) in found and (0, 2) not in found  # near pairs only

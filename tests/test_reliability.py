@@ -230,9 +230,7 @@ def test_an_output_path_that_is_a_file_is_an_error_not_a_traceback(tmp_path, cap
     assert afile.read_text() == "keep me"
 
 
-def test_learning_says_how_many_candidates_failed_and_refuses_an_all_failed_run(
-    tmp_path, capsys
-):
+def test_learning_says_how_many_candidates_failed_and_refuses_an_all_failed_run(tmp_path, capsys):
     from types import SimpleNamespace
 
     from zoetic.runs import finish_run

@@ -69,8 +69,13 @@ def _table(rows: list[dict], n: dict) -> None:
 
     from zoetic.reproduce.docs import fmt
 
-    colour = {"reproduced": "green", "partly": "yellow", "contradicted": "red",
-              "explained": "magenta", "absent": "dim"}  # fmt: skip
+    colour = {
+        "reproduced": "green",
+        "partly": "yellow",
+        "contradicted": "red",
+        "explained": "magenta",
+        "absent": "dim",
+    }
     t = Table(title="claims of the three papers", show_lines=False)
     t.add_column("claim", no_wrap=True)
     for col in ("where", "status", "stale", "ours / latest run"):
@@ -88,8 +93,13 @@ def _table(rows: list[dict], n: dict) -> None:
                 )
             )
         ours = r["ours"] if len(r["ours"]) <= 80 else r["ours"][:77] + "..."
-        t.add_row(r["id"], r["where"], f"[{colour[r['status']]}]{r['status']}[/]",
-                  "stale" if r["stale"] else "", ours + latest)  # fmt: skip
+        t.add_row(
+            r["id"],
+            r["where"],
+            f"[{colour[r['status']]}]{r['status']}[/]",
+            "stale" if r["stale"] else "",
+            ours + latest,
+        )
     console.print(t)
     console.print(
         ", ".join(f"{k} {v}" for k, v in n.items() if k not in ("total",)) + f" of {n['total']}"

@@ -42,8 +42,9 @@ def surface_reach(body: Body) -> float:
     if not len(f):
         return 0.0
     p = body.rest_pos
-    edges = np.concatenate([p[f[:, 1]] - p[f[:, 0]], p[f[:, 2]] - p[f[:, 1]],
-                            p[f[:, 0]] - p[f[:, 2]]])  # fmt: skip
+    edges = np.concatenate(
+        [p[f[:, 1]] - p[f[:, 0]], p[f[:, 2]] - p[f[:, 1]], p[f[:, 0]] - p[f[:, 2]]]
+    )
     return float(np.sqrt((edges**2).sum(1)).max() * STRETCH / np.sqrt(3.0))
 
 
@@ -83,8 +84,14 @@ def _closest(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
     den = 1.0 / (va + vb + vc)
     v = vb * den
     w = vc * den
-    return (ax + abx * v + acx * w, ay + aby * v + acy * w, az + abz * v + acz * w,
-            1.0 - v - w, v, w)  # fmt: skip
+    return (
+        ax + abx * v + acx * w,
+        ay + aby * v + acy * w,
+        az + abz * v + acz * w,
+        1.0 - v - w,
+        v,
+        w,
+    )
 
 
 @njit(cache=True, inline="always")
@@ -116,8 +123,12 @@ def _signed(pos, faces, b, px, py, pz):
         l2 = math.sqrt(x2 * x2 + y2 * y2 + z2 * z2)
         l3 = math.sqrt(x3 * x3 + y3 * y3 + z3 * z3)
         det = x1 * (y2 * z3 - z2 * y3) - y1 * (x2 * z3 - z2 * x3) + z1 * (x2 * y3 - y2 * x3)
-        den = (l1 * l2 * l3 + (x1 * x2 + y1 * y2 + z1 * z2) * l3
-               + (x1 * x3 + y1 * y3 + z1 * z3) * l2 + (x2 * x3 + y2 * y3 + z2 * z3) * l1)
+        den = (
+            l1 * l2 * l3
+            + (x1 * x2 + y1 * y2 + z1 * z2) * l3
+            + (x1 * x3 + y1 * y3 + z1 * z3) * l2
+            + (x2 * x3 + y2 * y3 + z2 * z3) * l1
+        )
         solid += 2.0 * math.atan2(det, den)
         qx, qy, qz, u, v, w = _closest(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz)
         dx, dy, dz = px - qx, py - qy, pz - qz
@@ -180,12 +191,14 @@ def close(pa, va, pb, vb, reach, skin, horizon) -> bool:
         ux, uy, uz = ux / (na + nb), uy / (na + nb), uz / (na + nb)
         sa = 0.0
         for i in range(na):
-            sa = max(sa, (va[i, 0, b] - ux) ** 2 + (va[i, 1, b] - uy) ** 2
-                     + (va[i, 2, b] - uz) ** 2)  # fmt: skip
+            sa = max(
+                sa, (va[i, 0, b] - ux) ** 2 + (va[i, 1, b] - uy) ** 2 + (va[i, 2, b] - uz) ** 2
+            )
         sb = 0.0
         for j in range(nb):
-            sb = max(sb, (vb[j, 0, b] - ux) ** 2 + (vb[j, 1, b] - uy) ** 2
-                     + (vb[j, 2, b] - uz) ** 2)  # fmt: skip
+            sb = max(
+                sb, (vb[j, 0, b] - ux) ** 2 + (vb[j, 1, b] - uy) ** 2 + (vb[j, 2, b] - uz) ** 2
+            )
         travel = (math.sqrt(sa) + math.sqrt(sb)) * horizon
         if not (_any_in_box(pa, pb, b, skin + travel) or _any_in_box(pb, pa, b, skin + travel)):
             continue
@@ -200,7 +213,6 @@ def close(pa, va, pb, vb, reach, skin, horizon) -> bool:
     return False
 
 
-
 @njit(cache=True)
 def close_pairs(pos, vel, off, reach, skin, horizon) -> np.ndarray:
     """Return the pairs (P, 2) of animals that may touch within ``horizon`` s (``close`` for
@@ -210,14 +222,14 @@ def close_pairs(pos, vel, off, reach, skin, horizon) -> np.ndarray:
     out = np.empty((n * (n - 1) // 2, 2), np.int64)
     k = 0
     for a in range(n):
-        pa, va = pos[off[a]:off[a + 1]], vel[off[a]:off[a + 1]]
+        pa, va = pos[off[a] : off[a + 1]], vel[off[a] : off[a + 1]]
         for c in range(a + 1, n):
             r = max(reach[a], reach[c]) + skin
-            if close(pa, va, pos[off[c]:off[c + 1]], vel[off[c]:off[c + 1]], r, skin,
-                     horizon):  # fmt: skip
+            if close(pa, va, pos[off[c] : off[c + 1]], vel[off[c] : off[c + 1]], r, skin, horizon):
                 out[k, 0], out[k, 1] = a, c
                 k += 1
     return out[:k]
+
 
 @njit(cache=True)
 def _push(pa, va, ma, pb, vb, mb, fb, radius, w, zeta, fa_out, fb_out, load, b):

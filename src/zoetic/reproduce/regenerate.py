@@ -83,9 +83,14 @@ def _numbers(exp: Experiment, out_dir: Path, stdout: str) -> dict[str, Any]:
 def _run(cmd: list[str], env: dict, timeout: float | None, name: str):
     """Run ``cmd`` in its own process group; on timeout end the group (workers included)."""
     proc = subprocess.Popen(
-        cmd, cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        cmd,
+        cwd=REPO,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
         start_new_session=True,
-    )  # fmt: skip
+    )
     try:
         out, err = proc.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
