@@ -11,21 +11,14 @@ Two contact models, each chosen so that a contact never hands out more energy th
   steps at no more than ``CORRECTION_SPEED``. Each pair's impulse takes 1 - e^2 of the pair's
   normal kinetic energy, so a struck ball leaves at most at (1 + e) M / (M + m) times the
   striking speed, plus the correction speed, whatever pins it.
-  Why not penalties (as before): a penalty spring sized to the ball's reduced mass is soft
-  for the body behind the node, so a body that squeezed the 0.3 kg beach ball against its
-  post sank into it and the spring stored the body's energy and handed it to the ball. The
-  stiffnesses of several nodes on one ball also added up. A leap knocked the ball ~28 m
-  high. In a constructed squeeze (``tests/test_contacts.py``), the ball left at 7.2 times
-  the body's speed; with impulses at 1.29 (the bound is 1 + e = 1.37).
 * **Nodes against fixed shapes** (a rock, a wall, the hurdle's bar, the post) stay penalty
   forces, because a node is held by the stiff springs of its body. An impulse would stop
   the node alone, and the springs would pull it on through the wall. The stiffness comes
   from the node's mass and the time step: k = m w^2 and damping 2 zeta m w with
   w = pi / (contact_steps dt), so a contact lasts about ``contact_steps`` steps and stays
   stable whatever the masses. The push never makes a node separate faster than
-  ``SEPARATION_SPEED``. A heavy body drives a node deep into a thin post, and the nearest
-  face can then flip (the post's top instead of its side). Uncapped, the stored spring shot
-  the nose node out at 17 m/s, and on into the ball.
+  ``shapes.SEPARATION_SPEED`` (a node driven deep into a thin post is let out, not shot out).
+  Why these two models: docs/animals.md, "Contacts".
 
 Friction is Coulomb in both models, capped so that it can at most stop the sliding in one step.
 Every force acts on both sides (node and ball get equal and opposite impulses); a fixed shape
@@ -42,107 +35,7 @@ import numpy as np
 from numba import njit
 
 from zoetic.physics.media import DRAG, FLOOR, LEVEL, G
-
-
-@njit(cache=True, inline="always")
-def _sdf(kind, cx, cy, cz, s0, s1, s2, px, py, pz):
-    """Signed distance from a point to a box (kind 0) or cylinder (kind 1), and the outward
-    unit normal at the nearest surface point."""
-    dx = px - cx
-    dy = py - cy
-    dz = pz - cz
-    if kind == 0:
-        qx = abs(dx) - s0
-        qy = abs(dy) - s1
-        qz = abs(dz) - s2
-        if qx < 0.0 and qy < 0.0 and qz < 0.0:
-            # inside: push out through the nearest face
-            if qx >= qy and qx >= qz:
-                return qx, math.copysign(1.0, dx), 0.0, 0.0
-            if qy >= qz:
-                return qy, 0.0, math.copysign(1.0, dy), 0.0
-            return qz, 0.0, 0.0, math.copysign(1.0, dz)
-        ox = math.copysign(max(qx, 0.0), dx)
-        oy = math.copysign(max(qy, 0.0), dy)
-        oz = math.copysign(max(qz, 0.0), dz)
-        d = math.sqrt(ox * ox + oy * oy + oz * oz) + 1e-12
-        return d, ox / d, oy / d, oz / d
-    # cylinder: s0 radius, s1 half length, s2 axis index
-    ax = int(s2)
-    if ax == 0:
-        da, r1, r2 = dx, dy, dz
-    elif ax == 1:
-        da, r1, r2 = dy, dz, dx
-    else:
-        da, r1, r2 = dz, dx, dy
-    rho = math.sqrt(r1 * r1 + r2 * r2) + 1e-12
-    qr = rho - s0
-    qa = abs(da) - s1
-    if qr < 0.0 and qa < 0.0:
-        if qr >= qa:
-            na, n1, n2 = 0.0, r1 / rho, r2 / rho
-            d = qr
-        else:
-            na, n1, n2 = math.copysign(1.0, da), 0.0, 0.0
-            d = qa
-    else:
-        orr = max(qr, 0.0)
-        oa = math.copysign(max(qa, 0.0), da)
-        d = math.sqrt(orr * orr + oa * oa) + 1e-12
-        na, n1, n2 = oa / d, orr * r1 / rho / d, orr * r2 / rho / d
-    if ax == 0:
-        return d, na, n1, n2
-    if ax == 1:
-        return d, n2, na, n1
-    return d, n1, n2, na
-
-
-@njit(cache=True, inline="always")
-def _shape_sdf(s, skind, scenter, ssize, px, py, pz):
-    """``_sdf`` of the fixed shape s of the packed shapes (``objects.pack_statics``)."""
-    return _sdf(
-        skind[s],
-        scenter[s, 0],
-        scenter[s, 1],
-        scenter[s, 2],
-        ssize[s, 0],
-        ssize[s, 1],
-        ssize[s, 2],
-        px,
-        py,
-        pz,
-    )
-
-
-@njit(cache=True, inline="always")
-def _penalty(pen, vx, vy, vz, nx, ny, nz, m, w, zeta, mu, dt):
-    """Contact force (on the side whose relative velocity is v) along normal n: spring-damper
-    normal force plus capped Coulomb friction; zero when the pair separates fast enough. The
-    push never makes the side separate faster than SEPARATION_SPEED: a node that a heavy body
-    drove deep into a thin shape is let out, not shot out."""
-    vn = vx * nx + vy * ny + vz * nz
-    fn = min(m * w * w * pen - 2.0 * zeta * m * w * vn, m * (SEPARATION_SPEED - vn) / dt)
-    if fn <= 0.0:
-        return 0.0, 0.0, 0.0
-    tx = vx - vn * nx
-    ty = vy - vn * ny
-    tz = vz - vn * nz
-    vt = math.sqrt(tx * tx + ty * ty + tz * tz)
-    ft = min(mu * fn, m * vt / dt)
-    s = ft / (vt + 1e-12)
-    return fn * nx - s * tx, fn * ny - s * ty, fn * nz - s * tz
-
-
-@njit(cache=True, inline="always")
-def _shape_force(s, skind, scenter, ssize, px, py, pz, radius, vx, vy, vz, m, w, zeta, mu, dt):
-    """Penalty force of fixed shape ``s`` on a node (a sphere of ``radius`` at p moving at v;
-    zero when they do not touch)."""
-    d, nx, ny, nz = _shape_sdf(s, skind, scenter, ssize, px, py, pz)
-    pen = radius - d
-    if pen <= 0.0:
-        return 0.0, 0.0, 0.0
-    return _penalty(pen, vx, vy, vz, nx, ny, nz, m, w, zeta, mu, dt)
-
+from zoetic.physics.shapes import shape_force, shape_sdf
 
 # a pair closing slower than REST_SPEED (m/s) just stops (a resting ball does not chatter);
 # an overlap beyond SLOP (m) is removed at no more than CORRECTION_SPEED (m/s); projected
@@ -150,7 +43,6 @@ def _shape_force(s, skind, scenter, ssize, px, py, pz, radius, vx, vy, vz, m, w,
 REST_SPEED = 0.1
 SLOP = 0.002
 CORRECTION_SPEED = 0.3
-SEPARATION_SPEED = 0.5  # m/s: nodes against fixed shapes
 SWEEPS = 8
 
 
@@ -256,7 +148,7 @@ def _shape_rows(cx, cy, cz, r, skind, scenter, ssize, floor, rows, c):
     n_static = skind.shape[0]
     for s in range(n_static + (1 if floor else 0)):
         if s < n_static:
-            d, nx, ny, nz = _shape_sdf(s, skind, scenter, ssize, cx, cy, cz)
+            d, nx, ny, nz = shape_sdf(s, skind, scenter, ssize, cx, cy, cz)
         else:
             d, nx, ny, nz = cy, 0.0, 1.0, 0.0
         pen = r - d
@@ -358,86 +250,144 @@ def node_contacts(
     overlap is removed over about contact_steps steps; zeta: the penalty's damping ratio,
     which also sets the balls' restitution (``restitution``).
     """
-    n_nodes = pos.shape[0]
     e = restitution(zeta)
     rate = w * dt / math.pi
-    rows = contact_rows(n_nodes, skind.shape[0])
+    rows = contact_rows(pos.shape[0], skind.shape[0])
     for b in range(pos.shape[2]):
-        for k in range(bpos.shape[0]):
-            mb = bpar[k, 1]
-            h = dt / mb
-            ux = bvel[k, 0, b] + h * bforce[k, 0, b]
-            uy = bvel[k, 1, b] + h * bforce[k, 1, b]
-            uz = bvel[k, 2, b] + h * bforce[k, 2, b]
-            nx, ny, nz, _ = solve(
-                bpos[k, 0, b],
-                bpos[k, 1, b],
-                bpos[k, 2, b],
-                bpar[k, 0],
-                mb,
-                ux,
-                uy,
-                uz,
-                b,
-                pos,
-                vel,
-                mass,
-                radius,
+        _ball_contacts(
+            b,
+            pos,
+            vel,
+            mass,
+            radius,
+            bpos,
+            bvel,
+            bpar,
+            skind,
+            scenter,
+            ssize,
+            ball_obj,
+            dt,
+            mu,
+            bforce,
+            impulse,
+            e,
+            rate,
+            rows,
+        )
+        _shape_contacts(
+            b, pos, vel, mass, radius, skind, scenter, ssize, static_obj, dt, w, zeta, mu, impulse
+        )
+
+
+@njit(cache=True, inline="always")
+def _ball_contacts(
+    b,
+    pos,
+    vel,
+    mass,
+    radius,
+    bpos,
+    bvel,
+    bpar,
+    skind,
+    scenter,
+    ssize,
+    ball_obj,
+    dt,
+    mu,
+    bforce,
+    impulse,
+    e,
+    rate,
+    rows,
+):
+    """Lane b: each ball solved with the nodes and fixed shapes it touches (``solve``); its
+    velocity change added to ``bforce`` as the force that makes it over one step."""
+    for k in range(bpos.shape[0]):
+        mb = bpar[k, 1]
+        h = dt / mb
+        ux = bvel[k, 0, b] + h * bforce[k, 0, b]
+        uy = bvel[k, 1, b] + h * bforce[k, 1, b]
+        uz = bvel[k, 2, b] + h * bforce[k, 2, b]
+        nx, ny, nz, _ = solve(
+            bpos[k, 0, b],
+            bpos[k, 1, b],
+            bpos[k, 2, b],
+            bpar[k, 0],
+            mb,
+            ux,
+            uy,
+            uz,
+            b,
+            pos,
+            vel,
+            mass,
+            radius,
+            skind,
+            scenter,
+            ssize,
+            False,
+            e,
+            rate,
+            dt,
+            mu,
+            impulse,
+            ball_obj[k],
+            rows,
+        )
+        bforce[k, 0, b] += (nx - ux) / h
+        bforce[k, 1, b] += (ny - uy) / h
+        bforce[k, 2, b] += (nz - uz) / h
+
+
+@njit(cache=True, inline="always")
+def _shape_contacts(
+    b, pos, vel, mass, radius, skind, scenter, ssize, static_obj, dt, w, zeta, mu, impulse
+):
+    """Lane b: each fixed shape a node overlaps pushes it with a penalty force (v += dt F /
+    m); each push's impulse accumulates in ``impulse`` at the shape's object index."""
+    n_nodes = pos.shape[0]
+    for i in range(n_nodes):
+        m = mass[i]
+        px, py, pz = pos[i, 0, b], pos[i, 1, b], pos[i, 2, b]
+        if not (px == px):
+            continue
+        fxs = 0.0
+        fys = 0.0
+        fzs = 0.0
+        for s in range(skind.shape[0]):
+            fx, fy, fz = shape_force(
+                s,
                 skind,
                 scenter,
                 ssize,
-                False,
-                e,
-                rate,
-                dt,
+                px,
+                py,
+                pz,
+                radius,
+                vel[i, 0, b],
+                vel[i, 1, b],
+                vel[i, 2, b],
+                m,
+                w,
+                zeta,
                 mu,
-                impulse,
-                ball_obj[k],
-                rows,
+                dt,
             )
-            bforce[k, 0, b] += (nx - ux) / h
-            bforce[k, 1, b] += (ny - uy) / h
-            bforce[k, 2, b] += (nz - uz) / h
-        for i in range(n_nodes):
-            m = mass[i]
-            px, py, pz = pos[i, 0, b], pos[i, 1, b], pos[i, 2, b]
-            if not (px == px):
+            if fx == 0.0 and fy == 0.0 and fz == 0.0:
                 continue
-            fxs = 0.0
-            fys = 0.0
-            fzs = 0.0
-            for s in range(skind.shape[0]):
-                fx, fy, fz = _shape_force(
-                    s,
-                    skind,
-                    scenter,
-                    ssize,
-                    px,
-                    py,
-                    pz,
-                    radius,
-                    vel[i, 0, b],
-                    vel[i, 1, b],
-                    vel[i, 2, b],
-                    m,
-                    w,
-                    zeta,
-                    mu,
-                    dt,
-                )
-                if fx == 0.0 and fy == 0.0 and fz == 0.0:
-                    continue
-                o = static_obj[s]
-                impulse[i, o, 0, b] += dt * fx
-                impulse[i, o, 1, b] += dt * fy
-                impulse[i, o, 2, b] += dt * fz
-                fxs += fx
-                fys += fy
-                fzs += fz
-            h = dt / m
-            vel[i, 0, b] += h * fxs
-            vel[i, 1, b] += h * fys
-            vel[i, 2, b] += h * fzs
+            o = static_obj[s]
+            impulse[i, o, 0, b] += dt * fx
+            impulse[i, o, 1, b] += dt * fy
+            impulse[i, o, 2, b] += dt * fz
+            fxs += fx
+            fys += fy
+            fzs += fz
+        h = dt / m
+        vel[i, 0, b] += h * fxs
+        vel[i, 1, b] += h * fys
+        vel[i, 2, b] += h * fzs
 
 
 @njit(cache=True)
@@ -541,7 +491,7 @@ def near(pos, vel, radius, bpos, bvel, bpar, skind, scenter, ssize, horizon):
                 if dx * dx + dy * dy + dz * dz < (bpar[k, 0] + reach) ** 2:
                     return True
             for s in range(skind.shape[0]):
-                d, _, _, _ = _shape_sdf(s, skind, scenter, ssize, px, py, pz)
+                d, _, _, _ = shape_sdf(s, skind, scenter, ssize, px, py, pz)
                 if d < reach:
                     return True
     return False
