@@ -306,18 +306,50 @@ def test_the_focuser_weighs_food_by_the_way_to_it_not_the_distance():
 
 
 def test_a_way_out_of_another_fish_does_not_lead_into_a_wall():
-    from zoetic.behavior.aquarium.routines import Me, collision_ahead
+    from zoetic.behavior.aquarium.routines import Me, collision_ahead, fish_threats
 
     kind, center, size = pack_statics([Box((0.0, 0.0, -3.25), (20.0, 2.0, 0.25), name="wall")])
     # heading along the wall (at z = -3) 1.5 m from it; another fish ahead, a little to the
-    # left: away from it is right, into the wall
+    # left, coming the other way: away from it is right, into the wall
     f = np.array([1.0, 0.0, 0.0])
     me = Me(np.array([-0.5, 0.0, -1.5]), np.array([0.0, 0.0, -1.5]), f, 0.4 * f, 0.2, 0.4)
-    other = np.array([[0.2, 0.0, -1.3]])
-    hit, away = collision_ahead(me, kind, center, size, other)
+    nose = np.array([[0.0, 0.0, -1.5], [1.0, 0.0, -1.3]])
+    com = np.array([[-0.5, 0.0, -1.5], [1.5, 0.0, -1.3]])
+    fwd, vel = np.stack([f, -f]), np.stack([0.4 * f, -0.4 * f])
+    region = [np.full(2, x) for x in (1.0, 0.4, 2.0)]
+    j, side, near = fish_threats(nose, com, fwd, vel, ~np.eye(2, dtype=bool), *region)
+    assert j.tolist() == [1, 0] and side.tolist() == [-1, -1]  # both keep to the right
+    assert near[0] == pytest.approx(np.hypot(1.0, 0.2))
+    hit, away = collision_ahead(me, kind, center, size, int(side[0]))
     assert hit and away[2] > 0.9  # left, away from the wall
-    hit, away = collision_ahead(me, np.zeros(0, int), np.zeros((0, 3)), np.zeros((0, 3)), other)
+    hit, away = collision_ahead(me, np.zeros(0, int), np.zeros((0, 3)), np.zeros((0, 3)), -1)
     assert hit and away[2] < -0.9  # without the wall: away from the fish
+    # a fish not perceived, or swimming alongside out of the region, is no threat
+    j, _, _ = fish_threats(nose, com, fwd, vel, np.zeros((2, 2), bool), *region)
+    assert j.tolist() == [-1, -1]
+    beside = np.array([[0.0, 0.0, -1.5], [0.0, 0.0, -0.9]])
+    j, _, _ = fish_threats(
+        beside, beside - 0.5 * f, np.stack([f, f]), vel[[0, 0]], ~np.eye(2, dtype=bool), *region
+    )
+    assert j.tolist() == [-1, -1]
+
+
+def test_a_fish_crossing_ahead_is_seen_coming_and_turned_away_from():
+    from zoetic.behavior.aquarium.routines import fish_threats
+
+    # fish 0 heads +x; fish 1, 1.5 m ahead and 0.8 m to its right (-z), swims to its left
+    # (+z) across its path: fish 0 turns left, away from it (both then swim the same way)
+    nose = np.array([[0.0, 0.0, 0.0], [1.5, 0.0, -0.8]])
+    com = np.array([[-0.5, 0.0, 0.0], [1.5, 0.0, -1.3]])
+    fwd = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    vel = 0.3 * fwd
+    region = [np.full(2, x) for x in (1.0, 0.4, 2.0)]
+    j, side, _ = fish_threats(nose, com, fwd, vel, ~np.eye(2, dtype=bool), *region)
+    assert j[0] == 1 and side[0] == 1
+    # with no anticipation it is not (yet) in the region
+    region[2][:] = 0.0
+    j, _, _ = fish_threats(nose, com, fwd, vel, ~np.eye(2, dtype=bool), *region)
+    assert j[0] == -1
 
 
 @pytest.mark.parametrize("skills", [None, "built-in"])
