@@ -149,19 +149,23 @@ def fish_threats(
     reach: np.ndarray,
     half_width: np.ndarray,
     anticipation: np.ndarray,
+    prefer: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Return for each of n fishes the fish that threatens a collision (index, -1: none), the
     side to turn to (+1 left, -1 right, 0: none) and how far (m) the threat's centre line is
     from its nose now (inf: none).
 
     Tu's collision sensitivity region: a box ahead of each fish in the horizontal plane, from
-    its centre to ``reach`` m ahead of its nose and ``half_width`` m to either side (n,).
+    its nose to ``reach`` m ahead and ``half_width`` m to either side (n,).
     Another fish it perceives (``seen`` (n, n)) threatens when a point of that fish's centre
     line (nose to tail, ``CENTRE_LINE`` points) lies in the box now or will, moving as both
     fishes move now, within ``anticipation`` s (n,); the most dangerous is the one with the
     most points in the box over those instants (the nearest on a tie). The way out is away
     from where the threat's centre is now (Tu's avoid-fish routine turns away from the
-    obstacle's relative position). nose, com, forward, velocity: (n, 3)."""
+    obstacle's relative position); a threat nearly dead ahead (within a quarter of the half
+    width) is turned away from on the side ``prefer`` (n,) gives (+1, -1; 0: none), the side
+    an avoidance already turns to, so that the fish does not dither. nose, com, forward,
+    velocity: (n, 3)."""
     n = len(nose)
     f = np.array(forward, float)
     f[:, 1] = 0.0
@@ -176,8 +180,7 @@ def fish_threats(
     rel = rel + t[:, None, :, :, None] * rel_v[None, None]
     ahead = np.einsum("kpijc,ic->kpij", rel, f)
     aside = np.einsum("kpijc,ic->kpij", rel, left)
-    back = np.linalg.norm(com - nose, axis=1)[None, None, :, None]
-    inside = (ahead > -back) & (ahead < reach[None, None, :, None])
+    inside = (ahead > 0.0) & (ahead < reach[None, None, :, None])
     inside &= np.abs(aside) < half_width[None, None, :, None]
     count = np.where(seen, inside.sum(axis=(0, 1)), 0)  # (i, j)
     dist = np.linalg.norm(rel[0], axis=-1).min(axis=0)  # (i, j) now, nose to centre line
@@ -190,7 +193,10 @@ def fish_threats(
         # away from where it is now: two fishes that both turn away from each other end up
         # swimming apart or alongside, whichever way they met
         lateral = float((com[k] - nose[i]) @ left[i])
-        side[i] = -1 if lateral > 0.0 else 1
+        if prefer is not None and prefer[i] and abs(lateral) < 0.25 * half_width[i]:
+            side[i] = int(prefer[i])
+        else:
+            side[i] = -1 if lateral > 0.0 else 1
         near[i] = float(dist[i, k])
     return j, side, near
 
@@ -239,7 +245,7 @@ def collision_ahead(
             left, right = side_room(me, kind, center, size, reach)
             return True, side if left >= right else -side
     if fish_side:
-        return True, way_out(prefer or fish_side)
+        return True, way_out(fish_side)
     return False, None
 
 

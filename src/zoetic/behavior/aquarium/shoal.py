@@ -152,12 +152,15 @@ class Shoal:
         kind, center, size = self.statics
         probes = [probes_ahead(m, probe_reach(m, q)) for m, q in zip(selves, meals, strict=True)]
         ahead = obstacle_distance(np.stack(probes), kind, center, size)  # all fishes at once
-        b, seen = self.bodies, np.isfinite(pc.fish)
+        fb, seen = self.bodies, np.isfinite(pc.fish)
         for i, brain in enumerate(self.brains):
             th = brain.thought
             if th.intention == "hunt" and th.target is not None:
                 seen[i, th.target] = False
-        _, sides, near = fish_threats(b.nose, b.com, b.fwd, b.vel, seen, *self.region)
+        avoiding = [b.avoid_side if b.thought.intention == "avoid" else 0 for b in self.brains]
+        _, sides, near = fish_threats(
+            fb.nose, fb.com, fb.fwd, fb.vel, seen, *self.region, np.array(avoiding)
+        )
         hits, aways = [], []
         for i, brain in enumerate(self.brains):
             prefer = brain.avoid_side if brain.thought.intention == "avoid" else 0
@@ -166,7 +169,7 @@ class Shoal:
             )
             if hit and away is not None:
                 # the vertical component of fwd x away: which side the way out lies on
-                fwd = b.fwd[i]
+                fwd = fb.fwd[i]
                 brain.avoid_side = 1 if fwd[2] * away[0] - fwd[0] * away[2] < 0 else -1
             hits.append(hit)
             aways.append(away)
