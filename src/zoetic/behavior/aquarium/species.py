@@ -74,8 +74,8 @@ class Senses:
     view_angle: float = 300.0
     view_range: float = 6.0
     smell_range: float = 3.0
-    collision_reach: float = 1.0
-    collision_half_width: float = 0.4
+    collision_reach: float = 0.7
+    collision_half_width: float = 0.35
     collision_anticipation: float = 2.0
 
 
