@@ -289,6 +289,46 @@ def test_fishes_driven_nose_to_nose_do_not_pass_through_each_other(contact):
         assert life.deepest_fish > 0.03 and not touches
 
 
+@pytest.mark.parametrize(
+    "other",
+    [((2.0, 0.0, 0.1), np.pi), ((0.5, 0.0, -2.5), np.pi / 2)],
+    ids=["head-on", "crossing"],
+)
+def test_two_minnows_on_a_collision_course_avoid_each_other(other):
+    # two minnows swimming at cruise speed on a collision course (head on, 0.1 m aside; or
+    # crossing at right angles, both reaching the crossing together): each senses the other
+    # in its collision sensitivity region in time, and they pass without touching (on main,
+    # which sensed another fish only 0.8 m between centres, both pairs touched)
+    from dataclasses import replace
+
+    from zoetic.behavior.mind import INTENTIONS
+    from zoetic.physics.world import placed_pose
+
+    cfg = TankConfig(
+        fishes=2, predators=0, food=0, obstacles=0, seconds=10.0, seed=0, half_size=8.0
+    )
+    tank = build_tank(cfg)
+    world, body = tank.world, tank.fishes[0].body
+    poses = [((-2.0, 0.0, 0.0), 0.0), other]
+    state = world.state
+    speed = tank.fishes[0].species.motor.cruise_speed
+    heading = [np.array([np.cos(yaw), 0.0, np.sin(yaw)]) for _, yaw in poses]
+    world.restore(
+        replace(
+            state,
+            positions=tuple(placed_pose(body, p, yaw)[None] for p, yaw in poses),
+            velocities=tuple(
+                np.zeros_like(v) + speed * h for v, h in zip(state.velocities, heading, strict=True)
+            ),
+        )
+    )
+    life = live(tank)
+    assert [e for e in life.events if e[2] == "collision"] == [] and life.deepest_fish == 0.0
+    assert INTENTIONS.index("avoid") in life.intentions  # they did see each other coming
+    for p in life.positions:  # each swam on (at cruise it would swim 2.5 m), not stopped short
+        assert np.linalg.norm(np.diff(p.mean(axis=1), axis=0), axis=1).sum() > 1.5
+
+
 def test_the_focuser_weighs_food_by_the_way_to_it_not_the_distance():
     from zoetic.behavior.aquarium.routines import Me, reach_cost, turn_paths
     from zoetic.behavior.mind import focus
