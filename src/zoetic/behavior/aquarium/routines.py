@@ -193,10 +193,11 @@ def fish_threats(
         # away from where it is now: two fishes that both turn away from each other end up
         # swimming apart or alongside, whichever way they met
         lateral = float((com[k] - nose[i]) @ left[i])
-        if prefer is not None and prefer[i] and abs(lateral) < 0.25 * half_width[i]:
-            side[i] = int(prefer[i])
-        else:
+        if abs(lateral) >= 0.25 * half_width[i]:
             side[i] = -1 if lateral > 0.0 else 1
+        else:  # nearly dead ahead: the side already taken, else to the right (as ships do:
+            # two fishes meeting head on then both turn right and pass each other)
+            side[i] = int(prefer[i]) if prefer is not None and prefer[i] else -1
         near[i] = float(dist[i, k])
     return j, side, near
 
