@@ -164,8 +164,8 @@ def fish_threats(
     from where the threat's centre is now (Tu's avoid-fish routine turns away from the
     obstacle's relative position); a threat nearly dead ahead (within a quarter of the half
     width) is turned away from on the side ``prefer`` (n,) gives (+1, -1; 0: none), the side
-    an avoidance already turns to, so that the fish does not dither. nose, com, forward,
-    velocity: (n, 3)."""
+    an avoidance already turns to, so that the fish does not dither, else to the right (two
+    fishes meeting head on both turn right and pass). nose, com, forward, velocity: (n, 3)."""
     n = len(nose)
     f = np.array(forward, float)
     f[:, 1] = 0.0
