@@ -289,6 +289,46 @@ def test_fishes_driven_nose_to_nose_do_not_pass_through_each_other(contact):
         assert life.deepest_fish > 0.03 and not touches
 
 
+@pytest.mark.parametrize(
+    "other",
+    [((2.0, 0.0, 0.1), np.pi), ((0.5, 0.0, -2.5), np.pi / 2)],
+    ids=["head-on", "crossing"],
+)
+def test_two_minnows_on_a_collision_course_avoid_each_other(other):
+    # two minnows swimming at cruise speed on a collision course (head on, 0.1 m aside; or
+    # crossing at right angles, both reaching the crossing together): each senses the other
+    # in its collision sensitivity region in time, and they pass without touching (on main,
+    # which sensed another fish only 0.8 m between centres, both pairs touched)
+    from dataclasses import replace
+
+    from zoetic.behavior.mind import INTENTIONS
+    from zoetic.physics.world import placed_pose
+
+    cfg = TankConfig(
+        fishes=2, predators=0, food=0, obstacles=0, seconds=10.0, seed=0, half_size=8.0
+    )
+    tank = build_tank(cfg)
+    world, body = tank.world, tank.fishes[0].body
+    poses = [((-2.0, 0.0, 0.0), 0.0), other]
+    state = world.state
+    speed = tank.fishes[0].species.motor.cruise_speed
+    heading = [np.array([np.cos(yaw), 0.0, np.sin(yaw)]) for _, yaw in poses]
+    world.restore(
+        replace(
+            state,
+            positions=tuple(placed_pose(body, p, yaw)[None] for p, yaw in poses),
+            velocities=tuple(
+                np.zeros_like(v) + speed * h for v, h in zip(state.velocities, heading, strict=True)
+            ),
+        )
+    )
+    life = live(tank)
+    assert [e for e in life.events if e[2] == "collision"] == [] and life.deepest_fish == 0.0
+    assert INTENTIONS.index("avoid") in life.intentions  # they did see each other coming
+    for p in life.positions:  # each swam on (at cruise it would swim 2.5 m), not stopped short
+        assert np.linalg.norm(np.diff(p.mean(axis=1), axis=0), axis=1).sum() > 1.5
+
+
 def test_the_focuser_weighs_food_by_the_way_to_it_not_the_distance():
     from zoetic.behavior.aquarium.routines import Me, reach_cost, turn_paths
     from zoetic.behavior.mind import focus
@@ -306,18 +346,50 @@ def test_the_focuser_weighs_food_by_the_way_to_it_not_the_distance():
 
 
 def test_a_way_out_of_another_fish_does_not_lead_into_a_wall():
-    from zoetic.behavior.aquarium.routines import Me, collision_ahead
+    from zoetic.behavior.aquarium.routines import Me, collision_ahead, fish_threats
 
     kind, center, size = pack_statics([Box((0.0, 0.0, -3.25), (20.0, 2.0, 0.25), name="wall")])
     # heading along the wall (at z = -3) 1.5 m from it; another fish ahead, a little to the
-    # left: away from it is right, into the wall
+    # left, coming the other way: away from it is right, into the wall
     f = np.array([1.0, 0.0, 0.0])
     me = Me(np.array([-0.5, 0.0, -1.5]), np.array([0.0, 0.0, -1.5]), f, 0.4 * f, 0.2, 0.4)
-    other = np.array([[0.2, 0.0, -1.3]])
-    hit, away = collision_ahead(me, kind, center, size, other)
+    nose = np.array([[0.0, 0.0, -1.5], [1.0, 0.0, -1.3]])
+    com = np.array([[-0.5, 0.0, -1.5], [1.5, 0.0, -1.3]])
+    fwd, vel = np.stack([f, -f]), np.stack([0.4 * f, -0.4 * f])
+    region = [np.full(2, x) for x in (1.0, 0.4, 2.0)]
+    j, side, near = fish_threats(nose, com, fwd, vel, ~np.eye(2, dtype=bool), *region)
+    assert j.tolist() == [1, 0] and side.tolist() == [-1, -1]  # both keep to the right
+    assert near[0] == pytest.approx(np.hypot(1.0, 0.2))
+    hit, away = collision_ahead(me, kind, center, size, int(side[0]))
     assert hit and away[2] > 0.9  # left, away from the wall
-    hit, away = collision_ahead(me, np.zeros(0, int), np.zeros((0, 3)), np.zeros((0, 3)), other)
+    hit, away = collision_ahead(me, np.zeros(0, int), np.zeros((0, 3)), np.zeros((0, 3)), -1)
     assert hit and away[2] < -0.9  # without the wall: away from the fish
+    # a fish not perceived, or swimming alongside out of the region, is no threat
+    j, _, _ = fish_threats(nose, com, fwd, vel, np.zeros((2, 2), bool), *region)
+    assert j.tolist() == [-1, -1]
+    beside = np.array([[0.0, 0.0, -1.5], [0.0, 0.0, -0.9]])
+    j, _, _ = fish_threats(
+        beside, beside - 0.5 * f, np.stack([f, f]), vel[[0, 0]], ~np.eye(2, dtype=bool), *region
+    )
+    assert j.tolist() == [-1, -1]
+
+
+def test_a_fish_crossing_ahead_is_seen_coming_and_turned_away_from():
+    from zoetic.behavior.aquarium.routines import fish_threats
+
+    # fish 0 heads +x; fish 1, 1.5 m ahead and 0.8 m to its right (-z), swims to its left
+    # (+z) across its path: fish 0 turns left, away from it (both then swim the same way)
+    nose = np.array([[0.0, 0.0, 0.0], [1.5, 0.0, -0.8]])
+    com = np.array([[-0.5, 0.0, 0.0], [1.5, 0.0, -1.3]])
+    fwd = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    vel = 0.3 * fwd
+    region = [np.full(2, x) for x in (1.0, 0.4, 2.0)]
+    j, side, _ = fish_threats(nose, com, fwd, vel, ~np.eye(2, dtype=bool), *region)
+    assert j[0] == 1 and side[0] == 1
+    # with no anticipation it is not (yet) in the region
+    region[2][:] = 0.0
+    j, _, _ = fish_threats(nose, com, fwd, vel, ~np.eye(2, dtype=bool), *region)
+    assert j[0] == -1
 
 
 @pytest.mark.parametrize("skills", [None, "built-in"])

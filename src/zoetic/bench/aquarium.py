@@ -68,6 +68,10 @@ def bench_aquarium(
     for _ in range(int(round(seconds / cfg.record_period))):
         bare.world.step(steps * bare.world.dt, None)
     physics, physics_cpu = time.perf_counter() - t0, time.process_time() - c0
+
+    def per_minute(count: int) -> float | None:
+        return 60.0 * count / s["seconds"] if s["seconds"] > 0 else None
+
     return {
         "scene": f"{fishes} fishes, {food} food, {obstacles} obstacles, {seconds:g} s",
         "perception": perception if perception == "oracle" else f"{perception} (one predator)",
@@ -85,5 +89,9 @@ def bench_aquarium(
         "deepest_into_obstacle_m": s["deepest_into_obstacle_m"],
         "collisions_between_fishes": s["collisions_between_fishes"],
         "deepest_into_fish_m": s["deepest_into_fish_m"],
+        # per minute of simulated time: fish against fish, and fish against rock or wall
+        "fish_collisions_per_minute": per_minute(s["collisions_between_fishes"]),
+        "obstacle_collisions_per_minute": per_minute(s["collisions_with_obstacles"]),
+        "avoid_share": s["intention_share"]["avoid"],
         "survivors": s["survivors"],
     }

@@ -66,6 +66,7 @@ class View:
     obstacle_distance: np.ndarray  # (S,)
     collision: bool
     away: np.ndarray | None
+    threat: float = np.inf  # m from the nose to a fish that threatens a collision (inf: none)
 
 
 @dataclass(frozen=True)
@@ -220,7 +221,8 @@ class FishBrain:
     ) -> Around:
         """Return what the routines read of the fish's surroundings: the fishes it sees, the
         predators among them, its target (and the target fish's velocity), the way out of a
-        collision and the nearest obstacle's distance; masks: the fishes' ``kinds``."""
+        collision and the nearest obstacle's (or threatening fish's) distance; masks: the
+        fishes' ``kinds``."""
         same, hunters, _ = masks
         seen = np.isfinite(v.fish_distance)
         food = intention == "eat"
@@ -232,7 +234,10 @@ class FishBrain:
             target=None if target is None else (v.food if food else v.fish_com)[target],
             target_velocity=None if target is None or food else v.fish_velocity[target],
             away=v.away,
-            obstacle=float(v.obstacle_distance.min()) if len(v.obstacle_distance) else np.inf,
+            obstacle=min(
+                float(v.obstacle_distance.min()) if len(v.obstacle_distance) else np.inf,
+                v.threat,
+            ),
         )
 
     def _routine(self, intention: str, me: Me, around: Around) -> Demand:

@@ -1,11 +1,12 @@
 """Behaviour routines: an intention and its focused target in, a motor demand out.
 
-avoid (static obstacles and other fishes), eat, mate, leave, wander, escape, school and the
-predator's hunt. Each is a small pure function of the fish's own kinematics (``Me``) and what it
-perceives (``Around``); the tank turns the demand into muscle activations (``locomotion``:
-the calibrated swim / turn / pitch motor controllers). Directions are steered in the
-horizontal plane; ``keep_depth`` pitches the fins to hold a fish at its target's depth (or
-its layer), since a turning lattice fish drifts up or down.
+avoid (static obstacles and other fishes: ``collision_ahead``, ``fish_threats``), eat, mate,
+leave, wander, escape, school and the predator's hunt. Each is a small pure function of the
+fish's own kinematics (``Me``) and what it perceives (``Around``); the tank turns the demand
+into muscle activations (``locomotion``: the calibrated swim / turn / pitch motor
+controllers). Directions are steered in the horizontal plane; ``keep_depth`` pitches the fins
+to hold a fish at its target's depth (or its layer), since a turning lattice fish drifts up
+or down.
 """
 
 from __future__ import annotations
@@ -26,7 +27,8 @@ TURN_RADIUS = 1.9  # m: default radius of a fish's sharpest turn (the brain give
 DEPTH_GAIN = 1.0  # rad of climb per m of depth error (capped at MAX_CLIMB)
 MAX_CLIMB = 0.4  # rad: the steepest climb or dive asked for
 PITCH_GAIN = 2.0  # rad of fin pitch per rad of climb-angle error
-FISH_CLEARANCE = 0.8  # m between centres ahead that triggers avoid-fish
+CENTRE_LINE = 5  # points along another fish's centre line, nose to tail, tested for a threat
+THREAT_TIMES = 4  # instants from now to the anticipation horizon at which they are tested
 ROOM_STEP = 0.4  # m between the probes of the room to either side (walls are 0.5 m thick)
 _SIN60 = math.sqrt(3) / 2
 RADIUS_MARGIN = 1.1  # the turning circle a fish plans with, over its calibrated sharpest turn
@@ -62,7 +64,8 @@ class Around:
     target: np.ndarray | None = None
     target_velocity: np.ndarray | None = None
     away: np.ndarray | None = None  # unit horizontal direction away from the threat
-    obstacle: float = math.inf  # m from the nose to the nearest perceived obstacle surface
+    # m from the nose to the nearest perceived obstacle surface or threatening fish
+    obstacle: float = math.inf
 
 
 def _flat(v: np.ndarray) -> np.ndarray:
@@ -137,19 +140,82 @@ def side_room(me: Me, kind, center, size, reach: float) -> tuple[float, float]:
     return float(d[0]), float(d[1])
 
 
+def fish_threats(
+    nose: np.ndarray,
+    com: np.ndarray,
+    forward: np.ndarray,
+    velocity: np.ndarray,
+    seen: np.ndarray,
+    reach: np.ndarray,
+    half_width: np.ndarray,
+    anticipation: np.ndarray,
+    prefer: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return for each of n fishes the fish that threatens a collision (index, -1: none), the
+    side to turn to (+1 left, -1 right, 0: none) and how far (m) the threat's centre line is
+    from its nose now (inf: none).
+
+    Tu's collision sensitivity region: a box ahead of each fish in the horizontal plane, from
+    its nose to ``reach`` m ahead and ``half_width`` m to either side (n,).
+    Another fish it perceives (``seen`` (n, n)) threatens when a point of that fish's centre
+    line (nose to tail, ``CENTRE_LINE`` points) lies in the box now or will, moving as both
+    fishes move now, within ``anticipation`` s (n,); the most dangerous is the one with the
+    most points in the box over those instants (the nearest on a tie). The way out is away
+    from where the threat's centre is now (Tu's avoid-fish routine turns away from the
+    obstacle's relative position); a threat nearly dead ahead (within a quarter of the half
+    width) is turned away from on the side ``prefer`` (n,) gives (+1, -1; 0: none), the side
+    an avoidance already turns to, so that the fish does not dither, else to the right (two
+    fishes meeting head on both turn right and pass). nose, com, forward, velocity: (n, 3)."""
+    n = len(nose)
+    f = np.array(forward, float)
+    f[:, 1] = 0.0
+    f /= np.maximum(np.linalg.norm(f, axis=1, keepdims=True), 1e-9)
+    left = np.stack([-f[:, 2], np.zeros(n), f[:, 0]], axis=1)
+    u = np.linspace(0.0, 1.0, CENTRE_LINE)[:, None, None]  # nose (0) to tail (1)
+    line = nose[None] + u * 2.0 * (com - nose)[None]  # (P, n, 3): the tail mirrors the nose
+    t = np.linspace(0.0, 1.0, THREAT_TIMES)[:, None, None] * anticipation[None, :, None]
+    rel_v = velocity[None, :, :] - velocity[:, None, :]  # (i, j, 3): j's velocity seen by i
+    # (K, P, i, j, 3): j's centre line points relative to i's nose at each instant
+    rel = line[None, :, None, :, :] - nose[None, None, :, None, :]
+    rel = rel + t[:, None, :, :, None] * rel_v[None, None]
+    ahead = np.einsum("kpijc,ic->kpij", rel, f)
+    aside = np.einsum("kpijc,ic->kpij", rel, left)
+    inside = (ahead > 0.0) & (ahead < reach[None, None, :, None])
+    inside &= np.abs(aside) < half_width[None, None, :, None]
+    count = np.where(seen, inside.sum(axis=(0, 1)), 0)  # (i, j)
+    dist = np.linalg.norm(rel[0], axis=-1).min(axis=0)  # (i, j) now, nose to centre line
+    score = np.where(count > 0, count - dist / (dist.max() + 1.0), -np.inf)
+    j = np.where(count.max(axis=1) > 0, score.argmax(axis=1), -1)
+    side = np.zeros(n, int)
+    near = np.full(n, np.inf)
+    for i in np.flatnonzero(j >= 0).tolist():
+        k = int(j[i])
+        # away from where it is now: two fishes that both turn away from each other end up
+        # swimming apart or alongside, whichever way they met
+        lateral = float((com[k] - nose[i]) @ left[i])
+        if abs(lateral) >= 0.25 * half_width[i]:
+            side[i] = -1 if lateral > 0.0 else 1
+        else:  # nearly dead ahead: the side already taken, else to the right (as ships do:
+            # two fishes meeting head on then both turn right and pass each other)
+            side[i] = int(prefer[i]) if prefer is not None and prefer[i] else -1
+        near[i] = float(dist[i, k])
+    return j, side, near
+
+
 def collision_ahead(
     me: Me,
     kind,
     center,
     size,
-    others: np.ndarray,
+    fish_side: int = 0,
     prefer: int = 0,
     target: float | None = None,
     ahead: np.ndarray | None = None,
 ) -> tuple[bool, np.ndarray | None]:
     """Return (imminent?, the unit way out): probes along the heading (``probes_ahead`` up to
-    ``probe_reach``) against the obstacles (clearance CLEARANCE m) and other fishes' centres
-    ahead. prefer: +1 (left) or -1 (right) keeps the side an avoidance already turns to,
+    ``probe_reach``) against the obstacles (clearance CLEARANCE m), then another fish that
+    threatens (``fish_side``: the side ``fish_threats`` turns to, +1 left, -1 right, 0 none).
+    prefer: +1 (left) or -1 (right) keeps the side an avoidance already turns to,
     unless obstacles close that side and the other side is open; a way out of another fish's
     path is also checked against the obstacles (it must not lead into a rock or a wall);
     target: the distance (m) to a food particle the fish is about to eat; ahead: the probes'
@@ -179,16 +245,8 @@ def collision_ahead(
             # turn to the side with more room
             left, right = side_room(me, kind, center, size, reach)
             return True, side if left >= right else -side
-    if len(others):
-        rel = others - me.com
-        rel[:, 1] = 0.0
-        dist = np.sqrt((rel * rel).sum(axis=1))  # np.linalg.norm's formula, without its overhead
-        ahead = (rel @ f) > 0.3 * dist
-        close = ahead & (dist < FISH_CLEARANCE)
-        if close.any():
-            j = int(np.argmin(np.where(close, dist, np.inf)))
-            sgn = prefer or (-1 if float(rel[j] @ side) > 0 else 1)
-            return True, way_out(sgn)
+    if fish_side:
+        return True, way_out(fish_side)
     return False, None
 
 

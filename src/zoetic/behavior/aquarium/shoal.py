@@ -18,7 +18,13 @@ from zoetic.behavior.aquarium.bodystate import FishBodies
 from zoetic.behavior.aquarium.brain import FishBrain, View, situations
 from zoetic.behavior.aquarium.locomotion import Demand, LearnedLocomotion
 from zoetic.behavior.aquarium.perception import Percepts, obstacle_distance, perceive
-from zoetic.behavior.aquarium.routines import Me, collision_ahead, probe_reach, probes_ahead
+from zoetic.behavior.aquarium.routines import (
+    Me,
+    collision_ahead,
+    fish_threats,
+    probe_reach,
+    probes_ahead,
+)
 from zoetic.behavior.aquarium.species import Species
 from zoetic.behavior.mind import Drives, drives_many
 from zoetic.control.policy import Period
@@ -50,6 +56,11 @@ class Shoal:
             np.array([getattr(s.senses, k) for s in species])
             for k in ("view_angle", "view_range", "smell_range")
         ]
+        # the collision sensitivity region: reach, half width (m), anticipation (s)
+        self.region = [
+            np.array([getattr(s.senses, k) for s in species], float)
+            for k in ("collision_reach", "collision_half_width", "collision_anticipation")
+        ]
         # each fish's kinds of fishes (rows: same species, hunters, prey), habits and constants
         kinds = [b.kinds(self.names) for b in brains]
         self.masks = tuple(np.array([k[x] for k in kinds]) for x in range(3))
@@ -68,7 +79,7 @@ class Shoal:
         food = world.food_positions[0]
         pc, seen = self.perceive(world, alive, food)
         selves, meals = self._selves(pc)
-        hits, aways = self._ahead(pc, selves, meals)
+        hits, aways, threats = self._ahead(pc, selves, meals)
         sits, predators = situations(
             pc.fish, pc.food, pc.obstacles, *self.masks, *self.habits, hits
         )
@@ -89,6 +100,7 @@ class Shoal:
                 obstacle_distance=pc.obstacles[i],
                 collision=hits[i],
                 away=aways[i],
+                threat=threats[i],
             )
             d = brain.decide({**obs, "view": view}, period, sits[i], drives[i])
             demands.append(
@@ -133,26 +145,35 @@ class Shoal:
 
     def _ahead(
         self, pc: Percepts, selves: list[Me], meals: list[float | None]
-    ) -> tuple[list[bool], list[np.ndarray | None]]:
-        """Return for each fish whether an obstacle or fish lies ahead, and the way out; an
-        avoiding fish keeps the side it turned to."""
+    ) -> tuple[list[bool], list[np.ndarray | None], list[float]]:
+        """Return for each fish whether an obstacle or fish lies ahead, the way out, and how
+        far (m) a threatening fish is (inf: none); an avoiding fish keeps the side it turned
+        to. A hunting predator does not shy away from the prey it chases."""
         kind, center, size = self.statics
         probes = [probes_ahead(m, probe_reach(m, q)) for m, q in zip(selves, meals, strict=True)]
         ahead = obstacle_distance(np.stack(probes), kind, center, size)  # all fishes at once
+        fb, seen = self.bodies, np.isfinite(pc.fish)
+        for i, brain in enumerate(self.brains):
+            th = brain.thought
+            if th.intention == "hunt" and th.target is not None:
+                seen[i, th.target] = False
+        avoiding = [b.avoid_side if b.thought.intention == "avoid" else 0 for b in self.brains]
+        _, sides, near = fish_threats(
+            fb.nose, fb.com, fb.fwd, fb.vel, seen, *self.region, np.array(avoiding)
+        )
         hits, aways = [], []
         for i, brain in enumerate(self.brains):
-            others = self.bodies.com[np.isfinite(pc.fish[i])]
             prefer = brain.avoid_side if brain.thought.intention == "avoid" else 0
             hit, away = collision_ahead(
-                selves[i], kind, center, size, others, prefer, meals[i], ahead[i]
+                selves[i], kind, center, size, int(sides[i]), prefer, meals[i], ahead[i]
             )
             if hit and away is not None:
                 # the vertical component of fwd x away: which side the way out lies on
-                fwd = self.bodies.fwd[i]
+                fwd = fb.fwd[i]
                 brain.avoid_side = 1 if fwd[2] * away[0] - fwd[0] * away[2] < 0 else -1
             hits.append(hit)
             aways.append(away)
-        return hits, aways
+        return hits, aways, near.tolist()
 
     def _drives(self, t: float, predators: np.ndarray) -> list[Drives]:
         """Return every fish's drives at time ``t`` s in one step over arrays."""

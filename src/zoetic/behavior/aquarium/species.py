@@ -65,11 +65,18 @@ class MindConstants:
 
 @dataclass(frozen=True)
 class Senses:
-    """The perception oracle's view volume: angle (degrees), range and smell radius (m)."""
+    """The perception oracle's view volume: angle (degrees), range and smell radius (m); and
+    the collision sensitivity region (``routines.fish_threats``): how far ahead of the nose
+    and to either side (m) another fish threatens a collision, and how far ahead (s) the
+    fishes' motion is anticipated (a larger region makes a timid fish, a tight one a
+    courageous fish)."""
 
     view_angle: float = 300.0
     view_range: float = 6.0
     smell_range: float = 3.0
+    collision_reach: float = 0.7
+    collision_half_width: float = 0.35
+    collision_anticipation: float = 2.0
 
 
 @dataclass(frozen=True)
@@ -197,11 +204,16 @@ def _mind(m: Table) -> MindConstants:
 
 
 def _senses(s: Table) -> Senses:
-    """Return the [senses] of a species file: view angle (deg), view and smell range (m)."""
+    """Return the [senses] of a species file: view angle (deg), view and smell range (m),
+    the collision sensitivity region (m, m, s)."""
+    d = Senses()
     senses = Senses(
-        s.number("view_angle", 300.0, positive=True, hi=360.0),
-        s.number("view_range", 6.0, positive=True, hi=1000.0),
-        s.number("smell_range", 3.0, lo=0.0, hi=1000.0),
+        s.number("view_angle", d.view_angle, positive=True, hi=360.0),
+        s.number("view_range", d.view_range, positive=True, hi=1000.0),
+        s.number("smell_range", d.smell_range, lo=0.0, hi=1000.0),
+        s.number("collision_reach", d.collision_reach, lo=0.0, hi=100.0),
+        s.number("collision_half_width", d.collision_half_width, lo=0.0, hi=100.0),
+        s.number("collision_anticipation", d.collision_anticipation, lo=0.0, hi=60.0),
     )
     s.finish()
     return senses
