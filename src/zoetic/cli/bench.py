@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import typer
 
 from zoetic.cli.apps import app
 from zoetic.cli.options import Json
-from zoetic.cli.output import emit
+from zoetic.cli.output import emit, err_console
 
 bench_app = typer.Typer(help="Benchmarks; figures are ratios measured side by side.")
 app.add_typer(bench_app, name="bench")
@@ -54,3 +56,20 @@ def bench_jax_cmd(
 
         out["numba"] = bench_simulate(animal, seconds, batch, repeats)
     emit(out, json)
+
+
+@bench_app.command("readme")
+def bench_readme_cmd(
+    readme: Path = typer.Option(Path("README.md"), help="The README whose commands to time."),
+    everything: bool = typer.Option(
+        False, "--all", help="Every timed command, not only the quick start's."
+    ),
+    json: Json = False,
+) -> None:
+    """The wall time of each command the README times ([~12 s]), run as written, in a temp dir."""
+    from zoetic.bench.readme import bench_readme
+
+    def say(row: dict) -> None:
+        err_console.print(f"{row['measured_s']:8.1f} s  {row['command']}", highlight=False)
+
+    emit(bench_readme(readme.resolve(), everything, say), json)

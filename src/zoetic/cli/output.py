@@ -8,6 +8,7 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 console = Console()
+err_console = Console(stderr=True)  # what a --json command says beside its one line
 
 
 def emit(result: dict, as_json: bool) -> None:
