@@ -105,11 +105,13 @@ def read_readme(path: Path) -> list[Block]:
 
 
 def bench_readme(path: Path, everything: bool = False, on_row=None) -> dict:
-    """Run the quick start's blocks (or every block with a timed command) and time each command.
+    """Run the quick start's blocks (or every block with a timed command); time each command.
 
+    Every command of those blocks gets a row (``stated_s`` is None where the README states no
+    time), so a command that has grown slow shows up too.
     Commands run as ``python -m zoetic ...`` in a fresh process each, in one temp dir, so the
     times include starting Python and loading the compiled kernels from their cache.
-    ``on_row(row)`` sees each timed command's row as soon as it is measured."""
+    ``on_row(row)`` sees each row as soon as it is measured."""
     todo = [
         b
         for b in read_readme(path)
@@ -134,9 +136,8 @@ def bench_readme(path: Path, everything: bool = False, on_row=None) -> dict:
                         f"{path}:{cmd.line}: `{cmd.text}` failed ({done.returncode}): "
                         f"{done.stderr.strip()[-500:]}"
                     )
-                if cmd.stated_s is not None:
-                    row = {"command": cmd.text, "stated_s": cmd.stated_s}
-                    rows.append(row | {"measured_s": round(wall, 1)})
-                    if on_row is not None:
-                        on_row(rows[-1])
+                row = {"command": cmd.text, "stated_s": cmd.stated_s}
+                rows.append(row | {"measured_s": round(wall, 1)})
+                if on_row is not None:
+                    on_row(rows[-1])
     return {"cpus": os.cpu_count(), "load_1min": round(os.getloadavg()[0], 1), "commands": rows}
