@@ -1,7 +1,7 @@
 """Every code block of README.md runs: ```sh blocks command by command through the CLI in a temp
 dir, with tiny budgets; ```python blocks (all in "Python API") with exec in tests/test_api.py.
 
-The conventions (zoetic.bench.readme): ``[~12 s]`` in a command's comment states its wall time
+The conventions (zoetic.bench.readme): ``[~12 s]`` in a command's comment states its CPU time
 (``zoetic bench readme`` measures it); ``<!-- test: slow -->`` before a fence puts the block in
 the slow tier.
 """
@@ -21,7 +21,7 @@ BLOCKS = read_readme(README)
 
 # what the tests change so that each command takes seconds: option -> value (None: a flag)
 TINY: dict[str, dict[str, str | None]] = {
-    "demo": {"--budget": "24", "--no-video": None},
+    "demo": {"--budget": "24"},
     "simulate": {"--seconds": "1"},
     "learn": {"--budget": "24"},
     "repertoire train": {"--budget": "16"},
@@ -32,14 +32,19 @@ TINY: dict[str, dict[str, str | None]] = {
     "san evolve": {"--trials": "6"},
     "aquarium": {"--seconds": "1"},
     "pursue": {"--seconds": "1"},
+    "san show": {"--seconds": "1"},
 }
+# videos take most of a tiny run's time; other tests check them
+NO_VIDEO = {"demo", "simulate", "learn", "stunt", "macro", "sequence", "track", "aquarium"}
+NO_VIDEO |= {"pursue", "san search", "san tune", "san evolve"}
 
 
 def tiny(argv: tuple[str, ...]) -> list[str]:
     """The CLI arguments of a README command with the TINY options set (replaced or added)."""
     args = list(argv[1:])
     key = " ".join(args[:2]) if args[0] in ("san", "repertoire") else args[0]
-    for option, value in TINY.get(key, {}).items():
+    extra: dict[str, str | None] = {"--no-video": None} if key in NO_VIDEO else {}
+    for option, value in (TINY.get(key, {}) | extra).items():
         if value is None:
             args += [] if option in args else [option]
         elif option in args:
