@@ -38,6 +38,26 @@ need_debian() {
 cmd="${1:-demo}"
 [ $# -gt 0 ] && shift
 
+# web/node_modules: esbuild and three.js (the viewer's build) and the Khronos glTF validator
+# (a test). The built viewer itself is in git, so the other commands need none of this.
+# npm ci runs again whenever web/package-lock.json changes (its hash is kept in node_modules).
+npm_ci() {
+  need_debian node:nodejs npm:npm
+  local lock
+  lock="$(sha256sum web/package-lock.json | cut -c1-16)"
+  if [ "$(cat web/node_modules/.zoetic-lock 2>/dev/null)" != "$lock" ]; then
+    (cd web && npm ci --no-audit --no-fund --loglevel=error) >&2
+    echo "$lock" > web/node_modules/.zoetic-lock
+  fi
+}
+
+if [ "$cmd" = build-viewer ]; then  # needs npm only, not Python
+  npm_ci
+  (cd web && npm run --silent build)
+  echo "built src/zoetic/web/static/viewer.js and viewer.sources.json: commit both" >&2
+  exit 0
+fi
+
 PY="${PYTHON:-}"
 if [ -z "$PY" ]; then
   for cand in python3.11 python3.12 python3.13 python3; do
@@ -59,23 +79,8 @@ if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
   echo "$want" > "$stamp"
 fi
 
-# web/node_modules: esbuild and three.js (the viewer's build) and the Khronos glTF validator
-# (a test). The built viewer itself is in git, so the other commands need none of this.
-npm_ci() {
-  need_debian node:nodejs npm:npm
-  if [ ! -f web/node_modules/.package-lock.json ] \
-     || [ web/package-lock.json -nt web/node_modules/.package-lock.json ]; then
-    (cd web && npm ci --no-audit --no-fund --loglevel=error) >&2
-  fi
-}
-
 case "$cmd" in
   demo) exec zoetic demo "$@" ;;
-  build-viewer)
-    npm_ci
-    (cd web && npm run --silent build)
-    echo "built src/zoetic/web/static/viewer.js and viewer.sources.json: commit both" >&2
-    ;;
   test)
     npm_ci
     need_debian chromium:chromium
