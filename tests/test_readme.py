@@ -54,11 +54,19 @@ def tiny(argv: tuple[str, ...]) -> list[str]:
     return args
 
 
-def _tier(block: Block):
-    return pytest.param(block, marks=[pytest.mark.slow] if block.slow else [], id=f"L{block.line}")
+def _params(blocks: list[Block]) -> list:
+    """One test per sh block, named by its section and place in it (``1995-2``)."""
+    out, seen = [], {}
+    for b in blocks:
+        if b.lang == "sh":
+            name = b.section.split(":")[0].lower().replace(" ", "-")
+            seen[name] = seen.get(name, 0) + 1
+            marks = [pytest.mark.slow] if b.slow else []
+            out.append(pytest.param(b, marks=marks, id=f"{name}-{seen[name]}"))
+    return out
 
 
-SH = [_tier(b) for b in BLOCKS if b.lang == "sh"]
+SH = _params(BLOCKS)
 
 
 def test_the_readme_holds_only_blocks_the_tests_run() -> None:
