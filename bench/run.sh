@@ -17,3 +17,4 @@ Z=".venv/bin/zoetic"
 "$Z" bench aquarium --skills both --json | tail -n 1
 "$Z" bench aquarium --perception vision --json | tail -n 1
 "$Z" bench stunts --json | tail -n 1
+"$Z" bench readme --json | tail -n 1

@@ -229,3 +229,115 @@ def test_stunt_search_on_ray_matches_in_process(local_ray, tmp_path, monkeypatch
     assert s["history"] == [[n, round(f, 5)] for n, f in here.result.history]
     plan = json.loads((out / "macro.json").read_text())["controller"]
     assert plan == macro_document(here.problem, here.result.sequence, "")["controller"]
+
+
+def _free_ports(n: int) -> list[int]:
+    """Return ``n`` distinct TCP ports that are free on the loopback address now."""
+    import socket
+
+    socks = [socket.socket() for _ in range(n)]
+    for s in socks:
+        s.bind(("127.0.0.1", 0))
+    ports = [s.getsockname()[1] for s in socks]
+    for s in socks:
+        s.close()
+    return ports
+
+
+def _alive_nodes(ray_bin: str, address: str, env: dict) -> int:
+    import subprocess
+
+    out = subprocess.run(
+        [ray_bin, "status", f"--address={address}"], env=env, capture_output=True, text=True
+    )
+    active = out.stdout.split("Active:")[-1].split("Pending:")[0]
+    return active.count("node_") if out.returncode == 0 else 0
+
+
+@pytest.fixture(scope="module")
+def two_node_cluster():
+    """A head and a worker node on 127.0.0.1, each with one CPU, its own temp dir and ports, and
+    token authentication on (a token of this test's own, not ~/.ray/auth_token). Yields the
+    address and the environment a driver needs; the fixture kills both nodes' process groups."""
+    import secrets
+    import shutil
+    import subprocess
+    import sys
+    import tempfile
+    import time
+
+    ray_bin = str(Path(sys.executable).with_name("ray"))
+    base = Path(tempfile.mkdtemp(prefix="zray", dir="/tmp"))  # short: Ray's socket paths
+    src = str(Path(__file__).resolve().parents[1] / "src")
+    env = {k: v for k, v in os.environ.items() if k != "RAY_ADDRESS"}
+    env.update(
+        RAY_AUTH_MODE="token",
+        RAY_AUTH_TOKEN=secrets.token_hex(32),
+        PYTHONPATH=os.pathsep.join([src, env.get("PYTHONPATH", "")]),
+    )
+    gcs, dash, *agents = _free_ports(4)
+    address = f"127.0.0.1:{gcs}"
+    common = ["--num-cpus=1", "--node-ip-address=127.0.0.1", "--disable-usage-stats"]
+    head = ["--head", f"--port={gcs}", "--include-dashboard=false", f"--dashboard-port={dash}"]
+    groups: list[int] = []
+    try:
+        for i, args in enumerate([head, [f"--address={address}"]]):
+            cmd = [ray_bin, "start", *args, *common, f"--temp-dir={base / str(i)}"]
+            cmd.append(f"--dashboard-agent-listen-port={agents[i]}")
+            proc = subprocess.Popen(
+                cmd,
+                env=env,
+                start_new_session=True,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.STDOUT,
+                text=True,
+            )
+            groups.append(proc.pid)  # its daemons stay in the group it leads
+            log = proc.communicate(timeout=180)[0]
+            assert proc.returncode == 0, log[-3000:]
+        deadline = time.monotonic() + 90
+        while _alive_nodes(ray_bin, address, env) < 2:
+            assert time.monotonic() < deadline, "the worker node never joined the head"
+            time.sleep(2)
+        yield address, env
+    finally:
+        for sig in (signal.SIGTERM, signal.SIGKILL):
+            for pgid in groups:
+                try:
+                    os.killpg(pgid, sig)
+                except ProcessLookupError:
+                    pass
+            time.sleep(3)
+        shutil.rmtree(base, ignore_errors=True)
+
+
+def _learn_on(address: str, env: dict, out: Path):
+    """``zoetic learn CONFIG --evaluator ray --ray-address address`` in a fresh process."""
+    import subprocess
+    import sys
+
+    c = CONFIG
+    args = [sys.executable, "-m", "zoetic", "learn", c["animal"], "--task", c["task"]]
+    args += ["--optimizer", c["optimizer"], "--budget", str(c["budget"])]
+    args += ["--popsize", str(c["popsize"]), "--nodes", str(c["nodes"]), "--seed", str(c["seed"])]
+    args += ["--no-video", "--out", str(out), "--evaluator", "ray", "--ray-address", address]
+    return subprocess.run(args, env=env, capture_output=True, text=True, timeout=600)
+
+
+def test_a_two_node_cluster_with_token_auth_gives_the_in_process_history(
+    two_node_cluster, reference, tmp_path
+):
+    address, env = two_node_cluster
+    done = _learn_on(address, env, tmp_path)
+    assert done.returncode == 0, done.stderr[-3000:]
+    with (tmp_path / "history.csv").open() as fh:
+        assert [row["E"] for row in csv.DictReader(fh)] == [f"{e:.6g}" for e in reference[1]]
+
+
+def test_a_driver_without_the_token_is_told_so(two_node_cluster, tmp_path):
+    address, env = two_node_cluster
+    done = _learn_on(address, {**env, "RAY_AUTH_MODE": "disabled"}, tmp_path)
+    assert done.returncode == 2
+    said = " ".join(done.stderr.split())  # the console wraps long lines
+    assert "refused this driver's authentication token" in said
+    assert "RAY_AUTH_MODE=token" in said and "cannot reach" not in said

@@ -217,6 +217,8 @@ def test_stunt_cli_writes_its_files_and_the_macro_replays(tmp_path, capsys, dolp
         ]
     )
     assert code == 0
+    said = " ".join(capsys.readouterr().out.split())  # before the search: what it will cost
+    assert "dolphin short-leap: 6 plans by anneal, each a 0.5 s simulation" in said
     for f in ("macro.json", "summary.json", "score.png", "video.mp4"):
         assert (out / f).stat().st_size > 0, f
     s = json.loads((out / "summary.json").read_text())

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import typer
 
 from zoetic.cli.apps import app
 from zoetic.cli.options import Json
-from zoetic.cli.output import emit
+from zoetic.cli.output import emit, err_console
 
 bench_app = typer.Typer(help="Benchmarks; figures are ratios measured side by side.")
 app.add_typer(bench_app, name="bench")
@@ -84,3 +86,23 @@ def bench_track_cmd(
     from zoetic.bench.track import bench_track
 
     emit(bench_track(animal, memory, time_limit), json)
+
+
+@bench_app.command("readme")
+def bench_readme_cmd(
+    readme: Path = typer.Option(Path("README.md"), help="The README whose commands to time."),
+    section: list[str] = typer.Option(None, help="A ## section to run (default: Quick start)."),
+    everything: bool = typer.Option(False, "--all", help="Every section's timed blocks."),
+    json: Json = False,
+) -> None:
+    """The CPU and wall time of the README's timed commands ([~12 s]), run as written."""
+    from zoetic.bench.readme import QUICK_START, bench_readme
+
+    def say(row: dict) -> None:
+        err_console.print(
+            f"{row['cpu_s']:8.1f} s CPU {row['wall_s']:8.1f} s wall  {row['command']}",
+            highlight=False,
+        )
+
+    sections = None if everything else tuple(section or [QUICK_START])
+    emit(bench_readme(readme.resolve(), sections, say), json)

@@ -168,6 +168,21 @@ def _print_summary(summary: dict) -> None:
         console.print(f"{key:>14}: {value}")
 
 
+def demo_banner(config) -> str:
+    """What the demo is about to do, in words computed from its config and task file."""
+    from zoetic.tasks import load_task
+
+    task = load_task(config.task)
+    n = len(task.starts)
+    starts = f"from {n} starts ({', '.join(s.name or '?' for s in task.starts)})" if n > 1 else ""
+    return (
+        f"[bold]zoetic demo[/]: a {config.animal} with random muscle signals learns "
+        f"{task.name} ({config.optimizer}): {config.budget} candidate controllers, each "
+        f"simulated for {task.horizon:g} s {starts}".rstrip()
+        + "."
+    )
+
+
 @app.command()
 def demo(
     out: Path = typer.Option(Path("runs/demo"), help="Where to write the demo run."),
@@ -175,7 +190,7 @@ def demo(
     seed: int = typer.Option(0),
     video: bool = typer.Option(True),
 ) -> None:
-    """A shark learns to swim from scratch (CMA-ES, 40 nodes per muscle, ~15 s on 2 cores)."""
+    """A shark learns to swim from scratch (CMA-ES, 40 nodes per muscle); runs/demo."""
     from zoetic.learning.run import LearnConfig, Run
     from zoetic.runs import clear_demo, finish_run, mark_demo
     from zoetic.viz.media import learning_media
@@ -192,10 +207,7 @@ def demo(
         popsize=24,
         nodes=40,
     )
-    console.print(
-        "[bold]zoetic demo[/]: a shark with random muscle signals learns to swim straight "
-        f"({budget} simulations of {4.0:g} s each)."
-    )
+    console.print(demo_banner(config))
     run = Run.create(out, config)
     try:
         run_with_progress(run, "shark learns to swim")

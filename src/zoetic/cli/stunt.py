@@ -20,7 +20,7 @@ from zoetic.cli.options import (
     Seed,
     use_ray_address,
 )
-from zoetic.cli.output import console, emit
+from zoetic.cli.output import Countdown, console, emit
 from zoetic.cli.track import track_bar
 
 
@@ -75,7 +75,10 @@ def stunt(
     ),
     method: Method = "anneal",
     budget: int = typer.Option(
-        None, min=1, max=10_000_000, help="Plans (stunt simulations) to evaluate (default 9600)."
+        None,
+        min=1,
+        max=10_000_000,
+        help="Plans (stunt simulations) to evaluate (default 9600; the time is said early).",
     ),
     seed: Seed = 0,
     segments: int = typer.Option(None, min=1, help="Entries in a plan (default: the trick's)."),
@@ -99,11 +102,18 @@ def stunt(
     rep = Repertoire.load(memory, body)
     tr = load_trick(trick)
     budget = budget or BUDGET
+    console.print(
+        f"{body.name} {tr.name}: {budget} plans by {method}, each a {tr.task.horizon:g} s "
+        "simulation; the time it takes here is printed after the first steps "
+        "(--budget sets the plans)"
+    )
+    countdown = Countdown(budget, "plans")
     with track_bar("plans") as bar:
         tid = bar.add_task(f"{body.name} {tr.name} ({method})", total=budget, info="")
 
         def update(opt) -> None:
             bar.update(tid, completed=min(opt.evaluations, budget), info=f"E {opt.best_f:.3f}")
+            countdown(opt.evaluations, bar.console)
 
         found = discover(
             body, rep, tr, method, budget, seed, segments, progress=update, evaluator=evaluator

@@ -34,6 +34,28 @@ def import_ray():
     return ray
 
 
+_AUTH_FAILURE = ("InvalidAuthToken", "AuthenticationError", "Unauthenticated")
+
+
+def _connect_failure(address: str | None, exc: BaseException) -> str:
+    """Say why ``ray.init`` could not join the cluster at ``address``: the token, or the network.
+
+    Ray 2.5x clusters turn token authentication on by default; a driver started without
+    ``RAY_AUTH_MODE=token`` is refused, which Ray reports as a ConnectionError whose cause's text
+    (not its type) names the refusal."""
+    text = " ".join(str(e) for e in (exc, exc.__cause__, exc.__context__) if e is not None)
+    if any(word in text for word in _AUTH_FAILURE):
+        mode = os.environ.get("RAY_AUTH_MODE", "unset")
+        return (
+            f"the Ray cluster at {address} refused this driver's authentication token "
+            f"(InvalidAuthToken; RAY_AUTH_MODE is {mode}): the cluster has token "
+            "authentication on, so run zoetic with RAY_AUTH_MODE=token and the cluster's token "
+            "in ~/.ray/auth_token, RAY_AUTH_TOKEN_PATH or RAY_AUTH_TOKEN (docs/cluster.md)"
+        )
+    first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+    return f"cannot reach the Ray cluster at {address} ({first})"
+
+
 class _Worker:
     """A Ray actor: caches one job (an objective, ...) by key and runs sub-batches through it."""
 
@@ -92,10 +114,8 @@ class RayPool:
                     include_dashboard=False,
                     configure_logging=False,
                 )
-            except ConnectionError as exc:
-                raise ZoeticError(
-                    f"cannot reach the Ray cluster at {self.address} ({exc})"
-                ) from None
+            except (ConnectionError, RuntimeError) as exc:
+                raise ZoeticError(_connect_failure(self.address, exc)) from None
             self._started_ray = True
         n = self.n_actors or max(1, int(ray.cluster_resources().get("CPU", 1)))
         remote = ray.remote(num_cpus=1, max_restarts=-1, max_task_retries=self.retries)(_Worker)

@@ -2,8 +2,9 @@
 (built by ``zoetic.viz.viewer`` from the run record).
 
 The script ``static/viewer.js`` is built from ``web/viewer.js`` and the ``three`` npm package by
-``./run.sh`` (``npm ci && npm run build`` in ``web/``); it is not kept in git. The page needs
-nothing else: no network, no server, so it can be mailed and opened from disk.
+``./run.sh build-viewer`` (``npm run build`` in ``web/``) and shipped built, in git and in the
+wheel, so ``pip install`` needs no npm. The page needs nothing else: no network, no server, so it
+can be mailed and opened from disk.
 """
 
 from __future__ import annotations
@@ -61,8 +62,8 @@ def bundle_path() -> Path:
     path = _STATIC / "viewer.js"
     if not path.exists():
         raise ZoeticError(
-            f"{path}: the viewer's script is not built; run ./run.sh from a zoetic checkout "
-            "(it runs `npm ci && npm run build` in web/, which needs Node.js and npm)"
+            f"{path}: the viewer's script is missing; reinstall zoetic, or in a checkout run "
+            "./run.sh build-viewer (npm run build in web/, which needs Node.js and npm)"
         )
     return path
 
