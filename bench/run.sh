@@ -17,4 +17,6 @@ Z=".venv/bin/zoetic"
 "$Z" bench aquarium --skills both --json | tail -n 1
 "$Z" bench aquarium --perception vision --json | tail -n 1
 "$Z" bench stunts --json | tail -n 1
+"$Z" bench track --json | tail -n 1
+"$Z" bench render --json | tail -n 1
 "$Z" bench readme --json | tail -n 1
