@@ -24,7 +24,8 @@ from pathlib import Path
 import numpy as np
 import tomli_w
 
-from zoetic.behavior.tracking import body_length, handmade_repertoire
+from zoetic.behavior.handmade import handmade_repertoire
+from zoetic.behavior.tracking import body_length
 from zoetic.bench.skills import burst, learn_skill, sustained_speed
 from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller

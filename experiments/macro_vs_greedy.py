@@ -18,13 +18,14 @@ import argparse
 from pathlib import Path
 
 import numpy as np
-from zoetic.reproduce import figures_dir
 
+from zoetic.behavior.handmade import handmade_repertoire
 from zoetic.behavior.macro import MacroProblem, ReachTask, path_scores, search
 from zoetic.behavior.repertoire import Repertoire
-from zoetic.behavior.tracking import TrackConfig, handmade_repertoire, track
+from zoetic.behavior.tracking import TrackConfig, track
 from zoetic.bodies import load_animal
 from zoetic.io import write_json
+from zoetic.reproduce import figures_dir
 
 OUT = figures_dir()
 COURSE = np.array([[2.0, 0.5], [4.0, 2.0], [5.0, 4.5], [3.5, 6.5], [1.0, 7.0]])

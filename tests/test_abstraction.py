@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from zoetic.behavior.tracking import wave_abstraction
+from zoetic.behavior.handmade import wave_abstraction
 from zoetic.bodies import load_animal
 from zoetic.control import FrequencyDomainController, TimeDomainController, from_dict
 from zoetic.control.abstract import AbstractController, SequenceController

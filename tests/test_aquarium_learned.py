@@ -18,8 +18,8 @@ from zoetic.behavior.aquarium.species import (
     with_skills,
 )
 from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live
+from zoetic.behavior.handmade import handmade_repertoire
 from zoetic.behavior.learned_motor import LEARNED_SWIM
-from zoetic.behavior.tracking import handmade_repertoire
 from zoetic.bodies import load_animal
 from zoetic.learning.objective import heading_angles
 from zoetic.physics import simulate

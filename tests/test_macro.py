@@ -8,6 +8,7 @@ import json
 import numpy as np
 import pytest
 
+from zoetic.behavior.handmade import handmade_repertoire
 from zoetic.behavior.macro import (
     MacroProblem,
     PlanAnnealing,
@@ -16,7 +17,7 @@ from zoetic.behavior.macro import (
     path_scores,
     search,
 )
-from zoetic.behavior.tracking import TrackingError, handmade_repertoire
+from zoetic.behavior.tracking import TrackingError
 from zoetic.bodies import load_animal
 from zoetic.cli import main
 from zoetic.control import load_controller

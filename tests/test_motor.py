@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from zoetic.behavior.handmade import handmade_repertoire
 from zoetic.behavior.motor import MotorControllers, blend, motor_repertoire
-from zoetic.behavior.tracking import handmade_repertoire
 from zoetic.bodies import load_animal
 from zoetic.learning.objective import heading_angles
 from zoetic.physics import simulate

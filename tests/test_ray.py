@@ -145,8 +145,8 @@ def test_san_search_on_ray_matches_the_process_pool(local_ray):
 
 
 def test_macro_search_on_ray_matches_in_process(local_ray):
+    from zoetic.behavior.handmade import handmade_repertoire
     from zoetic.behavior.macro import MacroProblem, ReachTask, search
-    from zoetic.behavior.tracking import handmade_repertoire
     from zoetic.bodies import load_animal
 
     shark = load_animal("shark")

@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
+from zoetic.behavior.handmade import handmade_repertoire
 from zoetic.behavior.repertoire import Repertoire
-from zoetic.behavior.tracking import handmade_repertoire
 from zoetic.behavior.training import build_sequence, parse_sequence, plan_for
 from zoetic.bodies import load_animal
 from zoetic.cli import main

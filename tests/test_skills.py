@@ -79,7 +79,7 @@ def test_a_users_own_animal_file_learns_with_a_built_in_task(tmp_path):
 
 
 def test_depth_change_with_the_fins_and_the_dolphins_burst_are_reported():
-    from zoetic.behavior.tracking import handmade_repertoire
+    from zoetic.behavior.handmade import handmade_repertoire
     from zoetic.bench.skills import burst, depth_change
 
     shark = load_animal("shark")

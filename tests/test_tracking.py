@@ -8,11 +8,11 @@ import json
 import numpy as np
 import pytest
 
+from zoetic.behavior.handmade import handmade_repertoire
 from zoetic.behavior.tracking import (
     RESTART,
     TrackConfig,
     TrackingError,
-    handmade_repertoire,
     parse_points,
     parse_targets,
     replay,

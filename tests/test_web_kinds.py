@@ -128,7 +128,7 @@ def _activations(page, actuators: int) -> None:
 @pytest.fixture(scope="module")
 def memory(tmp_path_factory) -> Path:
     """The shark's hand-made repertoire (track, macro, sequence)."""
-    from zoetic.behavior.tracking import handmade_repertoire
+    from zoetic.behavior.handmade import handmade_repertoire
     from zoetic.bodies import load_animal
 
     path = tmp_path_factory.mktemp("memory")

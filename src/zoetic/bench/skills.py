@@ -3,7 +3,7 @@
 ``zoetic bench skills`` runs this: for every animal and every entry of its basic training
 (go straight, sharp and wide left turns), learn the entry's task with the defaults of
 ``zoetic learn`` and score the learned controller and the hand-made one (the animal's wave,
-bent for turns: ``tracking.handmade_repertoire``) on the same task, from each of the task's
+bent for turns: ``handmade.handmade_repertoire``) on the same task, from each of the task's
 starts (``learned``/``hand_made`` from the first, rest; ``learned_<name>``/``hand_made_<name>``
 from each other start, e.g. ``learned_cruising``), with the same figures: the task's E, speed
 in body lengths per second, the heading change, the time to turn 90 degrees and the turning
@@ -18,7 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from zoetic.behavior.tracking import body_length, handmade_repertoire
+from zoetic.behavior.handmade import handmade_repertoire
+from zoetic.behavior.tracking import body_length
 from zoetic.behavior.training import plan_for
 from zoetic.bodies import Body, list_animals, load_animal
 from zoetic.control import Controller
