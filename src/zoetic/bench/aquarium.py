@@ -61,13 +61,7 @@ def bench_aquarium(
     life = live(tank)
     cpu = time.process_time() - c0
     s = summarize(tank, life)
-    # the same world stepped with the same number of calls and no brains: the physics share
-    bare = build_tank(cfg)
-    t0, c0 = time.perf_counter(), time.process_time()
-    steps = bare.world.steps_for(cfg.record_period)
-    for _ in range(int(round(seconds / cfg.record_period))):
-        bare.world.step(steps * bare.world.dt, None)
-    physics, physics_cpu = time.perf_counter() - t0, time.process_time() - c0
+    physics, physics_cpu = _physics_alone(cfg)
 
     def per_minute(count: int) -> float | None:
         return 60.0 * count / s["seconds"] if s["seconds"] > 0 else None
@@ -95,3 +89,14 @@ def bench_aquarium(
         "avoid_share": s["intention_share"]["avoid"],
         "survivors": s["survivors"],
     }
+
+
+def _physics_alone(cfg: TankConfig) -> tuple[float, float]:
+    """Return the wall and CPU seconds of the same world stepped with the same number of
+    calls and no brains: the physics' share of the tank's time."""
+    bare = build_tank(cfg)
+    t0, c0 = time.perf_counter(), time.process_time()
+    steps = bare.world.steps_for(cfg.record_period)
+    for _ in range(int(round(cfg.seconds / cfg.record_period))):
+        bare.world.step(steps * bare.world.dt, None)
+    return time.perf_counter() - t0, time.process_time() - c0
