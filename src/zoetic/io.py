@@ -18,6 +18,7 @@ import difflib
 import json
 import math
 import os
+import re
 import tempfile
 import tomllib
 from collections.abc import Iterable
@@ -25,6 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import tomli_w
 
 from zoetic.errors import ZoeticError
@@ -204,9 +206,33 @@ def check_depth(obj: Any, where: str, error=ZoeticError, limit: int | None = Non
             stack.extend((v, depth + 1) for v in item if isinstance(v, list | dict))
 
 
+# what a string or comment looks like, so that brackets inside one are not counted
+_QUOTED = {
+    "JSON": re.compile(r'"(?:[^"\\]|\\.)*"'),
+    "TOML": re.compile(
+        r'"""[\s\S]*?"""|\'\'\'[\s\S]*?\'\'\'|"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'|#[^\n]*'
+    ),
+}
+_BRACKETS = re.compile(r"[^\[\]{}]+")
+
+
+def text_depth(text: str, fmt: str = "JSON") -> int:
+    """Return how deep the brackets and braces of a JSON or TOML text nest (outside strings and
+    comments), counted without parsing, so that a parser's recursion is never reached."""
+    marks = _BRACKETS.sub("", _QUOTED[fmt].sub("", text)).encode()
+    if not marks:
+        return 0
+    codes = np.frombuffer(marks, np.uint8)
+    steps = np.where((codes == ord("[")) | (codes == ord("{")), 1, -1)
+    return int(np.cumsum(steps).max())
+
+
 def _load(path, what: str, error, loads, invalid: type[Exception], fmt: str) -> Any:
-    """Return ``loads`` of the text in ``path`` (read safely), nesting checked; errors name it."""
+    """Return ``loads`` of the text in ``path`` (read safely), nesting checked before and after
+    parsing; errors name it."""
     text = read_text(path, what, error)
+    if text_depth(text, fmt) > LIMITS.depth + 2:  # a TOML [[header]] adds two for a moment
+        raise error(f"{path}: nested more than {LIMITS.depth} levels deep; is the {what} damaged?")
     try:
         doc = loads(text)
     except invalid as exc:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shlex
 from functools import partial
 from pathlib import Path
 
@@ -10,7 +11,7 @@ import typer
 from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
 from zoetic.cli.options import Animal, Json, Seed, use_ray_address
-from zoetic.cli.output import console, emit, progress_bar
+from zoetic.cli.output import console, emit, interrupted, progress_bar
 from zoetic.io import check_out_dir
 
 
@@ -58,11 +59,10 @@ def run_with_progress(run, label: str, every_s: float = 2.0) -> None:
         try:
             run.learn(progress=update, every_s=every_s)
         except KeyboardInterrupt:
-            console.print(
-                f"[yellow]interrupted at {run.evaluations} evaluations; nothing is lost: "
-                f"zoetic learn --resume {run.out}[/]"
+            interrupted(
+                f"saved {run.out} at {run.evaluations} of {budget} evaluations; continue with: "
+                f"zoetic learn --resume {shlex.quote(str(run.out))}"
             )
-            raise typer.Exit(130) from None
 
 
 @app.command()

@@ -11,7 +11,7 @@ from rich.table import Table
 
 from zoetic.cli.apps import app
 from zoetic.cli.learn import learn_bar
-from zoetic.cli.output import console
+from zoetic.cli.output import console, interrupted
 
 repertoire_app = typer.Typer(
     help="Basic training: learn, abstract and keep a repertoire.", no_args_is_help=True
@@ -108,11 +108,7 @@ def train_cmd(
                 evaluator,
             )
         except KeyboardInterrupt:
-            console.print(
-                f"[yellow]interrupted; run the same command again to continue "
-                f"({out} keeps what was learned)[/]"
-            )
-            raise typer.Exit(130) from None
+            interrupted(f"{out} keeps what was learned; run the same command to continue")
     _print_rows(show_repertoire(out), f"{out}")
 
 
