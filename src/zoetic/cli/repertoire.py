@@ -11,6 +11,7 @@ from rich.table import Table
 
 from zoetic.cli.apps import app
 from zoetic.cli.learn import learn_bar
+from zoetic.cli.options import Force
 from zoetic.cli.output import console, interrupted
 
 repertoire_app = typer.Typer(
@@ -162,17 +163,19 @@ def sequence_cmd(
     overlap: float = typer.Option(0.05, help="Fraction of each entry shared with the next."),
     out: Path = typer.Option(Path("runs/sequence"), help="Output directory."),
     video: bool = typer.Option(True, help="Write video.mp4."),
+    force: Force = False,
 ) -> None:
     """Concatenate repertoire entries, cross-faded, into one controller; simulate it."""
     from zoetic.behavior.repertoire import Repertoire
     from zoetic.behavior.training import build_sequence, parse_sequence
     from zoetic.bodies import load_animal
     from zoetic.control import save_controller
-    from zoetic.io import make_dir
+    from zoetic.io import make_dir, prepare_out
     from zoetic.runs import simulate_run
     from zoetic.viz.learning import plot_controller
     from zoetic.viz.media import simulation_media
 
+    prepare_out(out, force)
     body = load_animal(animal)
     rep = Repertoire.load(memory, body)
     seq = build_sequence(rep, parse_sequence(entries, rep), overlap)
