@@ -12,7 +12,7 @@ from rich.table import Table
 from zoetic.cli.apps import app
 from zoetic.cli.learn import learn_bar
 from zoetic.cli.options import Force
-from zoetic.cli.output import console, interrupted
+from zoetic.cli.output import console, interrupted, print_summary
 
 repertoire_app = typer.Typer(
     help="Basic training: learn, abstract and keep a repertoire.", no_args_is_help=True
@@ -195,6 +195,4 @@ def sequence_cmd(
     summary = simulate_run(
         animal, str(path), seq.duration, out, media=partial(simulation_media, video=video)
     )
-    for key, value in summary.items():
-        console.print(f"{key:>12}: {value}")
-    console.print(f"{'sequence':>12}: {path}")
+    print_summary(summary | {"sequence": str(path)})

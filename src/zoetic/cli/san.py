@@ -374,6 +374,7 @@ def show_cmd(
     force: Force = False,
 ) -> None:
     """Replay a network with its sensor and node states drawn beside the creature (video)."""
+    from zoetic.san.creature import CreatureError
     from zoetic.san.network import load_with_creature
     from zoetic.san.search import speed_cm_s
     from zoetic.san.show import resolve_network
@@ -385,6 +386,8 @@ def show_cmd(
     net, c = load_with_creature(file, creature)
     _check_seconds(c, seconds)
     terrain = terrain or str(net.info.get("terrain", "flat"))
+    if out is not None and out.suffix.lower() in (".mp4", ".gif", ".webm", ".mov"):
+        raise CreatureError(f"--out {out}: a directory; the video is written inside it")
     name = "show.mp4" if file.stem in ("san", f"{rank:02d}") else f"show-{file.stem}.mp4"
     target = (prepare_out(out, force) if out else path if path.is_dir() else file.parent) / name
     with console.status(f"rendering {target}"):
