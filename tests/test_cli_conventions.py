@@ -303,3 +303,18 @@ def test_resume_takes_a_new_budget_and_refuses_other_settings(tmp_path, capsys):
     assert tomllib.loads((out / "config.toml").read_text())["run"]["budget"] == 32
     rows = (out / "history.csv").read_text().strip().splitlines()
     assert len(rows) - 1 == 32  # one row per evaluation, all of the new budget
+
+
+def test_a_bug_is_one_line_exit_1_and_debug_shows_the_traceback(tmp_path, monkeypatch, capsys):
+    import zoetic.runs
+
+    def broken(*args, **kwargs):
+        raise TypeError("a bug")
+
+    monkeypatch.setattr(zoetic.runs, "simulate_run", broken)
+    assert main(["simulate", "shark", "--out", str(tmp_path / "o")]) == 1
+    err = capsys.readouterr().err
+    assert "internal error: TypeError: a bug" in err and "--debug" in err
+    assert "Traceback" not in err
+    with pytest.raises(TypeError, match="a bug"):
+        main(["--debug", "simulate", "shark", "--out", str(tmp_path / "o")])

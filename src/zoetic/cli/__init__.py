@@ -64,7 +64,15 @@ def main(argv: list[str] | None = None) -> int:
         if shows and isinstance(getattr(exc, "exit_code", None), int):
             exc.show()
             return 2
-        raise
+        if _DEBUG["on"] or "--debug" in args:
+            raise
+        err_console.print(
+            f"[bold red]internal error:[/] {type(exc).__name__}: {escape(str(exc)[:300])}; "
+            "this is a bug in zoetic: run again with --debug for the traceback and report it",
+            highlight=False,
+            soft_wrap=True,
+        )
+        return 1
     code = code if isinstance(code, int) else 0
     if code == 130 and not INTERRUPTED["told"]:
         err_console.print("[yellow]interrupted (Ctrl-C); the command stopped[/]", highlight=False)

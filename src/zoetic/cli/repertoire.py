@@ -175,11 +175,10 @@ def sequence_cmd(
     from zoetic.viz.learning import plot_controller
     from zoetic.viz.media import simulation_media
 
-    prepare_out(out, force)
     body = load_animal(animal)
     rep = Repertoire.load(memory, body)
     seq = build_sequence(rep, parse_sequence(entries, rep), overlap)
-    make_dir(out)
+    make_dir(prepare_out(out, force))
     path = save_controller(seq, out / "sequence.json")
     import numpy as np
 

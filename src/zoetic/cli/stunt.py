@@ -94,9 +94,9 @@ def stunt(
     from zoetic.io import prepare_out
 
     prepare_out(out, force)
+    tr = load_trick(trick)
     body = load_animal(animal)
     rep = Repertoire.load(memory, body)
-    tr = load_trick(trick)
     budget = budget or BUDGET
     with track_bar("plans") as bar:
         tid = bar.add_task(f"{body.name} {tr.name} ({method})", total=budget, info="")
