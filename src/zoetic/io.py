@@ -53,7 +53,8 @@ def check_out_dir(path: str | os.PathLike) -> Path:
     for p in (path, *path.parents):
         if p.exists():
             if not p.is_dir():
-                raise ZoeticError(f"{p}: exists and is not a directory; choose another --out")
+                where = f"{path}: {p}" if p != path else f"{p}:"
+                raise ZoeticError(f"{where} exists and is not a directory; choose another --out")
             break
     return path
 
