@@ -116,12 +116,8 @@ def _signed(pos, faces, b, px, py, pz):
         l2 = math.sqrt(x2 * x2 + y2 * y2 + z2 * z2)
         l3 = math.sqrt(x3 * x3 + y3 * y3 + z3 * z3)
         det = x1 * (y2 * z3 - z2 * y3) - y1 * (x2 * z3 - z2 * x3) + z1 * (x2 * y3 - y2 * x3)
-        den = (
-            l1 * l2 * l3
-            + (x1 * x2 + y1 * y2 + z1 * z2) * l3
-            + (x1 * x3 + y1 * y3 + z1 * z3) * l2
-            + (x2 * x3 + y2 * y3 + z2 * z3) * l1
-        )
+        den = (l1 * l2 * l3 + (x1 * x2 + y1 * y2 + z1 * z2) * l3
+               + (x1 * x3 + y1 * y3 + z1 * z3) * l2 + (x2 * x3 + y2 * y3 + z2 * z3) * l1)
         solid += 2.0 * math.atan2(det, den)
         qx, qy, qz, u, v, w = _closest(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz)
         dx, dy, dz = px - qx, py - qy, pz - qz
@@ -204,6 +200,7 @@ def close(pa, va, pb, vb, reach, skin, horizon) -> bool:
     return False
 
 
+
 @njit(cache=True)
 def close_pairs(pos, vel, off, reach, skin, horizon) -> np.ndarray:
     """Return the pairs (P, 2) of animals that may touch within ``horizon`` s (``close`` for
@@ -213,7 +210,7 @@ def close_pairs(pos, vel, off, reach, skin, horizon) -> np.ndarray:
     out = np.empty((n * (n - 1) // 2, 2), np.int64)
     k = 0
     for a in range(n):
-        pa, va = pos[off[a] : off[a + 1]], vel[off[a] : off[a + 1]]
+        pa, va = pos[off[a]:off[a + 1]], vel[off[a]:off[a + 1]]
         for c in range(a + 1, n):
             r = max(reach[a], reach[c]) + skin
             if close(pa, va, pos[off[c]:off[c + 1]], vel[off[c]:off[c + 1]], r, skin,
@@ -221,7 +218,6 @@ def close_pairs(pos, vel, off, reach, skin, horizon) -> np.ndarray:
                 out[k, 0], out[k, 1] = a, c
                 k += 1
     return out[:k]
-
 
 @njit(cache=True)
 def _push(pa, va, ma, pb, vb, mb, fb, radius, w, zeta, fa_out, fb_out, load, b):

@@ -28,9 +28,8 @@ def near_each(pos, vel, off, radius, bpos, bvel, bpar, skind, scenter, ssize, ho
     pos and vel): could any of its nodes touch a ball or fixed shape within ``horizon`` s."""
     for a in range(off.shape[0] - 1):
         o0, o1 = off[a], off[a + 1]
-        out[a] = near(
-            pos[o0:o1], vel[o0:o1], radius, bpos, bvel, bpar, skind, scenter, ssize, horizon
-        )
+        out[a] = near(pos[o0:o1], vel[o0:o1], radius, bpos, bvel, bpar, skind, scenter, ssize,
+                      horizon)
 
 
 class BroadPhase:
@@ -38,18 +37,8 @@ class BroadPhase:
     B), animal a in rows off[a]:off[a + 1], its ``views[a]``) and its ``solids``; ``reach``:
     each animal's ``bodycontact.surface_reach``; ``touchy``: animals push each other."""
 
-    def __init__(
-        self,
-        pos,
-        vel,
-        off,
-        views,
-        reach: list[float],
-        node_radius: float,
-        dt: float,
-        solids: Solids,
-        touchy: bool,
-    ) -> None:
+    def __init__(self, pos, vel, off, views, reach: list[float], node_radius: float, dt: float,
+                 solids: Solids, touchy: bool) -> None:
         self.pos, self.vel, self.off, self.views = pos, vel, off, views
         self.reach = reach
         self.reach_arr = np.array(reach, float)
@@ -84,20 +73,8 @@ class BroadPhase:
             mode = "apart"
             near_now = np.zeros(len(self.views), bool)
             s = self.solids
-            near_each(
-                self.pos,
-                self.vel,
-                self.off,
-                self.node_radius,
-                s.pos,
-                s.vel,
-                s.par,
-                s.kind,
-                s.center,
-                s.size,
-                horizon,
-                near_now,
-            )
+            near_each(self.pos, self.vel, self.off, self.node_radius, s.pos, s.vel, s.par,
+                      s.kind, s.center, s.size, horizon, near_now)
         elif self.solids.any and self.any_near(horizon):
             mode = "lockstep"
         else:
@@ -116,7 +93,8 @@ class BroadPhase:
     def close_pairs(self, horizon: float) -> list[tuple[int, int]]:
         """Return the pairs of animals that may touch within ``horizon`` s (every pair in one
         kernel call, ``close`` for each)."""
-        found = close_pairs(self.pos, self.vel, self.off, self.reach_arr, self.node_radius, horizon)
+        found = close_pairs(self.pos, self.vel, self.off, self.reach_arr, self.node_radius,
+                            horizon)
         return [(int(a), int(c)) for a, c in found]
 
     def close(self, a: int, c: int, horizon: float) -> bool:
@@ -130,6 +108,7 @@ class BroadPhase:
         ``horizon`` s."""
         s = self.solids
         for p, v in self.views:
-            if near(p, v, self.node_radius, s.pos, s.vel, s.par, s.kind, s.center, s.size, horizon):
+            if near(p, v, self.node_radius, s.pos, s.vel, s.par, s.kind, s.center, s.size,
+                    horizon):
                 return True
         return False

@@ -100,18 +100,8 @@ def _sdf(kind, cx, cy, cz, s0, s1, s2, px, py, pz):
 @njit(cache=True, inline="always")
 def _shape_sdf(s, skind, scenter, ssize, px, py, pz):
     """``_sdf`` of the fixed shape s of the packed shapes (``objects.pack_statics``)."""
-    return _sdf(
-        skind[s],
-        scenter[s, 0],
-        scenter[s, 1],
-        scenter[s, 2],
-        ssize[s, 0],
-        ssize[s, 1],
-        ssize[s, 2],
-        px,
-        py,
-        pz,
-    )
+    return _sdf(skind[s], scenter[s, 0], scenter[s, 1], scenter[s, 2], ssize[s, 0], ssize[s, 1],
+                ssize[s, 2], px, py, pz)
 
 
 @njit(cache=True, inline="always")
@@ -169,32 +159,8 @@ def contact_rows(n_nodes, n_statics):
 
 
 @njit(cache=True)
-def solve(
-    cx,
-    cy,
-    cz,
-    r,
-    mc,
-    ux,
-    uy,
-    uz,
-    b,
-    pos,
-    vel,
-    mass,
-    radius,
-    skind,
-    scenter,
-    ssize,
-    floor,
-    e,
-    rate,
-    dt,
-    mu,
-    impulse,
-    o,
-    rows,
-):
+def solve(cx, cy, cz, r, mc, ux, uy, uz, b, pos, vel, mass, radius, skind, scenter, ssize,
+          floor, e, rate, dt, mu, impulse, o, rows):
     """Resolve the contacts of a sphere (centre c, radius r, mass mc, velocity u) in lane b
     at the velocity level; return its new velocity and the number of contacts.
 
@@ -327,26 +293,8 @@ def _sweeps(ux, uy, uz, mc, mu, rows, c):
 
 
 @njit(cache=True)
-def node_contacts(
-    pos,
-    vel,
-    mass,
-    radius,
-    bpos,
-    bvel,
-    bpar,
-    skind,
-    scenter,
-    ssize,
-    ball_obj,
-    static_obj,
-    dt,
-    w,
-    zeta,
-    mu,
-    bforce,
-    impulse,
-):
+def node_contacts(pos, vel, mass, radius, bpos, bvel, bpar, skind, scenter, ssize, ball_obj,
+                  static_obj, dt, w, zeta, mu, bforce, impulse):
     """Apply one step's contacts between an animal's nodes and the objects.
 
     Each ball is solved with the nodes that overlap it and the fixed shapes it touches
@@ -369,32 +317,9 @@ def node_contacts(
             ux = bvel[k, 0, b] + h * bforce[k, 0, b]
             uy = bvel[k, 1, b] + h * bforce[k, 1, b]
             uz = bvel[k, 2, b] + h * bforce[k, 2, b]
-            nx, ny, nz, _ = solve(
-                bpos[k, 0, b],
-                bpos[k, 1, b],
-                bpos[k, 2, b],
-                bpar[k, 0],
-                mb,
-                ux,
-                uy,
-                uz,
-                b,
-                pos,
-                vel,
-                mass,
-                radius,
-                skind,
-                scenter,
-                ssize,
-                False,
-                e,
-                rate,
-                dt,
-                mu,
-                impulse,
-                ball_obj[k],
-                rows,
-            )
+            nx, ny, nz, _ = solve(bpos[k, 0, b], bpos[k, 1, b], bpos[k, 2, b], bpar[k, 0], mb,
+                                  ux, uy, uz, b, pos, vel, mass, radius, skind, scenter, ssize,
+                                  False, e, rate, dt, mu, impulse, ball_obj[k], rows)
             bforce[k, 0, b] += (nx - ux) / h
             bforce[k, 1, b] += (ny - uy) / h
             bforce[k, 2, b] += (nz - uz) / h
@@ -407,24 +332,9 @@ def node_contacts(
             fys = 0.0
             fzs = 0.0
             for s in range(skind.shape[0]):
-                fx, fy, fz = _shape_force(
-                    s,
-                    skind,
-                    scenter,
-                    ssize,
-                    px,
-                    py,
-                    pz,
-                    radius,
-                    vel[i, 0, b],
-                    vel[i, 1, b],
-                    vel[i, 2, b],
-                    m,
-                    w,
-                    zeta,
-                    mu,
-                    dt,
-                )
+                fx, fy, fz = _shape_force(s, skind, scenter, ssize, px, py, pz, radius,
+                                          vel[i, 0, b], vel[i, 1, b], vel[i, 2, b], m, w, zeta,
+                                          mu, dt)
                 if fx == 0.0 and fy == 0.0 and fz == 0.0:
                     continue
                 o = static_obj[s]
@@ -441,9 +351,8 @@ def node_contacts(
 
 
 @njit(cache=True)
-def balls_step(
-    bpos, bvel, bpar, bforce, med, current, skind, scenter, ssize, dt, steps, w, zeta, mu
-):
+def balls_step(bpos, bvel, bpar, bforce, med, current, skind, scenter, ssize, dt, steps, w,
+               zeta, mu):
     """Advance the balls ``steps`` steps: gravity, buoyancy of the submerged cap, drag
     against the current and the constant force ``bforce``, then their contacts with the
     floor and the fixed shapes (``solve``; w and zeta as in ``node_contacts``)."""
@@ -474,32 +383,9 @@ def balls_step(
                 vx = bvel[k, 0, b] + dt * bforce[k, 0, b] / mb
                 vy = bvel[k, 1, b] + dt * fy / mb
                 vz = bvel[k, 2, b] + dt * bforce[k, 2, b] / mb
-                vx, vy, vz, _ = solve(
-                    x,
-                    y,
-                    z,
-                    r,
-                    mb,
-                    vx,
-                    vy,
-                    vz,
-                    0,
-                    no_pos,
-                    no_pos,
-                    no_mass,
-                    0.0,
-                    skind,
-                    scenter,
-                    ssize,
-                    floor,
-                    e,
-                    rate,
-                    dt,
-                    mu,
-                    no_impulse,
-                    0,
-                    rows,
-                )
+                vx, vy, vz, _ = solve(x, y, z, r, mb, vx, vy, vz, 0, no_pos, no_pos, no_mass,
+                                      0.0, skind, scenter, ssize, floor, e, rate, dt, mu,
+                                      no_impulse, 0, rows)
                 if water and frac > 0.0:
                     # quadratic drag of the submerged part, at most stopping the relative motion
                     rx = vx - current[0]

@@ -120,18 +120,7 @@ def _substeps(s, act, t, b0, nb, m):
     Impulse (RESPA) order: holding the slow forces over the sub-steps instead is not
     symplectic and grows energy (det of the step map > 1)."""
     x, y, z, vx, vy, vz, fx, fy, fz, gx, gy, gz = (
-        s[0],
-        s[1],
-        s[2],
-        s[3],
-        s[4],
-        s[5],
-        s[6],
-        s[7],
-        s[8],
-        s[9],
-        s[10],
-        s[11],
+        s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9], s[10], s[11]
     )
     dt = F(m.dt)
     hsub = dt / F(max(m.substeps, 1))
@@ -201,9 +190,8 @@ def _scratch(n_nodes, nb):
 
 
 @njit(cache=True, fastmath=FM, parallel=True, error_model="numpy")
-def simulate_chunks(
-    pos0, vel0, act, record_every, chunk, vmax, m, rec, final_pos, final_vel, failed_step
-):
+def simulate_chunks(pos0, vel0, act, record_every, chunk, vmax, m, rec, final_pos, final_vel,
+                    failed_step):
     """Step every candidate of model ``m`` through all activation rows; fills rec (R, N, 3, B),
     final_pos and final_vel (N, 3, B) and failed_step (B,) (``_chunk_steps``)."""
     n_lanes = pos0.shape[2]
@@ -211,21 +199,8 @@ def simulate_chunks(
         b0 = c * chunk
         nb = min(chunk, n_lanes - b0)
         s = _scratch(m.mass.shape[0], nb)
-        _chunk_steps(
-            s,
-            pos0,
-            vel0,
-            act,
-            record_every,
-            vmax,
-            b0,
-            nb,
-            m,
-            rec,
-            final_pos,
-            final_vel,
-            failed_step,
-        )
+        _chunk_steps(s, pos0, vel0, act, record_every, vmax, b0, nb, m, rec, final_pos,
+                     final_vel, failed_step)
 
 
 # ---- a stateful entry point: one animal's lanes stepped in place, slice after slice ----------
@@ -275,15 +250,8 @@ def _typeof_stepper(val, c):
 
 
 _STEPPER = StepperType(
-    [
-        ("model", MODEL),
-        ("pos", _F3),
-        ("vel", _F3),
-        ("fs", _I1),
-        ("failed", _I1),
-        ("chunk", types.int64),
-        ("vmax", types.float32),
-    ]
+    [("model", MODEL), ("pos", _F3), ("vel", _F3), ("fs", _I1), ("failed", _I1),
+     ("chunk", types.int64), ("vmax", types.float32)]
 )
 
 
@@ -318,7 +286,9 @@ def serial(fn):
     from the parallel one's (numba keys the cache by the function's qualified name)."""
     py = fn.py_func
     name = f"{py.__name__}_serial"
-    copy = pytypes.FunctionType(py.__code__, py.__globals__, name, py.__defaults__, py.__closure__)
+    copy = pytypes.FunctionType(
+        py.__code__, py.__globals__, name, py.__defaults__, py.__closure__
+    )
     copy.__qualname__ = name
     return njit(cache=True, fastmath=FM, error_model="numpy")(copy)
 
@@ -333,7 +303,8 @@ def advance(st, table, t0, t1, base):
     in the call."""
     pos, vel = st.pos, st.vel
     no_rec = np.empty((0, pos.shape[0], 3, pos.shape[2]), dtype=np.float32)  # no records
-    simulate_chunks(pos, vel, table[t0:t1], 0, st.chunk, st.vmax, st.model, no_rec, pos, vel, st.fs)
+    simulate_chunks(pos, vel, table[t0:t1], 0, st.chunk, st.vmax, st.model, no_rec, pos, vel,
+                    st.fs)
     _mark_failed(st.fs, st.failed, base)
 
 
@@ -342,9 +313,8 @@ def advance_serial(st, table, t0, t1, base):
     """``advance`` on this thread alone (``serial``)."""
     pos, vel = st.pos, st.vel
     no_rec = np.empty((0, pos.shape[0], 3, pos.shape[2]), dtype=np.float32)  # no records
-    simulate_chunks_serial(
-        pos, vel, table[t0:t1], 0, st.chunk, st.vmax, st.model, no_rec, pos, vel, st.fs
-    )
+    simulate_chunks_serial(pos, vel, table[t0:t1], 0, st.chunk, st.vmax, st.model, no_rec,
+                           pos, vel, st.fs)
     _mark_failed(st.fs, st.failed, base)
 
 

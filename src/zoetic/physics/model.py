@@ -173,3 +173,4 @@ def _medium_fields(med: Medium, dt: float) -> dict:
     """The medium's constants (each a Model field of the Medium field's name) and the step."""
     shared = [f.name for f in dataclasses.fields(med) if f.name in Model._fields]
     return {name: getattr(med, name) for name in shared} | {"dt": dt}
+

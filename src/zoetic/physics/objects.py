@@ -151,9 +151,8 @@ class Solids:
     """
 
     def __init__(self, objects: list[Thing], batch: int) -> None:
-        self.ball_obj = np.array(
-            [i for i, o in enumerate(objects) if isinstance(o, Ball)], dtype=np.int64
-        )
+        self.ball_obj = np.array([i for i, o in enumerate(objects) if isinstance(o, Ball)],
+                                 dtype=np.int64)
         static = [i for i, o in enumerate(objects) if isinstance(o, Box | Cylinder)]
         self.static_obj = np.array(static, dtype=np.int64)
         self.balls = [objects[i] for i in self.ball_obj]

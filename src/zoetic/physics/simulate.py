@@ -282,19 +282,8 @@ def simulate(
     final_vel = np.empty((n, 3, batch), dtype=f32)
     failed_step = -np.ones(batch, dtype=np.int64)
     model = compile_model(body, med, dt)
-    simulate_chunks(
-        pos0,
-        vel0,
-        act_t,
-        record_every,
-        chunk_size(batch),
-        f32(VMAX),
-        model,
-        rec,
-        final_pos,
-        final_vel,
-        failed_step,
-    )
+    simulate_chunks(pos0, vel0, act_t, record_every, chunk_size(batch), f32(VMAX), model, rec,
+                    final_pos, final_vel, failed_step)
     times = np.arange(n_rec) * record_every * dt
     return Trajectory(
         times=times,

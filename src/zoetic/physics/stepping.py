@@ -70,9 +70,8 @@ class Drive:
     (pos, vel) of the world's state, its failure marks ``fs`` and ``failed``), the activation
     tables they read, and the kernel entry, threaded when the work is worth the pool."""
 
-    def __init__(
-        self, bodies: list[Body], models: list[Model], views, fs, failed, batch: int
-    ) -> None:
+    def __init__(self, bodies: list[Body], models: list[Model], views, fs, failed,
+                 batch: int) -> None:
         self.bodies = bodies
         self.batch = batch
         self.serial = _kernel(False)
@@ -173,20 +172,9 @@ class ContactSlices:
     damping ratio (which also sets the balls' restitution) and Coulomb friction (``World``).
     """
 
-    def __init__(
-        self,
-        drive: Drive,
-        broad: BroadPhase,
-        solids: Solids,
-        bodies: list[Body],
-        medium: Medium,
-        current: np.ndarray,
-        dt: float,
-        node_radius: float,
-        contact_steps: int,
-        damping_ratio: float,
-        friction: float,
-    ) -> None:
+    def __init__(self, drive: Drive, broad: BroadPhase, solids: Solids, bodies: list[Body],
+                 medium: Medium, current: np.ndarray, dt: float, node_radius: float,
+                 contact_steps: int, damping_ratio: float, friction: float) -> None:
         self.drive, self.broad, self.solids = drive, broad, solids
         self.views = broad.views
         self.mass = [b.mass.astype(np.float64) for b in bodies]
@@ -216,9 +204,8 @@ class ContactSlices:
             if len(self.solids.balls):
                 self.balls(1)
 
-    def apart(
-        self, tables, t: int, t1: int, n: int, impulse, near_now: np.ndarray, pairs=(), between=None
-    ) -> None:
+    def apart(self, tables, t: int, t1: int, n: int, impulse, near_now: np.ndarray, pairs=(),
+              between=None) -> None:
         """Step steps t .. t1 of animals that no balls couple: each near a fixed shape
         (``near_now``) one step at a time with its contacts, each other one in one kernel
         call; the animals of ``pairs`` (that may touch one another) in lockstep, one step at a
@@ -270,21 +257,8 @@ class ContactSlices:
         buf = self.pair_buf
         buf[:] = 0.0
         (pa, va), (pc, vc) = self.views[a], self.views[c]
-        pair_contacts(
-            pa,
-            va,
-            self.mass[a],
-            self.faces[a],
-            pc,
-            vc,
-            self.mass[c],
-            self.faces[c],
-            self.node_radius,
-            self.dt,
-            self.w_body,
-            self.zeta,
-            buf,
-        )
+        pair_contacts(pa, va, self.mass[a], self.faces[a], pc, vc, self.mass[c], self.faces[c],
+                      self.node_radius, self.dt, self.w_body, self.zeta, buf)
         between[:, a, c] += buf[0]
         between[:, c, a] += buf[1]
 
@@ -294,43 +268,12 @@ class ContactSlices:
         self.tested.add(a)
         p, v = self.views[a]
         s = self.solids
-        node_contacts(
-            p,
-            v,
-            self.mass[a],
-            self.node_radius,
-            s.pos,
-            s.vel,
-            s.par,
-            s.kind,
-            s.center,
-            s.size,
-            s.ball_obj,
-            s.static_obj,
-            self.dt,
-            self.w,
-            self.zeta,
-            self.mu,
-            s.force,
-            impulse[a],
-        )
+        node_contacts(p, v, self.mass[a], self.node_radius, s.pos, s.vel, s.par, s.kind,
+                      s.center, s.size, s.ball_obj, s.static_obj, self.dt, self.w, self.zeta,
+                      self.mu, s.force, impulse[a])
 
     def balls(self, steps: int) -> None:
         """Move the balls ``steps`` steps under the force the animals put on them."""
         s = self.solids
-        balls_step(
-            s.pos,
-            s.vel,
-            s.par,
-            s.force,
-            self.med64,
-            self.current,
-            s.kind,
-            s.center,
-            s.size,
-            self.dt,
-            steps,
-            self.w,
-            self.zeta,
-            self.mu,
-        )
+        balls_step(s.pos, s.vel, s.par, s.force, self.med64, self.current, s.kind, s.center,
+                   s.size, self.dt, steps, self.w, self.zeta, self.mu)

@@ -85,32 +85,14 @@ class World:
         self._touchy = bool(animal_contact) and len(self.animals) > 1
         self._touchy &= all(len(b.faces) for b in self.bodies)
         reach = [surface_reach(b) for b in self.bodies]
-        self._broad = BroadPhase(
-            self._pos,
-            self._vel,
-            self._off,
-            self._views,
-            reach,
-            self.node_radius,
-            self.dt,
-            self._solids,
-            self._touchy,
-        )
+        self._broad = BroadPhase(self._pos, self._vel, self._off, self._views, reach,
+                                 self.node_radius, self.dt, self._solids, self._touchy)
         models = [compile_model(b, self.medium, self.dt) for b in self.bodies]
         self._drive = Drive(self.bodies, models, self._views, self._fs, self._failed, self.batch)
         self._chunk = self._drive.chunk
         self._contacts = ContactSlices(
-            self._drive,
-            self._broad,
-            self._solids,
-            self.bodies,
-            self.medium,
-            self.current,
-            self.dt,
-            self.node_radius,
-            contact_steps,
-            damping_ratio,
-            friction,
+            self._drive, self._broad, self._solids, self.bodies, self.medium, self.current,
+            self.dt, self.node_radius, contact_steps, damping_ratio, friction,
         )
         self._n = 0
         self.restore(self.initial_state())
@@ -238,9 +220,8 @@ class World:
             self._n = int(state.step)
             self._pantry.restore(state.food_positions, state.food_eaten, self._n, self._heads())
         else:  # these lanes' food held at the mark, so that it lies where the state puts it now
-            self._pantry.restore_lanes(
-                sel, state.food_positions, state.food_eaten, self._n, self._heads()
-            )
+            self._pantry.restore_lanes(sel, state.food_positions, state.food_eaten, self._n,
+                                       self._heads())
 
     def positions(self, animal: int = 0) -> np.ndarray:
         """Return the animal's node positions (B, N, 3) in m (a copy)."""
