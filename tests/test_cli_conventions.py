@@ -100,10 +100,10 @@ def test_the_enumeration_sees_every_group():
 
 
 def test_version_and_h_on_the_root_and_subcommands(capsys):
-    from zoetic import __version__
+    from importlib.metadata import version
 
     assert main(["--version"]) == 0
-    assert capsys.readouterr().out.strip() == f"zoetic {__version__}"
+    assert capsys.readouterr().out.strip() == f"zoetic {version('zoetic')}"
     for argv in (["-h"], ["learn", "-h"], ["san", "show", "-h"], ["bench", "jax", "-h"]):
         assert main(argv) == 0
         text = capsys.readouterr().out

@@ -208,9 +208,10 @@ def test_a_san_found_for_a_creature_file_is_tuned_shown_and_evolved(tmp_path):
         "--seconds",
         "0.2",
         "--out",
-        str(tmp_path / "show.mp4"),
+        str(tmp_path / "shown"),
     ]
     assert main(show) == 0
+    assert (tmp_path / "shown" / "show.mp4").stat().st_size > 1000
     evolve = [
         "san",
         "evolve",

@@ -52,9 +52,13 @@ def _name(info) -> str:
 
 def _version(value: bool) -> None:
     if value:
-        from zoetic import __version__
+        from importlib.metadata import PackageNotFoundError, version
 
-        print(f"zoetic {__version__}")
+        try:
+            number = version("zoetic")
+        except PackageNotFoundError:  # run from a source tree that was never installed
+            number = "(not installed)"
+        print(f"zoetic {number}")
         raise typer.Exit()
 
 
