@@ -136,6 +136,9 @@ def test_macro_command_writes_its_run(tmp_path, capsys):
     assert isinstance(load_controller(out / "controller.json", shark), SequenceController)
     assert (out / "path.png").stat().st_size > 5000 and (out / "video.mp4").exists()
     assert "final distance" in capsys.readouterr().out
+    assert main([*args, "--method", "simplex", "--no-video"]) == 2  # out holds a run
+    assert "--force" in capsys.readouterr().err
+    args[args.index("--out") + 1] = str(out.parent / "another")
     assert main([*args, "--method", "simplex", "--no-video"]) == 2
     assert "unknown search method" in capsys.readouterr().err
     assert main([*args[:8], "--obstacle", "1,1,-1", "--no-video"]) == 2

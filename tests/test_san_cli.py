@@ -120,8 +120,8 @@ def test_annealing_tune_never_worse(cart):
 
 def test_show_writes_a_video_with_the_network_beside(search_run, tmp_path):
     pytest.importorskip("zoetic.viz.san")
-    video = tmp_path / "show.mp4"
-    argv = ["san", "show", str(search_run), "--seconds", "0.5", "--out", str(video)]
+    video = tmp_path / "shown" / "show.mp4"  # --out is a directory, the video inside it
+    argv = ["san", "show", str(search_run), "--seconds", "0.5", "--out", str(video.parent)]
     assert main(argv) == 0
     import imageio.v3 as iio
 
@@ -208,9 +208,10 @@ def test_a_san_found_for_a_creature_file_is_tuned_shown_and_evolved(tmp_path):
         "--seconds",
         "0.2",
         "--out",
-        str(tmp_path / "show.mp4"),
+        str(tmp_path / "shown"),
     ]
     assert main(show) == 0
+    assert (tmp_path / "shown" / "show.mp4").stat().st_size > 1000
     evolve = [
         "san",
         "evolve",

@@ -18,6 +18,8 @@ import difflib
 import json
 import math
 import os
+import re
+import shutil
 import tempfile
 import tomllib
 from collections.abc import Iterable
@@ -25,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import tomli_w
 
 from zoetic.errors import ZoeticError
@@ -50,9 +53,68 @@ def check_out_dir(path: str | os.PathLike) -> Path:
     for p in (path, *path.parents):
         if p.exists():
             if not p.is_dir():
-                raise ZoeticError(f"{p}: exists and is not a directory; choose another --out")
+                where = f"{path}: {p}" if p != path else f"{p}:"
+                raise ZoeticError(f"{where} exists and is not a directory; choose another --out")
             break
     return path
+
+
+DEMO_MARKER = ".zoetic-demo"  # the list of files zoetic demo made in its directory
+
+# files and folders by which a directory is known as a zoetic run (record, summary, learning
+# run, controllers, stunt, aquarium, SAN search): only such a directory is emptied by --force
+RUN_FILES = (
+    "record.npz",
+    "summary.json",
+    "config.toml",
+    "checkpoint.npz",
+    "controller.json",
+    "sequence.json",
+    "macro.json",
+    "events.csv",
+    "san.json",
+    "sans",
+    DEMO_MARKER,
+)
+
+
+def prepare_out(out: str | Path, force: bool = False, resume: str = "") -> Path:
+    """Return ``out`` ready for a new run: a missing or empty directory is used as it is; a
+    non-empty one is refused (naming what it holds, and ``resume``, the command that would
+    continue it, if any) unless ``force``, which empties it when it is a zoetic run."""
+    out = check_out_dir(out)
+    held = sorted(p.name for p in out.iterdir()) if out.is_dir() else []
+    if not held:
+        return out
+    if not force:
+        go_on = f"continue it with {resume}, " if resume else ""
+        raise ZoeticError(
+            f"{out}: already holds {len(held)} file(s) ({abbrev(held)[1:-1]}); {go_on}add "
+            "--force to replace them, or choose another --out"
+        )
+    _check_emptiable(out, held)
+    for child in out.iterdir():
+        if child.is_dir() and not child.is_symlink():
+            shutil.rmtree(child)  # removes links inside, never what they point to
+        else:
+            child.unlink()
+    return out
+
+
+def _check_emptiable(out: Path, held: list[str]) -> None:
+    """Refuse to empty a directory that is not a zoetic run, or that holds the working
+    directory or the home directory (a mistyped --out must never cost a person their files)."""
+    if out.is_symlink():
+        raise ZoeticError(f"{out}: is a link; --force empties only a real run directory")
+    where = out.resolve()
+    for keep in (Path.cwd().resolve(), Path.home().resolve()):
+        if keep == where or where in keep.parents:
+            raise ZoeticError(f"{out}: holds {keep}; --force will not empty it")
+    if not any(name in RUN_FILES for name in held):
+        raise ZoeticError(
+            f"{out}: does not look like a zoetic run (none of record.npz, summary.json, "
+            "config.toml, checkpoint.npz), so --force will not empty it; choose another --out"
+        )
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
@@ -204,9 +266,33 @@ def check_depth(obj: Any, where: str, error=ZoeticError, limit: int | None = Non
             stack.extend((v, depth + 1) for v in item if isinstance(v, list | dict))
 
 
+# what a string or comment looks like, so that brackets inside one are not counted
+_QUOTED = {
+    "JSON": re.compile(r'"(?:[^"\\]|\\.)*"'),
+    "TOML": re.compile(
+        r'"""[\s\S]*?"""|\'\'\'[\s\S]*?\'\'\'|"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'|#[^\n]*'
+    ),
+}
+_BRACKETS = re.compile(r"[^\[\]{}]+")
+
+
+def text_depth(text: str, fmt: str = "JSON") -> int:
+    """Return how deep the brackets and braces of a JSON or TOML text nest (outside strings and
+    comments), counted without parsing, so that a parser's recursion is never reached."""
+    marks = _BRACKETS.sub("", _QUOTED[fmt].sub("", text)).encode()
+    if not marks:
+        return 0
+    codes = np.frombuffer(marks, np.uint8)
+    steps = np.where((codes == ord("[")) | (codes == ord("{")), 1, -1)
+    return int(np.cumsum(steps).max())
+
+
 def _load(path, what: str, error, loads, invalid: type[Exception], fmt: str) -> Any:
-    """Return ``loads`` of the text in ``path`` (read safely), nesting checked; errors name it."""
+    """Return ``loads`` of the text in ``path`` (read safely), nesting checked before and after
+    parsing; errors name it."""
     text = read_text(path, what, error)
+    if text_depth(text, fmt) > LIMITS.depth + 2:  # a TOML [[header]] adds two for a moment
+        raise error(f"{path}: nested more than {LIMITS.depth} levels deep; is the {what} damaged?")
     try:
         doc = loads(text)
     except invalid as exc:

@@ -14,7 +14,7 @@ from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller, controller_from_spec
 from zoetic.control.measure import measure_record
 from zoetic.errors import BlowUpError, SimulationError
-from zoetic.io import atomic_write_bytes, check_memory, check_steps, make_dir
+from zoetic.io import DEMO_MARKER, atomic_write_bytes, check_memory, check_steps, make_dir
 from zoetic.learning.checks import (  # noqa: F401 - the run checks, for the commands
     MAX_BUDGET,
     check_learn_config,
@@ -203,7 +203,7 @@ def finish_run(run, media: Media | None = None) -> dict:
     }
 
 
-MARKER = ".zoetic-demo"
+MARKER = DEMO_MARKER
 
 
 def clear_demo(out: Path) -> None:

@@ -231,16 +231,19 @@ def macro_document(problem: StuntProblem, sequence: SequenceController, trick_so
 
 
 def is_macro_file(path: str | Path) -> bool:
-    """Return True when ``path`` is a stunt's macro.json."""
-    import json
+    """Return True when ``path`` is a stunt's macro.json (a file that cannot be read is not:
+    the controller reader then says what is wrong with it)."""
+    from zoetic.errors import ZoeticError
+    from zoetic.io import load_json
 
     p = Path(path)
     if p.suffix != ".json" or not p.is_file():
         return False
     try:
-        return json.loads(p.read_text()).get("format") == MACRO_FORMAT
-    except (ValueError, AttributeError, OSError):
+        doc = load_json(p, "controller file")
+    except ZoeticError:
         return False
+    return isinstance(doc, dict) and doc.get("format") == MACRO_FORMAT
 
 
 def load_macro(path: str | Path, body: Body) -> tuple[SequenceController, dict]:

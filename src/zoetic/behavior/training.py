@@ -25,7 +25,7 @@ from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller, load_controller
 from zoetic.control.abstract import AbstractController, SequenceController
 from zoetic.errors import RunDirError, ZoeticError
-from zoetic.io import read_json, read_toml
+from zoetic.io import read_json, read_toml, suggest
 from zoetic.learning.abstraction import Abstraction, abstract, compare, mirror_abstract
 from zoetic.tasks import Promise, Task, capabilities, fits, load_task, start_states
 
@@ -362,7 +362,8 @@ def parse_sequence(text: str, rep: Repertoire) -> list[tuple[str, float]]:
         name = name.strip()
         if name not in rep.controllers:
             raise ZoeticError(
-                f"sequence item {part!r}: no entry {name!r} in the repertoire "
+                f"sequence item {part!r}: no entry {name!r}{suggest(name, rep.names)} in the "
+                "repertoire "
                 f"(it has: {', '.join(rep.names)})"
             )
         try:

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from zoetic.errors import TaskError, ZoeticError
-from zoetic.io import read_toml
+from zoetic.io import read_toml, suggest
 from zoetic.physics.objects import Ball, Box, Cylinder
 from zoetic.tasks import TASK_DIR, Task, parse_task
 
@@ -120,8 +120,9 @@ def load_trick(name_or_path: str | Path) -> Trick:
     if not (path.suffix == ".toml" or path.exists()):
         path = TRICK_DIR / f"{name_or_path}.toml"
         if not path.exists():
+            hint = suggest(str(name_or_path), list_tricks())
             raise TaskError(
-                f"unknown trick {str(name_or_path)!r}: choose one of "
+                f"unknown trick {str(name_or_path)!r}{hint}: choose one of "
                 f"{', '.join(list_tricks())} or give a trick .toml file"
             )
     try:

@@ -5,15 +5,13 @@ from __future__ import annotations
 import sys
 
 import typer
-from rich.console import Console
 from rich.markup import escape
 
-from zoetic.cli.apps import _DEBUG, app
+from zoetic.cli.apps import _DEBUG, app, assign_panels
+from zoetic.cli.output import INTERRUPTED, err_console
 from zoetic.errors import ZoeticError
 
 __all__ = ["app", "main"]
-
-err_console = Console(stderr=True)
 
 
 def _register() -> None:
@@ -33,13 +31,17 @@ def _register() -> None:
         view,
     )
 
+    assign_panels()
+
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the CLI; a ZoeticError prints its message and exits with its code (2; 3 blow-up)."""
+    """Run the CLI; a ZoeticError prints its message and exits with its code (2; 3 blow-up);
+    Ctrl-C exits 130 with one line (a command that can resume says how)."""
     _register()
     args = sys.argv[1:] if argv is None else argv
+    INTERRUPTED["told"] = False
     try:
-        app(args=args, standalone_mode=False)
+        code = app(args=args, standalone_mode=False)  # Ctrl-C arrives as the code 130
     except ZoeticError as exc:
         if _DEBUG["on"] or "--debug" in args:
             raise
@@ -50,8 +52,7 @@ def main(argv: list[str] | None = None) -> int:
         err_console.print("(run with --debug for the traceback)", style="dim", highlight=False)
         return int(getattr(exc, "exit_code", 2))
     except KeyboardInterrupt:
-        err_console.print("[yellow]interrupted[/]")
-        return 130
+        code = 130
     except typer.Exit as exc:
         return exc.exit_code
     except SystemExit as exc:  # click usage errors arrive this way in non-standalone mode
@@ -64,8 +65,19 @@ def main(argv: list[str] | None = None) -> int:
         if shows and isinstance(getattr(exc, "exit_code", None), int):
             exc.show()
             return 2
-        raise
-    return 0
+        if _DEBUG["on"] or "--debug" in args:
+            raise
+        err_console.print(
+            f"[bold red]internal error:[/] {type(exc).__name__}: {escape(str(exc)[:300])}; "
+            "this is a bug in zoetic: run again with --debug for the traceback and report it",
+            highlight=False,
+            soft_wrap=True,
+        )
+        return 1
+    code = code if isinstance(code, int) else 0
+    if code == 130 and not INTERRUPTED["told"]:
+        err_console.print("[yellow]interrupted (Ctrl-C); the command stopped[/]", highlight=False)
+    return code
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -8,7 +8,7 @@ import typer
 
 from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
-from zoetic.cli.options import Json
+from zoetic.cli.options import Force, Json
 from zoetic.cli.output import console, emit
 
 
@@ -44,16 +44,17 @@ def aquarium(
     video: bool = typer.Option(True, help="Write video.mp4."),
     labels: bool = typer.Option(True, help="Label each fish with its intention in the video."),
     control_period: float = typer.Option(0.1, help="Brain period (s)."),
+    force: Force = False,
 ) -> None:
     """Let a tank of fishes live: write events.csv, mind.png, summary.json, record.npz and
     video.mp4."""
     from zoetic.behavior.aquarium.tank import TankConfig, build_tank, events_csv, live, summarize
     from zoetic.cli.records import write_aquarium_record
-    from zoetic.io import atomic_write_bytes, check_out_dir, make_dir, write_json
+    from zoetic.io import atomic_write_bytes, make_dir, prepare_out, write_json
     from zoetic.record import read_record
     from zoetic.viz.media import mind_media
 
-    check_out_dir(out)
+    prepare_out(out, force)
     cfg = TankConfig(
         fishes=fishes,
         predators=predators,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shlex
 from functools import partial
 from pathlib import Path
 
@@ -9,9 +10,9 @@ import typer
 
 from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
-from zoetic.cli.options import Animal, Json, Seed, use_ray_address
-from zoetic.cli.output import console, emit, progress_bar
-from zoetic.io import check_out_dir
+from zoetic.cli.options import Animal, Force, Json, Seed, use_ray_address
+from zoetic.cli.output import console, emit, interrupted, print_summary, progress_bar
+from zoetic.io import check_out_dir, prepare_out
 
 
 @app.command()
@@ -58,15 +59,22 @@ def run_with_progress(run, label: str, every_s: float = 2.0) -> None:
         try:
             run.learn(progress=update, every_s=every_s)
         except KeyboardInterrupt:
-            console.print(
-                f"[yellow]interrupted at {run.evaluations} evaluations; nothing is lost: "
-                f"zoetic learn --resume {run.out}[/]"
+            interrupted(
+                f"saved {run.out} at {run.evaluations} of {budget} evaluations; continue with: "
+                f"zoetic learn --resume {shlex.quote(str(run.out))}"
             )
-            raise typer.Exit(130) from None
+
+
+# learn's options that a run stores in its config.toml: a resumed run keeps them
+STORED = (
+    "animal task optimizer seed controller nodes frequency interp popsize chains evaluator "
+    "coupling fins"
+).split()
 
 
 @app.command()
 def learn(
+    ctx: typer.Context,
     animal: Animal = None,
     task: str = typer.Option("swim-straight", help="Task name (see `zoetic tasks`) or .toml file."),
     optimizer: str = typer.Option("cmaes", help="cmaes, anneal, simplex or gradient."),
@@ -100,8 +108,13 @@ def learn(
     fins: str = typer.Option(
         "auto", help="auto (learned for turns, else held level), held or free."
     ),
-    out: Path = typer.Option(None, help="Run directory (default runs/<animal>-<task>)."),
-    resume: Path = typer.Option(None, help="Continue the run in this directory."),
+    out: Path = typer.Option(
+        None, help="Run directory, new or empty (default runs/<animal>-<task>)."
+    ),
+    resume: Path = typer.Option(
+        None, help="Continue the run in this directory (a new --budget is taken)."
+    ),
+    force: Force = False,
     video: bool = typer.Option(True, help="Write video.mp4 of the best controller."),
     checkpoint_every: float = typer.Option(2.0, min=0.0, help="Seconds between checkpoints."),
 ) -> None:
@@ -112,7 +125,7 @@ def learn(
 
     use_ray_address(ray_address)  # the run's config keeps only the evaluator's name
     if resume is not None:
-        run = _resume(resume)
+        run = _resume(resume, ctx, budget)
     else:
         if animal is None:
             raise typer.BadParameter("give an ANIMAL (or --resume RUN_DIR)")
@@ -132,40 +145,71 @@ def learn(
             fins=fins,
             frequency=frequency,
         )
-        run = _create(config, out)
+        run = _create(config, out, force)
     cfg = run.setup.config
     run_with_progress(run, f"{cfg.animal} {cfg.optimizer}", checkpoint_every)
     summary = finish_run(run, partial(learning_media, video=video))
     _print_summary(summary)
 
 
-def _resume(resume: Path):
-    """Open the run in ``resume`` where it stopped (errors name the directory)."""
+def _given(ctx: typer.Context, name: str) -> bool:
+    """True when the option ``name`` was given (on the command line or in the environment)."""
+    source = ctx.get_parameter_source(name)
+    return source is not None and source.name not in ("DEFAULT", "DEFAULT_MAP")
+
+
+def _resume(resume: Path, ctx: typer.Context, budget: int):
+    """Open the run in ``resume`` where it stopped, with a new budget when --budget is given;
+    refuse other stored settings given otherwise than stored (errors name the directory)."""
     from zoetic.errors import ZoeticError, naming
+    from zoetic.learning.checks import run_dir_parts
     from zoetic.learning.run import Run
 
+    if _given(ctx, "out") or _given(ctx, "force"):
+        raise typer.BadParameter(f"a resumed run stays in {resume}; leave out --out and --force")
     try:
-        run = Run.resume(resume)
+        stored = run_dir_parts(resume)[0]
+        _check_same(resume, stored, ctx)
+        run = Run.resume(resume, budget if _given(ctx, "budget") else None)
     except ZoeticError as exc:
         raise naming(resume, exc) from None
-    console.print(f"resuming {resume} at {run.evaluations} evaluations")
+    was, now = stored.budget, run.setup.config.budget
+    change = f"; budget {was} -> {now} (--budget)" if now != was else f" of {now}"
+    console.print(f"resuming {resume} at {run.evaluations} evaluations{change}")
+    if run.evaluations >= now:
+        console.print(f"the budget of {now} evaluations is spent; writing the results")
     return run
 
 
-def _create(config, out: Path | None):
-    """Start a new run of ``config`` in ``out`` (default runs/<animal>-<task>)."""
+def _check_same(resume: Path, stored, ctx: typer.Context) -> None:
+    """Refuse a stored setting given on the command line with another value than the run's."""
+    from zoetic.errors import RunDirError
+
+    for name in STORED:
+        value, kept = ctx.params[name], getattr(stored, name)
+        if _given(ctx, name) and value != kept:
+            flag = "ANIMAL" if name == "animal" else "--" + name.replace("_", "-")
+            raise RunDirError(
+                f"{flag} {value} differs from the run's {kept}: a resumed run keeps its "
+                "settings (only --budget may change); start a new run with another --out"
+            )
+
+
+def _create(config, out: Path | None, force: bool):
+    """Start a new run of ``config`` in ``out`` (default runs/<animal>-<task>), which must be
+    empty (or, with ``force``, is emptied)."""
     from zoetic.bodies import load_animal
     from zoetic.learning.run import Run
 
     animal, task = config.animal, config.task
-    out = check_out_dir(out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}")
+    out = out or Path("runs") / f"{Path(animal).stem}-{Path(task).stem}"
+    out = prepare_out(out, force, f"zoetic learn --resume {shlex.quote(str(out))}")
     return Run.create(out, config, load_animal(animal))  # the run checks: learning.checks
 
 
 def _print_summary(summary: dict) -> None:
     """Print a finished learning run's summary, one aligned ``key: value`` line each."""
-    for key, value in summary.items():
-        console.print(f"{key:>14}: {value}")
+    print_summary(summary, 14)
 
 
 def demo_banner(config) -> str:

@@ -20,8 +20,14 @@ Memory = Annotated[Path, typer.Option(help="Repertoire directory (zoetic reperto
 Seed = Annotated[int, typer.Option(help="Random seed: same seed, same result.")]
 """The run's random seed."""
 
-RunDir = Annotated[Path, typer.Option(help="Run directory to write.")]
+RunDir = Annotated[Path, typer.Option(help="Run directory to write (it must be empty).")]
 """The directory a run writes its files into."""
+
+Force = Annotated[
+    bool,
+    typer.Option("--force", help="Empty a non-empty --out (a zoetic run directory) first."),
+]
+"""Whether a command may replace the files of an earlier run in its --out."""
 
 Method = Annotated[str, typer.Option(help="anneal (simulated annealing) or ga (genetic).")]
 """The search method of a macro controller."""

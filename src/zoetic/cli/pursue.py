@@ -7,6 +7,7 @@ from pathlib import Path
 import typer
 
 from zoetic.cli.apps import app
+from zoetic.cli.options import Force
 from zoetic.cli.output import console
 from zoetic.io import make_dir, write_json
 
@@ -21,17 +22,19 @@ def pursue(
     fps: float = typer.Option(30.0, min=1.0, help="Vision frames per simulated second."),
     video: bool = typer.Option(True, help="Write video.mp4 (the slowest part)."),
     width: int = typer.Option(320, min=32, help="Width of the world view in the video (px)."),
+    force: Force = False,
 ) -> None:
     """Chase a reddish prey by sight: saccades, vergence, stabilisation, muscle turns.
 
     Writes video.mp4 (world view, gaze rays, both retinas), gaze.png (Fig. 7), frames.png
     (Fig. 8), summary.json and record.npz.
     """
+    from zoetic.io import prepare_out
     from zoetic.perception.pursuit import make_chase, run_chase, summarize
     from zoetic.viz.gaze import chase_frames, plot_frames, plot_gaze
     from zoetic.viz.video import write_mp4
 
-    out = make_dir(out)
+    out = make_dir(prepare_out(out, force))
     chase = make_chase(seed, distractors=distractors, visibility=visibility)
     with console.status("pursuing"):
         result = run_chase(chase, seconds, fps=fps, seed=seed)

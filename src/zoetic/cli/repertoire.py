@@ -12,7 +12,8 @@ from rich.table import Table
 
 from zoetic.cli.apps import app
 from zoetic.cli.learn import learn_bar
-from zoetic.cli.output import console
+from zoetic.cli.options import Force
+from zoetic.cli.output import console, interrupted, print_summary
 
 Strict = Annotated[
     bool,
@@ -118,11 +119,7 @@ def train_cmd(
                 evaluator,
             )
         except KeyboardInterrupt:
-            console.print(
-                f"[yellow]interrupted; run the same command again to continue "
-                f"({out} keeps what was learned)[/]"
-            )
-            raise typer.Exit(130) from None
+            interrupted(f"{out} keeps what was learned; run the same command to continue")
     _print_rows(show_repertoire(out), f"{out}")
     _report_promises(out, strict)
 
@@ -211,13 +208,14 @@ def sequence_cmd(
     overlap: float = typer.Option(0.05, help="Fraction of each entry shared with the next."),
     out: Path = typer.Option(Path("runs/sequence"), help="Output directory."),
     video: bool = typer.Option(True, help="Write video.mp4."),
+    force: Force = False,
 ) -> None:
     """Concatenate repertoire entries, cross-faded, into one controller; simulate it."""
     from zoetic.behavior.repertoire import Repertoire
     from zoetic.behavior.training import build_sequence, parse_sequence
     from zoetic.bodies import load_animal
     from zoetic.control import save_controller
-    from zoetic.io import make_dir
+    from zoetic.io import make_dir, prepare_out
     from zoetic.runs import simulate_run
     from zoetic.viz.learning import plot_controller
     from zoetic.viz.media import simulation_media
@@ -225,7 +223,7 @@ def sequence_cmd(
     body = load_animal(animal)
     rep = Repertoire.load(memory, body)
     seq = build_sequence(rep, parse_sequence(entries, rep), overlap)
-    make_dir(out)
+    make_dir(prepare_out(out, force))
     path = save_controller(seq, out / "sequence.json")
     import numpy as np
 
@@ -247,7 +245,5 @@ def sequence_cmd(
 
     rec = read_record(summary["record"])
     motion = locomotion(body, np.asarray(rec.animals[0].positions, float), rec.times)
-    for key, value in summary.items():
-        console.print(f"{key:>12}: {value}")
-    console.print(f"{'sequence':>12}: {path}")
+    print_summary(summary | {"sequence": str(path)})
     console.print(f"{'locomotion':>12}: {motion_line(motion)}")

@@ -9,8 +9,9 @@ from rich.progress import Progress
 
 from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
-from zoetic.cli.options import Json, RayAddress, Seed, Terrain, Workers, use_ray_address
-from zoetic.cli.output import console, emit, progress_bar
+from zoetic.cli.options import Force, Json, RayAddress, Seed, Terrain, Workers, use_ray_address
+from zoetic.cli.output import console, emit, print_summary, progress_bar
+from zoetic.io import prepare_out
 
 san_app = typer.Typer(
     help="Sensor-actuator networks (van de Panne & Fiume 93): search, tune, show.",
@@ -119,6 +120,7 @@ def search_cmd(
     ),
     evaluator: str = typer.Option("process", help="process (this machine) or ray (a cluster)."),
     ray_address: RayAddress = None,
+    force: Force = False,
 ) -> None:
     """Phase 1: random SANs, evaluated in parallel; keeps the best (sans/*.json, videos)."""
     use_ray_address(ray_address)
@@ -128,7 +130,7 @@ def search_cmd(
 
     c = load_creature(creature)
     _check_seconds(c, seconds)
-    out = out or Path("runs") / c.name
+    out = prepare_out(out or Path("runs") / c.name, force)
     bar, tid = _bar(f"{c.name} {terrain}", trials)
     with bar:
         result = search(
@@ -146,8 +148,7 @@ def search_cmd(
         summary = write_search(result, out, top=top)
         summary = _with_files(out, summary, draw_search(result, out, top=top, video=video))
         summary["record"] = _record(out, out / "sans" / "01.json")
-    for key, value in summary.items():
-        console.print(f"{key:>18}: {value}")
+    print_summary(summary, 18)
     if gaits:
         _gaits(result, top, out, video, workers)
 
@@ -207,6 +208,7 @@ def evolve_cmd(
         False, "--resume", help="Continue from <out>/checkpoint.npz of the same run."
     ),
     workers: int = typer.Option(None, min=1, help="Worker processes for the start's search."),
+    force: Force = False,
 ) -> None:
     """Evolve the body (link lengths, sections, attachment points; masses coupled to them and
     to actuator strength) together with the network's Fig. 8 parameters (paper, 6.3)."""
@@ -216,6 +218,8 @@ def evolve_cmd(
 
     net, c = _evolve_subject(creature, network, terrain)
     out = out or Path("runs") / f"{c.name}-evolve"
+    if not resume:
+        prepare_out(out, force, "--resume")
     ckpt = out / "checkpoint.npz"
     start_file = out / "start.json"
     history = None
@@ -322,6 +326,7 @@ def tune_cmd(
     creature: str = typer.Option(None, help="Creature (default: the one the file names)."),
     out: Path = typer.Option(None, help="Output directory (default: <file>-<method>)."),
     video: bool = typer.Option(True, help="Write video.mp4 of the tuned gait."),
+    force: Force = False,
 ) -> None:
     """Phase 2: fine-tune the Fig. 8 parameters (delays, actuators, sensors), weights kept."""
     from zoetic.san.network import load_with_creature
@@ -331,7 +336,7 @@ def tune_cmd(
     if method not in METHODS:
         raise TuneError(f"unknown tuning method {method!r}; use one of {', '.join(METHODS)}")
     net, c = load_with_creature(network, creature)
-    out = out or network.with_name(f"{network.stem}-{method}")
+    out = prepare_out(out or network.with_name(f"{network.stem}-{method}"), force)
     bar, tid = _bar(f"{c.name} {method}", trials)
     with bar:
         result = tune(
@@ -347,8 +352,7 @@ def tune_cmd(
         summary = write_tune(result, c, out, terrain=terrain)
         summary = _with_files(out, summary, draw_tune(result, c, out, terrain, video))
         summary["record"] = _record(out, out / "san.json")
-    for key, value in summary.items():
-        console.print(f"{key:>18}: {value}")
+    print_summary(summary, 18)
 
 
 @san_app.command("show")
@@ -359,14 +363,18 @@ def show_cmd(
         None, min=0.1, max=1000.0, help="Replay time (default: creature's)."
     ),
     terrain: str = typer.Option(None, help="flat or rough (default: the run's)."),
-    out: Path = typer.Option(None, help="Video file (default <run>/show.mp4)."),
+    out: Path = typer.Option(
+        None, help="Directory of the video (default: the run's, beside the network)."
+    ),
     fps: int = typer.Option(30, min=1, help="Video frame rate."),
     creature: str = typer.Option(
         None,
         help="Creature (default: the one the file names; for an evolve run, its creature.toml).",
     ),
+    force: Force = False,
 ) -> None:
     """Replay a network with its sensor and node states drawn beside the creature (video)."""
+    from zoetic.san.creature import CreatureError
     from zoetic.san.network import load_with_creature
     from zoetic.san.search import speed_cm_s
     from zoetic.san.show import resolve_network
@@ -378,10 +386,10 @@ def show_cmd(
     net, c = load_with_creature(file, creature)
     _check_seconds(c, seconds)
     terrain = terrain or str(net.info.get("terrain", "flat"))
-    default = (path if path.is_dir() else file.parent) / (
-        "show.mp4" if file.stem in ("san", f"{rank:02d}") else f"show-{file.stem}.mp4"
-    )
-    target = out or default
+    if out is not None and out.suffix.lower() in (".mp4", ".gif", ".webm", ".mov"):
+        raise CreatureError(f"--out {out}: a directory; the video is written inside it")
+    name = "show.mp4" if file.stem in ("san", f"{rank:02d}") else f"show-{file.stem}.mp4"
+    target = (prepare_out(out, force) if out else path if path.is_dir() else file.parent) / name
     with console.status(f"rendering {target}"):
         written, rollout = show_video(net, c, target, seconds=seconds, terrain=terrain, fps=fps)
     speed = speed_cm_s(c, rollout.metric, rollout.distance, rollout.seconds)

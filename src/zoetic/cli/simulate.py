@@ -10,8 +10,8 @@ from rich.table import Table
 
 from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
-from zoetic.cli.options import Json
-from zoetic.cli.output import console, emit
+from zoetic.cli.options import Force, Json
+from zoetic.cli.output import console, emit, print_summary
 
 
 @app.command()
@@ -50,12 +50,15 @@ def simulate(
     dt: float = typer.Option(None, help="Time step (s); default the animal's own."),
     video: bool = typer.Option(True, help="Write video.mp4."),
     fps: int = typer.Option(30, min=1, help="Video frame rate."),
+    force: Force = False,
 ) -> None:
     """Simulate one animal under a controller; write record.npz, video.mp4 and path.png."""
     from zoetic.behavior.stunts import is_macro_file
+    from zoetic.io import prepare_out
     from zoetic.runs import simulate_run
     from zoetic.viz.media import simulation_media
 
+    prepare_out(out, force)
     if is_macro_file(controller) and medium is None and dt is None:  # a stunt, replayed whole
         from zoetic.bodies import load_animal
         from zoetic.cli.stunt import write_replay
@@ -66,8 +69,7 @@ def simulate(
         result = simulate_run(
             animal, controller, 10.0 if seconds is None else seconds, out, medium, dt, media
         )
-    for key, value in result.items():
-        console.print(f"{key:>12}: {value}")
+    print_summary(result)
 
 
 @bench_app.command("simulate")

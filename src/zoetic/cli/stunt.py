@@ -11,6 +11,7 @@ from zoetic.cli.bench import bench_app
 from zoetic.cli.options import (
     Animal,
     Evaluator,
+    Force,
     Fps,
     Json,
     Memory,
@@ -87,6 +88,7 @@ def stunt(
     fps: Fps = 30,
     evaluator: Evaluator = "batch",
     ray_address: RayAddress = None,
+    force: Force = False,
 ) -> None:
     """Discover a stunt: a macro controller of repertoire entries that scores the trick's style
     terms best; writes macro.json (replay: zoetic simulate ANIMAL --controller macro.json),
@@ -95,12 +97,12 @@ def stunt(
     from zoetic.behavior.repertoire import Repertoire
     from zoetic.behavior.stunts import BUDGET, discover, load_trick
     from zoetic.bodies import load_animal
-    from zoetic.io import check_out_dir
+    from zoetic.io import prepare_out
 
-    check_out_dir(out)
+    prepare_out(out, force)
+    tr = load_trick(trick)
     body = load_animal(animal)
     rep = Repertoire.load(memory, body)
-    tr = load_trick(trick)
     budget = budget or BUDGET
     console.print(
         f"{body.name} {tr.name}: {budget} plans by {method}, each a {tr.task.horizon:g} s "

@@ -11,6 +11,7 @@ from zoetic.cli.apps import app
 from zoetic.cli.options import (
     Animal,
     Evaluator,
+    Force,
     Fps,
     Memory,
     Method,
@@ -20,7 +21,7 @@ from zoetic.cli.options import (
     use_ray_address,
 )
 from zoetic.cli.output import console, progress_bar
-from zoetic.io import make_dir
+from zoetic.io import make_dir, prepare_out
 
 PLANE = (
     "Points are x,z (m) in the horizontal plane: the animal starts at the origin facing +x "
@@ -80,11 +81,13 @@ def track(
     ),
     video: bool = typer.Option(True, help="Write video.mp4 with the targets as buoys."),
     fps: Fps = 30,
+    force: Force = False,
 ) -> None:
     """Track targets greedily with a repertoire (Fig. 5, Plate 4); writes path.png and video."""
     from zoetic.behavior.tracking import TrackConfig, parse_targets
 
     pts = parse_targets(targets)
+    prepare_out(out, force)
     body, rep = _setup(animal, memory)
     config = TrackConfig(
         interval=interval, radius=radius, time_limit=time_limit, turn_radius=turn_radius
@@ -223,6 +226,7 @@ def macro(
     fps: Fps = 30,
     evaluator: Evaluator = "batch",
     ray_address: RayAddress = None,
+    force: Force = False,
 ) -> None:
     """Search for a macro controller (selection, order, durations of entries) to reach a goal."""
     use_ray_address(ray_address)
@@ -232,6 +236,7 @@ def macro(
     from zoetic.io import write_json
 
     g, obs = _goal_and_obstacles(goal, obstacle)
+    prepare_out(out, force)
     body, rep = _setup(animal, memory)
     task = ReachTask(tuple(g), tuple(map(tuple, obs)), horizon)
     problem = MacroProblem(body, rep, task, segments=segments)

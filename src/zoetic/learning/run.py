@@ -6,7 +6,8 @@ the previous one is kept as ``checkpoint.prev.npz``. The animal learned is store
 ``config.toml`` (``animal.npz``, the Body's arrays). Resuming rebuilds the problem from those
 two and restores the optimizer's state (nothing is replayed), then carries on to
 the same budget: an interrupted run and an uninterrupted one with the same seed end with the
-same history. The budget is an upper bound: a batch that would pass it is cut short.
+same history. The budget is an upper bound: a batch that would pass it is cut short; it is the
+one setting a resumed run may change (no method's steps depend on it).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import os
 import shutil
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +28,7 @@ from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller, frequency_domain, save_controller, time_domain
 from zoetic.errors import RunDirError, ZoeticError
 from zoetic.io import atomic_write_bytes, write_toml
-from zoetic.learning.checks import check_fits, check_run, run_dir_parts
+from zoetic.learning.checks import check_fits, check_learn_size, check_run, run_dir_parts
 from zoetic.learning.config import LearnConfig
 from zoetic.learning.evaluate import make_evaluator
 from zoetic.learning.objective import Objective
@@ -307,11 +308,26 @@ class Run:
         return cls(out, setup)
 
     @classmethod
-    def resume(cls, out: Path) -> Run:
-        """Rebuild a run from its config.toml and stored animal, and restore its checkpoint."""
+    def resume(cls, out: Path, budget: int | None = None) -> Run:
+        """Rebuild a run from its config.toml and stored animal, and restore its checkpoint;
+        a ``budget`` other than the stored one replaces it (config.toml is rewritten)."""
         out = Path(out)
         config, task, body = run_dir_parts(out)
+        new_budget = budget is not None and budget != config.budget
+        if new_budget:
+            config = replace(config, budget=int(budget))
+            check_learn_size(config.to_dict(), task, f"{out}: --budget {budget}", body)
         setup = build(config, task, body)
+        run = cls._restore(out, setup)
+        if new_budget:
+            write_toml(out / "config.toml", {"run": config.to_dict(), "task": task.to_dict()})
+        return run
+
+    @classmethod
+    def _restore(cls, out: Path, setup: Setup) -> Run:
+        """Return the run of ``setup`` in ``out`` with its checkpoint (if any) restored,
+        refusing a checkpoint written with other settings (the budget aside) or animal."""
+        config = setup.config
         path = out / CHECKPOINT
         if not path.exists() and (out / PREVIOUS).exists():
             path = out / PREVIOUS  # killed between keeping the previous and writing the next
@@ -322,7 +338,7 @@ class Run:
         now = _identity(setup)
         if saved is not None and "animal_sha256" not in saved:  # written before animals were
             now.pop("animal_sha256")
-        changed = edited_keys(saved, now) if saved is not None else []
+        changed = [k for k in edited_keys(saved, now) if k != "budget"] if saved else []
         if changed:
             raise RunDirError(
                 f"{out}: config.toml or {ANIMAL_FILE} was edited since the checkpoint was written "

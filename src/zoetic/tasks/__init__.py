@@ -353,15 +353,16 @@ def list_tasks() -> list[str]:
 
 def load_task(name_or_path: str | Path) -> Task:
     """Return a built-in task by name, or the task in a TOML file."""
-    from zoetic.io import read_toml
+    from zoetic.io import read_toml, suggest
 
     path = Path(name_or_path)
     if not (path.suffix == ".toml" or path.exists()):
         path = TASK_DIR / f"{name_or_path}.toml"
         if not path.exists():
+            hint = suggest(str(name_or_path), list_tasks())
             raise TaskError(
-                f"unknown task {str(name_or_path)!r}: choose one of {', '.join(list_tasks())} "
-                "or give the path of a task .toml file"
+                f"unknown task {str(name_or_path)!r}{hint}: choose one of "
+                f"{', '.join(list_tasks())} or give the path of a task .toml file"
             )
     try:
         doc = read_toml(path, what="task file")
