@@ -42,7 +42,8 @@ from zoetic.behavior.stunts import (
 )
 from zoetic.behavior.training import plan_digest, train_repertoire
 from zoetic.bodies import load_animal
-from zoetic.io import atomic_write_bytes, make_dir, read_toml, write_json
+from zoetic.io import atomic_write_bytes, read_toml, write_json
+from zoetic.io import make_dir
 from zoetic.viz.stunts import frame_strip, stunt_frames
 
 

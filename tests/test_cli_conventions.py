@@ -13,7 +13,8 @@ from zoetic.cli import _register, app, main
 from zoetic.cli.apps import PANELS
 from zoetic.cli.output import emit, fmt, number
 from zoetic.errors import ZoeticError
-from zoetic.io import LIMITS, load_json, load_toml, prepare_out, text_depth
+from zoetic.io import LIMITS, load_json, load_toml, text_depth
+from zoetic.outdir import prepare_out
 
 
 def _leaves(command, path=()):

@@ -17,6 +17,7 @@ ROOT = Path(zoetic.__file__).parent
 LAYERS = {
     "errors": 0,
     "io": 0,
+    "outdir": 0,  # run directories and the --out convention
     "record": 0,  # the run record: one writer, one reader (NumPy and JSON)
     "bodies": 1,
     "physics": 2,

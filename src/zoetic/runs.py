@@ -14,7 +14,7 @@ from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller, controller_from_spec
 from zoetic.control.measure import measure_record
 from zoetic.errors import BlowUpError, SimulationError
-from zoetic.io import DEMO_MARKER, atomic_write_bytes, check_memory, check_steps, make_dir
+from zoetic.io import atomic_write_bytes, check_memory, check_steps, make_dir
 from zoetic.learning.checks import (  # noqa: F401 - the run checks, for the commands
     MAX_BUDGET,
     check_learn_config,
@@ -22,6 +22,7 @@ from zoetic.learning.checks import (  # noqa: F401 - the run checks, for the com
     check_learnable,
     check_run_dir,
 )
+from zoetic.outdir import DEMO_MARKER
 from zoetic.physics import Medium, Trajectory, get_medium
 from zoetic.physics.simulate import check_dt, good_dt
 from zoetic.record import Animal, Record, write_record

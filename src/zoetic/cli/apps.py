@@ -21,7 +21,7 @@ PANELS = {
     "learn": ("learn", "demo", "repertoire", "abstract", "tasks"),
     "use": ("simulate", "sequence", "track", "macro", "stunt"),
     "look": ("view", "export", "animals"),
-    "papers": ("aquarium", "pursue", "san"),
+    "papers": ("aquarium", "pursue", "san", "reproduce"),
     "bench": ("bench",),
 }
 

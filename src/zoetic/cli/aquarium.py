@@ -50,7 +50,8 @@ def aquarium(
     video.mp4."""
     from zoetic.behavior.aquarium.tank import TankConfig, build_tank, events_csv, live, summarize
     from zoetic.cli.records import write_aquarium_record
-    from zoetic.io import atomic_write_bytes, make_dir, prepare_out, write_json
+    from zoetic.io import atomic_write_bytes, make_dir, write_json
+    from zoetic.outdir import prepare_out
     from zoetic.record import read_record
     from zoetic.viz.media import mind_media
 

@@ -12,7 +12,7 @@ from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
 from zoetic.cli.options import Animal, Force, Json, Seed, use_ray_address
 from zoetic.cli.output import console, emit, interrupted, print_summary, progress_bar
-from zoetic.io import check_out_dir, prepare_out
+from zoetic.outdir import check_out_dir, prepare_out
 
 
 @app.command()

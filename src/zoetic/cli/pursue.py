@@ -29,7 +29,7 @@ def pursue(
     Writes video.mp4 (world view, gaze rays, both retinas), gaze.png (Fig. 7), frames.png
     (Fig. 8), summary.json and record.npz.
     """
-    from zoetic.io import prepare_out
+    from zoetic.outdir import prepare_out
     from zoetic.perception.pursuit import make_chase, run_chase, summarize
     from zoetic.viz.gaze import chase_frames, plot_frames, plot_gaze
     from zoetic.viz.video import write_mp4

@@ -79,8 +79,8 @@ def train_cmd(
 
         os.environ["RAY_ADDRESS"] = ray_address
     from zoetic.behavior.training import train_repertoire
-    from zoetic.io import check_out_dir
     from zoetic.learning.abstraction import parse_modes
+    from zoetic.outdir import check_out_dir
     from zoetic.runs import check_learnable
     from zoetic.viz.media import show_repertoire
 
@@ -215,7 +215,8 @@ def sequence_cmd(
     from zoetic.behavior.training import build_sequence, parse_sequence
     from zoetic.bodies import load_animal
     from zoetic.control import save_controller
-    from zoetic.io import make_dir, prepare_out
+    from zoetic.io import make_dir
+    from zoetic.outdir import prepare_out
     from zoetic.runs import simulate_run
     from zoetic.viz.learning import plot_controller
     from zoetic.viz.media import simulation_media

@@ -11,7 +11,7 @@ from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
 from zoetic.cli.options import Force, Json, RayAddress, Seed, Terrain, Workers, use_ray_address
 from zoetic.cli.output import console, emit, print_summary, progress_bar
-from zoetic.io import prepare_out
+from zoetic.outdir import prepare_out
 
 san_app = typer.Typer(
     help="Sensor-actuator networks (van de Panne & Fiume 93): search, tune, show.",

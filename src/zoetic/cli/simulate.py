@@ -54,7 +54,7 @@ def simulate(
 ) -> None:
     """Simulate one animal under a controller; write record.npz, video.mp4 and path.png."""
     from zoetic.behavior.stunts import is_macro_file
-    from zoetic.io import prepare_out
+    from zoetic.outdir import prepare_out
     from zoetic.runs import simulate_run
     from zoetic.viz.media import simulation_media
 

@@ -97,7 +97,7 @@ def stunt(
     from zoetic.behavior.repertoire import Repertoire
     from zoetic.behavior.stunts import BUDGET, discover, load_trick
     from zoetic.bodies import load_animal
-    from zoetic.io import prepare_out
+    from zoetic.outdir import prepare_out
 
     prepare_out(out, force)
     tr = load_trick(trick)

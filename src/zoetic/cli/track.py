@@ -21,7 +21,8 @@ from zoetic.cli.options import (
     use_ray_address,
 )
 from zoetic.cli.output import console, progress_bar
-from zoetic.io import make_dir, prepare_out
+from zoetic.io import make_dir
+from zoetic.outdir import prepare_out
 
 PLANE = (
     "Points are x,z (m) in the horizontal plane: the animal starts at the origin facing +x "
