@@ -115,9 +115,6 @@ class Record:
     history: dict = field(default_factory=dict)  # quantity -> (K,) float32 per evaluation
 
 
-# ------------------------------------------------------------------------------------ writing
-
-
 def _rgb(color) -> list[int] | None:
     return None if color is None else [int(c) for c in color]
 
@@ -215,9 +212,6 @@ def write_record(path: str | os.PathLike, rec: Record) -> Path:
     buf = io.BytesIO()
     np.savez_compressed(buf, meta=np.frombuffer(text.encode(), np.uint8), **arrays)
     return atomic_write_bytes(path, buf.getvalue())
-
-
-# ------------------------------------------------------------------------------------ reading
 
 
 class _Check:

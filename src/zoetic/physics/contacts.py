@@ -37,13 +37,10 @@ from numba import njit
 from zoetic.physics.media import DRAG, FLOOR, LEVEL, G
 from zoetic.physics.shapes import shape_force, shape_sdf
 
-# a pair closing slower than REST_SPEED (m/s) just stops (a resting ball does not chatter);
-# an overlap beyond SLOP (m) is removed at no more than CORRECTION_SPEED (m/s); projected
-# Gauss-Seidel sweeps over a body's contacts per step
-REST_SPEED = 0.1
-SLOP = 0.002
+REST_SPEED = 0.1  # m/s: a pair closing slower just stops (a resting ball does not chatter)
+SLOP = 0.002  # m: an overlap beyond it is removed at no more than CORRECTION_SPEED (m/s)
 CORRECTION_SPEED = 0.3
-SWEEPS = 8
+SWEEPS = 8  # projected Gauss-Seidel sweeps over a body's contacts per step
 
 
 @njit(cache=True)
