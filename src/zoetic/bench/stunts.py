@@ -25,16 +25,13 @@ def bench_stunts(
         splash_ratio,
         targets_met,
     )
+    from zoetic.bench.memory import bench_memory
     from zoetic.bodies import load_animal
 
     body = load_animal(animal)
-    if memory is None:  # keyed by the body and its training tasks, so an update retrains
-        from zoetic.behavior.training import plan_digest, train_repertoire
-
-        memory = Path("runs/bench") / f"{body.name}-memory-{plan_digest(animal)}"
-        if not (memory / "repertoire.json").exists():
-            train_repertoire(animal, memory, seed=seed)
-    rep = Repertoire.load(memory, body)
+    rep = Repertoire.load(
+        memory if memory is not None else bench_memory(animal, body.name, seed), body
+    )
     out: dict = {"animal": body.name, "method": method, "budget": budget, "seed": seed}
     keep = (
         "apex_above_surface_m",

@@ -44,16 +44,13 @@ def bench_track(
     """Return the course suite's figures (see the module docstring) for one animal."""
     from zoetic.behavior.repertoire import Repertoire
     from zoetic.behavior.tracking import TrackConfig, parse_targets, track
+    from zoetic.bench.memory import bench_memory
     from zoetic.bodies import load_animal
 
     body = load_animal(animal)
-    if memory is None:  # keyed by the body and its training tasks, so an update retrains
-        from zoetic.behavior.training import plan_digest, train_repertoire
-
-        memory = Path("runs/bench") / f"{body.name}-memory-{plan_digest(animal)}"
-        if not (memory / "repertoire.json").exists():
-            train_repertoire(animal, memory, seed=seed)
-    rep = Repertoire.load(memory, body)
+    rep = Repertoire.load(
+        memory if memory is not None else bench_memory(animal, body.name, seed), body
+    )
     courses, wall = {}, 0.0
     for name, text in COURSES.items():
         pts = parse_targets(text, f"course {name}")
