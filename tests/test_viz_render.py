@@ -153,3 +153,25 @@ def test_tags_of_animals_on_top_of_each_other_do_not_overlap():
     for i, a in enumerate(boxes):
         for b in boxes[i + 1 :]:
             assert not (a[0] < b[2] and a[2] > b[0] and a[1] < b[3] and a[3] > b[1])
+
+
+def test_smooth_shading_normals_turn_gradually_across_a_closed_surface():
+    """On a cube of 12 outward triangles, two faces across an edge meet at 90 deg; their
+    shading normals (means of vertex normals) point outward and meet at less than that."""
+    from zoetic.viz.render3d import smooth_normals
+
+    v = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    faces = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))])
+    n = np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    centres = v[faces].mean(axis=1)
+    inward = np.einsum("fk,fk->f", n, centres) < 0  # wind every face outward
+    faces[inward], n[inward] = faces[inward][:, ::-1], -n[inward]
+    s = smooth_normals(n, faces, np.ones(len(faces), bool), len(v))
+    assert np.allclose(np.linalg.norm(s, axis=1), 1.0)
+    assert np.all(np.einsum("fk,fk->f", s, centres) > 0)  # outward
+    edge = [(i, j) for i in range(12) for j in range(i) if len(set(faces[i]) & set(faces[j])) == 2]
+    across = [(i, j) for i, j in edge if abs(np.dot(n[i], n[j])) < 1e-9]
+    assert across
+    assert all(np.dot(s[i], s[j]) > 0.2 for i, j in across)  # was cos 90 deg = 0

@@ -282,6 +282,20 @@ def skins_vertices(skins: Sequence[Skin], positions: Sequence[np.ndarray]) -> np
     return np.concatenate([skin_vertices(s, p) for s, p in zip(skins, positions, strict=True)])
 
 
+def smooth_normals(n: np.ndarray, faces: np.ndarray, closed: np.ndarray, n_vertices: int):
+    """Return per-face shading normals (F, 3) of a closed surface, smooth across its edges: the
+    mean of the face's vertex normals, each the mean of the unit normals of the closed
+    faces around it (``n``, unit, outward). The painter's fill is one colour per face,
+    so this is Gouraud shading at the face's centre: facets of the subdivided skin no longer
+    show as steps of light."""
+    vn = np.zeros((n_vertices, 3))
+    for k in range(3):
+        np.add.at(vn, faces[closed, k], n[closed])
+    vn /= np.linalg.norm(vn, axis=1, keepdims=True) + 1e-12
+    fn = vn[faces].sum(axis=1)
+    return fn / (np.linalg.norm(fn, axis=1, keepdims=True) + 1e-12)
+
+
 def face_items(
     pos, mesh: SceneMesh, eye, rot, focal, size, medium, side: int = 0, fog: float = _WATER_FOG
 ) -> list[tuple]:
@@ -298,8 +312,10 @@ def face_items(
     fs = scr[mesh.faces]  # (F, 3, 2): triangles wholly off the picture are not drawn
     keep &= (fs[..., 0].max(1) >= 0) & (fs[..., 0].min(1) <= size[0])
     keep &= (fs[..., 1].max(1) >= 0) & (fs[..., 1].min(1) <= size[1])
-    n = np.where(front[:, None], n, -n)
-    shade = 0.3 + 0.12 * n[:, 1] + 0.7 * np.maximum(n @ _LIGHT, 0.0)
+    smooth = smooth_normals(n, mesh.faces, mesh.closed, len(pos))
+    n = np.where(front[:, None], n, -n)  # a fin is lit on the side the camera sees
+    ns = np.where(mesh.closed[:, None], smooth, n)
+    shade = 0.3 + 0.12 * ns[:, 1] + 0.7 * np.maximum(ns @ _LIGHT, 0.0)
     col = mesh.color * shade[:, None]
     depth = z[mesh.faces].mean(axis=1)
     level = medium.water_level
