@@ -219,3 +219,35 @@ def test_only_a_tail_that_strikes_the_ball_first_knocks_it_off(dolphin):
     # the nose's term follows the same rule: first, or it did not knock the ball off
     assert _term("ball_moved_by_nose", touched("nose", "belly")) == pytest.approx(n - 21, rel=1e-6)
     assert _term("ball_moved_by_nose", touched("belly", "nose")) == 0.0
+
+
+def _rolled(body, n, angle, height=2.0) -> np.ndarray:
+    """Return (1, n, N, 3): the rest pose turned about its own long axis (centre of mass to
+    head) by 0..angle, right-handed about the forward direction, at ``height`` m."""
+    w = body.mass / body.total_mass
+    rel = body.rest_pos - w @ body.rest_pos
+    k = rel[int(BodyFrame.of(body).head)]
+    k = k / np.linalg.norm(k)
+    kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    out = []
+    for a in np.linspace(0.0, angle, n):
+        rot = np.eye(3) + math.sin(a) * kx + (1 - math.cos(a)) * kx @ kx  # Rodrigues
+        out.append(rel @ rot.T + [0.0, height, 0.0])
+    return np.array(out)[None]
+
+
+def test_a_spin_turns_about_the_long_axis_and_a_somersault_does_not(dolphin):
+    n = 41
+    spin = _signals(dolphin, _rolled(dolphin, n, 2 * np.pi))
+    assert _term("flight_roll_rotation", spin) == pytest.approx(2 * np.pi, rel=1e-3)
+    assert _term("flight_pitch_rotation", spin) < 0.05
+    # right-handed about the forward axis: the left side goes down first, positive
+    assert spin.flight_roll[0, 5] > 0
+    under = _signals(dolphin, _rolled(dolphin, n, 2 * np.pi, height=-2.0))
+    assert _term("flight_roll_rotation", under) == 0.0
+    flip = _signals(dolphin, _lifted(dolphin, np.full(n, 2.0), np.linspace(0, 2 * np.pi, n)))
+    assert _term("flight_roll_rotation", flip) == pytest.approx(0.0, abs=1e-6)
+    m = {"most_nodes_out_of_water": 1.0, "roll_rotation_in_air_deg": 361.0}
+    assert targets_met("spin", m) == {"leaves_water": True, "rotation": True}
+    assert not targets_met("spin", m | {"roll_rotation_in_air_deg": 300.0})["rotation"]
+    assert load_trick("spin").task.terms[0].kind == "flight_roll_rotation"

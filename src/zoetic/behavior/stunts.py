@@ -41,6 +41,7 @@ from zoetic.tasks.terms import (
     ball_moved_by_nose,
     ball_moved_by_tail,
     flight_pitch_rotation,
+    flight_roll_rotation,
     tail_strike_rotation,
 )
 
@@ -74,6 +75,10 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
         # vertical, or a body turned sideways to the start's plane, counts above, not here)
         "pitch_rotation_in_air_deg": round(
             float(np.degrees(flight_pitch_rotation(np, s, None)[lane])), 1
+        ),
+        # the spin: about the body's own long axis (a barrel roll in the air)
+        "roll_rotation_in_air_deg": round(
+            float(np.degrees(flight_roll_rotation(np, s, None)[lane])), 1
         ),
         "contacts": int(rec.contacts[lane].sum()),
         "body_length_m": round(length, 3),
@@ -126,6 +131,7 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
 
 # the issue's targets, per built-in trick (bellyflop against clean-dive: ``splash_ratio``)
 LEAP_AIR_S, LEAP_APEX_BL, SOMERSAULT_DEG, SPLASH_RATIO = 0.4, 0.5, 360.0, 3.0
+SPIN_DEG = 360.0  # spin: a full turn about the body's own long axis in the air
 BUDGET = 9600  # plans a trick search tries by default (about a minute a trick on 2 cores)
 TAIL_STRIKE_DEG = float(np.degrees(TAIL_STRIKE_TURN))  # ball-tail: a strike after half a turn
 
@@ -136,7 +142,7 @@ def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, boo
     the water and be wholly back in it by the end (a splash not yet made is not small); their
     target is the ratio of their splashes (``splash_ratio``)."""
     flags: dict[str, bool] = {}
-    if name in ("leap", "hurdle", "somersault", "bellyflop", "clean-dive"):
+    if name in ("leap", "hurdle", "somersault", "spin", "bellyflop", "clean-dive"):
         flags["leaves_water"] = bool(m["most_nodes_out_of_water"] >= 1.0)
     if name == "leap":
         flags["air_time"] = bool(m["air_time_s"] >= LEAP_AIR_S)
@@ -146,6 +152,8 @@ def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, boo
     elif name == "somersault":
         # a full turn about the body's own left-right axis (a spin about the vertical is none)
         flags["rotation"] = bool(m["pitch_rotation_in_air_deg"] >= SOMERSAULT_DEG)
+    elif name == "spin":
+        flags["rotation"] = bool(m["roll_rotation_in_air_deg"] >= SPIN_DEG)
     elif name == "hurdle":
         flags["over_bar"] = bool(m.get("bar_crossed", False))
         flags["no_contact"] = not m.get("hurdle_touched", True)

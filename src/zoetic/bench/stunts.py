@@ -2,8 +2,8 @@
 
 ``zoetic bench stunts`` runs this: for every trick, the plan search's result, its success
 flags against the issue's targets (a leap 0.4 s out of the water and 0.5 body lengths up, a
-full somersault, a cleared bar, a nose-struck ball, a tail strike in flight after half a
-somersault, a bellyflop splashing 3x a clean dive),
+full somersault, a full spin about the long axis, a cleared bar, a nose-struck ball, a tail
+strike in flight after half a somersault, a bellyflop splashing 3x a clean dive),
 what it achieved, evaluations and wall time (target: each trick in <= 5 minutes on 2 cores).
 """
 

@@ -70,7 +70,7 @@ def stunt(
     memory: Memory,
     trick: str = typer.Option(
         "leap",
-        help="A built-in trick (leap, hurdle, somersault, "
+        help="A built-in trick (leap, hurdle, somersault, spin, "
         "ball-nose, ball-tail, bellyflop, clean-dive) or a trick .toml "
         "file.",
     ),
@@ -231,7 +231,7 @@ def bench_stunts_cmd(
     ),
     animal: str = typer.Option("dolphin"),
     tricks: str = typer.Option(
-        "leap,somersault,hurdle,ball-nose,ball-tail,bellyflop,clean-dive",
+        "leap,somersault,spin,hurdle,ball-nose,ball-tail,bellyflop,clean-dive",
         help="Comma-separated tricks.",
     ),
     method: str = typer.Option("anneal"),

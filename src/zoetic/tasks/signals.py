@@ -306,6 +306,27 @@ class Signals:
         turned = xp.cumsum(turn * both, axis=1)
         return xp.concatenate([xp.zeros_like(turned[:, :1]), turned], axis=1)
 
+    @cached_property
+    def flight_roll(self):
+        """Signed rotation (K, R), rad, of the body about its own long axis (centre of mass to
+        head: a spin's axis) while wholly out of the water, up to each record: the sum of the
+        left-right axis' turns about the long axis between records, positive when the left
+        side goes down. Zeros without mirror pairs."""
+        xp = self.xp
+        k, r = self.positions.shape[:2]
+        if self.frame.left.size == 0 or r < 2:
+            return xp.zeros((k, r))
+        pos = self.positions
+        lat = xp.mean(pos[:, :, self.frame.left] - pos[:, :, self.frame.right], axis=2)
+        axis = self.head - self.com
+        axis = axis / (xp.sqrt(xp.sum(axis * axis, axis=-1, keepdims=True)) + EPS)
+        lat = lat - xp.sum(lat * axis, axis=-1, keepdims=True) * axis  # across the long axis
+        a, b = lat[:, :-1], lat[:, 1:]
+        turn = xp.arctan2(xp.sum(xp.cross(a, b) * axis[:, :-1], axis=-1), xp.sum(a * b, axis=-1))
+        both = self.airborne[:, 1:] * self.airborne[:, :-1]
+        turned = xp.cumsum(turn * both, axis=1)
+        return xp.concatenate([xp.zeros_like(turned[:, :1]), turned], axis=1)
+
     def part_ball_distance(self, part: str):
         """Closest approach (K, R), m, of a body part's nodes to the first ball's centre
         (zeros without a ball)."""

@@ -321,6 +321,15 @@ def flight_pitch_rotation(xp, s: Signals, p: TermParams):
 
 
 @term(
+    "rotation (rad, unsigned) about the body's own long axis while wholly out of the water "
+    "(``Signals.flight_roll``): an aerial spin, a barrel roll in the air"
+)
+def flight_roll_rotation(xp, s: Signals, p: TermParams):
+    """Return (K,) rad: greatest unsigned spin about the long axis while airborne (>= 0; gain)."""
+    return xp.max(xp.abs(s.flight_roll), axis=1)
+
+
+@term(
     "mean angular velocity (rad/s) about the body's own left-right axis in flight: the "
     "rotation ``flight_pitch_rotation`` over the time wholly out of the water (0 if never "
     "out for two records): a somersault's spin"
