@@ -39,6 +39,7 @@ def bench_stunts(
         "air_time_s",
         "rotation_in_air_deg",
         "pitch_rotation_in_air_deg",
+        "roll_rotation_in_air_deg",
         "ball_contact",
         "ball_parts",
         "tail_strike_rotation_deg",

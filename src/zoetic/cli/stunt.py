@@ -199,7 +199,8 @@ def _report(
         f"E = {summary['E']:.4f}; apex {got['apex_above_surface_m']:.3f} m above the surface "
         f"({got['apex_body_lengths']:.2f} body lengths), {got['air_time_s']:.2f} s wholly in "
         f"the air, {got['rotation_in_air_deg']:.0f} deg rotation in the air "
-        f"({got['pitch_rotation_in_air_deg']:.0f} about the left-right axis), "
+        f"({got['pitch_rotation_in_air_deg']:.0f} about the left-right axis, "
+        f"{got['roll_rotation_in_air_deg']:.0f} about the long axis), "
         f"{got['contacts']} contacts, splash {got['splash_m3_s']:.3f} m^3/s"
     )
     if "ball_contact" in got:
