@@ -6,6 +6,9 @@ Learns (CMA-ES) a straight and a sharp-turn controller for the shark and the sna
   says one mode suffices for the shark, two for the snake;
 - measures the phase between left and right actuators of the learned straight shark (the
   paper: roughly antiphase) from their dominant modes, and the correlation of the signals;
+- summarises the learned shark turn per muscle pair, side by side (the paper, Fig. 9b: the
+  right side's anterior and posterior muscles are "essentially unused", the left side's move
+  approximately in phase);
 - follows the learned snake turn's body bend (signed angle between the front and back halves)
   over time: the paper says a turn first coils toward the turn, then returns to serpentine.
 Writes docs/figures/abstraction_*.png and prints a Markdown table. About 5 minutes on 2 cores:
@@ -69,6 +72,33 @@ def antiphase(body, ctrl) -> list[dict]:
     return rows
 
 
+def turn_sides(body, ctrl) -> dict:
+    """Return the learned turn's activity per muscle (the standard deviation of its signal over
+    the turn, 0-1 activation) paired left/right by segment, the right side's activity as a
+    fraction of the left's, and the left side's spread of dominant-mode phases (deg): the
+    paper's "right side unused, left side in phase" is a small fraction and a small spread."""
+    spec = spectrum(ctrl)
+    u = ctrl.sample(np.linspace(0, ctrl.duration, 800))
+    rows, left_phase = [], []
+    for i, name in enumerate(body.actuator_names):
+        j = int(body.actuator_mirror[i])
+        if body.actuator_side[i] != "left" or j == i or "fin" in name:
+            continue  # muscles only: the paper's shark has no fins
+        k = int(np.argmax(spec.amp[i]))
+        left_phase.append(float(spec.phase[i, k]))
+        rows.append({"pair": f"{name}/{body.actuator_names[j]}",
+                     "left_activity": round(float(u[:, i].std()), 3),
+                     "right_activity": round(float(u[:, j].std()), 3),
+                     "left_mean": round(float(u[:, i].mean()), 3),
+                     "right_mean": round(float(u[:, j].mean()), 3)})  # fmt: skip
+    ph = np.asarray(left_phase)
+    gaps = (ph[:, None] - ph[None, :] + np.pi) % (2 * np.pi) - np.pi
+    left = sum(r["left_activity"] for r in rows)
+    right = sum(r["right_activity"] for r in rows)
+    return {"pairs": rows, "right_over_left_activity": round(right / max(left, 1e-9), 3),
+            "left_phase_spread_deg": round(float(np.degrees(np.abs(gaps).max())), 1)}  # fmt: skip
+
+
 def snake_bend(body, ctrl, seconds: float) -> tuple[np.ndarray, np.ndarray]:
     """Return times (R,) and the signed bend (R,) rad of the snake: + is coiled to the left."""
     dt = body.dt
@@ -114,6 +144,8 @@ def main() -> None:
         abstract_files(run_dir, FIGS / f"abstraction_{animal}_{task_name}", modes=2)
         if animal == "shark" and task_name == "swim-straight":
             results["shark_antiphase"] = antiphase(body, ctrl)
+        if animal == "shark" and "turn" in task_name:
+            results["shark_turn_sides"] = turn_sides(body, ctrl)
         if animal == "snake" and "turn" in task_name:
             t, bend = snake_bend(body, ctrl, task.horizon)
             thirds = np.array_split(np.degrees(bend), 3)
