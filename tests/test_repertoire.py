@@ -70,8 +70,35 @@ def test_training_writes_a_reloadable_mirrored_repertoire(trained, shark):
 
 def test_training_again_resumes_without_learning_more(trained):
     before = (trained / "runs" / "go-straight" / "history.csv").read_text()
-    assert main(["repertoire", "train", "shark", "--out", str(trained), "--budget", "30"]) == 0
+    args = ["repertoire", "train", "shark", "--out", str(trained), "--resume"]
+    assert main(args) == 0  # its budget of 30 is spent: nothing more is learned
     assert (trained / "runs" / "go-straight" / "history.csv").read_text() == before
+
+
+def test_a_trained_directory_is_refused_without_resume_or_force(trained, capsys):
+    capsys.readouterr()
+    args = ["repertoire", "train", "shark", "--out", str(trained), "--budget", "30"]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "--resume" in err and "--force" in err and "Traceback" not in err
+    assert main([*args, "--resume", "--force"]) == 2
+
+
+def test_resume_takes_a_new_budget_and_force_starts_again(tmp_path):
+    out = tmp_path / "m"
+    assert main(["repertoire", "train", "shark", "--out", str(out), "--budget", "12"]) == 0
+    runs = out / "runs" / "go-straight"
+    learned = len((runs / "history.csv").read_text().splitlines())
+    assert (
+        main(["repertoire", "train", "shark", "--out", str(out), "--resume", "--budget", "24"]) == 0
+    )
+    assert len((runs / "history.csv").read_text().splitlines()) > learned  # learned on
+    assert "budget = 24" in (runs / "config.toml").read_text()
+    assert (
+        main(["repertoire", "train", "shark", "--out", str(out), "--force", "--budget", "12"]) == 0
+    )
+    assert "budget = 12" in (runs / "config.toml").read_text()
+    assert main(["repertoire", "train", "shark", "--out", str(tmp_path / "new"), "--resume"]) == 2
 
 
 def test_an_entry_learned_for_an_older_task_is_not_resumed(tmp_path, capsys):
@@ -88,7 +115,7 @@ def test_an_entry_learned_for_an_older_task_is_not_resumed(tmp_path, capsys):
     doc["task"]["terms"][0]["target"] = 1.0  # as if learned before the task file changed
     write_toml(cfg, doc)
     capsys.readouterr()
-    assert main(["repertoire", "train", "shark", "--out", str(stale), "--budget", "12"]) == 2
+    assert main(["repertoire", "train", "shark", "--out", str(stale), "--resume"]) == 2
     err = capsys.readouterr().err
     assert "config.toml" in err and "quick-turn-left" in err and "fresh --out" in err
 

@@ -37,6 +37,7 @@ RUN_FILES = (
     "controller.json",
     "sequence.json",
     "macro.json",
+    "repertoire.json",
     "events.csv",
     "san.json",
     "sans",

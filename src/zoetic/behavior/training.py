@@ -274,12 +274,14 @@ def train_repertoire(
     on_entry: Callable[[str, object], None] | None = None,
     progress: Callable[[object], None] | None = None,
     evaluator: str = "batch",
+    resume_budget: int | None = None,
 ) -> Repertoire:
     """Learn, abstract and save the basic repertoire of ``animal`` (a zoo name, an animal
     file or a Body, learned as given) into ``out``; return it.
 
     nodes: controller nodes per actuator (default: each task's). on_entry(name, run) is called
-    before each entry is learned; progress(run) during learning.
+    before each entry is learned; progress(run) during learning. An entry already begun in
+    ``out`` continues to its stored budget, or to ``resume_budget`` evaluations when given.
     """
     from zoetic.learning.run import LearnConfig, Run
 
@@ -292,7 +294,7 @@ def train_repertoire(
     for k, entry in enumerate(plan_for(body)):
         run_dir = out / "runs" / entry.name
         if (run_dir / "config.toml").exists():
-            run = Run.resume(run_dir)
+            run = Run.resume(run_dir, resume_budget)
             check_same_task(run_dir, run.setup.task, entry.task)
         else:
             config = LearnConfig(

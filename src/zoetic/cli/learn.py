@@ -10,7 +10,7 @@ import typer
 
 from zoetic.cli.apps import app
 from zoetic.cli.bench import bench_app
-from zoetic.cli.options import Animal, Force, Json, Seed, use_ray_address
+from zoetic.cli.options import Animal, Force, Json, Seed, given, use_ray_address
 from zoetic.cli.output import console, emit, interrupted, print_summary, progress_bar
 from zoetic.outdir import check_out_dir, prepare_out
 
@@ -152,12 +152,6 @@ def learn(
     _print_summary(summary)
 
 
-def _given(ctx: typer.Context, name: str) -> bool:
-    """True when the option ``name`` was given (on the command line or in the environment)."""
-    source = ctx.get_parameter_source(name)
-    return source is not None and source.name not in ("DEFAULT", "DEFAULT_MAP")
-
-
 def _resume(resume: Path, ctx: typer.Context, budget: int):
     """Open the run in ``resume`` where it stopped, with a new budget when --budget is given;
     refuse other stored settings given otherwise than stored (errors name the directory)."""
@@ -165,12 +159,12 @@ def _resume(resume: Path, ctx: typer.Context, budget: int):
     from zoetic.learning.checks import run_dir_parts
     from zoetic.learning.run import Run
 
-    if _given(ctx, "out") or _given(ctx, "force"):
+    if given(ctx, "out") or given(ctx, "force"):
         raise typer.BadParameter(f"a resumed run stays in {resume}; leave out --out and --force")
     try:
         stored = run_dir_parts(resume)[0]
         _check_same(resume, stored, ctx)
-        run = Run.resume(resume, budget if _given(ctx, "budget") else None)
+        run = Run.resume(resume, budget if given(ctx, "budget") else None)
     except ZoeticError as exc:
         raise naming(resume, exc) from None
     was, now = stored.budget, run.setup.config.budget
@@ -187,7 +181,7 @@ def _check_same(resume: Path, stored, ctx: typer.Context) -> None:
 
     for name in STORED:
         value, kept = ctx.params[name], getattr(stored, name)
-        if _given(ctx, name) and value != kept:
+        if given(ctx, name) and value != kept:
             flag = "ANIMAL" if name == "animal" else "--" + name.replace("_", "-")
             raise RunDirError(
                 f"{flag} {value} differs from the run's {kept}: a resumed run keeps its "

@@ -55,3 +55,10 @@ def use_ray_address(address: str | None) -> None:
     """Point Ray at the cluster of ``--ray-address`` (``ray.init()`` reads RAY_ADDRESS)."""
     if address:
         os.environ["RAY_ADDRESS"] = address
+
+
+def given(ctx: typer.Context, name: str) -> bool:
+    """True when the option ``name`` was given (on the command line or in the environment),
+    not left at its default: a resumed run takes only what the user changed."""
+    source = ctx.get_parameter_source(name)
+    return source is not None and source.name not in ("DEFAULT", "DEFAULT_MAP")

@@ -12,7 +12,7 @@ from rich.table import Table
 
 from zoetic.cli.apps import app
 from zoetic.cli.learn import learn_bar
-from zoetic.cli.options import Force
+from zoetic.cli.options import Force, given
 from zoetic.cli.output import console, interrupted, print_summary
 
 Strict = Annotated[
@@ -60,6 +60,7 @@ def abstract_cmd(
 
 @repertoire_app.command("train")
 def train_cmd(
+    ctx: typer.Context,
     animal: str = typer.Argument(..., help="Zoo animal name or animal .toml file."),
     out: Path = typer.Option(None, help="Repertoire directory (default memory/<animal>)."),
     budget: int = typer.Option(3000, min=10, max=10_000_000, help="Evaluations per learned entry."),
@@ -71,6 +72,10 @@ def train_cmd(
     evaluator: str = typer.Option("batch", help="batch, process or ray (see zoetic learn)."),
     ray_address: str = typer.Option(None, help="Ray cluster for --evaluator ray."),
     strict: Strict = False,
+    resume: bool = typer.Option(
+        False, "--resume", help="Continue the repertoire in --out (a new --budget is taken)."
+    ),
+    force: Force = False,
 ) -> None:
     """Learn the basic repertoire (straight, sharp and wide turns, mirrored; a fish's swim-up
     and swim-down); resumable. Each entry is judged against its task's promises."""
@@ -80,12 +85,11 @@ def train_cmd(
         os.environ["RAY_ADDRESS"] = ray_address
     from zoetic.behavior.training import train_repertoire
     from zoetic.learning.abstraction import parse_modes
-    from zoetic.outdir import check_out_dir
     from zoetic.runs import check_learnable
     from zoetic.viz.media import show_repertoire
 
     check_learnable(animal)
-    out = check_out_dir(out or Path("memory") / Path(animal).stem)
+    out, again = _training_dir(animal, out, resume, force)
     with learn_bar() as bar:
         state: dict = {}
 
@@ -117,11 +121,35 @@ def train_cmd(
                 on_entry,
                 progress,
                 evaluator,
+                budget if resume and given(ctx, "budget") else None,
             )
         except KeyboardInterrupt:
-            interrupted(f"{out} keeps what was learned; run the same command to continue")
+            interrupted(f"{out} keeps what was learned; continue with: {again}")
     _print_rows(show_repertoire(out), f"{out}")
     _report_promises(out, strict)
+
+
+def _training_dir(animal: str, out: Path | None, resume: bool, force: bool) -> tuple[Path, str]:
+    """Return the repertoire directory ready for training (a new or empty one, an emptied one
+    under ``force``, or the one to continue under ``resume``) and the command that continues
+    it; a non-empty directory without either is refused, naming both."""
+    import shlex
+
+    from zoetic.behavior.repertoire import INDEX
+    from zoetic.errors import ZoeticError
+    from zoetic.outdir import check_out_dir, prepare_out
+
+    out = check_out_dir(out or Path("memory") / Path(animal).stem)
+    again = shlex.join(["zoetic", "repertoire", "train", animal, "--out", str(out), "--resume"])
+    if resume and force:
+        raise ZoeticError(
+            "--resume continues the repertoire in --out, --force replaces it: not both"
+        )
+    if not resume:
+        return prepare_out(out, force, again), again
+    if not (out / INDEX).is_file():
+        raise ZoeticError(f"{out}: holds no {INDEX}, so no repertoire to continue; drop --resume")
+    return out, again
 
 
 def _report_promises(memory: Path, strict: bool) -> dict[str, dict]:
