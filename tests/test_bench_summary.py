@@ -63,10 +63,13 @@ def test_side_by_side_figures_are_divided_by_the_same_runs_baseline(kept):
     assert kernel["ratio"] == pytest.approx(kernel["value"] / kernel["reference"])
     assert kernel["source"] == "NumPy reference, this run"
     # a time: the reference over this run (times faster), here annealing over CMA-ES
-    (cmaes,) = _rows(rows, "learn.cmaes")
-    assert cmaes["ratio"] == pytest.approx(
-        b["learn"]["anneal_seconds"] / b["learn"]["cmaes_seconds_to_match_anneal"]
-    )
+    learn = b["learn"] | {"anneal_seconds": 12.0, "cmaes_seconds_to_match_anneal": 1.5}
+    (cmaes,) = _rows(table_rows(b | {"learn": learn}, "quick"), "learn.cmaes")
+    assert (cmaes["value"], cmaes["reference"], cmaes["ratio"]) == (1.5, 12.0, 8.0)
+    # an optimizer that never matched annealing: its row stays, with no figure and no ratio
+    learn = learn | {"cmaes_seconds_to_match_anneal": None}
+    (cmaes,) = _rows(table_rows(b | {"learn": learn}, "quick"), "learn.cmaes")
+    assert cmaes["value"] is None and cmaes["ratio"] is None
     (skin,) = _rows(rows, "render.skin")
     assert skin["ratio"] == pytest.approx(
         b["render"]["lattice_ms_per_frame"] / b["render"]["skin_ms_per_frame"]
@@ -81,7 +84,8 @@ def test_papers_figures_are_rates_at_any_size_and_times_only_at_full_size(kept):
     b = kept["benches"]
     quick, full = table_rows(b, "quick"), table_rows(b, "full")
     frames = [r for r in _rows(quick, "aquarium.frames") if r["reference"] == 4.0]
-    assert len(frames) == 1 and "4 frames/sec" in frames[0]["source"]
+    assert len(frames) == 1 and frames[0]["source"] == PAPERS["tank"].source
+    assert "4 frames/sec" in PAPERS["tank"].quote
     assert frames[0]["value"] == pytest.approx(b["aquarium"]["realtime_factor"] / 0.05)
     (san,) = _rows(quick, "san.search")
     assert san["reference"] == pytest.approx(1200 / 21600)  # 001: 6 hours for 200 walkers
@@ -98,7 +102,12 @@ def test_counts_have_no_ratio_and_a_cpu_host_says_no_gpu(kept):
     (gpu,) = _rows(rows, "jax.gpu")
     assert gpu["value"] == "no GPU" and gpu["ratio"] is None
     (cpu,) = _rows(rows, "jax.cpu")
-    assert cpu["value"] == kept["benches"]["jax"]["sim_seconds_per_second_batched"]
+    assert cpu["value"] == kept["benches"]["jax"]["jax"]["sim_seconds_per_second_batched"]
+    on_gpu = {"jax": {"backend": "gpu", "sim_seconds_per_second_batched": 9e5}}
+    on_cpu = {"jax": {"backend": "cpu", "sim_seconds_per_second_batched": 2e3}}
+    both = kept["benches"] | {"jax": on_gpu, "jax-cpu": on_cpu}
+    rows = table_rows(both, "quick")
+    assert [r["value"] for r in _rows(rows, "jax.gpu") + _rows(rows, "jax.cpu")] == [9e5, 2e3]
 
 
 def test_a_saved_reference_is_the_next_tables_previous_figure(kept, tmp_path):
@@ -126,7 +135,8 @@ def test_run_all_runs_each_bench_once_and_jax_again_on_the_cpu_beside_a_gpu():
 
     def runner(argv, quick, env=None):
         calls.append((argv, quick, env))
-        return {"backend": "gpu"} if argv == ("jax",) and env is None else {"ok": 1}
+        gpu = argv == ("jax",) and env is None
+        return {"jax": {"backend": "gpu"}} if gpu else {"ok": 1}
 
     got = run_all(True, ("simulate", "jax"), runner=runner)
     assert set(got) == {"simulate", "jax", "jax-cpu"}
@@ -146,7 +156,8 @@ def test_bench_all_prints_the_table_of_a_kept_run_and_names_failures(kept, tmp_p
     argv = ["bench", "all", "--from", str(path), "--reference", str(ref)]
     assert main([*argv, "--save-reference"]) == 0
     first = capsys.readouterr().out
-    assert "shark batched (all cores), sim-s/s" in first and "NumPy reference" in first
+    assert "shark batched, all cores" in first and "NumPy reference" in first
+    assert PAPERS["san"].quote in first  # the paper quoted under the table it is cited in
     assert "bench ray failed: exit 1: no module named ray" in first
     assert main([*argv, "--json"]) == 0
     table = json.loads(capsys.readouterr().out)

@@ -38,7 +38,7 @@ PAPERS = {
     ),
     "tank": Paper(
         4.0,
-        "paper 003, SGI R4400 Indigo2 Extreme",
+        "paper 003, SGI Indigo2, drawn",
         "'10 fishes, 15 food particles, and 5 static obstacles at about 4 frames/sec "
         "(with wireframe rendering)'",
     ),
@@ -50,7 +50,7 @@ class Figure:
     """One figure of the table. ``value(results)`` reads it from ``{bench key: its JSON}``
     (None: not measured); ``baseline`` the same run's side-by-side reference; ``higher``
     whether more is faster (a rate) or less (a time); ``sized``: a time for a fixed amount of
-    work, compared with the paper's only at full sizes; ``always``: a row even when missing."""
+    work, compared with the paper's only at full sizes."""
 
     key: str
     label: str
@@ -61,7 +61,11 @@ class Figure:
     baseline_label: str = ""
     paper: Paper | None = None
     sized: bool = False
-    always: bool = False
+
+    @property
+    def bench(self) -> str:
+        """The key of the benchmark whose JSON holds the figure: its key's first part."""
+        return self.key.split(".")[0]
 
 
 def at(bench: str, *path: str) -> Callable[[dict], Any]:
@@ -108,7 +112,9 @@ def _jax_on(device: str) -> Callable[[dict], Any]:
     """The JAX bench's sim-s/s on the CPU or a GPU ("no GPU" when JAX ran on the CPU only)."""
 
     def read(results: dict) -> Any:
-        run, cpu = results.get("jax") or {}, results.get("jax-cpu")
+        # zoetic bench jax prints {"jax": its figures, "numba": ... with --numba}
+        run = (results.get("jax") or {}).get("jax") or {}
+        cpu = (results.get("jax-cpu") or {}).get("jax")
         on_cpu = run.get("backend", "cpu") == "cpu"
         if device == "cpu":
             run = cpu if cpu is not None else run if on_cpu else {}
@@ -135,7 +141,7 @@ ANNEAL = at("learn", "anneal_seconds")
 FIGURES: tuple[Figure, ...] = (
     Figure(
         "simulate.batched",
-        "shark batched (all cores), sim-s/s",
+        "shark batched, all cores",
         "sim-s/s",
         NUMBA,
         baseline=at("simulate", "numpy_reference_sim_seconds_per_second"),
@@ -143,13 +149,13 @@ FIGURES: tuple[Figure, ...] = (
     ),
     Figure(
         "simulate.single",
-        "shark, one candidate, sim-s/s",
+        "shark, one candidate",
         "sim-s/s",
         at("simulate", "sim_seconds_per_second_single"),
     ),
     Figure(
         "learn.anneal",
-        "anneal, the paper's 3500 evaluations (quick: 300)",
+        "anneal, 3500 evaluations (quick 300)",
         "s",
         ANNEAL,
         higher=False,
@@ -185,7 +191,7 @@ FIGURES: tuple[Figure, ...] = (
     ),
     Figure(
         "train.demo",
-        "zoetic demo's learning, 8000 evaluations (quick: 400)",
+        "demo learning, 8000 evals (quick 400)",
         "s",
         at("train", "demo_learning_seconds"),
         higher=False,
@@ -193,7 +199,7 @@ FIGURES: tuple[Figure, ...] = (
     ),
     Figure(
         "train.repertoire",
-        "zoetic repertoire train shark (quick: 150 per entry)",
+        "repertoire train shark (quick 150/entry)",
         "s",
         at("train", "repertoire_train_seconds"),
         higher=False,
@@ -201,7 +207,7 @@ FIGURES: tuple[Figure, ...] = (
     ),
     Figure(
         "skills.wall",
-        "bench skills: all skills learned",
+        "skills: learning them all",
         "s",
         total("skills", "learn_wall_s"),
         higher=False,
@@ -209,22 +215,22 @@ FIGURES: tuple[Figure, ...] = (
     ),
     Figure(
         "skills.beats",
-        "bench skills: learned beats hand-made",
+        "skills: learned beats hand-made",
         "",
         count("skills", "learned_beats_hand_made"),
     ),
     Figure(
         "stunts.slowest",
-        "slowest stunt, defaults",
+        "slowest stunt (quick: 100 plans)",
         "s",
         _slowest_trick,
         higher=False,
         sized=True,
     ),
-    Figure("stunts.success", "stunts that met their targets", "", count("stunts", "success")),
+    Figure("stunts.success", "stunts meeting their targets", "", count("stunts", "success")),
     Figure(
         "aquarium.realtime",
-        "aquarium, 10 fishes, oracle",
+        "aquarium 10 fishes, oracle",
         "x real time",
         at("aquarium", "realtime_factor"),
         baseline=at("aquarium", "physics_only_realtime_factor"),
@@ -232,21 +238,21 @@ FIGURES: tuple[Figure, ...] = (
     ),
     Figure(
         "aquarium.frames",
-        f"aquarium, 10 fishes: frames/s (a frame {AQUARIUM_FRAME_S:g} sim-s, no drawing)",
+        f"aquarium 10 fishes, frame = {AQUARIUM_FRAME_S:g} sim-s",
         "frames/s",
         _tank_frames,
         paper=PAPERS["tank"],
     ),
     Figure(
-        "aquarium60.realtime",
-        "aquarium, 60 fishes, oracle",
+        "aquarium-60.realtime",
+        "aquarium 60 fishes, oracle",
         "x real time",
         at("aquarium-60", "realtime_factor"),
         baseline=at("aquarium-60", "physics_only_realtime_factor"),
         baseline_label="its physics alone, this run",
     ),
     Figure(
-        "aquarium_vision.realtime",
+        "aquarium-vision.realtime",
         "aquarium, one seeing predator",
         "x real time",
         at("aquarium-vision", "realtime_factor"),
@@ -254,8 +260,8 @@ FIGURES: tuple[Figure, ...] = (
         baseline_label="oracle tank, this run",
     ),
     Figure(
-        "aquarium_learned.realtime",
-        "aquarium, 10 fishes, learned motor skills",
+        "aquarium-skills.learned",
+        "aquarium 10 fishes, learned skills",
         "x real time",
         at("aquarium-skills", "learned", "realtime_factor"),
         baseline=at("aquarium-skills", "built-in", "realtime_factor"),
@@ -263,7 +269,7 @@ FIGURES: tuple[Figure, ...] = (
     ),
     Figure(
         "jax.cpu",
-        "JAX on CPU, sim-s/s",
+        "JAX on CPU",
         "sim-s/s",
         _jax_on("cpu"),
         baseline=NUMBA,
@@ -271,23 +277,23 @@ FIGURES: tuple[Figure, ...] = (
     ),
     Figure(
         "jax.gpu",
-        "JAX on a GPU, sim-s/s",
+        "JAX on a GPU",
         "sim-s/s",
         _jax_on("gpu"),
         baseline=NUMBA,
         baseline_label="Numba kernel (CPU), this run",
     ),
-    Figure("jax.compile", "JAX compile", "s", at("jax", "compile_seconds"), higher=False),
+    Figure("jax.compile", "JAX compile", "s", at("jax", "jax", "compile_seconds"), higher=False),
     Figure(
         "san.search",
-        "SAN phase-1 search, walker, sim-s/s",
+        "SAN search, walker",
         "sim-s/s",
         at("san", "simulated_seconds_per_second"),
         paper=PAPERS["san"],
     ),
     Figure(
         "ray.generation",
-        "Ray, local: s per generation",
+        "Ray (local), per generation",
         "s",
         at("ray", "ray_s_per_generation"),
         higher=False,
@@ -296,7 +302,7 @@ FIGURES: tuple[Figure, ...] = (
     ),
     Figure(
         "gym.native",
-        "gym native vector env, env steps/s",
+        "gym native vector env",
         "steps/s",
         at("gym", "native_env_steps_per_second"),
         baseline=at("gym", "sync_env_steps_per_second"),
@@ -304,15 +310,15 @@ FIGURES: tuple[Figure, ...] = (
     ),
     Figure(
         "vision.retina",
-        "retina frames/s (2 eyes)",
+        "retina, 2 eyes",
         "frames/s",
         at("vision", "retina_frames_per_second"),
     ),
-    Figure("vision.loop", "pursuit loop frames/s", "frames/s", at("vision", "frames_per_second")),
-    Figure("track.reached", "tracking courses: targets reached", "", at("track", "reached")),
+    Figure("vision.loop", "pursuit loop", "frames/s", at("vision", "frames_per_second")),
+    Figure("track.reached", "tracking: targets reached", "", at("track", "reached")),
     Figure(
         "track.wall",
-        "tracking courses: wall",
+        "tracking: wall",
         "s",
         at("track", "tracking_wall_s"),
         higher=False,
@@ -330,6 +336,12 @@ FIGURES: tuple[Figure, ...] = (
 )
 
 
+def _short(command: str, width: int = 32) -> str:
+    """A README command for the table's figure column: without ``zoetic``, cut at ``width``."""
+    text = command.removeprefix("zoetic ")
+    return text if len(text) <= width else text[: width - 1] + "…"
+
+
 def readme_figures(results: dict) -> list[Figure]:
     """One figure per README command that ``bench readme`` timed: its CPU seconds beside the
     time the README states."""
@@ -337,7 +349,7 @@ def readme_figures(results: dict) -> list[Figure]:
     return [
         Figure(
             f"readme.{row['command']}",
-            f"README: {row['command']}",
+            f"README: {_short(row['command'])}",
             "s CPU",
             lambda _, row=row: row["cpu_s"],
             higher=False,

@@ -88,7 +88,7 @@ def run_all(
         results[bench.key] = runner(bench.argv, quick)
         if on_done:
             on_done(bench.key, results[bench.key], time.perf_counter() - t0)
-        if bench.key == "jax" and results["jax"].get("backend", "cpu") != "cpu":
+        if bench.key == "jax" and results["jax"].get("jax", {}).get("backend", "cpu") != "cpu":
             t0 = time.perf_counter()
             results["jax-cpu"] = runner(bench.argv, quick, CPU_ONLY)
             if on_done:
@@ -110,16 +110,18 @@ def ratio(value, reference, higher_is_better: bool) -> float | None:
 
 def figure_rows(fig: Figure, results: dict, mode: str, previous: dict) -> list[dict]:
     """The table's rows of one figure: one per reference (a row without one when it has
-    none); empty when the figure's benchmark was not run."""
+    none); empty when the figure's benchmark did not run or failed (its value None: the
+    benchmark ran and measured nothing, e.g. an optimizer that never matched annealing)."""
     value = fig.value(results)
-    if value is None and not fig.always:
+    ran = "error" not in results.get(fig.bench, {"error": "not run"})
+    if value is None and not ran:
         return []
     refs = []
     base = fig.baseline(results) if fig.baseline else None
     if base is not None:
         refs.append((base, fig.baseline_label))
     if fig.paper and (mode == "full" or not fig.sized):
-        refs.append((fig.paper.value, f"{fig.paper.source}: {fig.paper.quote}"))
+        refs.append((fig.paper.value, fig.paper.source))
     prev = previous.get(mode, {}).get(fig.key)
     if prev is not None:
         refs.append((prev["value"], f"previous: {prev['host']}, {prev['date']}, {prev['commit']}"))

@@ -222,9 +222,13 @@ def bench_all_cmd(
 def print_table(rows: list[dict], mode: str, kept: dict) -> None:
     """The figures for people: figure | this run | reference | ratio | source, one figure's
     further references on the lines under it."""
+    from rich.console import Console
     from rich.table import Table
 
+    from zoetic.bench.figures import PAPERS
     from zoetic.cli.output import console, number
+
+    out = console if console.is_terminal else Console(width=150)  # a file: one line a row
 
     def show(v, unit: str = "") -> str:
         text = v if isinstance(v, str) else "-" if v is None else number(float(v))
@@ -247,4 +251,11 @@ def print_table(rows: list[dict], mode: str, kept: dict) -> None:
             "-" if row["ratio"] is None else f"{number(row['ratio'])}x",
             row["source"],
         )
-    console.print(table)
+    out.print(table)
+    if mode == "quick":
+        out.print("quick: small sizes, a look and not a record; times of a fixed amount of work")
+        out.print("  are compared with the papers' only by a full run (zoetic bench all)")
+    cited = {row["source"] for row in rows}
+    for paper in PAPERS.values():
+        if paper.source in cited:
+            out.print(f"{paper.source}: {paper.quote}", highlight=False)
