@@ -169,3 +169,13 @@ def test_bench_all_prints_the_table_of_a_kept_run_and_names_failures(kept, tmp_p
     }
     assert main(["bench", "all", "--only", "simulat"]) == 2
     assert "no such benchmark" in capsys.readouterr().err
+
+
+def test_the_kept_reference_names_only_figures_of_the_table():
+    kept = json.loads((Path(__file__).parents[1] / "bench" / "reference.json").read_text())
+    known = {f.key for f in FIGURES}
+    for mode, figures in kept.items():
+        assert mode in ("quick", "full")
+        for key, fig in figures.items():
+            assert key in known or key.startswith("readme."), key
+            assert {"value", "host", "date", "commit"} <= set(fig), key

@@ -165,7 +165,8 @@ def save_reference(path: Path, rows: list[dict], mode: str, stamp: dict) -> dict
 
 
 def stamp() -> dict:
-    """Where and when this run measured: the CPU (and its cores), the UTC date, the commit."""
+    """Where and when this run measured: the CPU (and its cores), the UTC date, the commit,
+    and the host's load (1-minute average) as it started: a busy host's figures are low."""
     from zoetic.bench.simulate import host_cpu
 
     cpu = host_cpu()
@@ -179,4 +180,5 @@ def stamp() -> dict:
         "host": f"{cpu['cpu']} x{os.cpu_count()} ({cpu['simd_float32_lanes']} lanes)",
         "date": time.strftime("%Y-%m-%d", time.gmtime()),
         "commit": commit or "unknown",
+        "load_1min": round(os.getloadavg()[0], 1),
     }

@@ -200,8 +200,9 @@ def bench_all_cmd(
             state = f"failed: {result['error']}" if "error" in result else "done"
             err_console.print(f"bench {key}: {state} ({wall:.0f} s)", highlight=False)
 
+        where = stamp()
         found = run_all(quick, tuple(only or ()), said)
-        kept = {"mode": mode, **stamp(), "benches": found}
+        kept = {"mode": mode, **where, "benches": found}
         out = results or Path("runs/bench") / f"results-{mode}.json"
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(jsonlib.dumps(kept, indent=1) + "\n", encoding="utf-8")
@@ -234,8 +235,11 @@ def print_table(rows: list[dict], mode: str, kept: dict) -> None:
         text = v if isinstance(v, str) else "-" if v is None else number(float(v))
         return f"{text} {unit}".rstrip() if isinstance(v, int | float) else text
 
-    title = f"zoetic bench all ({mode}): {kept.get('host', '?')}, {kept.get('date', '?')}, "
-    table = Table(title=title + f"commit {kept.get('commit', '?')}", title_justify="left")
+    title = (
+        f"zoetic bench all ({mode}): {kept.get('host', '?')}, load {kept.get('load_1min', '?')}"
+        f" at the start, {kept.get('date', '?')}, commit {kept.get('commit', '?')}"
+    )
+    table = Table(title=title, title_justify="left")
     for name, justify in (("figure", "left"), ("this run", "right"), ("reference", "right")):
         table.add_column(name, justify=justify)
     table.add_column("x faster", justify="right")
