@@ -138,8 +138,8 @@ def test_run_all_runs_each_bench_once_and_jax_again_on_the_cpu_beside_a_gpu():
         gpu = argv == ("jax",) and env is None
         return {"jax": {"backend": "gpu"}} if gpu else {"ok": 1}
 
-    got = run_all(True, ("simulate", "jax"), runner=runner)
-    assert set(got) == {"simulate", "jax", "jax-cpu"}
+    got, timings = run_all(True, ("simulate", "jax"), runner=runner)
+    assert set(got) == set(timings) == {"simulate", "jax", "jax-cpu"}
     assert calls == [
         (("simulate",), True, None),
         (("jax",), True, None),

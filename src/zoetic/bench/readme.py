@@ -108,7 +108,8 @@ def read_readme(path: Path) -> list[Block]:
     return blocks(path.read_text(encoding="utf-8"))
 
 
-def _children_cpu_s() -> float:
+def children_cpu_s() -> float:
+    """CPU seconds (user + system) of this process's finished child processes so far."""
     use = resource.getrusage(resource.RUSAGE_CHILDREN)
     return use.ru_utime + use.ru_stime
 
@@ -147,14 +148,14 @@ def bench_readme(
     with tempfile.TemporaryDirectory(prefix="zoetic-readme-") as tmp:
         for commands in todo:
             for cmd in commands:
-                t0, cpu0 = time.perf_counter(), _children_cpu_s()
+                t0, cpu0 = time.perf_counter(), children_cpu_s()
                 done = subprocess.run(
                     [sys.executable, "-m", "zoetic", *cmd.argv[1:]],
                     cwd=tmp,
                     capture_output=True,
                     text=True,
                 )
-                wall, cpu = time.perf_counter() - t0, _children_cpu_s() - cpu0
+                wall, cpu = time.perf_counter() - t0, children_cpu_s() - cpu0
                 if done.returncode != 0:
                     raise ZoeticError(
                         f"{path}:{cmd.line}: `{cmd.text}` failed ({done.returncode}): "

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from zoetic.bench.figures import FIGURES, Figure, readme_figures
+from zoetic.bench.readme import children_cpu_s
 
 
 @dataclass(frozen=True)
@@ -74,26 +75,33 @@ def run_bench(argv: tuple[str, ...], quick: bool, env: dict | None = None) -> di
 def run_all(
     quick: bool,
     only: tuple[str, ...] | None = None,
-    on_done: Callable[[str, dict, float], None] | None = None,
+    on_done: Callable[[str, dict, dict], None] | None = None,
     runner: Callable[..., dict] = run_bench,
-) -> dict:
-    """Run every benchmark (``only``: those keys) and return ``{key: its JSON}``; ``on_done``
-    sees each key, result and wall seconds as it finishes. On a host where JAX runs on a GPU,
-    ``jax`` is that run and ``jax-cpu`` the same bench on the CPU."""
+) -> tuple[dict, dict]:
+    """Run every benchmark (``only``: those keys); return ``{key: its JSON}`` and
+    ``{key: {"wall_s", "cpu_s"}}`` (its process's CPU time, which a busy host hardly
+    changes); ``on_done`` sees each key, result and timing as it finishes. On a host where JAX
+    runs on a GPU, ``jax`` is that run and ``jax-cpu`` the same bench on the CPU."""
     results: dict = {}
+    timings: dict = {}
+
+    def one(key: str, argv: tuple[str, ...], env: dict | None = None) -> None:
+        t0, cpu0 = time.perf_counter(), children_cpu_s()
+        results[key] = runner(argv, quick) if env is None else runner(argv, quick, env)
+        timings[key] = {
+            "wall_s": round(time.perf_counter() - t0, 1),
+            "cpu_s": round(children_cpu_s() - cpu0, 1),
+        }
+        if on_done:
+            on_done(key, results[key], timings[key])
+
     for bench in BENCHES:
         if only and bench.key not in only:
             continue
-        t0 = time.perf_counter()
-        results[bench.key] = runner(bench.argv, quick)
-        if on_done:
-            on_done(bench.key, results[bench.key], time.perf_counter() - t0)
+        one(bench.key, bench.argv)
         if bench.key == "jax" and results["jax"].get("jax", {}).get("backend", "cpu") != "cpu":
-            t0 = time.perf_counter()
-            results["jax-cpu"] = runner(bench.argv, quick, CPU_ONLY)
-            if on_done:
-                on_done("jax-cpu", results["jax-cpu"], time.perf_counter() - t0)
-    return results
+            one("jax-cpu", bench.argv, CPU_ONLY)
+    return results, timings
 
 
 def is_number(v) -> bool:

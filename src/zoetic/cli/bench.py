@@ -194,15 +194,18 @@ def bench_all_cmd(
     else:
         mode = "quick" if quick else "full"
 
-        def said(key: str, result: dict, wall: float) -> None:
+        def said(key: str, result: dict, took: dict) -> None:
             if lines:
                 print(jsonlib.dumps(result), flush=True)
             state = f"failed: {result['error']}" if "error" in result else "done"
-            err_console.print(f"bench {key}: {state} ({wall:.0f} s)", highlight=False)
+            err_console.print(
+                f"bench {key}: {state} ({took['wall_s']:.0f} s wall, {took['cpu_s']:.0f} s CPU)",
+                highlight=False,
+            )
 
         where = stamp()
-        found = run_all(quick, tuple(only or ()), said)
-        kept = {"mode": mode, **where, "benches": found}
+        found, timings = run_all(quick, tuple(only or ()), said)
+        kept = {"mode": mode, **where, "benches": found, "timings": timings}
         out = results or Path("runs/bench") / f"results-{mode}.json"
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(jsonlib.dumps(kept, indent=1) + "\n", encoding="utf-8")
@@ -256,6 +259,10 @@ def print_table(rows: list[dict], mode: str, kept: dict) -> None:
             row["source"],
         )
     out.print(table)
+    took = kept.get("timings") or {}
+    if took:
+        wall, cpu = (sum(t[k] for t in took.values()) for k in ("wall_s", "cpu_s"))
+        out.print(f"{len(took)} benchmarks: {wall:.0f} s wall, {cpu:.0f} s CPU in all")
     if mode == "quick":
         out.print("quick: small sizes, a look and not a record; times of a fixed amount of work")
         out.print("  are compared with the papers' only by a full run (zoetic bench all)")
