@@ -179,3 +179,17 @@ def test_the_kept_reference_names_only_figures_of_the_table():
         for key, fig in figures.items():
             assert key in known or key.startswith("readme."), key
             assert {"value", "host", "date", "commit"} <= set(fig), key
+
+
+def test_bad_results_and_reference_files_are_one_message_naming_them(kept, tmp_path, capsys):
+    path = tmp_path / "results.json"
+    path.write_text(json.dumps([1, 2]))
+    assert main(["bench", "all", "--from", str(path)]) == 2
+    assert "results.json: not the results of zoetic bench all" in capsys.readouterr().err
+    path.write_text(json.dumps(kept))
+    ref = tmp_path / "ref.json"
+    ref.write_text(json.dumps({"full": {"simulate.batched": {"value": 1.0}}}))
+    assert main(["bench", "all", "--from", str(path), "--reference", str(ref)]) == 2
+    err = capsys.readouterr().err
+    assert "ref.json: full.simulate.batched: needs value, host, date and commit" in err
+    assert "Traceback" not in err

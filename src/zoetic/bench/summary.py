@@ -155,9 +155,17 @@ def load_reference(path: Path) -> dict:
     or none when it does not exist."""
     if not path.is_file():
         return {}
+    from zoetic.errors import ZoeticError
     from zoetic.io import load_json
 
-    return load_json(path, "bench reference file")
+    kept = load_json(path, "bench reference file")
+    for mode, figures in kept.items() if isinstance(kept, dict) else [("", None)]:
+        if mode not in ("quick", "full") or not isinstance(figures, dict):
+            raise ZoeticError(f"{path}: expected {{'quick'|'full': {{figure: ...}}}}, got {mode!r}")
+        for key, fig in figures.items():
+            if not isinstance(fig, dict) or not {"value", "host", "date", "commit"} <= set(fig):
+                raise ZoeticError(f"{path}: {mode}.{key}: needs value, host, date and commit")
+    return kept
 
 
 def save_reference(path: Path, rows: list[dict], mode: str, stamp: dict) -> dict:

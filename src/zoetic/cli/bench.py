@@ -190,7 +190,10 @@ def bench_all_cmd(
             raise ZoeticError(f"--only {key}: no such benchmark; one of {', '.join(sorted(keys))}")
     if table_of is not None:
         kept = load_json(table_of, "bench results file")
-        mode, found = kept.get("mode", "full"), kept.get("benches", {})
+        ok = isinstance(kept, dict) and isinstance(kept.get("benches"), dict)
+        if not ok or kept.get("mode") not in ("quick", "full"):
+            raise ZoeticError(f"{table_of}: not the results of zoetic bench all (mode, benches)")
+        mode, found = kept["mode"], kept["benches"]
     else:
         mode = "quick" if quick else "full"
 
@@ -213,7 +216,7 @@ def bench_all_cmd(
     if save_reference:
         from zoetic.bench.summary import save_reference as keep
 
-        keep(reference, rows, mode, {k: kept[k] for k in ("host", "date", "commit")})
+        keep(reference, rows, mode, {k: kept.get(k, "?") for k in ("host", "date", "commit")})
     if json:
         emit({"mode": mode, "rows": rows}, True)
     else:
