@@ -160,7 +160,9 @@ def bench_train_cmd(
 @bench_app.command("all")
 def bench_all_cmd(
     quick: Quick = False,
-    only: list[str] = typer.Option(None, help="Run only these benchmarks (keys of the table)."),
+    only: list[str] = typer.Option(
+        None, help="Run only this benchmark (repeatable; a wrong name lists them)."
+    ),
     lines: bool = typer.Option(False, "--lines", help="Also print each benchmark's JSON line."),
     results: Path = typer.Option(
         None, help="Where to keep every benchmark's JSON (default runs/bench/results-MODE.json)."
