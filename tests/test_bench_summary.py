@@ -193,3 +193,19 @@ def test_bad_results_and_reference_files_are_one_message_naming_them(kept, tmp_p
     err = capsys.readouterr().err
     assert "ref.json: full.simulate.batched: needs value, host, date and commit" in err
     assert "Traceback" not in err
+
+
+def test_the_quick_readme_bench_runs_each_block_up_to_its_first_long_command():
+    from zoetic.bench.readme import QUICK_BLOCK_S, Block, commands_within
+
+    lines = [
+        "zoetic animals",
+        "zoetic pursue  # [~11 s]",
+        "zoetic demo  # [~2 min]",
+        "zoetic tasks",
+    ]
+    text = "\n".join(lines)
+    commands = Block("sh", text, "S", False, 1).commands()
+    kept = commands_within(commands, QUICK_BLOCK_S)
+    assert [c.argv[1] for c in kept] == ["animals", "pursue"]  # later ones may need demo's run
+    assert commands_within(commands, None) == commands

@@ -114,7 +114,7 @@ def children_cpu_s() -> float:
     return use.ru_utime + use.ru_stime
 
 
-def _upto(commands: list[Command], cap: float | None) -> list[Command]:
+def commands_within(commands: list[Command], cap: float | None) -> list[Command]:
     """The commands before the first that states more than ``cap`` CPU seconds (None: all);
     a block's commands only need the ones before them, so the prefix runs as written."""
     if cap is None:
@@ -138,7 +138,7 @@ def bench_readme(
     times include starting Python and loading the compiled kernels from their cache.
     ``on_row(row)`` sees each row as soon as it is measured."""
     todo = [
-        _upto(b.commands(str(path)), max_stated_s)
+        commands_within(b.commands(str(path)), max_stated_s)
         for b in read_readme(path)
         if b.lang == "sh"
         and (sections is None or b.section in sections)
