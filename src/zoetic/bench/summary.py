@@ -125,7 +125,7 @@ def figure_rows(fig: Figure, results: dict, mode: str, previous: dict) -> list[d
     if value is None and not ran:
         return []
     refs = []
-    base = fig.baseline(results) if fig.baseline else None
+    base = fig.baseline(results) if fig.baseline and not isinstance(value, str) else None
     if base is not None:
         refs.append((base, fig.baseline_label))
     if fig.paper and (mode == "full" or not fig.sized):
