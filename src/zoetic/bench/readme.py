@@ -30,6 +30,7 @@ from zoetic.errors import ZoeticError
 MARK = re.compile(r"\[~(\d+(?:\.\d+)?) (s|min)\]")
 SLOW = "<!-- test: slow -->"
 QUICK_START = "Quick start"
+QUICK_BLOCK_S = 12.0  # --quick: each block's commands up to the first stated over this (CPU s)
 
 
 @dataclass(frozen=True)
@@ -107,15 +108,29 @@ def read_readme(path: Path) -> list[Block]:
     return blocks(path.read_text(encoding="utf-8"))
 
 
-def _children_cpu_s() -> float:
+def children_cpu_s() -> float:
+    """CPU seconds (user + system) of this process's finished child processes so far."""
     use = resource.getrusage(resource.RUSAGE_CHILDREN)
     return use.ru_utime + use.ru_stime
 
 
+def commands_within(commands: list[Command], cap: float | None) -> list[Command]:
+    """The commands before the first that states more than ``cap`` CPU seconds (None: all);
+    a block's commands only need the ones before them, so the prefix runs as written."""
+    if cap is None:
+        return commands
+    over = [k for k, c in enumerate(commands) if c.stated_s is not None and c.stated_s > cap]
+    return commands[: over[0]] if over else commands
+
+
 def bench_readme(
-    path: Path, sections: tuple[str, ...] | None = (QUICK_START,), on_row=None
+    path: Path,
+    sections: tuple[str, ...] | None = (QUICK_START,),
+    on_row=None,
+    max_stated_s: float | None = None,
 ) -> dict:
     """Run the blocks of ``sections`` (None: all) that time a command; time each command.
+    ``max_stated_s``: run each block only up to its first command stated over this.
 
     Every command of those blocks gets a row (``stated_s`` is None where the README states no
     time), so a command that has grown slow shows up too.
@@ -123,7 +138,7 @@ def bench_readme(
     times include starting Python and loading the compiled kernels from their cache.
     ``on_row(row)`` sees each row as soon as it is measured."""
     todo = [
-        b
+        commands_within(b.commands(str(path)), max_stated_s)
         for b in read_readme(path)
         if b.lang == "sh"
         and (sections is None or b.section in sections)
@@ -131,16 +146,16 @@ def bench_readme(
     ]
     rows = []
     with tempfile.TemporaryDirectory(prefix="zoetic-readme-") as tmp:
-        for block in todo:
-            for cmd in block.commands(str(path)):
-                t0, cpu0 = time.perf_counter(), _children_cpu_s()
+        for commands in todo:
+            for cmd in commands:
+                t0, cpu0 = time.perf_counter(), children_cpu_s()
                 done = subprocess.run(
                     [sys.executable, "-m", "zoetic", *cmd.argv[1:]],
                     cwd=tmp,
                     capture_output=True,
                     text=True,
                 )
-                wall, cpu = time.perf_counter() - t0, _children_cpu_s() - cpu0
+                wall, cpu = time.perf_counter() - t0, children_cpu_s() - cpu0
                 if done.returncode != 0:
                     raise ZoeticError(
                         f"{path}:{cmd.line}: `{cmd.text}` failed ({done.returncode}): "

@@ -7,8 +7,8 @@ from pathlib import Path
 import typer
 
 from zoetic.cli.apps import app
-from zoetic.cli.bench import bench_app
-from zoetic.cli.options import Force, Json
+from zoetic.cli.bench import bench_app, capped
+from zoetic.cli.options import Force, Json, Quick
 from zoetic.cli.output import console, emit
 
 
@@ -148,10 +148,12 @@ def bench_aquarium_cmd(
         "species files'.",
     ),
     json: Json = False,
+    quick: Quick = False,
 ) -> None:
     """Realtime factor of a tank (oracle perception, or animat vision for one predator),
     against its physics alone."""
     from zoetic.bench.aquarium import bench_aquarium
 
     pred = None if predator_skills is None else str(predator_skills)
+    seconds = capped(quick, seconds, 5.0)
     emit(bench_aquarium(fishes, food, obstacles, seconds, seed, perception, pred, skills), json)

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import typer
 
-from zoetic.cli.bench import bench_app
-from zoetic.cli.options import Json
+from zoetic.cli.bench import bench_app, capped
+from zoetic.cli.options import Json, Quick
 from zoetic.cli.output import emit
 
 
@@ -16,8 +16,10 @@ def bench_ray_cmd(
     generations: int = typer.Option(5, min=1),
     actors: int = typer.Option(None, min=1, help="Ray actors (default: one per core)."),
     json: Json = False,
+    quick: Quick = False,
 ) -> None:
     """Seconds per generation on a local Ray against in-process batches, side by side."""
     from zoetic.bench.ray import bench_ray
 
+    population, generations = capped(quick, population, 16), capped(quick, generations, 2)
     emit(bench_ray(animal, "swim-straight", population, generations, actors), json)

@@ -9,9 +9,10 @@ from pathlib import Path
 import typer
 
 from zoetic.cli.apps import app
-from zoetic.cli.bench import bench_app
-from zoetic.cli.options import Animal, Force, Json, Seed, given, use_ray_address
+from zoetic.cli.bench import bench_app, capped
+from zoetic.cli.options import Animal, Force, Json, Quick, Seed, given, use_ray_address
 from zoetic.cli.output import console, emit, interrupted, print_summary, progress_bar
+from zoetic.learning.config import DEMO_BUDGET, demo_config
 from zoetic.outdir import check_out_dir, prepare_out
 
 
@@ -224,27 +225,19 @@ def demo_banner(config) -> str:
 @app.command()
 def demo(
     out: Path = typer.Option(Path("runs/demo"), help="Where to write the demo run."),
-    budget: int = typer.Option(8000, min=16, max=10_000_000, help="Evaluations to spend."),
+    budget: int = typer.Option(DEMO_BUDGET, min=16, max=10_000_000, help="Evaluations to spend."),
     seed: int = typer.Option(0),
     video: bool = typer.Option(True),
 ) -> None:
     """A shark learns to swim from scratch (CMA-ES, 40 nodes per muscle); runs/demo."""
-    from zoetic.learning.run import LearnConfig, Run
+    from zoetic.learning.run import Run
     from zoetic.runs import clear_demo, finish_run, mark_demo
     from zoetic.viz.media import learning_media
 
     check_out_dir(out)
     clear_demo(out)  # only what an earlier demo made; anything else stays
     before = {p.name for p in out.iterdir()} if out.is_dir() else set()
-    config = LearnConfig(
-        animal="shark",
-        task="swim-straight",
-        optimizer="cmaes",
-        budget=budget,
-        seed=seed,
-        popsize=24,
-        nodes=40,
-    )
+    config = demo_config(budget, seed)
     console.print(demo_banner(config))
     run = Run.create(out, config)
     try:
@@ -259,11 +252,12 @@ def demo(
 def bench_learn_cmd(
     budget: int = typer.Option(3500, min=10),
     json: Json = False,
+    quick: Quick = False,
 ) -> None:
     """Annealing's wall time for the paper's budget, and how fast CMA-ES/gradient match it."""
     from zoetic.bench.learn import bench_learn
 
-    emit(bench_learn(budget), json)
+    emit(bench_learn(capped(quick, budget, 300), max_seconds=capped(quick, 60.0, 10.0)), json)
 
 
 @bench_app.command("skills")
@@ -272,8 +266,12 @@ def bench_skills_cmd(
     budget: int = typer.Option(None, min=10, help="Evaluations per skill (default: learn's)."),
     seed: int = typer.Option(0),
     json: Json = False,
+    quick: Quick = False,
 ) -> None:
-    """Learn each basic skill with defaults; print it beside the hand-made entry, and the time."""
+    """Learn each basic skill with defaults; print it beside the hand-made entry, and the time.
+    --quick: the shark alone, 150 evaluations per skill."""
     from zoetic.bench.skills import bench_skills
 
+    if quick:
+        animal, budget = animal or ["shark"], capped(quick, budget or 150, 150)
     emit(bench_skills(animal or None, budget, seed), json)

@@ -50,6 +50,15 @@ Workers = Annotated[int, typer.Option(min=1, help="Worker processes (default: al
 Json = Annotated[bool, typer.Option("--json", help="Print one JSON object.")]
 """Whether a benchmark prints one JSON object instead of aligned lines."""
 
+Quick = Annotated[
+    bool,
+    typer.Option(
+        "--quick",
+        help="Small sizes (caps the size options): seconds, not minutes; for a look, not a record.",
+    ),
+]
+"""Whether a benchmark runs at its small sizes (``zoetic bench all --quick`` runs them all)."""
+
 
 def use_ray_address(address: str | None) -> None:
     """Point Ray at the cluster of ``--ray-address`` (``ray.init()`` reads RAY_ADDRESS)."""

@@ -8,8 +8,17 @@ import typer
 from rich.progress import Progress
 
 from zoetic.cli.apps import app
-from zoetic.cli.bench import bench_app
-from zoetic.cli.options import Force, Json, RayAddress, Seed, Terrain, Workers, use_ray_address
+from zoetic.cli.bench import bench_app, capped
+from zoetic.cli.options import (
+    Force,
+    Json,
+    Quick,
+    RayAddress,
+    Seed,
+    Terrain,
+    Workers,
+    use_ray_address,
+)
 from zoetic.cli.output import console, emit, print_summary, progress_bar
 from zoetic.outdir import prepare_out
 
@@ -407,8 +416,9 @@ def bench_san_cmd(
     trials: int = typer.Option(200, min=1, help="Random networks."),
     workers: Workers = None,
     json: Json = False,
+    quick: Quick = False,
 ) -> None:
     """Wall time of a phase-1 search (random SANs x the creature's seconds, all cores)."""
     from zoetic.bench.san import bench_search
 
-    emit(bench_search(creature, trials, workers), json)
+    emit(bench_search(creature, capped(quick, trials, 20), workers), json)

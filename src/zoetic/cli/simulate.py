@@ -9,8 +9,8 @@ import typer
 from rich.table import Table
 
 from zoetic.cli.apps import app
-from zoetic.cli.bench import bench_app
-from zoetic.cli.options import Force, Json
+from zoetic.cli.bench import bench_app, capped
+from zoetic.cli.options import Force, Json, Quick
 from zoetic.cli.output import console, emit, print_summary
 
 
@@ -78,8 +78,10 @@ def bench_simulate_cmd(
     seconds: float = typer.Option(10.0, min=0.1),
     batch: int = typer.Option(512, min=1),
     json: Json = False,
+    quick: Quick = False,
 ) -> None:
     """Simulated seconds per second: one candidate, a batch on all cores, and NumPy."""
     from zoetic.bench.simulate import bench_simulate
 
-    emit(bench_simulate(animal, seconds, batch), json)
+    seconds, batch = capped(quick, seconds, 2.0), capped(quick, batch, 128)
+    emit(bench_simulate(animal, seconds, batch, capped(quick, 3, 2)), json)

@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from zoetic.cli.apps import app
-from zoetic.cli.bench import bench_app
+from zoetic.cli.bench import bench_app, capped, quick_memory
 from zoetic.cli.options import (
     Animal,
     Evaluator,
@@ -16,6 +16,7 @@ from zoetic.cli.options import (
     Json,
     Memory,
     Method,
+    Quick,
     RayAddress,
     RunDir,
     Seed,
@@ -239,18 +240,23 @@ def bench_stunts_cmd(
     budget: int = typer.Option(None, min=1, help="Plans per trick (default: as zoetic stunt)."),
     seed: int = typer.Option(0),
     json: Json = False,
+    quick: Quick = False,
 ) -> None:
     """Each trick discovered: its success flags against the issue's targets, what it achieved,
-    evaluations and wall time (target: each trick in <= 5 minutes on 2 cores)."""
+    evaluations and wall time (target: each trick in <= 5 minutes on 2 cores). --quick: the
+    first trick only, 100 plans, a repertoire trained with a small budget."""
     from zoetic.behavior.stunts import BUDGET
     from zoetic.bench.stunts import bench_stunts
 
+    names = [t.strip() for t in tricks.split(",") if t.strip()]
+    if quick and memory is None:
+        memory = quick_memory(animal)
     out = bench_stunts(
         animal,
         memory,
-        [t.strip() for t in tricks.split(",") if t.strip()],
+        names[:1] if quick else names,
         method,
-        budget or BUDGET,
+        capped(quick, budget or BUDGET, 100),
         seed,
     )
     emit(out, json)

@@ -31,3 +31,20 @@ class LearnConfig:
     def to_dict(self) -> dict:
         """Return the settings that are set (None left out), as config.toml's [run]."""
         return {k: v for k, v in asdict(self).items() if v is not None}
+
+
+DEMO_BUDGET = 8000  # evaluations of ``zoetic demo``
+
+
+def demo_config(budget: int = DEMO_BUDGET, seed: int = 0) -> LearnConfig:
+    """Return the learning of ``zoetic demo``: a shark learns to swim straight from scratch
+    (CMA-ES, 24 candidates a generation, 40 nodes per muscle)."""
+    return LearnConfig(
+        animal="shark",
+        task="swim-straight",
+        optimizer="cmaes",
+        budget=budget,
+        seed=seed,
+        popsize=24,
+        nodes=40,
+    )
