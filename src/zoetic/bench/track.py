@@ -27,6 +27,8 @@ COURSES = {
     "right-zigzag": "2,-2;4,0;6,-2;8,0",  # first target ahead to the right
     "dive": "3,-1,0;5,-2,2;4,-2,5",  # down 2 m while turning left
     "climb": "3,1,1;1,2,3;-1,2,2",  # up 2 m while turning back
+    "dive-behind": "-3,-1,1;-4,-1.5,3",  # down 1.5 m, the first target behind
+    "climb-right": "2,1,-2;4,1.5,-1",  # up 1.5 m, the first target ahead to the right
 }
 
 
