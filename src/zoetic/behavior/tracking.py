@@ -5,9 +5,12 @@ current state over the next interval, all entries as one batch, and keeps the on
 greatest immediate gain: the drop in its cost to go, which is the 3D distance from its centre
 of mass to the current target, plus the bearing of the target off its heading, plus a depth
 term once it is further than a band above or below the target's depth, plus an attitude term
-once it rolls or pitches past what swimming needs (less a penalty for time spent inside
-obstacle discs). When the centre of mass comes within the reaching radius of the target, in
-3D, it moves on to the next target.
+once it rolls or pitches past what swimming needs, the roll judged also where its rate at the
+end of the window leads (less a penalty for time spent inside obstacle discs). Besides each
+entry it tries the entry with the pectoral fins tilted apart either way (``righting_entries``):
+swimming leaves the body no roll stiffness and little roll damping, so a roll left by a turn
+stays or grows unless the fins roll it back. When the centre of mass comes within the
+reaching radius of the target, in 3D, it moves on to the next target.
 
 Targets are (x, y, z): x forward, z to the animal's left, both m from the origin where the
 animal starts, and y m above the depth it starts at (0: hold the start depth; negative:
@@ -18,6 +21,7 @@ length, so the recorded controller, played from rest, reproduces the tracked mot
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -27,7 +31,7 @@ import numpy as np
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.bodies import Body
 from zoetic.control import Controller
-from zoetic.control.abstract import SequenceController
+from zoetic.control.abstract import AbstractController, SequenceController
 from zoetic.control.loop import Observer, Schedule, drive
 from zoetic.control.measure import motion_scalars
 from zoetic.control.policy import Period
@@ -133,6 +137,7 @@ def cost_to_go(
     cost = d + config.depth_weight * np.maximum(dy - config.depth_band, 0.0)
     if attitude is not None:
         roll, pitch = (np.nanmax(np.abs(a), axis=1) for a in attitude)
+        roll = np.maximum(roll, np.abs(_ahead(attitude[0], record_dt, config.roll_lookahead)))
         over = np.maximum(roll - config.roll_ok, 0) + np.maximum(pitch - config.pitch_ok, 0)
         cost = cost + config.attitude_weight * np.radians(over)
     if turn_radius <= 0:
@@ -144,6 +149,14 @@ def cost_to_go(
     cos = np.sum(h * g, axis=-1) / (np.linalg.norm(h, axis=-1) * dxz + 1e-12)
     fade = np.clip(dxz / (2.0 * config.radius_or(body)), 0.0, 1.0)
     return cost + fade * turn_radius * np.arccos(np.clip(cos, -1.0, 1.0))
+
+
+def _ahead(angle: np.ndarray, record_dt: float, seconds: float) -> np.ndarray:
+    """Return angles (B, R) deg extrapolated ``seconds`` past the end at their mean rate over
+    the last half second (B,): where a roll that is still gathering pace will be."""
+    n = max(1, min(angle.shape[1] - 1, int(round(0.5 / record_dt))))
+    rate = (angle[:, -1] - angle[:, -1 - n]) / (n * record_dt)
+    return angle[:, -1] + seconds * rate
 
 
 @dataclass(frozen=True)
@@ -158,13 +171,16 @@ class TrackConfig:
     obstacles: np.ndarray | None = None  # (O, 3) discs x, z, r that the gain penalises
     obstacle_weight: float = 1.0  # m of gain lost per second inside an obstacle
     allowed: tuple[str, ...] | None = None  # entries it may use (default: all)
-    # the depth and attitude terms, set so that the default shark repertoire holds depth
-    # within 0.5 m and roll within about 30 degrees over the courses of ``zoetic bench track``
+    # the depth and attitude terms and the fins' righting, set so that the default shark
+    # repertoire holds depth within 0.5 m and roll within 30 degrees over the courses of
+    # ``zoetic bench track`` (without the righting variants and the look-ahead it rolled 64)
     depth_band: float = 0.15  # m above or below the target's depth that costs nothing
     depth_weight: float = 6.0  # m of cost per m of depth error past the band
     roll_ok: float = 15.0  # deg of roll that costs nothing
-    pitch_ok: float = 30.0  # deg of pitch that costs nothing (climbing and diving need some)
+    pitch_ok: float = 20.0  # deg of pitch that costs nothing (climbing and diving need some)
     attitude_weight: float = 6.0  # m of cost per rad of roll or pitch past those
+    roll_lookahead: float = 0.5  # s: the roll is also judged where its rate at the end leads
+    fin_tilt: float = 0.3  # activation the righting variants tilt the fins apart (0: none)
 
     def radius_or(self, body: Body) -> float:
         """Return the reaching radius (m): the configured one, else half the body length."""
@@ -263,6 +279,37 @@ def _candidate_tables(ctrls, current, t, steps, dt, restart: bool = False) -> np
         )
         tables.append(seq.table(steps, dt, t0=held))
     return np.stack(tables)
+
+
+def righting_entries(
+    body: Body, names: list[str], ctrls: list[Controller], tilt: float
+) -> tuple[list[str], list[Controller]]:
+    """Return the entries followed by each one's two fin-righting variants: the same muscle
+    actions with the pectoral fins' activations ``tilt`` apart, the left one raised and the
+    right one lowered ("+roll-left": the back rolls toward the animal's left, negative roll
+    as the sensors count it) or the other way ("+roll-right").
+
+    The swimming body has no roll stiffness and, while its muscles undulate, little roll
+    damping: a roll left by a turn stays or grows. The fins, tilted apart, roll it back as
+    a fish's pectoral fins do; the tracker picks a variant when its own simulation of the next
+    window says it keeps the animal nearer upright. Entries that are not abstractions (no
+    offsets to shift) or do not swim (no modes: fins roll nothing without a flow past them),
+    and bodies without a left and a right fin, get none."""
+    kind, side = np.array(body.actuator_kind), np.array(body.actuator_side)
+    fins = kind == "fin"
+    if tilt <= 0 or not (np.any(fins & (side == "left")) and np.any(fins & (side == "right"))):
+        return names, ctrls
+    shift = np.where(fins & (side == "left"), 0.5, 0.0) - np.where(
+        fins & (side == "right"), 0.5, 0.0
+    )
+    out_n, out_c = list(names), list(ctrls)
+    for name, ctrl in zip(names, ctrls, strict=True):
+        if not isinstance(ctrl, AbstractController) or ctrl.modes == 0:
+            continue
+        for label, sign in (("roll-left", 1.0), ("roll-right", -1.0)):
+            out_n.append(f"{name}+{label}")
+            out_c.append(dataclasses.replace(ctrl, offset=ctrl.offset + sign * tilt * shift))
+    return out_n, out_c
 
 
 def _entries(repertoire: Repertoire, allowed) -> tuple[list[str], list[Controller]]:
@@ -383,7 +430,7 @@ def track(
     targets = as_targets(targets)
     if len(targets) == 0:
         raise TrackingError("give at least one target")
-    names, ctrls = _entries(repertoire, config.allowed)
+    names, ctrls = righting_entries(body, *_entries(repertoire, config.allowed), config.fin_tilt)
     radius = config.radius_or(body)
     if not radius > 0 or not config.interval > 0 or not config.time_limit > 0:
         raise TrackingError("radius, interval and time limit must be positive")

@@ -4,7 +4,10 @@ and upright while it reaches every target?
 ``zoetic bench track`` runs this: a suite of courses (targets ahead, behind, to either side,
 so every start heading relative to the course is met; level ones at the start depth and 3D
 ones that climb and dive) tracked with the default repertoire of an animal (trained once and
-kept under runs/bench, keyed by the body and its training tasks) or a given one. Per course:
+kept under runs/bench, keyed by the body and its training tasks) or a given one. The animal
+always starts facing +x, so the first target's bearing is the start heading relative to the
+course: 0 (ahead-left, dive), 90 (left), 180 (behind), about 160 (dive-behind) and -45
+degrees (right-zigzag, climb-right). Per course:
 targets reached (in 3D), simulated seconds, the depth change and span (m, relative to the
 start depth), the worst depth error from the target being tracked (m), the worst roll and
 pitch (deg); over the level courses, the worst depth excursion, which default tracking aims to
@@ -27,6 +30,8 @@ COURSES = {
     "right-zigzag": "2,-2;4,0;6,-2;8,0",  # first target ahead to the right
     "dive": "3,-1,0;5,-2,2;4,-2,5",  # down 2 m while turning left
     "climb": "3,1,1;1,2,3;-1,2,2",  # up 2 m while turning back
+    "dive-behind": "-3,-1,1;-4,-1.5,3",  # down 1.5 m, the first target behind
+    "climb-right": "2,1,-2;4,1.5,-1",  # up 1.5 m, the first target ahead to the right
 }
 
 

@@ -113,7 +113,8 @@ def track(
         f"reached {reached}/{len(pts)} targets (in 3D, within {result.radius:.2f} m) in "
         f"{result.sim_time:.1f} s simulated, {result.wall:.2f} s wall: "
         f"[bold]{result.realtime_factor:.0f}x real time[/] ({len(result.names)} controllers, "
-        f"{len(result.evaluations)} re-evaluations of {len(rep.names)} entries in one batch each)"
+        f"{len(result.evaluations)} re-evaluations of {len(rep.names)} entries and their "
+        "fin-righting variants in one batch each)"
     )
     console.print(motion_line(result.motion))
     _report_files(out, video)
