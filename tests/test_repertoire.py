@@ -202,6 +202,10 @@ def test_sequence_command_simulates_a_cross_faded_controller(tmp_path, capsys):
     assert isinstance(seq, SequenceController)
     assert seq.duration == pytest.approx(2 + 2 * 0.95)
     assert (tmp_path / "s" / "path.png").exists() and (tmp_path / "s" / "record.npz").exists()
+    from PIL import Image
+
+    w, h = Image.open(tmp_path / "s" / "path.png").size
+    assert w > 2 * h  # the top view beside the side view of the depth
     args[5] = "go-straight:2,backflip"
     assert main(args) == 2
     assert "no entry 'backflip'" in capsys.readouterr().err

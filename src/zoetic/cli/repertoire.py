@@ -273,6 +273,29 @@ def sequence_cmd(
     from zoetic.record import read_record
 
     rec = read_record(summary["record"])
-    motion = locomotion(body, np.asarray(rec.animals[0].positions, float), rec.times)
+    positions = np.asarray(rec.animals[0].positions, float)
+    motion = locomotion(body, positions, rec.times)
+    _sequence_path(body, positions, rec.times, seq, out / "path.png", entries)
     print_summary(summary | {"sequence": str(path)})
     console.print(f"{'locomotion':>12}: {motion_line(motion)}")
+
+
+def _sequence_path(body, positions, times, seq, path: Path, entries: str) -> None:
+    """Write the sequence's path.png: the top view beside the side view of its depth, white
+    dots where each entry takes over (a roll or a dive shows in the side view)."""
+    import numpy as np
+
+    from zoetic.viz.tracking import plot_plan
+
+    com = np.einsum("tnk,n->tk", positions, body.mass / body.mass.sum())
+    starts = np.searchsorted(times, seq.starts()[1:])
+    plot_plan(
+        [com],
+        ["sequence"],
+        path,
+        np.zeros((0, 3)),
+        np.zeros((0, 3)),
+        [starts],
+        title=f"sequence: {entries}",
+        band=0.5,
+    )

@@ -68,7 +68,8 @@ def _top_view(ax, paths, labels, targets, obstacles, starts) -> None:
             idx = np.clip(np.asarray(starts[i], int), 0, len(p) - 1)
             _white_dots(ax, p[idx, 0], p[idx, 2], line.get_color())
     ax.plot(*paths[0][0, [0, 2]], "s", color="0.2", ms=7, label="start", zorder=5)
-    ax.plot(targets[:, 0], targets[:, 2], "o", color="black", ms=8, label="target", zorder=5)
+    if len(targets):
+        ax.plot(targets[:, 0], targets[:, 2], "o", color="black", ms=8, label="target", zorder=5)
     for k, t in enumerate(targets):
         ax.annotate(str(k + 1), (t[0], t[2]), xytext=(5, 5), textcoords="offset points")
     ax.set_aspect("equal", adjustable="datalim")
@@ -95,7 +96,8 @@ def _side_view(ax, paths, labels, targets, starts, y0: float, band: float | None
     if band:
         ax.axhspan(-band, band, color="tab:green", alpha=0.12, label=f"start depth ±{band:g} m")
     near = np.argmin(np.linalg.norm(first[:, None, :] - targets[None], axis=-1), axis=0)
-    ax.plot(dist[near], targets[:, 1] - y0, "o", color="black", ms=8, label="target", zorder=5)
+    if len(targets):
+        ax.plot(dist[near], targets[:, 1] - y0, "o", color="black", ms=8, label="target", zorder=5)
     for k, (d, t) in enumerate(zip(dist[near], targets, strict=True)):
         ax.annotate(str(k + 1), (d, t[1] - y0), xytext=(5, 5), textcoords="offset points")
     ax.set_xlabel("distance swum (m, top view)")
