@@ -49,6 +49,8 @@ SYMMETRIC_TERMS = frozenset(
     "distance_along_heading lateral_deviation depth_keeping roll_keeping final_pitch "
     "pitch_change speed_deviation mean_speed effort max_height".split()
 )
+# terms that prefer neither side when their target is 0 (keep the heading: no turn either way)
+SYMMETRIC_AT_ZERO = frozenset({"heading_change"})
 
 
 @dataclass
@@ -127,7 +129,10 @@ def resolve_coupling(config: LearnConfig, task: Task, body) -> str:
         side == "right" and 0 <= mirror[k] != k and kind != "fin"
         for k, (side, kind) in enumerate(sides)
     )
-    symmetric = all(t.kind in SYMMETRIC_TERMS for t in task.terms)
+    symmetric = all(
+        t.kind in SYMMETRIC_TERMS or (t.kind in SYMMETRIC_AT_ZERO and t.target == 0.0)
+        for t in task.terms
+    )
     return "wave" if symmetric and pairs and config.controller != "time" else "none"
 
 
