@@ -108,6 +108,16 @@ def heading_change(xp, s: Signals, p: TermParams):
     return (s.heading[:, -1] - s.heading[:, 0] - p.target) ** 2
 
 
+@term(
+    "squared error of the change of the body axis's heading (``Signals.body_heading``, as the "
+    "sensors and a task's promises measure it) against 'target' (rad^2): for an animal whose "
+    "head wags far from its axis (the snake), which can end 'heading_change' with a swing"
+)
+def body_heading_change(xp, s: Signals, p: TermParams):
+    """Return (K,) rad^2: squared error of end-minus-start body heading vs 'target' (cost)."""
+    return (s.body_heading[:, -1] - s.body_heading[:, 0] - p.target) ** 2
+
+
 @term("squared distance of the head to 'goal', relative to its start (m^2)")
 def goal_distance2(xp, s: Signals, p: TermParams):
     """Return (K,) m^2: squared end distance of the head from its start plus 'goal' (cost)."""
