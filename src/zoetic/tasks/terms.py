@@ -184,12 +184,13 @@ def effort(xp, s: Signals, p: TermParams):
 
 
 @term(
-    "squared error of the pitch change, end minus start, against 'target' (rad^2, nose up "
-    "positive): turning up or down"
+    "squared error of the pitch change of the body's axis, end minus start, against 'target' "
+    "(rad^2, nose up positive): turning up or down"
 )
 def pitch_change(xp, s: Signals, p: TermParams):
-    """Return (K,) rad^2: squared error of end-minus-start pitch vs 'target' (>= 0; cost)."""
-    return (s.pitch[:, -1] - s.pitch[:, 0] - p.target) ** 2
+    """Return (K,) rad^2: squared error of end-minus-start pitch of the body's axis
+    (``Signals.body_pitch``, as a task's promise measures it) vs 'target' (>= 0; cost)."""
+    return (s.body_pitch[:, -1] - s.body_pitch[:, 0] - p.target) ** 2
 
 
 @term("greatest height of the centre of mass above the water surface (m): a leap's apex")
