@@ -258,7 +258,10 @@ def test_the_abstraction_keeps_a_weak_mode_when_the_promise_needs_it(tmp_path, s
         1.0 / f,
     )
     path = tmp_path / "swim.toml"
-    task_text = 'name = "swim"\nrequires = ["water"]\nhorizon = 1.5\n[[terms]]\nkind = "effort"\nweight = 1.0\n'
+    task_text = (
+        'name = "swim"\nrequires = ["water"]\nhorizon = 1.5\n'
+        '[[terms]]\nkind = "effort"\nweight = 1.0\n'
+    )
     path.write_text(task_text)
     plain = dataclasses.replace(gait, amp=np.where(muscles[:, None], [0.5, 0.0], 0.0))
     task = load_task(path)
