@@ -275,3 +275,28 @@ def test_auto_defaults_couple_straight_gaits_and_free_the_fins_for_turns():
     assert turn.objective.dimension == body.n_actuators * 5
     timed = build(LearnConfig(animal="shark", task="swim-straight", controller="time", budget=1))
     assert timed.objective.coupling == "none"  # a time-domain signal cannot be delayed exactly
+
+
+def test_a_mirror_symmetric_task_couples_learned_fins_and_a_zero_turn_stays_symmetric():
+    dolphin = load_animal("dolphin")  # its muscles lie in the vertical plane: the fins pair up
+    fins = [k for k, kind in enumerate(dolphin.actuator_kind) if kind == "fin"]
+    for task in ("turn-up", "turn-down"):  # pitched on both fins, never rolled on one
+        setup = build(LearnConfig(animal="dolphin", task=task, budget=1))
+        assert setup.objective.coupling == "wave" and setup.objective.held.size == 0, task
+        x = np.random.default_rng(1).uniform(*setup.objective.bounds())
+        table = setup.objective.tables(x[None])[0]
+        assert np.allclose(table[:, fins[0]], table[:, fins[1]]), task  # never set apart
+    banked = build(LearnConfig(animal="dolphin", task="turn-left-swimming", budget=1))
+    assert banked.objective.coupling == "none"  # a turn to one side banks on one fin
+    # the snake's straight crawl keeps its heading (a turn of 0 prefers neither side) and is
+    # learned mirror-symmetric; its sharp turn is not
+    straight = load_task("crawl-straight")
+    assert any(t.kind == "heading_change" and t.target == 0.0 for t in straight.terms)
+    assert (
+        build(LearnConfig(animal="snake", task="crawl-straight", budget=1)).objective.coupling
+        == "wave"
+    )
+    assert (
+        build(LearnConfig(animal="snake", task="sharp-turn-left", budget=1)).objective.coupling
+        == "none"
+    )

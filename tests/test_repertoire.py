@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -265,3 +266,45 @@ def test_a_promise_must_be_a_known_quantity_and_a_range(tmp_path):
         f.write_text(base + bad + "\n")
         with pytest.raises(TaskError, match=words):
             load_task(f)
+
+
+def test_the_abstraction_keeps_a_weak_mode_when_the_promise_needs_it(tmp_path, shark):
+    """A weak mode below the auto threshold that the promised motion depends on is kept: the
+    training steps the threshold down (FALLBACK_THRESHOLDS) rather than keep a broken entry."""
+    from zoetic.behavior.training import abstract_keeping_promises, entry_motion, judge_entry
+    from zoetic.tasks import load_task
+
+    muscles = np.array([kind == "muscle" for kind in shark.actuator_kind])
+    phase = -2 * np.pi * np.nan_to_num(np.asarray(shark.wave_phase, float))
+    f = shark.wave_frequency
+    freq = np.tile([f, 2 * f], (shark.n_actuators, 1))
+    amp = np.where(muscles[:, None], [0.5, 0.12], 0.0)  # the second mode 0.24 x the first
+    gait = AbstractController(
+        "shark",
+        shark.actuator_names,
+        np.full(shark.n_actuators, 0.5),
+        freq,
+        amp,
+        np.stack([phase, 2 * phase], axis=1),
+        1.0 / f,
+    )
+    path = tmp_path / "swim.toml"
+    task_text = (
+        'name = "swim"\nrequires = ["water"]\nhorizon = 1.5\n'
+        '[[terms]]\nkind = "effort"\nweight = 1.0\n'
+    )
+    path.write_text(task_text)
+    plain = dataclasses.replace(gait, amp=np.where(muscles[:, None], [0.5, 0.0], 0.0))
+    task = load_task(path)
+    full, weak = (entry_motion(shark, c, task)[0]["speed_bl_s"] for c in (gait, plain))
+    assert abs(full - weak) > 0.01  # the weak mode changes how fast it swims
+    low, high = ((full + weak) / 2, "inf") if full > weak else (0.0, (full + weak) / 2)
+    path.write_text(task_text + f"[promise]\nspeed_bl_s = [{low}, {high}]\n")
+    task = load_task(path)
+    ab = abstract_keeping_promises(shark, gait, task, "auto", 0.3)
+    assert ab.rule == "auto (threshold 0.1)" and ab.modes_per_actuator().max() == 2
+    assert judge_entry(shark, ab.controller, task)["met"]
+    # the default abstraction drops the mode and breaks the promise; a rule of K modes is kept
+    assert not judge_entry(
+        shark, abstract_keeping_promises(shark, gait, task, 1, 0.3).controller, task
+    )["met"]

@@ -332,3 +332,26 @@ def test_a_users_repertoire_finds_its_animal_file(my_eel, tmp_path):
     assert repertoire_body(memory, "shark").name == "shark"
     with pytest.raises(BodyError):
         repertoire_body(memory, "my_newt")
+
+
+def test_body_heading_change_follows_the_body_axis_not_a_swung_head():
+    body = load_animal("snake")
+    rest = body.rest_pos
+    com = body.mass @ rest / body.total_mass
+    theta = 0.5  # the whole body turned left by 0.5 rad ...
+    c, s = math.cos(theta), math.sin(theta)
+    end = (rest - com) @ np.array([[c, 0, -s], [0, 1, 0], [s, 0, c]]).T + com
+    swung = end.copy()  # ... and then its head alone swung 5 cm further left
+    swung[body.head] += 0.05 * np.array([-s, 0.0, c])
+    pos = np.stack([[rest, end], [rest, swung]])
+    terms = [
+        {"kind": "body_heading_change", "target": theta},
+        {"kind": "heading_change", "target": theta},
+    ]
+    task = parse_task(_task(terms=terms))
+    axis, head = (
+        np.asarray(v) for v in evaluate_terms(np, signals(task, body, pos, None, 0.05), task.terms)
+    )
+    assert axis[0] == pytest.approx(0.0, abs=1e-10) and head[0] == pytest.approx(0.0, abs=1e-10)
+    # the head-based heading counts the swing as a turn; the body axis barely moves
+    assert math.sqrt(head[1]) > 0.08 and math.sqrt(axis[1]) < 0.2 * math.sqrt(head[1])

@@ -49,6 +49,8 @@ SYMMETRIC_TERMS = frozenset(
     "distance_along_heading lateral_deviation depth_keeping roll_keeping final_pitch "
     "pitch_change speed_deviation mean_speed effort max_height".split()
 )
+# terms that prefer neither side when their target is 0 (keep the heading: no turn either way)
+SYMMETRIC_AT_ZERO = frozenset({"heading_change", "body_heading_change"})
 
 
 @dataclass
@@ -95,7 +97,8 @@ def build(config: LearnConfig, task: Task | None = None, body: Body | None = Non
     periodic = config.controller == "periodic"
     if m != task.nodes:
         task = parse_task({**task.to_dict(), "nodes": m}, task.source)
-    coupling, fins = resolve_coupling(config, task, body), resolve_fins(config, task)
+    fins = resolve_fins(config, task)
+    coupling = resolve_coupling(config, task, body, fins)
     bound = PERIODIC_AMPLITUDE if periodic else None
     objective = Objective(
         task, body, template, config.medium, coupling=coupling, fins=fins, harmonic_bound=bound
@@ -115,19 +118,23 @@ def build(config: LearnConfig, task: Task | None = None, body: Body | None = Non
     return Setup(config, task, objective, opt, template)
 
 
-def resolve_coupling(config: LearnConfig, task: Task, body) -> str:
+def resolve_coupling(config: LearnConfig, task: Task, body, fins: str = "held") -> str:
     """Return the coupling "auto" stands for: "wave" (right = left, later by the wave's lag)
-    when the task prefers neither side, the body has mirror pairs and the controller is
-    periodic; "none" otherwise."""
+    when the task prefers neither side, the body has mirror pairs (learned fins count: the
+    dolphin's only pair, whose fins set apart rolled it over while it pitched) and the
+    controller is periodic; "none" otherwise."""
     if config.coupling != "auto":
         return config.coupling
     mirror = np.asarray(body.actuator_mirror)
     sides = zip(body.actuator_side, body.actuator_kind, strict=True)
     pairs = any(
-        side == "right" and 0 <= mirror[k] != k and kind != "fin"
+        side == "right" and 0 <= mirror[k] != k and (kind != "fin" or fins == "free")
         for k, (side, kind) in enumerate(sides)
     )
-    symmetric = all(t.kind in SYMMETRIC_TERMS for t in task.terms)
+    symmetric = all(
+        t.kind in SYMMETRIC_TERMS or (t.kind in SYMMETRIC_AT_ZERO and t.target == 0.0)
+        for t in task.terms
+    )
     return "wave" if symmetric and pairs and config.controller != "time" else "none"
 
 
@@ -138,7 +145,7 @@ def resolve_fins(config: LearnConfig, task: Task) -> str:
     pitch a straight swimmer away from its course)."""
     if config.fins != "auto":
         return config.fins
-    turns = any(t.kind == "heading_change" for t in task.terms)
+    turns = any(t.kind in SYMMETRIC_AT_ZERO for t in task.terms)
     needs = any("fins" in r.split("|") for r in task.requires)
     return "free" if turns or needs else "held"
 

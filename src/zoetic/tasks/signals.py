@@ -167,14 +167,27 @@ class Signals:
         return self.xp.unwrap(self.xp.arctan2(h[..., 1], h[..., 0]), axis=1)
 
     @cached_property
-    def body_heading(self):
-        """Unwrapped heading (K, R), rad, of the body's forward axis as the sensors measure it
+    def body_forward(self):
+        """Unit forward axis (K, R, 3) of the body as the sensors measure it
         (``control.sensors.forward_axis``: the rest pose's forward axis carried by the best
-        linear fit; needs ``BodyFrame.of``), not swung by the head's wag as ``heading`` is."""
-        xp = self.xp
+        linear fit; needs ``BodyFrame.of``), not swung by the head as the head's direction is."""
         k, r, n = self.positions.shape[:3]
-        f = forward_axis(self.frame.body, self.positions.reshape(k * r, n, 3), xp)
-        return xp.unwrap(heading_of(f, xp).reshape(k, r), axis=1)
+        f = forward_axis(self.frame.body, self.positions.reshape(k * r, n, 3), self.xp)
+        return f.reshape(k, r, 3)
+
+    @cached_property
+    def body_heading(self):
+        """Unwrapped heading (K, R), rad, of the body's forward axis (``body_forward``), not
+        swung by the head's wag as ``heading`` is."""
+        xp = self.xp
+        return xp.unwrap(heading_of(self.body_forward, xp), axis=1)
+
+    @cached_property
+    def body_pitch(self):
+        """Pitch (K, R), rad, nose up positive, of the body's forward axis (``body_forward``),
+        as the sensors and a task's promises measure it."""
+        xp = self.xp
+        return xp.arcsin(xp.clip(self.body_forward[..., 1], -1.0, 1.0))
 
     @cached_property
     def pitch(self):

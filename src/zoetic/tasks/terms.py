@@ -108,6 +108,16 @@ def heading_change(xp, s: Signals, p: TermParams):
     return (s.heading[:, -1] - s.heading[:, 0] - p.target) ** 2
 
 
+@term(
+    "squared error of the change of the body axis's heading (``Signals.body_heading``, as the "
+    "sensors and a task's promises measure it) against 'target' (rad^2): for an animal whose "
+    "head wags far from its axis (the snake), which can end 'heading_change' with a swing"
+)
+def body_heading_change(xp, s: Signals, p: TermParams):
+    """Return (K,) rad^2: squared error of end-minus-start body heading vs 'target' (cost)."""
+    return (s.body_heading[:, -1] - s.body_heading[:, 0] - p.target) ** 2
+
+
 @term("squared distance of the head to 'goal', relative to its start (m^2)")
 def goal_distance2(xp, s: Signals, p: TermParams):
     """Return (K,) m^2: squared end distance of the head from its start plus 'goal' (cost)."""
@@ -174,12 +184,13 @@ def effort(xp, s: Signals, p: TermParams):
 
 
 @term(
-    "squared error of the pitch change, end minus start, against 'target' (rad^2, nose up "
-    "positive): turning up or down"
+    "squared error of the pitch change of the body's axis, end minus start, against 'target' "
+    "(rad^2, nose up positive): turning up or down"
 )
 def pitch_change(xp, s: Signals, p: TermParams):
-    """Return (K,) rad^2: squared error of end-minus-start pitch vs 'target' (>= 0; cost)."""
-    return (s.pitch[:, -1] - s.pitch[:, 0] - p.target) ** 2
+    """Return (K,) rad^2: squared error of end-minus-start pitch of the body's axis
+    (``Signals.body_pitch``, as a task's promise measures it) vs 'target' (>= 0; cost)."""
+    return (s.body_pitch[:, -1] - s.body_pitch[:, 0] - p.target) ** 2
 
 
 @term("greatest height of the centre of mass above the water surface (m): a leap's apex")

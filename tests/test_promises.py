@@ -1,0 +1,29 @@
+"""The default basic training keeps the promises of its tasks (slow: each trains a whole
+repertoire at the default budget, a few minutes an animal on two cores)."""
+
+from __future__ import annotations
+
+import pytest
+
+from zoetic.behavior.training import judge_repertoire, train_repertoire, unmet_text
+from zoetic.bodies import load_animal
+
+# entries the default training does not yet make keep their promises, with the reason: the
+# ray's flat disc pitches at most about 5 degrees/s with any flap of its four wing actuators
+# (hand-made sweeps and learning: it rises or sinks 0.06-0.07 m in 3 s where swim-up and
+# swim-down promise 0.5 m); see docs/animals.md, "Strength of the ray"
+NOT_YET = {"ray": {"swim-up", "swim-down"}}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("animal", ["snake", "ray", "dolphin", "shark"])
+def test_default_training_keeps_its_tasks_promises(tmp_path, animal):
+    train_repertoire(animal, tmp_path)
+    verdicts = judge_repertoire(tmp_path, load_animal(animal))
+    assert verdicts  # every learned entry's task makes promises
+    broken = [
+        unmet_text(name, v)
+        for name, v in verdicts.items()
+        if not v["met"] and name not in NOT_YET.get(animal, set())
+    ]
+    assert not broken, broken
