@@ -87,7 +87,7 @@ case "$cmd" in
     ruff check src tests scripts
     if [ $# -gt 0 ]; then exec python -m pytest "$@"; fi
     python -m pytest            # the default tier
-    exec python -m pytest -m slow  # the slow tier: JAX compiles, Ray clusters, long searches
+    exec python -m pytest -m 'slow and not long'  # the slow tier: JAX compiles, Ray clusters, searches
     ;;
   *) exec zoetic "$cmd" "$@" ;;
 esac
