@@ -23,7 +23,6 @@ from zoetic.physics.model import compile_model
 from zoetic.physics.simulate import VMAX
 
 F32 = jnp.float32
-UNROLL = 4  # time steps per iteration of the compiled loop: less loop overhead, small code
 
 
 def make_step(body: Body, medium: str | Medium | None = None, dt: float | None = None):
@@ -53,7 +52,7 @@ def rollout_fn(body: Body, medium=None, dt: float | None = None, record_every: i
         return step(*carry, a), None
 
     def outer(carry, chunk):
-        carry, _ = jax.lax.scan(inner, carry, chunk, unroll=min(UNROLL, record_every))
+        carry, _ = jax.lax.scan(inner, carry, chunk)
         return carry, carry[0]
 
     def rollout(x0: jax.Array, v0: jax.Array, act: jax.Array):

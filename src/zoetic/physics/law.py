@@ -72,9 +72,23 @@ def gather_sum(xp, values, targets: np.ndarray, n: int):
     """Return (3, n, B): the rows of ``values`` (3, M, B) summed onto the nodes ``targets`` (M,)
     they belong to (a scatter-add written as a gather of constant indices)."""
     table = incidence(targets, n)
-    zero = xp.zeros_like(values[:, :1])
-    padded = xp.concatenate([values, zero], axis=1)
-    return xp.sum(padded[:, table], axis=2)
+    padded = xp.concatenate([values, xp.zeros_like(values[:, :1])], axis=1)
+    return _sum([padded[:, table[:, j]] for j in range(table.shape[1])])
+
+
+def _sum(terms: list):
+    """Return the sum of arrays in list order, as a chain of additions (no reduction: XLA's
+    CPU reductions over short axes are slow, its elementwise additions fuse)."""
+    total = terms[0]
+    for term in terms[1:]:
+        total = total + term
+    return total
+
+
+def _corners(q, nodes: np.ndarray, w: np.ndarray):
+    """Return the weighted sums over each row of ``nodes`` (K, C) of q (..., N, B) with
+    weights ``w`` (K, C): a panel's or a fin's mean of its corners, (..., K, B)."""
+    return _sum([q[..., nodes[:, c], :] * w[:, c, None] for c in range(nodes.shape[1])])
 
 
 def _safe_sqrt(xp, s):
@@ -126,19 +140,19 @@ def water(xp, m: Model, x, v):
     """Return the water's reaction on the surface panels (Tu & Terzopoulos), shared by each
     panel's nodes: it opposes a panel's outward normal velocity, c * drag * A * |v| (n.v),
     and at most stops the panel's normal motion in one step."""
-    w = m.panel_weights[..., None]  # (P, 4, 1)
-    p = x[:, m.panels]  # (3, P, 4, B)
-    nrm = _cross(xp, p[:, :, 2] - p[:, :, 0], p[:, :, 3] - p[:, :, 1])  # 2 A n, (3, P, B)
+    w, panels = m.panel_weights, m.panels  # (P, 4)
+    p = [x[:, panels[:, c]] for c in range(4)]  # the corners, (3, P, B) each
+    nrm = _cross(xp, p[2] - p[0], p[3] - p[1])  # 2 A n
     nn = _dot(nrm, nrm) + TINY2
-    vm = xp.sum(v[:, m.panels] * w, axis=2)
+    vm = _corners(v, panels, w)
     q = xp.maximum(_dot(nrm, vm), 0.0)
     vv = _dot(vm, vm)
     lim = 0.5 * m.water_drag * col(m.panel_drag) * _safe_sqrt(xp, nn * vv)
     lim = xp.minimum(lim, col(m.panel_mass_dt))
-    wet = xp.sum(p[1] * w, axis=1) < m.water_level
+    wet = _corners(x[1], panels, w) < m.water_level
     mag = xp.where(wet, q / nn * lim, 0.0)
-    fp = -(w * mag[:, None])[None] * nrm[:, :, None]  # (3, P, 4, B)
-    return gather_sum(xp, xp.reshape(fp, (3, -1, fp.shape[-1])), m.panels.reshape(-1), x.shape[1])
+    fp = [-(w[:, c, None] * mag) * nrm for c in range(4)]  # each corner's share, (3, P, B)
+    return gather_sum(xp, xp.concatenate(fp, axis=1), panels.T.reshape(-1), x.shape[1])
 
 
 def fins(xp, m: Model, x, v, a):
@@ -152,15 +166,15 @@ def fins(xp, m: Model, x, v, a):
     ang = lo + a[m.fin_actuator] * (hi - lo)
     nrm = xp.cos(ang) * up + xp.sin(ang) * fwd
     nodes = np.maximum(m.fin_nodes, 0)  # padding: node 0 at weight 0
-    wts = m.fin_weights[..., None]  # (K, 4, 1)
-    vm = xp.sum(v[:, nodes] * wts, axis=2)
-    cy = xp.sum(x[1][nodes] * wts, axis=1)
+    wts = m.fin_weights  # (K, 4)
+    vm = _corners(v, nodes, wts)
+    cy = _corners(x[1], nodes, wts)
     vn = _dot(nrm, vm)
     cap = col(m.fin_mass) * xp.abs(vn) / m.dt
     mag = xp.clip(m.water_drag * col(m.fin_area) * _norm(xp, vm) * vn, -cap, cap)
     mag = xp.where(cy < m.water_level, mag, 0.0)
-    fq = -(wts * mag[:, None])[None] * nrm[:, :, None]  # (3, K, 4, B)
-    return gather_sum(xp, xp.reshape(fq, (3, -1, fq.shape[-1])), nodes.reshape(-1), x.shape[1])
+    fq = [-(wts[:, c, None] * mag) * nrm for c in range(4)]  # each node's share, (3, K, B)
+    return gather_sum(xp, xp.concatenate(fq, axis=1), nodes.T.reshape(-1), x.shape[1])
 
 
 def ground(xp, m: Model, x, v, f_other):
