@@ -71,6 +71,8 @@ def incidence(targets: np.ndarray, n: int) -> np.ndarray:
 def gather_sum(xp, values, targets: np.ndarray, n: int):
     """Return (3, n, B): the rows of ``values`` (3, M, B) summed onto the nodes ``targets`` (M,)
     they belong to (a scatter-add written as a gather of constant indices)."""
+    if targets.size == 0:
+        return xp.zeros((values.shape[0], n, values.shape[-1]), dtype=values.dtype)
     table = incidence(targets, n)
     padded = xp.concatenate([values, xp.zeros_like(values[:, :1])], axis=1)
     return _sum([padded[:, table[:, j]] for j in range(table.shape[1])])
