@@ -1,4 +1,5 @@
-"""The JAX backend's speed: simulated seconds per wall second of a batch, compile time apart."""
+"""The JAX backend's speed: simulated seconds per wall second of a batch, compile time apart,
+beside the Numba kernel on the same activations in the same run."""
 
 from __future__ import annotations
 
@@ -8,39 +9,58 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from zoetic.physics.jax_backend import F32, blown_up, make_rollout
+from zoetic.physics.jax_backend import F32, blown_up, lanes, make_rollout
+
+
+def _activations(body, steps: int, batch: int) -> jax.Array:
+    """Return (batch, steps, A) float32 activations: the wave controller's table, shifted in
+    time and scaled per candidate, built on the JAX device (a 64k batch never sits in NumPy)."""
+    from zoetic.control import wave_controller
+
+    rng = np.random.default_rng(0)
+    wave = jnp.asarray(wave_controller(body).table(steps, body.dt), F32)
+    shifts = jnp.asarray(rng.integers(0, steps, batch))
+    gains = jnp.asarray(rng.uniform(0.5, 1.0, (batch, 1, body.n_actuators)), F32)
+    rows = (jnp.arange(steps)[None, :] - shifts[:, None]) % steps
+    return wave[rows] * gains
+
+
+def _best(fn, repeats: int) -> tuple[float, object]:
+    best, out = float("inf"), None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
 
 
 def benchmark(
-    animal: str = "shark", seconds: float = 10.0, batch: int = 256, repeats: int = 2
+    animal: str = "shark",
+    seconds: float = 10.0,
+    batch: int = 256,
+    repeats: int = 2,
+    numba: bool = False,
 ) -> dict:
-    """Return simulated seconds per wall second of the JAX batch, compile time apart."""
+    """Return simulated seconds per wall second of the JAX batch, compile time apart; with
+    ``numba`` also the Numba kernel's on the same activations, timed alternately with it."""
     from zoetic.bodies import load_animal
-    from zoetic.control import wave_controller
-    from zoetic.physics.simulate import rest_state
+    from zoetic.physics.simulate import rest_state, simulate
 
     body = load_animal(animal)
     steps = int(round(seconds / body.dt))
-    rng = np.random.default_rng(0)
-    wave = wave_controller(body).table(steps, body.dt)
-    gains = rng.uniform(0.5, 1.0, (batch, 1, body.n_actuators))
-    shifts = rng.integers(0, steps, batch)
-    acts = jnp.asarray(np.stack([np.roll(wave, s, axis=0) for s in shifts]) * gains, F32)
+    acts = _activations(body, steps, batch)
     st = rest_state(body, batch)
     x0, v0 = jnp.asarray(st.positions, F32), jnp.asarray(st.velocities, F32)
     roll = make_rollout(body, record_every=steps)
     t0 = time.perf_counter()
     jax.block_until_ready(roll(x0, v0, acts))
     first = time.perf_counter() - t0
-    best = float("inf")
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = jax.block_until_ready(roll(x0, v0, acts))
-        best = min(best, time.perf_counter() - t0)
-    return {
+    best, out = _best(lambda: jax.block_until_ready(roll(x0, v0, acts)), repeats)
+    row = {
         "animal": animal,
         "device": str(jax.devices()[0]),
         "backend": jax.default_backend(),
+        "lanes_per_chunk": lanes(),
         "batch": batch,
         "horizon_seconds": seconds,
         "steps": steps,
@@ -49,3 +69,13 @@ def benchmark(
         "sim_seconds_per_second_batched": round(batch * seconds / best, 1),
         "blown_up": int(np.asarray(blown_up(out[1], out[2])).sum()),
     }
+    if numba:
+        table = np.asarray(acts)
+        simulate(body, table[:2, :4], record_every=4)  # compile outside the clock
+        t_nb, tr = _best(lambda: simulate(body, table, record_every=steps), repeats)
+        row["numba_sim_seconds_per_second_batched"] = round(batch * seconds / t_nb, 1)
+        row["numba_over_jax"] = round(best / t_nb, 2)
+        row["max_position_difference_m"] = float(
+            np.nanmax(np.abs(np.asarray(out[1]) - tr.final.positions))
+        )
+    return row

@@ -53,24 +53,24 @@ def bench_vision_cmd(
 @bench_app.command("jax")
 def bench_jax_cmd(
     animal: str = typer.Option("shark", help="A built-in animal."),
-    batch: int = typer.Option(256, min=1, help="Candidates simulated together."),
+    batch: list[int] = typer.Option(
+        [256], min=1, help="Candidates simulated together; repeat for a sweep (64 ... 65536)."
+    ),
     seconds: float = typer.Option(10.0, min=0.01, help="Simulated seconds per candidate."),
     repeats: int = typer.Option(2, min=1, help="Timed runs; the best counts."),
-    numba: bool = typer.Option(False, "--numba", help="Also run the Numba kernel's bench."),
+    numba: bool = typer.Option(
+        False, "--numba", help="Also time the Numba kernel on the same activations, alternately."
+    ),
     json: Json = False,
     quick: Quick = False,
 ) -> None:
     """The JAX backend on whatever device JAX sees: sim-s/s of a batch, compile time apart."""
     from zoetic.bench.jax_sim import benchmark
 
-    batch, seconds = capped(quick, batch, 32), capped(quick, seconds, 1.0)
-    repeats = capped(quick, repeats, 1)
-    out = {"jax": benchmark(animal, seconds, batch, repeats)}
-    if numba:
-        from zoetic.bench.simulate import bench_simulate
-
-        out["numba"] = bench_simulate(animal, seconds, batch, repeats)
-    emit(out, json)
+    batch = [capped(quick, b, 32) for b in batch]
+    seconds, repeats = capped(quick, seconds, 1.0), capped(quick, repeats, 1)
+    rows = [benchmark(animal, seconds, b, repeats, numba) for b in batch]
+    emit({"jax": rows[0] if len(rows) == 1 else rows}, json)
 
 
 @bench_app.command("render")

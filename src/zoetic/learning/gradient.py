@@ -253,10 +253,8 @@ def jax_objective(objective: Objective) -> Callable:
     basis = jnp.asarray(objective._basis, F32)  # (T, M)
     node_basis = jnp.asarray(objective._node_basis, F32)
     shape = objective.full_shape
-    starts = [
-        (jnp.asarray(x, F32), jnp.asarray(v, F32))
-        for x, v in zip(objective.starts.positions, objective.starts.velocities, strict=True)
-    ]
+    x0 = jnp.asarray(objective.starts.positions, F32)  # (S, N, 3): one batch of starts
+    v0 = jnp.asarray(objective.starts.velocities, F32)
     roll = rollout_fn(body, objective.medium, objective.dt, objective.record_every)
     frame = BodyFrame.of(body)
     n_rec = objective.steps // objective.record_every + 1
@@ -267,13 +265,12 @@ def jax_objective(objective: Objective) -> Callable:
     def evaluate(p):
         coef = jnp.reshape(L @ p + c, shape)
         act = jnp.clip(basis @ coef.T, 0.0, 1.0)
-        e_v = 0.0
-        for x0, v0 in starts:  # the mean over the task's starts, as the NumPy objective
-            rec, _, _ = roll(x0, v0, act)
-            s = Signals(jnp, frame, rec[None], act[rows][None], times, level, task.horizon)
-            values = evaluate_terms(jnp, s, task.terms)
-            e_v = e_v + sum(t.weight * v[0] for t, v in zip(task.terms, values, strict=True))
-        e_v = e_v / len(starts)
+        rec, _, _ = roll(x0, v0, act)  # every start under the same activations
+        a_rec = jnp.broadcast_to(act[rows][None], (rec.shape[0], *act[rows].shape))
+        s = Signals(jnp, frame, rec, a_rec, times, level, task.horizon)
+        values = evaluate_terms(jnp, s, task.terms)
+        # the mean over the task's starts, as the NumPy objective
+        e_v = sum(t.weight * jnp.mean(v) for t, v in zip(task.terms, values, strict=True))
         u = jnp.einsum("jm,am->aj", node_basis, coef)[None]
         e_u = control_energy_xp(jnp, u, objective.h, task.nu1, task.nu2)[0]
         return task.mu1 * e_u + task.mu2 * e_v, (e_u, e_v)

@@ -2,8 +2,9 @@
 
 The step is ``physics.law``'s, the very functions the NumPy reference runs, evaluated with
 ``jax.numpy`` on the body's float32 ``Model`` (the arrays the Numba kernel reads). The model is
-held as constants of the traced step; ``jit`` and ``vmap`` are applied only at the edge
-(``make_rollout``; losses in ``learning.gradient``), brax-style.
+held as constants of the traced step. The law steps a whole batch at once with the batch as the
+innermost axis (positions (3, N, B)), so a rollout needs no ``vmap``: XLA sees rows of B lanes
+and vectorises over candidates, as the Numba kernel does. One candidate is a batch of one.
 
 Unlike the Numba kernel, a candidate that blows up is not reset to rest: its state simply
 becomes large or non-finite, and ``blown_up`` tells which ones did.
@@ -22,27 +23,55 @@ from zoetic.physics.model import compile_model
 from zoetic.physics.simulate import VMAX
 
 F32 = jnp.float32
+CPU_LANES = 128  # candidates stepped together on a CPU (measured: 64-256 alike, 1024 slower)
 
 
 def make_step(body: Body, medium: str | Medium | None = None, dt: float | None = None):
-    """Return the pure step ``(x (N,3), v (N,3), a (A,)) -> (x, v)`` of one candidate."""
+    """Return the pure step ``(x (3,N,B), v (3,N,B), a (A,B)) -> (x, v)`` of a batch in the
+    law's layout (B = 1 for one candidate)."""
     m = compile_model(body, medium, dt)
 
     def step(x: jax.Array, v: jax.Array, a: jax.Array) -> tuple[jax.Array, jax.Array]:
-        return law.step(jnp, m, x, v, a)
+        return law.step_soa(jnp, m, x, v, a)
 
     return step
 
 
-def rollout_fn(body: Body, medium=None, dt: float | None = None, record_every: int = 1):
-    """Return the un-jitted single-candidate rollout ``(x0, v0, act (T,A)) -> (rec, x, v)``.
+def lanes() -> int | None:
+    """Return how many candidates the rollout steps together on this JAX backend: on a CPU a
+    chunk whose arrays stay in the core's cache (larger batches run chunk after chunk), on an
+    accelerator the whole batch (None)."""
+    return CPU_LANES if jax.default_backend() == "cpu" else None
 
-    ``rec`` holds the positions (R, N, 3) at steps 0, k, 2k, ... (R = T // k + 1) exactly as
-    ``simulate`` records them; activations are clipped to [0, 1] as ``simulate`` does.
+
+def rollout_fn(body: Body, medium=None, dt: float | None = None, record_every: int = 1):
+    """Return the un-jitted rollout ``(x0, v0, act) -> (rec, x, v)``.
+
+    One candidate: x0, v0 (N, 3), act (T, A); rec (R, N, 3). A batch: x0, v0 (B, N, 3) and
+    act (B, T, A), or (T, A) shared by every candidate (a task's start states); rec
+    (B, R, N, 3). ``rec`` holds the positions at steps 0, k, 2k, ... (R = T // k + 1) exactly
+    as ``simulate`` records them; activations are clipped to [0, 1] as ``simulate`` does.
     """
     if record_every < 1:
         raise SimulationError("record_every must be at least 1")
-    step = make_step(body, medium, dt)
+    run = _soa_rollout(make_step(body, medium, dt), record_every)
+
+    def rollout(x0: jax.Array, v0: jax.Array, act: jax.Array):
+        x0, v0 = jnp.asarray(x0, F32), jnp.asarray(v0, F32)
+        batch = x0.shape[:-2]
+        act = jnp.clip(jnp.asarray(act, F32), 0.0, 1.0)
+        # (T, A, B): a row of activations per step, the batch innermost (1: shared)
+        act = jnp.moveaxis(act, 0, -1) if act.ndim == 3 else act[..., None]
+        recs, x, v = _in_chunks(run, law.to_soa(jnp, x0), law.to_soa(jnp, v0), act, lanes())
+        rec = jnp.transpose(recs, (3, 0, 2, 1))  # (B, R, N, 3)
+        rec = jnp.reshape(rec, (*batch, *rec.shape[1:]))
+        return rec, law.from_soa(jnp, x, batch), law.from_soa(jnp, v, batch)
+
+    return rollout
+
+
+def _soa_rollout(step, record_every: int):
+    """Return ``(x, v (3,N,B), act (T,A,B)) -> (rec (R,3,N,B), x, v)`` in the law's layout."""
 
     def inner(carry, a):
         return step(*carry, a), None
@@ -51,16 +80,39 @@ def rollout_fn(body: Body, medium=None, dt: float | None = None, record_every: i
         carry, _ = jax.lax.scan(inner, carry, chunk)
         return carry, carry[0]
 
-    def rollout(x0: jax.Array, v0: jax.Array, act: jax.Array):
-        act = jnp.clip(jnp.asarray(act, F32), 0.0, 1.0)
-        x0, v0 = jnp.asarray(x0, F32), jnp.asarray(v0, F32)
+    def run(x, v, act):
         n_rec = act.shape[0] // record_every
-        main = act[: n_rec * record_every].reshape(n_rec, record_every, act.shape[1])
-        carry, recs = jax.lax.scan(outer, (x0, v0), main)
+        main = act[: n_rec * record_every].reshape(n_rec, record_every, *act.shape[1:])
+        carry, recs = jax.lax.scan(outer, (x, v), main)
         carry, _ = jax.lax.scan(inner, carry, act[n_rec * record_every :])
-        return jnp.concatenate([x0[None], recs]), carry[0], carry[1]
+        return jnp.concatenate([x[None], recs]), carry[0], carry[1]
 
-    return rollout
+    return run
+
+
+def _in_chunks(run, x, v, act, chunk: int | None):
+    """Return ``run(x, v, act)`` computed ``chunk`` lanes at a time (the batch padded with
+    copies of its last candidate to a whole number of chunks), or at once."""
+    b = x.shape[-1]
+    if chunk is None or b <= chunk:
+        return run(x, v, act)
+    n = -(-b // chunk)
+    shared = act.shape[-1] == 1
+
+    def split(q):  # (..., B) -> (C, ..., chunk)
+        q = jnp.concatenate([q, jnp.repeat(q[..., -1:], n * chunk - b, axis=-1)], axis=-1)
+        return jnp.moveaxis(q.reshape(*q.shape[:-1], n, chunk), -2, 0)
+
+    def one(args):
+        return run(args[0], args[1], act if shared else args[2])
+
+    out = jax.lax.map(one, (split(x), split(v)) + (() if shared else (split(act),)))
+
+    def join(q):  # (C, ..., chunk) -> (..., B)
+        q = jnp.moveaxis(q, 0, -2)
+        return q.reshape(*q.shape[:-2], n * chunk)[..., :b]
+
+    return tuple(join(q) for q in out)
 
 
 def make_rollout(body: Body, medium=None, dt: float | None = None, record_every: int = 1):
@@ -69,7 +121,7 @@ def make_rollout(body: Body, medium=None, dt: float | None = None, record_every:
     ``rec`` is (B, R, N, 3); the final positions and velocities are (B, N, 3). It compiles
     once per shape; a second call with the same shapes reuses the compiled code.
     """
-    return jax.jit(jax.vmap(rollout_fn(body, medium, dt, record_every)))
+    return jax.jit(rollout_fn(body, medium, dt, record_every))
 
 
 def blown_up(positions: jax.Array, velocities: jax.Array) -> jax.Array:

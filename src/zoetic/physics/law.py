@@ -1,23 +1,28 @@
 """The force law and the step, written once for NumPy and JAX (an array-module argument ``xp``).
 
-Every function takes the array module (``numpy`` or ``jax.numpy``), a ``model.Model`` and
-positions and velocities shaped (..., N, 3) with activations (..., A): the NumPy reference
-steps a batch (B, N, 3) in float64, the JAX mirror one candidate (N, 3) in float32 under
-``vmap``. The terms are those of the Numba kernel (``kernel_terms``), its hand-tuned twin:
-springs and muscles, gravity and buoyancy, water panels whose force can at most stop a panel's
-normal motion in one step, fins, a penalty floor with implicit directional Coulomb friction,
-implicit nodal damping, semi-implicit Euler with the stiff springs sub-stepped after one kick
-of everything else (``multirate.split``). Conformance tests hold the three equal.
+The law works in a structure-of-arrays layout with the batch innermost: positions and
+velocities are (3, N, B) (the x, y and z components of N nodes for B candidates) and
+activations (A, B), so that every term is elementwise work over contiguous rows of B lanes,
+which NumPy and XLA vectorise. ``to_soa``/``from_soa`` convert from and to the (..., N, 3)
+arrays the rest of the package holds; ``forces`` and ``step`` take those. The NumPy reference
+steps a batch in float64, the JAX mirror a batch (or one candidate, B = 1) in float32. The
+terms are those of the Numba kernel (``kernel_terms``), its hand-tuned twin: springs and
+muscles, gravity and buoyancy, water panels whose force can at most stop a panel's normal
+motion in one step, fins, a penalty floor with implicit directional Coulomb friction, implicit
+nodal damping, semi-implicit Euler with the stiff springs sub-stepped after one kick of
+everything else (``multirate.split``). Conformance tests hold the three equal.
 
-NumPy arrays are values here as JAX arrays are: nothing is changed in place. The two modules
-differ only in how entries are written (``add_at``, ``set_at``). Terms are added where the JAX
-mirror always added them: XLA fuses elementwise work and may contract a multiply and an add, so
-the same sums written another way can round differently. Square roots and unit
-vectors are guarded (the double-``where`` trick) so that JAX gradients stay finite at rest,
-where velocities are exactly zero.
+Nothing is written in place, and nothing is scattered: a term's contributions to the nodes
+(spring ends, panel and fin corners) are gathered back per node through a padded incidence
+table built once from the model's constant indices (``incidence``) and summed, the same code in
+NumPy and JAX (XLA's scatter is serial on a CPU; a gather of whole B-lane rows is a copy).
+Square roots and unit vectors are guarded (the double-``where`` trick) so that JAX gradients
+stay finite at rest, where velocities are exactly zero.
 """
 
 from __future__ import annotations
+
+from functools import lru_cache
 
 import numpy as np
 
@@ -27,31 +32,65 @@ TINY = 1e-12  # the kernel's guard on lengths
 TINY2 = 1e-30  # the kernel's guard on squared panel normals
 
 
-def add_at(xp, out, index, values, unique: bool = False):
-    """Return ``out`` with ``values`` added at ``out[index]``: repeated entries add up, unless
-    the caller knows there are none (``unique``: NumPy then adds in one pass)."""
-    if xp is np:
-        out = out.copy()
-        if unique:
-            out[index] += values
-        else:
-            np.add.at(out, index, values)
-        return out
-    return out.at[index].add(values)
+def to_soa(xp, q):
+    """Return node vectors (..., N, 3) as (3, N, B), the batch axes flattened into B (1 for
+    a single candidate)."""
+    n = q.shape[-2]
+    return xp.transpose(xp.reshape(q, (-1, n, 3)), (2, 1, 0))
 
 
-def set_at(xp, out, index, values):
-    """Return ``out`` with ``out[index]`` replaced by ``values``."""
-    if xp is np:
-        out = out.copy()
-        out[index] = values
-        return out
-    return out.at[index].set(values)
+def from_soa(xp, q, batch_shape: tuple):
+    """Return (3, N, B) node vectors as (*batch_shape, N, 3)."""
+    return xp.reshape(xp.transpose(q, (2, 1, 0)), (*batch_shape, q.shape[1], 3))
 
 
-def rows(idx):
-    """Return the index of node rows ``idx`` in an array (..., N, 3)."""
-    return (..., idx, slice(None))
+def col(q):
+    """Return a per-item model array (K,) as a column (K, 1) that broadcasts over the batch."""
+    return q[:, None]
+
+
+@lru_cache(maxsize=256)
+def _incidence(targets: bytes, n: int) -> np.ndarray:
+    t = np.frombuffer(targets, dtype=np.int64)
+    order = np.argsort(t, kind="stable")
+    counts = np.bincount(t, minlength=n)
+    table = np.full((n, max(int(counts.max(initial=0)), 1)), t.size, dtype=np.int64)
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    for node in range(n):
+        table[node, : counts[node]] = order[starts[node] : starts[node] + counts[node]]
+    table.setflags(write=False)
+    return table
+
+
+def incidence(targets: np.ndarray, n: int) -> np.ndarray:
+    """Return the (n, D) table of which entries of ``targets`` (node indices) land on each
+    node, in their order, padded with len(targets) (the zero row ``gather_sum`` appends)."""
+    return _incidence(np.ascontiguousarray(targets, dtype=np.int64).tobytes(), n)
+
+
+def gather_sum(xp, values, targets: np.ndarray, n: int):
+    """Return (3, n, B): the rows of ``values`` (3, M, B) summed onto the nodes ``targets`` (M,)
+    they belong to (a scatter-add written as a gather of constant indices)."""
+    if targets.size == 0:
+        return xp.zeros((values.shape[0], n, values.shape[-1]), dtype=values.dtype)
+    table = incidence(targets, n)
+    padded = xp.concatenate([values, xp.zeros_like(values[:, :1])], axis=1)
+    return _sum([padded[:, table[:, j]] for j in range(table.shape[1])])
+
+
+def _sum(terms: list):
+    """Return the sum of arrays in list order, as a chain of additions (no reduction: XLA's
+    CPU reductions over short axes are slow, its elementwise additions fuse)."""
+    total = terms[0]
+    for term in terms[1:]:
+        total = total + term
+    return total
+
+
+def _corners(q, nodes: np.ndarray, w: np.ndarray):
+    """Return the weighted sums over each row of ``nodes`` (K, C) of q (..., N, B) with
+    weights ``w`` (K, C): a panel's or a fin's mean of its corners, (..., K, B)."""
+    return _sum([q[..., nodes[:, c], :] * w[:, c, None] for c in range(nodes.shape[1])])
 
 
 def _safe_sqrt(xp, s):
@@ -60,100 +99,113 @@ def _safe_sqrt(xp, s):
     return xp.where(pos, xp.sqrt(xp.where(pos, s, 1.0)), 0.0)
 
 
+def _dot(a, b):
+    """Return the dot products over the component axis 0 of (3, ...) arrays."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _cross(xp, a, b):
+    return xp.stack(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    )
+
+
 def _norm(xp, a):
-    return _safe_sqrt(xp, xp.sum(a * a, axis=-1))
+    return _safe_sqrt(xp, _dot(a, a))
 
 
 def _unit(xp, a):
-    return a / (_norm(xp, a) + TINY)[..., None]
+    return a / (_norm(xp, a) + TINY)
 
 
 def springs(xp, m: Model, x, v, a, idx):
-    """Return the nodal forces (..., N, 3) of the springs with indices ``idx`` (NumPy, fixed
+    """Return the nodal forces (3, N, B) of the springs with indices ``idx`` (NumPy, fixed
     when JAX traces)."""
     sa, sb = m.spring_a[idx], m.spring_b[idx]
-    d = x[..., sb, :] - x[..., sa, :]
+    d = x[:, sb] - x[:, sa]
     length = _norm(xp, d) + TINY
-    u = d / length[..., None]
-    rest = m.relaxed[idx] + a[..., m.spring_col[idx]] * (m.contracted[idx] - m.relaxed[idx])
-    edot = xp.sum((v[..., sb, :] - v[..., sa, :]) * u, axis=-1)
-    fs = (m.stiffness[idx] * (length - rest) + m.spring_damping[idx] * edot)[..., None] * u
-    return add_at(xp, add_at(xp, xp.zeros_like(x), rows(sa), fs), rows(sb), -fs)
+    u = d / length
+    relaxed = col(m.relaxed[idx])
+    rest = relaxed + a[m.spring_col[idx]] * (col(m.contracted[idx]) - relaxed)
+    edot = _dot(v[:, sb] - v[:, sa], u)
+    fs = (col(m.stiffness[idx]) * (length - rest) + col(m.spring_damping[idx]) * edot) * u
+    return gather_sum(xp, xp.concatenate([fs, -fs], axis=1), np.concatenate([sa, sb]), x.shape[1])
 
 
 def weight(xp, m: Model, x):
-    """Return gravity and, below the water level, buoyancy (..., N) along y."""
-    g = m.gravity
-    return xp.where(x[..., 1] < m.water_level, m.mass * (g * m.buoyancy - g), -m.mass * g)
+    """Return gravity and, below the water level, buoyancy (N, B) along y."""
+    g, mass = m.gravity, col(m.mass)
+    return xp.where(x[1] < m.water_level, mass * (g * m.buoyancy - g), -mass * g)
 
 
 def water(xp, m: Model, x, v):
     """Return the water's reaction on the surface panels (Tu & Terzopoulos), shared by each
     panel's nodes: it opposes a panel's outward normal velocity, c * drag * A * |v| (n.v),
     and at most stops the panel's normal motion in one step."""
-    w = m.panel_weights  # (P, 4)
-    p = x[..., m.panels, :]  # (..., P, 4, 3)
-    nrm = xp.cross(p[..., 2, :] - p[..., 0, :], p[..., 3, :] - p[..., 1, :])  # 2 A n
-    nn = xp.sum(nrm * nrm, axis=-1) + TINY2
-    vm = xp.einsum("...pkd,pk->...pd", v[..., m.panels, :], w)
-    q = xp.maximum(xp.sum(nrm * vm, axis=-1), 0.0)
-    vv = xp.sum(vm * vm, axis=-1)
-    lim = xp.minimum(0.5 * m.water_drag * m.panel_drag * _safe_sqrt(xp, nn * vv), m.panel_mass_dt)
-    wet = xp.einsum("...pk,pk->...p", p[..., 1], w) < m.water_level
+    w, panels = m.panel_weights, m.panels  # (P, 4)
+    p = [x[:, panels[:, c]] for c in range(4)]  # the corners, (3, P, B) each
+    nrm = _cross(xp, p[2] - p[0], p[3] - p[1])  # 2 A n
+    nn = _dot(nrm, nrm) + TINY2
+    vm = _corners(v, panels, w)
+    q = xp.maximum(_dot(nrm, vm), 0.0)
+    vv = _dot(vm, vm)
+    lim = 0.5 * m.water_drag * col(m.panel_drag) * _safe_sqrt(xp, nn * vv)
+    lim = xp.minimum(lim, col(m.panel_mass_dt))
+    wet = _corners(x[1], panels, w) < m.water_level
     mag = xp.where(wet, q / nn * lim, 0.0)
-    fp = -(w * mag[..., None])[..., None] * nrm[..., None, :]  # (..., P, 4, 3)
-    at = rows(m.panels.reshape(-1))
-    return add_at(xp, xp.zeros_like(x), at, fp.reshape(*fp.shape[:-3], -1, 3))
+    fp = [-(w[:, c, None] * mag) * nrm for c in range(4)]  # each corner's share, (3, P, B)
+    return gather_sum(xp, xp.concatenate(fp, axis=1), panels.T.reshape(-1), x.shape[1])
 
 
 def fins(xp, m: Model, x, v, a):
     """Return the fins' forces: flat plates at their actuator's angle to the body, pushed on
     by the water (at most stopping their normal motion in one step)."""
-    fwd = _unit(xp, x[..., m.fin_forward[:, 0], :] - x[..., m.fin_forward[:, 1], :])
-    span = x[..., m.fin_span[:, 0], :] - x[..., m.fin_span[:, 1], :]
-    span = _unit(xp, span - xp.sum(span * fwd, -1, keepdims=True) * fwd)
-    up = xp.cross(fwd, span)
-    lo, hi = m.fin_angle[:, 0], m.fin_angle[:, 1]
-    ang = lo + a[..., m.fin_actuator] * (hi - lo)
-    nrm = xp.cos(ang)[..., None] * up + xp.sin(ang)[..., None] * fwd
+    fwd = _unit(xp, x[:, m.fin_forward[:, 0]] - x[:, m.fin_forward[:, 1]])
+    span = x[:, m.fin_span[:, 0]] - x[:, m.fin_span[:, 1]]
+    span = _unit(xp, span - _dot(span, fwd) * fwd)
+    up = _cross(xp, fwd, span)
+    lo, hi = col(m.fin_angle[:, 0]), col(m.fin_angle[:, 1])
+    ang = lo + a[m.fin_actuator] * (hi - lo)
+    nrm = xp.cos(ang) * up + xp.sin(ang) * fwd
     nodes = np.maximum(m.fin_nodes, 0)  # padding: node 0 at weight 0
-    wts = m.fin_weights
-    vm = xp.einsum("...kqd,kq->...kd", v[..., nodes, :], wts)
-    cy = xp.einsum("...kq,kq->...k", x[..., nodes, 1], wts)
-    vn = xp.sum(nrm * vm, axis=-1)
-    cap = m.fin_mass * xp.abs(vn) / m.dt
-    mag = xp.clip(m.water_drag * m.fin_area * _norm(xp, vm) * vn, -cap, cap)
+    wts = m.fin_weights  # (K, 4)
+    vm = _corners(v, nodes, wts)
+    cy = _corners(x[1], nodes, wts)
+    vn = _dot(nrm, vm)
+    cap = col(m.fin_mass) * xp.abs(vn) / m.dt
+    mag = xp.clip(m.water_drag * col(m.fin_area) * _norm(xp, vm) * vn, -cap, cap)
     mag = xp.where(cy < m.water_level, mag, 0.0)
-    fq = -(wts * mag[..., None])[..., None] * nrm[..., None, :]  # (..., K, 4, 3)
-    return add_at(xp, xp.zeros_like(x), rows(nodes.reshape(-1)), fq.reshape(*fq.shape[:-3], -1, 3))
+    fq = [-(wts[:, c, None] * mag) * nrm for c in range(4)]  # each node's share, (3, K, B)
+    return gather_sum(xp, xp.concatenate(fq, axis=1), nodes.T.reshape(-1), x.shape[1])
 
 
 def ground(xp, m: Model, x, v, f_other):
     """Return the floor's forces: a penalty normal force at y = 0 and directional Coulomb
     friction along the local body axis, solved against the velocity ``f_other`` would give."""
-    dt = m.dt
-    pen = -x[..., 1]
-    normal = m.floor_stiffness * pen - m.floor_damping * v[..., 1]
+    dt, mass = m.dt, col(m.mass)
+    pen = -x[1]
+    normal = m.floor_stiffness * pen - m.floor_damping * v[1]
     normal = xp.where((pen > 0) & (normal > 0), normal, 0.0)
-    t = _unit(xp, (x[..., m.axis_front, :] - x[..., m.axis_back, :])[..., np.array([0, 2])])
-    tx, tz = t[..., 0], t[..., 1]
-    px = v[..., 0] + dt * f_other[..., 0] / m.mass
-    pz = v[..., 2] + dt * f_other[..., 2] / m.mass
+    axis = x[:, m.axis_front] - x[:, m.axis_back]
+    length = _safe_sqrt(xp, axis[0] * axis[0] + axis[2] * axis[2]) + TINY
+    tx, tz = axis[0] / length, axis[2] / length
+    px = v[0] + dt * f_other[0] / mass
+    pz = v[2] + dt * f_other[2] / mass
     vf = px * tx + pz * tz
     vl = pz * tx - px * tz
     mu = xp.where(vf > 0, m.friction_forward, m.friction_backward)
-    ff = xp.minimum(mu * normal, m.mass * xp.abs(vf) / dt)
-    fl = xp.minimum(m.friction_lateral * normal, m.mass * xp.abs(vl) / dt)
+    ff = xp.minimum(mu * normal, mass * xp.abs(vf) / dt)
+    fl = xp.minimum(m.friction_lateral * normal, mass * xp.abs(vl) / dt)
     ff = xp.where(vf > 0, -ff, ff)
     fl = xp.where(vl > 0, -fl, fl)
-    return xp.stack([ff * tx - fl * tz, normal, ff * tz + fl * tx], axis=-1)
+    return xp.stack([ff * tx - fl * tz, normal, ff * tz + fl * tx])
 
 
-def forces(xp, m: Model, x, v, a, idx):
-    """Return the total nodal forces (..., N, 3) with the springs ``idx`` (the step passes the
+def forces_soa(xp, m: Model, x, v, a, idx):
+    """Return the total nodal forces (3, N, B) with the springs ``idx`` (the step passes the
     slow ones; every other term in full)."""
     f = springs(xp, m, x, v, a, idx)
-    f = add_at(xp, f, (..., 1), weight(xp, m, x), unique=True)
+    f = xp.stack([f[0], f[1] + weight(xp, m, x), f[2]])
     if m.water:
         f = f + water(xp, m, x, v)
         if m.fin_area.shape[0]:
@@ -163,26 +215,45 @@ def forces(xp, m: Model, x, v, a, idx):
     return f
 
 
-def step(xp, m: Model, x, v, a):
-    """Return (x, v) after one semi-implicit Euler step of dt (nodal damping implicit): every
-    force but the stiff springs kicks once, then those drive ``m.substeps`` sub-steps of the
-    nodes they touch (impulse multirate, ``multirate.split``)."""
+def step_soa(xp, m: Model, x, v, a):
+    """Return (x, v) (3, N, B) after one semi-implicit Euler step of dt (nodal damping
+    implicit): every force but the stiff springs kicks once, then those drive ``m.substeps``
+    sub-steps of the nodes they touch (impulse multirate, ``multirate.split``); the other
+    nodes keep the one step, as without a split."""
     real = m.mass.dtype.type
-    hm = (m.dt / m.mass)[:, None]
-    damp = 1.0 / (1.0 + hm * m.node_damping[:, None])
-    f = forces(xp, m, x, v, a, m.slow_springs)
+    hm = col(m.dt / m.mass)
+    damp = 1.0 / (1.0 + hm * col(m.node_damping))
+    f = forces_soa(xp, m, x, v, a, m.slow_springs)
     vs = (v + hm * f) * damp
     xs = x + m.dt * vs
     if m.fast_springs.shape[0] == 0:
         return xs, vs
-    sn, fn = m.slow_nodes, m.fast_nodes  # nodes no stiff spring touches: as without a split
-    x, v = set_at(xp, x, rows(sn), xs[..., sn, :]), set_at(xp, v, rows(sn), vs[..., sn, :])
-    v = add_at(xp, v, rows(fn), hm[fn] * f[..., fn, :], unique=True)  # a kick, then sub-steps
+    fast = np.zeros((m.mass.shape[0], 1), dtype=bool)  # nodes a stiff spring touches
+    fast[m.fast_nodes] = True
+    x, v = xp.where(fast, x, xs), xp.where(fast, v + hm * f, vs)  # a kick, then sub-steps
     h = real(m.dt) / real(m.substeps)
-    hms = (h / m.mass[fn])[:, None]
-    damps = 1.0 / (1.0 + hms * m.node_damping[fn][:, None])
+    hms = col(h / m.mass)
+    damps = 1.0 / (1.0 + hms * col(m.node_damping))
     for _ in range(m.substeps):
-        fq = springs(xp, m, x, v, a, m.fast_springs)[..., fn, :]
-        vq = (v[..., fn, :] + hms * fq) * damps
-        x, v = add_at(xp, x, rows(fn), h * vq, unique=True), set_at(xp, v, rows(fn), vq)
+        vq = (v + hms * springs(xp, m, x, v, a, m.fast_springs)) * damps
+        x, v = xp.where(fast, x + h * vq, x), xp.where(fast, vq, v)
     return x, v
+
+
+def forces(xp, m: Model, x, v, a, idx):
+    """Return ``forces_soa`` for node vectors (..., N, 3) and activations (..., A), as
+    (..., N, 3)."""
+    f = forces_soa(xp, m, to_soa(xp, x), to_soa(xp, v), _acts(xp, a), idx)
+    return from_soa(xp, f, x.shape[:-2])
+
+
+def step(xp, m: Model, x, v, a):
+    """Return ``step_soa`` for node vectors (..., N, 3) and activations (..., A), as
+    (x, v) (..., N, 3)."""
+    xs, vs = step_soa(xp, m, to_soa(xp, x), to_soa(xp, v), _acts(xp, a))
+    return from_soa(xp, xs, x.shape[:-2]), from_soa(xp, vs, x.shape[:-2])
+
+
+def _acts(xp, a):
+    """Return activations (..., A) as (A, B)."""
+    return xp.transpose(xp.reshape(a, (-1, a.shape[-1])))

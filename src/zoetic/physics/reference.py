@@ -31,10 +31,12 @@ def simulate_reference(
         act = np.zeros((*act.shape[:2], 1))
     m = compile_model(body, medium, dt, dtype=np.float64)
     state = state or rest_state(body, act.shape[0])
-    x, v = state.positions.astype(np.float64), state.velocities.astype(np.float64)
+    x = law.to_soa(np, state.positions.astype(np.float64))
+    v = law.to_soa(np, state.velocities.astype(np.float64))
     for t in range(act.shape[1]):
-        x, v = law.step(np, m, x, v, act[:, t])
-    return State(x, v)
+        x, v = law.step_soa(np, m, x, v, act[:, t].T)
+    batch = state.positions.shape[:1]
+    return State(*(np.ascontiguousarray(law.from_soa(np, q, batch)) for q in (x, v)))
 
 
 def _spring_jacobians(m: Model, x: np.ndarray, a: np.ndarray):
