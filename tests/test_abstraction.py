@@ -153,3 +153,14 @@ def test_blending_is_continuous_at_the_seams(shark):
     np.testing.assert_allclose(u[late], two.raw(t[late] - s), atol=1e-12)
     hard = SequenceController("shark", tuple(shark.actuator_names), ((one, 2.0), (two, 2.0)), 0.0)
     assert np.abs(np.diff(hard.raw(t), axis=0)).max() > 0.4  # without overlap: a jump
+
+
+def test_the_measure_a_task_is_about_follows_its_turn_target():
+    """A turn (heading or body-axis heading with a target) is judged on its heading change; a
+    straight gait that only keeps its heading (target 0) on its distance."""
+    from zoetic.learning.abstraction import primary_measure
+    from zoetic.tasks import load_task
+
+    assert primary_measure(load_task("sharp-turn-left")) == "heading_change"
+    assert primary_measure(load_task("crawl-straight")) == "forward"
+    assert primary_measure(load_task("swim-straight")) == "forward"

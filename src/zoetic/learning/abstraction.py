@@ -275,8 +275,11 @@ def summary(m: dict) -> dict:
 
 
 def primary_measure(task: Task | None) -> str:
-    """Return the measure a task is about: heading_change for turns, else forward."""
-    if task is not None and any(t.kind == "heading_change" for t in task.terms):
+    """Return the measure a task is about: heading_change for turns (a heading or body-axis
+    heading term with a target other than 0), else forward (a straight gait that keeps its
+    heading is still about distance)."""
+    turns = ("heading_change", "body_heading_change")
+    if task is not None and any(t.kind in turns and t.target != 0.0 for t in task.terms):
         return "heading_change"
     return "forward"
 
