@@ -415,3 +415,21 @@ def test_the_aquarium_lives_through_the_public_api():
     assert run.life.events == again.events
     with pytest.raises(zoetic.ZoeticError, match="fishs"):
         zoetic.aquarium(fishs=2)
+
+
+def test_a_fish_leaves_a_particle_to_a_nearer_fish_heading_for_it():
+    from zoetic.behavior.aquarium.brain import conceded
+
+    # fish 0 at the origin, fish 1 1 m nearer to particle 0 (at x = 3) and heading for it;
+    # particle 1 lies behind fish 1's heading (at x = -3)
+    nose = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.2]])
+    fwd = np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    food = np.array([[3.0, 0.0, 0.0], [-3.0, 0.0, 0.5]])
+    seen = ~np.eye(2, dtype=bool)
+    given = conceded(nose, fwd, food, np.array([True, True]), seen)
+    assert given.tolist() == [[True, False], [False, False]]
+    # not eating, not perceived, or heading elsewhere: nothing is conceded
+    assert not conceded(nose, fwd, food, np.array([True, False]), seen).any()
+    assert not conceded(nose, fwd, food, np.array([True, True]), np.zeros((2, 2), bool)).any()
+    away = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    assert not conceded(nose, away, food, np.array([True, True]), seen).any()

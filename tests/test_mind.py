@@ -8,6 +8,7 @@ import pytest
 
 from zoetic.behavior.aquarium.species import Habits, MindConstants
 from zoetic.behavior.mind import (
+    REFLEX_HOLD,
     MindState,
     Situation,
     ate,
@@ -114,6 +115,30 @@ def test_intentions_persist_unless_a_more_urgent_one_fires():
     assert m2.intention == "eat"
     m3, _ = think(m2, 1.5, C, LONER, Situation())
     assert m3.intention == "wander" and m3.since == 1.5
+
+
+def test_avoiding_another_fish_ends_when_it_has_passed_a_rock_holds_on():
+    hungry = MindState(eaten=0.0, intention="eat", since=0.0)
+    by_fish = Situation(collision=True, fish_only=True, food_distance=2.0)
+    by_rock = Situation(collision=True, food_distance=2.0)
+    clear = Situation(food_distance=2.0)
+    m, _ = think(hungry, 5.0, C, LONER, by_fish)
+    assert m.intention == "avoid" and m.reflex
+    m, _ = think(m, 5.1, C, LONER, clear)  # the fish has passed: held REFLEX_HOLD s
+    assert m.intention == "avoid"
+    m, _ = think(m, 5.0 + REFLEX_HOLD, C, LONER, clear)  # then back to eating
+    assert m.intention == "eat" and m.since == 5.0 + REFLEX_HOLD
+    m, _ = think(hungry, 5.0, C, LONER, by_rock)
+    assert m.intention == "avoid" and not m.reflex
+    m, _ = think(m, 5.1, C, LONER, clear)  # a rock: the avoidance holds persistence s
+    assert m.intention == "avoid"
+    m, _ = think(m, 6.0, C, LONER, clear)
+    assert m.intention == "eat"
+    # a fish, then a rock ahead in the same avoidance: no longer a reflex, it holds
+    m, _ = think(hungry, 5.0, C, LONER, by_fish)
+    m, _ = think(m, 5.1, C, LONER, by_rock)
+    m, _ = think(m, 5.2, C, LONER, clear)
+    assert m.intention == "avoid"
 
 
 def test_focuser_picks_the_nearest_and_keeps_a_near_previous_target():

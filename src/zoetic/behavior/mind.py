@@ -14,7 +14,10 @@ The intention generator follows the thesis's priorities: (1) an imminent collisi
 (a predator hunts instead of eating), the previous one of the two kept on a tie; (4) wander if
 the habits are content with the surroundings, else leave. Intentions persist: a new intention
 of the same or a lower priority level replaces the current one only after ``persistence``
-seconds, a more urgent one at once, so that the choice does not flicker between periods.
+seconds, a more urgent one at once, so that the choice does not flicker between periods;
+an avoidance of another fish alone (no obstacle ahead) is a reflex that ends ``REFLEX_HOLD``
+s after that fish has passed (our reading: the 1 s hold that clears a rock kept a fish from its
+meal while nothing threatened it any more).
 Pure functions over plain numbers and small arrays; constants in SI (see ``aquarium.species``).
 """
 
@@ -36,6 +39,9 @@ LEVEL = {
     "wander": 3,
     "leave": 3,
 }
+# s: an avoidance of another fish ends this long after no fish threatens any more (not held
+# the whole persistence; shorter, the fish flickers between avoiding and its errand each period)
+REFLEX_HOLD = 0.3
 
 
 def ramp(s, q1: float, q2: float):
@@ -96,6 +102,7 @@ class Situation:
     crowded: bool = False  # more fishes within personal space than the habits tolerate
     alone: bool = False  # no fish perceived at all
     near_obstacle: bool = False  # an obstacle within personal space
+    fish_only: bool = False  # the imminent collision is with another fish, no obstacle ahead
 
 
 @dataclass(frozen=True)
@@ -108,6 +115,8 @@ class MindState:
     intention: str = "wander"
     since: float = -np.inf  # when the current intention was chosen (s)
     target: int | None = None
+    reflex: bool = False  # the avoidance under way is of another fish only (``think``)
+    threatened: float = -np.inf  # when another fish last threatened a collision (s)
 
 
 def initial_mind(initial_hunger: float, p0: float, t: float = 0.0) -> MindState:
@@ -227,13 +236,22 @@ def think(
 ) -> tuple[MindState, Drives]:
     """Return the mind after one brain period at time t, and its drives (``d`` when given,
     e.g. from ``drives_many``): the intention the priorities and persistence choose (the
-    target is left to the focuser)."""
+    target is left to the focuser); an avoidance of another fish alone ends ``REFLEX_HOLD`` s
+    after no collision threatens, not held the whole persistence."""
     if d is None:
         d = drives(state, t, c, sit.predator_distances)
     cand = intend(d, sit, c, habits, predator, state.intention)
-    chosen = persist(state.intention, state.since, cand, t, c.persistence)
+    if sit.collision and sit.fish_only:
+        state = replace(state, threatened=t)
+    passed = not sit.collision and t - state.threatened >= REFLEX_HOLD - 1e-9
+    if state.intention == "avoid" and state.reflex and passed:
+        chosen = cand  # the fish it avoided has passed: back to what it was doing
+    else:
+        chosen = persist(state.intention, state.since, cand, t, c.persistence)
     if chosen != state.intention:
         state = replace(state, intention=chosen, since=t, target=None)
+    if chosen == "avoid" and sit.collision and state.reflex != sit.fish_only:
+        state = replace(state, reflex=sit.fish_only)
     return state, d
 
 

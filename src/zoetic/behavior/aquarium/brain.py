@@ -67,6 +67,9 @@ class View:
     collision: bool
     away: np.ndarray | None
     threat: float = np.inf  # m from the nose to a fish that threatens a collision (inf: none)
+    fish_only: bool = False  # the collision threatens from another fish only, no obstacle
+    # (F,) particles another fish nearer to them is heading for (``conceded``; None: none)
+    conceded: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -159,6 +162,7 @@ class FishBrain:
             np.array([h.personal_space]),
             np.array([h.crowd]),
             [v.collision],
+            [v.fish_only],
         )
         return sits[0]
 
@@ -204,7 +208,11 @@ class FishBrain:
         fishes' ``kinds``."""
         same, _, prey = masks
         if intention == "eat":
-            candidates = reach_cost(v.me, v.food, v.food_distance)
+            d = v.food_distance
+            if v.conceded is not None:
+                free = np.where(v.conceded, np.inf, d)
+                d = free if np.isfinite(free).any() else d  # all conceded: race for one
+            candidates = reach_cost(v.me, v.food, d)
         elif intention == "mate":
             candidates = np.where(same, v.fish_distance, np.inf)
         elif intention == "hunt":
@@ -265,6 +273,7 @@ def situations(
     personal_space: np.ndarray,
     crowd: np.ndarray,
     collision: np.ndarray,
+    fish_only: np.ndarray | None = None,
 ) -> tuple[list[Situation], np.ndarray]:
     """Return every fish's ``Situation`` from all the percepts at once, and (n, n) the
     distances of the predators each perceives (inf elsewhere, for ``mind.drives_many``).
@@ -272,9 +281,11 @@ def situations(
     fish (n, M), food (n, F), obstacles (n, S): the distances perceived by each of n fishes
     (inf: not perceived, ``Percepts``; M = n in the tank, one row for ``FishBrain._situation``);
     same, hunters, prey (n, M): row i the masks of ``FishBrain.kinds`` of fish i;
-    personal_space, crowd (n,): the habits; collision (n,) bools."""
+    personal_space, crowd (n,): the habits; collision (n,) bools; fish_only (n,) bools: the
+    collision threatens from another fish only (default none)."""
     n = len(fish)
     inf = np.full(n, np.inf)
+    fish_only = [False] * n if fish_only is None else fish_only
     seen = np.isfinite(fish)
     predators = np.where(hunters, fish, np.inf)
     food_near = food.min(axis=1) if food.shape[1] else inf
@@ -290,8 +301,8 @@ def situations(
     for i, x in zip(ii.tolist(), predators[ii, jj].tolist(), strict=True):
         near_predators[i].append(x)
     out = [
-        Situation(bool(c), tuple(pd), f, m, q, bool(cr), bool(al), bool(no))
-        for c, pd, f, m, q, cr, al, no in zip(
+        Situation(bool(c), tuple(pd), f, m, q, bool(cr), bool(al), bool(no), bool(fo))
+        for c, pd, f, m, q, cr, al, no, fo in zip(
             collision,
             near_predators,
             food_near.tolist(),
@@ -300,10 +311,38 @@ def situations(
             crowded,
             alone,
             near_obstacle,
+            fish_only,
             strict=True,
         )
     ]
     return out, predators
+
+
+CONCEDE_COS = 0.7  # a fish heads for a particle within about 45 degrees of its heading
+
+
+def conceded(
+    nose: np.ndarray,
+    forward: np.ndarray,
+    food: np.ndarray,
+    eating: np.ndarray,
+    seen: np.ndarray,
+) -> np.ndarray:
+    """Return (n, F): the food particles each of n fishes leaves to another, for its focuser.
+
+    Fish i concedes particle p when a fish it perceives (``seen`` (n, n)) that is eating
+    (``eating`` (n,)) is nearer to p than i (horizontally, nose to particle) and heads for it
+    (p within about 45 degrees of its heading): racing it there would end in a collision or
+    a lost meal, while another particle is free. Our addition to Tu's focuser (which takes
+    the nearest food): with ten fishes after fifteen particles the minnows otherwise
+    converged on the same particles and collided there. nose, forward (n, 3); food (F, 3)."""
+    to = food[None, :, :] - nose[:, None, :]  # (n, F, 3)
+    to[..., 1] = 0.0
+    dist = np.linalg.norm(to, axis=-1)
+    cos = np.einsum("nfc,nc->nf", to, forward) / np.maximum(dist, 1e-9)
+    heading = (cos > CONCEDE_COS) & np.asarray(eating, bool)[:, None]  # (k, F)
+    nearer = dist[None, :, :] < dist[:, None, :]  # (i, k, F): k nearer to p than i
+    return (np.asarray(seen, bool)[:, :, None] & nearer & heading[None]).any(axis=1)
 
 
 def tank_brains(

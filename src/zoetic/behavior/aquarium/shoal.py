@@ -15,10 +15,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from zoetic.behavior.aquarium.bodystate import FishBodies
-from zoetic.behavior.aquarium.brain import FishBrain, View, situations
+from zoetic.behavior.aquarium.brain import FishBrain, View, conceded, situations
 from zoetic.behavior.aquarium.locomotion import Demand, LearnedLocomotion
 from zoetic.behavior.aquarium.perception import Percepts, obstacle_distance, perceive
 from zoetic.behavior.aquarium.routines import (
+    CLEARANCE,
     Me,
     collision_ahead,
     fish_threats,
@@ -79,10 +80,12 @@ class Shoal:
         food = world.food_positions[0]
         pc, seen = self.perceive(world, alive, food)
         selves, meals = self._selves(pc)
-        hits, aways, threats = self._ahead(pc, selves, meals)
+        hits, aways, threats, fish_only = self._ahead(pc, selves, meals)
         sits, predators = situations(
-            pc.fish, pc.food, pc.obstacles, *self.masks, *self.habits, hits
+            pc.fish, pc.food, pc.obstacles, *self.masks, *self.habits, hits, fish_only
         )
+        eating = alive & np.array([br.thought.intention == "eat" for br in self.brains])
+        given = conceded(self.bodies.nose, self.bodies.fwd, food, eating, np.isfinite(pc.fish))
         drives = self._drives(period.t0, predators)
         roll, rate, bend = (x.tolist() for x in self.bodies.posture(world, period.t0))
         b, obs = self.bodies, {"time": np.array([period.t0])}
@@ -101,6 +104,8 @@ class Shoal:
                 collision=hits[i],
                 away=aways[i],
                 threat=threats[i],
+                fish_only=fish_only[i],
+                conceded=given[i],
             )
             d = brain.decide({**obs, "view": view}, period, sits[i], drives[i])
             demands.append(
@@ -145,10 +150,11 @@ class Shoal:
 
     def _ahead(
         self, pc: Percepts, selves: list[Me], meals: list[float | None]
-    ) -> tuple[list[bool], list[np.ndarray | None], list[float]]:
-        """Return for each fish whether an obstacle or fish lies ahead, the way out, and how
-        far (m) a threatening fish is (inf: none); an avoiding fish keeps the side it turned
-        to. A hunting predator does not shy away from the prey it chases."""
+    ) -> tuple[list[bool], list[np.ndarray | None], list[float], list[bool]]:
+        """Return for each fish whether an obstacle or fish lies ahead, the way out, how
+        far (m) a threatening fish is (inf: none), and whether only a fish threatens (no
+        obstacle ahead); an avoiding fish keeps the side it turned to. A hunting predator
+        does not shy away from the prey it chases."""
         kind, center, size = self.statics
         probes = [probes_ahead(m, probe_reach(m, q)) for m, q in zip(selves, meals, strict=True)]
         ahead = obstacle_distance(np.stack(probes), kind, center, size)  # all fishes at once
@@ -161,7 +167,7 @@ class Shoal:
         _, sides, near = fish_threats(
             fb.nose, fb.com, fb.fwd, fb.vel, seen, *self.region, np.array(avoiding)
         )
-        hits, aways = [], []
+        hits, aways, fish_only = [], [], []
         for i, brain in enumerate(self.brains):
             prefer = brain.avoid_side if brain.thought.intention == "avoid" else 0
             hit, away = collision_ahead(
@@ -173,7 +179,9 @@ class Shoal:
                 brain.avoid_side = 1 if fwd[2] * away[0] - fwd[0] * away[2] < 0 else -1
             hits.append(hit)
             aways.append(away)
-        return hits, aways, near.tolist()
+            rock = len(kind) > 0 and float(ahead[i].min()) < CLEARANCE
+            fish_only.append(bool(hit and sides[i] and not rock))
+        return hits, aways, near.tolist(), fish_only
 
     def _drives(self, t: float, predators: np.ndarray) -> list[Drives]:
         """Return every fish's drives at time ``t`` s in one step over arrays."""
