@@ -84,10 +84,14 @@ def main() -> None:
     for r in rows:
         summary.setdefault(r["creature"], []).append(r)
     for name, rs in summary.items():
-        f = lambda k: float(np.median([x[k] for x in rs]))  # noqa: E731
+        med = {
+            k: float(np.median([x[k] for x in rs]))
+            for k in rs[0]
+            if k.endswith(("l_s", "ul", "ll"))
+        }
         print(
-            f"{name:10s} useful {f('useful'):.3f} fell {f('fell'):.2f} "
-            f"random {f('best_random_bl_s'):.3f} BL/s tuned {f('best_tuned_bl_s'):.3f} BL/s"
+            f"{name:10s} useful {med['useful']:.3f} fell {med['fell']:.2f} "
+            f"random {med['best_random_bl_s']:.3f} BL/s tuned {med['best_tuned_bl_s']:.3f} BL/s"
         )
     if a.out:
         Path(a.out).write_text(json.dumps(rows, indent=1) + "\n")
