@@ -208,6 +208,14 @@ class Creature:
         """Number of actuators A."""
         return len(self.actuators)
 
+    @property
+    def size(self) -> float:
+        """The body's length scale (m): the sum of its link lengths, or twice its largest
+        radius when every link is a point or a sphere. Speeds in body lengths per second and
+        the search's scale-free defaults (``zoetic.san.scales``) are measured in it."""
+        total = sum(ln.length for ln in self.links)
+        return total if total > 0 else 2.0 * max(ln.radius for ln in self.links)
+
     def link_index(self, name: str) -> int:
         """Return the index of the link called ``name``."""
         return [ln.name for ln in self.links].index(name)

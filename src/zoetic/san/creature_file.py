@@ -74,6 +74,7 @@ def load_creature(name_or_path: str | os.PathLike) -> Creature:
 # A creature's simulation may take at most this many physics steps (seconds / dt): the
 # planar world steps a few hundred thousand times a second, and a search runs many.
 MAX_CREATURE_STEPS = 1_000_000
+PAPER_KD_PER_KS = 0.1  # s: "choosing kd/ks = 0.10 provides suitable energetic motions"
 MIN_CREATURE_DT = 1e-5
 
 
@@ -175,10 +176,10 @@ def _header(data: dict, src: str) -> dict[str, Any]:
     kw["plane"] = h.str("plane", "vertical", PLANES)
     kw["description"] = h.str("description", "")
     for key in ("seconds", "expected_cycle", "dt", "control_dt"):
-        val = h.num(key, getattr(Creature, key))
-        if val <= 0:
+        val = h.num(key, None if key == "expected_cycle" else getattr(Creature, key))
+        if val is not None and val <= 0:
             raise h.err(f"{key} must be positive, got {val:g}")
-        kw[key] = val
+        kw[key] = val  # no expected_cycle: derived from the creature (see _own_scales)
     if kw["dt"] < MIN_CREATURE_DT:
         raise h.err(f"dt = {kw['dt']:g} s is below the smallest allowed ({MIN_CREATURE_DT:g} s)")
     steps = kw["seconds"] / kw["dt"]
@@ -309,8 +310,9 @@ def _joints(data: dict, src: str, links: list[Link]) -> tuple[list[Joint], str]:
     return joints, roots[0]
 
 
-def _actuators(data: dict, src: str, joint_by: dict[str, Joint]) -> list[Actuator]:
-    """Return the [[actuator]] entries as Actuators (at least one), one per joint."""
+def _actuators(data: dict, src: str, joint_by: dict[str, Joint], unset: set[str]) -> list[Actuator]:
+    """Return the [[actuator]] entries as Actuators (at least one), one per joint; the names
+    of those that give no kd are added to ``unset``."""
     acts, aseen = [], set()
     for i, entry in enumerate(_entries(data, "actuator", src)):
         t = _Table(entry, f"{src}: [[actuator]] #{i + 1}")
@@ -327,8 +329,11 @@ def _actuators(data: dict, src: str, joint_by: dict[str, Joint]) -> list[Actuato
         ang = kind == "angular"
         lo, hi = t.num("lo", angle=ang), t.num("hi", angle=ang)
         ks = t.num("ks", per_deg=ang)
-        kd = t.num("kd", ks * 0.1, per_deg=ang)
+        kd = t.num("kd", None, per_deg=ang)
         t.finish()
+        if kd is None:
+            unset.add(name)  # the paper's kd/ks = 0.1 s, or derived (see _own_scales)
+            kd = PAPER_KD_PER_KS * ks
         a = Actuator(name, kind, jn, lo, hi, ks, kd)
         _check_actuator_values(a, t.where)
         acts.append(a)
@@ -386,7 +391,8 @@ def creature_from_dict(data: dict, path: str | os.PathLike | None = None) -> Cre
     link_names = {ln.name for ln in links}
     joints, root = _joints(data, src, links)
     joint_by = {j.name: j for j in joints}
-    acts = _actuators(data, src, joint_by)
+    no_kd: set[str] = set()
+    acts = _actuators(data, src, joint_by, no_kd)
     sens = _sensors(data, src, link_names, joint_by, {a.name: a for a in acts})
     for ln in kw["fall_links"]:
         if ln not in link_names:
@@ -395,7 +401,9 @@ def creature_from_dict(data: dict, path: str | os.PathLike | None = None) -> Cre
         raise CreatureError(f"{src}: [creature]: metric 'follow' needs at least one eye sensor")
     # the root link first: the world makes it the planar root
     links.sort(key=lambda ln: ln.name != root)
-    return Creature(
+    own = kw["expected_cycle"] is None
+    kw["expected_cycle"] = kw["expected_cycle"] or Creature.expected_cycle
+    c = Creature(
         links=tuple(links),
         joints=tuple(joints),
         sensors=tuple(sens),
@@ -403,6 +411,28 @@ def creature_from_dict(data: dict, path: str | os.PathLike | None = None) -> Cre
         path=Path(path) if path is not None else None,
         **kw,
     )
+    return _own_scales(c, no_kd) if own else c
+
+
+def _own_scales(c: Creature, no_kd: set[str]) -> Creature:
+    """Return ``c`` with its time scales derived from its own mechanics (``zoetic.san.scales``):
+    the expected cycle, and the damping of every actuator that gave no kd.
+
+    The paper's two time constants, kd/ks = 0.1 s and node delays of 0.07-0.15 s (0.25 of
+    the expected cycle), suit creatures of its size; a file that gives ``expected_cycle`` is
+    taken to be calibrated in those terms (the zoo) and keeps kd/ks = 0.1 where it gives no
+    kd. A file without it gets kd for a damping ratio of 0.7 about each actuated joint's own
+    inertia, and a cycle of 1.5 servo periods, whatever its size and mass."""
+    from dataclasses import replace
+
+    from zoetic.san.scales import derived_cycle, derived_kd
+
+    kd = derived_kd(c)
+    acts = tuple(
+        replace(a, kd=float(kd[i])) if a.name in no_kd else a for i, a in enumerate(c.actuators)
+    )
+    c = replace(c, actuators=acts)
+    return replace(c, expected_cycle=derived_cycle(c))
 
 
 # ----------------------------------------------------------------------------- saving

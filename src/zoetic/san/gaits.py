@@ -123,7 +123,7 @@ def gait_features(creature, rollout) -> dict:
     com = _com(creature, poses)
     ground = 0.0 if rollout.terrain is None else np.interp(com[:, 0], *rollout.terrain.T)
     height = com[:, 1] - ground
-    size = sum(ln.length for ln in creature.links) or 2 * max(ln.radius for ln in creature.links)
+    size = creature.size
     shape = poses[:, 1:, 2] - poses[:, :1, 2]  # link angles relative to the root
     signals = np.column_stack([np.sin(shape), np.cos(shape), height / size])
     dt = float(rollout.times[1] - rollout.times[0])

@@ -287,6 +287,16 @@ USEFUL_FRACTION = 0.5  # of the best gait's speed
 USEFUL_FLOOR_CM_S = 1.0
 
 
+USEFUL_BODY_LENGTHS_S = 0.1  # the scale-free usefulness bar, in body lengths per second
+
+
+def body_length_bar_cm_s(creature, body_lengths_s: float = USEFUL_BODY_LENGTHS_S) -> float:
+    """Return the scale-free usefulness bar (cm/s): ``body_lengths_s`` of the creature's own
+    size (``Creature.size``) per second, 0.1 by default; the zoo's absolute bars (a quarter
+    of Table 1's speeds) lie between 0.04 (star) and 0.3 (luxo) body lengths per second."""
+    return 100.0 * body_lengths_s * float(creature.size)
+
+
 def useful_threshold_cm_s(result: SearchResult) -> float:
     """Return the speed (cm/s) from which a trial counts as useful in this search.
 
