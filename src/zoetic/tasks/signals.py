@@ -92,6 +92,11 @@ def norm_xz(xp, v):
     return xp.sqrt(x * x + z * z)
 
 
+def _unit(xp, v):
+    """Return vectors (..., 3) scaled to unit length (zero vectors stay near zero)."""
+    return v / (xp.sqrt(xp.sum(v * v, axis=-1, keepdims=True)) + EPS)
+
+
 def roll_angle(xp, positions, left, right, forward=None):
     """Return the roll (...), rad, of positions (..., N, 3): the tilt of the left-right axis
     (the mean of left minus right over the mirror pairs, ``BodyFrame.left`` and ``.right``)
@@ -305,19 +310,9 @@ class Signals:
         head's turns about the centre of mass around that axis between records. Unlike
         ``body_angle``, which is read in the start's vertical plane, a spin about the
         vertical or a body turned sideways adds nothing. Zeros without mirror pairs."""
-        xp = self.xp
-        k, r = self.positions.shape[:2]
-        if self.frame.left.size == 0 or r < 2:
-            return xp.zeros((k, r))
-        pos = self.positions
-        lat = xp.mean(pos[:, :, self.frame.left] - pos[:, :, self.frame.right], axis=2)
-        lat = lat / (xp.sqrt(xp.sum(lat * lat, axis=-1, keepdims=True)) + EPS)
-        d = self.head - self.com
-        a, b = d[:, :-1], d[:, 1:]
-        turn = xp.arctan2(xp.sum(xp.cross(a, b) * lat[:, :-1], axis=-1), xp.sum(a * b, axis=-1))
-        both = self.airborne[:, 1:] * self.airborne[:, :-1]
-        turned = xp.cumsum(turn * both, axis=1)
-        return xp.concatenate([xp.zeros_like(turned[:, :1]), turned], axis=1)
+        if self.frame.left.size == 0 or self.positions.shape[1] < 2:
+            return self.xp.zeros(self.positions.shape[:2])
+        return self._airborne_turn(self.head - self.com, _unit(self.xp, self._lateral))
 
     @cached_property
     def flight_roll(self):
@@ -326,15 +321,25 @@ class Signals:
         left-right axis' turns about the long axis between records, positive when the left
         side goes down. Zeros without mirror pairs."""
         xp = self.xp
-        k, r = self.positions.shape[:2]
-        if self.frame.left.size == 0 or r < 2:
-            return xp.zeros((k, r))
-        pos = self.positions
-        lat = xp.mean(pos[:, :, self.frame.left] - pos[:, :, self.frame.right], axis=2)
-        axis = self.head - self.com
-        axis = axis / (xp.sqrt(xp.sum(axis * axis, axis=-1, keepdims=True)) + EPS)
+        if self.frame.left.size == 0 or self.positions.shape[1] < 2:
+            return xp.zeros(self.positions.shape[:2])
+        axis = _unit(xp, self.head - self.com)
+        lat = self._lateral
         lat = lat - xp.sum(lat * axis, axis=-1, keepdims=True) * axis  # across the long axis
-        a, b = lat[:, :-1], lat[:, 1:]
+        return self._airborne_turn(lat, axis)
+
+    @cached_property
+    def _lateral(self):
+        """The body's left-right vector (K, R, 3): mean of left minus right over mirror pairs."""
+        pos = self.positions
+        return self.xp.mean(pos[:, :, self.frame.left] - pos[:, :, self.frame.right], axis=2)
+
+    def _airborne_turn(self, v, axis):
+        """Return (K, R) rad: the signed turns of vectors ``v`` (K, R, 3) about the unit
+        ``axis`` (K, R, 3) from record to record, summed over the steps wholly airborne (0 at
+        the first record)."""
+        xp = self.xp
+        a, b = v[:, :-1], v[:, 1:]
         turn = xp.arctan2(xp.sum(xp.cross(a, b) * axis[:, :-1], axis=-1), xp.sum(a * b, axis=-1))
         both = self.airborne[:, 1:] * self.airborne[:, :-1]
         turned = xp.cumsum(turn * both, axis=1)
