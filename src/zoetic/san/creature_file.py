@@ -179,7 +179,7 @@ def _header(data: dict, src: str) -> dict[str, Any]:
         val = h.num(key, None if key == "expected_cycle" else getattr(Creature, key))
         if val is not None and val <= 0:
             raise h.err(f"{key} must be positive, got {val:g}")
-        kw[key] = val  # no expected_cycle: derived from the creature (see _own_scales)
+        kw[key] = val  # no expected_cycle: derived from the creature (see san.scales.own_scales)
     if kw["dt"] < MIN_CREATURE_DT:
         raise h.err(f"dt = {kw['dt']:g} s is below the smallest allowed ({MIN_CREATURE_DT:g} s)")
     steps = kw["seconds"] / kw["dt"]
@@ -332,7 +332,7 @@ def _actuators(data: dict, src: str, joint_by: dict[str, Joint], unset: set[str]
         kd = t.num("kd", None, per_deg=ang)
         t.finish()
         if kd is None:
-            unset.add(name)  # the paper's kd/ks = 0.1 s, or derived (see _own_scales)
+            unset.add(name)  # the paper's kd/ks = 0.1 s, or derived (see san.scales.own_scales)
             kd = PAPER_KD_PER_KS * ks
         a = Actuator(name, kind, jn, lo, hi, ks, kd)
         _check_actuator_values(a, t.where)
@@ -411,28 +411,11 @@ def creature_from_dict(data: dict, path: str | os.PathLike | None = None) -> Cre
         path=Path(path) if path is not None else None,
         **kw,
     )
-    return _own_scales(c, no_kd) if own else c
+    if not own:
+        return c
+    from zoetic.san.scales import own_scales
 
-
-def _own_scales(c: Creature, no_kd: set[str]) -> Creature:
-    """Return ``c`` with its time scales derived from its own mechanics (``zoetic.san.scales``):
-    the expected cycle, and the damping of every actuator that gave no kd.
-
-    The paper's two time constants, kd/ks = 0.1 s and node delays of 0.07-0.15 s (0.25 of
-    the expected cycle), suit creatures of its size; a file that gives ``expected_cycle`` is
-    taken to be calibrated in those terms (the zoo) and keeps kd/ks = 0.1 where it gives no
-    kd. A file without it gets kd for a damping ratio of 0.7 about each actuated joint's own
-    inertia, and a cycle of 1.5 servo periods, whatever its size and mass."""
-    from dataclasses import replace
-
-    from zoetic.san.scales import derived_cycle, derived_kd
-
-    kd = derived_kd(c)
-    acts = tuple(
-        replace(a, kd=float(kd[i])) if a.name in no_kd else a for i, a in enumerate(c.actuators)
-    )
-    c = replace(c, actuators=acts)
-    return replace(c, expected_cycle=derived_cycle(c))
+    return own_scales(c, no_kd)
 
 
 # ----------------------------------------------------------------------------- saving

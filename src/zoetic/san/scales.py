@@ -68,3 +68,22 @@ def derived_cycle(creature) -> float:
     """Return the default expected locomotion cycle (s): ``CYCLE_PER_SERVO_PERIOD`` times the
     median servo period."""
     return CYCLE_PER_SERVO_PERIOD * float(np.median(servo_periods(creature)))
+
+
+def own_scales(c, no_kd: set[str]):
+    """Return creature ``c`` with its time scales derived from its own mechanics (this module):
+    the expected cycle, and the damping of every actuator that gave no kd.
+
+    The paper's two time constants, kd/ks = 0.1 s and node delays of 0.07-0.15 s (0.25 of
+    the expected cycle), suit creatures of its size; a file that gives ``expected_cycle`` is
+    taken to be calibrated in those terms (the zoo) and keeps kd/ks = 0.1 where it gives no
+    kd. A file without it gets kd for a damping ratio of 0.7 about each actuated joint's own
+    inertia, and a cycle of 1.5 servo periods, whatever its size and mass."""
+    from dataclasses import replace
+
+    kd = derived_kd(c)
+    acts = tuple(
+        replace(a, kd=float(kd[i])) if a.name in no_kd else a for i, a in enumerate(c.actuators)
+    )
+    c = replace(c, actuators=acts)
+    return replace(c, expected_cycle=derived_cycle(c))
