@@ -92,6 +92,34 @@ def test_optimizers_improve_respect_bounds_and_never_keep_failures(name):
         opt.close()
 
 
+def test_cmaes_does_its_linear_algebra_on_one_blas_thread(monkeypatch):
+    """CMA-ES's eigendecomposition runs with BLAS held to one thread (its threads would spin
+    against the kernel's), and the limit is lifted again after ask and tell."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from zoetic.learning.optimizers import cmaes
+
+    def blas_threads() -> set[int]:
+        return {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
+
+    with threadpool_limits(limits=2, user_api="blas"):  # as on 2 cores, even on one
+        before = blas_threads()
+        seen: list[set[int]] = []
+        real_eigh = np.linalg.eigh
+
+        def eigh(a, *args, **kw):
+            seen.append(blas_threads())
+            return real_eigh(a, *args, **kw)
+
+        monkeypatch.setattr(np.linalg, "eigh", eigh)
+        opt = cmaes.CMAES(np.full(8, 0.5), np.zeros(8), np.ones(8), seed=0, popsize=8)
+        for _ in range(12):
+            X = opt.ask()
+            opt.tell(X, np.sum((X - 0.3) ** 2, axis=1))
+        assert seen and all(s == {1} for s in seen)
+        assert blas_threads() == before == {2}
+
+
 def test_annealing_follows_the_papers_schedule():
     opt = make_optimizer("anneal", np.full(4, 0.5), np.zeros(4), np.ones(4), seed=0, budget=100)
     assert opt.T == 0.5 and opt.max_steps == 40 and opt.min_accepts == 4

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import pickle
+from contextlib import AbstractContextManager
+from functools import cache
 
 import numpy as np
 
@@ -44,6 +46,21 @@ class _Randn:
         )
 
 
+@cache
+def _blas():
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()
+
+
+def one_blas_thread() -> AbstractContextManager:
+    """Hold BLAS/LAPACK to one thread: CMA-ES's eigendecomposition of its covariance (n <= a
+    few hundred) is too small to share, and its threads spin against the simulation kernel's
+    thread pool: with two threads on two busy cores one eigh can cost more than the whole
+    generation's rollouts."""
+    return _blas().limit(limits=1, user_api="blas")
+
+
 class CMAES(Optimizer):
     """CMA-ES from the ``cma`` package, with its own handling of the box bounds.
 
@@ -72,7 +89,8 @@ class CMAES(Optimizer):
 
     def ask(self):
         """Return the next generation (popsize, n): samples of CMA-ES's bounded normal."""
-        return np.array(self.es.ask(), dtype=np.float64)
+        with one_blas_thread():
+            return np.array(self.es.ask(), dtype=np.float64)
 
     def tell(self, X, f, grad=None):
         """Record f; pass it to CMA-ES with failures scored far above the worst finite."""
@@ -80,7 +98,8 @@ class CMAES(Optimizer):
         finite = np.isfinite(f)
         worst = np.max(f[finite]) if finite.any() else 1.0
         g = np.where(finite, f, worst + 1e3 * (1 + abs(worst)))
-        self.es.tell(list(X), list(g))
+        with one_blas_thread():
+            self.es.tell(list(X), list(g))
 
     def done(self):
         """Return True when CMA-ES meets a stop criterion other than the budget."""
