@@ -106,3 +106,38 @@ def test_a_record_with_control_periods_gets_the_motion_at_its_period_times(shark
     bare = measure_record(Record("simulate", "t", "sea", times, (fish,)), [shark])
     np.testing.assert_array_equal(bare.period_times, times)
     assert len(bare.scalars["s"]["pitch"]) == len(times)
+
+
+def test_muscle_work_is_tension_times_the_rest_length_moved(shark):
+    """Held still at its rest pose, each muscle's tension is k (l - r); moving u from 0 to 1
+    in one interval moves r by (contracted - relaxed) and costs |k (l - r_mid) dr| (trapezoid
+    tension) summed over muscles; a constant activation spends nothing."""
+    from zoetic.control.measure import muscle_work
+
+    pos = np.repeat(np.asarray(shark.rest_pos, float)[None, None], 2, axis=1)  # (1, 2, N, 3)
+    u = np.zeros((1, 2, shark.n_actuators))
+    u[:, 1] = 1.0
+    m = np.flatnonzero(np.asarray(shark.spring_actuator) >= 0)
+    a, b = shark.spring_a[m], shark.spring_b[m]
+    length = np.linalg.norm(shark.rest_pos[a] - shark.rest_pos[b], axis=-1)
+    dr = shark.contracted[m] - shark.relaxed[m]
+    mid = shark.stiffness[m] * (length - shark.relaxed[m] - 0.5 * dr)
+    assert muscle_work(shark, pos, u)[0] == pytest.approx(np.abs(mid * dr).sum())
+    assert muscle_work(shark, pos, np.full_like(u, 0.4))[0] == 0.0
+
+
+def test_a_stronger_stroke_spends_more_muscle_work(shark):
+    """The same wave at half and at full amplitude about the half-contracted pose: the full
+    stroke moves every rest length twice as far against larger tensions."""
+    from zoetic.control import wave_controller
+    from zoetic.control.measure import muscle_work
+    from zoetic.physics.simulate import simulate
+
+    t = np.arange(400) * shark.dt
+    u = wave_controller(shark).sample(t)
+    spent = []
+    for scale in (0.5, 1.0):
+        acts = np.clip(0.5 + scale * (u - 0.5), 0.0, 1.0)[None]
+        traj = simulate(shark, acts, record_every=1)
+        spent.append(muscle_work(shark, traj.positions[:, 1:], acts)[0])
+    assert 0.0 < 1.5 * spent[0] < spent[1]

@@ -114,3 +114,29 @@ def measure_record(rec: Record, bodies: Sequence[Body]) -> Record:
                 mine[what] = _at(values[row], times, periods).astype(np.float32)
     units = {**rec.units, **{q: UNITS[q] for q in UNITS if any(q in s for s in scalars.values())}}
     return dataclasses.replace(rec, period_times=periods, scalars=scalars, units=units)
+
+
+def muscle_work(body: Body, positions: np.ndarray, activations: np.ndarray) -> np.ndarray:
+    """Return the work (J) the muscles spend, per candidate: positions (K, T, N, 3) m and the
+    activations (K, T, A) in force at the same T instants.
+
+    A muscle is a spring whose rest length r = relaxed + u (contracted - relaxed) follows its
+    activation u; moving r by dr against the spring's tension k (l - r) does work -k (l - r) dr
+    on the body. Expenditure counts it whether the muscle shortens against a pull or is
+    lengthened by one (|work|, as a muscle spends energy either way), summed over muscles and
+    instants (the tension at the midpoint of each interval). The measure of 'energy
+    expenditure' in section 4.2 of Grzeszczuk & Terzopoulos 95.
+    """
+    pos = np.asarray(positions, float)
+    u = np.clip(np.asarray(activations, float), 0.0, 1.0)
+    act = np.asarray(body.spring_actuator)
+    m = np.flatnonzero(act >= 0)
+    if not len(m) or pos.shape[1] < 2:
+        return np.zeros(pos.shape[0])
+    a, b = np.asarray(body.spring_a)[m], np.asarray(body.spring_b)[m]
+    length = np.linalg.norm(pos[:, :, a] - pos[:, :, b], axis=-1)  # (K, T, M)
+    relaxed, contracted = np.asarray(body.relaxed)[m], np.asarray(body.contracted)[m]
+    rest = relaxed + u[:, :, act[m]] * (contracted - relaxed)
+    tension = np.asarray(body.stiffness)[m] * (length - rest)
+    mid = 0.5 * (tension[:, 1:] + tension[:, :-1])
+    return np.nansum(np.abs(mid * np.diff(rest, axis=1)), axis=(1, 2))
