@@ -8,11 +8,11 @@ of the centre of mass after 3 s and 6 s and the pitch reached: the disc pitches 
 5 degrees/s at most, so the ray's rise in 3 s stays under a tenth of a metre.
 
 Then two bounds that hold whatever the flap: (1) the ray set at a pitch of 0, 45 or 90 degrees
-from the first instant (the task's starts, pitched), swimming the built-in flap or the gaits in
-the controller files given on the command line: its rise and path in 3 s. It keeps its pitch
-and swims along its axis, so the rise is at most the path, and from rest the path in 3 s is
-under the promised 0.5 m. (2) How fast a pitch rate dies away (the disc's pitch damping), and so
-the pitching moment a steady 30 degrees/s would take.
+from the first instant (from rest and at the level ray's cruising speed), swimming the flap or
+the gaits in the controller files given on the command line: its rise and path in 3 s. It
+keeps its pitch and swims along its axis, so the rise is at most the path, and from rest the
+path in 3 s is under the promised 0.5 m. (2) How fast a pitch rate dies away (the disc's
+pitch damping), and so the pitching moment a steady 30 degrees/s would take.
 
 Run: python experiments/ray_climb.py [controller.json ...]  (about a minute)
 """
