@@ -14,15 +14,24 @@ keeps its pitch and swims along its axis, so the rise is at most the path, and f
 path in 3 s is under the promised 0.5 m. (2) How fast a pitch rate dies away (the disc's
 pitch damping), and so the pitching moment a steady 30 degrees/s would take.
 
+Last, what a body change would give: the ray with a pair of fins (flat plates of 0.015 m², the
+shark's, or 0.04 m² each, at the front or the rear body station, turning +-0.5 rad), flapping
+with the fins held at either end of their range: its rise and pitch in 3 s.
+
 Run: python experiments/ray_climb.py [controller.json ...]  (about a minute)
 """
 
 from __future__ import annotations
 
 import sys
+import tempfile
+import tomllib
+from pathlib import Path
 
 import numpy as np
+import tomli_w
 
+from zoetic import bodies
 from zoetic.bodies import load_animal
 from zoetic.control.files import load_controller
 from zoetic.control.measure import motion_scalars
@@ -73,6 +82,9 @@ def main() -> None:
     }
     pitched_bound(body, gaits)
     pitch_damping(body, flap(body, 0.0, 0.5))
+    for station in (0, 3):
+        for area in (0.015, 0.04):
+            with_fins(finned(station, area), flap(body, 0.0, 0.5), f"station {station}, {area} m2")
 
 
 def pitched_bound(body, gaits: dict[str, np.ndarray], pitches=(0.0, 45.0, 90.0)) -> None:
@@ -120,6 +132,50 @@ def pitch_damping(body, gait: np.ndarray, rates=(30.0, 60.0)) -> None:
             f"{name}: pitch gained after a kick of {rates} deg/s: {np.round(gained, 1)} deg; decay"
             f" time {decay:.3f} s; I = {inertia:.4f} kg m^2; a steady 30 deg/s takes about"
             f" {inertia * np.radians(30.0) / decay:.3f} N m"
+        )
+
+
+def finned(station: int, area: float):
+    """Return the zoo ray with a fin pair (``area`` m² each) on the body box of ``station``."""
+    doc = tomllib.loads((Path(bodies.__file__).parent / "zoo" / "ray.toml").read_text())
+    pair = (("L", "left", "right"), ("R", "right", "left"))
+    doc["actuators"] += [
+        {"name": f"fin_{side}", "kind": "fin", "side": side, "mirror": f"fin_{other}"}
+        for _, side, other in pair
+    ]
+    doc["fins"] = [
+        {
+            "name": f"fin_{side}",
+            "actuator": f"fin_{side}",
+            "nodes": [f"s{station}_T{s}", f"s{station}_B{s}"],
+            "forward": ["s0_TL", "s3_TL"],
+            "span": ["s0_TL", "s0_TR"],
+            "area": area,
+            "angle_range": [-0.5, 0.5],
+        }
+        for s, side, _ in pair
+    ]
+    path = Path(tempfile.mkdtemp()) / "ray_fins.toml"
+    path.write_text(tomli_w.dumps(doc))
+    return load_animal(path)
+
+
+def with_fins(body, muscles: np.ndarray, label: str) -> None:
+    """Print the rise (m) and pitch (deg) in 3 s of the flap with the fins held at 0 or 1."""
+    starts = start_states(load_task("swim-up"), body)
+    n3 = int(round(3.0 / body.dt))
+    tables = np.zeros((2, n3, body.n_actuators))
+    tables[:, :, :4] = muscles[:n3]
+    tables[1, :, 4:] = 1.0
+    for i, name in enumerate(("rest", "cruising")):
+        pos = np.repeat(starts.positions[i : i + 1], 2, axis=0)
+        vel = np.repeat(starts.velocities[i : i + 1], 2, axis=0)
+        tr = simulate(body, tables, state=State(pos, vel), record_every=n3)
+        rise = tr.com(body)[:, -1, 1] - tr.com(body)[:, 0, 1]
+        pitch = motion_scalars(body, tr.positions, tr.times, get_medium(body.medium))["pitch"]
+        print(
+            f"fins at {label}, {name}: fins at 0: rise {rise[0]:+.3f} pitch {pitch[0, -1]:+.1f};"
+            f" fins at 1: rise {rise[1]:+.3f} pitch {pitch[1, -1]:+.1f}"
         )
 
 
