@@ -38,6 +38,16 @@ Evaluator = Annotated[str, typer.Option(help="batch (this machine) or ray (a clu
 RayAddress = Annotated[str, typer.Option(help="Ray cluster for --evaluator ray.")]
 """The Ray cluster an ``--evaluator ray`` search uses."""
 
+Righting = Annotated[
+    bool,
+    typer.Option(
+        help="Keep a fish upright: each window plays the planned entry or one of its "
+        "fin-righting variants, whichever its own simulation keeps nearest upright and at "
+        "the start depth (as tracking does); --no-righting plays the plan as given.",
+    ),
+]
+"""Whether a feed-forward plan (sequence, macro) gets the fins' righting reflex."""
+
 Fps = Annotated[int, typer.Option(min=1)]
 """The video's frame rate."""
 
