@@ -281,7 +281,7 @@ def _candidate_tables(ctrls, current, t, steps, dt, restart: bool = False) -> np
 
 
 def righting_entries(
-    body: Body, names: list[str], ctrls: list[Controller], tilt: float
+    body: Body, names: list[str], ctrls: list[Controller], tilt: float, gentle: float = 1.0
 ) -> tuple[list[str], list[Controller]]:
     """Return the entries followed by each one's two fin-righting variants: the same muscle
     actions with the pectoral fins' activations ``tilt`` apart, the left one raised and the
@@ -293,7 +293,9 @@ def righting_entries(
     a fish's pectoral fins do; the tracker picks a variant when its own simulation of the next
     window says it keeps the animal nearer upright. Entries that are not abstractions (no
     offsets to shift) or do not swim (no modes: fins roll nothing without a flow past them),
-    and bodies without a left and a right fin, get none."""
+    and bodies without a left and a right fin, get none. With ``gentle`` < 1 each also gets
+    "+gentle" variants, its muscles' stroke amplitudes scaled by ``gentle``, with and without
+    the fins tilted: a hard stroke can spin the body faster than the fins roll it back."""
     kind, side = np.array(body.actuator_kind), np.array(body.actuator_side)
     fins = kind == "fin"
     if tilt <= 0 or not (np.any(fins & (side == "left")) and np.any(fins & (side == "right"))):
@@ -301,13 +303,21 @@ def righting_entries(
     shift = np.where(fins & (side == "left"), 0.5, 0.0) - np.where(
         fins & (side == "right"), 0.5, 0.0
     )
+    soft = np.where(kind == "muscle", gentle, 1.0)[:, None]
     out_n, out_c = list(names), list(ctrls)
     for name, ctrl in zip(names, ctrls, strict=True):
         if not isinstance(ctrl, AbstractController) or ctrl.modes == 0:
             continue
-        for label, sign in (("roll-left", 1.0), ("roll-right", -1.0)):
-            out_n.append(f"{name}+{label}")
-            out_c.append(dataclasses.replace(ctrl, offset=ctrl.offset + sign * tilt * shift))
+        kinds = [(name, ctrl)] + [
+            (f"{name}+gentle", dataclasses.replace(ctrl, amp=ctrl.amp * soft))
+        ]
+        for base, c in kinds[: 1 + (gentle < 1)]:
+            if c is not ctrl:
+                out_n.append(base)
+                out_c.append(c)
+            for label, sign in (("roll-left", 1.0), ("roll-right", -1.0)):
+                out_n.append(f"{base}+{label}")
+                out_c.append(dataclasses.replace(c, offset=c.offset + sign * tilt * shift))
     return out_n, out_c
 
 

@@ -4,13 +4,19 @@ A plan plays its entries without feedback, and a swimming fish's body has no rol
 and little roll damping, so a roll left by a turn stays or grows until the fish swims on its
 side or upside down. Here the plan is played in a World through the one closed-loop driver, in
 windows of the tracker's interval (each plan item's first window starts where the item does).
-At each window the planned entry is kept, and of it and its two fin-righting variants
-(``tracking.righting_entries``), each carried on from where the plan is in its stroke
+At each window the planned entry is kept, and of it and its righting variants
+(``tracking.righting_entries``: the pectoral fins tilted apart either way, and the same with
+a gentler stroke), each carried on from where the plan is in its stroke
 (``AbstractController.resumed``), the one is played whose own simulation of the window costs
 least by the tracker's depth and attitude terms (``tracking.upright_cost``, the start depth
 the goal, the roll judged also where its rate leads); ties go to the entry as planned. The
 choices are recorded as a SequenceController (``tracking.sequence_of``) which, played from
 rest, reproduces the run.
+
+The gentle variants are there because the fins alone are too weak for a hard stroke: after
+the README's sharp turn the shark's learned go-straight spins it at about 140 deg/s, and the
+fins at full tilt slow that to about 50 deg/s but do not stop it; with the muscles' stroke
+amplitude at 0.2 the shark swims on at most of its speed and the fins right it.
 """
 
 from __future__ import annotations
@@ -38,6 +44,8 @@ from .tracking import (
     sequence_of,
     upright_cost,
 )
+
+GENTLE = 0.2  # the muscles' stroke amplitude the gentle variants keep
 
 
 @dataclass
@@ -90,6 +98,7 @@ class _Righting:
     config: TrackConfig
     decisions: list[tuple[float, int]]  # the windows: start s, plan item
     height: float  # m, the start depth's height: the depth term's goal
+    gentle: float = 1.0  # the stroke amplitude the gentle variants keep (1: none)
     ctrls: list[Controller] = field(default_factory=list)  # the items' controllers
     items: list[list] = field(default_factory=list)  # [index into ctrls, start s]
     playing: tuple[int, str] = (-1, "")  # the last item's plan item and entry name
@@ -108,7 +117,8 @@ class _Righting:
         ctrl, start = self.plan.items[i][0], self.plan.starts()[i]
         if isinstance(ctrl, AbstractController) and t != start:
             ctrl = ctrl.resumed(t - start)
-        return righting_entries(self.body, [self.names[i]], [ctrl], self.config.fin_tilt)
+        tilt = self.config.fin_tilt
+        return righting_entries(self.body, [self.names[i]], [ctrl], tilt, self.gentle)
 
     def _table(self, ctrl: Controller | None, t: float, steps: int) -> np.ndarray:
         """Return the activations (steps, A) from ``t`` with ``ctrl`` taking over then (None:
@@ -157,15 +167,17 @@ def right_plan(
     plan: SequenceController,
     seconds: float | None = None,
     config: TrackConfig = TrackConfig(),
+    gentle: float = GENTLE,
 ) -> UprightResult:
     """Return ``plan`` (its items' entry ``names``) played for ``seconds`` (default its
-    duration) with the fins' righting reflex, run through the one closed-loop driver."""
+    duration) with the fins' righting reflex, run through the one closed-loop driver;
+    ``gentle``: the stroke amplitude of the gentle variants (1: fins only)."""
     seconds = plan.duration if seconds is None else float(seconds)
     rec, dt = int(config.record_every), body.dt
     world = World([body])
     height = float(world.positions(0)[0].T[1] @ body.mass / body.total_mass)
     decisions = _decisions(plan, seconds, config.interval, rec * dt)
-    reflex = _Righting(body, list(names), plan, config, decisions, height)
+    reflex = _Righting(body, list(names), plan, config, decisions, height, gentle)
     path = PathRecorder()
     schedule = Schedule(config.interval, record_every=rec, plan=reflex.window)
     drive(world, reflex, seconds, schedule, (path,))

@@ -42,8 +42,8 @@ Righting = Annotated[
     bool,
     typer.Option(
         help="Keep a fish upright: each window plays the planned entry or one of its "
-        "fin-righting variants, whichever its own simulation keeps nearest upright and at "
-        "the start depth (as tracking does); --no-righting plays the plan as given.",
+        "righting variants (fins tilted, a gentler stroke), whichever its own simulation "
+        "keeps nearest upright and at the start depth; --no-righting plays the plan as given.",
     ),
 ]
 """Whether a feed-forward plan (sequence, macro) gets the fins' righting reflex."""
