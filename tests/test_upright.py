@@ -90,7 +90,7 @@ def test_the_sequence_command_rights_by_default_and_not_when_told(tmp_path, shar
         assert main([*args, "--out", str(tmp_path / "on")]) == 0
     assert drawn == ["top+side"]
     text = capsys.readouterr().out
-    assert "the fins righted" in text and "net turn" in text
+    assert "a righting variant played in" in text and "net turn" in text
     roll = float(text.split("worst roll ")[1].split(" deg")[0])
     assert roll < 30.0
     on = load_controller(tmp_path / "on" / "sequence.json", shark)

@@ -61,9 +61,15 @@ class UprightResult:
     motion: dict = field(default_factory=dict)  # locomotion(): depth, roll, pitch, turn
 
     def summary(self) -> dict:
-        """Return how often the fins righted the plan, with the locomotion figures."""
-        righted = sum("+roll-" in n for n in self.evaluations)
-        return {"windows": len(self.evaluations), "windows_righted": righted, **self.motion}
+        """Return in how many windows a righting variant played (of them, how many with the
+        gentler stroke), with the locomotion figures."""
+        ev = self.evaluations
+        return {
+            "windows": len(ev),
+            "windows_righted": sum("+roll-" in n or "+gentle" in n for n in ev),
+            "windows_gentle": sum("+gentle" in n for n in ev),
+            **self.motion,
+        }
 
 
 def has_righting(body: Body, plan: SequenceController, tilt: float) -> bool:

@@ -264,7 +264,7 @@ def sequence_cmd(
     seq, note = _upright(body, [n for n, _ in items], seq, righting)
     path = save_controller(seq, out / "sequence.json")
     t = np.linspace(0.0, seq.duration, 600)
-    title = f"sequence: {entries}" + (" (fins righting)" if note.startswith("the fins") else "")
+    title = f"sequence: {entries}" + (" (righting)" if note.startswith("a righting") else "")
     plot_controller(
         t, seq.sample(t), body.actuator_names, body.actuator_side, out / "controller.png", title
     )
@@ -291,6 +291,6 @@ def _upright(body, names: list[str], seq, righting: bool):
     result = right_plan(body, names, seq, config=config)
     s = result.summary()
     return result.sequence, (
-        f"the fins righted {s['windows_righted']} of {s['windows']} windows "
-        f"of {config.interval:g} s"
+        f"a righting variant played in {s['windows_righted']} of {s['windows']} windows "
+        f"of {config.interval:g} s ({s['windows_gentle']} with the gentler stroke)"
     )

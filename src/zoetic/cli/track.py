@@ -267,7 +267,7 @@ def macro(
     _report_plan(method, result.summary(), out, video)
     if righted:
         console.print(
-            f"played with the fins righting {righted['windows_righted']} of "
+            f"played with a righting variant in {righted['windows_righted']} of "
             f"{righted['windows']} windows: final distance {righted['final_m']:.2f} m, closest "
             f"{righted['closest_m']:.2f} m, {righted['inside_obstacle_s']:.1f} s in obstacles"
         )
@@ -297,7 +297,7 @@ def _play_plan(body, problem, result, righting: bool):
         r.sequence,
         {
             "windows": len(r.evaluations),
-            "windows_righted": r.summary()["windows_righted"],
+            **{k: r.summary()[k] for k in ("windows_righted", "windows_gentle")},
             "final_m": round(sc["final"], 3),
             "closest_m": round(sc["closest"], 3),
             "inside_obstacle_s": round(sc["inside"], 2),
