@@ -46,7 +46,7 @@ Righting = Annotated[
         "keeps nearest upright and at the start depth; --no-righting plays the plan as given.",
     ),
 ]
-"""Whether a feed-forward plan (sequence, macro) gets the fins' righting reflex."""
+"""Whether a sequence of repertoire entries gets a fish's righting reflex."""
 
 Fps = Annotated[int, typer.Option(min=1)]
 """The video's frame rate."""

@@ -16,7 +16,6 @@ from zoetic.cli.options import (
     Memory,
     Method,
     RayAddress,
-    Righting,
     RunDir,
     Seed,
     use_ray_address,
@@ -229,11 +228,16 @@ def macro(
     fps: Fps = 30,
     evaluator: Evaluator = "batch",
     ray_address: RayAddress = None,
-    righting: Righting = True,
+    righting: bool = typer.Option(
+        False,
+        help="Play the plan found with the righting reflex of `zoetic sequence` (off by "
+        "default: the search judges plans without it, and righting afterwards changes the "
+        "path the plan was chosen for).",
+    ),
     force: Force = False,
 ) -> None:
     """Search for a macro controller (selection, order, durations of entries) to reach a goal;
-    a fish plays it with its fins' righting reflex (--no-righting: as planned)."""
+    --righting plays it with a fish's righting reflex."""
     use_ray_address(ray_address)
     from zoetic.behavior.macro import MacroProblem, ReachTask
     from zoetic.control import save_controller
