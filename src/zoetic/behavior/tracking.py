@@ -486,17 +486,14 @@ def track(
     )
 
 
-def repeat_state(state: State, k: int) -> State:
-    """Return ``state`` repeated over k lanes."""
+def repeat_state(state: State, k: int) -> State:  # the state over k lanes
     return State(np.repeat(state.positions, k, axis=0), np.repeat(state.velocities, k, axis=0))
 
 
-def sequence_of(
-    ctrls, items, t_end: float, overlap: float = OVERLAP
-) -> tuple[SequenceController, np.ndarray]:
-    """Return the chosen items ([index into ``ctrls``, start s]) as one SequenceController
-    and their start times: each item lasts until the next one starts plus the cross-fade,
-    ``overlap`` of its length, and the last until ``t_end``."""
+def sequence_of(ctrls, items, t_end: float, overlap: float = OVERLAP):
+    """Return the items ([index into ``ctrls``, start s]) as one SequenceController, each
+    lasting to the next one's start plus the cross-fade (``overlap`` of its length), the
+    last to ``t_end``, and the items' starts (s)."""
     starts = np.array([s for _, s in items], float)
     ends = np.append(starts[1:], t_end)
     seq_items = []

@@ -357,7 +357,7 @@ def _draw_plan(
     idx = np.searchsorted(traj.times, starts[starts < result.horizon] - 1e-9)
     s, method = righted or result.summary(), result.method
     title = (
-        f"{body.name} macro controller ({method}{', fins righting' if righted else ''}): "
+        f"{body.name} macro controller ({method}{', righting' if righted else ''}): "
         f"final distance {s['final_m']:.2f} m, {s['inside_obstacle_s']:.1f} s in obstacles"
     )
     plot_plan(
