@@ -128,11 +128,15 @@ def test_macro_command_writes_its_run(tmp_path, capsys):
         "--fps",
         "10",
     ]
-    assert main([*args, "--method", "anneal"]) == 0
+    assert main([*args, "--method", "anneal", "--righting"]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["method"] == "anneal" and len(summary["plan"]) == 3
     assert summary["obstacles_xzr"] == [[0.9, 0.3, 0.3]]
     assert {"cost", "final_m", "closest_m", "inside_obstacle_s", "history"} <= set(summary)
+    # played with the righting reflex: its figures are the righted path's, and what it swam
+    righted = summary["righting"]
+    assert righted["windows"] >= 5 and {"final_m", "closest_m", "reached_s"} <= set(righted)
+    assert {"worst_roll_deg", "turn_deg", "depth_change_m"} <= set(summary)
     assert isinstance(load_controller(out / "controller.json", shark), SequenceController)
     assert (out / "path.png").stat().st_size > 5000 and (out / "video.mp4").exists()
     assert "final distance" in capsys.readouterr().out

@@ -198,7 +198,11 @@ def test_sequence_command_simulates_a_cross_faded_controller(tmp_path, capsys):
         str(tmp_path / "s"),
         "--no-video",
     ]
-    assert main(args) == 0
+    import zoetic.viz.plots
+
+    with pytest.MonkeyPatch.context() as mp:  # path.png is drawn once, with the side view
+        mp.setattr(zoetic.viz.plots, "plot_path", lambda *a, **k: pytest.fail("top view only"))
+        assert main(args) == 0
     seq = load_controller(tmp_path / "s" / "sequence.json", shark)
     assert isinstance(seq, SequenceController)
     assert seq.duration == pytest.approx(2 + 2 * 0.95)

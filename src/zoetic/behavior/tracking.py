@@ -33,7 +33,7 @@ from zoetic.bodies import Body
 from zoetic.control import Controller
 from zoetic.control.abstract import AbstractController, SequenceController
 from zoetic.control.loop import Observer, Schedule, drive
-from zoetic.control.measure import motion_scalars
+from zoetic.control.measure import locomotion, motion_scalars
 from zoetic.control.policy import Period
 from zoetic.control.rollout import rollout
 from zoetic.errors import SimulationError, ZoeticError
@@ -133,13 +133,7 @@ def cost_to_go(
     com = com3[..., [0, 2]]
     goal = np.asarray(target, float)
     d = np.linalg.norm(com3[:, -1] - goal, axis=-1)
-    dy = np.abs(com3[:, -1, 1] - goal[1])
-    cost = d + config.depth_weight * np.maximum(dy - config.depth_band, 0.0)
-    if attitude is not None:
-        roll, pitch = (np.nanmax(np.abs(a), axis=1) for a in attitude)
-        roll = np.maximum(roll, np.abs(_ahead(attitude[0], record_dt, config.roll_lookahead)))
-        over = np.maximum(roll - config.roll_ok, 0) + np.maximum(pitch - config.pitch_ok, 0)
-        cost = cost + config.attitude_weight * np.radians(over)
+    cost = d + upright_cost(com3[:, -1, 1], goal[1], record_dt, config, attitude)
     if turn_radius <= 0:
         return cost
     h = tail[:, :, body.head, :][..., [0, 2]] - com
@@ -149,6 +143,28 @@ def cost_to_go(
     cos = np.sum(h * g, axis=-1) / (np.linalg.norm(h, axis=-1) * dxz + 1e-12)
     fade = np.clip(dxz / (2.0 * config.radius_or(body)), 0.0, 1.0)
     return cost + fade * turn_radius * np.arccos(np.clip(cos, -1.0, 1.0))
+
+
+def upright_cost(
+    height: np.ndarray,
+    goal_height: float,
+    record_dt: float,
+    config: TrackConfig,
+    attitude: tuple[np.ndarray, np.ndarray] | None = None,
+) -> np.ndarray:
+    """Return the cost (m) of where each path (B,) ends up off depth and upright:
+    ``config.depth_weight`` times the end height's (m) error from ``goal_height`` past
+    ``config.depth_band``, plus ``config.attitude_weight`` times the worst roll and pitch (rad)
+    past what swimming needs (``attitude``: roll and pitch (B, R) deg over each path), the roll
+    judged also ``config.roll_lookahead`` s past the end at its rate there."""
+    dy = np.abs(np.asarray(height, float) - goal_height)
+    cost = config.depth_weight * np.maximum(dy - config.depth_band, 0.0)
+    if attitude is not None:
+        roll, pitch = (np.nanmax(np.abs(a), axis=1) for a in attitude)
+        roll = np.maximum(roll, np.abs(_ahead(attitude[0], record_dt, config.roll_lookahead)))
+        over = np.maximum(roll - config.roll_ok, 0) + np.maximum(pitch - config.pitch_ok, 0)
+        cost = cost + config.attitude_weight * np.radians(over)
+    return cost
 
 
 def _ahead(angle: np.ndarray, record_dt: float, seconds: float) -> np.ndarray:
@@ -240,23 +256,6 @@ class TrackResult:
         }
 
 
-def locomotion(body: Body, positions: np.ndarray, times: np.ndarray) -> dict[str, object]:
-    """Return what a locomotion run did to the animal's depth and attitude: the centre of
-    mass's height change end minus start and its lowest and highest (m, up positive, relative
-    to the start), and the worst roll and pitch (deg, either way) over ``positions`` (R, N, 3)
-    recorded at ``times`` (R,) s (``control.measure``)."""
-    pos = np.asarray(positions, float)
-    m = motion_scalars(body, pos[None], np.asarray(times, float), get_medium(body.medium))
-    y = np.einsum("rnk,n->rk", pos, body.mass / body.total_mass)
-    y = y[:, 1] - y[0, 1]
-    return {
-        "depth_change_m": round(float(y[-1]), 3),
-        "depth_span_m": [round(float(y.min()), 3), round(float(y.max()), 3)],
-        "worst_roll_deg": round(float(np.nanmax(np.abs(m["roll"]))), 1),
-        "worst_pitch_deg": round(float(np.nanmax(np.abs(m["pitch"]))), 1),
-    }
-
-
 def _candidate_tables(ctrls, current, t, steps, dt, restart: bool = False) -> np.ndarray:
     """Return (K, steps, A): each entry started at time t, cross-faded from the current one;
     the current one carries on, or with ``restart`` starts afresh like the others."""
@@ -282,7 +281,7 @@ def _candidate_tables(ctrls, current, t, steps, dt, restart: bool = False) -> np
 
 
 def righting_entries(
-    body: Body, names: list[str], ctrls: list[Controller], tilt: float
+    body: Body, names: list[str], ctrls: list[Controller], tilt: float, gentle: float = 1.0
 ) -> tuple[list[str], list[Controller]]:
     """Return the entries followed by each one's two fin-righting variants: the same muscle
     actions with the pectoral fins' activations ``tilt`` apart, the left one raised and the
@@ -294,7 +293,9 @@ def righting_entries(
     a fish's pectoral fins do; the tracker picks a variant when its own simulation of the next
     window says it keeps the animal nearer upright. Entries that are not abstractions (no
     offsets to shift) or do not swim (no modes: fins roll nothing without a flow past them),
-    and bodies without a left and a right fin, get none."""
+    and bodies without a left and a right fin, get none. With ``gentle`` < 1 each also gets
+    "+gentle" variants, its muscles' stroke amplitudes scaled by ``gentle``, with and without
+    the fins tilted: a hard stroke can spin the body faster than the fins roll it back."""
     kind, side = np.array(body.actuator_kind), np.array(body.actuator_side)
     fins = kind == "fin"
     if tilt <= 0 or not (np.any(fins & (side == "left")) and np.any(fins & (side == "right"))):
@@ -302,13 +303,21 @@ def righting_entries(
     shift = np.where(fins & (side == "left"), 0.5, 0.0) - np.where(
         fins & (side == "right"), 0.5, 0.0
     )
+    soft = np.where(kind == "muscle", gentle, 1.0)[:, None]
     out_n, out_c = list(names), list(ctrls)
     for name, ctrl in zip(names, ctrls, strict=True):
         if not isinstance(ctrl, AbstractController) or ctrl.modes == 0:
             continue
-        for label, sign in (("roll-left", 1.0), ("roll-right", -1.0)):
-            out_n.append(f"{name}+{label}")
-            out_c.append(dataclasses.replace(ctrl, offset=ctrl.offset + sign * tilt * shift))
+        kinds = [(name, ctrl)] + [
+            (f"{name}+gentle", dataclasses.replace(ctrl, amp=ctrl.amp * soft))
+        ]
+        for base, c in kinds[: 1 + (gentle < 1)]:
+            if c is not ctrl:
+                out_n.append(base)
+                out_c.append(c)
+            for label, sign in (("roll-left", 1.0), ("roll-right", -1.0)):
+                out_n.append(f"{base}+{label}")
+                out_c.append(dataclasses.replace(c, offset=c.offset + sign * tilt * shift))
     return out_n, out_c
 
 
@@ -322,14 +331,16 @@ def _entries(repertoire: Repertoire, allowed) -> tuple[list[str], list[Controlle
     return names, [repertoire.controllers[n] for n in names]
 
 
-class _Path(Observer):
-    """The animal's positions (lane 0) at each record."""
+class PathRecorder(Observer):
+    """The animal's positions (lane 0) at each record, and the records' times (s)."""
 
     def __init__(self) -> None:
         self.frames: list[np.ndarray] = []
+        self.times: list[float] = []
 
     def record(self, world: World) -> None:
         self.frames.append(world.positions(0)[0])
+        self.times.append(world.time)
 
 
 @dataclass
@@ -372,7 +383,7 @@ class _Greedy:
         restart = current is not None and self.t - current[1] >= RESTART
         tables = _candidate_tables(self.ctrls, current, self.t, period.steps, dt, restart)
         state = State(world.positions(0), world.velocities(0))
-        traj = simulate(body, tables, state=_repeat(state, k), record_every=rec)
+        traj = simulate(body, tables, state=repeat_state(state, k), record_every=rec)
         com3 = np.einsum("brnk,n->brk", traj.positions, body.mass / body.total_mass)
         com = com3[..., [0, 2]]
         m = motion_scalars(body, traj.positions, traj.times, self.medium)
@@ -439,12 +450,14 @@ def track(
     t0 = time.perf_counter()
     state = rest_state(body, 1)
     targets = targets + [0.0, float(state.positions[0].T[1] @ body.mass / body.total_mass), 0.0]
-    simulate(body, np.zeros((len(ctrls), rec, body.n_actuators)), state=_repeat(state, len(ctrls)))
+    simulate(
+        body, np.zeros((len(ctrls), rec, body.n_actuators)), state=repeat_state(state, len(ctrls))
+    )
     compile_wall = time.perf_counter() - t0
 
     world = World([body])
     greedy = _Greedy(body, ctrls, names, targets, config, float(radius), lam, progress)
-    path = _Path()
+    path = PathRecorder()
     # the run ends at ``done``; a window that starts before the time limit plays whole, so
     # the driver's own end lies past the longest window that can start then
     longest = max(config.interval, config.time_limit * OVERLAP / (1 - OVERLAP)) + 2 * rec * dt
@@ -452,7 +465,7 @@ def track(
     start = time.perf_counter()
     drive(world, greedy, config.time_limit + longest, schedule, (path,), stop=greedy.done)
     wall = time.perf_counter() - start
-    seq, starts = _sequence(ctrls, greedy.items, greedy.t)
+    seq, starts = sequence_of(ctrls, greedy.items, greedy.t)
     positions = np.array(path.frames)
     w = body.mass / body.total_mass
     return TrackResult(
@@ -473,20 +486,22 @@ def track(
     )
 
 
-def _repeat(state: State, k: int) -> State:
+def repeat_state(state: State, k: int) -> State:  # the state over k lanes
     return State(np.repeat(state.positions, k, axis=0), np.repeat(state.velocities, k, axis=0))
 
 
-def _sequence(ctrls, items, t_end) -> tuple[SequenceController, np.ndarray]:
-    """Return the chosen items as one SequenceController and their start times."""
+def sequence_of(ctrls, items, t_end: float, overlap: float = OVERLAP):
+    """Return the items ([index into ``ctrls``, start s]) as one SequenceController, each
+    lasting to the next one's start plus the cross-fade (``overlap`` of its length), the
+    last to ``t_end``, and the items' starts (s)."""
     starts = np.array([s for _, s in items], float)
     ends = np.append(starts[1:], t_end)
     seq_items = []
     for i, (k, s) in enumerate(items):
         last = i == len(items) - 1
-        seq_items.append((ctrls[k], (ends[i] - s) if last else (ends[i] - s) / (1 - OVERLAP)))
+        seq_items.append((ctrls[k], (ends[i] - s) if last else (ends[i] - s) / (1 - overlap)))
     ctrl = ctrls[0]
-    return SequenceController(ctrl.animal, ctrl.actuators, tuple(seq_items), OVERLAP), starts
+    return SequenceController(ctrl.animal, ctrl.actuators, tuple(seq_items), overlap), starts
 
 
 def replay(body: Body, result: TrackResult) -> Trajectory:

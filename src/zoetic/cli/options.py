@@ -38,6 +38,16 @@ Evaluator = Annotated[str, typer.Option(help="batch (this machine) or ray (a clu
 RayAddress = Annotated[str, typer.Option(help="Ray cluster for --evaluator ray.")]
 """The Ray cluster an ``--evaluator ray`` search uses."""
 
+Righting = Annotated[
+    bool,
+    typer.Option(
+        help="Keep a fish upright: each window plays the planned entry or one of its "
+        "righting variants (fins tilted, a gentler stroke), whichever its own simulation "
+        "keeps nearest upright and at the start depth; --no-righting plays the plan as given.",
+    ),
+]
+"""Whether a sequence of repertoire entries gets a fish's righting reflex."""
+
 Fps = Annotated[int, typer.Option(min=1)]
 """The video's frame rate."""
 

@@ -12,7 +12,7 @@ from rich.table import Table
 
 from zoetic.cli.apps import app
 from zoetic.cli.learn import learn_bar
-from zoetic.cli.options import Force, given
+from zoetic.cli.options import Force, Righting, given
 from zoetic.cli.output import console, interrupted, print_summary
 
 Strict = Annotated[
@@ -235,67 +235,62 @@ def sequence_cmd(
     entries: str = typer.Option(..., help='Entries in order, "name:seconds,name,...".'),
     overlap: float = typer.Option(0.05, help="Fraction of each entry shared with the next."),
     out: Path = typer.Option(Path("runs/sequence"), help="Output directory."),
+    righting: Righting = True,
     video: bool = typer.Option(True, help="Write video.mp4."),
     force: Force = False,
 ) -> None:
-    """Concatenate repertoire entries, cross-faded, into one controller; simulate it."""
+    """Concatenate repertoire entries, cross-faded, into one controller; simulate it. A fish
+    keeps upright by its fins' righting reflex (--no-righting: the plan as given)."""
+    import numpy as np
+
     from zoetic.behavior.repertoire import Repertoire
     from zoetic.behavior.training import build_sequence, parse_sequence
     from zoetic.bodies import load_animal
+    from zoetic.cli.track import motion_line
     from zoetic.control import save_controller
+    from zoetic.control.measure import locomotion
     from zoetic.io import make_dir
     from zoetic.outdir import prepare_out
+    from zoetic.record import read_record
     from zoetic.runs import simulate_run
     from zoetic.viz.learning import plot_controller
     from zoetic.viz.media import simulation_media
 
     body = load_animal(animal)
     rep = Repertoire.load(memory, body)
-    seq = build_sequence(rep, parse_sequence(entries, rep), overlap)
+    items = parse_sequence(entries, rep)
+    seq = build_sequence(rep, items, overlap)
     make_dir(prepare_out(out, force))
+    seq, note = _upright(body, [n for n, _ in items], seq, righting)
     path = save_controller(seq, out / "sequence.json")
-    import numpy as np
-
     t = np.linspace(0.0, seq.duration, 600)
+    title = f"sequence: {entries}" + (" (righting)" if note.startswith("a righting") else "")
     plot_controller(
-        t,
-        seq.sample(t),
-        body.actuator_names,
-        body.actuator_side,
-        out / "controller.png",
-        title=f"sequence: {entries}",
+        t, seq.sample(t), body.actuator_names, body.actuator_side, out / "controller.png", title
     )
-    summary = simulate_run(
-        animal, str(path), seq.duration, out, media=partial(simulation_media, video=video)
-    )
-    from zoetic.behavior.tracking import locomotion
-    from zoetic.cli.track import motion_line
-    from zoetic.record import read_record
-
+    media = partial(simulation_media, video=video, starts=seq.starts()[1:], title=title)
+    summary = simulate_run(animal, str(path), seq.duration, out, media=media)
     rec = read_record(summary["record"])
-    positions = np.asarray(rec.animals[0].positions, float)
-    motion = locomotion(body, positions, rec.times)
-    _sequence_path(body, positions, rec.times, seq, out / "path.png", entries)
+    motion = locomotion(body, np.asarray(rec.animals[0].positions, float), rec.times)
     print_summary(summary | {"sequence": str(path)})
+    console.print(f"{'righting':>12}: {note}")
     console.print(f"{'locomotion':>12}: {motion_line(motion)}")
 
 
-def _sequence_path(body, positions, times, seq, path: Path, entries: str) -> None:
-    """Write the sequence's path.png: the top view beside the side view of its depth, white
-    dots where each entry takes over (a roll or a dive shows in the side view)."""
-    import numpy as np
+def _upright(body, names: list[str], seq, righting: bool):
+    """Return the sequence to play (with the fins' righting reflex where asked for and the
+    animal has fins to right itself with) and a note saying what the reflex did."""
+    from zoetic.behavior.tracking import TrackConfig
+    from zoetic.behavior.upright import has_righting, right_plan
 
-    from zoetic.viz.tracking import plot_plan
-
-    com = np.einsum("tnk,n->tk", positions, body.mass / body.mass.sum())
-    starts = np.searchsorted(times, seq.starts()[1:])
-    plot_plan(
-        [com],
-        ["sequence"],
-        path,
-        np.zeros((0, 3)),
-        np.zeros((0, 3)),
-        [starts],
-        title=f"sequence: {entries}",
-        band=0.5,
+    config = TrackConfig()
+    if not righting:
+        return seq, "off (--no-righting): the plan as given"
+    if not has_righting(body, seq, config.fin_tilt):
+        return seq, f"none: the {body.name} has no pectoral fins to right itself with"
+    result = right_plan(body, names, seq, config=config)
+    s = result.summary()
+    return result.sequence, (
+        f"a righting variant played in {s['windows_righted']} of {s['windows']} windows "
+        f"of {config.interval:g} s ({s['windows_gentle']} with the gentler stroke)"
     )

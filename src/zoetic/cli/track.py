@@ -121,12 +121,12 @@ def track(
 
 
 def motion_line(m: dict) -> str:
-    """Return a locomotion summary's depth and attitude figures in words."""
+    """Return a locomotion summary's depth, attitude and turn figures in words."""
     lo, hi = m["depth_span_m"]
     return (
         f"depth: {m['depth_change_m']:+.2f} m at the end (between {lo:+.2f} and {hi:+.2f} m "
         f"of the start depth); worst roll {m['worst_roll_deg']:.0f} deg, worst pitch "
-        f"{m['worst_pitch_deg']:.0f} deg"
+        f"{m['worst_pitch_deg']:.0f} deg; net turn {m['turn_deg']:+.0f} deg (left +)"
     )
 
 
@@ -228,13 +228,20 @@ def macro(
     fps: Fps = 30,
     evaluator: Evaluator = "batch",
     ray_address: RayAddress = None,
+    righting: bool = typer.Option(
+        False,
+        help="Play the plan found with the righting reflex of `zoetic sequence` (off by "
+        "default: the search judges plans without it, and righting afterwards changes the "
+        "path the plan was chosen for).",
+    ),
     force: Force = False,
 ) -> None:
-    """Search for a macro controller (selection, order, durations of entries) to reach a goal."""
+    """Search for a macro controller (selection, order, durations of entries) to reach a goal;
+    --righting plays it with a fish's righting reflex."""
     use_ray_address(ray_address)
     from zoetic.behavior.macro import MacroProblem, ReachTask
-    from zoetic.behavior.tracking import locomotion
     from zoetic.control import save_controller
+    from zoetic.control.measure import locomotion
     from zoetic.io import write_json
 
     g, obs = _goal_and_obstacles(goal, obstacle)
@@ -244,7 +251,6 @@ def macro(
     problem = MacroProblem(body, rep, task, segments=segments)
     result = _search_plan(problem, body.name, method, budget, seed, evaluator)
     make_dir(out)
-    save_controller(result.sequence, out / "controller.json")
     summary = result.summary() | {
         "animal": body.name,
         "memory": str(memory),
@@ -254,15 +260,54 @@ def macro(
         "seed": seed,
         "history": [[n, round(f, 5)] for n, f in result.history],
     }
-    traj = problem.rollout(result.entries, result.durations, record_every=4)
+    traj, sequence, righted = _play_plan(body, problem, result, righting)
+    save_controller(sequence, out / "controller.json")
     motion = locomotion(body, traj.positions[0], traj.times)
-    summary |= motion
+    summary |= motion | {"righting": righted}
     write_json(out / "summary.json", summary)
     depth = float(traj.com(body)[0][0, 1])
-    _write_plan_record(out, body, traj, result.sequence, g, obs, depth, summary)
-    _draw_plan(out, body, traj, result, g, obs, video, fps)
+    _write_plan_record(out, body, traj, sequence, g, obs, depth, summary)
+    _draw_plan(out, body, traj, result, sequence.starts(), righted, g, obs, video, fps)
     _report_plan(method, result.summary(), out, video)
+    if righted:
+        console.print(
+            f"played with a righting variant in {righted['windows_righted']} of "
+            f"{righted['windows']} windows: final distance {righted['final_m']:.2f} m, closest "
+            f"{righted['closest_m']:.2f} m, {righted['inside_obstacle_s']:.1f} s in obstacles"
+        )
     console.print(motion_line(motion))
+
+
+def _play_plan(body, problem, result, righting: bool):
+    """Return the planned run as played (a trajectory recorded every 4 steps), the controller
+    that plays it, and what the fins' righting reflex did (empty when off or finless): the
+    plan was searched as given, and is played with the reflex over the horizon, its scores
+    (final and closest distance, time in obstacles) taken again on the righted path."""
+    from zoetic.behavior.tracking import TrackConfig
+    from zoetic.behavior.upright import has_righting, right_plan
+    from zoetic.physics import Trajectory
+
+    config = TrackConfig(record_every=4)
+    if not righting or not has_righting(body, result.sequence, config.fin_tilt):
+        traj = problem.rollout(result.entries, result.durations, record_every=4)
+        return traj, result.sequence, {}
+    r = right_plan(body, result.names, result.sequence, problem.task.horizon, config)
+    none = np.full(1, -1)
+    traj = Trajectory(r.times, r.positions[None], None, none, body.dt)
+    sc = {k: float(v[0]) for k, v in problem.scores(traj).items()}
+    reached = round(sc["reach"], 2) if np.isfinite(sc["reach"]) else None
+    return (
+        traj,
+        r.sequence,
+        {
+            "windows": len(r.evaluations),
+            **{k: r.summary()[k] for k in ("windows_righted", "windows_gentle")},
+            "final_m": round(sc["final"], 3),
+            "closest_m": round(sc["closest"], 3),
+            "inside_obstacle_s": round(sc["inside"], 2),
+            "reached_s": reached,
+        },
+    )
 
 
 def _goal_and_obstacles(goal: str, obstacle: list[str]) -> tuple[np.ndarray, np.ndarray]:
@@ -291,19 +336,29 @@ def _search_plan(problem, name: str, method: str, budget: int, seed: int, evalua
 
 
 def _draw_plan(
-    out: Path, body, traj, result, goal: np.ndarray, obstacles: np.ndarray, video: bool, fps: int
+    out: Path,
+    body,
+    traj,
+    result,
+    starts: np.ndarray,
+    righted: dict,
+    goal: np.ndarray,
+    obstacles: np.ndarray,
+    video: bool,
+    fps: int,
 ) -> None:
-    """Write a macro run's path.png (and video.mp4, goal and obstacle rims as buoys)."""
+    """Write a macro run's path.png, white dots at ``starts`` (s, each played item's), its
+    title the ``righted`` path's figures where the fins righted it, and video.mp4 (goal and
+    obstacle rims as buoys)."""
     from zoetic.viz.tracking import plot_plan
 
     com = traj.com(body)[0]
     depth = float(com[0, 1])
-    starts = result.sequence.starts()
     idx = np.searchsorted(traj.times, starts[starts < result.horizon] - 1e-9)
-    s, method = result.summary(), result.method
+    s, method = righted or result.summary(), result.method
     title = (
-        f"{body.name} macro controller ({method}): final distance {s['final_m']:.2f} m, "
-        f"{s['inside_obstacle_s']:.1f} s in obstacles"
+        f"{body.name} macro controller ({method}{', righting' if righted else ''}): "
+        f"final distance {s['final_m']:.2f} m, {s['inside_obstacle_s']:.1f} s in obstacles"
     )
     plot_plan(
         [com], [f"{method} plan"], out / "path.png", goal, obstacles, [idx], title=title, band=0.5

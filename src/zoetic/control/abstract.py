@@ -8,6 +8,7 @@ length (5% by default) and the two are cross-faded linearly over the overlap (se
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -43,6 +44,12 @@ class AbstractController(Controller):
     def modes(self) -> int:
         """Return the number of non-zero modes."""
         return int(np.count_nonzero(self.amp))
+
+    def resumed(self, t0: float) -> AbstractController:
+        """Return the controller as it plays from ``t0`` s on, with its own clock reset:
+        ``resumed(t0).raw(t) == raw(t0 + t)`` (each mode's phase advanced by 2 pi f t0), so a
+        sequence item that takes over mid-stroke carries the stroke on instead of restarting."""
+        return dataclasses.replace(self, phase=self.phase + 2 * np.pi * self.freq * float(t0))
 
     def raw(self, t):
         """Return unclipped activations (T, A) at times t (s): offset plus the cosine modes."""

@@ -140,3 +140,25 @@ def muscle_work(body: Body, positions: np.ndarray, activations: np.ndarray) -> n
     tension = np.asarray(body.stiffness)[m] * (length - rest)
     mid = 0.5 * (tension[:, 1:] + tension[:, :-1])
     return np.nansum(np.abs(mid * np.diff(rest, axis=1)), axis=(1, 2))
+
+
+def locomotion(body: Body, positions: np.ndarray, times: np.ndarray) -> dict[str, object]:
+    """Return what a locomotion run did to the animal's depth, attitude and heading: the
+    centre of mass's height change end minus start and its lowest and highest (m, up
+    positive, relative to the start), the worst roll and pitch (deg, either way) and the net
+    turn (deg, left positive: the heading over the last half second less that over the first,
+    so a stroke's head swing cancels) over ``positions`` (R, N, 3) recorded at ``times`` (R,) s."""
+    pos = np.asarray(positions, float)
+    times = np.asarray(times, float)
+    m = motion_scalars(body, pos[None], times, get_medium(body.medium))
+    y = np.einsum("rnk,n->rk", pos, body.mass / body.total_mass)
+    y = y[:, 1] - y[0, 1]
+    half = times <= times[0] + 0.5, times >= times[-1] - 0.5
+    heading = [float(np.nanmean(m["heading"][0, h])) for h in half]
+    return {
+        "depth_change_m": round(float(y[-1]), 3),
+        "depth_span_m": [round(float(y.min()), 3), round(float(y.max()), 3)],
+        "worst_roll_deg": round(float(np.nanmax(np.abs(m["roll"]))), 1),
+        "worst_pitch_deg": round(float(np.nanmax(np.abs(m["pitch"]))), 1),
+        "turn_deg": round(heading[1] - heading[0], 1),
+    }

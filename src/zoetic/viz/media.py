@@ -21,13 +21,31 @@ def _motion(rec: Record) -> tuple[np.ndarray, np.ndarray]:
     return pos, np.einsum("tnk,n->tk", pos, mass / mass.sum())
 
 
-def simulation_media(body: Body, rec: Record, out: Path, video: bool = True, fps: int = 30) -> dict:
+def simulation_media(
+    body: Body,
+    rec: Record,
+    out: Path,
+    video: bool = True,
+    fps: int = 30,
+    starts: np.ndarray | None = None,
+    title: str = "",
+) -> dict:
     """Write path.png (and video.mp4) of a simulation's record; return their paths. ``body``
-    (the record's animal) gives the video its display surface."""
-    from zoetic.viz.plots import plot_path
-
+    (the record's animal) gives the video its display surface. With ``starts`` (s: when each
+    entry of a sequence takes over) path.png is the top view beside the side view of the
+    depth, white dots where an entry starts (a roll or a dive shows there)."""
     pos, com = _motion(rec)
-    files = {"path": plot_path(com, out / "path.png", title=body.name)}
+    if starts is None:
+        from zoetic.viz.plots import plot_path
+
+        files = {"path": plot_path(com, out / "path.png", title=title or body.name)}
+    else:
+        from zoetic.viz.tracking import plot_plan
+
+        idx = np.searchsorted(np.asarray(rec.times, float), np.asarray(starts, float) - 1e-9)
+        none = np.zeros((0, 3))
+        path = out / "path.png"
+        files = {"path": plot_plan([com], [body.name], path, none, none, [idx], title, 0.5)}
     if video:
         from zoetic.viz.render3d import render_video
 
