@@ -17,7 +17,7 @@ from zoetic.behavior.macro import (
     path_scores,
     search,
 )
-from zoetic.behavior.tracking import TrackingError
+from zoetic.behavior.targets import TrackingError
 from zoetic.bodies import load_animal
 from zoetic.cli import main
 from zoetic.control import load_controller

@@ -9,13 +9,11 @@ import numpy as np
 import pytest
 
 from zoetic.behavior.handmade import handmade_repertoire
+from zoetic.behavior.targets import TrackingError, parse_points, parse_targets
 from zoetic.behavior.tracking import (
     RESTART,
     TrackConfig,
-    TrackingError,
     cost_to_go,
-    parse_points,
-    parse_targets,
     replay,
     track,
 )

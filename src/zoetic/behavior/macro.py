@@ -23,7 +23,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from zoetic.behavior.repertoire import Repertoire
-from zoetic.behavior.tracking import OVERLAP, TrackingError, body_length, obstacle_seconds
+from zoetic.behavior.targets import TrackingError
+from zoetic.behavior.tracking import OVERLAP, body_length, obstacle_seconds
 from zoetic.bodies import Body
 from zoetic.control.abstract import SequenceController
 from zoetic.learning.optimizers import Annealing

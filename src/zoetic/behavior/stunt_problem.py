@@ -11,7 +11,7 @@ import numpy as np
 
 from zoetic.behavior.macro import MacroProblem
 from zoetic.behavior.repertoire import Repertoire
-from zoetic.behavior.tracking import TrackingError
+from zoetic.behavior.targets import TrackingError
 from zoetic.behavior.tricks import Trick
 from zoetic.bodies import Body
 from zoetic.control.loop import Observer, Schedule, drive

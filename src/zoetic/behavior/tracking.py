@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from zoetic.behavior.repertoire import Repertoire
+from zoetic.behavior.targets import TrackingError, as_targets
 from zoetic.bodies import Body
 from zoetic.control import Controller
 from zoetic.control.abstract import AbstractController, SequenceController
@@ -36,7 +37,7 @@ from zoetic.control.loop import Observer, Schedule, drive
 from zoetic.control.measure import locomotion, motion_scalars
 from zoetic.control.policy import Period
 from zoetic.control.rollout import rollout
-from zoetic.errors import SimulationError, ZoeticError
+from zoetic.errors import SimulationError
 from zoetic.physics import State, Trajectory, get_medium, rest_state, simulate
 from zoetic.physics.world import World
 
@@ -44,56 +45,10 @@ RESTART = 2.0  # s an entry plays before the tracker restarts it (keeps cross-fa
 OVERLAP = 0.05  # cross-fade: fraction of each controller's length shared with the next
 
 
-class TrackingError(ZoeticError):
-    """A tracking or planning problem is ill-posed (no targets, bad radius, empty repertoire)."""
-
-
 def body_length(body: Body) -> float:
     """Return the animal's length (m) along its forward axis in the rest pose."""
     along = body.rest_pos @ np.asarray(body.forward, float)
     return float(np.ptp(along))
-
-
-def parse_points(text: str, per: int, what: str) -> np.ndarray:
-    """Return the points of ``"a,b;c,d;..."`` as an (M, per) array; a TrackingError if malformed."""
-    try:
-        rows = [[float(v) for v in chunk.split(",")] for chunk in text.split(";") if chunk.strip()]
-    except ValueError:
-        raise TrackingError(f"{what} {text!r}: numbers expected, like '2,0;4,1.5'") from None
-    if not rows or any(len(r) != per for r in rows):
-        raise TrackingError(f"{what} {text!r}: each item needs {per} comma-separated numbers")
-    pts = np.array(rows, float)
-    if not np.all(np.isfinite(pts)):
-        raise TrackingError(f"{what} {text!r}: values must be finite")
-    return pts
-
-
-def parse_targets(text: str, what: str = "--targets") -> np.ndarray:
-    """Return the targets of ``"x,z;x,y,z;..."`` as (M, 3) x, y, z: a two-number item is a
-    point at the start depth (y = 0); a TrackingError if malformed."""
-    rows = []
-    for chunk in (c for c in text.split(";") if c.strip()):
-        n = len(chunk.split(","))
-        if n not in (2, 3):
-            raise TrackingError(
-                f"{what} {text!r}: item {chunk.strip()!r} needs 'x,z' or 'x,y,z' (m)"
-            )
-        p = parse_points(chunk, n, what)[0]
-        rows.append(p if n == 3 else np.array([p[0], 0.0, p[1]]))
-    if not rows:
-        raise TrackingError(f"{what} {text!r}: give at least one target 'x,z' or 'x,y,z'")
-    return np.array(rows)
-
-
-def as_targets(targets) -> np.ndarray:
-    """Return targets (M, 2) x, z or (M, 3) x, y, z as (M, 3), y = 0 for the 2-number form."""
-    t = np.asarray(targets, float)
-    t = t.reshape(-1, t.shape[-1] if t.ndim > 1 else 2)
-    if t.shape[1] == 2:
-        return np.column_stack([t[:, 0], np.zeros(len(t)), t[:, 1]])
-    if t.shape[1] != 3:
-        raise TrackingError(f"targets must be (x, z) or (x, y, z) points, got shape {t.shape}")
-    return t
 
 
 def obstacle_seconds(com_xz: np.ndarray, obstacles: np.ndarray, dt: float) -> np.ndarray:

@@ -48,7 +48,8 @@ def bench_track(
 ) -> dict:
     """Return the course suite's figures (see the module docstring) for one animal."""
     from zoetic.behavior.repertoire import Repertoire
-    from zoetic.behavior.tracking import TrackConfig, parse_targets, track
+    from zoetic.behavior.targets import parse_targets
+    from zoetic.behavior.tracking import TrackConfig, track
     from zoetic.bench.memory import bench_memory
     from zoetic.bodies import load_animal
 

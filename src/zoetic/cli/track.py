@@ -85,7 +85,8 @@ def track(
     force: Force = False,
 ) -> None:
     """Track targets greedily with a repertoire (Fig. 5, Plate 4); writes path.png and video."""
-    from zoetic.behavior.tracking import TrackConfig, parse_targets
+    from zoetic.behavior.targets import parse_targets
+    from zoetic.behavior.tracking import TrackConfig
 
     pts = parse_targets(targets)
     prepare_out(out, force)
@@ -312,7 +313,7 @@ def _play_plan(body, problem, result, righting: bool):
 
 def _goal_and_obstacles(goal: str, obstacle: list[str]) -> tuple[np.ndarray, np.ndarray]:
     """Parse --goal 'x,z' and each --obstacle 'x,z,r' (radii must be positive)."""
-    from zoetic.behavior.tracking import TrackingError, parse_points
+    from zoetic.behavior.targets import TrackingError, parse_points
 
     g = parse_points(goal, 2, "--goal")[0]
     obs = np.concatenate([parse_points(o, 3, "--obstacle") for o in obstacle] or [np.zeros((0, 3))])
