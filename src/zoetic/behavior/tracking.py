@@ -49,9 +49,8 @@ class TrackingError(ZoeticError):
 
 
 def body_length(body: Body) -> float:
-    """Return the animal's length (m) along its forward axis in the rest pose."""
-    along = body.rest_pos @ np.asarray(body.forward, float)
-    return float(np.ptp(along))
+    """Return the animal's length (m) along its forward axis in the rest pose (``Body.length``)."""
+    return body.length
 
 
 def parse_points(text: str, per: int, what: str) -> np.ndarray:
