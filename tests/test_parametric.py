@@ -31,12 +31,19 @@ def shark():
 
 @pytest.fixture(scope="module")
 def rep(shark):
-    """The hand-made repertoire with slow and medium swims: go-straight's stroke weakened."""
+    """The hand-made repertoire with slow and medium swims: go-straight's stroke weakened,
+    the medium one half a stroke out of step (as two independently learned gaits can be)."""
     rep = handmade_repertoire(shark)
     straight = rep.controllers["go-straight"]
     rep.add("swim-slow", scaled(straight, 0.3), 6.0)
-    rep.add("swim-medium", scaled(straight, 0.6), 6.0)
+    rep.add("swim-medium", scaled(straight, 0.6).ahead(straight.period / 2), 6.0)
     return rep
+
+
+def test_a_gait_ahead_plays_later_signals_now(rep):
+    gait = rep.controllers["go-straight"]
+    t = np.linspace(0.0, 1.0, 37)
+    np.testing.assert_allclose(gait.ahead(0.07).raw(t), gait.raw(t + 0.07), atol=1e-9)
 
 
 @pytest.fixture(scope="module")
@@ -44,9 +51,13 @@ def nodes(shark, rep):
     return SpeedNodes.measure(shark, rep)
 
 
-def test_nodes_are_the_straight_swims_slowest_first(nodes):
+def test_nodes_are_the_straight_swims_slowest_first_in_step(shark, rep, nodes):
     assert nodes.names == ("swim-slow", "swim-medium", "go-straight")
     assert np.all(np.diff(nodes.speeds) > 0) and nodes.speeds[0] > 0.01
+    period = rep.controllers["go-straight"].period
+    # medium is played half a stroke on, back in step with slow; fast already is with medium
+    assert nodes.lags[0] == pytest.approx(period / 2, abs=shark.dt)
+    assert nodes.lags[1] == pytest.approx(period / 2, abs=shark.dt)
 
 
 def test_a_speed_on_a_node_plays_that_entry(rep, nodes):
