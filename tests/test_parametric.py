@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from zoetic.behavior.handmade import handmade_repertoire
-from zoetic.behavior.parametric import SpeedNodes, gait_speeds, swim_at
+from zoetic.behavior.parametric import SpeedNodes, gait_speeds, speed_nodes, swim_at
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.behavior.training import plan_for
 from zoetic.bodies import load_animal
@@ -48,7 +48,15 @@ def test_a_gait_ahead_plays_later_signals_now(rep):
 
 @pytest.fixture(scope="module")
 def nodes(shark, rep):
-    return SpeedNodes.measure(shark, rep)
+    return speed_nodes(shark, rep)
+
+
+def test_nodes_are_measured_once_per_body_and_swims(shark, rep, nodes):
+    assert speed_nodes(shark, rep) is nodes
+    other = Repertoire(rep.animal, rep.actuators)
+    for name in ("swim-slow", "go-straight"):
+        other.add(name, rep.controllers[name], 6.0)
+    assert speed_nodes(shark, other).names == ("swim-slow", "go-straight")
 
 
 def test_nodes_are_the_straight_swims_slowest_first_in_step(shark, rep, nodes):

@@ -20,6 +20,7 @@ is read off them, linear between calibrated weights: the speed of a blend is not
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,6 +36,8 @@ SPEED_ENTRIES = ("swim-slow", "swim-medium", "go-straight")
 GAIT_SECONDS = 6.0  # s a gait is played from rest; its speed is that of the second half
 # the blend weights of two neighbouring swims whose speeds are measured (ends: the entries)
 CALIBRATION_WEIGHTS = (0.0, 0.25, 0.5, 0.75, 1.0)
+# measured nodes per body object, then per content of its repertoire's straight swims
+_NODES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def gait_speeds(body: Body, ctrls: list) -> np.ndarray:
@@ -127,6 +130,21 @@ class SpeedNodes:
 
     def __len__(self) -> int:
         return len(self.names)
+
+
+def speed_nodes(body: Body, rep: Repertoire) -> SpeedNodes:
+    """Return ``SpeedNodes.measure(body, rep)``, measured once per body object and content of
+    the repertoire's straight swims (a sequence of several swims at chosen speeds measures
+    once)."""
+    gaits = [rep.controllers[n] for n in SPEED_ENTRIES if n in rep.controllers]
+    key = tuple(
+        np.concatenate([c.offset, c.freq.ravel(), c.amp.ravel(), c.phase.ravel()]).tobytes()
+        for c in gaits
+    )
+    cached = _NODES.setdefault(body, {})
+    if key not in cached:
+        cached[key] = SpeedNodes.measure(body, rep)
+    return cached[key]
 
 
 def swim_at(rep: Repertoire, nodes: SpeedNodes, speed: float) -> tuple[AbstractController, dict]:

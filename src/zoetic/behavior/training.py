@@ -52,7 +52,7 @@ SURFACE_PLAN = (
 )
 # With ``speeds``: straight swims at steady speeds (body lengths/s) below go-straight's (which
 # swims as far as it can, so it is the fastest), learned after the rest of the plan (whose
-# entries and seeds stay as without them); ``behavior.skills`` interpolates between them
+# entries and seeds stay as without them); ``behavior.parametric`` blends between them
 SPEED_PLAN = (("swim-slow", "swim-slow"), ("swim-medium", "swim-medium"))
 REST_SECONDS = 1.0
 # the "auto" abstraction's thresholds (times each actuator's strongest mode) tried in turn
@@ -316,8 +316,7 @@ def train_repertoire(
     nodes: controller nodes per actuator (default: each task's). on_entry(name, run) is called
     before each entry is learned; progress(run) during learning. An entry already begun in
     ``out`` continues to its stored budget, or to ``resume_budget`` evaluations when given.
-    speeds: learn a swimmer's ``SPEED_PLAN`` entries too (each entry's steady speed is kept in
-    the index, ``skills.SPEED_KEY``, for ``skills.swim_at``).
+    speeds: learn a swimmer's ``SPEED_PLAN`` entries too (``parametric.swim_at`` blends them).
     """
     from zoetic.learning.run import LearnConfig, Run
 

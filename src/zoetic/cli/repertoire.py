@@ -321,7 +321,7 @@ def blend_cmd(
 ) -> None:
     """Blend the two learned straight swims around SPEED into a controller that swims it,
     measure it from rest and write it (play it with zoetic simulate ANIMAL --controller)."""
-    from zoetic.behavior.parametric import SpeedNodes, gait_speeds, swim_at
+    from zoetic.behavior.parametric import gait_speeds, speed_nodes, swim_at
     from zoetic.behavior.repertoire import Repertoire
     from zoetic.control import save_controller
     from zoetic.errors import ZoeticError
@@ -333,7 +333,7 @@ def blend_cmd(
     out = out or Path("runs") / f"swim-{speed:g}.json"
     if out.exists() and not force:
         raise ZoeticError(f"{out}: exists; give another --out or --force to replace it")
-    nodes = SpeedNodes.measure(body, rep)
+    nodes = speed_nodes(body, rep)
     ctrl, how = swim_at(rep, nodes, speed)
     measured = float(gait_speeds(body, [ctrl])[0])
     out.parent.mkdir(parents=True, exist_ok=True)
