@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from zoetic.behavior.handmade import handmade_repertoire
+from zoetic.behavior.motor import blend
 from zoetic.behavior.parametric import SpeedNodes, gait_speeds, speed_nodes, swim_at
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.behavior.training import plan_for
@@ -62,10 +63,14 @@ def test_nodes_are_measured_once_per_body_and_swims(shark, rep, nodes):
 def test_nodes_are_the_straight_swims_slowest_first_in_step(shark, rep, nodes):
     assert nodes.names == ("swim-slow", "swim-medium", "go-straight")
     assert np.all(np.diff(nodes.speeds) > 0) and nodes.speeds[0] > 0.01
-    period = rep.controllers["go-straight"].period
-    # medium is played half a stroke on, back in step with slow; fast already is with medium
-    assert nodes.lags[0] == pytest.approx(period / 2, abs=shark.dt)
-    assert nodes.lags[1] == pytest.approx(period / 2, abs=shark.dt)
+    # medium is half a stroke out of step with slow: blended in step, the speeds rise from
+    # one entry's to the next (out of step, half and half, they would cancel to a crawl)
+    assert np.all(np.diff(nodes.curve, axis=1) > 0)
+    np.testing.assert_allclose(nodes.curve[:, [0, -1]], [nodes.speeds[:-1], nodes.speeds[1:]])
+    assert np.abs(nodes.turns).max() < 5.0  # deg over the 6 s: straight swims stay straight
+    lagged = swim_at(rep, nodes, float(nodes.curve[0, 4]))[0]
+    unlagged = blend(rep.controllers["swim-slow"], rep.controllers["swim-medium"], 0.5)
+    assert gait_speeds(shark, [unlagged])[0] < nodes.speeds[0] < gait_speeds(shark, [lagged])[0]
 
 
 def test_a_speed_on_a_node_plays_that_entry(rep, nodes):

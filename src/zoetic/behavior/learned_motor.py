@@ -19,7 +19,7 @@ from functools import cached_property
 
 import numpy as np
 
-from zoetic.behavior.motor import best_lag, fin_activation, fin_rows, grid_rates, interp
+from zoetic.behavior.motor import fin_activation, fin_rows, grid_rates, interp
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.bodies import Body
 from zoetic.control.abstract import AbstractController
@@ -226,7 +226,10 @@ class LearnedMotor:
         is the left steer's mirror image (in anti-phase, a fish switching between the two
         steers rolls over: docs/aquarium.md)."""
         gait = self.bases[1]
-        return best_lag(lambda t: self.body.mirror_actuators(gait.raw(t)), gait, self.body.dt)
+        t = np.arange(max(1, int(round(gait.period / self.body.dt)))) * self.body.dt
+        mirrored = self.body.mirror_actuators(gait.raw(t))
+        err = [float(np.sum((mirrored - gait.raw(t + s)) ** 2)) for s in t.tolist()]
+        return float(t[int(np.argmin(err))])
 
     def swim_signal(self, times: np.ndarray, a: float, pitch: float) -> np.ndarray:
         """Return activations (T, A) of the swim gait of weight ``a``, fins at ``pitch``."""

@@ -50,16 +50,6 @@ def blend(a: AbstractController, b: AbstractController, w: float) -> AbstractCon
     )
 
 
-def best_lag(reference, gait: AbstractController, dt: float) -> float:
-    """Return the time shift s (s, a multiple of ``dt`` within the gait's period) at which
-    ``gait.raw(t + s)`` is nearest ``reference(t)`` (least squared difference over a period
-    sampled every ``dt``); ``reference`` maps times (T,) to activations (T, A)."""
-    t = np.arange(max(1, int(round(gait.period / dt)))) * dt
-    want = reference(t)
-    err = [float(np.sum((want - gait.raw(t + s)) ** 2)) for s in t.tolist()]
-    return float(t[int(np.argmin(err))])
-
-
 def fin_rows(body: Body) -> list[tuple[int, float, float, float]]:
     """Return each fin's (actuator, angle at activation 0, angle at 1, side) as Python numbers;
     side is 1 for a fin on the left, -1 on the right, 0 on neither (its actuator's side)."""
