@@ -319,9 +319,10 @@ def blend_cmd(
     json_out: bool = typer.Option(False, "--json", help="Print the result as JSON."),
     force: Force = False,
 ) -> None:
-    """Blend the two learned straight swims around SPEED into a controller that swims it,
-    measure it from rest and write it (play it with zoetic simulate ANIMAL --controller)."""
-    from zoetic.behavior.parametric import gait_speeds, speed_nodes, swim_at
+    """Blend the two learned straight swims around SPEED (m/s) into a controller that swims
+    it (at the weight read off measured blends), measure it from rest and write it; play it
+    with zoetic simulate ANIMAL --controller FILE."""
+    from zoetic.behavior.parametric import GAIT_SECONDS, gait_motion, speed_nodes, swim_at
     from zoetic.behavior.repertoire import Repertoire
     from zoetic.control import save_controller
     from zoetic.errors import ZoeticError
@@ -335,13 +336,16 @@ def blend_cmd(
         raise ZoeticError(f"{out}: exists; give another --out or --force to replace it")
     nodes = speed_nodes(body, rep)
     ctrl, how = swim_at(rep, nodes, speed)
-    measured = float(gait_speeds(body, [ctrl])[0])
+    motion = {q: float(v[0]) for q, v in gait_motion(body, [ctrl]).items()}
+    measured = motion["speed"]
     out.parent.mkdir(parents=True, exist_ok=True)
     save_controller(ctrl, out)
     result = how | {
         "entries_m_s": {n: round(v, 4) for n, v in nodes.table().items()},
         "measured_m_s": round(measured, 4),
         "error_m_s": round(measured - speed, 4),
+        "turn_deg": round(motion["turn"], 2),
+        "roll_deg": round(motion["roll"], 2),
         "controller": str(out),
     }
     if json_out:
@@ -354,6 +358,8 @@ def blend_cmd(
     w = how["weight"]
     console.print(
         f"swim at {speed:g} m/s: {1 - w:.2f} {how['from']} + {w:.2f} {how['to']}; "
-        f"measured {measured:.3f} m/s (error {measured - speed:+.3f})"
+        f"measured {measured:.3f} m/s (error {measured - speed:+.3f}); from rest over "
+        f"{GAIT_SECONDS:g} s it turns {motion['turn']:+.1f} deg and rolls up to "
+        f"{motion['roll']:.1f} deg"
     )
     console.print(f"wrote {out} (zoetic simulate {rep.animal} --controller {out})")
