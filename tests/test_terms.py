@@ -92,6 +92,18 @@ def test_terms_measure_what_they_say_on_rigid_motions():
     assert heading_angles(body, pos)[0, -1] == pytest.approx(theta)
 
 
+def test_steady_speed_is_the_second_halfs_in_body_lengths():
+    body = load_animal("shark")
+    length = body.length
+    assert length == pytest.approx(np.ptp(body.rest_pos @ body.forward))
+    # still for 1 s, then 2 body lengths forward and 1 sideways (top view) in the last 1 s
+    xs = [0.0, 0.0, 0.0, 0.5, 1.0]
+    pos = np.stack([body.rest_pos + length * np.array([2 * x, 0.3 * x, x]) for x in xs])[None]
+    task = parse_task(_task(terms=[{"kind": "steady_speed_bl", "target": 1.5}]))
+    got = motion_terms(task, body, pos, dt=0.5)["steady_speed_bl"][0]
+    assert got == pytest.approx((math.sqrt(5.0) - 1.5) ** 2)  # 2.24 BL/s asked 1.5
+
+
 def test_heading_shortfall_rewards_reaching_the_heading_early():
     body = load_animal("shark")
     rest = body.rest_pos

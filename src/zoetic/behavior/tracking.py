@@ -46,9 +46,8 @@ OVERLAP = 0.05  # cross-fade: fraction of each controller's length shared with t
 
 
 def body_length(body: Body) -> float:
-    """Return the animal's length (m) along its forward axis in the rest pose."""
-    along = body.rest_pos @ np.asarray(body.forward, float)
-    return float(np.ptp(along))
+    """Return the animal's length (m) along its forward axis in the rest pose (``Body.length``)."""
+    return body.length
 
 
 def obstacle_seconds(com_xz: np.ndarray, obstacles: np.ndarray, dt: float) -> np.ndarray:

@@ -50,6 +50,10 @@ SURFACE_PLAN = (
     ("turn-up", "turn-up"),
     ("turn-left", "turn-left-swimming"),
 )
+# With ``speeds``: straight swims at steady speeds (body lengths/s) below go-straight's (which
+# swims as far as it can, so it is the fastest), learned after the rest of the plan (whose
+# entries and seeds stay as without them); ``behavior.parametric`` blends between them
+SPEED_PLAN = (("swim-slow", "swim-slow"), ("swim-medium", "swim-medium"))
 REST_SECONDS = 1.0
 # the "auto" abstraction's thresholds (times each actuator's strongest mode) tried in turn
 # when the default one breaks a promise the learned controller keeps
@@ -64,8 +68,9 @@ class Entry:
     task: Task
 
 
-def plan_for(body: Body) -> list[Entry]:
-    """Return the entries the basic training learns for this animal (tasks that allow it)."""
+def plan_for(body: Body, speeds: bool = False) -> list[Entry]:
+    """Return the entries the basic training learns for this animal (tasks that allow it);
+    with ``speeds``, a swimmer's ``SPEED_PLAN`` too."""
     caps = capabilities(body)
     kind = "water" if "water" in caps else "ground"
     plan = (
@@ -73,6 +78,8 @@ def plan_for(body: Body) -> list[Entry]:
         if "surface" in caps
         else [(n, t[kind]) for n, t in PLAN if kind in t]
     )
+    if speeds and kind == "water":
+        plan += list(SPEED_PLAN)
     out = []
     for name, task_name in plan:
         task = load_task(task_name)
@@ -130,11 +137,14 @@ def entry_motion(body: Body, ctrl: Controller, task: Task) -> list[dict[str, flo
     for i in range(k):
         turned = float(m["heading"][i, -1] - m["heading"][i, 0])
         path = np.linalg.norm(np.diff(com[i], axis=0), axis=1).sum()
+        half = len(com[i]) // 2
+        late = np.linalg.norm((com[i, -1] - com[i, half])[[0, 2]])
         rows.append(
             {
                 "turn_deg": turned,
                 "climb_m": float(com[i, -1, 1] - com[i, 0, 1]),
                 "speed_bl_s": float(path / task.horizon / length),
+                "steady_speed_bl_s": float(late / (tr.times[-1] - tr.times[half]) / length),
                 "radius_bl": arc_radius(com[i], np.radians(turned)) / length,
                 "roll_deg": float(np.nanmax(np.abs(m["roll"][i]))),
                 "pitch_change_deg": float(m["pitch"][i, -1] - m["pitch"][i, 0]),
@@ -275,12 +285,12 @@ def check_same_task(run_dir: Path, learned: Task, now: Task) -> None:
         )
 
 
-def plan_digest(animal: str | Path) -> str:
+def plan_digest(animal: str | Path, speeds: bool = False) -> str:
     """Return a short digest of what the basic training of ``animal`` learns: its body and
     its plan's tasks (a cache of trained repertoires keyed by it goes stale with either)."""
     body = load_animal(animal)
     h = hashlib.sha256(Path(body.source).read_bytes())
-    for e in plan_for(body):
+    for e in plan_for(body, speeds):
         h.update(f"|{e.name}|{_plain(e.task)}".encode())
     return h.hexdigest()[:10]
 
@@ -298,6 +308,7 @@ def train_repertoire(
     progress: Callable[[object], None] | None = None,
     evaluator: str = "batch",
     resume_budget: int | None = None,
+    speeds: bool = False,
 ) -> Repertoire:
     """Learn, abstract and save the basic repertoire of ``animal`` (a zoo name, an animal
     file or a Body, learned as given) into ``out``; return it.
@@ -305,6 +316,7 @@ def train_repertoire(
     nodes: controller nodes per actuator (default: each task's). on_entry(name, run) is called
     before each entry is learned; progress(run) during learning. An entry already begun in
     ``out`` continues to its stored budget, or to ``resume_budget`` evaluations when given.
+    speeds: learn a swimmer's ``SPEED_PLAN`` entries too (``parametric.swim_at`` blends them).
     """
     from zoetic.learning.run import LearnConfig, Run
 
@@ -314,7 +326,7 @@ def train_repertoire(
     rep = Repertoire(body.name, tuple(body.actuator_names))
     rep.add("do-nothing", rest_abstraction(body), REST_SECONDS, source="all muscles relaxed")
     rep.save(out)
-    for k, entry in enumerate(plan_for(body)):
+    for k, entry in enumerate(plan_for(body, speeds)):
         run_dir = out / "runs" / entry.name
         if (run_dir / "config.toml").exists():
             run = Run.resume(run_dir, resume_budget)

@@ -92,6 +92,11 @@ class Body:
         return float(self.mass.sum())
 
     @property
+    def length(self) -> float:
+        """The animal's length (m) along its forward axis in the rest pose."""
+        return float(np.ptp(self.rest_pos @ np.asarray(self.forward, float)))
+
+    @property
     def is_mirror_symmetric(self) -> bool:
         return bool(np.all(self.node_mirror >= 0))
 

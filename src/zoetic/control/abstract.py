@@ -57,6 +57,14 @@ class AbstractController(Controller):
         waves = self.amp * np.cos(2 * np.pi * self.freq * t + self.phase)  # (T, A, K)
         return self.offset[None, :] + waves.sum(axis=2)
 
+    def ahead(self, seconds: float) -> AbstractController:
+        """Return this gait ``seconds`` ahead: it plays at t what this one plays at t + seconds
+        (each mode's phase advanced by 2 pi freq seconds)."""
+        phase = self.phase + 2.0 * np.pi * self.freq * float(seconds)
+        return AbstractController(
+            self.animal, self.actuators, self.offset, self.freq, self.amp, phase, self.period
+        )
+
     def to_dict(self):
         """Return the base description plus period (s), offset, freq (Hz), amp, phase (rad)."""
         return super().to_dict() | {

@@ -74,6 +74,7 @@ PROMISES = {
     "turn_deg": "heading change, end minus start (deg, left positive)",
     "climb_m": "rise of the centre of mass, end minus start (m, up positive)",
     "speed_bl_s": "mean speed of the centre of mass (body lengths/s)",
+    "steady_speed_bl_s": "top-view speed of the centre of mass, second half (body lengths/s)",
     "radius_bl": "radius of the arc the centre of mass turns on (body lengths)",
     "roll_deg": "greatest roll over the motion (deg, either way)",
     "pitch_change_deg": "pitch change, end minus start (deg, nose up positive)",

@@ -38,6 +38,7 @@ class BodyFrame:
     panel_weights: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 4)))
     parts: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, int))  # (N,)
     body: Body | None = None  # for the body's forward axis (``Signals.body_heading``)
+    length: float = 1.0  # m, the body's length (``Body.length``): speeds in body lengths/s
 
     @classmethod
     def of(cls, body: Body) -> BodyFrame:
@@ -56,6 +57,7 @@ class BodyFrame:
             np.asarray(body.panel_weights, float),
             body_parts(body),
             body,
+            body.length,
         )
 
     def part_mask(self, part: str) -> np.ndarray:

@@ -131,6 +131,19 @@ def speed_deviation(xp, s: Signals, p: TermParams):
     return (s.along / s.horizon - p.target) ** 2
 
 
+@term(
+    "squared error of the top-view speed of the centre of mass over the second half of the "
+    "motion, in body lengths per second, against 'target' ((BL/s)^2): swimming at a speed of "
+    "the animal's own size, the first half left to reach it from rest or slow down from a cruise"
+)
+def steady_speed_bl(xp, s: Signals, p: TermParams):
+    """Return (K,) (BL/s)^2: squared error of the second half's speed vs 'target' (cost)."""
+    half = s.com.shape[1] // 2
+    span = s.times[-1] - s.times[half] if s.com.shape[1] > 1 else 1.0
+    speed = norm_xz(xp, s.com[:, -1] - s.com[:, half]) / span / s.frame.length
+    return (speed - p.target) ** 2
+
+
 @term("squared error of the final pitch against 'target' (rad^2, nose up positive)")
 def final_pitch(xp, s: Signals, p: TermParams):
     """Return (K,) rad^2: squared error of the end pitch (nose up +) vs 'target' (>= 0; cost)."""
