@@ -71,27 +71,35 @@ def run(seed: int, seconds: float) -> dict:
     cpu = time.process_time() - c0
     s = summarize(tank, life)
     fish = {f.name for f in tank.fishes}
-    hits = [describe(tank, life, t, a, d) for t, a, e, d in life.events
-            if e == "collision" and d in fish]
-    return {"seed": seed, "food_eaten": round(s["food_eaten_fraction"], 3),
-            "fish_collisions_per_minute": round(60 * s["collisions_between_fishes"]
-                                                / s["seconds"], 2),
-            "avoid": round(s["intention_share"]["avoid"], 3),
-            "cpu_realtime_factor": round(seconds / cpu, 2), "collisions": hits}
+    hits = [
+        describe(tank, life, t, a, d)
+        for t, a, e, d in life.events
+        if e == "collision" and d in fish
+    ]
+    return {
+        "seed": seed,
+        "food_eaten": round(s["food_eaten_fraction"], 3),
+        "fish_collisions_per_minute": round(60 * s["collisions_between_fishes"] / s["seconds"], 2),
+        "avoid": round(s["intention_share"]["avoid"], 3),
+        "cpu_realtime_factor": round(seconds / cpu, 2),
+        "collisions": hits,
+    }
 
 
 def kinds(rows: list[dict]) -> dict:
     """Count the collisions by kind: species pair, intentions, heading class."""
-    out: dict[str, collections.Counter] = {k: collections.Counter() for k in
-                                           ("pair", "intentions", "avoided_before", "heading")}
+    out: dict[str, collections.Counter] = {
+        k: collections.Counter() for k in ("pair", "intentions", "avoided_before", "heading")
+    }
     for row in rows:
         for c in row["collisions"]:
             out["pair"]["-".join(sorted(c["pair"]))] += 1
             out["intentions"]["+".join(sorted(c["intentions"]))] += 1
             out["avoided_before"][str(sum(c["avoided_before"]))] += 1
             h = c["heading_deg"]
-            out["heading"]["same way <60" if h < 60 else "head on >120" if h > 120
-                           else "crossing"] += 1
+            out["heading"][
+                "same way <60" if h < 60 else "head on >120" if h > 120 else "crossing"
+            ] += 1
     return {k: dict(v.most_common()) for k, v in out.items()}
 
 
@@ -105,10 +113,17 @@ def main() -> None:
     for s in args.seeds:
         rows.append(run(s, args.seconds))
         print(json.dumps(rows[-1]), flush=True)
-    print(json.dumps({"mean_food_eaten": round(float(np.mean([r["food_eaten"] for r in rows])), 3),
-                      "mean_fish_collisions_per_minute": round(float(np.mean(
-                          [r["fish_collisions_per_minute"] for r in rows])), 2),
-                      "kinds": kinds(rows)}))
+    print(
+        json.dumps(
+            {
+                "mean_food_eaten": round(float(np.mean([r["food_eaten"] for r in rows])), 3),
+                "mean_fish_collisions_per_minute": round(
+                    float(np.mean([r["fish_collisions_per_minute"] for r in rows])), 2
+                ),
+                "kinds": kinds(rows),
+            }
+        )
+    )
 
 
 if __name__ == "__main__":
