@@ -455,7 +455,7 @@ def test_an_avoiding_fish_brakes_for_a_fish_close_ahead_and_not_for_a_rock():
 
 def test_a_minnow_with_another_close_ahead_brakes_through_its_brain():
     # the brain hands the percept's "another fish alone threatens" on to its avoid routine:
-    # a minnow 0.3 m behind another's flank asks no forward speed (on main it asked the top)
+    # a minnow 0.3 m behind another's flank asks no forward speed; with a rock as near, top speed
     from zoetic.behavior.aquarium.brain import View, tank_brains
     from zoetic.behavior.aquarium.routines import Me
     from zoetic.control.policy import Period
