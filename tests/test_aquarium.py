@@ -433,3 +433,60 @@ def test_a_fish_leaves_a_particle_to_a_nearer_fish_heading_for_it():
     assert not conceded(nose, fwd, food, np.array([True, True]), np.zeros((2, 2), bool)).any()
     away = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
     assert not conceded(nose, away, food, np.array([True, True]), seen).any()
+
+
+def test_an_avoiding_fish_brakes_for_a_fish_close_ahead_and_not_for_a_rock():
+    from zoetic.behavior.aquarium.routines import URGENT_FISH, Around, Me, avoid
+
+    f, left = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0])
+    me = Me(np.array([-0.5, 0.0, 0.0]), np.zeros(3), f, 0.25 * f, 0.25, 0.43)
+    close = 0.5 * URGENT_FISH * 0.25  # m: half the braking distance at cruise
+    # another fish alone, close ahead: the half turn away with no forward speed (a brake)
+    fish = avoid(me, Around(away=left, obstacle=close, fish_only=True))
+    assert fish.speed == 0.0 and fish.turn == pytest.approx(np.pi)
+    assert avoid(me, Around(away=-left, obstacle=close, fish_only=True)).turn < -3.0
+    # a rock as close: the half turn at top speed, as before (it steers rocks best)
+    rock = avoid(me, Around(away=left, obstacle=close))
+    assert rock.speed == pytest.approx(0.43) and rock.turn == pytest.approx(np.pi)
+    # a fish farther than the braking distance: a quarter turn, swimming on at top speed
+    far = avoid(me, Around(away=left, obstacle=3 * URGENT_FISH * 0.25, fish_only=True))
+    assert far.speed == pytest.approx(0.43) and far.turn == pytest.approx(np.pi / 2)
+
+
+def test_a_minnow_with_another_close_ahead_brakes_through_its_brain():
+    # the brain hands the percept's "another fish alone threatens" on to its avoid routine:
+    # a minnow 0.3 m behind another's flank asks no forward speed; with a rock as near, top speed
+    from zoetic.behavior.aquarium.brain import View, tank_brains
+    from zoetic.behavior.aquarium.routines import Me
+    from zoetic.control.policy import Period
+
+    tank = build_tank(TankConfig(fishes=2, predators=0, food=0, obstacles=0, seconds=1.0))
+    species, bodies = [f.species for f in tank.fishes], [f.body for f in tank.fishes]
+    brain = tank_brains(species, bodies, True, 0)[0]
+    f = np.array([1.0, 0.0, 0.0])
+    com = np.array([[-0.5, 0.0, 0.0], [0.3, 0.0, 0.0]])
+
+    def view(fish_only: bool) -> View:
+        return View(
+            me=Me(com[0], np.zeros(3), f, 0.25 * f, brain.cruise, brain.top, brain.radius),
+            fish_distance=np.array([np.inf, 0.3]),
+            fish_com=com,
+            fish_forward=np.array([f, [0.0, 0.0, 1.0]]),
+            fish_velocity=np.zeros((2, 3)),
+            fish_species=tuple(s.name for s in species),
+            food_distance=np.zeros(0),
+            food=np.zeros((0, 3)),
+            obstacle_distance=np.full(1, 0.3 if not fish_only else 5.0),
+            collision=True,
+            away=np.array([0.0, 0.0, 1.0]),
+            threat=0.3,
+            fish_only=fish_only,
+        )
+
+    period = Period(start=0, steps=10, dt=0.01)
+    braked = brain.decide({"view": view(True)}, period)
+    assert brain.thought.intention == "avoid"
+    assert braked.speed == 0.0 and abs(braked.turn) > 3.0
+    brain.reset(0)
+    rock = brain.decide({"view": view(False)}, period)
+    assert brain.thought.intention == "avoid" and rock.speed == pytest.approx(brain.top)

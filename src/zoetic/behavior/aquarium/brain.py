@@ -246,6 +246,7 @@ class FishBrain:
                 float(v.obstacle_distance.min()) if len(v.obstacle_distance) else np.inf,
                 v.threat,
             ),
+            fish_only=v.fish_only,
         )
 
     def _routine(self, intention: str, me: Me, around: Around) -> Demand:

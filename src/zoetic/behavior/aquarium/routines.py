@@ -35,6 +35,9 @@ RADIUS_MARGIN = 1.1  # the turning circle a fish plans with, over its calibrated
 # s of travel: an avoiding fish whose nose is nearer than this to an obstacle turns as hard as
 # its motor can (a half turn asked at once), not at its steady steering rate
 URGENT = 1.5
+# s of travel: an avoiding fish whose nose is nearer than this to another fish that threatens
+# it (no obstacle ahead) brakes: the half turn with no forward speed asked (``avoid``)
+URGENT_FISH = 1.5
 
 
 @dataclass(frozen=True)
@@ -66,6 +69,7 @@ class Around:
     away: np.ndarray | None = None  # unit horizontal direction away from the threat
     # m from the nose to the nearest perceived obstacle surface or threatening fish
     obstacle: float = math.inf
+    fish_only: bool = False  # the threat is another fish alone (no obstacle ahead)
 
 
 def _flat(v: np.ndarray) -> np.ndarray:
@@ -253,14 +257,22 @@ def collision_ahead(
 def avoid(me: Me, around: Around) -> Demand:
     """Turn hard to the side of the way out (kept while the avoidance lasts), beating hard:
     a quarter turn asked in ``TURN_SECONDS``, or a half turn (as hard as the motor can turn)
-    once an obstacle is nearer than ``URGENT`` s of travel."""
+    once an obstacle is nearer than ``URGENT`` s of travel. Another fish alone (no obstacle
+    ahead) nearer than ``URGENT_FISH`` s of travel: the half turn with no forward speed asked,
+    a brake (the learned sharp turn's bursts turn the fish about 10 degrees each and all but
+    stop it; the swim asked between them at top speed carried it on into the other fish)."""
     if around.away is None:
         return Demand(me.cruise, 0.0)
     f = _unit(_flat(me.forward))
     left = float(around.away @ np.array([-f[2], 0.0, f[0]])) >= 0.0
     speed = max(math.sqrt(me.velocity @ me.velocity), me.cruise)
-    turn = np.pi if around.obstacle < URGENT * speed else np.pi / 2
-    return Demand(me.top, turn if left else -turn)
+    urgent = URGENT_FISH if around.fish_only else URGENT
+    if around.obstacle >= urgent * speed:
+        return Demand(me.top, np.pi / 2 if left else -np.pi / 2)
+    # a fish close ahead: the sharp turn's bursts stop the fish, and between them it glides
+    # instead of swimming on at top speed into the fish it avoids
+    brake = around.fish_only
+    return Demand(0.0 if brake else me.top, np.pi if left else -np.pi)
 
 
 def wander(me: Me, around: Around, rng: np.random.Generator) -> Demand:

@@ -1,0 +1,130 @@
+"""Which fish-fish collisions happen in the default tank, and what the fishes were doing.
+
+For every fish-fish ``collision`` event: the pair's species, each fish's intention in the
+period of the touch and whether it avoided within the 2 s before, the angle between their
+headings (0: same way, 180: head on), where each lay from the other (bearing from the heading,
+0: dead ahead) and their closing speed 0.5 s before. One JSON line a seed (the bench's
+figures and the collisions), then counts by kind:
+    python experiments/aquarium_collisions.py [--seeds 0 1 ... 11] [--seconds 60]
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import time
+
+import numpy as np
+
+from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live, summarize
+from zoetic.behavior.mind import INTENTIONS
+
+
+def _motion(life, i: int, r: int, back: int) -> tuple[np.ndarray, np.ndarray]:
+    """Return fish i's centre at record r and its horizontal velocity over ``back`` records."""
+    c = life.positions[i].mean(axis=1)
+    r0 = max(r - back, 0)
+    v = (c[r] - c[r0]) / max(life.times[r] - life.times[r0], 1e-9)
+    v[1] = 0.0
+    return c[r], v
+
+
+def _angle(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.degrees(np.arctan2(a[0] * b[2] - a[2] * b[0], a @ b)))
+
+
+def describe(tank, life, t: float, a: str, b: str) -> dict:
+    """Return what the two fishes did at the collision at time t."""
+    names = [f.name for f in tank.fishes]
+    i, j = names.index(a), names.index(b)
+    k = int(np.searchsorted(life.brain_times, t - 1e-6) - 1)
+    k0 = max(k - 20, 0)
+    r = int(np.searchsorted(life.times, t - 1e-6))
+    r = min(r, len(life.times) - 1)
+    (ci, vi), (cj, vj) = _motion(life, i, r, 3), _motion(life, j, r, 3)
+    pi, pvi = _motion(life, i, max(r - 5, 0), 3)
+    pj, pvj = _motion(life, j, max(r - 5, 0), 3)
+    rel = pj - pi
+    closing = -float(rel @ (pvj - pvi)) / max(float(np.linalg.norm(rel)), 1e-9)
+    avoid = INTENTIONS.index("avoid")
+    return {
+        "t": round(t, 1),
+        "pair": [tank.fishes[i].species.name, tank.fishes[j].species.name],
+        "intentions": [INTENTIONS[life.intentions[k, i]], INTENTIONS[life.intentions[k, j]]],
+        "avoided_before": [
+            bool((life.intentions[k0:k, i] == avoid).any()),
+            bool((life.intentions[k0:k, j] == avoid).any()),
+        ],
+        "heading_deg": round(abs(_angle(vi, vj))),
+        "bearing_deg": [round(_angle(vi, cj - ci)), round(_angle(vj, ci - cj))],
+        "speeds": [round(float(np.linalg.norm(vi)), 2), round(float(np.linalg.norm(vj)), 2)],
+        "closing_m_s": round(closing, 2),
+    }
+
+
+def run(seed: int, seconds: float) -> dict:
+    """Live the default scene from ``seed``; return its figures and its fish collisions."""
+    tank = build_tank(TankConfig(seed=seed, seconds=seconds, record_period=0.1))
+    c0 = time.process_time()
+    life = live(tank)
+    cpu = time.process_time() - c0
+    s = summarize(tank, life)
+    fish = {f.name for f in tank.fishes}
+    hits = [
+        describe(tank, life, t, a, d)
+        for t, a, e, d in life.events
+        if e == "collision" and d in fish
+    ]
+    return {
+        "seed": seed,
+        "food_eaten": round(s["food_eaten_fraction"], 3),
+        "fish_collisions_per_minute": round(60 * s["collisions_between_fishes"] / s["seconds"], 2),
+        "avoid": round(s["intention_share"]["avoid"], 3),
+        "cpu_realtime_factor": round(seconds / cpu, 2),
+        "collisions": hits,
+    }
+
+
+def kinds(rows: list[dict]) -> dict:
+    """Count the collisions by kind: species pair, intentions, heading class."""
+    out: dict[str, collections.Counter] = {
+        k: collections.Counter() for k in ("pair", "intentions", "avoided_before", "heading")
+    }
+    for row in rows:
+        for c in row["collisions"]:
+            out["pair"]["-".join(sorted(c["pair"]))] += 1
+            out["intentions"]["+".join(sorted(c["intentions"]))] += 1
+            out["avoided_before"][str(sum(c["avoided_before"]))] += 1
+            h = c["heading_deg"]
+            out["heading"][
+                "same way <60" if h < 60 else "head on >120" if h > 120 else "crossing"
+            ] += 1
+    return {k: dict(v.most_common()) for k, v in out.items()}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, nargs="+", default=list(range(12)))
+    ap.add_argument("--seconds", type=float, default=60.0)
+    args = ap.parse_args()
+    live(build_tank(TankConfig(fishes=2, food=1, obstacles=1, seconds=0.2)))  # compile
+    rows = []
+    for s in args.seeds:
+        rows.append(run(s, args.seconds))
+        print(json.dumps(rows[-1]), flush=True)
+    print(
+        json.dumps(
+            {
+                "mean_food_eaten": round(float(np.mean([r["food_eaten"] for r in rows])), 3),
+                "mean_fish_collisions_per_minute": round(
+                    float(np.mean([r["fish_collisions_per_minute"] for r in rows])), 2
+                ),
+                "kinds": kinds(rows),
+            }
+        )
+    )
+
+
+if __name__ == "__main__":
+    main()
