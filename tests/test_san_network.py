@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from zoetic.errors import ZoeticError
+from zoetic.san import load_creature
 from zoetic.san.network import (
     Network,
     NetworkError,
@@ -25,7 +26,7 @@ from zoetic.san.network import (
     save_network,
 )
 from zoetic.san.search import SearchResult, search, useful_mask, useful_threshold_cm_s
-from zoetic.san.tune import tunable_parameters, tune
+from zoetic.san.tune import MeanEvaluator, WorldEvaluator, tunable_parameters, tune
 
 # --- a fake creature and world ------------------------------------------------------------
 
@@ -372,3 +373,15 @@ def test_tuning_runs_on_the_one_annealing_of_learn(monkeypatch):
         told.clear()
         tune(net, creature, method=method, trials=7, seed=1, evaluate=_bowl)
         assert told == [1] * 8  # the start, then one per trial
+
+
+def test_mean_evaluator_scores_pursuit_over_several_splines():
+    # a follow creature's metric depends on its spline; the mean over splines is what the
+    # Fig. 10 experiment tunes, so one lucky path does not decide the SAN
+    fish = load_creature("fish")
+    net = random_network(fish, np.random.default_rng(3))
+    each = [WorldEvaluator(seed=s, seconds=3.0)(net, fish) for s in (0, 2)]
+    assert each[0] != each[1]
+    assert MeanEvaluator((0, 2), seconds=3.0)(net, fish) == pytest.approx(np.mean(each))
+    with pytest.raises(ZoeticError, match="at least one seed"):
+        MeanEvaluator(())

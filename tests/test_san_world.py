@@ -288,6 +288,17 @@ def test_fish_swims_and_is_still_without_actuation():
     assert r.follow is not None and r.follow.shape == (len(r.times), 2)
 
 
+def test_fish_follow_point_does_not_outrun_a_plain_fish_gait():
+    # Fig. 10: the fish must be able to keep up with its point. A square wave on both
+    # actuators at the fish's expected cycle, swimming straight with no steering, is a gait a
+    # SAN finds easily; a point faster than it leaves every fish behind (the gap grows by
+    # the difference, 1.5-5 m over the 30 s run at 0.2 m/s).
+    c = load_creature("fish")
+    r = World(c, follow=False).run(Square(c.expected_cycle, [0.0, 0.0]), seconds=10.0)
+    straight_m_s = r.distance / r.seconds
+    assert 0.0 < c.follow_speed <= straight_m_s, (c.follow_speed, straight_m_s)
+
+
 def test_hand_policies_move_the_ground_creatures():
     # half-range waves for the bouncer (~3 m in 6 s); full swings of its 1 kg body tip it over
     for name, period, phase, amp in (

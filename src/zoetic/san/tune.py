@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,6 +29,7 @@ from zoetic.san.network import TUNING_KEYS, Network, SanPolicy, check_fits
 
 __all__ = [
     "METHODS",
+    "MeanEvaluator",
     "Param",
     "TuneResult",
     "Walk",
@@ -141,6 +142,21 @@ class WorldEvaluator:
         rollout = self._world.run(SanPolicy(network, creature), seconds=self.seconds)
         metric = float(rollout.metric)
         return metric if np.isfinite(metric) else -math.inf
+
+
+class MeanEvaluator:
+    """Evaluate a network as the mean metric over worlds of several seeds: for a "follow"
+    creature, several splines, so that tuning rewards pursuit in general rather than the
+    manoeuvres that happen to fit one path."""
+
+    def __init__(self, seeds: Sequence[int], terrain: str = "flat", seconds: float | None = None):
+        if not seeds:
+            raise TuneError("MeanEvaluator needs at least one seed")
+        self.parts = [WorldEvaluator(terrain, int(s), seconds) for s in seeds]
+
+    def __call__(self, network: Network, creature) -> float:
+        """Return the mean of the worlds' metrics (-inf if any world's metric is not finite)."""
+        return float(np.mean([part(network, creature) for part in self.parts]))
 
 
 @dataclass(frozen=True, eq=False)
