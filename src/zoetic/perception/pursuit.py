@@ -1,24 +1,20 @@
 """Vision-guided pursuit (seed 003, section 3.2): a predator fish that sees with its eyes,
 a reddish prey that wanders and flees, and a yellowish distractor that passes behind it.
 
-Steering is the paper's (section 3.2, "Vision-Guided Navigation"): "The theta angles are used
-to compute the left/right turn angle theta_P shown in Fig. 6, and the phi angles are similarly
-used to compute an up/down turn angle phi_P. The fish's turn motor controllers (see Section 2)
-are invoked to execute a left/right turn -- left-turn-MC for an above-threshold positive
-theta_P and right-turn-MC for negative theta_P -- with |theta_P| as parameter. Up/down turn
-motor commands are issued to the fish's pectoral fins, with an above-threshold positive phi_P
-interpreted as 'up' and negative as 'down'."
-
-So the predator hands its motor system the same demand the aquarium's fishes hand theirs
-(``behavior.aquarium.locomotion.Demand``: a speed, a turn angle, a fin pitch, and the roll its
-righting reflex answers) through the same motor skills (``Locomotion``): the built-in one
+Steering is the paper's (section 3.2): "The theta angles are used to compute the left/right
+turn angle theta_P shown in Fig. 6, and the phi angles are similarly used to compute an
+up/down turn angle phi_P. The fish's turn motor controllers (see Section 2) are invoked to
+execute a left/right turn -- left-turn-MC for an above-threshold positive theta_P and
+right-turn-MC for negative theta_P -- with |theta_P| as parameter. Up/down turn motor commands
+are issued to the fish's pectoral fins, with an above-threshold positive phi_P interpreted as
+'up' and negative as 'down'." So the predator hands its motor system the demand the
+aquarium's fishes hand theirs (``behavior.aquarium.locomotion.Demand``: speed, turn angle, fin
+pitch, and the roll its righting reflex answers) through the same motor skills: built-in
 (``MotorLocomotion``: the body's wave calibrated so that a demanded turn is the angle turned)
-or a learned repertoire's (``LearnedLocomotion``: the learned steer and sharp turns). The turn
-is theta_P above threshold (0 below it), the fin pitch ``fin_gain`` phi_P above threshold;
-the paper gives no rule for the speed, so the swim motor controller is asked for the fastest
-the skills swim. Both turn angles are the gaze direction relative to the body's mean heading
-(``eyes.body_frame``), so the head's wag does not feed back into the steering.
-"""
+or learned (``LearnedLocomotion``: a repertoire's steers and sharp turns). The turn is theta_P
+above threshold, the fin pitch ``fin_gain`` phi_P; the paper gives no rule for the speed, so
+the swim motor controller is asked for the fastest the skills swim. Both turn angles are the
+gaze relative to the body's mean heading (``eyes.body_frame``): the head's wag does not steer."""
 
 from __future__ import annotations
 
@@ -86,7 +82,9 @@ class Scenery:
 @dataclass
 class VisionRecord:
     """One frame of the predator's vision: gaze angles (2, 2), the locks, the turn angles,
-    the triangulated range (m) and the component images (2, L, S, S, 3)."""
+    the triangulated range (m), the component images (2, L, S, S, 3), the cameras' view
+    directions and positions (2, 3) that took them, and the gaze rays (2, 3) after the frame
+    (the ones the range triangulates)."""
 
     time: float
     angles: np.ndarray
@@ -97,6 +95,7 @@ class VisionRecord:
     images: np.ndarray
     eye_dirs: np.ndarray
     eye_pos: np.ndarray
+    gaze_dirs: np.ndarray
 
 
 @dataclass
@@ -184,6 +183,7 @@ class PredatorPolicy:
                 images,
                 cams.rotation[::n, 2].copy(),
                 cams.eye[::n].copy(),
+                self.state.directions.copy(),
             )
         )
         return self.locomotion.activations(demand, period.times)[None]
@@ -463,7 +463,8 @@ def summarize(result: ChaseResult, spec: EyeSpec) -> dict:
     (frames on which the eyes, aimed by a lock when the image was taken, held a distractor,
     not the prey, in a fovea: frame 0, seen straight ahead before any lock, does not count),
     the relative error of the triangulated range (against ``gazed_range``: where the left
-    gaze ray meets the prey's surface) while foveated, as mean and median."""
+    gaze ray that it triangulates meets the prey's surface at the frame's time) while
+    foveated, as mean and median."""
     half = 0.5 * spec.fovs[-1]
     prey = result.positions[1].mean(1)
     faces = result.prey_faces
@@ -477,7 +478,7 @@ def summarize(result: ChaseResult, spec: EyeSpec) -> dict:
             if aimed and (o < half).any() and not (off < half).any():
                 distr += 1
         if np.isfinite(rec.range) and fov[-1]:
-            true = gazed_range(faces, result.positions[1][i], rec.eye_pos, rec.eye_dirs[0])
+            true = gazed_range(faces, result.positions[1][i], rec.eye_pos, rec.gaze_dirs[0])
             rng_err.append(abs(rec.range - true) / true)
     head = result.positions[0][:, 0]
     dist = np.linalg.norm(prey - head, axis=-1)
