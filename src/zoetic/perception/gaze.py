@@ -1,10 +1,11 @@
 """Gaze control: saccades to a detected target, vergence of both eyes on it, range by
 triangulation, and stabilisation of the fovea by least-squares translational optical flow
 (seed 003, section 3.1; Horn's Robot Vision for the flow constraint). Each eye is controlled
-independently; the vergence angle is theta_V = theta_R - theta_L (Fig. 6). Vergence matches
-the spot the left fovea fixates in the right eye's images, coarse to fine, to a fraction of a
-foveal pixel (``GazeController.vergence``), so that both eyes look at the same point of the
-target's surface and the range is that point's.
+independently; the vergence angle is theta_V = theta_R - theta_L (Fig. 6). Vergence finds the
+spot the left fovea fixates in the right eye's images to a fraction of a foveal pixel
+(``GazeController.vergence``: the foveas' correlation for a far target, the spot itself
+matched coarse to fine for a near one), so that both eyes look at the same
+point of the target's surface and the range is that point's.
 """
 
 from __future__ import annotations
@@ -95,6 +96,25 @@ def image_shift(prev: np.ndarray, cur: np.ndarray, iterations: int = 3) -> tuple
     return float(u), float(v)
 
 
+def correlate(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
+    """Return the shift (u, v) in pixels (cols, rows) with b(x + (u, v)) ~ a(x), found by
+    phase correlation (sub-pixel by a parabola through the peak), and the peak's height."""
+    ga = _gray(a) if a.ndim == 3 else np.asarray(a, float)
+    gb = _gray(b) if b.ndim == 3 else np.asarray(b, float)
+    win = np.outer(np.hanning(ga.shape[0]), np.hanning(ga.shape[1]))
+    fa = np.fft.fft2((ga - ga.mean()) * win)
+    fb = np.fft.fft2((gb - gb.mean()) * win)
+    cross = fb * np.conj(fa)
+    r = np.real(np.fft.ifft2(cross / (np.abs(cross) + 1e-12)))
+    j, i = np.unravel_index(int(np.argmax(r)), r.shape)
+    h, w = r.shape
+    di = _peak_offset(r[j, i - 1], r[j, i], r[j, (i + 1) % w])
+    dj = _peak_offset(r[j - 1, i], r[j, i], r[(j + 1) % h, i])
+    u = (i + w // 2) % w - w // 2 + di
+    v = (j + h // 2) % h - h // 2 + dj
+    return float(u), float(v), float(r[j, i])
+
+
 def _peak_offset(m1: float, m0: float, p1: float) -> float:
     """Return the sub-pixel offset (px, within +-0.5) of a parabola's vertex through three
     samples around a peak."""
@@ -182,10 +202,11 @@ class GazeController:
     threshold: backprojection strength that counts as a detection; max_shift: the largest
     image motion (fovea px) trusted to the flow; centre_tol: fovea px off centre at which a
     detected target is re-foveated by a saccade; match: the histogram intersection of the
-    fovea with the model below which the fovea no longer holds the target; verge: match the
-    spot the left fovea centres on in the right eye's images (``vergence``: a square of
-    2 ``verge_half`` + 1 px, accepted when its normalised correlation reaches
-    ``verge_peak``) so that the right eye fixates the point the left one does.
+    fovea with the model below which the fovea no longer holds the target; verge: find the
+    spot the left fovea centres on in the right eye's images (``vergence``, with
+    ``verge_peak``, ``verge_half`` and ``match_peak``; near: the range the eyes verged on in
+    the last frame under ``near_range`` m) so that the right eye fixates the point the left
+    one does.
     """
 
     model: np.ndarray
@@ -197,8 +218,10 @@ class GazeController:
     max_theta: float = np.radians(60.0)
     max_phi: float = np.radians(45.0)
     verge: bool = True
-    verge_peak: float = 0.5
+    verge_peak: float = 0.1
     verge_half: int = 8
+    match_peak: float = 0.5
+    near_range: float = 1.5
 
     def hold(self, state: GazeState, frame: HeadFrame) -> GazeState:
         """Return the state with its angles re-expressed in the head's new ``frame`` so that
@@ -261,7 +284,10 @@ class GazeController:
                 new.locked[eye] = True
             new.fovea[eye] = fov
         if self.verge and new.locked.all() and aim[LEFT] is not None:
-            found = self.vergence(images, aim[LEFT])
+            # near: verged under near_range m last frame, or not verged at all (rays apart)
+            last = fixation(frame, state.angles, self.spec)[1]
+            near = last < self.near_range or not np.isfinite(last)
+            found = self.vergence(images, aim[LEFT], bool(state.locked.all() and near))
             if found is not None:
                 lev, col, row = found
                 new.angles[RIGHT] = saccade(frame, cameras, RIGHT * n + lev, col, row)
@@ -270,28 +296,35 @@ class GazeController:
         new.directions = gaze_direction(frame, new.angles[:, 0], new.angles[:, 1])
         return new
 
-    def vergence(self, images: np.ndarray, aim: tuple[float, float]):
+    def vergence(self, images: np.ndarray, aim: tuple[float, float], near: bool):
         """Return (level, col, row): where in the right eye's component image of that level
         lies the spot of the target the left fovea centres on (``aim``, left foveal px), or
-        None when no match reaches ``verge_peak``. Coarse to fine on the target's own pixels
-        (``target_image``): matched first in the level below the fovea (twice its field, so a
-        near target's disparity stays in view), then refined in the fovea within a few px of
-        that, whose pixels are half the size: the finer the image, the finer the vergence
-        angle, and so the range."""
-        n, c = self.spec.levels, 0.5 * self.spec.size
-        if n < 2:
+        None when no match is good enough. On the target's own pixels (``target_image``). A far
+        target: the two foveas' correlation (its outline fixes the disparity; accepted when
+        the peak reaches ``verge_peak``). A ``near`` one, whose outline spans depths as long
+        as its range (a fish seen along its length): its spot at ``aim`` matched (``match``,
+        a square of 2 ``verge_half`` + 1 px, accepted from a normalised correlation of
+        ``match_peak``),
+        coarse to fine: in the level below the fovea (twice its field, so a near target's
+        disparity stays in view), then within a few px of that in the fovea, whose pixels
+        are half the size: the finer the image, the finer the vergence angle and the range."""
+        n, s = self.spec.levels, self.spec.size
+        c = 0.5 * s
+        left, right = (target_image(images[e, n - 1], self.model) for e in (LEFT, RIGHT))
+        if n < 2 or not near:
+            u, v, peak = correlate(left, right)
+            if peak >= self.verge_peak and np.hypot(u, v) < 0.25 * s:
+                return n - 1, aim[0] + u, aim[1] + v
             return None
-        left, right = (target_image(images[e, n - 2], self.model) for e in (LEFT, RIGHT))
+        lo, ro = (target_image(images[e, n - 2], self.model) for e in (LEFT, RIGHT))
         coarse = (c + 0.5 * (aim[0] - c), c + 0.5 * (aim[1] - c))
-        col, row, score = match(left, right, *coarse, self.verge_half)
-        if score < self.verge_peak:
+        col, row, score = match(lo, ro, *coarse, self.verge_half)
+        if score < self.match_peak:
             return None
         fine = (c + 2.0 * (col - c), c + 2.0 * (row - c))
-        inside = min(fine) >= self.verge_half and max(fine) <= 2 * c - self.verge_half
-        if inside:
-            left, right = (target_image(images[e, n - 1], self.model) for e in (LEFT, RIGHT))
+        if min(fine) >= self.verge_half and max(fine) <= s - self.verge_half:
             f_col, f_row, f_score = match(left, right, *aim, self.verge_half, fine, 3)
-            if f_score >= self.verge_peak:
+            if f_score >= self.match_peak:
                 return n - 1, f_col, f_row
         return n - 2, col, row
 
