@@ -3,6 +3,7 @@
 
 Writes docs/figures/vision_fig7_gaze.png, vision_fig8_frames.png and vision_pursuit.json.
 Run: python experiments/vision_pursuit.py [--seeds 20] [--first 0] [--seconds 60]
+[--skills built-in|learned|DIR]
 """
 
 from __future__ import annotations
@@ -10,10 +11,10 @@ from __future__ import annotations
 import argparse
 
 import numpy as np
-from zoetic.reproduce import figures_dir
 
 from zoetic.io import write_json
 from zoetic.perception.pursuit import make_chase, run_chase, summarize
+from zoetic.reproduce import figures_dir
 from zoetic.viz.gaze import plot_frames, plot_gaze
 
 OUT = figures_dir()
@@ -24,11 +25,14 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--first", type=int, default=0, help="the first seed (figures from seed 0)")
     ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument(
+        "--skills", default="built-in", help="built-in, learned or a repertoire's directory"
+    )
     args = ap.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     rows = []
     for seed in range(args.first, args.first + args.seeds):
-        chase = make_chase(seed)
+        chase = make_chase(seed, skills=args.skills)
         res = run_chase(chase, args.seconds, seed=seed)
         s = summarize(res, chase.predator.gaze.spec) | {"seed": seed}
         rows.append(s)
@@ -41,6 +45,7 @@ def main() -> None:
         "seeds": args.seeds,
         "first_seed": args.first,
         "seconds": args.seconds,
+        "skills": args.skills,
         "caught": len(caught),
         "mean_time_to_catch_s": float(np.mean([r["time_to_catch_s"] for r in caught]))
         if caught
@@ -55,7 +60,7 @@ def main() -> None:
     pitch = []
     for height in (0.6, -0.6):
         for gain in (2.0, 0.0):
-            chase = make_chase(0, prey_height=height)
+            chase = make_chase(0, prey_height=height, skills=args.skills)
             chase.predator.fin_gain = gain
             res = run_chase(chase, 15.0, seed=0)
             s = summarize(res, chase.predator.gaze.spec)

@@ -183,6 +183,59 @@ def test_correlating_two_foveas_finds_their_disparity():
     assert abs(u - 5.0) < 0.3 and abs(v + 2.0) < 0.3 and peak > 0.3
 
 
+def test_matching_a_point_finds_it_in_the_other_image_to_a_fraction_of_a_pixel():
+    from scipy.ndimage import gaussian_filter, shift
+
+    from zoetic.perception.gaze import match
+
+    base = gaussian_filter(np.random.default_rng(1).random((64, 64)), 1.5)
+    moved = shift(base, (-2.3, 5.4), order=3, mode="nearest")  # content 5.4 px right, 2.3 up
+    col, row, score = match(base, moved, 30.5, 30.5)
+    assert col == pytest.approx(35.9, abs=0.15) and row == pytest.approx(28.2, abs=0.15)
+    assert score > 0.9
+    # searched only near a guess, the same point
+    near = match(base, moved, 30.5, 30.5, near=(36.0, 28.0), radius=2)
+    assert near[:2] == pytest.approx((col, row))
+
+
+def _prey_range_error(dist: float, yaw: float, bearing: float, frames: int = 6) -> float:
+    """Return the relative error of the range two eyes at FRAME triangulate to a prey shark
+    whose centre of mass lies ``dist`` m from them at ``bearing`` rad, turned ``yaw`` rad,
+    after ``frames`` frames of a still scene, against where the left gaze meets its skin."""
+    from zoetic.perception.pursuit import FOG, PREY, gazed_range, learn_model
+    from zoetic.render import world_mesh
+
+    shark = load_animal("shark")
+    spec = EyeSpec.of(shark)
+    eyes = eye_positions(FRAME, spec)
+    com = (shark.mass @ shark.rest_pos) / shark.total_mass
+    centre = eyes.mean(0) + dist * np.array([np.cos(bearing), 0.0, np.sin(bearing)])
+    pos = placed_pose(shark, centre - com, yaw)
+    model = learn_model(shark, placed_pose(shark, eyes.mean(0) + (2.0, 0, 0) - com), PREY, spec)
+    mesh = world_mesh([shark], [pos], [PREY])
+    ctl, state = GazeController(model, spec), GazeState()
+    for _ in range(frames):
+        img, cams = look(mesh, FRAME, state.angles, spec, FOG)
+        state = ctl.step(state, FRAME, img, cams)
+    assert state.locked.all()
+    _, rng = fixation(FRAME, state.angles, spec)
+    true = gazed_range(shark.faces, pos, eyes, state.directions[0])
+    return abs(rng - true) / true
+
+
+@pytest.mark.parametrize("yaw, bearing", [(0.0, 0.15), (0.5, -0.2), (-2.4, 0.15)])
+def test_vergence_ranges_a_prey_a_metre_away_within_ten_percent(yaw, bearing):
+    # a 1 m fish a metre away fills more than the fovea; the eyes must fixate one spot of it
+    assert _prey_range_error(1.0, yaw, bearing) < 0.10
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("dist", [0.6, 1.0, 2.0, 3.0])
+def test_the_median_range_error_over_views_is_under_ten_percent(dist):
+    views = [(y, b) for y in (0.0, 0.5, 1.2, 2.0, 2.8, -0.7, -1.5, -2.4) for b in (-0.2, 0.15)]
+    assert np.median([_prey_range_error(dist, y, b) for y, b in views]) < 0.10
+
+
 def test_the_vestibulo_ocular_reflex_keeps_the_gaze_on_the_target_as_the_head_turns():
     spec = EyeSpec.of(load_animal("shark"))
     model = _red_model(spec)

@@ -8,9 +8,11 @@ import json
 import numpy as np
 import pytest
 
+from zoetic.behavior.aquarium.locomotion import LearnedLocomotion, MotorLocomotion
 from zoetic.behavior.wave_motor import WaveMotor
 from zoetic.bodies import load_animal
 from zoetic.cli import main
+from zoetic.errors import ZoeticError
 from zoetic.perception.pursuit import gazed_range, make_chase, run_chase, steer, summarize
 from zoetic.physics.world import Animal, World
 
@@ -99,6 +101,48 @@ def test_the_predator_steers_through_its_turn_motor_controller_with_theta_p(monk
             big = abs(rec.theta_p) >= chase.predator.threshold
             assert angle == pytest.approx(rec.theta_p if big else 0.0)
     assert any(abs(a) > 0 for a in asked)
+
+
+@pytest.mark.parametrize("skills", ["built-in", "learned"])
+def test_the_gaze_angles_go_to_the_motor_skills_the_aquarium_fishes_use(monkeypatch, skills):
+    chase = make_chase(0, distractors=0, rocks=False, start_distance=2.0, skills=skills)
+    loco = chase.predator.locomotion
+    assert isinstance(loco, MotorLocomotion if skills == "built-in" else LearnedLocomotion)
+    demands = []
+    real = type(loco).activations
+
+    def spy(self, demand, times):
+        demands.append(demand)
+        return real(self, demand, times)
+
+    monkeypatch.setattr(type(loco), "activations", spy)
+    run_chase(chase, 1.0, fps=15.0)
+    pred = chase.predator
+    assert len(demands) == len(pred.log)
+    for d, rec in zip(demands, pred.log, strict=True):
+        assert d.speed == pytest.approx(loco.top_speed)
+        if not rec.locked.any():
+            assert d.turn == pred.search_turn
+            continue
+        # left-turn-MC for theta_P above threshold, right-turn-MC below -threshold: |theta_P|
+        big = abs(rec.theta_p) >= pred.threshold
+        assert d.turn == pytest.approx(rec.theta_p if big else 0.0)
+        up = abs(rec.phi_p) >= pred.threshold
+        assert d.pitch == pytest.approx(pred.fin_gain * rec.phi_p if up else 0.0)
+    assert any(abs(d.turn) > pred.threshold for d in demands)
+
+
+def test_a_learned_predator_catches_its_prey():
+    chase = make_chase(0, distractors=0, rocks=False, start_distance=1.6, skills="learned")
+    result = run_chase(chase, 3.0, fps=15.0, catch_radius=0.75)
+    assert result.caught
+
+
+def test_unknown_skills_are_refused_by_name(tmp_path):
+    with pytest.raises(ZoeticError, match="no learned repertoire"):
+        make_chase(0, distractors=0, rocks=False, skills=str(tmp_path))
+    out = tmp_path / "chase"
+    assert main(["pursue", "--seconds", "0.2", "--skills", str(tmp_path), "--out", str(out)]) == 2
 
 
 def test_the_gazed_range_is_where_the_gaze_ray_meets_the_surface():

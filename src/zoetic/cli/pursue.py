@@ -20,11 +20,17 @@ def pursue(
     distractors: int = typer.Option(1, min=0, help="Yellowish distractor fish."),
     visibility: float = typer.Option(6.0, min=0.0, help="Water clarity: fog distance (m)."),
     fps: float = typer.Option(30.0, min=1.0, help="Vision frames per simulated second."),
+    skills: str = typer.Option(
+        "built-in",
+        help="The predator's motor skills: built-in (the calibrated wave), learned (the "
+        "repertoire shipped for the shark) or a learned repertoire's directory.",
+    ),
     video: bool = typer.Option(True, help="Write video.mp4 (the slowest part)."),
     width: int = typer.Option(320, min=32, help="Width of the world view in the video (px)."),
     force: Force = False,
 ) -> None:
-    """Chase a reddish prey by sight: saccades, vergence, stabilisation, muscle turns.
+    """Chase a reddish prey by sight: saccades, vergence, stabilisation, and turns by the
+    fish's turn motor controllers from its gaze angles.
 
     Writes video.mp4 (world view, gaze rays, both retinas), gaze.png (Fig. 7), frames.png
     (Fig. 8), summary.json and record.npz.
@@ -35,10 +41,14 @@ def pursue(
     from zoetic.viz.video import write_mp4
 
     out = make_dir(prepare_out(out, force))
-    chase = make_chase(seed, distractors=distractors, visibility=visibility)
+    chase = make_chase(seed, distractors=distractors, visibility=visibility, skills=skills)
     with console.status("pursuing"):
         result = run_chase(chase, seconds, fps=fps, seed=seed)
-    summary = summarize(result, chase.predator.gaze.spec) | {"seed": seed, "seconds": seconds}
+    summary = summarize(result, chase.predator.gaze.spec) | {
+        "seed": seed,
+        "seconds": seconds,
+        "skills": skills,
+    }
     write_json(out / "summary.json", summary)
     from zoetic.cli.records import write_chase_record
 

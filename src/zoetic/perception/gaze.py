@@ -1,7 +1,11 @@
 """Gaze control: saccades to a detected target, vergence of both eyes on it, range by
 triangulation, and stabilisation of the fovea by least-squares translational optical flow
 (seed 003, section 3.1; Horn's Robot Vision for the flow constraint). Each eye is controlled
-independently; the vergence angle is theta_V = theta_R - theta_L (Fig. 6).
+independently; the vergence angle is theta_V = theta_R - theta_L (Fig. 6). Vergence finds the
+spot the left fovea fixates in the right eye's images to a fraction of a foveal pixel
+(``GazeController.vergence``: the foveas' correlation for a far target, the spot itself
+matched coarse to fine for a near one), so that both eyes look at the same
+point of the target's surface and the range is that point's.
 """
 
 from __future__ import annotations
@@ -104,21 +108,76 @@ def correlate(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
     r = np.real(np.fft.ifft2(cross / (np.abs(cross) + 1e-12)))
     j, i = np.unravel_index(int(np.argmax(r)), r.shape)
     h, w = r.shape
-
-    def sub(m1: float, m0: float, p1: float) -> float:
-        den = m1 - 2 * m0 + p1
-        return 0.5 * (m1 - p1) / den if abs(den) > 1e-12 else 0.0
-
-    di = sub(r[j, i - 1], r[j, i], r[j, (i + 1) % w])
-    dj = sub(r[j - 1, i], r[j, i], r[(j + 1) % h, i])
+    di = _peak_offset(r[j, i - 1], r[j, i], r[j, (i + 1) % w])
+    dj = _peak_offset(r[j - 1, i], r[j, i], r[(j + 1) % h, i])
     u = (i + w // 2) % w - w // 2 + di
     v = (j + h // 2) % h - h // 2 + dj
     return float(u), float(v), float(r[j, i])
 
 
+def _peak_offset(m1: float, m0: float, p1: float) -> float:
+    """Return the sub-pixel offset (px, within +-0.5) of a parabola's vertex through three
+    samples around a peak."""
+    den = m1 - 2 * m0 + p1
+    return float(np.clip(0.5 * (m1 - p1) / den, -0.5, 0.5)) if abs(den) > 1e-12 else 0.0
+
+
+def match(
+    a: np.ndarray,
+    b: np.ndarray,
+    col: float,
+    row: float,
+    half: int = 8,
+    near: tuple[float, float] | None = None,
+    radius: int = 3,
+) -> tuple[float, float, float]:
+    """Return the point (col, row) of gray image ``b`` that looks like point (col, row) of
+    gray image ``a`` (continuous pixel coordinates), and the match's score in [-1, 1]: the
+    normalised cross-correlation of a's (2 half + 1)-px square around the point with b's
+    squares, best over all of b (or within ``radius`` px of ``near``), refined to a sub-pixel
+    peak by a parabola in each direction. Stereo matching of one point, not of the whole
+    image: the two eyes then look at the same spot of the target's surface."""
+    k = 2 * half + 1
+    j, i = int(np.floor(row)), int(np.floor(col))
+    pa = np.pad(np.asarray(a, float), half)
+    tpl = pa[j : j + k, i : i + k]
+    tpl = tpl - tpl.mean()
+    tn = float(np.sqrt((tpl * tpl).sum()))
+    win = np.lib.stride_tricks.sliding_window_view(np.pad(np.asarray(b, float), half), (k, k))
+    h, w = win.shape[:2]
+    rows, cols = slice(0, h), slice(0, w)
+    if near is not None:
+        nj, ni = int(np.floor(near[1])), int(np.floor(near[0]))
+        rows = slice(max(nj - radius, 0), max(min(nj + radius + 1, h), 0))
+        cols = slice(max(ni - radius, 0), max(min(ni + radius + 1, w), 0))
+    sub = win[rows, cols]
+    if tn < 1e-9 or sub.size == 0:
+        return col, row, 0.0
+    sub = sub - sub.mean(axis=(-2, -1), keepdims=True)
+    norm = np.sqrt((sub * sub).sum(axis=(-2, -1))) * tn
+    score = np.where(norm > 1e-9, np.einsum("hwij,ij->hw", sub, tpl) / np.maximum(norm, 1e-9), -1)
+    y, x = np.unravel_index(int(np.argmax(score)), score.shape)
+    dy = (
+        _peak_offset(score[y - 1, x], score[y, x], score[y + 1, x])
+        if 0 < y < score.shape[0] - 1
+        else 0.0
+    )
+    dx = (
+        _peak_offset(score[y, x - 1], score[y, x], score[y, x + 1])
+        if 0 < x < score.shape[1] - 1
+        else 0.0
+    )
+    # the square around pixel j of a maps to the square around pixel y of b: same fraction
+    return (
+        float(cols.start + x + dx + (col - i)),
+        float(rows.start + y + dy + (row - j)),
+        float(score[y, x]),
+    )
+
+
 def target_image(image: np.ndarray, model: np.ndarray) -> np.ndarray:
     """Return the gray image (H, W) weighted by the backprojection of the target's colour
-    ``model``: what the correlation of the two foveas should match, the target's own pixels,
+    ``model``: what the two eyes' vergence should match, the target's own pixels,
     not the background behind it (which lies at another disparity)."""
     return _gray(image) * backproject(image, model, radius=2)
 
@@ -143,9 +202,11 @@ class GazeController:
     threshold: backprojection strength that counts as a detection; max_shift: the largest
     image motion (fovea px) trusted to the flow; centre_tol: fovea px off centre at which a
     detected target is re-foveated by a saccade; match: the histogram intersection of the
-    fovea with the model below which the fovea no longer holds the target; verge: correlate
-    the two foveas so that the right eye fixates the point the left one does (accepted when
-    the phase-correlation peak reaches ``verge_peak``).
+    fovea with the model below which the fovea no longer holds the target; verge: find the
+    spot the left fovea centres on in the right eye's images (``vergence``, with
+    ``verge_peak``, ``verge_half`` and ``match_peak``; near: the range the eyes verged on in
+    the last frame under ``near_range`` m) so that the right eye fixates the point the left
+    one does.
     """
 
     model: np.ndarray
@@ -158,6 +219,9 @@ class GazeController:
     max_phi: float = np.radians(45.0)
     verge: bool = True
     verge_peak: float = 0.1
+    verge_half: int = 8
+    match_peak: float = 0.5
+    near_range: float = 1.5
 
     def hold(self, state: GazeState, frame: HeadFrame) -> GazeState:
         """Return the state with its angles re-expressed in the head's new ``frame`` so that
@@ -220,17 +284,49 @@ class GazeController:
                 new.locked[eye] = True
             new.fovea[eye] = fov
         if self.verge and new.locked.all() and aim[LEFT] is not None:
-            # vergence: the right eye fixates what the left fovea centres on (the correlation
-            # of the target's pixels in the two foveas)
-            left, right = (target_image(images[e, n - 1], self.model) for e in (LEFT, RIGHT))
-            u, v, peak = correlate(left, right)
-            if peak >= self.verge_peak and np.hypot(u, v) < 0.25 * s:
-                col, row = aim[LEFT][0] + u, aim[LEFT][1] + v
-                new.angles[RIGHT] = saccade(frame, cameras, RIGHT * n + n - 1, col, row)
+            # near: verged under near_range m last frame, or not verged at all (rays apart)
+            last = fixation(frame, state.angles, self.spec)[1]
+            near = last < self.near_range or not np.isfinite(last)
+            found = self.vergence(images, aim[LEFT], bool(state.locked.all() and near))
+            if found is not None:
+                lev, col, row = found
+                new.angles[RIGHT] = saccade(frame, cameras, RIGHT * n + lev, col, row)
         new.angles[:, 0] = np.clip(new.angles[:, 0], -self.max_theta, self.max_theta)
         new.angles[:, 1] = np.clip(new.angles[:, 1], -self.max_phi, self.max_phi)
         new.directions = gaze_direction(frame, new.angles[:, 0], new.angles[:, 1])
         return new
+
+    def vergence(self, images: np.ndarray, aim: tuple[float, float], near: bool):
+        """Return (level, col, row): where in the right eye's component image of that level
+        lies the spot of the target the left fovea centres on (``aim``, left foveal px), or
+        None when no match is good enough. On the target's own pixels (``target_image``). A far
+        target: the two foveas' correlation (its outline fixes the disparity; accepted when
+        the peak reaches ``verge_peak``). A ``near`` one, whose outline spans depths as long
+        as its range (a fish seen along its length): its spot at ``aim`` matched (``match``,
+        a square of 2 ``verge_half`` + 1 px, accepted from a normalised correlation of
+        ``match_peak``),
+        coarse to fine: in the level below the fovea (twice its field, so a near target's
+        disparity stays in view), then within a few px of that in the fovea, whose pixels
+        are half the size: the finer the image, the finer the vergence angle and the range."""
+        n, s = self.spec.levels, self.spec.size
+        c = 0.5 * s
+        left, right = (target_image(images[e, n - 1], self.model) for e in (LEFT, RIGHT))
+        if n < 2 or not near:
+            u, v, peak = correlate(left, right)
+            if peak >= self.verge_peak and np.hypot(u, v) < 0.25 * s:
+                return n - 1, aim[0] + u, aim[1] + v
+            return None
+        lo, ro = (target_image(images[e, n - 2], self.model) for e in (LEFT, RIGHT))
+        coarse = (c + 0.5 * (aim[0] - c), c + 0.5 * (aim[1] - c))
+        col, row, score = match(lo, ro, *coarse, self.verge_half)
+        if score < self.match_peak:
+            return None
+        fine = (c + 2.0 * (col - c), c + 2.0 * (row - c))
+        if min(fine) >= self.verge_half and max(fine) <= s - self.verge_half:
+            f_col, f_row, f_score = match(left, right, *aim, self.verge_half, fine, 3)
+            if f_score >= self.match_peak:
+                return n - 1, f_col, f_row
+        return n - 2, col, row
 
 
 def fixation(frame: HeadFrame, angles: np.ndarray, spec: EyeSpec) -> tuple[np.ndarray, float]:

@@ -1,22 +1,37 @@
 """Vision-guided pursuit (seed 003, section 3.2): a predator fish that sees with its eyes,
 a reddish prey that wanders and flees, and a yellowish distractor that passes behind it.
 
-Steering is the paper's: the left/right turn angle theta_P, when above threshold, is handed to
-the fish's turn motor controller (``behavior.wave_motor.WaveMotor.turn``: the body's own wave,
-calibrated once per body, asked to turn theta_P within ``turn_seconds``), with |theta_P| as its
-parameter; the up/down turn angle phi_P tilts the pectoral fins from level. Both turn angles
-are the gaze direction relative to the body's mean heading (``eyes.body_frame``), so the head's
-wag does not feed back into the steering.
-"""
+Steering is the paper's (section 3.2): "The theta angles are used to compute the left/right
+turn angle theta_P shown in Fig. 6, and the phi angles are similarly used to compute an
+up/down turn angle phi_P. The fish's turn motor controllers (see Section 2) are invoked to
+execute a left/right turn -- left-turn-MC for an above-threshold positive theta_P and
+right-turn-MC for negative theta_P -- with |theta_P| as parameter. Up/down turn motor commands
+are issued to the fish's pectoral fins, with an above-threshold positive phi_P interpreted as
+'up' and negative as 'down'." So the predator hands its motor system the demand the
+aquarium's fishes hand theirs (``behavior.aquarium.locomotion.Demand``: speed, turn angle, fin
+pitch, and the roll its righting reflex answers) through the same motor skills: built-in
+(``MotorLocomotion``: the body's wave calibrated so that a demanded turn is the angle turned)
+or learned (``LearnedLocomotion``: a repertoire's steers and sharp turns). The turn is theta_P
+above threshold, the fin pitch ``fin_gain`` phi_P; the paper gives no rule for the speed, so
+the swim motor controller is asked for the fastest the skills swim. Both turn angles are the
+gaze relative to the body's mean heading (``eyes.body_frame``): the head's wag does not steer."""
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
-from zoetic.behavior.wave_motor import WaveMotor
+from zoetic.behavior.aquarium.locomotion import (
+    Demand,
+    LearnedLocomotion,
+    Locomotion,
+    MotorLocomotion,
+    learned_motor,
+)
+from zoetic.behavior.aquarium.species import BUILT_IN, LEARNED, SKILLS_DIR
 from zoetic.bodies import Body, load_animal
 from zoetic.control import steered_wave
 from zoetic.control.loop import Observer, Schedule, drive
@@ -67,7 +82,9 @@ class Scenery:
 @dataclass
 class VisionRecord:
     """One frame of the predator's vision: gaze angles (2, 2), the locks, the turn angles,
-    the triangulated range (m) and the component images (2, L, S, S, 3)."""
+    the triangulated range (m), the component images (2, L, S, S, 3), the cameras' view
+    directions and positions (2, 3) that took them, and the gaze rays (2, 3) after the frame
+    (the ones the range triangulates)."""
 
     time: float
     angles: np.ndarray
@@ -78,44 +95,64 @@ class VisionRecord:
     images: np.ndarray
     eye_dirs: np.ndarray
     eye_pos: np.ndarray
+    gaze_dirs: np.ndarray
 
 
 @dataclass
 class PredatorPolicy:
     """A Policy: the predator renders what its eyes see each control period, foveates the
-    prey by its colour model, and turns toward the gaze direction (theta_P) with its muscles.
+    prey by its colour model, and turns toward the gaze direction (theta_P) through its turn
+    motor controllers.
 
-    turn_seconds: the time (s) in which the turn motor controller is asked to turn theta_P (the
-    gaze is re-read every frame, so this sets how hard it steers); threshold: |theta_P| (rad)
-    below which it swims straight; search_turn: the turn (rad, left positive) asked of the
-    motor controller while nothing is in sight; fin_gain: fin tilt
-    (fraction of the fins' range) per rad of phi_P, up to max_pitch; vor: hold the eyes'
-    world directions against the head's own rotation between frames (``GazeController.hold``).
+    locomotion: the fish's motor skills (default the built-in ``MotorLocomotion`` asked to
+    turn a demanded angle in ``turn_seconds`` s: the gaze is re-read every frame, so this sets
+    how hard it steers); threshold: |theta_P|, |phi_P| (rad) below which it swims straight
+    and level; search_turn: the turn (rad, left positive) demanded while nothing is in sight;
+    fin_gain: fin pitch (rad) per rad of phi_P (the motor layer holds it within
+    ``locomotion.MAX_PITCH``); vor: hold the eyes' world directions against the head's own
+    rotation between frames (``GazeController.hold``). The roll it feels (sensor "roll") and
+    its rate since the last frame go with the demand to the righting reflex, as in the tank.
     """
 
     world: World
     animal: int
     scenery: Scenery
     gaze: GazeController
+    locomotion: Locomotion | None = None
     turn_seconds: float = 0.6
     threshold: float = np.radians(3.0)
     search_turn: float = np.radians(20.0)
     vor: bool = True
     fin_gain: float = 2.0
-    max_pitch: float = 0.5
-    sensors: tuple[str, ...] = ()
+    sensors: tuple[str, ...] = ("roll",)
     state: GazeState = field(default_factory=GazeState)
     log: list = field(default_factory=list)
+    _roll: tuple[float, float] | None = None  # the last roll (rad) felt and when (s)
+
+    def __post_init__(self) -> None:
+        if self.locomotion is None:
+            body = self.world.bodies[self.animal]
+            self.locomotion = MotorLocomotion(body, turn_seconds=self.turn_seconds)
 
     def reset(self, seed: int | None = None) -> None:
-        """Start with the eyes looking ahead and an empty log."""
+        """Start with the eyes looking ahead, an empty log and no roll felt yet."""
         self.state = GazeState()
         self.log = []
+        self._roll = None
 
-    @property
-    def motor(self) -> WaveMotor:
-        """The fish's swim/turn motor controllers (calibrated once per body)."""
-        return WaveMotor.calibrate(self.world.bodies[self.animal])
+    def demand(self, theta_p: float, phi_p: float, roll: float, t: float) -> Demand:
+        """Return the motor demand for turn angles theta_P, phi_P (rad) and the roll felt
+        (rad) at ``t`` s: theta_P to the turn motor controllers and ``fin_gain`` phi_P to the
+        fins when above threshold (the search turn while nothing is locked), at top speed."""
+        locked = bool(self.state.locked.any())
+        if locked:
+            turn = theta_p if abs(theta_p) >= self.threshold else 0.0
+        else:
+            turn = self.search_turn
+        pitch = self.fin_gain * phi_p if locked and abs(phi_p) >= self.threshold else 0.0
+        last, self._roll = self._roll, (roll, t)
+        rate = 0.0 if last is None or t <= last[1] else wrap_angle(roll - last[0]) / (t - last[1])
+        return Demand(self.locomotion.top_speed, turn, pitch, roll, float(rate))
 
     def act(self, observation: Mapping[str, np.ndarray], period: Period) -> np.ndarray:
         """Return (1, T, A) activations: see, move the eyes, steer."""
@@ -133,14 +170,7 @@ class PredatorPolicy:
         th_p, ph_p = gaze_angles(body_frame(body, pos), look_dir)
         theta_p, phi_p = float(th_p), float(ph_p)
         _, rng = fixation(frame, a, spec) if self.state.locked.all() else (None, np.inf)
-        if self.state.locked.any():
-            turn = 0.0 if abs(theta_p) < self.threshold else theta_p
-        else:
-            turn = self.search_turn
-        amplitude, bias = self.motor.turn(turn, self.turn_seconds)
-        pitch = 0.0
-        if self.state.locked.any() and abs(phi_p) >= self.threshold:
-            pitch = float(np.clip(self.fin_gain * phi_p, -self.max_pitch, self.max_pitch))
+        demand = self.demand(theta_p, phi_p, float(observation["roll"][0]), period.t0)
         n = spec.levels
         self.log.append(
             VisionRecord(
@@ -153,9 +183,25 @@ class PredatorPolicy:
                 images,
                 cams.rotation[::n, 2].copy(),
                 cams.eye[::n].copy(),
+                self.state.directions.copy(),
             )
         )
-        return steer(body, period.times, bias, amplitude, pitch)[None]
+        return self.locomotion.activations(demand, period.times)[None]
+
+
+def predator_skills(body: Body, skills: str) -> Locomotion | None:
+    """Return the predator's motor skills named as a tank species' ``[motor] skills``:
+    ``"built-in"`` (None: the policy's own ``MotorLocomotion``), ``"learned"`` (the repertoire
+    shipped for the body) or a learned repertoire's directory."""
+    if skills == BUILT_IN:
+        return None
+    directory = SKILLS_DIR / body.name if skills == LEARNED else Path(skills).expanduser()
+    if not (directory / "repertoire.json").is_file():
+        raise ZoeticError(
+            f"skills {skills!r}: no learned repertoire at {directory} (give {BUILT_IN!r}, "
+            f"{LEARNED!r} or a directory made by zoetic repertoire train)"
+        )
+    return LearnedLocomotion(body, learned_motor(body, directory))
 
 
 @dataclass
@@ -260,10 +306,11 @@ def make_chase(
     start_distance: float | None = None,
     rocks: bool = True,
     prey_height: float = 0.0,
+    skills: str = BUILT_IN,
 ) -> Chase:
     """Return a chase scene: a shark with eyes, a reddish prey ahead of it (off to one side,
     in its periphery, ``prey_height`` m above it), yellowish distractors crossing behind the
-    prey, rocks and seaweed."""
+    prey, rocks and seaweed; the shark swims by ``skills`` (``predator_skills``)."""
     if distractors < 0:
         raise ZoeticError(f"distractors must be 0 or more, got {distractors}")
     rng = np.random.default_rng(seed)
@@ -295,7 +342,8 @@ def make_chase(
     colors = (PREDATOR, PREY) + (DISTRACTOR,) * distractors
     scenery = Scenery(colors)
     model = learn_model(shark, world.positions(1)[0], PREY, spec)
-    pred = PredatorPolicy(world, 0, scenery, GazeController(model, spec))
+    loco = predator_skills(shark, skills)
+    pred = PredatorPolicy(world, 0, scenery, GazeController(model, spec), loco)
     pols = [pred, WanderFleePolicy(world, 1, 0, seed=seed)]
     pols += [CruisePolicy(shark) for _ in range(distractors)]
     return Chase(world, pols, scenery, pred)
@@ -415,7 +463,8 @@ def summarize(result: ChaseResult, spec: EyeSpec) -> dict:
     (frames on which the eyes, aimed by a lock when the image was taken, held a distractor,
     not the prey, in a fovea: frame 0, seen straight ahead before any lock, does not count),
     the relative error of the triangulated range (against ``gazed_range``: where the left
-    gaze ray meets the prey's surface) while foveated, as mean and median."""
+    gaze ray that it triangulates meets the prey's surface at the frame's time) while
+    foveated, as mean and median."""
     half = 0.5 * spec.fovs[-1]
     prey = result.positions[1].mean(1)
     faces = result.prey_faces
@@ -429,7 +478,7 @@ def summarize(result: ChaseResult, spec: EyeSpec) -> dict:
             if aimed and (o < half).any() and not (off < half).any():
                 distr += 1
         if np.isfinite(rec.range) and fov[-1]:
-            true = gazed_range(faces, result.positions[1][i], rec.eye_pos, rec.eye_dirs[0])
+            true = gazed_range(faces, result.positions[1][i], rec.eye_pos, rec.gaze_dirs[0])
             rng_err.append(abs(rec.range - true) / true)
     head = result.positions[0][:, 0]
     dist = np.linalg.norm(prey - head, axis=-1)
