@@ -61,7 +61,27 @@ def test_unknown_claim_exits_2_with_a_suggestion(capsys):
     assert "gt95-fig7a-time-convex" in capsys.readouterr().err
 
 
-def test_claim_without_experiment_says_why(capsys):
+def test_claim_without_experiment_says_why(tmp_path, monkeypatch, capsys):
+    """A claim that nothing regenerates names why (its ``absent``) and exits 2."""
+    from zoetic.reproduce import registry
+
+    text = (REPO / "src/zoetic/reproduce/claims.toml").read_text()
+    start = text.index('id = "gt95-fig8-energy"')
+    end = text.index("[[claims]]", start)
+    absent = """id = "gt95-fig8-energy"
+paper = "gt95"
+where = "section 4.2"
+says = "less energy expenditure"
+ours = "not measured"
+status = "absent"
+explanation = "no experiment integrates the muscles' work"
+absent = "needs a muscle-work measure"
+
+"""
+    path = tmp_path / "claims.toml"
+    path.write_text(text[:start] + absent + text[end:])
+    monkeypatch.setattr(registry, "REGISTRY", path)
+    monkeypatch.setattr(registry.load_registry, "__defaults__", (path,))
     assert main(["reproduce", "gt95-fig8-energy"]) == 2
     assert "muscle-work" in capsys.readouterr().err
 
