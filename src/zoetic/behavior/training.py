@@ -49,6 +49,9 @@ SURFACE_PLAN = (
     ("turn-down", "turn-down"),
     ("turn-up", "turn-up"),
     ("turn-left", "turn-left-swimming"),
+    # beside the five: a burst for the stunts, which leap and somersault on the speed they
+    # reach under water; move-forward, held level and upright, swims too slowly for them
+    ("sprint", "sprint"),
 )
 REST_SECONDS = 1.0
 # the "auto" abstraction's thresholds (times each actuator's strongest mode) tried in turn
