@@ -12,10 +12,8 @@ from zoetic.bodies import load_animal
 # entries the default training does not yet make keep their promises, with the reason: the
 # ray's flat disc pitches at most about 5 degrees/s with any flap of its four wing actuators
 # (hand-made sweeps and learning: it rises or sinks 0.06-0.07 m in 3 s where swim-up and
-# swim-down promise 0.5 m); see docs/animals.md, "Strength of the ray". The dolphin's turn-left
-# turns 79 deg from rest where it promises 80-110 deg and sinks 0.86 m (+-0.5): four weightings
-# of its task learned 63-89 deg; its best candidate came from the first generation.
-NOT_YET = {"ray": {"swim-up", "swim-down"}, "dolphin": {"turn-left"}}
+# swim-down promise 0.5 m); see docs/animals.md, "Strength of the ray".
+NOT_YET = {"ray": {"swim-up", "swim-down"}}
 
 
 @pytest.mark.long
