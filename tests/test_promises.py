@@ -14,10 +14,8 @@ from zoetic.bodies import load_animal
 # (hand-made sweeps and learning: it rises or sinks 0.06-0.07 m in 3 s where swim-up and
 # swim-down promise 0.5 m), and even pointing straight up from the first instant its fastest
 # gait takes it 0.48 m in 3 s from rest; see docs/animals.md, "Strength of the ray", and
-# experiments/ray_climb.py. The dolphin's turn-left
-# turns 79 deg from rest where it promises 80-110 deg and sinks 0.86 m (+-0.5): four weightings
-# of its task learned 63-89 deg; its best candidate came from the first generation.
-NOT_YET = {"ray": {"swim-up", "swim-down"}, "dolphin": {"turn-left"}}
+# experiments/ray_climb.py.
+NOT_YET = {"ray": {"swim-up", "swim-down"}}
 
 
 @pytest.mark.long

@@ -42,7 +42,13 @@ def test_plans_follow_the_medium():
     snake = plan_for(load_animal("snake"))
     assert snake[0].task.name == "crawl-straight"
     dolphin = plan_for(load_animal("dolphin"))  # the five basic motor tasks (right: mirrored)
-    assert [e.name for e in dolphin] == ["move-forward", "turn-down", "turn-up", "turn-left"]
+    assert [e.name for e in dolphin] == [
+        "move-forward",
+        "turn-down",
+        "turn-up",
+        "turn-left",
+        "sprint",
+    ]
     assert all(e.task.start.speed == 0.0 and e.task.starts[1].speed == "cruise" for e in dolphin)
 
 

@@ -49,6 +49,9 @@ SURFACE_PLAN = (
     ("turn-down", "turn-down"),
     ("turn-up", "turn-up"),
     ("turn-left", "turn-left-swimming"),
+    # beside the five: a burst for the stunts, which leap and somersault on the speed they
+    # reach under water; move-forward, held level and upright, swims too slowly for them
+    ("sprint", "sprint"),
 )
 # With ``speeds``: straight swims at steady speeds (body lengths/s) below go-straight's (which
 # swims as far as it can, so it is the fastest), learned after the rest of the plan (whose
