@@ -97,8 +97,9 @@ def test_the_skills_bench_compares_every_entry_of_the_dolphins_plan_with_a_hand_
     from zoetic.bench.skills import bench_skills
 
     got = bench_skills(["dolphin"], budget=32)["dolphin"]
-    assert set(got) == {"move-forward", "turn-down", "turn-up", "turn-left"}
+    assert set(got) == {"move-forward", "turn-down", "turn-up", "turn-left", "sprint"}
     assert got["move-forward"]["hand_made_entry"] == "go-straight"
+    assert got["sprint"]["hand_made_entry"] == "go-straight"  # the burst beside the swim
     assert got["turn-left"]["hand_made_entry"] == "sharp-turn-left"
     assert "burst" in got["move-forward"]  # the sea has a surface to burst toward
     assert all(isinstance(v["learned_beats_hand_made"], bool) for v in got.values())
