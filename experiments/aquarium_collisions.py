@@ -13,11 +13,11 @@ from __future__ import annotations
 import argparse
 import collections
 import json
-import time
 
 import numpy as np
+from aquarium_forage import timed_life  # this directory's: run as a script
 
-from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live, summarize
+from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live
 from zoetic.behavior.mind import INTENTIONS
 
 
@@ -65,11 +65,7 @@ def describe(tank, life, t: float, a: str, b: str) -> dict:
 
 def run(seed: int, seconds: float) -> dict:
     """Live the default scene from ``seed``; return its figures and its fish collisions."""
-    tank = build_tank(TankConfig(seed=seed, seconds=seconds, record_period=0.1))
-    c0 = time.process_time()
-    life = live(tank)
-    cpu = time.process_time() - c0
-    s = summarize(tank, life)
+    tank, life, s, cpu = timed_life(seed, seconds)
     fish = {f.name for f in tank.fishes}
     hits = [
         describe(tank, life, t, a, d)

@@ -15,13 +15,19 @@ import numpy as np
 from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live, summarize
 
 
-def run(seed: int, seconds: float) -> dict:
-    """Live the default scene from ``seed`` and return its foraging figures."""
+def timed_life(seed: int, seconds: float):
+    """Live the default scene from ``seed``: return the tank, its life, its summary and the
+    CPU seconds the life took."""
     tank = build_tank(TankConfig(seed=seed, seconds=seconds, record_period=0.1))
     c0 = time.process_time()
     life = live(tank)
     cpu = time.process_time() - c0
-    s = summarize(tank, life)
+    return tank, life, summarize(tank, life), cpu
+
+
+def run(seed: int, seconds: float) -> dict:
+    """Live the default scene from ``seed`` and return its foraging figures."""
+    _, _, s, cpu = timed_life(seed, seconds)
     share = s["intention_share"]
     return {"seed": seed, "food_eaten": s["food_eaten_fraction"],
             "avoid": round(share["avoid"], 3), "eat": round(share["eat"], 3),
