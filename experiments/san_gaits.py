@@ -7,7 +7,11 @@
    scales). Then each mode's fastest network is fine-tuned (annealing, ``--tune-trials``
    evaluations) as the paper did to make promising modes periodic, and replayed: does it stay
    in its mode, is it more periodic, faster? The twolink, bouncer and walker: 200 random SANs,
-   the best ``--keep``, sorted the same way.
+   the best ``--keep``, sorted the same way (``--keep 0``: every gait that moves without
+   falling). ``--strength S`` multiplies every actuator's stiffness and damping by S: the
+   zoo's twolink is calibrated to Table 1's speed, and whether the paper's flips onto the
+   back and aerial jumps appear depends on how strong its one actuator is, which the paper
+   does not give; such a run is recorded under "<creature>-x<S>".
 2. Evolution. Per creature, the best of 200 random SANs is improved for ``--evolve-trials``
    evaluations two ways from the same start: fine-tuning of the network alone (phase 2), and
    ``zoetic.san.evolve`` (body and network together, masses coupled to lengths, sections and
@@ -23,6 +27,7 @@ Run: python experiments/san_gaits.py [--seed 0] [--workers 2] [--only modes|evol
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -65,23 +70,40 @@ def _tune_mode(job: tuple) -> dict:
     }  # fmt: skip
 
 
-def modes(name: str, trials: int, keep: int, seed: int, workers: int, tune_trials: int) -> dict:
-    """Search, sort the best ``keep`` gaits into modes (clips), fine-tune each mode (cart)."""
+def strengthened(name: str, strength: float):
+    """Return the creature with every actuator's ks and kd multiplied by ``strength``."""
     c = load_creature(name)
+    if strength == 1.0:
+        return c
+    acts = tuple(
+        dataclasses.replace(a, ks=a.ks * strength, kd=a.kd * strength) for a in c.actuators
+    )
+    return dataclasses.replace(c, name=f"{c.name}-x{strength:g}", actuators=acts)
+
+
+def modes(
+    name: str, trials: int, keep: int, seed: int, workers: int, tune_trials: int,
+    strength: float = 1.0,
+) -> dict:  # fmt: skip
+    """Search, sort the best ``keep`` gaits (0: all that move) into modes (clips), fine-tune
+    each mode (cart)."""
+    c = strengthened(name, strength)
     t0 = time.perf_counter()
     res = search(c, trials=trials, seed=seed, workers=workers)
     ranked = res.top(len(res.networks))
-    kept = [i for i in ranked if not res.fell[i] and res.metrics[i] > 0][:keep]
+    moving = [i for i in ranked if not res.fell[i] and res.metrics[i] > 0]
+    kept = moving[:keep] if keep > 0 else [i for i in moving if res.speeds[i] >= 1.0]
     info = [{"rank": ranked.index(i) + 1, "trial": int(i)} for i in kept]
     networks = [res.networks[i] for i in kept]
-    doc = write_modes(c, networks, info, RUNS / name, seed=seed)
+    doc = write_modes(c, networks, info, RUNS / c.name, seed=seed)
     draw_modes(c, networks, doc, seed=seed, workers=workers)
     row = {
         "trials": trials, "kept": len(kept), "modes_found": doc["modes_found"],
         "kinds": doc["kinds"],
         "modes": [{"mode": m["mode"], "label": m["label"], "count": m["count"],
                    "best_cm_s": m["best"]["speed_cm_s"], "best_rank": m["best"]["rank"],
-                   "turns": m["best"]["turns"], "airborne": m["best"]["airborne"],
+                   "turns": m["best"]["turns"], "upside": m["best"].get("upside"),
+                   "airborne": m["best"]["airborne"],
                    "periodicity": m["best"]["periodicity"], "clip": _rel(m.get("clip"))}
                   for m in doc["modes"]],
     }  # fmt: skip
@@ -91,8 +113,8 @@ def modes(name: str, trials: int, keep: int, seed: int, workers: int, tune_trial
             for m, t in zip(row["modes"], pool.map(_tune_mode, jobs), strict=True):
                 m["fine_tuned"] = t
     row["wall_s"] = round(time.perf_counter() - t0, 1)
-    _stills(c, res, doc, OUT / f"san_modes_{name}.png")
-    print(name, json.dumps({m["label"]: m["count"] for m in row["modes"]}), flush=True)
+    _stills(c, res, doc, OUT / f"san_modes_{c.name}.png")
+    print(c.name, json.dumps({m["label"]: m["count"] for m in row["modes"]}), flush=True)
     return row
 
 
@@ -151,7 +173,8 @@ def main() -> None:
     ap.add_argument("--modes-file", default="san_modes.json", help="JSON the modes merge into")
     ap.add_argument("--trials", type=int, default=200)
     ap.add_argument("--cart-keep", type=int, default=40)
-    ap.add_argument("--keep", type=int, default=20)
+    ap.add_argument("--keep", type=int, default=20, help="0: every gait that moves")
+    ap.add_argument("--strength", type=float, default=1.0, help="actuator ks, kd multiplier")
     ap.add_argument("--tune-trials", type=int, default=150, help="per cart mode")
     ap.add_argument("--evolve-creatures", default="cart,twolink,luxo,walker")
     ap.add_argument("--evolve-trials", type=int, default=300)
@@ -161,11 +184,12 @@ def main() -> None:
         rows = {}
         for name in [n for n in args.creatures.split(",") if n]:
             cart = name == "cart"
-            rows[name] = modes(
+            row = modes(
                 name, args.cart_trials if cart else args.trials,
                 args.cart_keep if cart else args.keep, args.seed, args.workers,
-                args.tune_trials if cart else 0,
+                args.tune_trials if cart else 0, args.strength,
             )  # fmt: skip
+            rows[name if args.strength == 1.0 else f"{name}-x{args.strength:g}"] = row
         path = OUT / args.modes_file
         old = json.loads(path.read_text()) if path.exists() else {}
         path.write_text(json.dumps({**old, **rows}, indent=2) + "\n")

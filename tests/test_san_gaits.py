@@ -21,7 +21,7 @@ from zoetic.san.evolve import (
     start_genes,
     write_evolve,
 )
-from zoetic.san.gaits import describe_gaits, gait_features
+from zoetic.san.gaits import describe_gaits, feature_matrix, gait_features, mode_label
 from zoetic.san.network import random_network
 from zoetic.san.world import Rollout
 
@@ -115,6 +115,21 @@ def test_gait_features_see_rolling_hopping_and_direction(cart):
     assert g["periodicity"] > 0.8 and g["period_s"] == pytest.approx(0.5, abs=0.03)
     low = _rollout(cart, np.zeros(n), np.zeros(n))  # lying flat: both links down
     assert all(v == 1.0 for v in gait_features(cart, low)["contact"].values())
+
+
+def test_gait_features_see_a_chain_flipping_onto_its_back(cart):
+    n = 400
+    t = np.linspace(0, 4, n)
+    # jumps over onto its back and back again each second: upside down half the time
+    flips = _rollout(cart, np.pi * (0.5 - 0.5 * np.cos(2 * np.pi * t)), np.full(n, 0.05))
+    f = gait_features(cart, flips)
+    assert f["upside"] == pytest.approx(0.5, abs=0.02) and f["turns"] < 0.01
+    assert mode_label(f).startswith("flips onto its back")
+    rocking = _rollout(cart, np.radians(40) * np.sin(2 * np.pi * t), np.full(n, 0.05))
+    g = gait_features(cart, rocking)
+    assert g["upside"] == 0.0 and not mode_label(g).startswith("flips")
+    X, names = feature_matrix([f, g])
+    assert abs(X[0, names.index("upside")] - X[1, names.index("upside")]) >= 2.0
 
 
 def test_search_gaits_cli_writes_modes_with_a_count(tmp_path):

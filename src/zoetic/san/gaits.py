@@ -8,6 +8,8 @@ Each gait is replayed and described by a few features of the rollout (``gait_fea
 - ``turns``: how many whole turns the root link makes (net rotation / 2 pi, absolute):
   rolling and cartwheels; clustered as ``min(turns, ROLL_CAP)`` (1.5), so that a cartwheel
   of 2 turns and one of 5 (a faster one) are the same mode;
+- ``upside``: the fraction of the time the root link is turned more than 90 degrees from its
+  start (a chain that jumps or flips onto its back);
 - ``airborne``: the fraction of the time no link touches the ground (hopping);
 - ``bounce``: the standard deviation of the centre of mass's height over the body's size
   (the sum of the link lengths): small hops against big hops;
@@ -50,11 +52,13 @@ __all__ = [
 STILL_CM_S = 0.5  # slower than this, a gait has no direction
 CONTACT_CLEAR = 0.003  # m: a link this close to the ground touches it
 ROLL_CAP = 1.5  # turns: more turns than this is the same rolling mode
+FLIPPED = 0.1  # of the time upside down (root turned past 90 degrees): flips onto its back
 THRESHOLD = 2.0  # average-linkage distance (scaled units) from which modes are distinct
 SCALES = {  # one unit of each feature: a difference one can see in a video
     "direction": 1.0,
     "log2_speed": 1.5,
     "turns": 0.5,
+    "upside": 0.25,
     "airborne": 0.15,
     "bounce": 0.06,
     "contact": 0.35,
@@ -118,6 +122,7 @@ def gait_features(creature, rollout) -> dict:
     direction = 0 if speed < STILL_CM_S else (1 if rollout.distance > 0 else -1)
     root = np.unwrap(poses[:, 0, 2])
     turns = abs(root[-1] - root[0]) / (2 * math.pi)
+    upside = float(np.mean(np.cos(root - root[0]) < 0.0))
     clear = _clearance(creature, poses, rollout.terrain)
     touching = clear <= CONTACT_CLEAR
     com = _com(creature, poses)
@@ -133,6 +138,7 @@ def gait_features(creature, rollout) -> dict:
         "speed_cm_s": round(speed, 2),
         "log2_speed": round(math.log2(max(speed, STILL_CM_S)), 3),
         "turns": round(float(turns), 3),
+        "upside": round(upside, 3),
         "airborne": round(float(np.mean(~touching.any(axis=1))), 3),
         "bounce": round(float(np.std(height) / size), 4),
         "contact": {
@@ -149,12 +155,12 @@ def feature_matrix(features: list[dict]) -> tuple[np.ndarray, list[str]]:
     if not features:
         return np.zeros((0, 0)), []
     links = list(features[0]["contact"])
-    names = ["direction", "log2_speed", "turns", "airborne", "bounce"]
+    names = ["direction", "log2_speed", "turns", "upside", "airborne", "bounce"]
     names += [f"contact_{n}" for n in links] + ["periodicity"]
     rows = []
     for f in features:
-        row = [min(f[k], ROLL_CAP) if k == "turns" else f[k] for k in names[:5]]
-        row = [v / SCALES[k] for v, k in zip(row, names[:5], strict=True)]
+        row = [min(f[k], ROLL_CAP) if k == "turns" else f.get(k, 0.0) for k in names[:6]]
+        row = [v / SCALES[k] for v, k in zip(row, names[:6], strict=True)]
         row += [f["contact"][n] / SCALES["contact"] for n in links]
         rows.append(row + [f["periodicity"] / SCALES["periodicity"]])
     return np.array(rows, dtype=float), names
@@ -182,6 +188,8 @@ def mode_label(f: dict) -> str:
     carried = [n for n, v in contact.items() if v >= 0.5]
     if f["turns"] >= 1.0:
         kind = f"cartwheels ({f['turns']:.1f} turns)"
+    elif f.get("upside", 0.0) >= FLIPPED:
+        kind = "flips onto its back"
     elif f["airborne"] >= 0.15:
         kind = "big hops" if f["airborne"] >= 0.3 else "small hops"
     elif len(carried) >= 2:
