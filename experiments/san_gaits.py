@@ -7,11 +7,12 @@
    scales). Then each mode's fastest network is fine-tuned (annealing, ``--tune-trials``
    evaluations) as the paper did to make promising modes periodic, and replayed: does it stay
    in its mode, is it more periodic, faster? The twolink, bouncer and walker: 200 random SANs,
-   the best ``--keep``, sorted the same way (``--keep 0``: every gait that moves without
-   falling). ``--strength S`` multiplies every actuator's stiffness and damping by S: the
-   zoo's twolink is calibrated to Table 1's speed, and whether the paper's flips onto the
-   back and aerial jumps appear depends on how strong its one actuator is, which the paper
-   does not give; such a run is recorded under "<creature>-x<S>".
+   the best ``--keep``, sorted the same way (``--keep 0``: every gait that moves at least
+   1 cm/s without falling). ``--strengths 1,4`` runs each creature once per factor S, which
+   multiplies every actuator's stiffness and damping: the zoo's twolink is calibrated to
+   Table 1's speed, and whether the paper's flips onto the back and aerial jumps appear
+   depends on how strong its one actuator is, which the paper does not give; such a run is
+   recorded under "<creature>-x<S>".
 2. Evolution. Per creature, the best of 200 random SANs is improved for ``--evolve-trials``
    evaluations two ways from the same start: fine-tuning of the network alone (phase 2), and
    ``zoetic.san.evolve`` (body and network together, masses coupled to lengths, sections and
@@ -174,7 +175,7 @@ def main() -> None:
     ap.add_argument("--trials", type=int, default=200)
     ap.add_argument("--cart-keep", type=int, default=40)
     ap.add_argument("--keep", type=int, default=20, help="0: every gait that moves")
-    ap.add_argument("--strength", type=float, default=1.0, help="actuator ks, kd multiplier")
+    ap.add_argument("--strengths", default="1", help="actuator ks, kd multipliers, e.g. 1,4")
     ap.add_argument("--tune-trials", type=int, default=150, help="per cart mode")
     ap.add_argument("--evolve-creatures", default="cart,twolink,luxo,walker")
     ap.add_argument("--evolve-trials", type=int, default=300)
@@ -182,14 +183,16 @@ def main() -> None:
     OUT.mkdir(parents=True, exist_ok=True)
     if args.only != "evolve":
         rows = {}
+        strengths = [float(s) for s in args.strengths.split(",") if s]
         for name in [n for n in args.creatures.split(",") if n]:
             cart = name == "cart"
-            row = modes(
-                name, args.cart_trials if cart else args.trials,
-                args.cart_keep if cart else args.keep, args.seed, args.workers,
-                args.tune_trials if cart else 0, args.strength,
-            )  # fmt: skip
-            rows[name if args.strength == 1.0 else f"{name}-x{args.strength:g}"] = row
+            for k in strengths:
+                row = modes(
+                    name, args.cart_trials if cart else args.trials,
+                    args.cart_keep if cart else args.keep, args.seed, args.workers,
+                    args.tune_trials if cart else 0, k,
+                )  # fmt: skip
+                rows[name if k == 1.0 else f"{name}-x{k:g}"] = row
         path = OUT / args.modes_file
         old = json.loads(path.read_text()) if path.exists() else {}
         path.write_text(json.dumps({**old, **rows}, indent=2) + "\n")
