@@ -14,7 +14,8 @@ from zoetic.bodies import load_animal
 # (hand-made sweeps and learning: it rises or sinks 0.06-0.07 m in 3 s where swim-up and
 # swim-down promise 0.5 m), and even pointing straight up from the first instant its fastest
 # gait takes it 0.48 m in 3 s from rest; see docs/animals.md, "Strength of the ray", and
-# experiments/ray_climb.py.
+# experiments/ray_climb.py. Stronger muscles, a streamlined leading edge and fins on the rear of
+# the wings (experiments/ray_variants.py) keep the promise from cruising but not from rest.
 NOT_YET = {"ray": {"swim-up", "swim-down"}}
 
 
