@@ -346,6 +346,22 @@ def test_a_users_repertoire_finds_its_animal_file(my_eel, tmp_path):
         repertoire_body(memory, "my_newt")
 
 
+def test_a_repertoire_of_a_variant_named_like_a_zoo_animal_is_judged_as_the_variant(tmp_path):
+    import dataclasses
+
+    from zoetic.learning.stored_body import ANIMAL_FILE, save_body
+    from zoetic.runs import repertoire_body
+
+    ray = load_animal("ray")
+    heavier = dataclasses.replace(ray, mass=ray.mass * 1.5)  # a variant file's ray
+    memory = tmp_path / "memory"
+    (memory / "runs" / "go-straight").mkdir(parents=True)
+    save_body(heavier, memory / "runs" / "go-straight" / ANIMAL_FILE)
+    got = repertoire_body(memory, "ray")
+    assert np.allclose(got.mass, heavier.mass) and not np.allclose(got.mass, ray.mass)
+    assert repertoire_body(memory, "shark").name == "shark"
+
+
 def test_body_heading_change_follows_the_body_axis_not_a_swung_head():
     body = load_animal("snake")
     rest = body.rest_pos

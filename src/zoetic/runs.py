@@ -237,10 +237,17 @@ def mark_demo(out: Path, before: set[str]) -> None:
 
 
 def repertoire_body(directory: str | Path, animal: str) -> Body:
-    """Return the body a repertoire is for: a zoo animal, or the file its training runs used."""
+    """Return the body a repertoire is for: the body its training runs stored (so an animal
+    file that shares a zoo animal's name is judged as itself), else a zoo animal, else the
+    file its training runs name."""
     from zoetic.errors import BodyError
     from zoetic.io import read_toml
+    from zoetic.learning.stored_body import ANIMAL_FILE, load_body
 
+    for stored in sorted(Path(directory).glob(f"runs/*/{ANIMAL_FILE}")):
+        body = load_body(stored)
+        if body.name == animal:
+            return body
     try:
         return load_animal(animal)
     except BodyError:
