@@ -160,6 +160,7 @@ class Log:
     E_v: list = field(default_factory=list)
     wall: list = field(default_factory=list)
     batches: list = field(default_factory=list)
+    _lines: list = field(default_factory=list, repr=False, compare=False)  # history.csv's
 
     def add(self, X, ev, wall: float) -> None:
         """Append a batch: its candidates X (k, n), E, E_u, E_v and the run's wall time (s)."""
@@ -171,14 +172,20 @@ class Log:
         self.batches.append(len(ev.E))
 
     def history_csv(self) -> bytes:
-        """Return history.csv bytes: per evaluation E, E_u, E_v, best E so far, wall (s)."""
-        best = np.minimum.accumulate(np.array(self.E)) if self.E else np.array([])
-        lines = ["evaluation,E,E_u,E_v,best_E,wall_time"]
-        for i, (e, eu, ev, b, w) in enumerate(
-            zip(self.E, self.E_u, self.E_v, best, self.wall, strict=True)
-        ):
-            lines.append(f"{i + 1},{e:.6g},{eu:.6g},{ev:.6g},{b:.6g},{w:.3f}")
-        return ("\n".join(lines) + "\n").encode()
+        """Return history.csv bytes: per evaluation E, E_u, E_v, best E so far, wall (s).
+
+        Each evaluation's line is formatted once and kept (a run checkpoints every few
+        seconds, and formatting the whole history each time grew with its square)."""
+        lines = self._lines
+        del lines[len(self.E) :]  # a step undone on interruption
+        best = min(self.E[: len(lines)], default=np.inf)
+        rows = zip(self.E, self.E_u, self.E_v, self.wall, strict=True)
+        for i, (e, eu, ev, w) in enumerate(rows):
+            if i < len(lines):
+                continue
+            best = min(best, e)
+            lines.append(f"{i + 1},{e:.6g},{eu:.6g},{ev:.6g},{best:.6g},{w:.3f}\n")
+        return ("evaluation,E,E_u,E_v,best_E,wall_time\n" + "".join(lines)).encode()
 
 
 CHECKPOINT = "checkpoint.npz"

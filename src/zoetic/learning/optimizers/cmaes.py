@@ -71,7 +71,12 @@ class CMAES(Optimizer):
 
     name = "cmaes"
 
-    def __init__(self, x0, lower, upper, seed, budget=None, popsize=None, sigma=0.3):
+    def __init__(
+        self, x0, lower, upper, seed, budget=None, popsize=None, sigma=0.3, diagonal=False
+    ):
+        """``diagonal``: learn only the covariance's diagonal (separable CMA-ES), whose
+        learning rate is about n times a full covariance's: with n = 120 parameters and a few
+        thousand evaluations the full one hardly adapts."""
         super().__init__(x0, lower, upper, seed)
         import cma
 
@@ -85,6 +90,8 @@ class CMAES(Optimizer):
         }
         if popsize:
             opts["popsize"] = int(popsize)
+        if diagonal:
+            opts["CMA_diagonal"] = True
         self.es = cma.CMAEvolutionStrategy(list(self.x0), sigma * scale.mean(), opts)
 
     def ask(self):
