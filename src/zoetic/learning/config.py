@@ -37,7 +37,7 @@ DEMO_BUDGET = 8000  # evaluations of ``zoetic demo``
 # CMA-ES for the demo: 48 candidates a generation (96 rollouts a kernel call, from 2 starts),
 # separable (the covariance's diagonal learned): 120 parameters in 8000 evaluations. Measured
 # against 24 candidates with a full covariance (docs/performance.md, "Learning's own cost"):
-# best E at seeds 0, 1, 2 -6.69, -6.72, -6.71 against -6.45, -6.87, -6.74, in 0.64x the CPU time
+# best E at seeds 0, 1, 2 -6.69, -6.72, -6.71 against -6.45, -6.87, -6.74, in 0.66x the CPU time
 DEMO_POPSIZE = 48
 DEMO_OPTIMIZER = {"diagonal": True}
 
