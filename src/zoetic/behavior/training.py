@@ -6,8 +6,11 @@ stroke frequency per actuator (``learning.run.LearnConfig.controller``; a time-d
 controller with ``controller="time"``). It is then abstracted by FFT into its primary modes
 (for the periodic default this keeps the harmonics that carry the motion), checked against
 the original in the same simulation, and added to the repertoire; right turns are the left
-ones with left and right actuator signals swapped. The repertoire directory is written after
-every entry, so an interrupted training keeps what it finished and picks up where it stopped.
+ones with left and right actuator signals swapped. The entries are learned together
+(``learning.together``: entries whose rollouts last as long share one batched simulation a
+generation), each in its own run directory checkpointed as it goes, so an interrupted training
+picks up where every entry stopped; the repertoire directory is written after each entry is
+abstracted.
 """
 
 from __future__ import annotations
@@ -317,11 +320,13 @@ def train_repertoire(
     file or a Body, learned as given) into ``out``; return it.
 
     nodes: controller nodes per actuator (default: each task's). on_entry(name, run) is called
-    before each entry is learned; progress(run) during learning. An entry already begun in
-    ``out`` continues to its stored budget, or to ``resume_budget`` evaluations when given.
+    for each entry before learning starts; progress(run) as that entry's run learns. An entry
+    already begun in ``out`` continues to its stored budget, or to ``resume_budget``
+    evaluations when given.
     speeds: learn a swimmer's ``SPEED_PLAN`` entries too (``parametric.swim_at`` blends them).
     """
     from zoetic.learning.run import LearnConfig, Run
+    from zoetic.learning.together import learn_together
 
     body = animal if isinstance(animal, Body) else load_animal(animal)
     name = body.name if isinstance(animal, Body) else str(animal)
@@ -329,7 +334,9 @@ def train_repertoire(
     rep = Repertoire(body.name, tuple(body.actuator_names))
     rep.add("do-nothing", rest_abstraction(body), REST_SECONDS, source="all muscles relaxed")
     rep.save(out)
-    for k, entry in enumerate(plan_for(body, speeds)):
+    entries = plan_for(body, speeds)
+    runs = []
+    for k, entry in enumerate(entries):
         run_dir = out / "runs" / entry.name
         if (run_dir / "config.toml").exists():
             run = Run.resume(run_dir, resume_budget)
@@ -347,7 +354,9 @@ def train_repertoire(
             run = Run.create(run_dir, config, body)
         if on_entry:
             on_entry(entry.name, run)
-        run.learn(progress=progress)
+        runs.append(run)
+    learn_together(runs, progress=progress)
+    for entry, run in zip(entries, runs, strict=True):
         original = run.best_controller()
         ab = abstract_keeping_promises(body, original, entry.task, modes, threshold)
         info = abstraction_report(body, original, ab, entry.task)

@@ -100,7 +100,7 @@ def train_cmd(
         state: dict = {}
 
         def on_entry(name: str, run) -> None:
-            state["tid"] = bar.add_task(
+            state[id(run)] = bar.add_task(
                 name,
                 total=run.setup.config.budget,
                 completed=run.evaluations,
@@ -111,7 +111,7 @@ def train_cmd(
 
         def progress(run) -> None:
             bar.update(
-                state["tid"], completed=run.evaluations, best=f"{run.setup.optimizer.best_f:.4g}"
+                state[id(run)], completed=run.evaluations, best=f"{run.setup.optimizer.best_f:.4g}"
             )
 
         try:

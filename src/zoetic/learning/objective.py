@@ -272,7 +272,11 @@ class Objective:
     def tables(self, params: np.ndarray) -> np.ndarray:
         """Return activation tables (K, T, A) for parameter vectors (K, dim)."""
         coef = self.full_coefficients(params)
-        return np.clip(np.einsum("tm,kam->kta", self._basis, coef), 0.0, 1.0)
+        k, a, m = coef.shape
+        # one matrix product (K A, M) x (M, T): the same values as the sum over m, at a
+        # fraction of einsum's cost
+        u = (coef.reshape(k * a, m) @ self._basis.T).reshape(k, a, -1)
+        return np.clip(u.transpose(0, 2, 1), 0.0, 1.0)
 
     def control_cost(self, params: np.ndarray) -> np.ndarray:
         """Return E_u (K,) of parameter vectors, on the M node times."""
@@ -291,24 +295,43 @@ class Objective:
         return tables if s == 1 else np.repeat(tables, s, axis=0)
 
     def _run(self, lanes: np.ndarray):
-        reps = (lanes.shape[0] // self.n_starts, 1, 1)
-        state = State(np.tile(self.starts.positions, reps), np.tile(self.starts.velocities, reps))
+        state = self.start_lanes(lanes.shape[0] // self.n_starts)
         return simulate(self.body, lanes, self.medium, self.dt, state, self.record_every)
 
     def record_rows(self, n_records: int) -> np.ndarray:
         """Return the activation-table rows applied at each recorded instant, (R,)."""
         return np.minimum(np.arange(n_records) * self.record_every, self.steps - 1)
 
+    def lanes(self, params: np.ndarray) -> np.ndarray:
+        """Return the activation tables (K * S, T, A) of a batch's rollouts (``simulate``)."""
+        return self._lanes(self.tables(np.atleast_2d(params)))
+
+    def rollout_key(self) -> tuple:
+        """What the simulator must share, beside the body, to play this objective's rollouts in
+        one batched call with another's (the kernel's lanes are independent: a lane moves the
+        same in any batch): the medium, time step, steps and recording interval."""
+        return (self.medium.name, self.dt, self.steps, self.record_every)
+
+    def start_lanes(self, k: int) -> State:
+        """Return the start state of each of K candidates' rollouts (K * S lanes)."""
+        reps = (k, 1, 1)
+        return State(np.tile(self.starts.positions, reps), np.tile(self.starts.velocities, reps))
+
     def evaluate(self, params: np.ndarray) -> Evaluation:
         """Return the Evaluation of a batch of parameter vectors (K, dim)."""
         params = np.atleast_2d(params)
         lanes = self._lanes(self.tables(params))
         traj = self._run(lanes)  # one kernel call for every candidate from every start
-        acts = lanes[:, self.record_rows(traj.positions.shape[1])]
+        return self.score(params, lanes, traj.positions, traj.failed)
+
+    def score(self, params, lanes, positions, failed) -> Evaluation:
+        """Return the Evaluation of a batch (K, dim) from its rollouts: their tables ``lanes``
+        (K * S, T, A), recorded ``positions`` (K * S, R, N, 3) and ``failed`` (K * S,)."""
+        acts = lanes[:, self.record_rows(positions.shape[1])]
         s = signals(
             self.task,
             self.body,
-            traj.positions,
+            positions,
             acts,
             self.record_every * self.dt,
             self.medium,
@@ -319,7 +342,7 @@ class Objective:
         e_u = self.control_cost(params)
         n = self.n_starts
         e = self.task.mu1 * (e_u if n == 1 else np.repeat(e_u, n)) + self.task.mu2 * e_v
-        failed = traj.failed | ~np.isfinite(e)
+        failed = failed | ~np.isfinite(e)
         e = np.where(failed, np.inf, e)
         if n == 1:
             terms = dict(zip(term_names(self.task.terms), values, strict=True))

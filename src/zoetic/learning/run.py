@@ -160,6 +160,7 @@ class Log:
     E_v: list = field(default_factory=list)
     wall: list = field(default_factory=list)
     batches: list = field(default_factory=list)
+    _lines: list = field(default_factory=list, repr=False, compare=False)  # history.csv's
 
     def add(self, X, ev, wall: float) -> None:
         """Append a batch: its candidates X (k, n), E, E_u, E_v and the run's wall time (s)."""
@@ -171,14 +172,20 @@ class Log:
         self.batches.append(len(ev.E))
 
     def history_csv(self) -> bytes:
-        """Return history.csv bytes: per evaluation E, E_u, E_v, best E so far, wall (s)."""
-        best = np.minimum.accumulate(np.array(self.E)) if self.E else np.array([])
-        lines = ["evaluation,E,E_u,E_v,best_E,wall_time"]
-        for i, (e, eu, ev, b, w) in enumerate(
-            zip(self.E, self.E_u, self.E_v, best, self.wall, strict=True)
-        ):
-            lines.append(f"{i + 1},{e:.6g},{eu:.6g},{ev:.6g},{b:.6g},{w:.3f}")
-        return ("\n".join(lines) + "\n").encode()
+        """Return history.csv bytes: per evaluation E, E_u, E_v, best E so far, wall (s).
+
+        Each evaluation's line is formatted once and kept (a run checkpoints every few
+        seconds, and formatting the whole history each time grew with its square)."""
+        lines = self._lines
+        del lines[len(self.E) :]  # a step undone on interruption
+        best = min(self.E[: len(lines)], default=np.inf)
+        rows = zip(self.E, self.E_u, self.E_v, self.wall, strict=True)
+        for i, (e, eu, ev, w) in enumerate(rows):
+            if i < len(lines):
+                continue
+            best = min(best, e)
+            lines.append(f"{i + 1},{e:.6g},{eu:.6g},{ev:.6g},{best:.6g},{w:.3f}\n")
+        return ("evaluation,E,E_u,E_v,best_E,wall_time\n" + "".join(lines)).encode()
 
 
 CHECKPOINT = "checkpoint.npz"
@@ -289,6 +296,7 @@ class Run:
         self.log = log or Log()
         self._before: tuple | None = None  # (log length, batches, state) while a step runs
         self._saved: int | None = None  # evaluations in the last checkpoint written
+        self._cut = False  # the batch being evaluated is the budget's last, partial one
         self.t_start = time.perf_counter() - (self.log.wall[-1] if self.log.wall else 0.0)
 
     @classmethod
@@ -389,20 +397,34 @@ class Run:
 
     def step(self, evaluator) -> int:
         """Ask, evaluate and tell one batch; return how many evaluations it made."""
+        X = self.ask()
+        if X is None:
+            return 0
+        opt = self.setup.optimizer
+        if opt.needs_gradient:
+            ev, grad = evaluator.value_and_grad(self.setup.objective, X)
+        else:
+            ev, grad = evaluator(self.setup.objective, X), None
+        return self.tell(X, ev, grad)
+
+    def ask(self) -> np.ndarray | None:
+        """Return the next batch to evaluate (cut to the budget's room), or None when there is
+        nothing left; until ``tell``, an interruption checkpoints the state before it."""
         opt = self.setup.optimizer
         self._before = (len(self.log.E), len(self.log.batches), opt.state_dict())
         X = opt.ask()
         room = self.setup.config.budget - self.evaluations
         if len(X) == 0 or room <= 0:
             self._before = None
-            return 0
-        cut = len(X) > room
-        X = X[:room]
-        if opt.needs_gradient:
-            ev, grad = evaluator.value_and_grad(self.setup.objective, X)
-        else:
-            ev, grad = evaluator(self.setup.objective, X), None
-        if cut:  # the last, partial batch: counted and kept if best, not a step of the method
+            return None
+        self._cut = len(X) > room
+        return X[:room]
+
+    def tell(self, X: np.ndarray, ev, grad=None) -> int:
+        """Give the optimizer the Evaluation of the batch ``ask`` returned; log it; return its
+        size. The last, partial batch is counted and kept if best, not a step of the method."""
+        opt = self.setup.optimizer
+        if self._cut:
             opt.record(X, ev.E)
         else:
             opt.tell(X, ev.E, grad)
@@ -410,13 +432,18 @@ class Run:
         self._before = None
         return len(X)
 
+    @property
+    def finished(self) -> bool:
+        """True when the run has spent its budget or its optimizer has stopped."""
+        return self.evaluations >= self.setup.config.budget or self.setup.optimizer.done()
+
     def learn(self, progress: Callable[[Run], None] | None = None, every_s: float = 2.0):
         """Run to the budget, checkpointing every ``every_s`` seconds and on interruption."""
         config = self.setup.config
         evaluator = make_evaluator(config.evaluator)
         last = time.perf_counter()
         try:
-            while self.evaluations < config.budget and not self.setup.optimizer.done():
+            while not self.finished:
                 if self.step(evaluator) == 0:
                     break
                 if progress:
@@ -426,7 +453,17 @@ class Run:
                     last = time.perf_counter()
         finally:
             evaluator.close()
-            if self._before is not None or self._saved != self.evaluations:
-                self.checkpoint()
-            self.setup.optimizer.close()
+            self.settle()
         return self
+
+    def settle(self) -> None:
+        """End learning for now: checkpoint what is not saved yet (the state before a step
+        interrupted midway) and release the optimizer."""
+        if self.unsaved:
+            self.checkpoint()
+        self.setup.optimizer.close()
+
+    @property
+    def unsaved(self) -> bool:
+        """True when the run holds evaluations (or a step midway) its checkpoint has not."""
+        return self._before is not None or self._saved != self.evaluations

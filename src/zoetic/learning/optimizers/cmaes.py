@@ -71,7 +71,12 @@ class CMAES(Optimizer):
 
     name = "cmaes"
 
-    def __init__(self, x0, lower, upper, seed, budget=None, popsize=None, sigma=0.3):
+    def __init__(
+        self, x0, lower, upper, seed, budget=None, popsize=None, sigma=0.3, diagonal=False
+    ):
+        """``diagonal``: learn only the covariance's diagonal (separable CMA-ES), whose
+        learning rate is about n times a full covariance's: with n = 120 parameters and a few
+        thousand evaluations the full one hardly adapts."""
         super().__init__(x0, lower, upper, seed)
         import cma
 
@@ -85,6 +90,8 @@ class CMAES(Optimizer):
         }
         if popsize:
             opts["popsize"] = int(popsize)
+        if diagonal:
+            opts["CMA_diagonal"] = True
         self.es = cma.CMAEvolutionStrategy(list(self.x0), sigma * scale.mean(), opts)
 
     def ask(self):
@@ -115,13 +122,21 @@ class CMAES(Optimizer):
             "pickle": np.frombuffer(pickle.dumps(es), dtype=np.uint8).copy(),
             "mean": np.array(es.mean, float),
             "sigma": float(es.sigma),
-            "C": np.array(es.sm.C, float),
+            "C": self._covariance(),
             "pc": np.array(es.pc, float),
             "ps": np.array(getattr(es.adapt_sigma, "ps", np.zeros(self.dimension)), float),
             "countiter": int(es.countiter),
             "countevals": int(es.countevals),
             "rng": es.opts["randn"].state(),
         }
+
+    def _covariance(self) -> np.ndarray:
+        """Return the search's covariance shape (n, n): the sampler's, or for the separable
+        (diagonal) method the squared per-parameter scaling it adapts instead."""
+        es = self.es
+        if hasattr(es.sm, "C"):
+            return np.array(es.sm.C, float)
+        return np.diag(np.asarray(es.sigma_vec.scaling, float) ** 2)
 
     def _load(self, s):
         try:
@@ -133,9 +148,12 @@ class CMAES(Optimizer):
         es = self.es
         es.mean = np.array(s["mean"], float)
         es.sigma = float(s["sigma"])
-        es.sm.C = np.array(s["C"], float)
-        if hasattr(es.sm, "_decompose_C"):
-            es.sm._decompose_C()
+        if hasattr(es.sm, "C"):
+            es.sm.C = np.array(s["C"], float)
+            if hasattr(es.sm, "_decompose_C"):
+                es.sm._decompose_C()
+        else:  # separable: the scaling is the diagonal's square root
+            es.sigma_vec.scaling = np.sqrt(np.diag(np.asarray(s["C"], float)))
         es.pc = np.array(s["pc"], float)
         if hasattr(es.adapt_sigma, "ps"):
             es.adapt_sigma.ps = np.array(s["ps"], float)
