@@ -98,7 +98,7 @@ def test_a_blended_swim_lies_between_its_neighbours_near_the_speed_asked(shark, 
 
 
 def test_a_speed_outside_the_learned_swims_is_refused(rep, nodes):
-    with pytest.raises(ZoeticError, match="learned straight swims reach"):
+    with pytest.raises(ZoeticError, match="upright blends reach"):
         swim_at(rep, nodes, float(speeds(nodes)[-1]) * 1.5)
     with pytest.raises(ZoeticError, match="--speeds"):
         Nodes.measure(load_animal("shark"), handmade_repertoire(load_animal("shark")), SPEED)
@@ -123,7 +123,7 @@ def test_repertoire_blend_writes_a_controller_that_swims_the_speed(tmp_path, rep
     assert main([*args, "--out", str(out)]) == 2  # no silent overwrite
     assert "exists" in capsys.readouterr().err
     assert main([*args[:-1], "9", "--out", str(tmp_path / "x.json")]) == 2
-    assert "learned straight swims reach" in capsys.readouterr().err
+    assert "upright blends reach" in capsys.readouterr().err
 
 
 def test_blend_needs_the_speed_entries(tmp_path, shark, capsys):

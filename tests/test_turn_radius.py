@@ -109,9 +109,9 @@ def test_a_turn_rate_is_read_off_the_same_blends(shark, rep, nodes):
 def test_a_radius_outside_the_learned_turns_is_refused(rep, nodes):
     tightest = 1.0 / nodes.table()["sharp-turn-left"]
     for radius in (tightest / 2, 0.0, -1.0, float("nan")):
-        with pytest.raises(ZoeticError, match="the learned turns reach"):
+        with pytest.raises(ZoeticError, match="upright blends reach"):
             turn_of_radius(rep, nodes, radius)
-    with pytest.raises(ZoeticError, match="learned turns reach"):
+    with pytest.raises(ZoeticError, match="upright blends reach"):
         play_at(rep, nodes, 1e3, "turn_rate")
     few = Repertoire(rep.animal, rep.actuators)
     few.add("sharp-turn-left", rep.controllers["sharp-turn-left"], 3.0)
@@ -144,6 +144,6 @@ def test_repertoire_blend_writes_a_turn_of_the_radius(tmp_path, shark, rep, node
     right = json.loads(capsys.readouterr().out)
     assert right["turn_rate_deg_s"] == pytest.approx(-got["turn_rate_deg_s"], rel=0.05)
     assert main([*args[:-1], "0.01", "--out", str(tmp_path / "x.json")]) == 2
-    assert "the learned turns reach" in capsys.readouterr().err
+    assert "upright blends reach" in capsys.readouterr().err
     assert main([*args, "--speed", "0.3", "--out", str(tmp_path / "y.json")]) == 2
     assert "give one of" in capsys.readouterr().err

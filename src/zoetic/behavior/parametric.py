@@ -46,6 +46,14 @@ from zoetic.errors import ZoeticError
 GAIT_SECONDS = 6.0  # s a straight swim is played from rest; its speed is that of the second half
 TURN_SECONDS = 4.0  # s a turn is played from rest: the wide and medium turn tasks' horizon
 UPSIDE_DOWN = 90.0  # deg of roll past which a blend swims on its back
+# deg of roll a blend may reach and still be read off: the turn and swim tasks' promise of
+# level and upright (roll_deg <= 30)
+UPRIGHT = 30.0
+# the fraction of the value asked by which a turn blend's own measured radius or turning rate
+# may miss it: more, and the calibrated blends around it change too abruptly for a weight
+# read linearly between them (the shark's medium and sharp turns, blended 0.15 to 0.18 of
+# the sharp one, turn on 0.5 to 1.1 body lengths)
+TOLERANCE = 0.1
 # the blend weights of two neighbouring entries whose motion is measured (ends: the entries)
 CALIBRATION_WEIGHTS = (0.0, 0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875, 1.0)
 # what ``gait_motion`` measures, with units, for the tables a CLI prints
@@ -218,25 +226,40 @@ class Nodes:
         row = self.curves[quantity or self.scale.quantity]
         return {n: float(v) for n, v in zip(self.names, [*row[:, 0], row[-1, -1]], strict=True)}
 
-    def reach(self, quantity: str | None = None) -> tuple[float, float]:
-        """Return the least and greatest ``quantity`` (default: the scale's) of the
-        calibrated blends: what a blend of neighbouring entries can be asked."""
-        row = self.curves[quantity or self.scale.quantity]
-        return float(np.nanmin(row)), float(np.nanmax(row))
+    def segments(self, quantity: str | None = None) -> list[tuple[int, int, float, float]]:
+        """Return (i, k, a, b) for each calibrated segment, gap i between weights k and k + 1,
+        whose two blends stay within ``UPRIGHT`` degrees of roll, with ``quantity`` (default:
+        the scale's) a and b at its ends, in the scale's order: what a blend can be read off."""
+        row, roll = self.curves[quantity or self.scale.quantity], self.curves["roll"]
+        return [
+            (i, k, float(row[i, k]), float(row[i, k + 1]))
+            for i in range(len(row))
+            for k in range(row.shape[1] - 1)
+            if roll[i, k] <= UPRIGHT and roll[i, k + 1] <= UPRIGHT
+        ]
+
+    def spans(self, quantity: str | None = None) -> list[tuple[float, float]]:
+        """Return the intervals of ``quantity`` (default: the scale's), least first, that the
+        upright calibrated blends reach (``segments``, overlapping ones merged)."""
+        out: list[list[float]] = []
+        for lo, hi in sorted((min(a, b), max(a, b)) for *_, a, b in self.segments(quantity)):
+            if out and lo <= out[-1][1]:
+                out[-1][1] = max(out[-1][1], hi)
+            else:
+                out.append([lo, hi])
+        return [(lo, hi) for lo, hi in out]
 
     def neighbours(self, value: float, quantity: str | None = None) -> tuple[int, float] | None:
         """Return (i, w): the blend of entries i and i + 1 at weight w has ``quantity``
-        (default: the scale's) ``value`` by the calibrated blends (the first crossing, linear
-        between calibrated weights); w = 0 on entry i, and the last entry is i = S - 2, w = 1.
-        None where no calibrated blend reaches ``value``."""
-        w = np.asarray(CALIBRATION_WEIGHTS)
-        for i, row in enumerate(self.curves[quantity or self.scale.quantity]):
-            if value == row[0]:
-                return i, 0.0
-            for k in range(len(w) - 1):
-                a, b = row[k], row[k + 1]
-                if min(a, b) <= value <= max(a, b) and a != b:
-                    return i, float(w[k] + (w[k + 1] - w[k]) * (value - a) / (b - a))
+        (default: the scale's) ``value`` by the upright calibrated blends (``segments``; the
+        first crossing, linear between calibrated weights); w = 0 on entry i, and the last
+        entry is i = S - 2, w = 1. None where no upright calibrated blend reaches ``value``."""
+        w = CALIBRATION_WEIGHTS
+        for i, k, a, b in self.segments(quantity):
+            if value == a:
+                return i, w[k]
+            if min(a, b) <= value <= max(a, b):
+                return i, float(w[k] + (w[k + 1] - w[k]) * (value - a) / (b - a))
         return None
 
     def __len__(self) -> int:
@@ -274,10 +297,10 @@ def play_at(
     q = quantity or nodes.scale.quantity
     found = nodes.neighbours(value, q) if np.isfinite(value) else None
     if found is None:
-        lo, hi = nodes.reach(q)
         raise ZoeticError(
-            f"{q} {value:g} {QUANTITIES[q]}: the learned {nodes.scale.name}s reach {lo:.3f} to "
-            f"{hi:.3f} ({', '.join(f'{n} {v:.3f}' for n, v in nodes.table(q).items())})"
+            f"{q} {value:g} {QUANTITIES[q]}: the learned {nodes.scale.name}s' upright blends "
+            f"reach {_spans_text(nodes.spans(q))} "
+            f"({', '.join(f'{n} {v:.3f}' for n, v in nodes.table(q).items())})"
         )
     i, w = found
     a, b = nodes.names[i], nodes.names[i + 1]
@@ -295,10 +318,16 @@ def swim_at(rep: Repertoire, nodes: Nodes, speed: float) -> tuple[AbstractContro
     return ctrl, {"speed_m_s": how.pop("speed")} | how
 
 
-def radius_text(curvature: float) -> str:
+def _radius_text(curvature: float) -> str:
     """Return the radius (body lengths) of a path of ``curvature`` (1/BL, left positive) as
-    text: "straight" for none, a negative radius for a right turn."""
-    return "straight" if curvature == 0.0 else f"{1.0 / curvature:.2f}"
+    text: "straight" for none or a right turn (a left turn's radius beyond any), else the
+    radius."""
+    return "straight" if curvature <= 0.0 else f"{1.0 / curvature:.2f}"
+
+
+def _spans_text(spans: list[tuple[float, float]]) -> str:
+    """Return intervals as text: "a to b, c to d"."""
+    return ", ".join(f"{lo:.3f} to {hi:.3f}" for lo, hi in spans) or "nothing"
 
 
 def turn_of_radius(
@@ -308,15 +337,37 @@ def turn_of_radius(
     (``play_at`` along ``TURN`` at curvature 1 / radius). Raise ZoeticError naming the radii
     the learned turns reach, and each entry's, where none of their blends turns that wide or
     that tight."""
-    lo, hi = nodes.reach()
-    if not (np.isfinite(radius_bl) and radius_bl > 0.0 and lo <= 1.0 / radius_bl <= hi):
-        widest = "any wider (straight)" if lo <= 0.0 else f"{1.0 / lo:.2f}"
-        entries = ", ".join(f"{n} {radius_text(k)}" for n, k in nodes.table().items())
-        tightest = f"{1.0 / hi:.2f}" if hi > 0.0 else "no left turn"
+    found = None
+    if np.isfinite(radius_bl) and radius_bl > 0.0:
+        found = nodes.neighbours(1.0 / radius_bl)
+    if found is None:
+        radii = [
+            (f"{1.0 / hi:.2f}" if hi > 0.0 else "straight", _radius_text(lo))
+            for lo, hi in reversed(nodes.spans())
+            if hi > 0.0
+        ]
+        entries = ", ".join(f"{n} {_radius_text(k)}" for n, k in nodes.table().items())
+        reach = ", ".join(a if a == b else f"{a} to {b}" for a, b in radii) or "no left turn"
         raise ZoeticError(
-            f"radius {radius_bl:g} body lengths: the learned turns reach {tightest} to "
-            f"{widest} body lengths ({entries}; steady, from rest)"
+            f"radius {radius_bl:g} body lengths: the learned turns' upright blends reach "
+            f"{reach} body lengths ({entries}; from rest over {TURN_SECONDS:g} s)"
         )
     ctrl, how = play_at(rep, nodes, 1.0 / radius_bl)
     del how["curvature"]
     return ctrl, {"radius_bl": float(radius_bl)} | how
+
+
+def check_reached(what: str, asked: float, measured: float | None, unit: str, roll: float) -> None:
+    """Raise ZoeticError where a blend, played, misses the value ``asked`` by more than
+    ``TOLERANCE`` of it (``measured``: its own value; None: it swims straight) or rolls past
+    ``UPRIGHT`` degrees (``roll``): the calibrated blends around it change too abruptly there
+    for a weight read between them."""
+    if measured is not None and abs(measured - asked) <= TOLERANCE * abs(asked):
+        if roll <= UPRIGHT:
+            return
+    got = "swims straight" if measured is None else f"measures {measured:.3g} {unit}"
+    raise ZoeticError(
+        f"{what} {asked:g} {unit}: the blend read off the calibrated blends {got} and rolls "
+        f"up to {roll:.0f} deg when played (more than {TOLERANCE:.0%} off, or past "
+        f"{UPRIGHT:g} deg): the learned entries' blends change abruptly there; ask another value"
+    )

@@ -64,15 +64,18 @@ def blend_cmd(
     console.print(f"wrote {out} (zoetic simulate {rep.animal} --controller {out})")
 
 
-def _measured(body, ctrl, out: Path, seconds: float) -> dict[str, float]:
-    """Save the controller to ``out`` and return its motion from rest over ``seconds``
-    (``gait_motion``)."""
+def _measured(body, ctrl, seconds: float) -> dict[str, float]:
+    """Return the controller's motion from rest over ``seconds`` (``gait_motion``)."""
     from zoetic.behavior.parametric import gait_motion
+
+    return {q: float(v[0]) for q, v in gait_motion(body, [ctrl], seconds).items()}
+
+
+def _save(ctrl, out: Path) -> None:
     from zoetic.control import save_controller
 
     out.parent.mkdir(parents=True, exist_ok=True)
     save_controller(ctrl, out)
-    return {q: float(v[0]) for q, v in gait_motion(body, [ctrl], seconds).items()}
 
 
 def _swim(body, rep, kind: str, speed: float, right: bool, out: Path) -> tuple[dict, list]:
@@ -81,7 +84,8 @@ def _swim(body, rep, kind: str, speed: float, right: bool, out: Path) -> tuple[d
 
     nodes = speed_nodes(body, rep)
     ctrl, how = swim_at(rep, nodes, speed)
-    motion = _measured(body, ctrl, out, GAIT_SECONDS)
+    motion = _measured(body, ctrl, GAIT_SECONDS)
+    _save(ctrl, out)
     measured = motion["speed"]
     result = how | {
         "entries_m_s": {n: round(v, 4) for n, v in nodes.table().items()},
@@ -103,16 +107,26 @@ def _swim(body, rep, kind: str, speed: float, right: bool, out: Path) -> tuple[d
     return result, lines
 
 
-def _radius(curvature: float) -> float | None:
-    """Return the radius (body lengths) of a path of ``curvature`` (1/BL); None if straight."""
-    return round(1.0 / abs(curvature), 3) if curvature else None
+def _radius(curvature: float, turn: float) -> float | None:
+    """Return the radius (body lengths) of a path of ``curvature`` (1/BL) that turned ``turn``
+    degrees; None if straight (under a degree, as ``training.arc_radius`` has it)."""
+    return round(1.0 / abs(curvature), 3) if abs(turn) >= 1.0 and curvature else None
 
 
 def _turn(body, rep, kind: str, value: float, right: bool, out: Path) -> tuple[dict, list]:
     """Blend a turn of radius ``value`` body lengths (``kind`` "radius") or turning rate
     ``value`` deg/s ("turn-rate"), mirrored if ``right``, and write it; return the result and
     lines saying it."""
-    from zoetic.behavior.parametric import TURN, TURN_SECONDS, nodes_for, play_at, turn_of_radius
+    import numpy as np
+
+    from zoetic.behavior.parametric import (
+        TURN,
+        TURN_SECONDS,
+        check_reached,
+        nodes_for,
+        play_at,
+        turn_of_radius,
+    )
     from zoetic.learning.abstraction import mirror_abstract
 
     nodes = nodes_for(body, rep, TURN)
@@ -123,11 +137,18 @@ def _turn(body, rep, kind: str, value: float, right: bool, out: Path) -> tuple[d
         how = {"turn_rate_deg_s": how.pop("turn_rate")} | how
     if right:
         ctrl = mirror_abstract(ctrl, body.actuator_mirror)
-    m = _measured(body, ctrl, out, TURN_SECONDS)
-    radius = _radius(m["curvature"])
+    m = _measured(body, ctrl, TURN_SECONDS)
+    radius = _radius(m["curvature"], m["turn"])
+    way = -1.0 if right else 1.0  # a turn the other way than asked measures negative
+    if kind == "radius":
+        signed = None if radius is None else radius * np.sign(way * m["curvature"])
+        check_reached("radius", value, signed, "body lengths", m["roll"])
+    else:
+        check_reached("turning rate", value, way * m["turn_rate"], "deg/s", m["roll"])
+    _save(ctrl, out)
     entries = {
         n: {
-            "radius_bl": _radius(nodes.table("curvature")[n]),
+            "radius_bl": _radius(nodes.table("curvature")[n], nodes.table("turn")[n]),
             "turn_rate_deg_s": round(nodes.table("turn_rate")[n], 2),
             "speed_m_s": round(nodes.table("speed")[n], 3),
         }
@@ -151,7 +172,9 @@ def _turn(body, rep, kind: str, value: float, right: bool, out: Path) -> tuple[d
     lines = [
         f"learned turns (the arc from rest over {TURN_SECONDS:g} s): "
         + ", ".join(
-            f"{n} radius {e['radius_bl'] or 'straight'} BL at {e['turn_rate_deg_s']:g} deg/s"
+            f"{n} "
+            + (f"radius {e['radius_bl']} BL" if e["radius_bl"] else "straight")
+            + f" at {e['turn_rate_deg_s']:g} deg/s"
             for n, e in entries.items()
         ),
         f"{result['side']} turn of {kind} {value:g} {'BL' if kind == 'radius' else 'deg/s'}: "
