@@ -177,13 +177,15 @@ class Nodes:
     Gap i joins entries i and i + 1, entry i + 1 played ``lags[i]`` s ahead (``_best_lag``);
     ``curves[q][i]`` holds quantity q (``gait_motion``) of the blends at
     ``CALIBRATION_WEIGHTS`` (entry i's own first, entry i + 1's last), which ``neighbours``
-    inverts.
+    inverts where ``mids[q][i]``, the blends halfway between two calibrated weights, bear out
+    a line between them (``segments``).
     """
 
     scale: Scale
     names: tuple[str, ...]
     lags: np.ndarray  # (S - 1,) s
     curves: dict[str, np.ndarray]  # quantity -> (S - 1, W)
+    mids: dict[str, np.ndarray]  # quantity -> (S - 1, W - 1), the blends halfway between
 
     @classmethod
     def measure(cls, body: Body, rep: Repertoire, scale: Scale) -> Nodes:
@@ -219,7 +221,18 @@ class Nodes:
             for i, (a, b) in enumerate(zip(names[:-1], names[1:], strict=True))
         ]
         curves = {q: np.array([g[1][q] for g in gaps]) for q in own}
-        return cls(scale, tuple(names), np.array([g[0] for g in gaps]), curves)
+        lags = np.array([g[0] for g in gaps])
+        gaits = [rep.controllers[n] for n in names]
+        w = np.asarray(CALIBRATION_WEIGHTS)
+        halves = (w[:-1] + w[1:]) / 2.0
+        ctrls = [
+            blend(gaits[i], gaits[i + 1].ahead(lag), h)
+            for i, lag in enumerate(lags)
+            for h in halves
+        ]
+        m = gait_motion(body, ctrls, scale.seconds)
+        mids = {q: v.reshape(len(lags), len(halves)) for q, v in m.items()}
+        return cls(scale, tuple(names), lags, curves, mids)
 
     def table(self, quantity: str | None = None) -> dict[str, float]:
         """Return each entry's ``quantity`` (default: the scale's), in the scale's order."""
@@ -228,15 +241,23 @@ class Nodes:
 
     def segments(self, quantity: str | None = None) -> list[tuple[int, int, float, float]]:
         """Return (i, k, a, b) for each calibrated segment, gap i between weights k and k + 1,
-        whose two blends stay within ``UPRIGHT`` degrees of roll, with ``quantity`` (default:
-        the scale's) a and b at its ends, in the scale's order: what a blend can be read off."""
-        row, roll = self.curves[quantity or self.scale.quantity], self.curves["roll"]
-        return [
-            (i, k, float(row[i, k]), float(row[i, k + 1]))
-            for i in range(len(row))
-            for k in range(row.shape[1] - 1)
-            if roll[i, k] <= UPRIGHT and roll[i, k + 1] <= UPRIGHT
-        ]
+        whose two blends and the one halfway stay within ``UPRIGHT`` degrees of roll and whose
+        halfway blend's ``quantity`` (default: the scale's) lies within a quarter of |b - a| of
+        the middle of a and b, those of its ends, in the scale's order: the segments a blend can
+        be read off, nearly a line between its ends (the shark's medium and sharp turns blended
+        0.125 and 0.25 of the sharp one turn on 0.6 body lengths left and 1.1 right, and the
+        blend halfway 0.5 left)."""
+        q = quantity or self.scale.quantity
+        row, mid, roll, mroll = self.curves[q], self.mids[q], self.curves["roll"], self.mids["roll"]
+        out = []
+        for i in range(len(row)):
+            for k in range(row.shape[1] - 1):
+                a, b = float(row[i, k]), float(row[i, k + 1])
+                between = abs(mid[i, k] - (a + b) / 2.0) <= abs(b - a) / 4.0
+                upright = max(roll[i, k], roll[i, k + 1], mroll[i, k]) <= UPRIGHT
+                if between and upright:
+                    out.append((i, k, a, b))
+        return out
 
     def spans(self, quantity: str | None = None) -> list[tuple[float, float]]:
         """Return the intervals of ``quantity`` (default: the scale's), least first, that the
@@ -253,7 +274,12 @@ class Nodes:
         """Return (i, w): the blend of entries i and i + 1 at weight w has ``quantity``
         (default: the scale's) ``value`` by the upright calibrated blends (``segments``; the
         first crossing, linear between calibrated weights); w = 0 on entry i, and the last
-        entry is i = S - 2, w = 1. None where no upright calibrated blend reaches ``value``."""
+        entry is i = S - 2, w = 1 (an entry's own value plays the entry). None where no
+        upright calibrated blend reaches ``value``."""
+        own = list(self.table(quantity).values())
+        if value in own:  # an entry itself
+            i = own.index(value)
+            return (i, 0.0) if i < len(own) - 1 else (i - 1, 1.0)
         w = CALIBRATION_WEIGHTS
         for i, k, a, b in self.segments(quantity):
             if value == a:
