@@ -13,6 +13,7 @@ from zoetic.behavior.parametric import (
     TURN,
     TURN_SECONDS,
     Nodes,
+    check_reached,
     gait_motion,
     nodes_for,
     play_at,
@@ -147,3 +148,33 @@ def test_repertoire_blend_writes_a_turn_of_the_radius(tmp_path, shark, rep, node
     assert "upright blends reach" in capsys.readouterr().err
     assert main([*args, "--speed", "0.3", "--out", str(tmp_path / "y.json")]) == 2
     assert "give one of" in capsys.readouterr().err
+
+
+def made_nodes(curvature, roll, mid_curvature, mid_roll) -> Nodes:
+    """Nodes of two entries whose calibrated blends are given, not measured."""
+    curves = {"curvature": np.array([curvature], float), "roll": np.array([roll], float)}
+    mids = {"curvature": np.array([mid_curvature], float), "roll": np.array([mid_roll], float)}
+    return Nodes(TURN, ("go-straight", "wide-turn-left"), np.zeros(1), curves, mids)
+
+
+def test_a_weight_is_read_only_off_upright_segments_that_are_nearly_lines():
+    w = np.linspace(0.0, 1.0, 9)
+    line = made_nodes(w, np.zeros(9), (w[:-1] + w[1:]) / 2, np.zeros(8))
+    assert line.neighbours(0.3) == (0, pytest.approx(0.3))
+    rolled = np.zeros(9)
+    rolled[3] = 45.0  # the blend at 0.375 rolls past UPRIGHT: the segments either side go
+    tipped = made_nodes(w, rolled, (w[:-1] + w[1:]) / 2, np.zeros(8))
+    assert tipped.neighbours(0.3) is None and tipped.neighbours(0.2) == (0, pytest.approx(0.2))
+    assert tipped.spans() == [(0.0, 0.25), (0.5, 1.0)]
+    kinked = (w[:-1] + w[1:]) / 2
+    kinked[4] = 0.9  # halfway between 0.5 and 0.625 the blend turns as tight as at 0.9
+    bent = made_nodes(w, np.zeros(9), kinked, np.zeros(8))
+    assert bent.neighbours(0.55) is None and bent.neighbours(0.45) == (0, pytest.approx(0.45))
+    assert bent.neighbours(0.0) == (0, 0.0) and bent.neighbours(1.0) == (0, 1.0)  # the entries
+
+
+def test_a_blend_that_misses_or_rolls_is_refused():
+    check_reached("radius", 2.0, 2.1, "body lengths", 10.0)  # 5 % off, upright: kept
+    for measured, roll in ((2.5, 10.0), (None, 10.0), (-2.0, 10.0), (2.0, 40.0)):
+        with pytest.raises(ZoeticError, match="change abruptly"):
+            check_reached("radius", 2.0, measured, "body lengths", roll)
