@@ -376,7 +376,7 @@ def turn_of_radius(
         reach = ", ".join(a if a == b else f"{a} to {b}" for a, b in radii) or "no left turn"
         raise ZoeticError(
             f"radius {radius_bl:g} body lengths: the learned turns' upright blends reach "
-            f"{reach} body lengths ({entries}; from rest over {TURN_SECONDS:g} s)"
+            f"{reach} (body lengths; {entries}; from rest over {TURN_SECONDS:g} s)"
         )
     ctrl, how = play_at(rep, nodes, 1.0 / radius_bl)
     del how["curvature"]

@@ -177,8 +177,9 @@ def _turn(body, rep, kind: str, value: float, right: bool, out: Path) -> tuple[d
             + f" at {e['turn_rate_deg_s']:g} deg/s"
             for n, e in entries.items()
         ),
-        f"{result['side']} turn of {kind} {value:g} {'BL' if kind == 'radius' else 'deg/s'}: "
-        f"{1 - w:.2f} {how['from']} + {w:.2f} {how['to']}; measured radius {radius} BL "
+        f"{result['side']} turn "
+        + (f"of radius {value:g} BL: " if kind == "radius" else f"at {value:g} deg/s: ")
+        + f"{1 - w:.2f} {how['from']} + {w:.2f} {how['to']}; measured radius {radius} BL "
         f"({result['measured_radius_m']} m), turning {abs(m['turn_rate']):.1f} deg/s at "
         f"{m['speed']:.3f} m/s, rolling up to {m['roll']:.1f} deg{error}",
     ]
