@@ -9,7 +9,7 @@ import pytest
 
 from zoetic.behavior.handmade import handmade_repertoire
 from zoetic.behavior.motor import blend
-from zoetic.behavior.parametric import SpeedNodes, gait_speeds, speed_nodes, swim_at
+from zoetic.behavior.parametric import SPEED, Nodes, gait_speeds, speed_nodes, swim_at
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.behavior.training import plan_for
 from zoetic.bodies import load_animal
@@ -60,17 +60,23 @@ def test_nodes_are_measured_once_per_body_and_swims(shark, rep, nodes):
     assert speed_nodes(shark, other).names == ("swim-slow", "go-straight")
 
 
+def speeds(nodes) -> np.ndarray:
+    return np.array(list(nodes.table().values()))
+
+
 def test_nodes_are_the_straight_swims_slowest_first_in_step(shark, rep, nodes):
     assert nodes.names == ("swim-slow", "swim-medium", "go-straight")
-    assert np.all(np.diff(nodes.speeds) > 0) and nodes.speeds[0] > 0.01
+    assert np.all(np.diff(speeds(nodes)) > 0) and speeds(nodes)[0] > 0.01
     # medium is half a stroke out of step with slow: blended in step, the speeds rise from
     # one entry's to the next (out of step, half and half, they would cancel to a crawl)
-    assert np.all(np.diff(nodes.curve, axis=1) > 0)
-    np.testing.assert_allclose(nodes.curve[:, [0, -1]], [nodes.speeds[:-1], nodes.speeds[1:]])
-    assert np.abs(nodes.turns).max() < 5.0  # deg over the 6 s: straight swims stay straight
-    lagged = swim_at(rep, nodes, float(nodes.curve[0, 4]))[0]
+    curve = nodes.curves["speed"]
+    assert np.all(np.diff(curve, axis=1) > 0)
+    np.testing.assert_allclose(curve[:, [0, -1]], [speeds(nodes)[:-1], speeds(nodes)[1:]])
+    # deg over the 6 s: straight swims stay straight
+    assert np.abs(nodes.curves["turn"][:, 1:-1]).max() < 5.0
+    lagged = swim_at(rep, nodes, float(curve[0, 4]))[0]
     unlagged = blend(rep.controllers["swim-slow"], rep.controllers["swim-medium"], 0.5)
-    assert gait_speeds(shark, [unlagged])[0] < nodes.speeds[0] < gait_speeds(shark, [lagged])[0]
+    assert gait_speeds(shark, [unlagged])[0] < speeds(nodes)[0] < gait_speeds(shark, [lagged])[0]
 
 
 def test_a_speed_on_a_node_plays_that_entry(rep, nodes):
@@ -81,7 +87,7 @@ def test_a_speed_on_a_node_plays_that_entry(rep, nodes):
 
 
 def test_a_blended_swim_lies_between_its_neighbours_near_the_speed_asked(shark, rep, nodes):
-    lo, hi = nodes.speeds[0], nodes.speeds[1]
+    lo, hi = speeds(nodes)[0], speeds(nodes)[1]
     asked = [lo + f * (hi - lo) for f in (0.2, 0.5, 0.8)]
     blends = [swim_at(rep, nodes, v) for v in asked]
     assert all(how["from"] == "swim-slow" and how["to"] == "swim-medium" for _, how in blends)
@@ -92,10 +98,10 @@ def test_a_blended_swim_lies_between_its_neighbours_near_the_speed_asked(shark, 
 
 
 def test_a_speed_outside_the_learned_swims_is_refused(rep, nodes):
-    with pytest.raises(ZoeticError, match="learned straight swims reach"):
-        swim_at(rep, nodes, float(nodes.speeds[-1]) * 1.5)
+    with pytest.raises(ZoeticError, match="upright blends reach"):
+        swim_at(rep, nodes, float(speeds(nodes)[-1]) * 1.5)
     with pytest.raises(ZoeticError, match="--speeds"):
-        SpeedNodes.measure(load_animal("shark"), handmade_repertoire(load_animal("shark")))
+        Nodes.measure(load_animal("shark"), handmade_repertoire(load_animal("shark")), SPEED)
 
 
 def test_the_speed_plan_is_asked_for(shark):
@@ -107,17 +113,17 @@ def test_the_speed_plan_is_asked_for(shark):
 
 def test_repertoire_blend_writes_a_controller_that_swims_the_speed(tmp_path, rep, nodes, capsys):
     rep.save(tmp_path / "memory")
-    speed = float(np.mean(nodes.speeds[1:]))
+    speed = float(np.mean(speeds(nodes)[1:]))
     out = tmp_path / "swim.json"
     args = ["repertoire", "blend", str(tmp_path / "memory"), "--speed", f"{speed}"]
     assert main([*args, "--out", str(out), "--json"]) == 0
     got = json.loads(capsys.readouterr().out)
     assert (got["from"], got["to"]) == ("swim-medium", "go-straight") and out.is_file()
-    assert nodes.speeds[1] < got["measured_m_s"] < nodes.speeds[2]
+    assert speeds(nodes)[1] < got["measured_m_s"] < speeds(nodes)[2]
     assert main([*args, "--out", str(out)]) == 2  # no silent overwrite
     assert "exists" in capsys.readouterr().err
     assert main([*args[:-1], "9", "--out", str(tmp_path / "x.json")]) == 2
-    assert "learned straight swims reach" in capsys.readouterr().err
+    assert "upright blends reach" in capsys.readouterr().err
 
 
 def test_blend_needs_the_speed_entries(tmp_path, shark, capsys):

@@ -60,6 +60,10 @@ SURFACE_PLAN = (
 # swims as far as it can, so it is the fastest), learned after the rest of the plan (whose
 # entries and seeds stay as without them); ``behavior.parametric`` blends between them
 SPEED_PLAN = (("swim-slow", "swim-slow"), ("swim-medium", "swim-medium"))
+# With ``radii``: a swimmer's turn of medium radius between the wide and the sharp one, learned
+# last (after ``SPEED_PLAN`` when both are asked for), mirrored like them;
+# ``behavior.parametric`` blends go-straight and the turns into a turn of any radius between
+RADIUS_PLAN = (("medium-turn-left", "medium-turn-left"),)
 REST_SECONDS = 1.0
 # the "auto" abstraction's thresholds (times each actuator's strongest mode) tried in turn
 # when the default one breaks a promise the learned controller keeps
@@ -74,9 +78,9 @@ class Entry:
     task: Task
 
 
-def plan_for(body: Body, speeds: bool = False) -> list[Entry]:
+def plan_for(body: Body, speeds: bool = False, radii: bool = False) -> list[Entry]:
     """Return the entries the basic training learns for this animal (tasks that allow it);
-    with ``speeds``, a swimmer's ``SPEED_PLAN`` too."""
+    with ``speeds``, a swimmer's ``SPEED_PLAN`` too, with ``radii`` its ``RADIUS_PLAN``."""
     caps = capabilities(body)
     kind = "water" if "water" in caps else "ground"
     plan = (
@@ -86,6 +90,8 @@ def plan_for(body: Body, speeds: bool = False) -> list[Entry]:
     )
     if speeds and kind == "water":
         plan += list(SPEED_PLAN)
+    if radii and kind == "water":
+        plan += list(RADIUS_PLAN)
     out = []
     for name, task_name in plan:
         task = load_task(task_name)
@@ -111,16 +117,24 @@ def rest_abstraction(body: Body) -> AbstractController:
     )
 
 
+def arc_curvature(com: np.ndarray, turned: float) -> float:
+    """Return the signed curvature (1/m, left turns positive) of the circular arc that turns
+    the heading by ``turned`` rad between the first and last centre-of-mass positions ``com``
+    (R, 3): a chord c of an arc of angle a has curvature 2 sin(a / 2) / c, the angle capped at
+    180 degrees; 0 for no turn, inf for a turn on the spot."""
+    a = min(abs(float(turned)), np.pi)
+    chord = float(np.linalg.norm((com[-1] - com[0])[[0, 2]]))
+    bend = 2.0 * float(np.sin(a / 2.0)) * float(np.sign(turned))
+    return bend / chord if chord > 0.0 else float(np.copysign(np.inf, bend)) if bend else 0.0
+
+
 def arc_radius(com: np.ndarray, turned: float) -> float:
     """Return the radius (m) of the circular arc that turns the heading by ``turned`` rad
-    between the first and last centre-of-mass positions ``com`` (R, 3): a chord c of an arc
-    of angle a has radius c / (2 sin(a / 2)), the angle capped at 180 degrees; inf under a
-    degree of turn (a straight line)."""
-    a = min(abs(float(turned)), np.pi)
-    if a < np.radians(1.0):
+    between the first and last centre-of-mass positions ``com`` (R, 3): 1 / |curvature|
+    (``arc_curvature``); inf under a degree of turn (a straight line)."""
+    if abs(float(turned)) < np.radians(1.0):
         return float("inf")
-    chord = float(np.linalg.norm((com[-1] - com[0])[[0, 2]]))
-    return chord / (2.0 * float(np.sin(a / 2.0)))
+    return 1.0 / abs(arc_curvature(com, turned))
 
 
 def entry_motion(body: Body, ctrl: Controller, task: Task) -> list[dict[str, float]]:
@@ -291,12 +305,12 @@ def check_same_task(run_dir: Path, learned: Task, now: Task) -> None:
         )
 
 
-def plan_digest(animal: str | Path, speeds: bool = False) -> str:
+def plan_digest(animal: str | Path, speeds: bool = False, radii: bool = False) -> str:
     """Return a short digest of what the basic training of ``animal`` learns: its body and
     its plan's tasks (a cache of trained repertoires keyed by it goes stale with either)."""
     body = load_animal(animal)
     h = hashlib.sha256(Path(body.source).read_bytes())
-    for e in plan_for(body, speeds):
+    for e in plan_for(body, speeds, radii):
         h.update(f"|{e.name}|{_plain(e.task)}".encode())
     return h.hexdigest()[:10]
 
@@ -315,6 +329,7 @@ def train_repertoire(
     evaluator: str = "batch",
     resume_budget: int | None = None,
     speeds: bool = False,
+    radii: bool = False,
 ) -> Repertoire:
     """Learn, abstract and save the basic repertoire of ``animal`` (a zoo name, an animal
     file or a Body, learned as given) into ``out``; return it.
@@ -323,7 +338,8 @@ def train_repertoire(
     for each entry before learning starts; progress(run) as that entry's run learns. An entry
     already begun in ``out`` continues to its stored budget, or to ``resume_budget``
     evaluations when given.
-    speeds: learn a swimmer's ``SPEED_PLAN`` entries too (``parametric.swim_at`` blends them).
+    speeds: learn a swimmer's ``SPEED_PLAN`` entries too (``parametric.swim_at`` blends them);
+    radii: its ``RADIUS_PLAN`` entry too (``parametric.turn_of_radius`` blends the turns).
     """
     from zoetic.learning.run import LearnConfig, Run
     from zoetic.learning.together import learn_together
@@ -334,7 +350,7 @@ def train_repertoire(
     rep = Repertoire(body.name, tuple(body.actuator_names))
     rep.add("do-nothing", rest_abstraction(body), REST_SECONDS, source="all muscles relaxed")
     rep.save(out)
-    entries = plan_for(body, speeds)
+    entries = plan_for(body, speeds, radii)
     runs = []
     for k, entry in enumerate(entries):
         run_dir = out / "runs" / entry.name

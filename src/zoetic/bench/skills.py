@@ -60,16 +60,12 @@ def skill_figures(body: Body, ctrl: Controller, task: Task, start: int = 0) -> d
 
 def turn_radius(com: np.ndarray, turned: float, length: float) -> float | None:
     """Return the radius (body lengths) of the circular arc that turns the heading by
-    ``turned`` radians between the first and last centre-of-mass positions ``com`` (R, 3).
+    ``turned`` radians between the first and last centre-of-mass positions ``com`` (R, 3), as
+    the turn promises judge it (``training.arc_radius``); None under a degree of turn."""
+    from zoetic.behavior.training import arc_radius
 
-    A chord c of an arc of angle a has radius c / (2 sin(a / 2)); the heading change is capped
-    at 180 degrees. None when the heading changed by less than a degree (no turn to speak of).
-    """
-    a = min(abs(float(turned)), np.pi)
-    if a < np.radians(1.0):
-        return None
-    chord = float(np.linalg.norm((com[-1] - com[0])[[0, 2]]))
-    return round(chord / (2.0 * float(np.sin(a / 2.0))) / length, 3)
+    r = arc_radius(com, turned)
+    return None if not np.isfinite(r) else round(r / length, 3)
 
 
 def sustained_speed(

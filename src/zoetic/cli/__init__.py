@@ -18,6 +18,7 @@ def _register() -> None:
     from zoetic.cli import (  # noqa: F401  (commands register)
         aquarium,
         bench,
+        blend,
         cluster,
         export,
         learn,

@@ -1,4 +1,5 @@
-"""``zoetic abstract``, ``zoetic repertoire train|show`` and ``zoetic sequence``."""
+"""``zoetic abstract``, ``zoetic repertoire train|show`` and ``zoetic sequence`` (``repertoire
+blend``: cli.blend)."""
 
 from __future__ import annotations
 
@@ -80,11 +81,16 @@ def train_cmd(
         "--speeds",
         help="A swimmer learns slow and medium straight swims too (for repertoire blend).",
     ),
+    radii: bool = typer.Option(
+        False,
+        "--radii",
+        help="A swimmer learns a turn of medium radius too (for repertoire blend --radius).",
+    ),
     force: Force = False,
 ) -> None:
     """Learn the basic repertoire (straight, sharp and wide turns, mirrored; a fish's swim-up
-    and swim-down; with --speeds, swims at steady slower speeds); resumable. Each entry is
-    judged against its task's promises."""
+    and swim-down; with --speeds, swims at steady slower speeds; with --radii, a medium turn);
+    resumable. Each entry is judged against its task's promises."""
     if ray_address:  # ray.init() reads it
         import os
 
@@ -95,7 +101,7 @@ def train_cmd(
     from zoetic.viz.media import show_repertoire
 
     check_learnable(animal)
-    out, again = _training_dir(animal, out, resume, force, speeds)
+    out, again = _training_dir(animal, out, resume, force, speeds, radii)
     with learn_bar() as bar:
         state: dict = {}
 
@@ -129,6 +135,7 @@ def train_cmd(
                 evaluator,
                 budget if resume and given(ctx, "budget") else None,
                 speeds,
+                radii,
             )
         except KeyboardInterrupt:
             interrupted(f"{out} keeps what was learned; continue with: {again}")
@@ -137,7 +144,12 @@ def train_cmd(
 
 
 def _training_dir(
-    animal: str, out: Path | None, resume: bool, force: bool, speeds: bool = False
+    animal: str,
+    out: Path | None,
+    resume: bool,
+    force: bool,
+    speeds: bool = False,
+    radii: bool = False,
 ) -> tuple[Path, str]:
     """Return the repertoire directory ready for training (a new or empty one, an emptied one
     under ``force``, or the one to continue under ``resume``) and the command that continues
@@ -150,7 +162,7 @@ def _training_dir(
 
     out = check_out_dir(out or Path("memory") / Path(animal).stem)
     again = ["zoetic", "repertoire", "train", animal, "--out", str(out), "--resume"]
-    again = shlex.join(again + (["--speeds"] if speeds else []))
+    again = shlex.join(again + ["--speeds"] * speeds + ["--radii"] * radii)
     if resume and force:
         raise ZoeticError(
             "--resume continues the repertoire in --out, --force replaces it: not both"
@@ -304,57 +316,3 @@ def _upright(body, names: list[str], seq, righting: bool):
         f"a righting variant played in {s['windows_righted']} of {s['windows']} windows "
         f"of {config.interval:g} s ({s['windows_gentle']} with the gentler stroke)"
     )
-
-
-@repertoire_app.command("blend")
-def blend_cmd(
-    memory: Path = typer.Argument(..., help="Repertoire directory (trained with --speeds)."),
-    speed: float = typer.Option(..., help="Swim speed asked (m/s), within the learned swims'."),
-    out: Path = typer.Option(None, help="Controller file to write (default runs/swim-SPEED.json)."),
-    json_out: bool = typer.Option(False, "--json", help="Print the result as JSON."),
-    force: Force = False,
-) -> None:
-    """Blend the two learned straight swims around SPEED (m/s) into a controller that swims
-    it (at the weight read off measured blends), measure it from rest and write it; play it
-    with zoetic simulate ANIMAL --controller FILE."""
-    from zoetic.behavior.parametric import GAIT_SECONDS, gait_motion, speed_nodes, swim_at
-    from zoetic.behavior.repertoire import Repertoire
-    from zoetic.control import save_controller
-    from zoetic.errors import ZoeticError
-    from zoetic.runs import repertoire_body
-
-    rep = Repertoire.load(memory)
-    body = repertoire_body(memory, rep.animal)
-    rep = Repertoire.load(memory, body)
-    out = out or Path("runs") / f"swim-{speed:g}.json"
-    if out.exists() and not force:
-        raise ZoeticError(f"{out}: exists; give another --out or --force to replace it")
-    nodes = speed_nodes(body, rep)
-    ctrl, how = swim_at(rep, nodes, speed)
-    motion = {q: float(v[0]) for q, v in gait_motion(body, [ctrl]).items()}
-    measured = motion["speed"]
-    out.parent.mkdir(parents=True, exist_ok=True)
-    save_controller(ctrl, out)
-    result = how | {
-        "entries_m_s": {n: round(v, 4) for n, v in nodes.table().items()},
-        "measured_m_s": round(measured, 4),
-        "error_m_s": round(measured - speed, 4),
-        "turn_deg": round(motion["turn"], 2),
-        "roll_deg": round(motion["roll"], 2),
-        "controller": str(out),
-    }
-    if json_out:
-        print(json.dumps(result, indent=1))
-        return
-    console.print(
-        "learned straight swims (m/s, steady from rest): "
-        + ", ".join(f"{n} {v:.3f}" for n, v in result["entries_m_s"].items())
-    )
-    w = how["weight"]
-    console.print(
-        f"swim at {speed:g} m/s: {1 - w:.2f} {how['from']} + {w:.2f} {how['to']}; "
-        f"measured {measured:.3f} m/s (error {measured - speed:+.3f}); from rest over "
-        f"{GAIT_SECONDS:g} s it turns {motion['turn']:+.1f} deg and rolls up to "
-        f"{motion['roll']:.1f} deg"
-    )
-    console.print(f"wrote {out} (zoetic simulate {rep.animal} --controller {out})")
