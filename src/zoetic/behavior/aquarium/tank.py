@@ -34,6 +34,7 @@ from zoetic.physics.world import Animal, World
 
 WALL = 0.25  # m: half thickness of the tank's walls
 PERCEPTIONS = ("oracle", "vision")
+MAX_FISHES, MAX_FOOD, MAX_OBSTACLES = 2000, 3000, 200  # the most a tank holds
 HEIGHT = 2.0  # m: half height of the walls, rocks and seaweed (all span the fishes' layer)
 
 
@@ -105,8 +106,11 @@ def _check(cfg: TankConfig) -> None:
         )
     if cfg.food < 0 or cfg.obstacles < 0:
         raise SimulationError("--food and --obstacles must be at least 0")
-    if cfg.fishes > 60 or cfg.food > 500 or cfg.obstacles > 60:
-        raise SimulationError("at most 60 fishes, 500 food particles and 60 obstacles")
+    if cfg.fishes > MAX_FISHES or cfg.food > MAX_FOOD or cfg.obstacles > MAX_OBSTACLES:
+        raise SimulationError(
+            f"at most {MAX_FISHES} fishes, {MAX_FOOD} food particles and {MAX_OBSTACLES} "
+            f"obstacles (got {cfg.fishes}, {cfg.food}, {cfg.obstacles})"
+        )
     if not 0 < cfg.seconds <= 3600:
         raise SimulationError(f"--seconds must be in (0, 3600], got {cfg.seconds:g}")
     if cfg.perception not in PERCEPTIONS:
