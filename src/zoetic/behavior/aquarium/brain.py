@@ -341,9 +341,16 @@ def conceded(
     to[..., 1] = 0.0
     dist = np.linalg.norm(to, axis=-1)
     cos = np.einsum("nfc,nc->nf", to, forward) / np.maximum(dist, 1e-9)
-    heading = (cos > CONCEDE_COS) & np.asarray(eating, bool)[:, None]  # (k, F)
-    nearer = dist[None, :, :] < dist[:, None, :]  # (i, k, F): k nearer to p than i
-    return (np.asarray(seen, bool)[:, :, None] & nearer & heading[None]).any(axis=1)
+    eating = np.asarray(eating, bool)
+    heading = cos > CONCEDE_COS  # (k, F)
+    # the pairs (i, k) of a fish i and an eating fish k it perceives, by i
+    ii, kk = np.nonzero(np.asarray(seen, bool) & eating[None, :])
+    out = np.zeros(dist.shape, bool)
+    if len(ii):
+        given = (dist[kk] < dist[ii]) & heading[kk]  # (pairs, F): k nearer to p than i
+        starts = np.r_[0, np.flatnonzero(np.diff(ii)) + 1]
+        out[ii[starts]] = np.logical_or.reduceat(given, starts, axis=0)
+    return out
 
 
 def tank_brains(
