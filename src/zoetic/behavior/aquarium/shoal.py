@@ -86,8 +86,8 @@ class Shoal:
         )
         eating = alive & np.array([br.thought.intention == "eat" for br in self.brains])
         b = self.bodies
-        seen = np.isfinite(pc.fish)
-        given = conceded(b.nose, b.fwd, food, eating, seen, np.isfinite(pc.food))
+        sees = np.isfinite(pc.fish)
+        given = conceded(b.nose, b.fwd, food, eating, sees, np.isfinite(pc.food))
         drives = self._drives(period.t0, predators)
         roll, rate, bend = (x.tolist() for x in self.bodies.posture(world, period.t0))
         b, obs = self.bodies, {"time": np.array([period.t0])}
