@@ -11,8 +11,8 @@ BOTH = "both"  # ``skills``: the built-in and the learned tank, side by side
 
 def bench_aquarium(
     fishes: int = 10,
-    food: int = 15,
-    obstacles: int = 5,
+    food: int | None = None,
+    obstacles: int | None = None,
     seconds: float = 60.0,
     seed: int = 0,
     perception: str = "oracle",
@@ -67,7 +67,7 @@ def bench_aquarium(
         return 60.0 * count / s["seconds"] if s["seconds"] > 0 else None
 
     return {
-        "scene": f"{fishes} fishes, {food} food, {obstacles} obstacles, {seconds:g} s",
+        "scene": f"{fishes} fishes, {cfg.food} food, {cfg.obstacles} obstacles, {seconds:g} s",
         "perception": perception if perception == "oracle" else f"{perception} (one predator)",
         "skills": skills or "species files",
         "predator_skills": predator_skills or skills or "species file",

@@ -49,7 +49,8 @@ BENCHES = (
     Bench("gym", ("gym",)),
     Bench("vision", ("vision",)),
     Bench("aquarium", ("aquarium",)),
-    Bench("aquarium-60", ("aquarium", "--fishes", "60")),
+    # its history's scene: 15 food particles, 5 obstacles (the defaults grow with the fishes)
+    Bench("aquarium-60", ("aquarium", "--fishes", "60", "--food", "15", "--obstacles", "5")),
     Bench("aquarium-vision", ("aquarium", "--perception", "vision")),
     Bench("aquarium-skills", ("aquarium", "--skills", "both")),
     Bench("stunts", ("stunts",)),

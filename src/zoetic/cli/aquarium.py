@@ -16,8 +16,12 @@ from zoetic.cli.output import console, emit
 def aquarium(
     fishes: int = typer.Option(10, help="Fishes in the tank, predators included."),
     predators: int = typer.Option(1, help="How many of them are predators (sharks)."),
-    food: int = typer.Option(15, help="Food particles drifting in the current."),
-    obstacles: int = typer.Option(5, help="Rocks and seaweed."),
+    food: int = typer.Option(
+        None, help="Food particles drifting in the current [default: 1.5 a fish]."
+    ),
+    obstacles: int = typer.Option(
+        None, help="Rocks and seaweed [default: 5 for 10 fishes, 5 sqrt(fishes / 10)]."
+    ),
     seconds: float = typer.Option(60.0, help="Simulated time (s)."),
     seed: int = typer.Option(0, help="Seed of the layout and of the fishes' wandering."),
     out: Path = typer.Option(Path("runs/tank"), help="Output directory."),
@@ -132,8 +136,8 @@ def _report(summary: dict, out: Path, video: bool) -> None:
 @bench_app.command("aquarium")
 def bench_aquarium_cmd(
     fishes: int = typer.Option(10),
-    food: int = typer.Option(15),
-    obstacles: int = typer.Option(5),
+    food: int = typer.Option(None, help="Food particles [default: 1.5 a fish]."),
+    obstacles: int = typer.Option(None, help="Rocks and seaweed [default: 5 sqrt(fishes / 10)]."),
     seconds: float = typer.Option(60.0, min=0.5),
     seed: int = typer.Option(0),
     perception: str = typer.Option("oracle", help="oracle, or vision for the first predator."),

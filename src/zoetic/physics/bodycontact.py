@@ -214,21 +214,65 @@ def close(pa, va, pb, vb, reach, skin, horizon) -> bool:
 
 
 @njit(cache=True)
+def _extents(pos, vel, off):
+    """Return each animal's bounding box over all lanes, lo (n, 3) and hi (n, 3), and the
+    fastest of its nodes' speeds (n,) m/s: nodes of all animals stacked in pos, vel (N, 3, B)."""
+    n = off.shape[0] - 1
+    lo, hi, speed = np.full((n, 3), np.inf), np.full((n, 3), -np.inf), np.zeros(n)
+    for a in range(n):
+        for i in range(off[a], off[a + 1]):
+            for b in range(pos.shape[2]):
+                s = 0.0
+                for c in range(3):
+                    lo[a, c] = min(lo[a, c], pos[i, c, b])
+                    hi[a, c] = max(hi[a, c], pos[i, c, b])
+                    s += vel[i, c, b] * vel[i, c, b]
+                speed[a] = max(speed[a], s)
+        speed[a] = math.sqrt(speed[a])
+    return lo, hi, speed
+
+
+@njit(cache=True)
 def close_pairs(pos, vel, off, reach, skin, horizon) -> np.ndarray:
     """Return the pairs (P, 2) of animals that may touch within ``horizon`` s (``close`` for
-    every pair in one call): nodes of all animals stacked in pos, vel (N, 3, B), animal a's
-    rows off[a]:off[a + 1], its surface reach (m) reach[a]."""
+    every pair in one call), in order (a < c, by a then c): nodes of all animals stacked in
+    pos, vel (N, 3, B), animal a's rows off[a]:off[a + 1], its surface reach (m) reach[a].
+
+    Sweep and prune first: ``close`` needs a node of one within its skin plus the travel of
+    the other's bounding box, and the travel is at most 4 max |v| horizon (each node's speed
+    against the pair's mean velocity at most twice the fastest node's), so only pairs whose
+    boxes padded by that overlap are tested (found along the boxes sorted by their low x)."""
     n = off.shape[0] - 1
-    out = np.empty((n * (n - 1) // 2, 2), np.int64)
-    k = 0
-    for a in range(n):
-        pa, va = pos[off[a] : off[a + 1]], vel[off[a] : off[a + 1]]
-        for c in range(a + 1, n):
-            r = max(reach[a], reach[c]) + skin
-            if close(pa, va, pos[off[c] : off[c + 1]], vel[off[c] : off[c + 1]], r, skin, horizon):
-                out[k, 0], out[k, 1] = a, c
-                k += 1
-    return out[:k]
+    lo, hi, speed = _extents(pos, vel, off)
+    reach_all = 4.0 * horizon * (speed.max() if n else 0.0) + skin + 1e-6
+    order = np.argsort(lo[:, 0])
+    keys = [np.int64(0) for _ in range(0)]
+    for ia in range(n):
+        a = order[ia]
+        for ic in range(ia + 1, n):
+            c = order[ic]
+            if lo[c, 0] > hi[a, 0] + reach_all:
+                break
+            pad = 4.0 * horizon * max(speed[a], speed[c]) + skin + 1e-6
+            if (
+                lo[c, 1] > hi[a, 1] + pad
+                or lo[a, 1] > hi[c, 1] + pad
+                or lo[c, 2] > hi[a, 2] + pad
+                or lo[a, 2] > hi[c, 2] + pad
+                or lo[c, 0] > hi[a, 0] + pad
+                or lo[a, 0] > hi[c, 0] + pad
+            ):
+                continue
+            i, j = min(a, c), max(a, c)
+            r = max(reach[i], reach[j]) + skin
+            pi, vi = pos[off[i] : off[i + 1]], vel[off[i] : off[i + 1]]
+            if close(pi, vi, pos[off[j] : off[j + 1]], vel[off[j] : off[j + 1]], r, skin, horizon):
+                keys.append(i * n + j)
+    found = np.sort(np.array(keys, np.int64)) if len(keys) > 0 else np.empty(0, np.int64)
+    out = np.empty((found.shape[0], 2), np.int64)
+    out[:, 0] = found // n
+    out[:, 1] = found % n
+    return out
 
 
 @njit(cache=True)

@@ -257,9 +257,10 @@ def tank_frames(
         view = (eye, rot, focal, size, medium)
         img = Image.fromarray(background(medium, eye, rot, xs, ys, floor, FOG))
         pos = [np.asarray(p[r], float) for p in positions]
-        near = [float(np.linalg.norm(np.nanmean(p, 0) - eye)) < NEAR for p in pos]
-        drawn = [s if n else c for s, c, n in zip(skins, coarse, near, strict=True)]
-        items = face_items(skins_vertices(drawn, pos), skins_mesh(drawn), *view, fog=FOG)
+        shown, dist = in_sight(pos, view)
+        drawn = [skins[i] if dist[i] < NEAR else coarse[i] for i in shown]
+        shown_pos = [pos[i] for i in shown]
+        items = face_items(skins_vertices(drawn, shown_pos), skins_mesh(drawn), *view, fog=FOG)
         left = food[r][~eaten[r]]
         items += _buoys(left, FOOD, 0.1, view)
         ghosts: list[tuple] = []
@@ -273,7 +274,8 @@ def tank_frames(
         draw = ImageDraw.Draw(img)
         if labels is not None:
             corner = (w - h // 3 - 16, 0, w, h // 3 + 60)  # the map and the species key
-            _tags(draw, labels[r], pos, view, small, [(0, 0, 260, 34), corner, (0, h - 26, w, h)])
+            taken = [(0, 0, 260, 34), corner, (0, h - 26, w, h)]
+            _tags(draw, [labels[r][i] for i in shown], shown_pos, view, small, taken)
             _legend(draw, labels, h, small)
         _species_key(draw, looks, fish_rgb, w, size[1] // 3 + 20, small)
         _minimap(img, pos, fish_rgb, left, statics, obstacles, half_size, targets[r])
@@ -284,6 +286,24 @@ def tank_frames(
 
 
 _STYLE = {"fill": (255, 255, 255), "stroke_width": 2, "stroke_fill": (0, 0, 0)}
+FAR = 45.0  # m: fishes farther from the camera are lost in the fog (7/8 water) and not drawn
+
+
+def in_sight(pos: list[np.ndarray], view: tuple) -> tuple[list[int], np.ndarray]:
+    """Return the fishes (their nodes ``pos``) worth drawing in the view: nearer than ``FAR``
+    to the eye, in front of it and within a body length of the picture; and every fish's
+    distance (m) from the eye. A crowd of a thousand fishes mostly lies out of the picture."""
+    from zoetic.viz.paint import project_points
+
+    eye, rot, focal, size = view[:4]
+    centre = np.array([np.nanmean(p, 0) for p in pos])
+    dist = np.linalg.norm(centre - eye, axis=1)
+    scr, z = project_points(centre, eye, rot, focal, size)
+    margin = focal / np.maximum(z, 0.1)  # px a metre spans at the fish's depth
+    inside = (scr[:, 0] > -margin) & (scr[:, 0] < size[0] + margin)
+    inside &= (scr[:, 1] > -margin) & (scr[:, 1] < size[1] + margin)
+    keep = (dist < FAR) & (z > -1.0) & (inside | (dist < 2.0))
+    return np.flatnonzero(keep).tolist(), dist
 
 
 def _buoys(points: np.ndarray, color, radius: float, view: tuple) -> list[tuple]:

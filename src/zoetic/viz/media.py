@@ -88,11 +88,15 @@ def learning_media(run, rec: Record, video: bool = True, fps: int = 30) -> dict:
     return files
 
 
+MIND_FISHES = 20  # the most fishes mind.png draws (one timeline each)
+
+
 def mind_media(rec: Record, out: Path) -> Path:
-    """Write mind.png of an aquarium's record: each fish's drives and intentions over time."""
+    """Write mind.png of an aquarium's record: each fish's drives and intentions over time
+    (the first ``MIND_FISHES`` fishes of a larger tank: the predators come first)."""
     from zoetic.viz.aquarium import plot_minds
 
-    names = [a.name for a in rec.animals]
+    names = [a.name for a in rec.animals][:MIND_FISHES]
     per = [rec.scalars[n] for n in names]
     drives = np.stack(
         [

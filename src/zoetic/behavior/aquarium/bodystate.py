@@ -117,6 +117,19 @@ def fish_bends(
     return out
 
 
+def near_pairs(com: np.ndarray, extent: np.ndarray) -> np.ndarray:
+    """Return the pairs (P, 2) i < j, in order, of the points ``com`` (n, 3) nearer than
+    ``extent[i] + extent[j]`` (n,) m (a k-d tree's neighbours, not every pair of a crowd)."""
+    from scipy.spatial import cKDTree
+
+    if len(com) < 2:
+        return np.zeros((0, 2), int)
+    pairs = cKDTree(com).query_pairs(2.0 * float(np.max(extent)), output_type="ndarray")
+    i, j = pairs[:, 0], pairs[:, 1]
+    pairs = pairs[np.linalg.norm(com[i] - com[j], axis=1) < extent[i] + extent[j]]
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+
+
 def fish_depth(
     bodies: list[Body],
     pos: list[np.ndarray],
@@ -129,9 +142,8 @@ def fish_depth(
     if masses is None:
         masses = [(b.mass, b.total_mass) for b in bodies]
     com = np.array([m @ p / total for (m, total), p in zip(masses, pos, strict=True)])
-    d = np.linalg.norm(com[:, None] - com[None], axis=-1)
     out = 0.0
-    for i, j in zip(*np.nonzero(np.triu(d < extent[:, None] + extent[None], 1)), strict=True):
+    for i, j in near_pairs(com, extent).tolist():
         out = max(
             out,
             deepest_into(pos[i], pos[j], bodies[j].faces),

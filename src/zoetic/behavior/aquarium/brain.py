@@ -328,8 +328,10 @@ def conceded(
     food: np.ndarray,
     eating: np.ndarray,
     seen: np.ndarray,
+    wanted: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Return (n, F): the food particles each of n fishes leaves to another, for its focuser.
+    """Return (n, F): the food particles each of n fishes leaves to another, for its focuser
+    (only where ``wanted`` (n, F), default everywhere: the particles each fish perceives).
 
     Fish i concedes particle p when a fish it perceives (``seen`` (n, n)) that is eating
     (``eating`` (n,)) is nearer to p than i (horizontally, nose to particle) and heads for it
@@ -341,9 +343,22 @@ def conceded(
     to[..., 1] = 0.0
     dist = np.linalg.norm(to, axis=-1)
     cos = np.einsum("nfc,nc->nf", to, forward) / np.maximum(dist, 1e-9)
-    heading = (cos > CONCEDE_COS) & np.asarray(eating, bool)[:, None]  # (k, F)
-    nearer = dist[None, :, :] < dist[:, None, :]  # (i, k, F): k nearer to p than i
-    return (np.asarray(seen, bool)[:, :, None] & nearer & heading[None]).any(axis=1)
+    eating = np.asarray(eating, bool)
+    heading = cos > CONCEDE_COS  # (k, F)
+    # the pairs (i, k) of a fish i and an eating fish k it perceives, and for each pair the
+    # particles i wants (a crowd's fishes see a few particles each, a few fishes each)
+    ii, kk = np.nonzero(np.asarray(seen, bool) & eating[None, :])
+    want = np.ones(dist.shape, bool) if wanted is None else np.asarray(wanted, bool)
+    rows, cols = np.nonzero(want)
+    start = np.searchsorted(rows, np.arange(len(dist) + 1))
+    count = (start[1:] - start[:-1])[ii]
+    pair = np.repeat(np.arange(len(ii)), count)
+    at = np.arange(len(pair)) - np.repeat(np.cumsum(count) - count, count)
+    i, k, p = ii[pair], kk[pair], cols[start[ii][pair] + at]
+    given = heading[k, p] & (dist[k, p] < dist[i, p])  # k is nearer to p than i, heading there
+    out = np.zeros(dist.shape, bool)
+    out[i[given], p[given]] = True
+    return out
 
 
 def tank_brains(

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from zoetic.behavior.aquarium.bodystate import FishBodies
+from zoetic.behavior.aquarium.bodystate import FishBodies, near_pairs
 from zoetic.behavior.aquarium.brain import FishBrain
 from zoetic.behavior.aquarium.species import Species
 from zoetic.control.loop import Observer
@@ -118,11 +118,11 @@ class Events(Observer):
         matings (two willing fishes of a species, one of them courting, close together),
         from the bodies at the period's end."""
         com, pos, nose, brains = self.bodies.com, self.bodies.pos, self.bodies.nose, self.brains
-        dcoms = np.linalg.norm(com[:, None] - com[None], axis=-1)
-        for i, j in zip(*np.nonzero(dcoms < NEAR), strict=True):
-            i, j = int(i), int(j)
+        near = near_pairs(com, np.full(len(com), NEAR / 2))  # i < j, nearer than NEAR
+        both = np.concatenate([near, near[:, ::-1]])
+        for i, j in both[np.lexsort((both[:, 1], both[:, 0]))].tolist():
             f, g = self.species[i], self.species[j]
-            if j == i or not brains[i].alive or not brains[j].alive:
+            if not brains[i].alive or not brains[j].alive:
                 continue
             if g.name in f.prey and brains[i].thought.intention == "hunt":
                 if np.linalg.norm(pos[j] - nose[i], axis=1).min() < f.motor.catch_radius:
@@ -130,7 +130,7 @@ class Events(Observer):
                     brains[i].ate(t, 3.0)
                     self.log.append((t, self.names[i], "catch", self.names[j]))
                     continue
-            if j < i or f.name != g.name or float(dcoms[i, j]) >= MATE_NEAR:
+            if j < i or f.name != g.name or float(np.linalg.norm(com[i] - com[j])) >= MATE_NEAR:
                 continue
             courting = "mate" in (brains[i].thought.intention, brains[j].thought.intention)
             if courting and brains[i].willing(t) and brains[j].willing(t):

@@ -177,19 +177,25 @@ def fish_threats(
     left = np.stack([-f[:, 2], np.zeros(n), f[:, 0]], axis=1)
     u = np.linspace(0.0, 1.0, CENTRE_LINE)[:, None, None]  # nose (0) to tail (1)
     line = nose[None] + u * 2.0 * (com - nose)[None]  # (P, n, 3): the tail mirrors the nose
-    t = np.linspace(0.0, 1.0, THREAT_TIMES)[:, None, None] * anticipation[None, :, None]
-    rel_v = velocity[None, :, :] - velocity[:, None, :]  # (i, j, 3): j's velocity seen by i
-    # (K, P, i, j, 3): j's centre line points relative to i's nose at each instant
-    rel = line[None, :, None, :, :] - nose[None, None, :, None, :]
-    rel = rel + t[:, None, :, :, None] * rel_v[None, None]
-    ahead = np.einsum("kpijc,ic->kpij", rel, f)
-    aside = np.einsum("kpijc,ic->kpij", rel, left)
-    inside = (ahead > 0.0) & (ahead < reach[None, None, :, None])
-    inside &= np.abs(aside) < half_width[None, None, :, None]
-    count = np.where(seen, inside.sum(axis=(0, 1)), 0)  # (i, j)
-    dist = np.linalg.norm(rel[0], axis=-1).min(axis=0)  # (i, j) now, nose to centre line
-    score = np.where(count > 0, count - dist / (dist.max() + 1.0), -np.inf)
-    j = np.where(count.max(axis=1) > 0, score.argmax(axis=1), -1)
+    ii, jj = np.nonzero(seen)  # only the pairs perceived: (n, n) pairs are many in a crowd
+    t = np.linspace(0.0, 1.0, THREAT_TIMES)[:, None, None] * anticipation[ii][None, :, None]
+    rel_v = velocity[jj] - velocity[ii]  # (m, 3): j's velocity seen by i
+    # (K, P, m, 3): j's centre line points relative to i's nose at each instant
+    rel = line[None][:, :, jj] - nose[ii][None, None]
+    rel = rel + t[:, None] * rel_v[None, None]
+    ahead = np.einsum("kpmc,mc->kpm", rel, f[ii])
+    aside = np.einsum("kpmc,mc->kpm", rel, left[ii])
+    inside = (ahead > 0.0) & (ahead < reach[ii])
+    inside &= np.abs(aside) < half_width[ii]
+    count = inside.sum(axis=(0, 1))  # (m,)
+    dist = np.linalg.norm(rel[0], axis=-1).min(axis=0)  # (m,) now, nose to centre line
+    # each fish's threat: the most points in the box, the nearest on a tie (then the first)
+    hit = np.flatnonzero(count > 0)
+    order = hit[np.lexsort((jj[hit], dist[hit], -count[hit], ii[hit]))]
+    best = order[np.r_[True, ii[order][1:] != ii[order][:-1]]] if len(order) else order
+    j = np.full(n, -1)
+    j[ii[best]] = jj[best]
+    dist_of = dict(zip(ii[best].tolist(), dist[best].tolist(), strict=True))
     side = np.zeros(n, int)
     near = np.full(n, np.inf)
     for i in np.flatnonzero(j >= 0).tolist():
@@ -202,7 +208,7 @@ def fish_threats(
         else:  # nearly dead ahead: the side already taken, else to the right (as ships do:
             # two fishes meeting head on then both turn right and pass each other)
             side[i] = int(prefer[i]) if prefer is not None and prefer[i] else -1
-        near[i] = float(dist[i, k])
+        near[i] = dist_of[i]
     return j, side, near
 
 

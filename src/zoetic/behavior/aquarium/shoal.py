@@ -85,7 +85,9 @@ class Shoal:
             pc.fish, pc.food, pc.obstacles, *self.masks, *self.habits, hits, fish_only
         )
         eating = alive & np.array([br.thought.intention == "eat" for br in self.brains])
-        given = conceded(self.bodies.nose, self.bodies.fwd, food, eating, np.isfinite(pc.fish))
+        b = self.bodies
+        sees = np.isfinite(pc.fish)
+        given = conceded(b.nose, b.fwd, food, eating, sees, np.isfinite(pc.food))
         drives = self._drives(period.t0, predators)
         roll, rate, bend = (x.tolist() for x in self.bodies.posture(world, period.t0))
         b, obs = self.bodies, {"time": np.array([period.t0])}

@@ -34,20 +34,23 @@ from zoetic.physics.world import Animal, World
 
 WALL = 0.25  # m: half thickness of the tank's walls
 PERCEPTIONS = ("oracle", "vision")
+MAX_FISHES, MAX_FOOD, MAX_OBSTACLES = 2000, 3000, 200  # the most a tank holds
 HEIGHT = 2.0  # m: half height of the walls, rocks and seaweed (all span the fishes' layer)
 
 
 @dataclass(frozen=True)
 class TankConfig:
     """A tank: how many fishes (predators among them), food particles and obstacles, for how
-    long, from which seed; ``half_size`` (m, default grows with the crowd), the water
+    long, from which seed (food and obstacles default to grow with the fishes: 1.5 food
+    particles a fish, 5 obstacles for 10 fishes times the square root of the fishes over 10,
+    as the tank's side grows); ``half_size`` (m, default grows with the crowd), the water
     current (m/s) that carries the food, the brains' control period and the record period
     (s; how often positions are kept: the run is the same whatever it is)."""
 
     fishes: int = 10
     predators: int = 1
-    food: int = 15
-    obstacles: int = 5
+    food: int | None = None  # None: 1.5 a fish (15 for 10 fishes)
+    obstacles: int | None = None  # None: 5 sqrt(fishes / 10) (5 for 10 fishes)
     seconds: float = 60.0
     seed: int = 0
     half_size: float | None = None
@@ -67,6 +70,15 @@ class TankConfig:
     # the motor layer's righting reflex: the fins lean against each fish's roll
     # (``behavior.motor.righting``)
     righting: bool = True
+
+    def __post_init__(self) -> None:
+        crowd = max(int(self.fishes), 1)
+        if self.food is None:
+            object.__setattr__(self, "food", min(round(1.5 * crowd), MAX_FOOD))
+        if self.obstacles is None:
+            object.__setattr__(
+                self, "obstacles", min(round(5 * math.sqrt(crowd / 10)), MAX_OBSTACLES)
+            )
 
     def size(self) -> float:
         """Return the half width of the tank (m)."""
@@ -105,8 +117,11 @@ def _check(cfg: TankConfig) -> None:
         )
     if cfg.food < 0 or cfg.obstacles < 0:
         raise SimulationError("--food and --obstacles must be at least 0")
-    if cfg.fishes > 60 or cfg.food > 500 or cfg.obstacles > 60:
-        raise SimulationError("at most 60 fishes, 500 food particles and 60 obstacles")
+    if cfg.fishes > MAX_FISHES or cfg.food > MAX_FOOD or cfg.obstacles > MAX_OBSTACLES:
+        raise SimulationError(
+            f"at most {MAX_FISHES} fishes, {MAX_FOOD} food particles and {MAX_OBSTACLES} "
+            f"obstacles (got {cfg.fishes}, {cfg.food}, {cfg.obstacles})"
+        )
     if not 0 < cfg.seconds <= 3600:
         raise SimulationError(f"--seconds must be in (0, 3600], got {cfg.seconds:g}")
     if cfg.perception not in PERCEPTIONS:

@@ -1,0 +1,135 @@
+"""A crowded tank: the neighbour searches that replace every-pair loops find what every pair
+would, and a tank of more than 60 fishes builds with grown defaults and lives."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+
+def _crowd(rng, n: int, half: float):
+    """Return noses, centres, unit headings and velocities (n, 3) of fishes in a square."""
+    com = rng.uniform(-half, half, (n, 3))
+    com[:, 1] *= 0.1
+    fwd = rng.normal(size=(n, 3))
+    fwd[:, 1] *= 0.2
+    fwd /= np.linalg.norm(fwd, axis=1, keepdims=True)
+    nose = com + 0.45 * fwd
+    vel = fwd * rng.uniform(0.0, 1.2, (n, 1))
+    return nose, com, fwd, vel
+
+
+def test_close_pairs_in_a_crowd_are_the_pairs_close_finds_one_by_one():
+    from zoetic.physics.bodycontact import close, close_pairs
+
+    rng = np.random.default_rng(5)
+    n, m = 80, 6
+    centres = rng.uniform(-4.0, 4.0, (n, 1, 3, 2))
+    pos = np.ascontiguousarray((centres + 0.25 * rng.normal(size=(n, m, 3, 2))).reshape(-1, 3, 2))
+    vel = np.ascontiguousarray(rng.normal(0.0, 1.5, pos.shape))
+    off = np.arange(n + 1, dtype=np.int64) * m
+    reach = rng.uniform(0.2, 0.5, n)
+    found = [tuple(p) for p in close_pairs(pos, vel, off, reach, 0.03, 0.1).tolist()]
+    one_by_one = [
+        (a, c)
+        for a in range(n)
+        for c in range(a + 1, n)
+        if close(
+            pos[off[a] : off[a + 1]],
+            vel[off[a] : off[a + 1]],
+            pos[off[c] : off[c + 1]],
+            vel[off[c] : off[c + 1]],
+            max(reach[a], reach[c]) + 0.03,
+            0.03,
+            0.1,
+        )
+    ]
+    assert found == one_by_one
+    assert 0 < len(found) < n * (n - 1) // 4  # some pairs, far from all
+
+
+def _dense_threats(nose, com, fwd, vel, seen, reach, half_width, anticipation):
+    """Every pair's count of centre-line points in the sensitivity box and distance (the
+    threat: the most points, the nearest on a tie), computed over all (i, j) at once."""
+    from zoetic.behavior.aquarium.routines import CENTRE_LINE, THREAT_TIMES
+
+    n = len(nose)
+    f = fwd.copy()
+    f[:, 1] = 0.0
+    f /= np.linalg.norm(f, axis=1, keepdims=True)
+    left = np.stack([-f[:, 2], np.zeros(n), f[:, 0]], axis=1)
+    line = nose[None] + np.linspace(0, 1, CENTRE_LINE)[:, None, None] * 2.0 * (com - nose)[None]
+    t = np.linspace(0, 1, THREAT_TIMES)[:, None, None] * anticipation[None, :, None]
+    rel = line[None, :, None] - nose[None, None, :, None]
+    rel = rel + t[:, None, :, :, None] * (vel[None, :] - vel[:, None])[None, None]
+    ahead, aside = np.einsum("kpijc,ic->kpij", rel, f), np.einsum("kpijc,ic->kpij", rel, left)
+    inside = (ahead > 0) & (ahead < reach[None, None, :, None])
+    inside &= np.abs(aside) < half_width[None, None, :, None]
+    count = np.where(seen, inside.sum(axis=(0, 1)), 0)
+    dist = np.linalg.norm(rel[0], axis=-1).min(axis=0)
+    score = np.where(count > 0, count - dist / (dist.max() + 1.0), -np.inf)
+    return np.where(count.max(axis=1) > 0, score.argmax(axis=1), -1)
+
+
+def test_fish_threats_over_the_perceived_pairs_are_every_pairs_threats():
+    from zoetic.behavior.aquarium.routines import fish_threats
+
+    rng = np.random.default_rng(7)
+    for n, half in ((40, 3.0), (25, 1.5)):
+        nose, com, fwd, vel = _crowd(rng, n, half)
+        seen = rng.random((n, n)) < 0.6
+        np.fill_diagonal(seen, False)
+        region = (np.full(n, 1.4), np.full(n, 0.5), np.full(n, 2.0))
+        j, side, near = fish_threats(nose, com, fwd, vel, seen, *region)
+        assert (j == _dense_threats(nose, com, fwd, vel, seen, *region)).all()
+        assert (j >= 0).sum() > 3 and (side[j >= 0] != 0).all()
+        assert np.isfinite(near[j >= 0]).all() and np.isinf(near[j < 0]).all()
+
+
+def test_concessions_asked_for_some_particles_are_those_of_all_particles():
+    from zoetic.behavior.aquarium.brain import conceded
+
+    rng = np.random.default_rng(2)
+    n, food = 30, rng.uniform(-4, 4, (20, 3))
+    nose, _, fwd, _ = _crowd(rng, n, 4.0)
+    eating, seen = rng.random(n) < 0.6, rng.random((n, n)) < 0.5
+    np.fill_diagonal(seen, False)
+    everywhere = conceded(nose, fwd, food, eating, seen)
+    wanted = rng.random((n, len(food))) < 0.4
+    assert everywhere.any()
+    assert (conceded(nose, fwd, food, eating, seen, wanted) == (everywhere & wanted)).all()
+
+
+def test_near_pairs_are_the_pairs_nearer_than_their_extents():
+    from zoetic.behavior.aquarium.bodystate import near_pairs
+
+    rng = np.random.default_rng(4)
+    com, extent = rng.uniform(-5, 5, (120, 3)), rng.uniform(0.2, 0.9, 120)
+    d = np.linalg.norm(com[:, None] - com[None], axis=-1)
+    brute = np.argwhere(np.triu(d < extent[:, None] + extent[None], 1))
+    assert len(brute) > 10
+    assert (near_pairs(com, extent) == brute).all()
+    assert near_pairs(com[:1], extent[:1]).shape == (0, 2)
+
+
+def test_food_and_obstacles_grow_with_the_fishes_unless_given():
+    from zoetic.behavior.aquarium.tank import TankConfig
+
+    assert (TankConfig().food, TankConfig().obstacles) == (15, 5)
+    big = TankConfig(fishes=1000)
+    assert (big.food, big.obstacles) == (1500, 50)
+    assert big.size() > 4 * TankConfig().size()
+    assert TankConfig(fishes=1000, food=3, obstacles=0).food == 3
+
+
+def test_a_tank_of_120_fishes_lives_and_one_of_2001_is_refused():
+    from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live
+    from zoetic.errors import SimulationError
+
+    tank = build_tank(TankConfig(fishes=120, seconds=0.3, seed=1))
+    life = live(tank)
+    assert len(tank.fishes) == 120 and life.intentions.shape == (3, 120)
+    moved = np.linalg.norm(life.positions[5][-1] - life.positions[5][0], axis=1).mean()
+    assert moved > 0.05  # m in 0.3 s: a minnow swims
+    with pytest.raises(SimulationError, match="at most 2000 fishes"):
+        build_tank(TankConfig(fishes=2001))
