@@ -95,9 +95,21 @@ FISH_WAVE_HZ = 5.0  # the built-in wave's (and the learned gait's base) stroke f
 FISH_EYES = {"node": "nose", "offset": [-0.08, 0.0, 0.06], "fov": 120.0, "levels": 4, "pixels": 64}
 
 
-def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
-    """The 23-node, 91-spring fish of MODEL-FACTS; returns the lattice and its 5 rings."""
+def fish_lattice(
+    rotate_on_side: bool,
+    ring_masses: list[float] | None = None,
+    tip_mass: float = FISH_TIP_MASS,
+    stiff: dict[str, float] | None = None,
+) -> tuple[Lattice, list[list[int]]]:
+    """The 23-node, 91-spring fish of MODEL-FACTS; returns the lattice and its 5 rings.
+
+    ``ring_masses`` (mass units per node of each ring), ``tip_mass`` and ``stiff`` (N/m per spring
+    kind) default to today's fish (FISH_RINGS, FISH_TIP_MASS, FISH_K)."""
     lat = Lattice()
+    stiff = stiff or FISH_K
+    rings_xhm = [
+        (x, h, m) for (x, h, _), m in zip(FISH_RINGS, ring_masses or [r[2] for r in FISH_RINGS])
+    ]
 
     def place(x, y, z):
         p = np.array([x, y, z]) * FISH_L
@@ -108,7 +120,7 @@ def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
     nose = lat.node("nose", place(0, 0, 0), 1.1 * FISH_M)
     rings = []
     pattern = [(1, 1), (1, -1), (-1, -1), (-1, 1)]  # (y, z) signs
-    for r, (x, h, m) in enumerate(FISH_RINGS):
+    for r, (x, h, m) in enumerate(rings_xhm):
         rings.append(
             [
                 lat.node(f"r{r + 1}_{k}", place(x, h * sy, h * sz), m * FISH_M)
@@ -116,16 +128,16 @@ def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
             ]
         )
     tips = [
-        lat.node("tail_top", place(-26, 3, 0), FISH_TIP_MASS * FISH_M),
-        lat.node("tail_bottom", place(-26, -3, 0), FISH_TIP_MASS * FISH_M),
+        lat.node("tail_top", place(-26, 3, 0), tip_mass * FISH_M),
+        lat.node("tail_bottom", place(-26, -3, 0), tip_mass * FISH_M),
     ]
     for i in rings[0]:
-        lat.spring(nose, i, FISH_K["structural"], "structural")
+        lat.spring(nose, i, stiff["structural"], "structural")
     for ring in rings:
         for k in range(4):
-            lat.spring(ring[k], ring[(k + 1) % 4], FISH_K["structural"], "structural")
-        lat.spring(ring[0], ring[2], FISH_K["cross"], "cross")
-        lat.spring(ring[1], ring[3], FISH_K["cross"], "cross")
+            lat.spring(ring[k], ring[(k + 1) % 4], stiff["structural"], "structural")
+        lat.spring(ring[0], ring[2], stiff["cross"], "cross")
+        lat.spring(ring[1], ring[3], stiff["cross"], "cross")
     segments = {0: "front", 1: "middle", 2: "back"}
     for r in range(4):
         for k in range(4):
@@ -137,20 +149,20 @@ def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
                 lat.spring(
                     a,
                     b,
-                    FISH_K["muscle"],
+                    stiff["muscle"],
                     "muscle",
                     actuator=act,
                     max_shortening=0.1 if r == 2 else 0.2,
                 )
             else:
-                lat.spring(a, b, FISH_K["structural"], "structural")
+                lat.spring(a, b, stiff["structural"], "structural")
         for k in range(4):
             for nb in ((k + 1) % 4, (k + 3) % 4):
-                lat.spring(rings[r][k], rings[r + 1][nb], FISH_K["cross"], "cross")
+                lat.spring(rings[r][k], rings[r + 1][nb], stiff["cross"], "cross")
     for t in tips:
         for i in rings[4]:
-            lat.spring(i, t, FISH_K["fin"], "fin")
-    lat.spring(tips[0], tips[1], FISH_K["fin"], "fin")
+            lat.spring(i, t, stiff["fin"], "fin")
+    lat.spring(tips[0], tips[1], stiff["fin"], "fin")
     assert len(lat.springs) == 91, len(lat.springs)
     # faces: nose triangles, quads between rings, the caudal fin
     x = lat.pos()
@@ -240,6 +252,59 @@ def shark() -> dict:
         actuators=fish_actuators() + fin_acts,
         fins=fins,
         wave={"frequency": FISH_WAVE_HZ, "amplitude": 1.0, "offset": 0.0, "phases": phases},
+        eyes=FISH_EYES,
+    )
+
+
+# The shark of the 1995 paper (docs/animals.md, "The papers' animals"): the MODEL-FACTS fish
+# as it stands, in the same length and mass units as today's fish (0.04 m, 0.1 kg) and a time
+# unit of our choosing (T = 0.0522 s, so that its "other springs" are the first zoo fish's
+# 1100 N/m): stiffness 38/28/30 units (cross, muscle, other; the caudal fin's springs are
+# "other"), spring damping 0.1 and nodal damping 0.05 units, masses 1.1/6.6/11/6.6/1.1/1.1 and
+# tips 0.165. Six muscle actuators and no pectoral fins (the paper's Fig. 10).
+FISH_1995_T = float(np.sqrt(FISH_M * 30.0 / 1100.0))  # s per time unit
+FISH_1995_K_UNIT = FISH_M / FISH_1995_T**2  # N/m per stiffness unit
+FISH_1995_C_UNIT = FISH_M / FISH_1995_T  # N s/m per damping unit
+SHARK_1995 = {
+    "rings": [6.6, 11.0, 6.6, 1.1, 1.1],
+    "tip_mass": 0.165,
+    "k": {"cross": 38.0, "muscle": 28.0, "structural": 30.0, "fin": 30.0},
+    "spring_damping": 0.1,
+    "node_damping": 0.05,
+    "wave_hz": 5.0,
+    "wave_lag": 0.1,
+    "dt": 0.005,
+}
+
+
+def shark_1995(**over) -> dict:
+    par = {**SHARK_1995, **over}
+    stiff = {kind: units * FISH_1995_K_UNIT for kind, units in par["k"].items()}
+    lat, _ = fish_lattice(False, par["rings"], par["tip_mass"], stiff)
+    c = round(par["spring_damping"] * FISH_1995_C_UNIT, 5)
+    for s in lat.springs:
+        s["damping"] = c
+    phases = {}
+    for i, seg in enumerate(("front", "middle", "back")):
+        phases[f"{seg}_left"] = round(par["wave_lag"] * i, 3)
+        phases[f"{seg}_right"] = round(par["wave_lag"] * i + 0.5, 3)
+    print(f"shark-1995 omega_max = {lat.omega_max():7.1f} rad/s")
+    return lat.doc(
+        name="shark-1995",
+        description=(
+            "The 1995 paper's leopard shark: the 23-node, 91-spring fish with the constants of "
+            "its references (MODEL-FACTS), 6 muscle actuators, no pectoral fins."
+        ),
+        medium="water",
+        dt=par["dt"],
+        head="nose",
+        forward=[1.0, 0.0, 0.0],
+        defaults={
+            "node_damping": round(par["node_damping"] * FISH_1995_C_UNIT, 5),
+            "spring_damping": 0.0,
+        },
+        actuators=fish_actuators(),
+        wave={"frequency": par["wave_hz"], "amplitude": 1.0, "offset": 0.0, "phases": phases},
         eyes=FISH_EYES,
     )
 
@@ -653,7 +718,7 @@ HEADER = (
 
 def main() -> None:
     ZOO.mkdir(parents=True, exist_ok=True)
-    for make in (snake, shark, ray, dolphin):
+    for make in (snake, shark, ray, dolphin, shark_1995):
         doc = make()
         order = [
             "name",
