@@ -107,9 +107,8 @@ def fish_lattice(
     kind) default to today's fish (FISH_RINGS, FISH_TIP_MASS, FISH_K)."""
     lat = Lattice()
     stiff = stiff or FISH_K
-    rings_xhm = [
-        (x, h, m) for (x, h, _), m in zip(FISH_RINGS, ring_masses or [r[2] for r in FISH_RINGS])
-    ]
+    masses = ring_masses or [r[2] for r in FISH_RINGS]
+    rings_xhm = [(x, h, m) for (x, h, _), m in zip(FISH_RINGS, masses, strict=True)]
 
     def place(x, y, z):
         p = np.array([x, y, z]) * FISH_L

@@ -144,8 +144,9 @@ def test_snake_crawls_forward_only_with_directional_friction():
     assert np.linalg.norm(moved[1][[0, 2]]) < 0.02
 
 
-def test_shark_swims_forward_in_water_and_not_in_vacuum():
-    body = load_animal("shark")
+@pytest.mark.parametrize("name", ["shark", "shark-1995"])
+def test_shark_swims_forward_in_water_and_not_in_vacuum(name):
+    body = load_animal(name)
     steps = int(6.0 / body.dt)
     act = wave_controller(body).table(steps, body.dt)
     moved = {}
