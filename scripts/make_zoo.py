@@ -308,6 +308,29 @@ def shark_1995(**over) -> dict:
     )
 
 
+def dolphin_1995(**over) -> dict:
+    """The 1995 paper's dolphin: "the shark spring-mass system turned on its side" with
+    pectoral fins, so shark-1995's constants at its size (no scaling, no drag coefficients);
+    the fins' size is not given: today's dolphin's 0.02 m^2 before its scaling."""
+    par = {**SHARK_1995, **over}
+    return dolphin(
+        rings=par["rings"],
+        tip_mass=par["tip_mass"],
+        k={kind: units * FISH_1995_K_UNIT for kind, units in par["k"].items()},
+        spring_damping=round(par["spring_damping"] * FISH_1995_C_UNIT, 5),
+        node_damping=round(par["node_damping"] * FISH_1995_C_UNIT, 5),
+        drag={g: 1.0 for g in DOLPHIN["drag"]},
+        wave_hz=par["wave_hz"],
+        dt=par["dt"],
+        scale=1.0,
+        name="dolphin-1995",
+        description=(
+            "The 1995 paper's dolphin: shark-1995 turned on its side (muscles flap the tail "
+            "up and down) with two pectoral fins; lives below a free surface."
+        ),
+    )
+
+
 # The dolphin (issue 10): the fish lattice on its side, re-massed, re-strengthened and with a
 # drag coefficient per face group (docs/animals.md, "The dolphin"): mass units of each ring and
 # of each fluke tip; a factor on each spring kind's stiffness; the face law's coefficient
@@ -321,6 +344,16 @@ DOLPHIN = {
     "dt": 0.0025,
     "scale": 1.635,
     "dorsal": None,  # no dorsal fin (DORSAL_FIN below was tried: it did not fix the drift)
+    "k": None,  # N/m per spring kind before scaling (None: FISH_K x k_scale)
+    "spring_damping": None,  # N s/m for every spring (None: 10 s^-1 x the lighter end's mass)
+    "node_damping": 0.05,  # N s/m
+    "fin_area": 0.02,  # m^2 per pectoral fin before scaling
+    "name": "dolphin",
+    "description": (
+        "Heaviside's dolphin (1.70 m, 52 kg): the fish lattice scaled up and turned on its "
+        "side (muscles flap the tail up and down), streamlined head, hydrofoil flukes and "
+        "two pectoral fins; lives below a free surface and flies above it."
+    ),
 }
 
 
@@ -375,7 +408,8 @@ def dolphin(**params) -> dict:
         nd["pos"] = [round(p * sc, 6) for p in nd["pos"]]
         nd["mass"] = round(nd["mass"] * sc**3, 6)
     for s in lat.springs:
-        s["stiffness"] = round(s["stiffness"] * par["k_scale"][s["kind"]] * sc**3, 4)
+        k = par["k"][s["kind"]] if par["k"] else s["stiffness"] * par["k_scale"][s["kind"]]
+        s["stiffness"] = round(k * sc**3, 4)
     if par["dorsal"]:
         dorsal_fin(lat, rings, par, sc)
     doc_acts = []
@@ -405,7 +439,7 @@ def dolphin(**params) -> dict:
                 "nodes": [names[i] for i in ids],
                 "forward": ["nose", names[tail_of[0]]],
                 "span": [names[span[0]], names[span[1]]],
-                "area": round(0.02 * sc**2, 6),
+                "area": round(par["fin_area"] * sc**2, 6),
                 "angle_range": [-0.5, 0.5],
             }
         )
@@ -414,20 +448,19 @@ def dolphin(**params) -> dict:
         phases[f"{seg}_dorsal"] = round(FISH_WAVE_LAG * i, 3)
         phases[f"{seg}_ventral"] = round(FISH_WAVE_LAG * i + 0.5, 3)
     lat.damp_springs(10.0)
-    print(f"dolphin omega_max = {lat.omega_max():7.1f} rad/s")
+    if par["spring_damping"] is not None:
+        for s in lat.springs:
+            s["damping"] = par["spring_damping"]
+    print(f"{par['name']} omega_max = {lat.omega_max():7.1f} rad/s")
     doc = lat.doc(
-        name="dolphin",
-        description=(
-            "Heaviside's dolphin (1.70 m, 52 kg): the fish lattice scaled up and turned on its "
-            "side (muscles flap the tail up and down), streamlined head, hydrofoil flukes and "
-            "two pectoral fins; lives below a free surface and flies above it."
-        ),
+        name=par["name"],
+        description=par["description"],
         medium="sea",
         dt=par["dt"],
         start_offset=[0.0, -1.0, 0.0],
         head="nose",
         forward=[1.0, 0.0, 0.0],
-        defaults={"node_damping": 0.05, "spring_damping": 0.0},
+        defaults={"node_damping": par["node_damping"], "spring_damping": 0.0},
         actuators=doc_acts,
         fins=fins,
         wave={"frequency": par["wave_hz"], "amplitude": 1.0, "offset": 0.0, "phases": phases},
@@ -717,7 +750,7 @@ HEADER = (
 
 def main() -> None:
     ZOO.mkdir(parents=True, exist_ok=True)
-    for make in (snake, shark, ray, dolphin, shark_1995):
+    for make in (snake, shark, ray, dolphin, shark_1995, dolphin_1995):
         doc = make()
         order = [
             "name",

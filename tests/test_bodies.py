@@ -25,6 +25,7 @@ def test_zoo_lists_the_four_animals_of_the_paper():
         ("ray", 42, 208, 16, 4, "water"),
         ("dolphin", 23, 91, 12, 8, "sea"),
         ("shark-1995", 23, 91, 12, 6, "water"),
+        ("dolphin-1995", 23, 91, 12, 8, "sea"),
     ],
 )
 def test_zoo_counts(name, nodes, springs, muscles, actuators, medium):
@@ -223,3 +224,8 @@ def test_the_1995_shark_carries_its_references_constants():
     assert np.allclose(shortening[back], 0.1) and np.allclose(shortening[~back], 0.2)
     # same lattice and size as today's shark: only the constants differ
     assert np.allclose(b.rest_pos, load_animal("shark").rest_pos)
+    # and the 1995 dolphin is this shark on its side, with the same constants
+    d = load_animal("dolphin-1995")
+    assert np.allclose(np.sort(d.stiffness), np.sort(b.stiffness))
+    assert np.allclose(d.mass, b.mass) and len(d.fin_area) == 2
+    assert np.allclose(d.rest_pos[:, 1], b.rest_pos[:, 2])  # left (+z) is now up (+y)
