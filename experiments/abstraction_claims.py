@@ -11,8 +11,13 @@ Learns (CMA-ES) a straight and a sharp-turn controller for the shark and the sna
   approximately in phase);
 - follows the learned snake turn's body bend (signed angle between the front and back halves)
   over time: the paper says a turn first coils toward the turn, then returns to serpentine.
-Writes docs/figures/abstraction_*.png and prints a Markdown table. About 5 minutes on 2 cores:
+``--animals shark-1995`` runs the fish's cases on the 1995 paper's shark (its references'
+constants, docs/animals.md "The papers' animals"); a fish (water) gets the shark's cases, a
+crawler (ground) the snake's. Writes docs/figures/abstraction_*.png and abstraction.json (the
+default animals) or abstraction_NAMES.json, and prints a Markdown table. About 5 minutes on 2
+cores:
     python experiments/abstraction_claims.py [--budget 6000] [--out /tmp/claims]
+        [--animals shark,snake]
 """
 
 from __future__ import annotations
@@ -32,12 +37,22 @@ from zoetic.tasks import load_task
 from zoetic.viz.media import abstract_files
 
 FIGS = figures_dir()
-CASES = (  # animal, task, nodes
-    ("shark", "swim-straight", 40),
-    ("shark", "sharp-turn-left", 30),
-    ("snake", "crawl-straight", 15),
-    ("snake", "sharp-turn-left", 15),
-)
+CASES = {  # the animal's medium: (task, nodes) of its cases
+    "water": (("swim-straight", 40), ("sharp-turn-left", 30)),
+    "ground": (("crawl-straight", 15), ("sharp-turn-left", 15)),
+}
+DEFAULT_ANIMALS = "shark,snake"
+
+
+def cases(animals: list[str]) -> list[tuple[str, str, int]]:
+    """Return (animal, task, nodes) of the animals' cases, a fish's and a crawler's by medium."""
+    out = []
+    for animal in animals:
+        medium = load_animal(animal).medium
+        if medium not in CASES:
+            raise SystemExit(f"--animals: {animal} lives in {medium!r}; only water and ground")
+        out += [(animal, task, nodes) for task, nodes in CASES[medium]]
+    return out
 
 
 def learn(animal: str, task: str, nodes: int, budget: int, out: Path, seed: int):
@@ -119,11 +134,13 @@ def main() -> None:
     ap.add_argument("--budget", type=int, default=6000)
     ap.add_argument("--out", type=Path, default=Path("/tmp/zoetic-claims"))
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--animals", default=DEFAULT_ANIMALS, help="comma-separated zoo animals")
     args = ap.parse_args()
+    animals = [a.strip() for a in args.animals.split(",") if a.strip()]
     results = {}
     print("| animal | task | original | K=1 | K=2 | K=3 | auto (modes) |")
     print("|---|---|---|---|---|---|---|")
-    for k, (animal, task_name, nodes) in enumerate(CASES):
+    for k, (animal, task_name, nodes) in enumerate(cases(animals)):
         body = load_animal(animal)
         task = load_task(task_name)
         run_dir, ctrl = learn(animal, task_name, nodes, args.budget, args.out, args.seed + k)
@@ -142,14 +159,15 @@ def main() -> None:
               f"{cells[3]} ({auto_modes:.1f}) |")  # fmt: skip
         results[f"{animal}/{task_name}"] = {"measure": m, "original": orig, **keep}
         abstract_files(run_dir, FIGS / f"abstraction_{animal}_{task_name}", modes=2)
-        if animal == "shark" and task_name == "swim-straight":
-            results["shark_antiphase"] = antiphase(body, ctrl)
-        if animal == "shark" and "turn" in task_name:
-            results["shark_turn_sides"] = turn_sides(body, ctrl)
-        if animal == "snake" and "turn" in task_name:
+        fish, crawler = body.medium == "water", body.medium == "ground"
+        if fish and task_name == "swim-straight":
+            results[f"{animal}_antiphase"] = antiphase(body, ctrl)
+        if fish and "turn" in task_name:
+            results[f"{animal}_turn_sides"] = turn_sides(body, ctrl)
+        if crawler and "turn" in task_name:
             t, bend = snake_bend(body, ctrl, task.horizon)
             thirds = np.array_split(np.degrees(bend), 3)
-            results["snake_turn_bend_deg"] = {
+            results[f"{animal}_turn_bend_deg"] = {
                 "mean_by_third": [round(float(b.mean()), 1) for b in thirds],
                 "max": round(float(np.degrees(bend.max())), 1),
                 "t_of_max": round(float(t[np.argmax(bend)]), 2),
@@ -166,11 +184,12 @@ def main() -> None:
             ax.set_ylabel("body bend (deg, + = left)")
             ax.set_title("learned snake turn: body bend over time")
             fig.tight_layout()
-            fig.savefig(FIGS / "abstraction_snake_turn_bend.png", dpi=110)
+            fig.savefig(FIGS / f"abstraction_{animal}_turn_bend.png", dpi=110)
     print(json.dumps({k: v for k, v in results.items() if "/" not in k}, indent=1))
     text = json.dumps(results, indent=1, default=float)
-    (args.out / "claims.json").write_text(text)
-    (FIGS / "abstraction.json").write_text(text + "\n")
+    tag = "" if args.animals == DEFAULT_ANIMALS else "_" + "_".join(animals)
+    (args.out / f"claims{tag}.json").write_text(text)
+    (FIGS / f"abstraction{tag}.json").write_text(text + "\n")
 
 
 if __name__ == "__main__":

@@ -28,10 +28,15 @@ does not depend on its place in the batch, so each run is exactly what it would 
 (``--check`` verifies that on a short budget); the batch only uses the batched simulator.
 About 10 minutes for three seeds and all panels on 2 shared cores.
 
-Writes docs/figures/fig6.png (a), fig6_cooling.png (b-c) and fig6.json.
+``--animal shark-1995`` runs the same on the 1995 paper's shark (its references' constants,
+docs/animals.md "The papers' animals"), whose goal and M follow from its own wave the same way.
 
-Run: python experiments/fig6_optimizers.py [--panels a,b,c] [--seeds 0-2] [--budget 3500]
-     [--nodes M] [--raw-units] [--goal METRES] [--check]
+Writes docs/figures/fig6.png (a), fig6_cooling.png (b-c) and fig6.json for today's shark;
+another animal (or ``--stem NAME``) writes NAME.json, NAME.png and NAME_cooling.png instead
+(default stem ``fig6_ANIMAL``), so the committed figures of today's shark stay.
+
+Run: python experiments/fig6_optimizers.py [--animal shark] [--panels a,b,c] [--seeds 0-2]
+     [--budget 3500] [--nodes M] [--raw-units] [--goal METRES] [--stem NAME] [--check]
 """
 
 from __future__ import annotations
@@ -67,9 +72,9 @@ def nodes_for_stroke(frequency: float, horizon: float, per_period: int = 4) -> i
     return int(np.ceil(horizon * frequency * per_period)) + 1
 
 
-def wave_reach(horizon: float) -> float:
-    """Return the metres the shark's own wave carries its head forward in ``horizon`` s."""
-    body = load_animal("shark")
+def wave_reach(animal: str, horizon: float) -> float:
+    """Return the metres the animal's own wave carries its head forward in ``horizon`` s."""
+    body = load_animal(animal)
     steps = int(round(horizon / body.dt))
     tr = simulate(body, wave_controller(body).table(steps, body.dt), record_every=steps)
     return float((tr.positions[0, -1, body.head] - tr.positions[0, 0, body.head]) @ body.forward)
@@ -178,6 +183,8 @@ def parse_seeds(text: str) -> list[int]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--animal", default="shark", help="a fish of the zoo (shark, shark-1995)")
+    ap.add_argument("--stem", default=None, help="output file stem (default fig6[_ANIMAL])")
     ap.add_argument("--panels", default="a,b,c", help="any of a, b, c, comma-separated")
     ap.add_argument("--seeds", default="0-2", help='e.g. "0-4" or "0,3"')
     ap.add_argument("--budget", type=int, default=3500)
@@ -192,17 +199,18 @@ def main() -> None:
         ap.error(f"--panels takes a, b and c, got {args.panels!r}")
     seeds = parse_seeds(args.seeds)
     task = load_task("reach-goal")
-    m = args.nodes or nodes_for_stroke(load_animal("shark").wave_frequency, task.horizon)
-    goal = args.goal or 2.0 * wave_reach(task.horizon)
+    m = args.nodes or nodes_for_stroke(load_animal(args.animal).wave_frequency, task.horizon)
+    goal = args.goal or 2.0 * wave_reach(args.animal, task.horizon)
     task = goal_task(task, goal, unit=not args.raw_units)
-    base = dict(animal="shark", task="reach-goal", nodes=m, coupling="antiphase",
+    stem = args.stem or ("fig6" if args.animal == "shark" else f"fig6_{args.animal}")
+    base = dict(animal=args.animal, task="reach-goal", nodes=m, coupling="antiphase",
                 budget=args.budget)  # fmt: skip
     if args.check:
         for controller in ("time", "frequency"):
             check_lockstep(controller, base, task)
         return
     OUT.mkdir(parents=True, exist_ok=True)
-    report: dict = {"nodes": m, "NM": 3 * m, "goal_m": round(goal, 3),
+    report: dict = {"animal": args.animal, "nodes": m, "NM": 3 * m, "goal_m": round(goal, 3),
                     "E_units": "m^2" if args.raw_units else "|d_g|^2 at start",
                     "T0": 0.5, "budget": args.budget, "seeds": seeds}  # fmt: skip
     print(report, flush=True)
@@ -252,11 +260,11 @@ def main() -> None:
             sorted(a, key=lambda k, i=i: a[k]["final_E"][i]) for i in range(len(seeds))]
         print("(a) ordering:", " < ".join(report["a_ordering"]), flush=True)
         plot_learning_seeds(
-            {f"Fig. 6(a): shark reaching a goal, NM = {3 * m}":
+            {f"Fig. 6(a): {args.animal} reaching a goal, NM = {3 * m}":
              {label(o, c) + (f", alpha {PAPER_ALPHA}" if o == "anneal" else ""):
               curves[(c, o, PAPER_ALPHA if o == "anneal" else None)]
               for c in ("time", "frequency") for o in ("anneal", "simplex")}},
-            OUT / "fig6.png")  # fmt: skip
+            OUT / f"{stem}.png")  # fmt: skip
     cooling_panels = {}
     for panel in sorted(panels & {"b", "c"}):
         controller = PANEL_CONTROLLER[panel]
@@ -273,12 +281,12 @@ def main() -> None:
         cooling_panels[f"Fig. 6({panel}): annealing, {controller} domain"] = {
             f"alpha {alpha}": curves[(controller, "anneal", alpha)] for alpha in COOLING_RATES}
     if cooling_panels:
-        plot_learning_seeds(cooling_panels, OUT / "fig6_cooling.png",
+        plot_learning_seeds(cooling_panels, OUT / f"{stem}_cooling.png",
                             title=f"cooling rates, T0 = 0.5, NM = {3 * m}")  # fmt: skip
-    write_json(OUT / "fig6.json", merged(OUT / "fig6.json", report))
+    write_json(OUT / f"{stem}.json", merged(OUT / f"{stem}.json", report))
 
 
-SETUP_KEYS = ("nodes", "goal_m", "E_units", "T0", "budget", "seeds")
+SETUP_KEYS = ("animal", "nodes", "goal_m", "E_units", "T0", "budget", "seeds")
 
 
 def merged(path: Path, report: dict) -> dict:
@@ -287,6 +295,7 @@ def merged(path: Path, report: dict) -> dict:
     if not path.exists():
         return report
     old = json.loads(path.read_text())
+    old.setdefault("animal", "shark")  # reports from before --animal were today's shark's
     if any(old.get(k) != report.get(k) for k in SETUP_KEYS):
         return report
     return {**old, **report}

@@ -95,9 +95,20 @@ FISH_WAVE_HZ = 5.0  # the built-in wave's (and the learned gait's base) stroke f
 FISH_EYES = {"node": "nose", "offset": [-0.08, 0.0, 0.06], "fov": 120.0, "levels": 4, "pixels": 64}
 
 
-def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
-    """The 23-node, 91-spring fish of MODEL-FACTS; returns the lattice and its 5 rings."""
+def fish_lattice(
+    rotate_on_side: bool,
+    ring_masses: list[float] | None = None,
+    tip_mass: float = FISH_TIP_MASS,
+    stiff: dict[str, float] | None = None,
+) -> tuple[Lattice, list[list[int]]]:
+    """The 23-node, 91-spring fish of MODEL-FACTS; returns the lattice and its 5 rings.
+
+    ``ring_masses`` (mass units per node of each ring), ``tip_mass`` and ``stiff`` (N/m per spring
+    kind) default to today's fish (FISH_RINGS, FISH_TIP_MASS, FISH_K)."""
     lat = Lattice()
+    stiff = stiff or FISH_K
+    masses = ring_masses or [r[2] for r in FISH_RINGS]
+    rings_xhm = [(x, h, m) for (x, h, _), m in zip(FISH_RINGS, masses, strict=True)]
 
     def place(x, y, z):
         p = np.array([x, y, z]) * FISH_L
@@ -108,7 +119,7 @@ def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
     nose = lat.node("nose", place(0, 0, 0), 1.1 * FISH_M)
     rings = []
     pattern = [(1, 1), (1, -1), (-1, -1), (-1, 1)]  # (y, z) signs
-    for r, (x, h, m) in enumerate(FISH_RINGS):
+    for r, (x, h, m) in enumerate(rings_xhm):
         rings.append(
             [
                 lat.node(f"r{r + 1}_{k}", place(x, h * sy, h * sz), m * FISH_M)
@@ -116,16 +127,16 @@ def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
             ]
         )
     tips = [
-        lat.node("tail_top", place(-26, 3, 0), FISH_TIP_MASS * FISH_M),
-        lat.node("tail_bottom", place(-26, -3, 0), FISH_TIP_MASS * FISH_M),
+        lat.node("tail_top", place(-26, 3, 0), tip_mass * FISH_M),
+        lat.node("tail_bottom", place(-26, -3, 0), tip_mass * FISH_M),
     ]
     for i in rings[0]:
-        lat.spring(nose, i, FISH_K["structural"], "structural")
+        lat.spring(nose, i, stiff["structural"], "structural")
     for ring in rings:
         for k in range(4):
-            lat.spring(ring[k], ring[(k + 1) % 4], FISH_K["structural"], "structural")
-        lat.spring(ring[0], ring[2], FISH_K["cross"], "cross")
-        lat.spring(ring[1], ring[3], FISH_K["cross"], "cross")
+            lat.spring(ring[k], ring[(k + 1) % 4], stiff["structural"], "structural")
+        lat.spring(ring[0], ring[2], stiff["cross"], "cross")
+        lat.spring(ring[1], ring[3], stiff["cross"], "cross")
     segments = {0: "front", 1: "middle", 2: "back"}
     for r in range(4):
         for k in range(4):
@@ -137,20 +148,20 @@ def fish_lattice(rotate_on_side: bool) -> tuple[Lattice, list[list[int]]]:
                 lat.spring(
                     a,
                     b,
-                    FISH_K["muscle"],
+                    stiff["muscle"],
                     "muscle",
                     actuator=act,
                     max_shortening=0.1 if r == 2 else 0.2,
                 )
             else:
-                lat.spring(a, b, FISH_K["structural"], "structural")
+                lat.spring(a, b, stiff["structural"], "structural")
         for k in range(4):
             for nb in ((k + 1) % 4, (k + 3) % 4):
-                lat.spring(rings[r][k], rings[r + 1][nb], FISH_K["cross"], "cross")
+                lat.spring(rings[r][k], rings[r + 1][nb], stiff["cross"], "cross")
     for t in tips:
         for i in rings[4]:
-            lat.spring(i, t, FISH_K["fin"], "fin")
-    lat.spring(tips[0], tips[1], FISH_K["fin"], "fin")
+            lat.spring(i, t, stiff["fin"], "fin")
+    lat.spring(tips[0], tips[1], stiff["fin"], "fin")
     assert len(lat.springs) == 91, len(lat.springs)
     # faces: nose triangles, quads between rings, the caudal fin
     x = lat.pos()
@@ -244,6 +255,82 @@ def shark() -> dict:
     )
 
 
+# The shark of the 1995 paper (docs/animals.md, "The papers' animals"): the MODEL-FACTS fish
+# as it stands, in the same length and mass units as today's fish (0.04 m, 0.1 kg) and a time
+# unit of our choosing (T = 0.0522 s, so that its "other springs" are the first zoo fish's
+# 1100 N/m): stiffness 38/28/30 units (cross, muscle, other; the caudal fin's springs are
+# "other"), spring damping 0.1 and nodal damping 0.05 units, masses 1.1/6.6/11/6.6/1.1/1.1 and
+# tips 0.165. Six muscle actuators and no pectoral fins (the paper's Fig. 10).
+FISH_1995_T = float(np.sqrt(FISH_M * 30.0 / 1100.0))  # s per time unit
+FISH_1995_K_UNIT = FISH_M / FISH_1995_T**2  # N/m per stiffness unit
+FISH_1995_C_UNIT = FISH_M / FISH_1995_T  # N s/m per damping unit
+SHARK_1995 = {
+    "rings": [6.6, 11.0, 6.6, 1.1, 1.1],
+    "tip_mass": 0.165,
+    "k": {"cross": 38.0, "muscle": 28.0, "structural": 30.0, "fin": 30.0},
+    "spring_damping": 0.1,
+    "node_damping": 0.05,
+    "wave_hz": 5.0,
+    "wave_lag": 0.1,
+    "dt": 0.005,
+}
+
+
+def shark_1995(**over) -> dict:
+    par = {**SHARK_1995, **over}
+    stiff = {kind: units * FISH_1995_K_UNIT for kind, units in par["k"].items()}
+    lat, _ = fish_lattice(False, par["rings"], par["tip_mass"], stiff)
+    c = round(par["spring_damping"] * FISH_1995_C_UNIT, 5)
+    for s in lat.springs:
+        s["damping"] = c
+    phases = {}
+    for i, seg in enumerate(("front", "middle", "back")):
+        phases[f"{seg}_left"] = round(par["wave_lag"] * i, 3)
+        phases[f"{seg}_right"] = round(par["wave_lag"] * i + 0.5, 3)
+    print(f"shark-1995 omega_max = {lat.omega_max():7.1f} rad/s")
+    return lat.doc(
+        name="shark-1995",
+        description=(
+            "The 1995 paper's leopard shark: the 23-node, 91-spring fish with the constants of "
+            "its references (MODEL-FACTS), 6 muscle actuators, no pectoral fins."
+        ),
+        medium="water",
+        dt=par["dt"],
+        head="nose",
+        forward=[1.0, 0.0, 0.0],
+        defaults={
+            "node_damping": round(par["node_damping"] * FISH_1995_C_UNIT, 5),
+            "spring_damping": 0.0,
+        },
+        actuators=fish_actuators(),
+        wave={"frequency": par["wave_hz"], "amplitude": 1.0, "offset": 0.0, "phases": phases},
+        eyes=FISH_EYES,
+    )
+
+
+def dolphin_1995(**over) -> dict:
+    """The 1995 paper's dolphin: "the shark spring-mass system turned on its side" with
+    pectoral fins, so shark-1995's constants at its size (no scaling, no drag coefficients);
+    the fins' size is not given: today's dolphin's 0.02 m^2 before its scaling."""
+    par = {**SHARK_1995, **over}
+    return dolphin(
+        rings=par["rings"],
+        tip_mass=par["tip_mass"],
+        k={kind: units * FISH_1995_K_UNIT for kind, units in par["k"].items()},
+        spring_damping=round(par["spring_damping"] * FISH_1995_C_UNIT, 5),
+        node_damping=round(par["node_damping"] * FISH_1995_C_UNIT, 5),
+        drag={g: 1.0 for g in DOLPHIN["drag"]},
+        wave_hz=par["wave_hz"],
+        dt=par["dt"],
+        scale=1.0,
+        name="dolphin-1995",
+        description=(
+            "The 1995 paper's dolphin: shark-1995 turned on its side (muscles flap the tail "
+            "up and down) with two pectoral fins; lives below a free surface."
+        ),
+    )
+
+
 # The dolphin (issue 10): the fish lattice on its side, re-massed, re-strengthened and with a
 # drag coefficient per face group (docs/animals.md, "The dolphin"): mass units of each ring and
 # of each fluke tip; a factor on each spring kind's stiffness; the face law's coefficient
@@ -257,6 +344,16 @@ DOLPHIN = {
     "dt": 0.0025,
     "scale": 1.635,
     "dorsal": None,  # no dorsal fin (DORSAL_FIN below was tried: it did not fix the drift)
+    "k": None,  # N/m per spring kind before scaling (None: FISH_K x k_scale)
+    "spring_damping": None,  # N s/m for every spring (None: 10 s^-1 x the lighter end's mass)
+    "node_damping": 0.05,  # N s/m
+    "fin_area": 0.02,  # m^2 per pectoral fin before scaling
+    "name": "dolphin",
+    "description": (
+        "Heaviside's dolphin (1.70 m, 52 kg): the fish lattice scaled up and turned on its "
+        "side (muscles flap the tail up and down), streamlined head, hydrofoil flukes and "
+        "two pectoral fins; lives below a free surface and flies above it."
+    ),
 }
 
 
@@ -311,7 +408,8 @@ def dolphin(**params) -> dict:
         nd["pos"] = [round(p * sc, 6) for p in nd["pos"]]
         nd["mass"] = round(nd["mass"] * sc**3, 6)
     for s in lat.springs:
-        s["stiffness"] = round(s["stiffness"] * par["k_scale"][s["kind"]] * sc**3, 4)
+        k = par["k"][s["kind"]] if par["k"] else s["stiffness"] * par["k_scale"][s["kind"]]
+        s["stiffness"] = round(k * sc**3, 4)
     if par["dorsal"]:
         dorsal_fin(lat, rings, par, sc)
     doc_acts = []
@@ -341,7 +439,7 @@ def dolphin(**params) -> dict:
                 "nodes": [names[i] for i in ids],
                 "forward": ["nose", names[tail_of[0]]],
                 "span": [names[span[0]], names[span[1]]],
-                "area": round(0.02 * sc**2, 6),
+                "area": round(par["fin_area"] * sc**2, 6),
                 "angle_range": [-0.5, 0.5],
             }
         )
@@ -350,20 +448,19 @@ def dolphin(**params) -> dict:
         phases[f"{seg}_dorsal"] = round(FISH_WAVE_LAG * i, 3)
         phases[f"{seg}_ventral"] = round(FISH_WAVE_LAG * i + 0.5, 3)
     lat.damp_springs(10.0)
-    print(f"dolphin omega_max = {lat.omega_max():7.1f} rad/s")
+    if par["spring_damping"] is not None:
+        for s in lat.springs:
+            s["damping"] = par["spring_damping"]
+    print(f"{par['name']} omega_max = {lat.omega_max():7.1f} rad/s")
     doc = lat.doc(
-        name="dolphin",
-        description=(
-            "Heaviside's dolphin (1.70 m, 52 kg): the fish lattice scaled up and turned on its "
-            "side (muscles flap the tail up and down), streamlined head, hydrofoil flukes and "
-            "two pectoral fins; lives below a free surface and flies above it."
-        ),
+        name=par["name"],
+        description=par["description"],
         medium="sea",
         dt=par["dt"],
         start_offset=[0.0, -1.0, 0.0],
         head="nose",
         forward=[1.0, 0.0, 0.0],
-        defaults={"node_damping": 0.05, "spring_damping": 0.0},
+        defaults={"node_damping": par["node_damping"], "spring_damping": 0.0},
         actuators=doc_acts,
         fins=fins,
         wave={"frequency": par["wave_hz"], "amplitude": 1.0, "offset": 0.0, "phases": phases},
@@ -653,7 +750,7 @@ HEADER = (
 
 def main() -> None:
     ZOO.mkdir(parents=True, exist_ok=True)
-    for make in (snake, shark, ray, dolphin):
+    for make in (snake, shark, ray, dolphin, shark_1995, dolphin_1995):
         doc = make()
         order = [
             "name",

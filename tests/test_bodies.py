@@ -24,6 +24,8 @@ def test_zoo_lists_the_four_animals_of_the_paper():
         ("shark", 23, 91, 12, 8, "water"),
         ("ray", 42, 208, 16, 4, "water"),
         ("dolphin", 23, 91, 12, 8, "sea"),
+        ("shark-1995", 23, 91, 12, 6, "water"),
+        ("dolphin-1995", 23, 91, 12, 8, "sea"),
     ],
 )
 def test_zoo_counts(name, nodes, springs, muscles, actuators, medium):
@@ -201,3 +203,29 @@ def test_a_face_may_declare_its_own_drag_coefficient():
     doc["faces"][5]["drag"] = 1.0
     doc["faces"][5]["drgg"] = 2.0
     _expect(doc, r"faces\[5\].*drgg")
+
+
+def test_the_1995_shark_carries_its_references_constants():
+    """shark-1995 is the MODEL-FACTS fish unchanged in proportion: stiffness 38 : 28 : 30
+    (cross, muscle, every other spring, the caudal fin's included), masses 1.1 / 6.6 / 11 /
+    6.6 / 1.1 / 1.1 per node and 0.165 at the fin tips, muscles shortening by 20 % (10 % the
+    posterior four), six muscle actuators and no pectoral fins (the 1995 paper's Fig. 10)."""
+    b = load_animal("shark-1995")
+    assert (b.n_nodes, b.n_springs, b.n_actuators, len(b.fin_area)) == (23, 91, 6, 0)
+    unit = b.stiffness[b.spring_kind.index("structural")] / 30.0
+    kinds = {"cross": 38.0, "muscle": 28.0, "structural": 30.0, "fin": 30.0}
+    for k, kind in enumerate(b.spring_kind):
+        assert b.stiffness[k] == pytest.approx(kinds[kind] * unit), (k, kind)
+    units = np.array([1.1] + [6.6] * 4 + [11.0] * 4 + [6.6] * 4 + [1.1] * 8 + [0.165] * 2)
+    assert np.allclose(b.mass / b.mass[0], units / 1.1)
+    muscle = b.spring_actuator >= 0
+    shortening = 1.0 - b.contracted[muscle] / b.relaxed[muscle]
+    back = np.array(["back" in b.actuator_names[a] for a in b.spring_actuator[muscle]])
+    assert np.allclose(shortening[back], 0.1) and np.allclose(shortening[~back], 0.2)
+    # same lattice and size as today's shark: only the constants differ
+    assert np.allclose(b.rest_pos, load_animal("shark").rest_pos)
+    # and the 1995 dolphin is this shark on its side, with the same constants
+    d = load_animal("dolphin-1995")
+    assert np.allclose(np.sort(d.stiffness), np.sort(b.stiffness))
+    assert np.allclose(d.mass, b.mass) and len(d.fin_area) == 2
+    assert np.allclose(d.rest_pos[:, 1], b.rest_pos[:, 2])  # left (+z) is now up (+y)

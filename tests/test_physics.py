@@ -105,6 +105,12 @@ def test_random_activations_for_30_seconds_stay_finite_and_sane(name):
     assert ratio.min() > 0.5 and ratio.max() < 1.5
 
 
+# The 10 % rule is ours (docs/animals.md, "The zoo and the numbers we chose"). The papers'
+# animals (``*-1995``) carry their references' constants unchanged, and the 1995 shark's
+# softer body strains 11 % under one actuator held on: for them the bound is 15 %.
+PAPER_SHAPE_LIMIT = 0.15
+
+
 @pytest.mark.parametrize("name", list_animals())
 def test_each_animal_keeps_its_shape_under_its_strongest_muscle_action(name):
     body = load_animal(name)
@@ -120,7 +126,7 @@ def test_each_animal_keeps_its_shape_under_its_strongest_muscle_action(name):
     length = np.linalg.norm(p[..., body.spring_b, :] - p[..., body.spring_a, :], axis=-1)
     passive = body.spring_actuator < 0
     strain = np.abs(length[..., passive] / body.relaxed[passive] - 1.0)
-    assert strain.max() < 0.10
+    assert strain.max() < (PAPER_SHAPE_LIMIT if name.endswith("-1995") else 0.10)
 
 
 def test_snake_crawls_forward_only_with_directional_friction():
@@ -138,8 +144,9 @@ def test_snake_crawls_forward_only_with_directional_friction():
     assert np.linalg.norm(moved[1][[0, 2]]) < 0.02
 
 
-def test_shark_swims_forward_in_water_and_not_in_vacuum():
-    body = load_animal("shark")
+@pytest.mark.parametrize("name", ["shark", "shark-1995"])
+def test_shark_swims_forward_in_water_and_not_in_vacuum(name):
+    body = load_animal(name)
     steps = int(6.0 / body.dt)
     act = wave_controller(body).table(steps, body.dt)
     moved = {}
