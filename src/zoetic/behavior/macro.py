@@ -30,12 +30,11 @@ import numpy as np
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.behavior.targets import TrackingError
 from zoetic.behavior.tracking import OVERLAP, TrackConfig, body_length, obstacle_seconds
-from zoetic.behavior.upright import RightedPlans, has_fins, right_plans
+from zoetic.behavior.upright import RightedPlans, attitude, has_fins, right_plans
 from zoetic.bodies import Body
 from zoetic.control.abstract import SequenceController
-from zoetic.control.measure import motion_scalars
 from zoetic.learning.optimizers import Annealing
-from zoetic.physics import Trajectory, get_medium, simulate
+from zoetic.physics import Trajectory, simulate
 
 
 @dataclass(frozen=True)
@@ -172,11 +171,11 @@ class MacroProblem:
             com3[..., [0, 2]], float(traj.times[1] - traj.times[0]), self.task, self.radius
         )
         dy = np.max(np.abs(com3[..., 1] - com3[:, :1, 1]), axis=1)
-        m = motion_scalars(self.body, traj.positions, traj.times, get_medium(self.body.medium))
-        ok = np.isfinite(m["roll"]).all(axis=1)
+        roll, pitch = attitude(self.body, traj.positions)
+        ok = np.isfinite(roll).all(axis=1)
         out["depth"] = dy
-        out["roll"] = np.where(ok, np.max(np.abs(np.nan_to_num(m["roll"])), axis=1), np.nan)
-        out["pitch"] = np.where(ok, np.max(np.abs(np.nan_to_num(m["pitch"])), axis=1), np.nan)
+        out["roll"] = np.where(ok, np.max(np.abs(np.nan_to_num(roll)), axis=1), np.nan)
+        out["pitch"] = np.where(ok, np.max(np.abs(np.nan_to_num(pitch)), axis=1), np.nan)
         t = self.task
         roll_over = np.radians(np.maximum(out["roll"] - t.roll_ok, 0.0))
         out["cost"] = (

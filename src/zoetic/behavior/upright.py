@@ -29,8 +29,9 @@ from zoetic.bodies import Body
 from zoetic.control import Controller
 from zoetic.control.abstract import AbstractController, SequenceController
 from zoetic.control.loop import Observer, Schedule, drive
-from zoetic.control.measure import locomotion, motion_scalars
+from zoetic.control.measure import locomotion
 from zoetic.control.policy import Period
+from zoetic.control.sensors import SENSORS, Senses
 from zoetic.errors import SimulationError
 from zoetic.physics import State, Trajectory, get_medium, simulate
 from zoetic.physics.world import World
@@ -68,6 +69,18 @@ class UprightResult:
             "windows_gentle": sum("+gentle" in n for n in ev),
             **self.motion,
         }
+
+
+def attitude(body: Body, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the roll and pitch (K, T) deg of animals sharing ``body`` over ``positions``
+    (K, T, N, 3) m: ``motion_scalars``' roll and pitch, without what else it measures."""
+    pos = np.asarray(positions, float)
+    k, t, n = pos.shape[:3]
+    flat = pos.reshape(k * t, n, 3)
+    s = Senses(
+        body, flat, np.zeros_like(flat), get_medium(body.medium), 0.0, np.zeros((k * t, 0), bool)
+    )
+    return tuple(np.degrees(SENSORS[q](s)).reshape(k, t) for q in ("roll", "pitch"))
 
 
 def has_fins(body: Body, ctrls: list[Controller], tilt: float) -> bool:
@@ -108,12 +121,12 @@ class _Lane:
     chosen: list[str] = field(default_factory=list)  # the entry played in each window
     blown: float | None = None  # s: when the plan and all its variants blew up
 
-    def candidates(self, body: Body, i: int, t: float, tilt: float, gentle: float):
-        """Return plan item ``i``'s entry and its righting variants, carried on from ``t``."""
+    def planned(self, i: int, t: float) -> Controller:
+        """Return plan item ``i``'s entry carried on from ``t`` (mid-stroke where it is)."""
         ctrl, start = self.plan.items[i][0], self.plan.starts()[i]
         if isinstance(ctrl, AbstractController) and t != start:
             ctrl = ctrl.resumed(t - start)
-        return righting_entries(body, [self.names[i]], [ctrl], tilt, gentle)
+        return ctrl
 
     def table(self, ctrl: Controller | None, t: float, steps: int, dt: float) -> np.ndarray:
         """Return the activations (steps, A) from ``t`` with ``ctrl`` taking over then (None:
@@ -151,12 +164,20 @@ class _Righting:
     height: float  # m, the start depth's height: the depth term's goal
     gentle: float = 1.0  # the stroke amplitude the gentle variants keep (1: none)
     done: int = 0  # windows decided
+    known: dict = field(default_factory=dict)  # id of an entry: whether it has variants
 
     def window(self, world: World) -> int:
         """Return the steps of the next window (to the run's end after the last start)."""
         if self.done + 1 >= len(self.decisions):
             return 2**31 - 1  # the driver cuts it at the run's end
         return int(round((self.decisions[self.done + 1][0] - world.time) / self.body.dt))
+
+    def varies(self, ctrl: Controller) -> bool:
+        """Return whether the entry ``ctrl`` has righting variants (remembered per entry)."""
+        key = id(ctrl)
+        if key not in self.known:
+            self.known[key] = has_fins(self.body, [ctrl], self.config.fin_tilt)
+        return self.known[key]
 
     def __call__(self, world: World, period: Period) -> list[np.ndarray]:
         """Return each lane's activations (B, T, A): its chosen entry over ``period``."""
@@ -165,41 +186,61 @@ class _Righting:
         self.done += 1
         rows = np.empty((len(self.lanes), steps, body.n_actuators))
         failed = world.failed(0)
-        asks = []  # (lane, plan item, names, controllers, tables) of the lanes that choose
+        asks = []  # (lane, plan item, the planned entry) of the lanes that choose
         for b, lane in enumerate(self.lanes):
             i = items[b]
-            names, ctrls = lane.candidates(body, i, t, self.config.fin_tilt, self.gentle)
-            if lane.items and (failed[b] or (lane.playing[0] == i and len(ctrls) == 1)):
-                lane.chosen.append(names[0])  # nothing to choose: the item plays on
+            fixed = not self.varies(lane.plan.items[i][0])
+            if lane.items and (failed[b] or (lane.playing[0] == i and fixed)):
+                lane.chosen.append(lane.names[i])  # nothing to choose: the item plays on
                 rows[b] = lane.table(None, t, steps, body.dt)
                 continue
-            asks.append((b, i, names, ctrls, [lane.table(c, t, steps, body.dt) for c in ctrls]))
+            asks.append((b, i, lane.planned(i, t)))
         if asks:
             self._choose(world, asks, rows, t, steps)
         return [rows]
 
-    def _choose(self, world: World, asks: list, rows: np.ndarray, t: float, steps: int) -> None:
-        """Simulate every asking lane's candidates in one batch from the lane's state and put
-        the cheapest one's activations (the first of equals: as planned) in ``rows``."""
+    def _costs(self, world: World, lanes: list[int], tables: list[np.ndarray]) -> np.ndarray:
+        """Return the reflex's cost (``upright_cost``) of each table (steps, A) simulated from
+        its lane's state (``lanes``), all in one batch (inf where it blew up)."""
         body, rec = self.body, int(self.config.record_every)
-        lane_of = np.concatenate([np.full(len(a[2]), a[0]) for a in asks])
-        tables = np.concatenate([np.stack(a[4]) for a in asks])
-        state = State(world.positions(0)[lane_of], world.velocities(0)[lane_of])
-        traj = simulate(body, tables, state=state, record_every=rec)
-        m = motion_scalars(body, traj.positions, traj.times, get_medium(body.medium))
+        state = State(world.positions(0)[lanes], world.velocities(0)[lanes])
+        traj = simulate(body, np.stack(tables), state=state, record_every=rec)
         height = np.einsum("bnk,n->bk", traj.positions[:, -1], body.mass / body.total_mass)[:, 1]
-        att = (m["roll"], m["pitch"])
+        att = attitude(body, traj.positions)
         cost = upright_cost(height, self.height, rec * body.dt, self.config, att)
         cost[traj.failed] = np.inf
-        first = 0
-        for b, i, names, ctrls, tabs in asks:
-            lane, c = self.lanes[b], cost[first : first + len(names)]
-            first += len(names)
+        return cost
+
+    def _choose(self, world: World, asks: list, rows: np.ndarray, t: float, steps: int) -> None:
+        """Put each asking lane's chosen activations in ``rows``: the planned entry where its
+        own simulation of the window costs nothing (it would win a tie with any variant),
+        else the cheapest of it and its righting variants (the first of equals: as planned),
+        every simulation of a stage in one batch from the lanes' states."""
+        dt, tilt = self.body.dt, self.config.fin_tilt
+        planned = [self.lanes[b].table(c, t, steps, dt) for b, _, c in asks]
+        first = self._costs(world, [b for b, _, _ in asks], planned)
+        for k, (b, i, ctrl) in enumerate(asks):
+            lane = self.lanes[b]
+            names, ctrls, tabs, c = [lane.names[i]], [ctrl], [planned[k]], [first[k]]
+            if first[k] > 0 and self.varies(lane.plan.items[i][0]):
+                names, ctrls = righting_entries(self.body, names, ctrls, tilt, self.gentle)
+                tabs += [lane.table(x, t, steps, dt) for x in ctrls[1:]]
+            asks[k] = (b, i, names, ctrls, tabs, c)
+        tried = [a for a in asks if len(a[2]) > 1]  # the lanes that try their variants
+        if tried:
+            lanes = [a[0] for a in tried for _ in a[2][1:]]
+            rest = self._costs(world, lanes, [x for a in tried for x in a[4][1:]])
+            at = np.cumsum([0] + [len(a[2]) - 1 for a in tried])
+            for n, a in enumerate(tried):
+                a[5].extend(rest[at[n] : at[n + 1]])
+        for b, i, names, ctrls, tabs, c in asks:
+            lane = self.lanes[b]
+            c = np.array(c)
             best = int(np.argmin(c)) if np.isfinite(c).any() else 0
             if not np.isfinite(c).any() and lane.blown is None:
                 lane.blown = t
             new = lane.take(i, names[best], ctrls[best], t)
-            rows[b] = tabs[best] if new else lane.table(None, t, steps, body.dt)
+            rows[b] = tabs[best] if new else lane.table(None, t, steps, dt)
 
 
 def shared_windows(plans: list[SequenceController], seconds: float, interval: float, grid: float):
