@@ -150,7 +150,18 @@ def test_macro_command_writes_its_run(tmp_path, capsys):
     assert np.allclose(t, rec.times, atol=1e-6)
     assert np.abs(pos - rec.animals[0].positions).max() < 1e-4  # m (the record is float32)
     assert (out / "path.png").stat().st_size > 5000 and (out / "video.mp4").exists()
-    assert "final distance" in capsys.readouterr().out
+    text = capsys.readouterr().out
+    assert "final distance" in text and "a righting variant played in" in text
+    # --no-righting: searched and played as planned, the controller the plan itself
+    off = out.parent / "off"
+    plain = [*args[:-4], "--out", str(off), "--no-video", "--no-righting"]
+    assert main(plain) == 0 and "righting reflex: off" in capsys.readouterr().out
+    summary = json.loads((off / "summary.json").read_text())
+    assert summary["righting"] == {} and summary["replay_drift_m"] < 1e-6
+    items = load_controller(off / "controller.json", shark).items
+    rep = handmade_repertoire(shark)
+    planned = [rep.controllers[p["entry"]].to_dict() for p in summary["plan"]]
+    assert [c.to_dict() for c, _ in items] == planned
     assert main([*args, "--method", "simplex", "--no-video"]) == 2  # out holds a run
     assert "--force" in capsys.readouterr().err
     args[args.index("--out") + 1] = str(out.parent / "another")
