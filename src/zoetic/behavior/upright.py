@@ -9,9 +9,11 @@ At each window the planned entry is kept, and of it and its righting variants
 a gentler stroke), each carried on from where the plan is in its stroke
 (``AbstractController.resumed``), the one is played whose own simulation of the window costs
 least by the tracker's depth and attitude terms (``tracking.upright_cost``, the start depth
-the goal, the roll judged also where its rate leads); ties go to the entry as planned. The
-choices are recorded as a SequenceController (``tracking.sequence_of``) which, played from
-rest, reproduces the run.
+the goal, the roll judged also where its rate leads); ties go to the entry as planned, so the
+planned entry is simulated first and its variants only where it costs anything. The choices
+are recorded as a SequenceController (``tracking.sequence_of``) which, played from rest,
+reproduces the run. Plans whose items start on the same windows (a macro search's batch) play
+side by side, one lane each of one World, every stage of every window simulated in one batch.
 
 The gentle variants are there because the fins alone are too weak for a hard stroke: after
 the README's sharp turn the shark's learned go-straight spins it at about 140 deg/s, and the
