@@ -205,7 +205,7 @@ def test_a_fish_is_judged_as_it_swims_upright(problem):
     # the worst roll past 30 degrees costs 5 m a radian, on top of the reach and depth terms
     b = {k: float(v[0]) for k, v in before.items()}
     t_cost = b["reach"] if np.isfinite(b["reach"]) else task.horizon
-    reach = b["final"] + task.time_weight * t_cost + 2.0 * max(b["depth"] - 0.5, 0.0)
+    reach = b["final"] + task.time_weight * t_cost + task.depth_weight * max(b["depth"] - 0.5, 0)
     assert b["cost"] == pytest.approx(reach + 5.0 * np.radians(b["roll"] - 30.0))
     # side by side in one World as one at a time; the played path is the one judged
     one = righted.evaluate(e[1:], d[1:])

@@ -48,7 +48,7 @@ class ReachTask:
     obstacle_weight: float = 1.0
     time_weight: float = 0.01
     depth_band: float = 0.5  # m above or below the start depth that costs nothing
-    depth_weight: float = 2.0  # m of cost per m of depth change past the band
+    depth_weight: float = 10.0  # m of cost per m of depth change past the band
     roll_ok: float = 30.0  # deg of roll (either way) that costs nothing
     attitude_weight: float = 5.0  # m of cost per rad of the worst roll past roll_ok
 
