@@ -6,7 +6,9 @@ factor (simulated s per wall s) of tracking, all six entries simulated as one ba
 Part 2, a task that needs planning: the goal lies behind the shark, and an obstacle disc sits
 inside the tight left U-turn that greedy tracking takes. Greedy tracking (the obstacle in its
 gain, with two weights, and the literal distance-only gain) against simulated annealing and
-a genetic algorithm over plans of 6 (entry, duration) segments, each for several seeds.
+a genetic algorithm over plans of 6 (entry, duration) segments, each for several seeds, the
+plans searched and played with the righting reflex as ``zoetic macro`` does (--no-righting: as
+planned).
 
 Writes docs/figures/fig5_tracking.png, macro_vs_greedy.png and macro_vs_greedy.json.
 Run: python experiments/macro_vs_greedy.py [--memory memory/shark] [--budget 2000]
@@ -51,6 +53,8 @@ def greedy(body, rep, task, radius, **config) -> tuple[dict, np.ndarray]:
     res = track(body, rep, np.array([task.goal]), cfg)
     s = path_scores(res.com[None][..., [0, 2]], float(res.times[1]), task, radius)
     row = {k: float(v[0]) for k, v in s.items()} | {"wall_s": res.wall}
+    print(f"  worst roll {res.motion['worst_roll_deg']:.0f} deg, depth span "
+          f"{res.motion['depth_span_m']} m")  # fmt: skip
     return row, res.com
 
 
@@ -100,6 +104,7 @@ def main() -> None:
     ap.add_argument("--budget", type=int, default=2000)
     ap.add_argument("--seeds", default="0,1,2")
     ap.add_argument("--tag", default="", help="suffix of the output files, e.g. _learned")
+    ap.add_argument("--no-righting", action="store_true", help="plans played as planned")
     args = ap.parse_args()
     tag = args.tag
     body = load_animal("shark")
@@ -110,7 +115,8 @@ def main() -> None:
     print(f"Fig. 5 course: {report['fig5']}")
 
     task = ReachTask(GOAL, (OBSTACLE,), HORIZON)
-    problem = MacroProblem(body, rep, task, segments=6)
+    righting = None if args.no_righting else TrackConfig()
+    problem = MacroProblem(body, rep, task, segments=6, righting=righting)
     rows, paths = {}, {}
     for name, cfg in (("greedy", {}), ("greedy, obstacle weight 10", {"obstacle_weight": 10.0}),
                       ("greedy, distance-only gain", {"turn_radius": 0.0})):  # fmt: skip
@@ -123,6 +129,7 @@ def main() -> None:
         for seed in (int(s) for s in args.seeds.split(",")):
             res = search(problem, method, args.budget, seed)
             row = dict(res.scores) | {"wall_s": res.wall, "plan": res.summary()["plan"]}
+            print(f"  worst roll {res.scores['roll']:.0f} deg, depth {res.scores['depth']:.2f} m")
             rows[f"{label} seed {seed}"] = row
             curves[label].append(tuple(np.array(res.history).T))
             print(_row(f"{label} seed {seed}", row, res.evaluations), flush=True)

@@ -1,5 +1,6 @@
 """Macro controllers: plans become cross-faded sequences, scores are right on known paths, both
-searches are reproducible, stay in bounds and improve, and the command writes its run."""
+searches are reproducible, stay in bounds and improve, a fish's plans are judged as it swims
+them with its righting reflex, and the command writes a run whose controller replays it."""
 
 from __future__ import annotations
 
@@ -18,10 +19,15 @@ from zoetic.behavior.macro import (
     search,
 )
 from zoetic.behavior.targets import TrackingError
+from zoetic.behavior.tracking import TrackConfig
 from zoetic.bodies import load_animal
 from zoetic.cli import main
 from zoetic.control import load_controller
 from zoetic.control.abstract import SequenceController
+from zoetic.control.measure import locomotion
+from zoetic.control.rollout import rollout
+from zoetic.physics.world import World
+from zoetic.record import read_record
 
 # a short task: a goal ahead and to the left, past a small disc on the straight line to it
 TASK = ReachTask(goal=(1.8, 0.8), obstacles=((0.9, 0.3, 0.3),), horizon=6.0)
@@ -128,18 +134,34 @@ def test_macro_command_writes_its_run(tmp_path, capsys):
         "--fps",
         "10",
     ]
-    assert main([*args, "--method", "anneal", "--righting"]) == 0
+    assert main([*args, "--method", "anneal"]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["method"] == "anneal" and len(summary["plan"]) == 3
     assert summary["obstacles_xzr"] == [[0.9, 0.3, 0.3]]
     assert {"cost", "final_m", "closest_m", "inside_obstacle_s", "history"} <= set(summary)
-    # played with the righting reflex: its figures are the righted path's, and what it swam
-    righted = summary["righting"]
-    assert righted["windows"] >= 5 and {"final_m", "closest_m", "reached_s"} <= set(righted)
-    assert {"worst_roll_deg", "turn_deg", "depth_change_m"} <= set(summary)
-    assert isinstance(load_controller(out / "controller.json", shark), SequenceController)
+    # searched and played with the righting reflex (by default): one window a second
+    assert summary["righting"]["windows"] == 5 and summary["replay_drift_m"] < 1e-6
+    assert {"worst_roll_deg", "worst_pitch_deg", "turn_deg", "depth_change_m"} <= set(summary)
+    # the controller written, played from rest, swims the recorded path
+    ctrl = load_controller(out / "controller.json", shark)
+    assert isinstance(ctrl, SequenceController)
+    rec = read_record(out)
+    t, pos = _played(shark, ctrl, float(rec.times[-1]))
+    assert np.allclose(t, rec.times, atol=1e-6)
+    assert np.abs(pos - rec.animals[0].positions).max() < 1e-4  # m (the record is float32)
     assert (out / "path.png").stat().st_size > 5000 and (out / "video.mp4").exists()
-    assert "final distance" in capsys.readouterr().out
+    text = capsys.readouterr().out
+    assert "final distance" in text and "a righting variant played in" in text
+    # --no-righting: searched and played as planned, the controller the plan itself
+    off = out.parent / "off"
+    plain = [*args[:-4], "--out", str(off), "--no-video", "--no-righting"]
+    assert main(plain) == 0 and "righting reflex: off" in capsys.readouterr().out
+    summary = json.loads((off / "summary.json").read_text())
+    assert summary["righting"] == {} and summary["replay_drift_m"] < 1e-6
+    items = load_controller(off / "controller.json", shark).items
+    rep = handmade_repertoire(shark)
+    planned = [rep.controllers[p["entry"]].to_dict() for p in summary["plan"]]
+    assert [c.to_dict() for c, _ in items] == planned
     assert main([*args, "--method", "simplex", "--no-video"]) == 2  # out holds a run
     assert "--force" in capsys.readouterr().err
     args[args.index("--out") + 1] = str(out.parent / "another")
@@ -158,3 +180,46 @@ def test_plan_annealing_runs_on_the_one_annealing_of_learn(problem):
     sa.tell(e, d, np.array([2.0, 4.0, 6.0, 8.0]))
     assert sa.sa.scale == 5.0  # temperatures in units of the chains' mean starting cost
     assert np.array_equal(sa.sa.x[:, : problem.segments], e)
+
+
+def _played(body, seq, seconds: float):
+    """The controller played from rest in a World: times (R,) and positions (R, N, 3)."""
+    steps = int(round(seconds / body.dt))
+    ro = rollout(World([body]), seq.table(steps, body.dt)[None], seconds, seconds, record_every=4)
+    tr = ro.trajectory(0)
+    return tr.times, tr.positions[0]
+
+
+def test_a_fish_is_judged_as_it_swims_upright(problem):
+    shark, rep = problem.body, handmade_repertoire(problem.body)
+    task = ReachTask(goal=(6.0, 3.0), horizon=13.0)
+    righted = MacroProblem(shark, rep, task, segments=3, righting=TrackConfig())
+    plain = MacroProblem(shark, rep, task, segments=3)
+    # go straight, turn left, go straight: as planned the shark rolls past 30 degrees
+    e = np.array([[1, 2, 1], [1, 4, 7]])
+    d = np.array([[4.0, 3.0, 6.0], [2.2, 3.1, 1.6]])
+    assert np.allclose(righted.played(d[1]) * 0.95, [2.0, 3.0, 2.0])  # whole 1 s windows
+    assert np.allclose(righted.sequence(e[1], d[1]).starts(), [0.0, 2.0, 5.0])
+    before, after = plain.evaluate(e[:1], d[:1]), righted.evaluate(e, d)
+    assert before["roll"][0] > 30.0 and after["roll"][0] < 30.0
+    # the worst roll past 30 degrees costs 5 m a radian, on top of the reach and depth terms
+    b = {k: float(v[0]) for k, v in before.items()}
+    t_cost = b["reach"] if np.isfinite(b["reach"]) else task.horizon
+    reach = b["final"] + task.time_weight * t_cost + task.depth_weight * max(b["depth"] - 0.5, 0)
+    assert b["cost"] == pytest.approx(reach + 5.0 * np.radians(b["roll"] - 30.0))
+    # side by side in one World as one at a time; the played path is the one judged
+    one = righted.evaluate(e[1:], d[1:])
+    assert after["cost"][1] == pytest.approx(one["cost"][0], abs=1e-4)
+    played = righted.righted(e[:1], d[:1]).result(0)
+    motion = locomotion(shark, played.positions, played.times)
+    assert motion["worst_roll_deg"] == pytest.approx(after["roll"][0], abs=0.1)
+    assert 0 < played.summary()["windows_righted"] < 13
+    # its recorded controller, played from rest, swims that path
+    t, pos = _played(shark, played.sequence, float(played.times[-1]))
+    n = min(len(t), len(played.times))
+    assert np.allclose(t[:n], played.times[:n])
+    assert np.nanmax(np.abs(pos[:n] - played.positions[:n])) < 1e-6  # m
+    # the search over righted plans is seeded: the same plan and cost twice
+    a, b = (search(righted, "ga", budget=16, seed=1, popsize=8) for _ in range(2))
+    assert a.entries.tolist() == b.entries.tolist() and a.scores["cost"] == b.scores["cost"]
+    assert a.scores["cost"] == pytest.approx(a.history[-1][1], abs=1e-4)

@@ -6,8 +6,13 @@ if the plan is shorter than the horizon. The objective of a reach-a-goal task is
     E = distance (m) of the centre of mass from the goal at the end of the horizon
         + obstacle_weight (m/s) * seconds spent inside any obstacle disc
         + time_weight (m/s) * time to reach the goal (the horizon when never reached)
-        + depth_weight * the centre of mass's greatest depth change past depth_band (m),
-so a plan that reaches the goal by sinking or rising away from the start depth costs more.
+        + depth_weight * the centre of mass's greatest depth change past depth_band (m)
+        + attitude_weight (m/rad) * the worst roll past roll_ok,
+so a plan that reaches the goal by sinking or rising away from the start depth, or by swimming
+on its side or upside down, costs more. A fish's plans are judged as they are played: with the
+righting reflex of ``behavior.upright`` (each 1 s window the planned entry or one of its
+fin-righting variants, whichever keeps the fish upright and at depth), every plan of a batch a
+lane of one World; each segment then lasts a whole number of windows (its duration rounded).
 Two searches share an ask/tell interface and evaluate whole batches in one simulation:
 simulated annealing (the paper's schedule, adapted to entries and durations) and a genetic
 algorithm (tournaments, crossover of segment blocks, mutation of entries and durations),
@@ -24,7 +29,8 @@ import numpy as np
 
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.behavior.targets import TrackingError
-from zoetic.behavior.tracking import OVERLAP, body_length, obstacle_seconds
+from zoetic.behavior.tracking import OVERLAP, TrackConfig, body_length, obstacle_seconds
+from zoetic.behavior.upright import RightedPlans, attitude, has_fins, right_plans
 from zoetic.bodies import Body
 from zoetic.control.abstract import SequenceController
 from zoetic.learning.optimizers import Annealing
@@ -42,7 +48,9 @@ class ReachTask:
     obstacle_weight: float = 1.0
     time_weight: float = 0.01
     depth_band: float = 0.5  # m above or below the start depth that costs nothing
-    depth_weight: float = 2.0  # m of cost per m of depth change past the band
+    depth_weight: float = 10.0  # m of cost per m of depth change past the band
+    roll_ok: float = 30.0  # deg of roll (either way) that costs nothing
+    attitude_weight: float = 5.0  # m of cost per rad of the worst roll past roll_ok
 
 
 def path_scores(com_xz: np.ndarray, record_dt: float, task: ReachTask, radius: float) -> dict:
@@ -66,7 +74,12 @@ def path_scores(com_xz: np.ndarray, record_dt: float, task: ReachTask, radius: f
 
 
 class MacroProblem:
-    """A reach task over a repertoire: plans of L (entry, duration) segments, scored in batches."""
+    """A reach task over a repertoire: plans of L (entry, duration) segments, scored in batches.
+
+    righting: the reflex's knobs (``TrackConfig``: window, fin tilt, depth and attitude terms)
+    with which plans are played and judged; None (or a finless animal): played as planned."""
+
+    righting: TrackConfig | None = None
 
     def __init__(
         self,
@@ -77,6 +90,7 @@ class MacroProblem:
         durations: tuple[float, float] | None = None,
         record_every: int = 10,
         allowed: tuple[str, ...] | None = None,
+        righting: TrackConfig | None = None,
     ):
         self.body, self.task = body, task
         self.names = list(repertoire.names if allowed is None else allowed)
@@ -94,17 +108,27 @@ class MacroProblem:
         self.radius = task.radius if task.radius is not None else 0.5 * body_length(body)
         self.record_every = int(record_every)
         self.steps = int(round(task.horizon / body.dt / self.record_every)) * self.record_every
+        if righting is not None and has_fins(body, self.ctrls, righting.fin_tilt):
+            self.righting = righting
 
     @property
     def entries(self) -> int:
         """Return the number of repertoire entries a segment can pick."""
         return len(self.names)
 
+    def played(self, durations: np.ndarray) -> np.ndarray:
+        """Return the segments' durations (s) as played: with the righting reflex each one's
+        span (its duration less the cross-fade) is rounded to whole windows, at least one."""
+        d = np.asarray(durations, float)
+        if self.righting is None:
+            return d
+        step = self.righting.interval / (1.0 - OVERLAP)
+        return np.maximum(1.0, np.round(d / step)) * step
+
     def sequence(self, entries: np.ndarray, durations: np.ndarray) -> SequenceController:
         """Return the plan as one controller: the entries in order, cross-faded."""
-        items = tuple(
-            (self.ctrls[int(e)], float(d)) for e, d in zip(entries, durations, strict=True)
-        )
+        played = self.played(durations)
+        items = tuple((self.ctrls[int(e)], float(d)) for e, d in zip(entries, played, strict=True))
         c = self.ctrls[0]
         return SequenceController(c.animal, c.actuators, items, OVERLAP)
 
@@ -114,13 +138,24 @@ class MacroProblem:
         return e, rng.uniform(self.lower, self.upper, (n, self.segments))
 
     def rollout(self, entries, durations, record_every: int | None = None) -> Trajectory:
-        """Return the trajectories of plans (B, L) played from rest over the horizon."""
+        """Return the trajectories of plans (B, L) played from rest over the horizon (with the
+        righting reflex: recorded every ``righting.record_every`` steps)."""
         e, d = np.atleast_2d(entries), np.atleast_2d(durations)
+        if self.righting is not None:
+            return self.righted(e, d).trajectory()
         dt = self.body.dt
         tables = np.stack(
             [self.sequence(a, b).table(self.steps, dt) for a, b in zip(e, d, strict=True)]
         )
         return simulate(self.body, tables, record_every=record_every or self.record_every)
+
+    def righted(self, entries: np.ndarray, durations: np.ndarray) -> RightedPlans:
+        """Return plans (B, L) played side by side with the righting reflex over the horizon."""
+        plans = [
+            ([self.names[int(i)] for i in a], self.sequence(a, b))
+            for a, b in zip(entries, durations, strict=True)
+        ]
+        return right_plans(self.body, plans, self.task.horizon, self.righting)
 
     def evaluate(self, entries: np.ndarray, durations: np.ndarray) -> dict:
         """Return the scores (path_scores) of plans (B, L), all simulated as one batch."""
@@ -136,9 +171,17 @@ class MacroProblem:
             com3[..., [0, 2]], float(traj.times[1] - traj.times[0]), self.task, self.radius
         )
         dy = np.max(np.abs(com3[..., 1] - com3[:, :1, 1]), axis=1)
+        roll, pitch = attitude(self.body, traj.positions)
+        ok = np.isfinite(roll).all(axis=1)
         out["depth"] = dy
-        out["cost"] = out["cost"] + self.task.depth_weight * np.maximum(
-            dy - self.task.depth_band, 0.0
+        out["roll"] = np.where(ok, np.max(np.abs(np.nan_to_num(roll)), axis=1), np.nan)
+        out["pitch"] = np.where(ok, np.max(np.abs(np.nan_to_num(pitch)), axis=1), np.nan)
+        t = self.task
+        roll_over = np.radians(np.maximum(out["roll"] - t.roll_ok, 0.0))
+        out["cost"] = (
+            out["cost"]
+            + t.depth_weight * np.maximum(dy - t.depth_band, 0.0)
+            + t.attitude_weight * roll_over
         )
         return out
 
@@ -333,6 +376,8 @@ class MacroResult:
             "final_m": round(float(s["final"]), 3),
             "inside_obstacle_s": round(float(s["inside"]), 2),
             "worst_depth_change_m": round(float(s["depth"]), 3),
+            "worst_roll_deg": round(float(s["roll"]), 1),
+            "worst_pitch_deg": round(float(s["pitch"]), 1),
             "reached_s": None if not np.isfinite(s["reach"]) else round(float(s["reach"]), 2),
             "evaluations": self.evaluations,
             "wall_s": round(self.wall, 2),
@@ -408,7 +453,7 @@ def search(
         method=method,
         names=[problem.names[i] for i in e],
         entries=e,
-        durations=d,
+        durations=problem.played(d),
         sequence=problem.sequence(e, d),
         scores=scores,
         evaluations=opt.evaluations,

@@ -230,17 +230,18 @@ def macro(
     evaluator: Evaluator = "batch",
     ray_address: RayAddress = None,
     righting: bool = typer.Option(
-        False,
-        help="Play the plan found with the righting reflex of `zoetic sequence` (off by "
-        "default: the search judges plans without it, and righting afterwards changes the "
-        "path the plan was chosen for).",
+        True,
+        help="Search and play plans with the righting reflex of `zoetic sequence` (each 1 s "
+        "window the planned entry or a fin-righting variant), so plans are judged as the fish "
+        "swims them; --no-righting: as planned, durations not rounded to whole windows.",
     ),
     force: Force = False,
 ) -> None:
-    """Search for a macro controller (selection, order, durations of entries) to reach a goal;
-    --righting plays it with a fish's righting reflex."""
+    """Search for a macro controller (selection, order, durations of entries) to reach a goal,
+    upright and at depth; a fish plays and is judged with its righting reflex."""
     use_ray_address(ray_address)
     from zoetic.behavior.macro import MacroProblem, ReachTask
+    from zoetic.behavior.tracking import TrackConfig
     from zoetic.control import save_controller
     from zoetic.control.measure import locomotion
     from zoetic.io import write_json
@@ -249,7 +250,8 @@ def macro(
     prepare_out(out, force)
     body, rep = _setup(animal, memory)
     task = ReachTask(tuple(g), tuple(map(tuple, obs)), horizon)
-    problem = MacroProblem(body, rep, task, segments=segments)
+    config = TrackConfig() if righting else None
+    problem = MacroProblem(body, rep, task, segments=segments, righting=config)
     result = _search_plan(problem, body.name, method, budget, seed, evaluator)
     make_dir(out)
     summary = result.summary() | {
@@ -261,10 +263,11 @@ def macro(
         "seed": seed,
         "history": [[n, round(f, 5)] for n, f in result.history],
     }
-    traj, sequence, righted = _play_plan(body, problem, result, righting)
+    traj, sequence, righted = _play_plan(body, problem, result)
     save_controller(sequence, out / "controller.json")
     motion = locomotion(body, traj.positions[0], traj.times)
-    summary |= motion | {"righting": righted}
+    drift = _replay_drift(body, sequence, traj.times, traj.positions[0])
+    summary |= motion | {"righting": righted, "replay_drift_m": drift}
     write_json(out / "summary.json", summary)
     depth = float(traj.com(body)[0][0, 1])
     _write_plan_record(out, body, traj, sequence, g, obs, depth, summary)
@@ -272,43 +275,41 @@ def macro(
     _report_plan(method, result.summary(), out, video)
     if righted:
         console.print(
-            f"played with a righting variant in {righted['windows_righted']} of "
-            f"{righted['windows']} windows: final distance {righted['final_m']:.2f} m, closest "
-            f"{righted['closest_m']:.2f} m, {righted['inside_obstacle_s']:.1f} s in obstacles"
+            f"righting reflex: a righting variant played in {righted['windows_righted']} of "
+            f"{righted['windows']} windows (searched and played so)"
         )
+    else:
+        console.print("righting reflex: off (--no-righting or a finless animal)")
     console.print(motion_line(motion))
 
 
-def _play_plan(body, problem, result, righting: bool):
-    """Return the planned run as played (a trajectory recorded every 4 steps), the controller
-    that plays it, and what the fins' righting reflex did (empty when off or finless): the
-    plan was searched as given, and is played with the reflex over the horizon, its scores
-    (final and closest distance, time in obstacles) taken again on the righted path."""
-    from zoetic.behavior.tracking import TrackConfig
-    from zoetic.behavior.upright import has_righting, right_plan
-    from zoetic.physics import Trajectory
-
-    config = TrackConfig(record_every=4)
-    if not righting or not has_righting(body, result.sequence, config.fin_tilt):
+def _play_plan(body, problem, result):
+    """Return the found plan as played (a trajectory recorded every 4 steps), the controller
+    that plays it, and what the fins' righting reflex did (empty when off or finless): a
+    plan is played as it was judged in the search, with the reflex where the problem has it
+    (the recorded controller then holds the variants the reflex chose)."""
+    if problem.righting is None:
         traj = problem.rollout(result.entries, result.durations, record_every=4)
         return traj, result.sequence, {}
-    r = right_plan(body, result.names, result.sequence, problem.task.horizon, config)
-    none = np.full(1, -1)
-    traj = Trajectory(r.times, r.positions[None], None, none, body.dt)
-    sc = {k: float(v[0]) for k, v in problem.scores(traj).items()}
-    reached = round(sc["reach"], 2) if np.isfinite(sc["reach"]) else None
-    return (
-        traj,
-        r.sequence,
-        {
-            "windows": len(r.evaluations),
-            **{k: r.summary()[k] for k in ("windows_righted", "windows_gentle")},
-            "final_m": round(sc["final"], 3),
-            "closest_m": round(sc["closest"], 3),
-            "inside_obstacle_s": round(sc["inside"], 2),
-            "reached_s": reached,
-        },
-    )
+    played = problem.righted(result.entries[None], result.durations[None])
+    r = played.result(0)
+    s = r.summary()
+    return played.trajectory(), r.sequence, {k: s[k] for k in ("windows", "windows_righted")}
+
+
+def _replay_drift(body, sequence, times: np.ndarray, positions: np.ndarray) -> float:
+    """Return how far (m, the worst node coordinate) the controller, played from rest in a
+    World, strays from the path it was recorded with (``positions`` (R, N, 3) at ``times``)."""
+    from zoetic.control.rollout import rollout
+    from zoetic.physics.world import World
+
+    every = int(round((times[1] - times[0]) / body.dt))
+    steps = int(round(times[-1] / body.dt))
+    seconds = steps * body.dt
+    table = sequence.table(steps, body.dt)[None]
+    again = rollout(World([body]), table, seconds, seconds, record_every=every).positions[0][0]
+    n = min(len(again), len(positions))
+    return float(np.nanmax(np.abs(again[:n] - positions[:n])))
 
 
 def _goal_and_obstacles(goal: str, obstacle: list[str]) -> tuple[np.ndarray, np.ndarray]:
@@ -349,17 +350,18 @@ def _draw_plan(
     fps: int,
 ) -> None:
     """Write a macro run's path.png, white dots at ``starts`` (s, each played item's), its
-    title the ``righted`` path's figures where the fins righted it, and video.mp4 (goal and
-    obstacle rims as buoys)."""
+    title the played path's figures (``righted``: what the reflex did, empty when off), and
+    video.mp4 (goal and obstacle rims as buoys)."""
     from zoetic.viz.tracking import plot_plan
 
     com = traj.com(body)[0]
     depth = float(com[0, 1])
     idx = np.searchsorted(traj.times, starts[starts < result.horizon] - 1e-9)
-    s, method = righted or result.summary(), result.method
+    s, method = result.summary(), result.method
     title = (
         f"{body.name} macro controller ({method}{', righting' if righted else ''}): "
-        f"final distance {s['final_m']:.2f} m, {s['inside_obstacle_s']:.1f} s in obstacles"
+        f"final distance {s['final_m']:.2f} m, {s['inside_obstacle_s']:.1f} s in obstacles, "
+        f"worst roll {s['worst_roll_deg']:.0f} deg"
     )
     plot_plan(
         [com], [f"{method} plan"], out / "path.png", goal, obstacles, [idx], title=title, band=0.5
