@@ -25,3 +25,29 @@ def write_short_task(folder: Path, horizon: float, nodes: int) -> Path:
 def dolphin():
     """The zoo dolphin, loaded once for the stunt and contact tests."""
     return load_animal("dolphin")
+
+
+@pytest.fixture
+def pairs_one_by_one():
+    """The reference for ``bodycontact.close_pairs``: every pair of animals (a < c) that
+    ``bodycontact.close`` finds close, testing each pair on its own; same arguments."""
+    from zoetic.physics.bodycontact import close
+
+    def pairs(pos, vel, off, reach, pad: float, horizon: float) -> list[tuple[int, int]]:
+        n = len(off) - 1
+        return [
+            (a, c)
+            for a in range(n)
+            for c in range(a + 1, n)
+            if close(
+                pos[off[a] : off[a + 1]],
+                vel[off[a] : off[a + 1]],
+                pos[off[c] : off[c + 1]],
+                vel[off[c] : off[c + 1]],
+                max(reach[a], reach[c]) + pad,
+                pad,
+                horizon,
+            )
+        ]
+
+    return pairs

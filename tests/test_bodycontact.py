@@ -62,8 +62,8 @@ def test_deepest_measures_a_node_inside_the_surface():
     assert deepest(probe[1:], body.rest_pos, body.faces) == 0.0
 
 
-def test_close_pairs_finds_the_pairs_close_finds_one_by_one():
-    from zoetic.physics.bodycontact import close, close_pairs
+def test_close_pairs_finds_the_pairs_close_finds_one_by_one(pairs_one_by_one):
+    from zoetic.physics.bodycontact import close_pairs
 
     rng = np.random.default_rng(3)
     sizes = [5, 7, 4, 6]
@@ -75,19 +75,6 @@ def test_close_pairs_finds_the_pairs_close_finds_one_by_one():
     vel = np.ascontiguousarray(0.1 * rng.normal(size=pos.shape))
     reach = np.array([0.1, 0.2, 0.1, 0.15])
     found = [tuple(p) for p in close_pairs(pos, vel, off, reach, 0.03, 0.1).tolist()]
-    one_by_one = [
-        (a, c)
-        for a in range(4)
-        for c in range(a + 1, 4)
-        if close(
-            pos[off[a] : off[a + 1]],
-            vel[off[a] : off[a + 1]],
-            pos[off[c] : off[c + 1]],
-            vel[off[c] : off[c + 1]],
-            max(reach[a], reach[c]) + 0.03,
-            0.03,
-            0.1,
-        )
-    ]
+    one_by_one = pairs_one_by_one(pos, vel, off, reach, 0.03, 0.1)
     assert found == one_by_one
     assert (0, 1) in found and (0, 2) not in found  # near pairs only

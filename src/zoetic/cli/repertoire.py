@@ -13,7 +13,7 @@ from rich.table import Table
 
 from zoetic.cli.apps import app
 from zoetic.cli.learn import learn_bar
-from zoetic.cli.options import Force, Righting, given
+from zoetic.cli.options import Force, Righting, given, use_ray_address
 from zoetic.cli.output import console, interrupted, print_summary
 
 Strict = Annotated[
@@ -91,10 +91,7 @@ def train_cmd(
     """Learn the basic repertoire (straight, sharp and wide turns, mirrored; a fish's swim-up
     and swim-down; with --speeds, swims at steady slower speeds; with --radii, a medium turn);
     resumable. Each entry is judged against its task's promises."""
-    if ray_address:  # ray.init() reads it
-        import os
-
-        os.environ["RAY_ADDRESS"] = ray_address
+    use_ray_address(ray_address)
     from zoetic.behavior.training import train_repertoire
     from zoetic.learning.abstraction import parse_modes
     from zoetic.runs import check_learnable
