@@ -26,6 +26,7 @@ from __future__ import annotations
 import sys
 import tempfile
 import tomllib
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -135,9 +136,9 @@ def pitch_damping(body, gait: np.ndarray, rates=(30.0, 60.0)) -> None:
         )
 
 
-def finned(station: int, area: float):
-    """Return the zoo ray with a fin pair (``area`` m² each) on the body box of ``station``."""
-    doc = tomllib.loads((Path(bodies.__file__).parent / "zoo" / "ray.toml").read_text())
+def add_fin_pair(doc: dict, nodes: Callable[[str], list[str]], area: float) -> dict:
+    """Add to the ray document ``doc`` a left/right fin pair of ``area`` m² each, turning
+    +-0.5 rad; ``nodes(side)`` names the lattice nodes a side's fin is attached to ("L"/"R")."""
     pair = (("L", "left", "right"), ("R", "right", "left"))
     doc["actuators"] += [
         {"name": f"fin_{side}", "kind": "fin", "side": side, "mirror": f"fin_{other}"}
@@ -147,7 +148,7 @@ def finned(station: int, area: float):
         {
             "name": f"fin_{side}",
             "actuator": f"fin_{side}",
-            "nodes": [f"s{station}_T{s}", f"s{station}_B{s}"],
+            "nodes": nodes(s),
             "forward": ["s0_TL", "s3_TL"],
             "span": ["s0_TL", "s0_TR"],
             "area": area,
@@ -155,6 +156,13 @@ def finned(station: int, area: float):
         }
         for s, side, _ in pair
     ]
+    return doc
+
+
+def finned(station: int, area: float):
+    """Return the zoo ray with a fin pair (``area`` m² each) on the body box of ``station``."""
+    doc = tomllib.loads((Path(bodies.__file__).parent / "zoo" / "ray.toml").read_text())
+    add_fin_pair(doc, lambda s: [f"s{station}_T{s}", f"s{station}_B{s}"], area)
     path = Path(tempfile.mkdtemp()) / "ray_fins.toml"
     path.write_text(tomli_w.dumps(doc))
     return load_animal(path)

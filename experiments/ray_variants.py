@@ -31,6 +31,7 @@ import tomli_w
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from ray_climb import add_fin_pair  # noqa: E402
 from ray_strength import make_zoo, shape_strain  # noqa: E402
 
 from zoetic.bodies import load_animal  # noqa: E402
@@ -61,23 +62,7 @@ def variant(strong: bool = False, nose: bool = False, fins: str | None = None) -
         if nose and "nose" in f["nodes"]:
             f["drag"] = NOSE_DRAG
     if fins:
-        pair = (("L", "left", "right"), ("R", "right", "left"))
-        doc["actuators"] += [
-            {"name": f"fin_{side}", "kind": "fin", "side": side, "mirror": f"fin_{other}"}
-            for _, side, other in pair
-        ]
-        doc["fins"] = [
-            {
-                "name": f"fin_{side}",
-                "actuator": f"fin_{side}",
-                "nodes": FIN_NODES[fins](s),
-                "forward": ["s0_TL", "s3_TL"],
-                "span": ["s0_TL", "s0_TR"],
-                "area": FIN_AREA[fins],
-                "angle_range": [-0.5, 0.5],
-            }
-            for s, side, _ in pair
-        ]
+        add_fin_pair(doc, FIN_NODES[fins], FIN_AREA[fins])
     return doc
 
 
