@@ -228,30 +228,42 @@ def shark_fins(lat: Lattice, rings: list[list[int]]) -> tuple[list[dict], list[d
     return acts, fins
 
 
+def fish_doc(lat: Lattice, wave_hz: float, wave_lag: float, **top) -> dict:
+    """Return the animal document of a fish lattice swimming in water, nose first along +x:
+    its built-in wave travels ``wave_lag`` cycles per segment tailward, left and right in
+    antiphase; ``top`` gives the rest (name, description, dt, defaults, actuators, fins)."""
+    phases = {}
+    for i, seg in enumerate(("front", "middle", "back")):
+        phases[f"{seg}_left"] = round(wave_lag * i, 3)
+        phases[f"{seg}_right"] = round(wave_lag * i + 0.5, 3)
+    return lat.doc(
+        medium="water",
+        head="nose",
+        forward=[1.0, 0.0, 0.0],
+        wave={"frequency": wave_hz, "amplitude": 1.0, "offset": 0.0, "phases": phases},
+        eyes=FISH_EYES,
+        **top,
+    )
+
+
 def shark() -> dict:
     lat, rings = fish_lattice(rotate_on_side=False)
     fin_acts, fins = shark_fins(lat, rings)
-    phases = {}
-    for i, seg in enumerate(("front", "middle", "back")):
-        phases[f"{seg}_left"] = round(FISH_WAVE_LAG * i, 3)
-        phases[f"{seg}_right"] = round(FISH_WAVE_LAG * i + 0.5, 3)
     lat.damp_springs(10.0)
     print(f"shark   omega_max = {lat.omega_max():7.1f} rad/s")
-    return lat.doc(
+    return fish_doc(
+        lat,
+        FISH_WAVE_HZ,
+        FISH_WAVE_LAG,
         name="shark",
         description=(
             "Leopard shark: the 23-node, 91-spring fish lattice; 12 muscles, 6 muscle "
             "actuators and two pectoral fins."
         ),
-        medium="water",
         dt=0.005,
-        head="nose",
-        forward=[1.0, 0.0, 0.0],
         defaults={"node_damping": 0.05, "spring_damping": 0.0},
         actuators=fish_actuators() + fin_acts,
         fins=fins,
-        wave={"frequency": FISH_WAVE_HZ, "amplitude": 1.0, "offset": 0.0, "phases": phases},
-        eyes=FISH_EYES,
     )
 
 
@@ -283,28 +295,22 @@ def shark_1995(**over) -> dict:
     c = round(par["spring_damping"] * FISH_1995_C_UNIT, 5)
     for s in lat.springs:
         s["damping"] = c
-    phases = {}
-    for i, seg in enumerate(("front", "middle", "back")):
-        phases[f"{seg}_left"] = round(par["wave_lag"] * i, 3)
-        phases[f"{seg}_right"] = round(par["wave_lag"] * i + 0.5, 3)
     print(f"shark-1995 omega_max = {lat.omega_max():7.1f} rad/s")
-    return lat.doc(
+    return fish_doc(
+        lat,
+        par["wave_hz"],
+        par["wave_lag"],
         name="shark-1995",
         description=(
             "The 1995 paper's leopard shark: the 23-node, 91-spring fish with the constants of "
             "its references (MODEL-FACTS), 6 muscle actuators, no pectoral fins."
         ),
-        medium="water",
         dt=par["dt"],
-        head="nose",
-        forward=[1.0, 0.0, 0.0],
         defaults={
             "node_damping": round(par["node_damping"] * FISH_1995_C_UNIT, 5),
             "spring_damping": 0.0,
         },
         actuators=fish_actuators(),
-        wave={"frequency": par["wave_hz"], "amplitude": 1.0, "offset": 0.0, "phases": phases},
-        eyes=FISH_EYES,
     )
 
 
