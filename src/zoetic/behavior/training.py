@@ -20,6 +20,7 @@ one batched simulation a generation), each in its own run directory checkpointed
 so an interrupted training picks up where every entry stopped; the repertoire directory is
 written after each entry is abstracted.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -363,18 +364,20 @@ def train_repertoire(
     body = animal if isinstance(animal, Body) else load_animal(animal)
     name = body.name if isinstance(animal, Body) else str(animal)
     out = Path(out)
-    rep = Repertoire(body.name, tuple(body.actuator_names))
-    rep.add("do-nothing", rest_abstraction(body), REST_SECONDS, source="all muscles relaxed")
-    rep.save(out)
     entries = plan_for(body, speeds, radii)
     runs = []
     for k, entry in enumerate(entries):
         settings = {"animal": name, "optimizer": optimizer, "budget": budget, "seed": seed + k}
         settings |= {"evaluator": evaluator} | entry_config(pipeline, body, entry.task, nodes)
-        run = _entry_run(out / "runs" / entry.name, entry, body, settings, resume_budget, pipeline)
+        runs.append(
+            _entry_run(out / "runs" / entry.name, entry, body, settings, resume_budget, pipeline)
+        )
+    rep = Repertoire(body.name, tuple(body.actuator_names))
+    rep.add("do-nothing", rest_abstraction(body), REST_SECONDS, source="all muscles relaxed")
+    rep.save(out)
+    for entry, run in zip(entries, runs, strict=True):
         if on_entry:
             on_entry(entry.name, run)
-        runs.append(run)
     learn_together(runs, progress=progress)
     for entry, run in zip(entries, runs, strict=True):
         original = run.best_controller()
