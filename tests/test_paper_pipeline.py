@@ -99,3 +99,24 @@ def test_bad_pipeline_threshold_or_optimizer_exit_2(extra, message, tmp_path, ca
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
     assert not out.exists()  # refused before anything was learned or written
+
+
+def test_the_fft_finds_the_stroke_in_nodal_values_and_says_what_it_kept():
+    """A time-domain controller whose nodal values are a 5 Hz stroke plus a weaker 1 Hz sway:
+    one mode per actuator is the stroke, at its amplitude, and the metadata counts it."""
+    from zoetic.behavior.pipelines import paper_abstraction
+    from zoetic.control import time_domain
+
+    shark = load_animal("shark")
+    task = load_task("swim-straight")
+    m = stroke_nodes(shark.wave_frequency, task.horizon)
+    t = np.linspace(0.0, task.horizon, m)
+    lag = np.arange(shark.n_actuators)[:, None] * 0.1
+    values = 0.5 + 0.4 * np.cos(2 * np.pi * (5.0 * t - lag)) + 0.05 * np.cos(2 * np.pi * t)
+    ctrl = time_domain(shark, m, task.horizon, values)
+    ab, info = paper_abstraction(shark, ctrl, task, 1, 0.3, "anneal")
+    assert np.allclose(ab.controller.freq[:, 0], 5.0) and np.allclose(ab.controller.amp, 0.4)
+    assert info["modes_kept"] == shark.n_actuators and info["rule"] == "1 strongest"
+    assert info["frequencies_hz"] == [5.0] and info["learned_nodes"] == m
+    both = paper_abstraction(shark, ctrl, task, "auto", 0.1, "anneal")[1]
+    assert both["modes_kept"] == 2 * shark.n_actuators and both["frequencies_hz"] == [1.0, 5.0]

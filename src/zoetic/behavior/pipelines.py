@@ -37,9 +37,7 @@ def check_training(pipeline: str, optimizer: str | None, threshold: float) -> st
     if pipeline not in PIPELINES:
         raise ZoeticError(f"--pipeline must be one of {', '.join(PIPELINES)}, got {pipeline!r}")
     if optimizer is not None and optimizer not in OPTIMIZERS:
-        raise ZoeticError(
-            f"--optimizer must be one of {', '.join(OPTIMIZERS)}, got {optimizer!r}"
-        )
+        raise ZoeticError(f"--optimizer must be one of {', '.join(OPTIMIZERS)}, got {optimizer!r}")
     if not (math.isfinite(threshold) and 0.0 < threshold <= 1.0):
         raise ZoeticError(
             f"--threshold must be in (0, 1] (a fraction of each actuator's strongest mode), "
@@ -75,14 +73,20 @@ def check_resumed(pipeline: str, config: LearnConfig, where: str) -> None:
 
 
 def paper_abstraction(
-    body: Body, original: Controller, task: Task, threshold: float, optimizer: str
+    body: Body,
+    original: Controller,
+    task: Task,
+    modes: str | int,
+    threshold: float,
+    optimizer: str,
 ) -> tuple[Abstraction, dict]:
-    """Return the FFT abstraction of a learned time-domain controller at ``threshold`` and
+    """Return the FFT abstraction of a learned time-domain controller (``modes`` "auto": the
+    modes at least ``threshold`` times each actuator's strongest; K: the K strongest) and
     the entry metadata that says where it came from: the pipeline, the optimizer, the modes
     kept per actuator and in all, and the fractions of the distance (centre of mass, top
     view) and of the task's primary measure the abstraction keeps, played from the task's
     start state over its horizon."""
-    ab = abstract(original, "auto", threshold)
+    ab = abstract(original, modes, threshold)
     cmp = compare(body, original, ab.controller, task)
     o, a = cmp.original["distance"], cmp.abstract["distance"]
     info = {

@@ -382,7 +382,8 @@ def train_repertoire(
     for entry, run in zip(entries, runs, strict=True):
         original = run.best_controller()
         if pipeline == "paper":
-            ab, info = paper_abstraction(body, original, entry.task, threshold, optimizer)
+            learned_by = run.setup.config.optimizer  # a resumed entry's own
+            ab, info = paper_abstraction(body, original, entry.task, modes, threshold, learned_by)
         else:
             ab = abstract_keeping_promises(body, original, entry.task, modes, threshold)
             info = abstraction_report(body, original, ab, entry.task)

@@ -73,9 +73,7 @@ def train_cmd(
     optimizer: str = typer.Option(
         None, help="anneal, simplex or cmaes (default: cmaes; --pipeline paper: anneal)."
     ),
-    modes: str = typer.Option(
-        "auto", help="Modes kept by the abstraction: auto or K (--pipeline paper: auto)."
-    ),
+    modes: str = typer.Option("auto", help="Modes kept by the abstraction: auto or K."),
     threshold: float = typer.Option(0.3, help="auto keeps modes >= threshold x the strongest."),
     nodes: int = typer.Option(None, min=2, help="Controller nodes per actuator (task's)."),
     seed: int = typer.Option(0, help="Random seed: same seed, same repertoire."),
