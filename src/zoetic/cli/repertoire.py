@@ -75,7 +75,9 @@ def train_cmd(
     ),
     modes: str = typer.Option("auto", help="Modes kept by the abstraction: auto or K."),
     threshold: float = typer.Option(0.3, help="auto keeps modes >= threshold x the strongest."),
-    nodes: int = typer.Option(None, min=2, help="Controller nodes per actuator (task's)."),
+    nodes: int = typer.Option(
+        None, min=2, help="Controller nodes per actuator (task's; --pipeline paper: 4 a stroke)."
+    ),
     seed: int = typer.Option(0, help="Random seed: same seed, same repertoire."),
     evaluator: str = typer.Option("batch", help="batch, process or ray (see zoetic learn)."),
     ray_address: str = typer.Option(None, help="Ray cluster for --evaluator ray."),
