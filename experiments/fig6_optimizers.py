@@ -47,14 +47,15 @@ import time
 from pathlib import Path
 
 import numpy as np
-from zoetic.reproduce import figures_dir
 
 from zoetic.bodies import load_animal
 from zoetic.control import wave_controller
 from zoetic.io import write_json
+from zoetic.learning.config import stroke_nodes
 from zoetic.learning.optimizers import Optimizer
 from zoetic.learning.run import LearnConfig, build
 from zoetic.physics import simulate
+from zoetic.reproduce import figures_dir
 from zoetic.tasks import Task, load_task, parse_task
 from zoetic.viz.learning import best_so_far, plot_learning_seeds
 
@@ -65,11 +66,6 @@ PANEL_CONTROLLER = {"b": "time", "c": "frequency"}
 # the paper's final E (Sec. 4.1): panel (a)
 PAPER_A = {"anneal, time domain": 0.42, "simplex, time domain": 0.49,
            "anneal, frequency domain": 0.52, "simplex, frequency domain": 0.65}  # fmt: skip
-
-
-def nodes_for_stroke(frequency: float, horizon: float, per_period: int = 4) -> int:
-    """Return M: time-domain nodes at most 1/per_period of a stroke period apart."""
-    return int(np.ceil(horizon * frequency * per_period)) + 1
 
 
 def wave_reach(animal: str, horizon: float) -> float:
@@ -199,7 +195,7 @@ def main() -> None:
         ap.error(f"--panels takes a, b and c, got {args.panels!r}")
     seeds = parse_seeds(args.seeds)
     task = load_task("reach-goal")
-    m = args.nodes or nodes_for_stroke(load_animal(args.animal).wave_frequency, task.horizon)
+    m = args.nodes or stroke_nodes(load_animal(args.animal).wave_frequency, task.horizon)
     goal = args.goal or 2.0 * wave_reach(args.animal, task.horizon)
     task = goal_task(task, goal, unit=not args.raw_units)
     stem = args.stem or ("fig6" if args.animal == "shark" else f"fig6_{args.animal}")

@@ -1,16 +1,24 @@
 """Basic training (section 3 of the muscle paper): learn, abstract and keep a repertoire.
 
 For each entry of the plan, a controller is learned for its task (in a run directory of its
-own, resumable): by default a periodic one, a constant plus two harmonics of the animal's
-stroke frequency per actuator (``learning.run.LearnConfig.controller``; a time-domain
-controller with ``controller="time"``). It is then abstracted by FFT into its primary modes
-(for the periodic default this keeps the harmonics that carry the motion), checked against
-the original in the same simulation, and added to the repertoire; right turns are the left
-ones with left and right actuator signals swapped. The entries are learned together
-(``learning.together``: entries whose rollouts last as long share one batched simulation a
-generation), each in its own run directory checkpointed as it goes, so an interrupted training
-picks up where every entry stopped; the repertoire directory is written after each entry is
-abstracted.
+own, resumable), by one of two pipelines (``behavior.pipelines``):
+
+- "periodic" (the default): a constant plus two harmonics of the animal's stroke frequency per
+  actuator (``learning.run.LearnConfig.controller``), learned by CMA-ES. Its "abstraction" is
+  no FFT: the controller already is a few sinusoids, so the harmonics weaker than the
+  threshold times each actuator's strongest are dropped as they are (equal frequencies added
+  as phasors), and when that breaks a promise the learned controller keeps, a lower threshold
+  is tried (``FALLBACK_THRESHOLDS``).
+- "paper" (``pipeline="paper"``): the paper's own path, a time-domain controller of M nodal
+  values per actuator learned from scratch by simulated annealing or the simplex method, then
+  abstracted by the FFT of its nodal values at the threshold given.
+
+The abstraction is checked against the original in the same simulation and added to the
+repertoire; right turns are the left ones with left and right actuator signals swapped. The
+entries are learned together (``learning.together``: entries whose rollouts last as long share
+one batched simulation a generation), each in its own run directory checkpointed as it goes,
+so an interrupted training picks up where every entry stopped; the repertoire directory is
+written after each entry is abstracted.
 """
 
 from __future__ import annotations
@@ -23,6 +31,12 @@ from pathlib import Path
 
 import numpy as np
 
+from zoetic.behavior.pipelines import (
+    check_resumed,
+    check_training,
+    entry_config,
+    paper_abstraction,
+)
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller, load_controller
@@ -320,7 +334,7 @@ def train_repertoire(
     out: str | Path,
     budget: int = 3000,
     seed: int = 0,
-    optimizer: str = "cmaes",
+    optimizer: str | None = None,
     modes: str | int = "auto",
     threshold: float = 0.3,
     nodes: int | None = None,
@@ -330,52 +344,49 @@ def train_repertoire(
     resume_budget: int | None = None,
     speeds: bool = False,
     radii: bool = False,
+    pipeline: str = "periodic",
 ) -> Repertoire:
     """Learn, abstract and save the basic repertoire of ``animal`` (a zoo name, an animal
     file or a Body, learned as given) into ``out``; return it.
 
-    nodes: controller nodes per actuator (default: each task's). on_entry(name, run) is called
-    for each entry before learning starts; progress(run) as that entry's run learns. An entry
-    already begun in ``out`` continues to its stored budget, or to ``resume_budget``
-    evaluations when given.
+    optimizer: the pipeline's own when None (periodic: cmaes; paper: anneal). nodes:
+    controller nodes per actuator (default: each task's; the paper pipeline's, 4 per stroke
+    period). on_entry(name, run) is called for each entry before learning starts;
+    progress(run) as that entry's run learns. An entry already begun in ``out`` continues to
+    its stored budget, or to ``resume_budget`` evaluations when given.
     speeds: learn a swimmer's ``SPEED_PLAN`` entries too (``parametric.swim_at`` blends them);
     radii: its ``RADIUS_PLAN`` entry too (``parametric.turn_of_radius`` blends the turns).
+    pipeline: "periodic" or "paper" (module doc).
     """
-    from zoetic.learning.run import LearnConfig, Run
     from zoetic.learning.together import learn_together
 
+    optimizer = check_training(pipeline, optimizer, threshold)
     body = animal if isinstance(animal, Body) else load_animal(animal)
     name = body.name if isinstance(animal, Body) else str(animal)
     out = Path(out)
-    rep = Repertoire(body.name, tuple(body.actuator_names))
-    rep.add("do-nothing", rest_abstraction(body), REST_SECONDS, source="all muscles relaxed")
-    rep.save(out)
     entries = plan_for(body, speeds, radii)
     runs = []
     for k, entry in enumerate(entries):
-        run_dir = out / "runs" / entry.name
-        if (run_dir / "config.toml").exists():
-            run = Run.resume(run_dir, resume_budget)
-            check_same_task(run_dir, run.setup.task, entry.task)
-        else:
-            config = LearnConfig(
-                animal=name,
-                task=entry.task.name,
-                optimizer=optimizer,
-                budget=budget,
-                seed=seed + k,
-                nodes=nodes,
-                evaluator=evaluator,
-            )
-            run = Run.create(run_dir, config, body)
+        settings = {"animal": name, "optimizer": optimizer, "budget": budget, "seed": seed + k}
+        settings |= {"evaluator": evaluator} | entry_config(pipeline, body, entry.task, nodes)
+        runs.append(
+            _entry_run(out / "runs" / entry.name, entry, body, settings, resume_budget, pipeline)
+        )
+    rep = Repertoire(body.name, tuple(body.actuator_names))
+    rep.add("do-nothing", rest_abstraction(body), REST_SECONDS, source="all muscles relaxed")
+    rep.save(out)
+    for entry, run in zip(entries, runs, strict=True):
         if on_entry:
             on_entry(entry.name, run)
-        runs.append(run)
     learn_together(runs, progress=progress)
     for entry, run in zip(entries, runs, strict=True):
         original = run.best_controller()
-        ab = abstract_keeping_promises(body, original, entry.task, modes, threshold)
-        info = abstraction_report(body, original, ab, entry.task)
+        if pipeline == "paper":
+            learned_by = run.setup.config.optimizer  # a resumed entry's own
+            ab, info = paper_abstraction(body, original, entry.task, modes, threshold, learned_by)
+        else:
+            ab = abstract_keeping_promises(body, original, entry.task, modes, threshold)
+            info = abstraction_report(body, original, ab, entry.task)
         rep.add(entry.name, ab.controller, entry.task.horizon, source=f"runs/{entry.name}", **info)
         right = mirrored_name(entry.name)
         if right:
@@ -387,6 +398,26 @@ def train_repertoire(
             )
         rep.save(out)
     return rep
+
+
+def _entry_run(
+    run_dir: Path,
+    entry: Entry,
+    body: Body,
+    settings: dict,
+    resume_budget: int | None,
+    pipeline: str,
+):
+    """Return the learning run of one entry: the one begun in ``run_dir`` (same task and
+    pipeline), or a new one with ``settings`` (LearnConfig's)."""
+    from zoetic.learning.run import LearnConfig, Run
+
+    if (run_dir / "config.toml").exists():
+        run = Run.resume(run_dir, resume_budget)
+        check_same_task(run_dir, run.setup.task, entry.task)
+        check_resumed(pipeline, run.setup.config, str(run_dir / "config.toml"))
+        return run
+    return Run.create(run_dir, LearnConfig(task=entry.task.name, **settings), body)
 
 
 def abstract_source(path: str | Path, task: str | None = None) -> tuple[Body, Controller, Task]:

@@ -65,10 +65,19 @@ def train_cmd(
     animal: str = typer.Argument(..., help="Zoo animal name or animal .toml file."),
     out: Path = typer.Option(None, help="Repertoire directory (default memory/<animal>)."),
     budget: int = typer.Option(3000, min=10, max=10_000_000, help="Evaluations per learned entry."),
-    optimizer: str = typer.Option("cmaes", help="anneal, simplex or cmaes."),
+    pipeline: str = typer.Option(
+        "periodic",
+        help="periodic (a constant and two stroke harmonics per actuator, CMA-ES) or paper "
+        "(the 1995 paper's: a time-domain controller from scratch, abstracted by FFT).",
+    ),
+    optimizer: str = typer.Option(
+        None, help="anneal, simplex or cmaes (default: cmaes; --pipeline paper: anneal)."
+    ),
     modes: str = typer.Option("auto", help="Modes kept by the abstraction: auto or K."),
     threshold: float = typer.Option(0.3, help="auto keeps modes >= threshold x the strongest."),
-    nodes: int = typer.Option(None, min=2, help="Controller nodes per actuator (task's)."),
+    nodes: int = typer.Option(
+        None, min=2, help="Controller nodes per actuator (task's; --pipeline paper: 4 a stroke)."
+    ),
     seed: int = typer.Option(0, help="Random seed: same seed, same repertoire."),
     evaluator: str = typer.Option("batch", help="batch, process or ray (see zoetic learn)."),
     ray_address: str = typer.Option(None, help="Ray cluster for --evaluator ray."),
@@ -90,15 +99,21 @@ def train_cmd(
 ) -> None:
     """Learn the basic repertoire (straight, sharp and wide turns, mirrored; a fish's swim-up
     and swim-down; with --speeds, swims at steady slower speeds; with --radii, a medium turn);
-    resumable. Each entry is judged against its task's promises."""
+    resumable. Each entry is judged against its task's promises. --pipeline paper learns each
+    entry the 1995 paper's way (time domain, annealing or simplex, FFT abstraction)."""
     use_ray_address(ray_address)
+    from zoetic.behavior.pipelines import check_training
     from zoetic.behavior.training import train_repertoire
     from zoetic.learning.abstraction import parse_modes
     from zoetic.runs import check_learnable
     from zoetic.viz.media import show_repertoire
 
+    check_training(pipeline, optimizer, threshold)
+    modes = parse_modes(modes)
     check_learnable(animal)
-    out, again = _training_dir(animal, out, resume, force, speeds, radii)
+    flags = ["--speeds"] * speeds + ["--radii"] * radii
+    flags += ["--pipeline", pipeline] * (pipeline != "periodic")
+    out, again = _training_dir(animal, out, resume, force, flags)
     with learn_bar() as bar:
         state: dict = {}
 
@@ -124,7 +139,7 @@ def train_cmd(
                 budget,
                 seed,
                 optimizer,
-                parse_modes(modes),
+                modes,
                 threshold,
                 nodes,
                 on_entry,
@@ -133,6 +148,7 @@ def train_cmd(
                 budget if resume and given(ctx, "budget") else None,
                 speeds,
                 radii,
+                pipeline,
             )
         except KeyboardInterrupt:
             interrupted(f"{out} keeps what was learned; continue with: {again}")
@@ -145,8 +161,7 @@ def _training_dir(
     out: Path | None,
     resume: bool,
     force: bool,
-    speeds: bool = False,
-    radii: bool = False,
+    flags: list[str] = (),
 ) -> tuple[Path, str]:
     """Return the repertoire directory ready for training (a new or empty one, an emptied one
     under ``force``, or the one to continue under ``resume``) and the command that continues
@@ -159,7 +174,7 @@ def _training_dir(
 
     out = check_out_dir(out or Path("memory") / Path(animal).stem)
     again = ["zoetic", "repertoire", "train", animal, "--out", str(out), "--resume"]
-    again = shlex.join(again + ["--speeds"] * speeds + ["--radii"] * radii)
+    again = shlex.join(again + list(flags))
     if resume and force:
         raise ZoeticError(
             "--resume continues the repertoire in --out, --force replaces it: not both"

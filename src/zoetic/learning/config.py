@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
+from math import ceil
 
 
 @dataclass
@@ -31,6 +32,12 @@ class LearnConfig:
     def to_dict(self) -> dict:
         """Return the settings that are set (None left out), as config.toml's [run]."""
         return {k: v for k, v in asdict(self).items() if v is not None}
+
+
+def stroke_nodes(frequency: float, horizon: float, per_period: int = 4) -> int:
+    """Return M, the time-domain nodes per actuator that sample a stroke of ``frequency`` Hz
+    at least ``per_period`` times a period over ``horizon`` s (both ends are nodes)."""
+    return int(ceil(horizon * frequency * per_period)) + 1
 
 
 DEMO_BUDGET = 8000  # evaluations of ``zoetic demo``
