@@ -141,7 +141,24 @@ class Plants:
         up = np.arange(m + 1)[None, :, None] * self.l0[:, None, None] * np.array([0.0, 1.0, 0.0])
         self.pos = self.anchors[:, None, :] + up
         self.vel = np.zeros_like(self.pos)
-        self.below = self.anchors - self.l0[:, None] * np.array([0.0, 1.0, 0.0])
+        self._constants(m)
+
+    def _constants(self, m: int) -> None:
+        """Lay out what every step reuses: the bending energy kappa / 2 |D c|^2 over the chain
+        c = (the virtual node under the anchor, nodes 0..M) with D the second differences,
+        written as the linear force K x + its virtual node's share (with the net buoyancy)."""
+        d = np.zeros((m, m + 2))
+        for j in range(m):
+            d[j, j : j + 3] = (1.0, -2.0, 1.0)
+        below = self.anchors - self.l0[:, None] * np.array([0.0, 1.0, 0.0])  # (S, 3)
+        self._dx, self._db_below = d[:, 1:], d[:, :1] * below[:, None, :]  # (M, M+1), (S, M, 3)
+        self._bend = -self.weed.bending * d[:, 1:].T @ d[:, 1:]  # (M + 1, M + 1)
+        self._fixed = -self.weed.bending * np.einsum("jn,sjc->snc", d[:, 1:], self._db_below)
+        self._fixed[:, :, 1] += self.lift
+        self._l0 = self.l0[:, None, None]
+        self._damp = self.damp[:, :, None]
+        self._dt_m = self.dt / self.mass[:, :, None]
+        self._drag_dt_m = self.drag[:, :, None] * self._dt_m
 
     @property
     def nodes(self) -> np.ndarray:
@@ -152,36 +169,23 @@ class Plants:
         """Return the water's velocity (3,) m/s at time ``t`` s: current plus surge."""
         return self.current + self.surge * math.sin(2.0 * math.pi * t / self.surge_period)
 
-    def _chain(self, pos: np.ndarray) -> np.ndarray:
-        """Return the positions with the virtual node under each anchor first (S, M + 2, 3)."""
-        return np.concatenate([self.below[:, None], pos], axis=1)
-
     def forces(self, pos: np.ndarray, vel: np.ndarray) -> np.ndarray:
         """Return the springs', dashpots' and net buoyancy's force on every node (S, M + 1, 3)."""
-        w = self.weed
         d = pos[:, 1:] - pos[:, :-1]  # (S, M, 3) segments
         length = np.sqrt((d * d).sum(-1, keepdims=True))
-        unit = d / np.maximum(length, 1e-12)
+        unit = d / length
         rate = ((vel[:, 1:] - vel[:, :-1]) * unit).sum(-1, keepdims=True)
-        tension = w.stretch * (length - self.l0[:, None, None]) + self.damp[:, :, None] * rate
-        f = np.zeros_like(pos)
-        f[:, :-1] += tension * unit
-        f[:, 1:] -= tension * unit
-        c = self._chain(pos)
-        bend = w.bending * (c[:, :-2] + c[:, 2:] - 2.0 * c[:, 1:-1])  # (S, M, 3) at nodes 0..M-1
-        f[:, :-1] += 2.0 * bend
-        f[:, 1:] -= bend
-        f[:, :-2] -= bend[:, 1:]
-        f[:, :, 1] += self.lift
+        pull = (self.weed.stretch * (length - self._l0) + self._damp * rate) * unit
+        f = self._bend @ pos + self._fixed
+        f[:, :-1] += pull
+        f[:, 1:] -= pull
         return f
 
     def energy(self) -> float:
         """Return the strands' energy (J): kinetic, springs' and bending, and the potential of
         their net buoyancy (taken from the seabed)."""
-        d = self.pos[:, 1:] - self.pos[:, :-1]
-        stretch = np.sqrt((d * d).sum(-1)) - self.l0[:, None]
-        c = self._chain(self.pos)
-        bend = c[:, :-2] + c[:, 2:] - 2.0 * c[:, 1:-1]
+        stretch = np.linalg.norm(np.diff(self.pos, axis=1), axis=-1) - self.l0[:, None]
+        bend = self._dx @ self.pos + self._db_below
         kinetic = 0.5 * (self.mass[:, :, None] * self.vel**2).sum()
         springs = 0.5 * self.weed.stretch * (stretch**2).sum()
         bending = 0.5 * self.weed.bending * (bend**2).sum()
@@ -190,23 +194,23 @@ class Plants:
 
     def step(self, push: np.ndarray | None = None) -> None:
         """Advance one step of dt: springs, buoyancy and ``push`` (S, M + 1, 3 N; the fishes')
-        kick the velocities, the water's drag slows them implicitly, then the positions move
-        with the new velocities; the anchors stay and no node sinks through the seabed."""
-        dt, m = self.dt, self.mass[:, :, None]
+        kick the velocities, the water's drag slows them implicitly (at most stopping a node
+        against the water), then the positions move with the new velocities; the anchors stay
+        and no node sinks through the seabed."""
         f = self.forces(self.pos, self.vel)
         if push is not None:
             f += push
-        v = self.vel + dt * f / m
-        u = v - self.water(self.time + dt)
-        speed = np.sqrt((u * u).sum(-1, keepdims=True))
-        v -= np.minimum(dt * self.drag[:, :, None] * speed / m, 1.0) * u
+        v = self.vel + self._dt_m * f
+        u = v - self.water(self.time + self.dt)
+        v -= np.minimum(self._drag_dt_m * np.sqrt((u * u).sum(-1, keepdims=True)), 1.0) * u
         v[:, 0] = 0.0
-        self.pos += dt * v
-        low = self.pos[:, :, 1] < self.seabed
-        self.pos[:, :, 1][low] = self.seabed
-        v[:, :, 1][low] = np.maximum(v[:, :, 1][low], 0.0)
+        self.pos += self.dt * v
+        if self.pos[:, :, 1].min() < self.seabed:
+            low = self.pos[:, :, 1] < self.seabed
+            self.pos[:, :, 1][low] = self.seabed
+            v[:, :, 1][low] = np.maximum(v[:, :, 1][low], 0.0)
         self.vel = v
-        self.time += dt
+        self.time += self.dt
 
     def advance(self, steps: int, skins: Skins | None, start=None, end=None) -> None:
         """Advance ``steps`` steps while the fishes (``skins``) move from their node positions
