@@ -12,12 +12,13 @@ broadside area, taken implicitly so it at most stops the node's motion relative 
 in one step. The water is the tank's current plus a slow surge, a sinusoid of ``surge`` m/s
 amplitude and ``surge_period`` s, so the strands sway.
 
-Fishes push the strands: every node and segment midpoint of a strand within reach of a fish
-(``bodycontact.close_pairs`` on the fishes and strands together, once per slice of steps)
-is pushed out of the fish's skin (``bodycontact.skin_distances``) by the penalty spring-damper
-of animal contact (w = pi / (``CONTACT_STEPS`` dt)). A strand weighs well under a tenth of a
-fish, so the fishes feel no reaction (one-way coupling): the fishes' minds still see the
-seaweed as its cylinder obstacle.
+Fishes push the strands aside: every node and segment middle of a strand that may touch a
+fish in a slice of steps (``bodycontact.close_pairs`` on the fishes and strands together) is,
+after each step, put back out of the fish's skin by its depth plus the blade's half width
+(``bodycontact.skin_distances``: the signed distance and the way out), and its velocity into
+the skin is taken away. The fish moves the strand as a kinematic body would: a strand weighs
+under a tenth of a fish, so the fishes feel no reaction (one-way coupling), and their minds
+still see the seaweed as its cylinder obstacle.
 
 The step is semi-implicit Euler at the world's dt (velocities first, then positions with the
 new velocities), vectorised over all strands at once (arrays (S, M + 1, 3), strand s's nodes
@@ -33,7 +34,7 @@ import numpy as np
 
 from zoetic.bodies import Body
 from zoetic.errors import SimulationError
-from zoetic.physics.bodycontact import CONTACT_STEPS, close_pairs, skin_distances, surface_reach
+from zoetic.physics.bodycontact import close_pairs, skin_distances, surface_reach
 from zoetic.physics.media import Medium
 from zoetic.physics.objects import WATER_DENSITY
 
@@ -44,8 +45,8 @@ STABLE = 1.2  # the largest omega dt the stiffest spring mode may reach (2 is th
 class Weed:
     """How a strand is made (SI units): its segments, blade width and thickness (m), density
     (kg/m^3, under water's so that it floats up), drag coefficient across the blade, stretch
-    stiffness (N/m a segment), bending stiffness kappa (N/m), the segments' damping ratio and
-    the contact's damping ratio against a fish."""
+    stiffness (N/m a segment), bending stiffness kappa (N/m) and the segments' damping
+    ratio."""
 
     segments: int = 10
     width: float = 0.08
@@ -55,7 +56,6 @@ class Weed:
     stretch: float = 400.0
     bending: float = 0.3
     damping_ratio: float = 0.5
-    contact_damping: float = 0.3
 
     def __post_init__(self) -> None:
         if int(self.segments) < 1:
@@ -63,8 +63,8 @@ class Weed:
         for name in ("width", "thickness", "density", "drag_coefficient", "stretch"):
             if not getattr(self, name) > 0:
                 raise SimulationError(f"Weed {name} must be positive, got {getattr(self, name)}")
-        if self.bending < 0 or self.damping_ratio < 0 or self.contact_damping < 0:
-            raise SimulationError("Weed bending and damping ratios must be at least 0")
+        if self.bending < 0 or self.damping_ratio < 0:
+            raise SimulationError("Weed bending and damping ratio must be at least 0")
 
 
 @dataclass(frozen=True)
@@ -192,39 +192,38 @@ class Plants:
         rise = -(self.lift * (self.pos[:, :, 1] - self.seabed)).sum()
         return float(kinetic + springs + bending + rise)
 
-    def step(self, push: np.ndarray | None = None) -> None:
-        """Advance one step of dt: springs, buoyancy and ``push`` (S, M + 1, 3 N; the fishes')
-        kick the velocities, the water's drag slows them implicitly (at most stopping a node
-        against the water), then the positions move with the new velocities; the anchors stay
-        and no node sinks through the seabed."""
-        f = self.forces(self.pos, self.vel)
-        if push is not None:
-            f += push
-        v = self.vel + self._dt_m * f
+    def step(self, fishes: tuple | None = None) -> None:
+        """Advance one step of dt: springs and buoyancy kick the velocities, the water's drag
+        slows them implicitly (at most stopping a node against the water), the positions move
+        with the new velocities, then nodes inside a fish are put back out (``fishes``: what
+        ``_collide`` reads); the anchors stay and no node sinks through the seabed."""
+        v = self.vel + self._dt_m * self.forces(self.pos, self.vel)
         u = v - self.water(self.time + self.dt)
         v -= np.minimum(self._drag_dt_m * np.sqrt((u * u).sum(-1, keepdims=True)), 1.0) * u
         v[:, 0] = 0.0
         self.pos += self.dt * v
+        self.vel = v
+        if fishes is not None:
+            self._collide(*fishes)
         if self.pos[:, :, 1].min() < self.seabed:
             low = self.pos[:, :, 1] < self.seabed
             self.pos[:, :, 1][low] = self.seabed
-            v[:, :, 1][low] = np.maximum(v[:, :, 1][low], 0.0)
-        self.vel = v
+            self.vel[:, :, 1][low] = np.maximum(self.vel[:, :, 1][low], 0.0)
         self.time += self.dt
 
     def advance(self, steps: int, skins: Skins | None, start=None, end=None) -> None:
         """Advance ``steps`` steps while the fishes (``skins``) move from their node positions
         ``start`` to ``end`` (N, 3), taken as straight-line motion over the slice; the strands
-        near a fish (``close_pairs`` over the slice) are pushed out of its skin."""
+        near a fish (``close_pairs`` over the slice) are kept out of its skin."""
         touch = None
         if skins is not None and start is not None and len(self.pos) and steps > 0:
             touch = self._touching(skins, np.asarray(start, float), np.asarray(end, float), steps)
+        fish_vel = None if touch is None else (end - start) / (steps * self.dt)
         for k in range(steps):
-            push = None
+            fishes = None
             if touch is not None:
-                fish = start + (end - start) * ((k + 1) / steps)
-                push = self._push(skins, touch, fish, (end - start) / (steps * self.dt))
-            self.step(push)
+                fishes = (skins, touch, start + (end - start) * ((k + 1) / steps), fish_vel)
+            self.step(fishes)
 
     def _touching(self, skins: Skins, start, end, steps: int):
         """Return the contact points of the strands that may touch a fish in the slice:
@@ -255,12 +254,14 @@ class Plants:
             fish, k
         )
 
-    def _push(self, skins: Skins, touch, fish_pos: np.ndarray, fish_vel: np.ndarray):
-        """Return the fishes' push (S, M + 1, 3) N on the strands: a penalty spring-damper
-        on each contact point's depth inside a fish's skin plus the blade's half width."""
+    def _collide(self, skins: Skins, touch, fish_pos: np.ndarray, fish_vel: np.ndarray):
+        """Put every contact point that lies within the blade's half width of a fish's skin
+        back out along the way out of the fish (a segment's middle moves both its ends), and
+        take away its velocity into the fish's surface (an inelastic push: the fish, a
+        hundred times heavier, is not slowed); a node touched at several points takes their
+        mean."""
         (s, a, b), fish = touch
         p = 0.5 * (self.pos[s, a] + self.pos[s, b])
-        v = 0.5 * (self.vel[s, a] + self.vel[s, b])
         dist, face, bary, normal = skin_distances(
             np.ascontiguousarray(p),
             fish,
@@ -271,15 +272,18 @@ class Plants:
         depth = 0.5 * self.weed.width - dist
         hit = (depth > 0.0) & (face >= 0)
         if not hit.any():
-            return None
-        tri = skins.faces[face[hit]]
-        surf_v = (bary[hit, :, None] * fish_vel[tri]).sum(1)
-        vn = ((v[hit] - surf_v) * normal[hit]).sum(-1)
-        m = self.mass[s[hit], 0]
-        w = math.pi / (CONTACT_STEPS * self.dt)
-        fn = np.maximum(m * w * w * depth[hit] - 2.0 * self.weed.contact_damping * m * w * vn, 0.0)
-        force = 0.5 * fn[:, None] * normal[hit]  # half to each end (a node: both halves)
-        push = np.zeros_like(self.pos)
-        np.add.at(push, (s[hit], a[hit]), force)
-        np.add.at(push, (s[hit], b[hit]), force)
-        return push
+            return
+        s, a, b, n = s[hit], a[hit], b[hit], normal[hit]
+        surface = (bary[hit, :, None] * fish_vel[skins.faces[face[hit]]]).sum(1)
+        v = 0.5 * (self.vel[s, a] + self.vel[s, b])
+        into = np.minimum(((v - surface) * n).sum(-1), 0.0)
+        moves = np.concatenate([depth[hit, None] * n, -into[:, None] * n], axis=1)  # (H, 6)
+        two = a != b  # a segment's middle: both ends move
+        rows, nodes = np.concatenate([s, s[two]]), np.concatenate([a, b[two]])
+        total, count = np.zeros(self.pos.shape[:2] + (6,)), np.zeros(self.pos.shape[:2])
+        np.add.at(total, (rows, nodes), np.concatenate([moves, moves[two]]))
+        np.add.at(count, (rows, nodes), 1.0)
+        mean = total / np.maximum(count, 1.0)[:, :, None]
+        self.pos += mean[:, :, :3]
+        self.vel += mean[:, :, 3:]
+        self.pos[:, 0], self.vel[:, 0] = self.anchors, 0.0
