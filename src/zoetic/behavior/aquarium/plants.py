@@ -2,10 +2,12 @@
 observer that steps them with the world.
 
 Each seaweed clump (a ``Cylinder`` named "seaweed" among the tank's obstacles) becomes
-``BLADES`` strands anchored on the seabed within the clump's radius, 55 to 75 % of the
-walls' height long, so that they cross the fishes' layer; the water surges slowly about the
-tank's current so they sway. With dynamic plants the clump is no solid for the fishes' bodies
-(they part the strands) but stays the obstacle their minds avoid and their eyes see.
+``BLADES`` strands anchored on the seabed within ``FRINGE`` m of the clump's radius, 55 to
+75 % of the walls' height long, so that they cross the fishes' layer; the water surges slowly
+about the tank's current so they sway. With dynamic plants the clump is no solid for the
+fishes' bodies (they part the strands) but its cylinder stays the obstacle their minds avoid
+and their eyes see: the dense core, while the outer blades reach into the water the fishes
+swim through (they steer clear of obstacles by ``routines.CLEARANCE`` = 0.5 m).
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ PLANTS = ("dynamic", "static")  # seaweed as swaying strands, or as fixed cylind
 BLADES = 7  # strands a clump
 SURGE = (0.12, 0.0, 0.05)  # m/s: the slow surge's amplitude about the current
 SURGE_PERIOD = 7.0  # s
+FRINGE = 0.5  # m: how far beyond the clump's cylinder blades grow
 
 
 def is_weed(shape: Box | Cylinder) -> bool:
@@ -42,7 +45,8 @@ def tank_plants(
     rng = np.random.default_rng([int(seed), 271])
     anchors, lengths = [], []
     for c in clumps:
-        radius = c.radius * np.sqrt(rng.uniform(0.0, 1.0, BLADES))  # even over the disc
+        outer = c.radius + FRINGE
+        radius = outer * np.sqrt(rng.uniform(0.0, 1.0, BLADES))  # even over the disc
         angle = rng.uniform(-np.pi, np.pi, BLADES)
         base = np.array(c.center) - [0.0, 0.5 * c.length, 0.0]
         ring = np.stack([radius * np.cos(angle), np.zeros(BLADES), radius * np.sin(angle)], 1)
