@@ -63,7 +63,7 @@ def test_the_record_and_the_gltf_export_carry_the_strands(tmp_path):
 
     out = tmp_path / "tank"
     args = ["aquarium", "--fishes", "2", "--food", "1", "--obstacles", "2", "--seconds", "0.3"]
-    assert main([*args, "--no-video", "--out", str(out)]) == 0
+    assert main([*args, "--plants", "dynamic", "--no-video", "--out", str(out)]) == 0
     rec = read_record(out)
     strands = [o for o in rec.objects if o.shape == "strand"]
     assert len(strands) == BLADES and all(o.kind == "seaweed" for o in strands)

@@ -18,7 +18,7 @@ def bench_aquarium(
     perception: str = "oracle",
     predator_skills: str | None = None,
     skills: str | None = None,
-    plants: str = "dynamic",
+    plants: str = "static",
 ) -> dict:
     """Return the realtime factor of the tank (brains, perception and physics together, no
     video; ``perception`` oracle, or vision for the first predator), the same world's

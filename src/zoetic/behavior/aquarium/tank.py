@@ -72,9 +72,10 @@ class TankConfig:
     # the motor layer's righting reflex: the fins lean against each fish's roll
     # (``behavior.motor.righting``)
     righting: bool = True
-    # seaweed as light spring-mass strands that sway and part around the fishes ("dynamic",
-    # ``behavior.aquarium.plants``) or as fixed cylinders ("static")
-    plants: str = "dynamic"
+    # seaweed as fixed cylinders ("static") or as light spring-mass strands that sway and
+    # part around the fishes ("dynamic", ``behavior.aquarium.plants``; about a fifth more CPU
+    # time, docs/aquarium.md)
+    plants: str = "static"
 
     def __post_init__(self) -> None:
         crowd = max(int(self.fishes), 1)
