@@ -249,17 +249,16 @@ class Plants:
         segs = np.arange(n1 - 1)
         a = np.concatenate([nodes, segs])
         b = np.concatenate([nodes, segs + 1])
-        k = len(a)
-        return (np.repeat(strand, k), np.tile(a, len(pairs)), np.tile(b, len(pairs))), np.repeat(
-            fish, k
-        )
+        k, n = len(a), len(pairs)
+        points = (np.repeat(strand, k), np.tile(a, n), np.tile(b, n))
+        return points, np.repeat(fish, k)
 
     def _collide(self, skins: Skins, touch, fish_pos: np.ndarray, fish_vel: np.ndarray):
         """Put every contact point that lies within the blade's half width of a fish's skin
         back out along the way out of the fish (a segment's middle moves both its ends), and
-        take away its velocity into the fish's surface (an inelastic push: the fish, a
-        hundred times heavier, is not slowed); a node touched at several points takes their
-        mean."""
+        take away its velocity into the fish's surface (an inelastic push: the fish, 11.7 kg
+        against a strand's 0.7 kg, is not slowed); a node touched at several points takes
+        their mean."""
         (s, a, b), fish = touch
         p = 0.5 * (self.pos[s, a] + self.pos[s, b])
         dist, face, bary, normal = skin_distances(
