@@ -25,7 +25,7 @@ from zoetic.io import LIMITS, atomic_write_bytes
 FORMAT = "zoetic-record"
 VERSION = 1
 FILE = "record.npz"
-SHAPES = ("sphere", "box", "cylinder", "point")
+SHAPES = ("sphere", "box", "cylinder", "point", "strand")
 AXES = ("x", "y", "z")
 # arrays of motion, which a run that blew up leaves NaN from then on (viewers hold the last
 # good frame); every other float array must be finite, and per-period scalars may hold inf
@@ -77,9 +77,10 @@ class Thing:
     kind: str  # what it is: ball, food, rock, seaweed, wall, hurdle, target, ...
     name: str
     shape: str  # sphere (size: radius), box (half sizes x, y, z), cylinder (radius, length),
-    # point (no size: a marker)
+    # point (no size: a marker), strand (radius: a chain of nodes, a dynamic plant's blade)
     size: tuple[float, ...]
-    positions: np.ndarray  # (T, 3) float32 m where it moves, else (1, 3): its centre
+    # (T, 3) float32 m where it moves, else (1, 3): its centre; a strand's nodes (T, M, 3)
+    positions: np.ndarray
     axis: str = "y"  # a cylinder's long axis
     visible: np.ndarray | None = None  # (T,) bool: present (food not yet eaten); None: always
 
@@ -322,7 +323,7 @@ def _creatures(meta: dict, ck: _Check, t: int) -> tuple[Creature, ...]:
 
 def _objects(meta: dict, ck: _Check, t: int) -> tuple[Thing, ...]:
     out = []
-    sizes = {"sphere": 1, "box": 3, "cylinder": 2, "point": 0}
+    sizes = {"sphere": 1, "box": 3, "cylinder": 2, "point": 0, "strand": 1}
     for k, d in enumerate(meta["objects"]):
         d = ck.entry(d, ("kind", "name", "shape", "size", "axis"), f"objects[{k}]")
         if d["shape"] not in SHAPES or d["axis"] not in AXES:
@@ -334,7 +335,8 @@ def _objects(meta: dict, ck: _Check, t: int) -> tuple[Thing, ...]:
             or not all(isinstance(s, int | float) and np.isfinite(s) and s > 0 for s in size)
         ):
             raise ck.fail(f"objects[{k}]: a {d['shape']} needs {sizes[d['shape']]} positive sizes")
-        pos = ck.array(f"object/{k}/positions", (None, 3))
+        chain = d["shape"] == "strand"
+        pos = ck.array(f"object/{k}/positions", (None, None, 3) if chain else (None, 3))
         if len(pos) not in (1, t):
             raise ck.fail(f"object/{k}/positions has {len(pos)} rows, expected 1 or {t}")
         vis = ck.array(f"object/{k}/visible", (t,), "b", optional=True)

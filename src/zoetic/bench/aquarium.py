@@ -18,17 +18,19 @@ def bench_aquarium(
     perception: str = "oracle",
     predator_skills: str | None = None,
     skills: str | None = None,
+    plants: str = "static",
 ) -> dict:
     """Return the realtime factor of the tank (brains, perception and physics together, no
     video; ``perception`` oracle, or vision for the first predator), the same world's
     physics alone, and the run's outcome figures. ``skills``: every fish's motor skills
     ("built-in", "learned" or a repertoire's directory; default the species files'), or
     "both": the built-in and the learned tank one after the other, each line under its name,
-    with the learned tank's CPU realtime factor over the built-in's."""
+    with the learned tank's CPU realtime factor over the built-in's. ``plants``: the
+    seaweed dynamic (swaying strands) or static (fixed cylinders)."""
     if skills == BOTH:
         out = {
             k: bench_aquarium(
-                fishes, food, obstacles, seconds, seed, perception, predator_skills, k
+                fishes, food, obstacles, seconds, seed, perception, predator_skills, k, plants
             )
             for k in ("built-in", "learned")
         }
@@ -45,15 +47,17 @@ def bench_aquarium(
         perception=perception,
         predator_skills=predator_skills,
         skills=skills,
+        plants=plants,
     )
     warm = TankConfig(
         fishes=2,
         food=1,
-        obstacles=1,
+        obstacles=2,  # a rock and a seaweed clump: compiles the plants' contacts too
         seconds=0.2,
         perception=perception,
         predator_skills=predator_skills,
         skills=skills,
+        plants=plants,
     )
     live(build_tank(warm))  # compile, calibrate the motor controllers
     tank = build_tank(cfg)
@@ -71,6 +75,7 @@ def bench_aquarium(
         "perception": perception if perception == "oracle" else f"{perception} (one predator)",
         "skills": skills or "species files",
         "predator_skills": predator_skills or skills or "species file",
+        "plants": plants,
         "realtime_factor": s["realtime_factor"],
         "wall_seconds": s["wall_seconds"],
         "physics_only_realtime_factor": seconds / physics if physics > 0 else None,

@@ -124,8 +124,9 @@ def figures(summary: dict) -> dict:
 
 
 def write_aquarium_record(out: Path, tank, life, summary: dict) -> Path:
-    """Write a tank's record: every fish, the food (eaten or not), rocks, seaweed and walls,
-    the events, and per brain period each fish's drives, intention and whether it lives."""
+    """Write a tank's record: every fish, the food (eaten or not), rocks, seaweed (its strands'
+    nodes where the plants are dynamic) and walls, the events, and per brain period each
+    fish's drives, intention and whether it lives."""
     from zoetic.behavior.mind import INTENTIONS
 
     fishes = tank.fishes
@@ -136,6 +137,12 @@ def write_aquarium_record(out: Path, tank, life, summary: dict) -> Path:
         for i, f in enumerate(fishes)
     )
     things = solid_things(tank.world.statics, life.times)
+    if life.plants is not None:  # dynamic seaweed: each strand's nodes at every record
+        radius = 0.5 * tank.plants.weed.width
+        things += [
+            Thing("seaweed", f"seaweed strand {k + 1}", "strand", (radius,), life.plants[:, k])
+            for k in range(life.plants.shape[1])
+        ]
     for k, food in enumerate(tank.world.foods):
         things.append(
             Thing(

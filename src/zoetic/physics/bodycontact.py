@@ -363,3 +363,30 @@ def deepest(pos_a: np.ndarray, pos_b: np.ndarray, faces_b: np.ndarray) -> float:
     pa = np.ascontiguousarray(np.asarray(pos_a, np.float64)[:, :, None])
     pb = np.ascontiguousarray(np.asarray(pos_b, np.float64)[:, :, None])
     return float(_deepest(pa, pb, np.asarray(faces_b, np.int64), 0))
+
+
+@njit(cache=True)
+def skin_distances(points, which, pos, faces, face_off):
+    """Return, for each point (P, 3) against the closed surface of body which[p] (triangles
+    faces[face_off[a]:face_off[a + 1]], indices into the nodes pos (N, 3)): its signed
+    distance (P,) m (negative inside), the nearest triangle's row in ``faces`` (P,; -1 if the
+    body has none), the closest point's weights on its corners (P, 3) and the unit direction
+    that takes the point out fastest (P, 3)."""
+    n = points.shape[0]
+    dist = np.full(n, np.inf)
+    face = np.full(n, -1, np.int64)
+    bary = np.zeros((n, 3))
+    normal = np.zeros((n, 3))
+    lanes = pos.reshape(pos.shape[0], 3, 1)
+    for p in range(n):
+        a = which[p]
+        f0, f1 = face_off[a], face_off[a + 1]
+        if f1 <= f0:
+            continue
+        s, k, u, v, w, nx, ny, nz = _signed(
+            lanes, faces[f0:f1], 0, points[p, 0], points[p, 1], points[p, 2]
+        )
+        dist[p], face[p] = s, f0 + k
+        bary[p, 0], bary[p, 1], bary[p, 2] = u, v, w
+        normal[p, 0], normal[p, 1], normal[p, 2] = nx, ny, nz
+    return dist, face, bary, normal

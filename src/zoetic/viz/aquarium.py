@@ -128,9 +128,12 @@ def _blocks(c: np.ndarray, half: np.ndarray, a: np.ndarray, b: np.ndarray) -> bo
     return bool(max(lo.max(), 0.0) <= min(hi.min(), 1.0))
 
 
-def _static_items(statics, view: tuple, times_r: float, focus=None) -> tuple[list, list]:
-    """Painter items of the rocks (shaded boxes) and seaweed (swaying blades), and apart the
-    faces of rocks that stand between the eye and the point ``focus`` (drawn see-through)."""
+def _static_items(
+    statics, view: tuple, times_r: float, focus=None, weed: bool = True
+) -> tuple[list, list]:
+    """Painter items of the rocks (shaded boxes) and, when ``weed``, seaweed as a picture of
+    swaying blades (fixed plants), and apart the faces of rocks that stand between the eye
+    and the point ``focus`` (drawn see-through)."""
     from zoetic.viz.render3d import project_points, water_tint
 
     eye, rot, focal, size, medium = view
@@ -144,6 +147,8 @@ def _static_items(statics, view: tuple, times_r: float, focus=None) -> tuple[lis
             c, sz = np.asarray(c, float), np.asarray(sz, float)
             hides = focus is not None and _blocks(c, sz, eye, np.asarray(focus, float))
             (ghosts if hides else items).extend(_box_items(c, sz, view))
+            continue
+        if not weed:
             continue
         r, half = float(sz[0]), float(sz[1])
         for k in range(7):
@@ -160,6 +165,29 @@ def _static_items(statics, view: tuple, times_r: float, focus=None) -> tuple[lis
             rgb = tuple(np.clip(col[0], 0, 255).astype(int))
             items.append((float(z.mean()), 2, (scr.ravel().tolist(), wpx), rgb))
     return items, ghosts
+
+
+def _strand_items(nodes: np.ndarray, view: tuple, width: float = 0.08) -> list[tuple]:
+    """Painter items of dynamic seaweed: every strand (its nodes (S, M, 3) now) as thick
+    segments ``width`` m wide, in the shape the simulation gave it."""
+    from zoetic.viz.render3d import project_points, water_tint
+
+    eye, rot, focal, size, medium = view
+    s, m = nodes.shape[:2]
+    mid = 0.5 * (nodes[:, 1:] + nodes[:, :-1]).reshape(-1, 3)
+    shade = np.repeat(0.8 + 0.05 * (np.arange(s) % 7), m - 1)[:, None]
+    col = np.clip(water_tint(WEED[None] * shade, mid, eye, medium, FOG), 0, 255).astype(int)
+    scr, z = project_points(nodes.reshape(-1, 3), eye, rot, focal, size)
+    scr, z = scr.reshape(s, m, 2), z.reshape(s, m)
+    items = []
+    for k in range(s):
+        for j in range(m - 1):
+            zz = 0.5 * (z[k, j] + z[k, j + 1])
+            if min(z[k, j], z[k, j + 1]) <= 0.1:
+                continue
+            line = (scr[k, j : j + 2].ravel().tolist(), max(2.0, focal * width / zz))
+            items.append((float(zz), 2, line, tuple(col[k * (m - 1) + j].tolist())))
+    return items
 
 
 def _see_through(img, items: list[tuple], alpha: int = 90):
@@ -219,12 +247,14 @@ def tank_frames(
     looks: Sequence[str] | None = None,
     statics=None,
     focus: int = 0,
+    plants: np.ndarray | None = None,
 ) -> Iterator[np.ndarray]:
     """Yield the tank's frames: a camera following fish ``focus`` (the predator) over the
     tank, the fishes in their species' looks (``looks``, else plain ``colors``), rocks and
     seaweed (``statics``: kind, centre, size and name of each fixed shape; without them the
     ``obstacles`` as grey buoys), uneaten food as orange buoys, and, when ``labels`` (R, n)
-    ("name: intention") are given, each fish's intention as a tag and a legend."""
+    ("name: intention") are given, each fish's intention as a tag and a legend; ``plants``
+    (R, S, M, 3): dynamic seaweed's strands, drawn in their simulated shape."""
     from PIL import Image, ImageDraw
 
     from zoetic.physics.media import get_medium
@@ -265,8 +295,11 @@ def tank_frames(
         items += _buoys(left, FOOD, 0.1, view)
         ghosts: list[tuple] = []
         if statics is not None:
-            solid, ghosts = _static_items(statics, view, float(times[r]), pos[focus].mean(0))
+            here = pos[focus].mean(0)
+            solid, ghosts = _static_items(statics, view, float(times[r]), here, plants is None)
             items += solid
+        if plants is not None:
+            items += _strand_items(np.asarray(plants[r], float), view)
         else:
             items += _buoys(obstacles, (120.0, 120, 120), 0.4, view)
         paint_items(ImageDraw.Draw(img), items)
@@ -278,7 +311,8 @@ def tank_frames(
             _tags(draw, [labels[r][i] for i in shown], shown_pos, view, small, taken)
             _legend(draw, labels, h, small)
         _species_key(draw, looks, fish_rgb, w, size[1] // 3 + 20, small)
-        _minimap(img, pos, fish_rgb, left, statics, obstacles, half_size, targets[r])
+        strands = None if plants is None else plants[r]
+        _minimap(img, pos, fish_rgb, left, statics, obstacles, half_size, targets[r], strands)
         caught = 0 if labels is None else sum(lb.endswith(": caught") for lb in labels[r])
         text = f"t = {times[r]:5.1f} s" + (f"    caught {caught}" if labels is not None else "")
         draw.text((10, 8), text, font=font, **_STYLE)
@@ -364,9 +398,10 @@ def _species_key(draw, looks, fish_rgb, width: int, top: int, font) -> None:
         y += 18
 
 
-def _minimap(img, pos, fish_rgb, food, statics, obstacles, half: float, target) -> None:
-    """Draw a map of the whole tank from above in the top right corner: rocks, seaweed,
-    food, every fish in its colour and a ring where the camera looks."""
+def _minimap(img, pos, fish_rgb, food, statics, obstacles, half: float, target, strands=None):
+    """Draw a map of the whole tank from above in the top right corner: rocks, seaweed (and
+    its ``strands`` (S, M, 3) seen from above), food, every fish in its colour and a ring
+    where the camera looks."""
     from PIL import Image, ImageDraw
 
     side = max(90, img.size[1] // 3)
@@ -399,6 +434,8 @@ def _minimap(img, pos, fish_rgb, food, statics, obstacles, half: float, target) 
         for c in obstacles:
             cx, cy = at(c)
             d.ellipse((cx - 3, cy - 3, cx + 3, cy + 3), fill=(150, 150, 150, 255))
+    for nodes in [] if strands is None else strands:
+        d.line([at(p) for p in nodes], fill=(120, 230, 120, 255), width=1)
     for p in food:
         cx, cy = at(p)
         d.ellipse((cx - 1.5, cy - 1.5, cx + 1.5, cy + 1.5), fill=(250, 150, 30, 255))

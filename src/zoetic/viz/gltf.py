@@ -249,7 +249,7 @@ def scene_bounds(scene: Scene, margin: float = 8.0) -> tuple[np.ndarray, np.ndar
     """Return the (x, z) rectangle in glTF axes that the ground covers: the paths, the objects
     and a margin."""
     pts = [to_gltf_axes(m.com)[:, [0, 2]] for m in scene.movers]
-    pts += [to_gltf_axes(o.positions)[:, [0, 2]] for o in scene.objects]
+    pts += [to_gltf_axes(o.positions).reshape(-1, 3)[:, [0, 2]] for o in scene.objects]
     allp = np.concatenate(pts) if pts else np.zeros((0, 2), np.float32)
     allp = allp[np.isfinite(allp).all(axis=1)]
     if not len(allp):
@@ -406,6 +406,9 @@ def _add_objects(b: _Builder, tracks: _Tracks, scene: Scene) -> None:
             rgb, alpha = OBJECT_COLORS.get(thing.kind, ((160, 160, 160), 1.0))
             rgba = _linear(rgb)[:3] + [alpha]
             materials[thing.kind] = _material(b, thing.kind, rgba, blend=alpha < 1)
+        if thing.shape == "strand":
+            _add_strand(b, tracks, f"{thing.kind}-{i + 1}-{thing.name}", thing, materials)
+            continue
         verts, faces = _solid(thing, marker)
         prim = {
             "attributes": {"POSITION": b.accessor(verts, "VEC3", _ARRAY, bounds=True)},
@@ -426,6 +429,44 @@ def _add_objects(b: _Builder, tracks: _Tracks, scene: Scene) -> None:
         if thing.visible is not None and len(scene.times) > 1:
             scale = np.repeat(np.asarray(thing.visible, np.float32)[:, None], 3, axis=1)
             tracks.add(node, "scale", b.accessor(scale, "VEC3"), "STEP")
+
+
+def _add_strand(b: _Builder, tracks: _Tracks, name: str, thing: Thing, materials: dict) -> None:
+    """Add a dynamic plant's strand: a tube of its radius whose rings are skinned, one to a
+    joint, to its nodes, keyframed where they were."""
+    nodes = to_gltf_axes(_fill_frames(np.asarray(thing.positions, np.float32)))  # (R, M, 3)
+    rest, (m, sides) = nodes[0], (nodes.shape[1], 6)
+    ang = 2 * np.pi * np.arange(sides) / sides
+    ring = thing.size[0] * np.stack([np.cos(ang), np.zeros(sides), np.sin(ang)], 1)
+    verts = (rest[:, None] + ring[None]).reshape(-1, 3).astype(np.float32)
+    j, k = np.meshgrid(np.arange(m - 1), np.arange(sides), indexing="ij")
+    a, c = j * sides + k, j * sides + (k + 1) % sides
+    faces = np.stack([a, a + sides, c, c, a + sides, c + sides], -1).reshape(-1, 3)
+    ids = np.zeros((len(verts), 4), np.uint16)
+    ids[:, 0] = np.repeat(np.arange(m), sides)
+    weights = np.zeros((len(verts), 4), np.float32)
+    weights[:, 0] = 1.0
+    attrs = {
+        "POSITION": b.accessor(verts, "VEC3", _ARRAY, bounds=True),
+        "JOINTS_0": b.accessor(ids, "VEC4", _ARRAY),
+        "WEIGHTS_0": b.accessor(weights, "VEC4", _ARRAY),
+    }
+    idx = b.accessor(faces.astype(np.uint32).ravel(), "SCALAR", _ELEMENTS)
+    prim = {"attributes": attrs, "material": materials[thing.kind], "indices": idx}
+    mesh = b.add("meshes", {"name": thing.name, "primitives": [prim]})
+    joints = [
+        b.node({"name": f"{name}-node-{n}", "translation": rest[n].tolist()}, root=False)
+        for n in range(m)
+    ]
+    ibm = np.tile(np.eye(4, dtype=np.float32), (m, 1, 1))
+    ibm[:, 3, :3] = -rest  # column-major: the translation is the last column
+    skin = b.add("skins", {"joints": joints, "inverseBindMatrices": b.accessor(ibm, "MAT4")})
+    b.node({"name": f"{name}-nodes", "children": joints})
+    b.node({"name": name, "mesh": mesh, "skin": skin})  # the viewer's objects layer
+    if len(nodes) > 1:
+        for n, joint in enumerate(joints):
+            track = np.ascontiguousarray(nodes[:, n])
+            tracks.add(joint, "translation", b.accessor(track, "VEC3"))
 
 
 def _add_environment(b: _Builder, scene: Scene) -> None:

@@ -22,6 +22,7 @@ from zoetic.behavior.aquarium.bodystate import FishBodies
 from zoetic.behavior.aquarium.brain import FishBrain, tank_brains
 from zoetic.behavior.aquarium.events import Event, Events
 from zoetic.behavior.aquarium.perception import obstacle_distance
+from zoetic.behavior.aquarium.plants import PLANTS, PlantSteps, is_weed, tank_plants
 from zoetic.behavior.aquarium.shoal import Shoal
 from zoetic.behavior.aquarium.species import Species, SpeciesError, load_species, with_skills
 from zoetic.behavior.mind import INTENTIONS
@@ -30,6 +31,7 @@ from zoetic.control.loop import Observer, Schedule, drive
 from zoetic.control.policy import Period
 from zoetic.errors import SimulationError
 from zoetic.physics.objects import Box, Cylinder, Food, pack_statics
+from zoetic.physics.plants import Plants
 from zoetic.physics.world import Animal, World
 
 WALL = 0.25  # m: half thickness of the tank's walls
@@ -70,6 +72,10 @@ class TankConfig:
     # the motor layer's righting reflex: the fins lean against each fish's roll
     # (``behavior.motor.righting``)
     righting: bool = True
+    # seaweed as fixed cylinders ("static") or as light spring-mass strands that sway and
+    # part around the fishes ("dynamic", ``behavior.aquarium.plants``; about a fifth more CPU
+    # time, docs/aquarium.md)
+    plants: str = "static"
 
     def __post_init__(self) -> None:
         crowd = max(int(self.fishes), 1)
@@ -107,6 +113,7 @@ class Tank:
     center: np.ndarray
     size: np.ndarray
     static_names: list[str]
+    plants: Plants | None = None  # the seaweed's strands (dynamic plants)
 
 
 def _check(cfg: TankConfig) -> None:
@@ -130,6 +137,8 @@ def _check(cfg: TankConfig) -> None:
         )
     if cfg.perception == "vision" and cfg.predators < 1:
         raise SimulationError("--perception vision gives a predator eyes: need --predators >= 1")
+    if cfg.plants not in PLANTS:
+        raise SimulationError(f"plants must be one of {', '.join(PLANTS)}, got {cfg.plants!r}")
     if not 0 < cfg.control_period <= 1.0 or not 0 < cfg.record_period <= cfg.control_period:
         raise SimulationError("need 0 < record period <= control period <= 1 s")
 
@@ -167,14 +176,20 @@ def build_tank(cfg: TankConfig) -> Tank:
         Food(tuple(_place(rng, half, lambda p: free(p, 0.6), cfg.food_margin)), cfg.food_radius)
         for _ in range(cfg.food)
     ]
+    dynamic = cfg.plants == "dynamic"
+    # dynamic seaweed is no solid for the fishes' bodies: they part its strands
+    solid = [s for s in statics if not (dynamic and is_weed(s))]
     world = World(
-        [*animals, *statics, *foods],
+        [*animals, *solid, *foods],
         medium="water",
         current=cfg.current,
         animal_contact=cfg.fish_contact,
     )
     names = [s.name for s in statics]
-    return Tank(cfg, world, fishes, kind, center, size, names)
+    plants = (
+        tank_plants(statics, cfg.seed, world.medium, cfg.current, world.dt) if dynamic else None
+    )
+    return Tank(cfg, world, fishes, kind, center, size, names, plants)
 
 
 def _tank_species(cfg: TankConfig) -> tuple[Species, Species]:
@@ -263,6 +278,7 @@ class Life:
     wall_seconds: float = 0.0
     deepest: float = 0.0  # m: the deepest any node went into an obstacle (0 if none)
     deepest_fish: float = 0.0  # m: the deepest any node went inside another fish (0 if none)
+    plants: np.ndarray | None = None  # (R, S, M + 1, 3) m: the strands' nodes (dynamic plants)
 
 
 class Recorder(Observer):
@@ -356,7 +372,8 @@ def live(
     species, bodies = [f.species for f in tank.fishes], [f.body for f in tank.fishes]
     statics = (tank.kind, tank.center, tank.size)
     brains = tank_brains(species, bodies, cfg.righting, cfg.seed)
-    state = FishBodies(world, bodies, statics)
+    # how deep the fishes go into the solids (not into dynamic seaweed, which they part)
+    state = FishBodies(world, bodies, pack_statics(world.statics))
     eyes = _eyes(tank) if cfg.perception == "vision" else None
     shoal = Shoal(species, brains, state, statics, eyes)
     recorder = Recorder(brains, state)
@@ -364,6 +381,9 @@ def live(
     # the recorder sees the brains before the events end a caught fish's life; the events read
     # the bodies the state observer has measured at the period's end
     observers: list[Observer] = [recorder, state, events]
+    grow = None if tank.plants is None else PlantSteps(tank.plants, world, bodies)
+    if grow is not None:
+        observers.append(grow)
     if progress is not None:
         observers.append(_Progress(progress))
     # records on the grid every record period from the run's start (step 0 for a new tank)
@@ -371,7 +391,10 @@ def live(
     schedule = Schedule(cfg.control_period, fixed=True, record_every=every, record_end=True)
     t_start = time.perf_counter()
     drive(world, shoal, cfg.seconds if seconds is None else seconds, schedule, observers)
-    return recorder.life(events.log, state, time.perf_counter() - t_start)
+    life = recorder.life(events.log, state, time.perf_counter() - t_start)
+    if grow is not None:
+        life.plants = grow.positions()
+    return life
 
 
 @dataclass(frozen=True)
