@@ -75,22 +75,13 @@ def gather_sum(xp, values, targets: np.ndarray, n: int):
         return xp.zeros((values.shape[0], n, values.shape[-1]), dtype=values.dtype)
     table = incidence(targets, n)
     padded = xp.concatenate([values, xp.zeros_like(values[:, :1])], axis=1)
-    return _sum([padded[:, table[:, j]] for j in range(table.shape[1])])
+    return xp.sum(padded[:, table], axis=2)
 
 
-def _sum(terms: list):
-    """Return the sum of arrays in list order, as a chain of additions (no reduction: XLA's
-    CPU reductions over short axes are slow, its elementwise additions fuse)."""
-    total = terms[0]
-    for term in terms[1:]:
-        total = total + term
-    return total
-
-
-def _corners(q, nodes: np.ndarray, w: np.ndarray):
+def _corners(xp, q, nodes: np.ndarray, w: np.ndarray):
     """Return the weighted sums over each row of ``nodes`` (K, C) of q (..., N, B) with
     weights ``w`` (K, C): a panel's or a fin's mean of its corners, (..., K, B)."""
-    return _sum([q[..., nodes[:, c], :] * w[:, c, None] for c in range(nodes.shape[1])])
+    return xp.sum(q[..., nodes, :] * w[..., None], axis=-2)
 
 
 def _safe_sqrt(xp, s):
@@ -99,9 +90,9 @@ def _safe_sqrt(xp, s):
     return xp.where(pos, xp.sqrt(xp.where(pos, s, 1.0)), 0.0)
 
 
-def _dot(a, b):
+def _dot(xp, a, b):
     """Return the dot products over the component axis 0 of (3, ...) arrays."""
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    return xp.sum(a * b, axis=0)
 
 
 def _cross(xp, a, b):
@@ -111,7 +102,7 @@ def _cross(xp, a, b):
 
 
 def _norm(xp, a):
-    return _safe_sqrt(xp, _dot(a, a))
+    return _safe_sqrt(xp, _dot(xp, a, a))
 
 
 def _unit(xp, a):
@@ -127,7 +118,7 @@ def springs(xp, m: Model, x, v, a, idx):
     u = d / length
     relaxed = col(m.relaxed[idx])
     rest = relaxed + a[m.spring_col[idx]] * (col(m.contracted[idx]) - relaxed)
-    edot = _dot(v[:, sb] - v[:, sa], u)
+    edot = _dot(xp, v[:, sb] - v[:, sa], u)
     fs = (col(m.stiffness[idx]) * (length - rest) + col(m.spring_damping[idx]) * edot) * u
     return gather_sum(xp, xp.concatenate([fs, -fs], axis=1), np.concatenate([sa, sb]), x.shape[1])
 
@@ -145,13 +136,13 @@ def water(xp, m: Model, x, v):
     w, panels = m.panel_weights, m.panels  # (P, 4)
     p = [x[:, panels[:, c]] for c in range(4)]  # the corners, (3, P, B) each
     nrm = _cross(xp, p[2] - p[0], p[3] - p[1])  # 2 A n
-    nn = _dot(nrm, nrm) + TINY2
-    vm = _corners(v, panels, w)
-    q = xp.maximum(_dot(nrm, vm), 0.0)
-    vv = _dot(vm, vm)
+    nn = _dot(xp, nrm, nrm) + TINY2
+    vm = _corners(xp, v, panels, w)
+    q = xp.maximum(_dot(xp, nrm, vm), 0.0)
+    vv = _dot(xp, vm, vm)
     lim = 0.5 * m.water_drag * col(m.panel_drag) * _safe_sqrt(xp, nn * vv)
     lim = xp.minimum(lim, col(m.panel_mass_dt))
-    wet = _corners(x[1], panels, w) < m.water_level
+    wet = _corners(xp, x[1], panels, w) < m.water_level
     mag = xp.where(wet, q / nn * lim, 0.0)
     fp = [-(w[:, c, None] * mag) * nrm for c in range(4)]  # each corner's share, (3, P, B)
     return gather_sum(xp, xp.concatenate(fp, axis=1), panels.T.reshape(-1), x.shape[1])
@@ -162,16 +153,16 @@ def fins(xp, m: Model, x, v, a):
     by the water (at most stopping their normal motion in one step)."""
     fwd = _unit(xp, x[:, m.fin_forward[:, 0]] - x[:, m.fin_forward[:, 1]])
     span = x[:, m.fin_span[:, 0]] - x[:, m.fin_span[:, 1]]
-    span = _unit(xp, span - _dot(span, fwd) * fwd)
+    span = _unit(xp, span - _dot(xp, span, fwd) * fwd)
     up = _cross(xp, fwd, span)
     lo, hi = col(m.fin_angle[:, 0]), col(m.fin_angle[:, 1])
     ang = lo + a[m.fin_actuator] * (hi - lo)
     nrm = xp.cos(ang) * up + xp.sin(ang) * fwd
     nodes = np.maximum(m.fin_nodes, 0)  # padding: node 0 at weight 0
     wts = m.fin_weights  # (K, 4)
-    vm = _corners(v, nodes, wts)
-    cy = _corners(x[1], nodes, wts)
-    vn = _dot(nrm, vm)
+    vm = _corners(xp, v, nodes, wts)
+    cy = _corners(xp, x[1], nodes, wts)
+    vn = _dot(xp, nrm, vm)
     cap = col(m.fin_mass) * xp.abs(vn) / m.dt
     mag = xp.clip(m.water_drag * col(m.fin_area) * _norm(xp, vm) * vn, -cap, cap)
     mag = xp.where(cy < m.water_level, mag, 0.0)
