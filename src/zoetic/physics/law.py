@@ -68,6 +68,15 @@ def incidence(targets: np.ndarray, n: int) -> np.ndarray:
     return _incidence(np.ascontiguousarray(targets, dtype=np.int64).tobytes(), n)
 
 
+def rows(xp, q, idx):
+    """Return the node rows ``idx`` (an index array of any shape) of q (N, B) or (3, N, B),
+    one component at a time: a gather of whole B-lane rows per component, where indexing
+    (3, N, B) at once puts the index axis first and costs XLA a transpose back."""
+    if q.ndim == 2:
+        return q[idx]
+    return xp.stack([q[c][idx] for c in range(q.shape[0])])
+
+
 def gather_sum(xp, values, targets: np.ndarray, n: int):
     """Return (3, n, B): the rows of ``values`` (3, M, B) summed onto the nodes ``targets`` (M,)
     they belong to (a scatter-add written as a gather of constant indices)."""
@@ -75,13 +84,13 @@ def gather_sum(xp, values, targets: np.ndarray, n: int):
         return xp.zeros((values.shape[0], n, values.shape[-1]), dtype=values.dtype)
     table = incidence(targets, n)
     padded = xp.concatenate([values, xp.zeros_like(values[:, :1])], axis=1)
-    return xp.sum(padded[:, table], axis=2)
+    return xp.sum(rows(xp, padded, table), axis=2)
 
 
 def _corners(xp, q, nodes: np.ndarray, w: np.ndarray):
     """Return the weighted sums over each row of ``nodes`` (K, C) of q (..., N, B) with
     weights ``w`` (K, C): a panel's or a fin's mean of its corners, (..., K, B)."""
-    return xp.sum(q[..., nodes, :] * w[..., None], axis=-2)
+    return xp.sum(rows(xp, q, nodes) * w[..., None], axis=-2)
 
 
 def _safe_sqrt(xp, s):
@@ -113,12 +122,12 @@ def springs(xp, m: Model, x, v, a, idx):
     """Return the nodal forces (3, N, B) of the springs with indices ``idx`` (NumPy, fixed
     when JAX traces)."""
     sa, sb = m.spring_a[idx], m.spring_b[idx]
-    d = x[:, sb] - x[:, sa]
+    d = rows(xp, x, sb) - rows(xp, x, sa)
     length = _norm(xp, d) + TINY
     u = d / length
     relaxed = col(m.relaxed[idx])
     rest = relaxed + a[m.spring_col[idx]] * (col(m.contracted[idx]) - relaxed)
-    edot = _dot(xp, v[:, sb] - v[:, sa], u)
+    edot = _dot(xp, rows(xp, v, sb) - rows(xp, v, sa), u)
     fs = (col(m.stiffness[idx]) * (length - rest) + col(m.spring_damping[idx]) * edot) * u
     return gather_sum(xp, xp.concatenate([fs, -fs], axis=1), np.concatenate([sa, sb]), x.shape[1])
 
@@ -134,7 +143,7 @@ def water(xp, m: Model, x, v):
     panel's nodes: it opposes a panel's outward normal velocity, c * drag * A * |v| (n.v),
     and at most stops the panel's normal motion in one step."""
     w, panels = m.panel_weights, m.panels  # (P, 4)
-    p = [x[:, panels[:, c]] for c in range(4)]  # the corners, (3, P, B) each
+    p = [rows(xp, x, panels[:, c]) for c in range(4)]  # the corners, (3, P, B) each
     nrm = _cross(xp, p[2] - p[0], p[3] - p[1])  # 2 A n
     nn = _dot(xp, nrm, nrm) + TINY2
     vm = _corners(xp, v, panels, w)
@@ -151,8 +160,8 @@ def water(xp, m: Model, x, v):
 def fins(xp, m: Model, x, v, a):
     """Return the fins' forces: flat plates at their actuator's angle to the body, pushed on
     by the water (at most stopping their normal motion in one step)."""
-    fwd = _unit(xp, x[:, m.fin_forward[:, 0]] - x[:, m.fin_forward[:, 1]])
-    span = x[:, m.fin_span[:, 0]] - x[:, m.fin_span[:, 1]]
+    fwd = _unit(xp, rows(xp, x, m.fin_forward[:, 0]) - rows(xp, x, m.fin_forward[:, 1]))
+    span = rows(xp, x, m.fin_span[:, 0]) - rows(xp, x, m.fin_span[:, 1])
     span = _unit(xp, span - _dot(xp, span, fwd) * fwd)
     up = _cross(xp, fwd, span)
     lo, hi = col(m.fin_angle[:, 0]), col(m.fin_angle[:, 1])
@@ -177,7 +186,7 @@ def ground(xp, m: Model, x, v, f_other):
     pen = -x[1]
     normal = m.floor_stiffness * pen - m.floor_damping * v[1]
     normal = xp.where((pen > 0) & (normal > 0), normal, 0.0)
-    axis = x[:, m.axis_front] - x[:, m.axis_back]
+    axis = rows(xp, x, m.axis_front) - rows(xp, x, m.axis_back)
     length = _safe_sqrt(xp, axis[0] * axis[0] + axis[2] * axis[2]) + TINY
     tx, tz = axis[0] / length, axis[2] / length
     px = v[0] + dt * f_other[0] / mass
