@@ -16,6 +16,10 @@ Nothing is written in place, and nothing is scattered: a term's contributions to
 (spring ends, panel and fin corners) are gathered back per node through a padded incidence
 table built once from the model's constant indices (``incidence``) and summed, the same code in
 NumPy and JAX (XLA's scatter is serial on a CPU; a gather of whole B-lane rows is a copy).
+Whatever is summed (dot products over xyz, corner means, the per-node sums) is written as a
+reduction (``sum`` over an axis): XLA's CPU fusion copies an elementwise producer into every
+fusion that reads it, so a value read through gathers would be recomputed per element read,
+while a reduction is computed once into a buffer. NumPy sums those short axes in order.
 Square roots and unit vectors are guarded (the double-``where`` trick) so that JAX gradients
 stay finite at rest, where velocities are exactly zero.
 """
