@@ -73,6 +73,11 @@ def rollout_fn(body: Body, medium=None, dt: float | None = None, record_every: i
 def _soa_rollout(step, record_every: int):
     """Return ``(x, v (3,N,B), act (T,A,B)) -> (rec (R,3,N,B), x, v)`` in the law's layout."""
 
+    # rematerialised under differentiation: the backward pass keeps only each step's state and
+    # recomputes the step's intermediates, instead of stacking every one of them over the
+    # horizon (half the compile time and half the gradient's run time, measured on the shark)
+    step = jax.checkpoint(step, prevent_cse=False)
+
     def inner(carry, a):
         return step(*carry, a), None
 
@@ -84,7 +89,8 @@ def _soa_rollout(step, record_every: int):
         n_rec = act.shape[0] // record_every
         main = act[: n_rec * record_every].reshape(n_rec, record_every, *act.shape[1:])
         carry, recs = jax.lax.scan(outer, (x, v), main)
-        carry, _ = jax.lax.scan(inner, carry, act[n_rec * record_every :])
+        if act.shape[0] > n_rec * record_every:  # the steps after the last record
+            carry, _ = jax.lax.scan(inner, carry, act[n_rec * record_every :])
         return jnp.concatenate([x[None], recs]), carry[0], carry[1]
 
     return run

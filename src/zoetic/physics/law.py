@@ -16,6 +16,10 @@ Nothing is written in place, and nothing is scattered: a term's contributions to
 (spring ends, panel and fin corners) are gathered back per node through a padded incidence
 table built once from the model's constant indices (``incidence``) and summed, the same code in
 NumPy and JAX (XLA's scatter is serial on a CPU; a gather of whole B-lane rows is a copy).
+Whatever is summed (dot products over xyz, corner means, the per-node sums) is written as a
+reduction (``sum`` over an axis): XLA's CPU fusion copies an elementwise producer into every
+fusion that reads it, so a value read through gathers would be recomputed per element read,
+while a reduction is computed once into a buffer. NumPy sums those short axes in order.
 Square roots and unit vectors are guarded (the double-``where`` trick) so that JAX gradients
 stay finite at rest, where velocities are exactly zero.
 """
@@ -68,6 +72,15 @@ def incidence(targets: np.ndarray, n: int) -> np.ndarray:
     return _incidence(np.ascontiguousarray(targets, dtype=np.int64).tobytes(), n)
 
 
+def rows(xp, q, idx):
+    """Return the node rows ``idx`` (an index array of any shape) of q (N, B) or (3, N, B),
+    one component at a time: a gather of whole B-lane rows per component, where indexing
+    (3, N, B) at once puts the index axis first and costs XLA a transpose back."""
+    if q.ndim == 2:
+        return q[idx]
+    return xp.stack([q[c][idx] for c in range(q.shape[0])])
+
+
 def gather_sum(xp, values, targets: np.ndarray, n: int):
     """Return (3, n, B): the rows of ``values`` (3, M, B) summed onto the nodes ``targets`` (M,)
     they belong to (a scatter-add written as a gather of constant indices)."""
@@ -75,22 +88,13 @@ def gather_sum(xp, values, targets: np.ndarray, n: int):
         return xp.zeros((values.shape[0], n, values.shape[-1]), dtype=values.dtype)
     table = incidence(targets, n)
     padded = xp.concatenate([values, xp.zeros_like(values[:, :1])], axis=1)
-    return _sum([padded[:, table[:, j]] for j in range(table.shape[1])])
+    return xp.sum(rows(xp, padded, table), axis=2)
 
 
-def _sum(terms: list):
-    """Return the sum of arrays in list order, as a chain of additions (no reduction: XLA's
-    CPU reductions over short axes are slow, its elementwise additions fuse)."""
-    total = terms[0]
-    for term in terms[1:]:
-        total = total + term
-    return total
-
-
-def _corners(q, nodes: np.ndarray, w: np.ndarray):
+def _corners(xp, q, nodes: np.ndarray, w: np.ndarray):
     """Return the weighted sums over each row of ``nodes`` (K, C) of q (..., N, B) with
     weights ``w`` (K, C): a panel's or a fin's mean of its corners, (..., K, B)."""
-    return _sum([q[..., nodes[:, c], :] * w[:, c, None] for c in range(nodes.shape[1])])
+    return xp.sum(rows(xp, q, nodes) * w[..., None], axis=-2)
 
 
 def _safe_sqrt(xp, s):
@@ -99,9 +103,9 @@ def _safe_sqrt(xp, s):
     return xp.where(pos, xp.sqrt(xp.where(pos, s, 1.0)), 0.0)
 
 
-def _dot(a, b):
+def _dot(xp, a, b):
     """Return the dot products over the component axis 0 of (3, ...) arrays."""
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    return xp.sum(a * b, axis=0)
 
 
 def _cross(xp, a, b):
@@ -111,7 +115,7 @@ def _cross(xp, a, b):
 
 
 def _norm(xp, a):
-    return _safe_sqrt(xp, _dot(a, a))
+    return _safe_sqrt(xp, _dot(xp, a, a))
 
 
 def _unit(xp, a):
@@ -122,12 +126,12 @@ def springs(xp, m: Model, x, v, a, idx):
     """Return the nodal forces (3, N, B) of the springs with indices ``idx`` (NumPy, fixed
     when JAX traces)."""
     sa, sb = m.spring_a[idx], m.spring_b[idx]
-    d = x[:, sb] - x[:, sa]
+    d = rows(xp, x, sb) - rows(xp, x, sa)
     length = _norm(xp, d) + TINY
     u = d / length
     relaxed = col(m.relaxed[idx])
     rest = relaxed + a[m.spring_col[idx]] * (col(m.contracted[idx]) - relaxed)
-    edot = _dot(v[:, sb] - v[:, sa], u)
+    edot = _dot(xp, rows(xp, v, sb) - rows(xp, v, sa), u)
     fs = (col(m.stiffness[idx]) * (length - rest) + col(m.spring_damping[idx]) * edot) * u
     return gather_sum(xp, xp.concatenate([fs, -fs], axis=1), np.concatenate([sa, sb]), x.shape[1])
 
@@ -143,15 +147,15 @@ def water(xp, m: Model, x, v):
     panel's nodes: it opposes a panel's outward normal velocity, c * drag * A * |v| (n.v),
     and at most stops the panel's normal motion in one step."""
     w, panels = m.panel_weights, m.panels  # (P, 4)
-    p = [x[:, panels[:, c]] for c in range(4)]  # the corners, (3, P, B) each
+    p = [rows(xp, x, panels[:, c]) for c in range(4)]  # the corners, (3, P, B) each
     nrm = _cross(xp, p[2] - p[0], p[3] - p[1])  # 2 A n
-    nn = _dot(nrm, nrm) + TINY2
-    vm = _corners(v, panels, w)
-    q = xp.maximum(_dot(nrm, vm), 0.0)
-    vv = _dot(vm, vm)
+    nn = _dot(xp, nrm, nrm) + TINY2
+    vm = _corners(xp, v, panels, w)
+    q = xp.maximum(_dot(xp, nrm, vm), 0.0)
+    vv = _dot(xp, vm, vm)
     lim = 0.5 * m.water_drag * col(m.panel_drag) * _safe_sqrt(xp, nn * vv)
     lim = xp.minimum(lim, col(m.panel_mass_dt))
-    wet = _corners(x[1], panels, w) < m.water_level
+    wet = _corners(xp, x[1], panels, w) < m.water_level
     mag = xp.where(wet, q / nn * lim, 0.0)
     fp = [-(w[:, c, None] * mag) * nrm for c in range(4)]  # each corner's share, (3, P, B)
     return gather_sum(xp, xp.concatenate(fp, axis=1), panels.T.reshape(-1), x.shape[1])
@@ -160,18 +164,18 @@ def water(xp, m: Model, x, v):
 def fins(xp, m: Model, x, v, a):
     """Return the fins' forces: flat plates at their actuator's angle to the body, pushed on
     by the water (at most stopping their normal motion in one step)."""
-    fwd = _unit(xp, x[:, m.fin_forward[:, 0]] - x[:, m.fin_forward[:, 1]])
-    span = x[:, m.fin_span[:, 0]] - x[:, m.fin_span[:, 1]]
-    span = _unit(xp, span - _dot(span, fwd) * fwd)
+    fwd = _unit(xp, rows(xp, x, m.fin_forward[:, 0]) - rows(xp, x, m.fin_forward[:, 1]))
+    span = rows(xp, x, m.fin_span[:, 0]) - rows(xp, x, m.fin_span[:, 1])
+    span = _unit(xp, span - _dot(xp, span, fwd) * fwd)
     up = _cross(xp, fwd, span)
     lo, hi = col(m.fin_angle[:, 0]), col(m.fin_angle[:, 1])
     ang = lo + a[m.fin_actuator] * (hi - lo)
     nrm = xp.cos(ang) * up + xp.sin(ang) * fwd
     nodes = np.maximum(m.fin_nodes, 0)  # padding: node 0 at weight 0
     wts = m.fin_weights  # (K, 4)
-    vm = _corners(v, nodes, wts)
-    cy = _corners(x[1], nodes, wts)
-    vn = _dot(nrm, vm)
+    vm = _corners(xp, v, nodes, wts)
+    cy = _corners(xp, x[1], nodes, wts)
+    vn = _dot(xp, nrm, vm)
     cap = col(m.fin_mass) * xp.abs(vn) / m.dt
     mag = xp.clip(m.water_drag * col(m.fin_area) * _norm(xp, vm) * vn, -cap, cap)
     mag = xp.where(cy < m.water_level, mag, 0.0)
@@ -186,7 +190,7 @@ def ground(xp, m: Model, x, v, f_other):
     pen = -x[1]
     normal = m.floor_stiffness * pen - m.floor_damping * v[1]
     normal = xp.where((pen > 0) & (normal > 0), normal, 0.0)
-    axis = x[:, m.axis_front] - x[:, m.axis_back]
+    axis = rows(xp, x, m.axis_front) - rows(xp, x, m.axis_back)
     length = _safe_sqrt(xp, axis[0] * axis[0] + axis[2] * axis[2]) + TINY
     tx, tz = axis[0] / length, axis[2] / length
     px = v[0] + dt * f_other[0] / mass
