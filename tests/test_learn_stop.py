@@ -6,14 +6,15 @@ import numpy as np
 import pytest
 
 from conftest import write_short_task
-from zoetic.cli import app
+from zoetic.bodies import load_animal
+from zoetic.cli import main
 from zoetic.control import wave_controller
-from zoetic.errors import RunDirError
+from zoetic.errors import RunDirError, ZoeticError
 from zoetic.io import read_toml, write_toml
 from zoetic.learning.checks import check_learn_config
 from zoetic.learning.optimizers import make_optimizer
 from zoetic.learning.optimizers.base import plateaued
-from zoetic.learning.run import LearnConfig, Run, build
+from zoetic.learning.run import START_FILE, LearnConfig, Run, build
 
 
 @pytest.fixture
@@ -100,25 +101,36 @@ def test_stop_and_start_settings_are_checked(bad, message):
         check_learn_config({"animal": "shark", **bad}, "config.toml: [run]")
 
 
-def test_bad_stop_settings_exit_2_naming_the_setting(tmp_path, short_task):
-    from typer.testing import CliRunner
-
-    cli = CliRunner()
+def test_bad_stop_settings_exit_2_naming_the_setting(tmp_path, short_task, capsys):
     out = tmp_path / "r"
     args = ["learn", "shark", "--task", str(short_task), "--budget", "8", "--no-video"]
-    res = cli.invoke(app, [*args, "--out", str(out), "--stop-generations", "4"])
-    assert res.exit_code == 2 and "stop_generations needs stop_improvement" in res.output
-    res = cli.invoke(app, [*args, "--out", str(out), "--start", "nowhere"])
-    assert res.exit_code == 2 and "unknown value" in res.output
-    assert "random, wave, stored" in res.output
-    res = cli.invoke(app, [*args, "--out", str(out), "--popsize", "4"])
-    assert res.exit_code == 0, res.output
+    assert main([*args, "--out", str(out), "--stop-generations", "4"]) == 2
+    assert "stop_generations needs stop_improvement" in capsys.readouterr().err
+    assert main([*args, "--out", str(out), "--start", "nowhere"]) == 2
+    err = capsys.readouterr().err
+    assert "unknown value 'nowhere'" in err and "random, wave, stored" in err
+    assert main([*args, "--out", str(out), "--popsize", "4"]) == 0
     doc = read_toml(out / "config.toml")
     doc["run"] |= {"stop_generations": 3, "stop_improvement": -1.0}  # an edited config.toml
     write_toml(out / "config.toml", doc)
-    res = cli.invoke(app, ["learn", "--resume", str(out), "--no-video"])
-    assert res.exit_code == 2 and "stop_improvement must be at least 0" in res.output
-    assert "config.toml" in res.output and "Traceback" not in res.output
+    assert main(["learn", "--resume", str(out), "--no-video"]) == 2
+    err = capsys.readouterr().err
+    assert "stop_improvement must be at least 0" in err and "config.toml" in err
+    assert "Traceback" not in err
+
+
+def test_a_stored_start_is_kept_in_the_run_and_read_back_on_resume(tmp_path, short_task):
+    shark = load_animal("shark")
+    wave = wave_controller(shark)
+    config = LearnConfig(task=str(short_task), budget=16, popsize=8, start="stored")
+    with pytest.raises(ZoeticError, match="needs the gait to start from"):
+        build(config, body=shark)
+    run = Run.create(tmp_path / "r", config, shark, start=wave)
+    assert (tmp_path / "r" / START_FILE).exists()
+    obj = run.setup.objective
+    assert np.allclose(obj.tables(run.setup.optimizer.x0[None])[0], wave.table(obj.steps, obj.dt))
+    resumed = Run.resume(tmp_path / "r")
+    assert np.array_equal(resumed.setup.optimizer.x0, run.setup.optimizer.x0)
 
 
 def test_wave_start_plays_the_animals_own_wave(short_task):

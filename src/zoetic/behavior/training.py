@@ -30,7 +30,6 @@ from zoetic.control.abstract import AbstractController, SequenceController
 from zoetic.errors import RunDirError, ZoeticError
 from zoetic.io import read_json, read_toml, suggest
 from zoetic.learning.abstraction import Abstraction, abstract, compare, mirror_abstract
-from zoetic.learning.config import TRAIN_BUDGET, TRAIN_OPTIMIZER
 from zoetic.tasks import Promise, Task, capabilities, fits, load_task, start_states
 
 # (entry name, task per medium kind): the paper's basic training, in order
@@ -319,7 +318,7 @@ def plan_digest(animal: str | Path, speeds: bool = False, radii: bool = False) -
 def train_repertoire(
     animal: str | Path | Body,
     out: str | Path,
-    budget: int = TRAIN_BUDGET,
+    budget: int = 3000,
     seed: int = 0,
     optimizer: str = "cmaes",
     modes: str | int = "auto",
@@ -342,7 +341,6 @@ def train_repertoire(
     speeds: learn a swimmer's ``SPEED_PLAN`` entries too (``parametric.swim_at`` blends them);
     radii: its ``RADIUS_PLAN`` entry too (``parametric.turn_of_radius`` blends the turns).
     """
-    from zoetic.behavior.handmade import handmade_repertoire
     from zoetic.learning.run import LearnConfig, Run
     from zoetic.learning.together import learn_together
 
@@ -353,7 +351,6 @@ def train_repertoire(
     rep.add("do-nothing", rest_abstraction(body), REST_SECONDS, source="all muscles relaxed")
     rep.save(out)
     entries = plan_for(body, speeds, radii)
-    known = handmade_repertoire(body).controllers
     runs = []
     for k, entry in enumerate(entries):
         run_dir = out / "runs" / entry.name
@@ -369,10 +366,8 @@ def train_repertoire(
                 seed=seed + k,
                 nodes=nodes,
                 evaluator=evaluator,
-                start="stored" if entry.name in known else "wave",
-                extra={"optimizer": dict(TRAIN_OPTIMIZER)} if optimizer == "cmaes" else {},
             )
-            run = Run.create(run_dir, config, body, start=known.get(entry.name))
+            run = Run.create(run_dir, config, body)
         if on_entry:
             on_entry(entry.name, run)
         runs.append(run)

@@ -15,7 +15,6 @@ from zoetic.cli.apps import app
 from zoetic.cli.learn import learn_bar
 from zoetic.cli.options import Force, Righting, given, use_ray_address
 from zoetic.cli.output import console, interrupted, print_summary
-from zoetic.learning.config import TRAIN_BUDGET
 
 Strict = Annotated[
     bool,
@@ -65,9 +64,7 @@ def train_cmd(
     ctx: typer.Context,
     animal: str = typer.Argument(..., help="Zoo animal name or animal .toml file."),
     out: Path = typer.Option(None, help="Repertoire directory (default memory/<animal>)."),
-    budget: int = typer.Option(
-        TRAIN_BUDGET, min=10, max=10_000_000, help="Evaluations per learned entry."
-    ),
+    budget: int = typer.Option(3000, min=10, max=10_000_000, help="Evaluations per learned entry."),
     optimizer: str = typer.Option("cmaes", help="anneal, simplex or cmaes."),
     modes: str = typer.Option("auto", help="Modes kept by the abstraction: auto or K."),
     threshold: float = typer.Option(0.3, help="auto keeps modes >= threshold x the strongest."),

@@ -69,10 +69,3 @@ def demo_config(budget: int = DEMO_BUDGET, seed: int = 0) -> LearnConfig:
         extra={"optimizer": dict(DEMO_OPTIMIZER)},
     )
 
-
-# ``zoetic repertoire train``'s search (docs/performance.md, "Learning in seconds"): each entry
-# starts from the animal's hand-made entry of the same name (``behavior.handmade``: its wave,
-# steered or with the fins tilted), else from its own travelling wave, with CMA-ES's step 0.1
-# of the box, and spends TRAIN_BUDGET evaluations (from a random start it spent 3000)
-TRAIN_BUDGET = 1500
-TRAIN_OPTIMIZER = {"sigma": 0.1}
