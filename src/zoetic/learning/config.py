@@ -68,4 +68,3 @@ def demo_config(budget: int = DEMO_BUDGET, seed: int = 0) -> LearnConfig:
         start=DEMO_START,
         extra={"optimizer": dict(DEMO_OPTIMIZER)},
     )
-
