@@ -21,6 +21,9 @@ def test_the_demo_banner_states_its_tasks_horizon_and_starts() -> None:
     assert f"8000 candidate controllers, each simulated for {task.horizon:g} s" in said
     names = ", ".join(s.name for s in task.starts)
     assert len(task.starts) > 1 and f"from {len(task.starts)} starts ({names})" in said
+    assert "random muscle signals" in said
+    warm = demo_banner(LearnConfig(task="swim-straight", start="wave"))
+    assert "starting from its own travelling wave" in warm and "random" not in warm
 
 
 def test_the_demo_banner_follows_another_task() -> None:

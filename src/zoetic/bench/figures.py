@@ -191,7 +191,7 @@ FIGURES: tuple[Figure, ...] = (
     ),
     Figure(
         "train.demo",
-        "demo learning, 8000 evals (quick 400)",
+        "demo learning, 2400 evals (quick 400)",
         "s",
         at("train", "demo_learning_seconds"),
         higher=False,

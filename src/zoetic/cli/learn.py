@@ -69,7 +69,7 @@ def run_with_progress(run, label: str, every_s: float = 2.0) -> None:
 # learn's options that a run stores in its config.toml: a resumed run keeps them
 STORED = (
     "animal task optimizer seed controller nodes frequency interp popsize chains evaluator "
-    "coupling fins"
+    "coupling fins start stop_generations stop_improvement"
 ).split()
 
 
@@ -109,6 +109,15 @@ def learn(
     fins: str = typer.Option(
         "auto", help="auto (learned for turns, else held level), held or free."
     ),
+    start: str = typer.Option(
+        "random", help="Where the search starts: random, or wave (the animal's own wave)."
+    ),
+    stop_generations: int = typer.Option(
+        None, help="Stop when the best E improves by at most --stop-improvement in K generations."
+    ),
+    stop_improvement: float = typer.Option(
+        None, help="That improvement, a fraction of |best E| (e.g. 0.001)."
+    ),
     out: Path = typer.Option(
         None, help="Run directory, new or empty (default runs/<animal>-<task>)."
     ),
@@ -145,6 +154,9 @@ def learn(
             coupling=coupling,
             fins=fins,
             frequency=frequency,
+            start=None if start == "random" else start,
+            stop_generations=stop_generations,
+            stop_improvement=stop_improvement,
         )
         run = _create(config, out, force)
     cfg = run.setup.config
@@ -182,6 +194,7 @@ def _check_same(resume: Path, stored, ctx: typer.Context) -> None:
 
     for name in STORED:
         value, kept = ctx.params[name], getattr(stored, name)
+        kept = "random" if name == "start" and kept is None else kept  # None: the default
         if given(ctx, name) and value != kept:
             flag = "ANIMAL" if name == "animal" else "--" + name.replace("_", "-")
             raise RunDirError(
@@ -207,6 +220,13 @@ def _print_summary(summary: dict) -> None:
     print_summary(summary, 14)
 
 
+def _start_words(config) -> str:
+    """How the demo's search starts, in words (``LearnConfig.start``)."""
+    if config.start == "wave":
+        return "starting from its own travelling wave"
+    return "with random muscle signals"
+
+
 def demo_banner(config) -> str:
     """What the demo is about to do, in words computed from its config and task file."""
     from zoetic.tasks import load_task
@@ -215,7 +235,7 @@ def demo_banner(config) -> str:
     n = len(task.starts)
     starts = f"from {n} starts ({', '.join(s.name or '?' for s in task.starts)})" if n > 1 else ""
     return (
-        f"[bold]zoetic demo[/]: a {config.animal} with random muscle signals learns "
+        f"[bold]zoetic demo[/]: a {config.animal} {_start_words(config)} learns "
         f"{task.name} ({config.optimizer}): {config.budget} candidate controllers, each "
         f"simulated for {task.horizon:g} s {starts}".rstrip()
         + "."
@@ -229,7 +249,7 @@ def demo(
     seed: int = typer.Option(0),
     video: bool = typer.Option(True),
 ) -> None:
-    """A shark learns to swim from scratch (CMA-ES, 40 nodes per muscle); runs/demo."""
+    """A shark learns to swim farther than its own wave (CMA-ES, 40 nodes per muscle)."""
     from zoetic.learning.run import Run
     from zoetic.runs import clear_demo, finish_run, mark_demo
     from zoetic.viz.media import learning_media

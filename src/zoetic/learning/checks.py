@@ -24,6 +24,7 @@ CHOICES = {  # the controller kinds are left to learning.run.build, which names 
     "fins": ("auto", "held", "free"),
     "medium": ("ground", "water", "sea", "vacuum"),
     "optimizer": tuple(OPTIMIZERS),
+    "start": ("random", "wave", "stored"),
 }
 BOUNDS = {
     "budget": (1, MAX_BUDGET),
@@ -31,7 +32,11 @@ BOUNDS = {
     "popsize": (2, 100_000),
     "chains": (1, 10_000),
     "seed": (0, 2**63 - 1),
+    "stop_generations": (1, 100_000),
+    "stop_improvement": (0.0, 1.0),
 }
+# settings that mean something only together
+PAIRED = (("stop_generations", "stop_improvement"),)
 
 
 def check_learn_config(d: dict, where: str) -> dict:
@@ -53,13 +58,17 @@ def check_learn_config(d: dict, where: str) -> dict:
             lo, hi = BOUNDS.get(key, (None, None))
             rd.integer(value, at, E, lo, hi)
         elif kind.startswith("float"):
-            rd.number(value, at, E)
+            rd.number(value, at, E, *BOUNDS.get(key, (None, None)))
         elif kind.startswith("str"):
             rd.string(value, at, E, CHOICES.get(key))
         elif kind.startswith("bool") and not isinstance(value, bool):
             raise E(f"{at} must be true or false, got {rd.abbrev(value)}")
         elif kind.startswith("dict") and not isinstance(value, dict):
             raise E(f"{at} must be a table, got {rd.abbrev(value)}")
+    for a, b in PAIRED:
+        if (d.get(a) is None) != (d.get(b) is None):
+            given, missing = (a, b) if d.get(a) is not None else (b, a)
+            raise E(f"{where}: {given} needs {missing} too (the plateau stop uses both)")
     return d
 
 

@@ -245,6 +245,16 @@ class Objective:
         """Return the free parameters (dim,) of a full controller parameter vector."""
         return np.asarray(full, float).reshape(self.full_shape)[self.free].ravel()
 
+    def params_of(self, controller: Controller) -> np.ndarray:
+        """Return the free parameters (dim,) whose signals come nearest to ``controller``'s
+        over the horizon (least squares on every step), within the bounds: a start for the
+        search from a known gait (the animal's own wave plays exactly on a periodic basis of
+        its frequency)."""
+        u = controller.table(self.steps, self.dt)  # (T, A)
+        coef = np.linalg.lstsq(self._basis, u, rcond=None)[0].T  # (A, M)
+        lo, hi = self.bounds()
+        return np.clip(self.free_params(coef), lo, hi)
+
     def full_coefficients(self, params: np.ndarray) -> np.ndarray:
         """Return the coefficients (K, A, M) of every actuator for free parameters (K, dim)."""
         free = np.asarray(params, dtype=np.float64).reshape(-1, *self.shape)

@@ -25,7 +25,14 @@ from pathlib import Path
 import numpy as np
 
 from zoetic.bodies import Body, load_animal
-from zoetic.control import Controller, frequency_domain, save_controller, time_domain
+from zoetic.control import (
+    Controller,
+    frequency_domain,
+    load_controller,
+    save_controller,
+    time_domain,
+    wave_controller,
+)
 from zoetic.errors import RunDirError, ZoeticError
 from zoetic.io import atomic_write_bytes, write_toml
 from zoetic.learning.checks import check_fits, check_learn_size, check_run, run_dir_parts
@@ -85,11 +92,17 @@ def _template(config: LearnConfig, body: Body, task: Task) -> tuple[Controller, 
     raise ZoeticError(f"unknown controller {config.controller!r} (periodic, time or frequency)")
 
 
-def build(config: LearnConfig, task: Task | None = None, body: Body | None = None) -> Setup:
+def build(
+    config: LearnConfig,
+    task: Task | None = None,
+    body: Body | None = None,
+    start: Controller | None = None,
+) -> Setup:
     """Return the task, objective and a fresh optimizer for a configuration and an animal.
 
     ``body`` is the animal learned (default: ``config.animal`` loaded from the zoo or its
-    file); ``task`` defaults to ``config.task`` loaded."""
+    file); ``task`` defaults to ``config.task`` loaded; ``start`` is the gait a run with
+    ``start = "stored"`` starts from (its run directory's start.json)."""
     body = body if body is not None else load_animal(config.animal)
     task = task or load_task(config.task)
     check_fits(task, body, config.medium)
@@ -104,10 +117,7 @@ def build(config: LearnConfig, task: Task | None = None, body: Body | None = Non
         task, body, template, config.medium, coupling=coupling, fins=fins, harmonic_bound=bound
     )
     lo, hi = objective.bounds()
-    rng = np.random.default_rng(config.seed)
-    x0 = rng.uniform(lo, hi)
-    if config.controller != "time":  # random small amplitudes about a mid-level constant
-        x0 = np.clip(x0 * 0.5 + np.where(lo == 0.0, 0.25, 0.0), lo, hi)  # constants: lo 0
+    x0 = start_point(config, objective, start)
     options = {}
     if config.optimizer == "cmaes":
         options["popsize"] = config.popsize or CMAES_POPSIZE
@@ -115,7 +125,29 @@ def build(config: LearnConfig, task: Task | None = None, body: Body | None = Non
         options["chains"] = config.chains
     options |= config.extra.get("optimizer", {})
     opt = make_optimizer(config.optimizer, x0, lo, hi, config.seed, config.budget, **options)
+    if config.stop_generations is not None and config.stop_improvement is not None:
+        opt.plateau = (config.stop_generations, config.stop_improvement)
     return Setup(config, task, objective, opt, template)
+
+
+def start_point(
+    config: LearnConfig, objective: Objective, start: Controller | None = None
+) -> np.ndarray:
+    """Return where the search starts (``LearnConfig.start``): a known gait on the
+    controller's parameters, the animal's own travelling wave ("wave") or the run's stored
+    ``start`` ("stored"), or a random point of the box from the seed (a frequency-domain
+    controller: small amplitudes about a mid-level constant)."""
+    if config.start == "wave":
+        return objective.params_of(wave_controller(objective.body))
+    if config.start == "stored":
+        if start is None:
+            raise ZoeticError(f'start = "stored" needs the gait to start from ({START_FILE})')
+        return objective.params_of(start)
+    lo, hi = objective.bounds()
+    x0 = np.random.default_rng(config.seed).uniform(lo, hi)
+    if config.controller != "time":
+        x0 = np.clip(x0 * 0.5 + np.where(lo == 0.0, 0.25, 0.0), lo, hi)  # constants: lo 0
+    return x0
 
 
 def resolve_coupling(config: LearnConfig, task: Task, body, fins: str = "held") -> str:
@@ -189,6 +221,7 @@ class Log:
 
 
 CHECKPOINT = "checkpoint.npz"
+START_FILE = "start.json"  # the gait a run with start = "stored" starts from
 PREVIOUS = "checkpoint.prev.npz"
 LOG_KEYS = ("X", "E", "E_u", "E_v", "wall", "batches")
 
@@ -301,13 +334,19 @@ class Run:
 
     @classmethod
     def create(
-        cls, out: Path, config: LearnConfig, body: Body | None = None, task: Task | None = None
+        cls,
+        out: Path,
+        config: LearnConfig,
+        body: Body | None = None,
+        task: Task | None = None,
+        start: Controller | None = None,
     ) -> Run:
         """Start a new run of ``config`` on ``body`` in ``out`` (refuses a directory that already
         holds one, and whatever ``checks.check_run`` refuses).
 
         ``body`` is the animal learned (default: ``config.animal`` loaded); it is stored in the
-        run directory (``animal.npz``) and a resumed run learns it, never a reloaded one."""
+        run directory (``animal.npz``) and a resumed run learns it, never a reloaded one.
+        ``start``: the gait a run with ``start = "stored"`` starts from, stored as start.json."""
         out = Path(out)
         if (out / CHECKPOINT).exists():
             raise RunDirError(
@@ -316,9 +355,11 @@ class Run:
         body = body if body is not None else load_animal(config.animal)
         task = task or load_task(config.task)
         check_run(config, body, task)
-        setup = build(config, task, body)
+        setup = build(config, task, body, start)
         out.mkdir(parents=True, exist_ok=True)
         save_body(body, out / ANIMAL_FILE)
+        if config.start == "stored":
+            save_controller(start, out / START_FILE)
         write_toml(out / "config.toml", {"run": config.to_dict(), "task": setup.task.to_dict()})
         return cls(out, setup)
 
@@ -332,7 +373,10 @@ class Run:
         if new_budget:
             config = replace(config, budget=int(budget))
             check_learn_size(config.to_dict(), task, f"{out}: --budget {budget}", body)
-        setup = build(config, task, body)
+        start = None
+        if config.start == "stored":
+            start = load_controller(out / START_FILE, body)
+        setup = build(config, task, body, start)
         run = cls._restore(out, setup)
         if new_budget:
             write_toml(out / "config.toml", {"run": config.to_dict(), "task": task.to_dict()})

@@ -19,6 +19,20 @@ import numpy as np
 from zoetic.errors import ZoeticError
 
 
+def plateaued(bests: list[float], generations: int, improvement: float) -> bool:
+    """True when the best E improved by at most ``improvement`` times its size over the last
+    ``generations`` batches: bests[-1 - generations] - bests[-1] <= improvement * |bests[-1]|.
+
+    ``bests`` is the best E after each batch told; a run shorter than ``generations`` + 1
+    batches, or without a finite best ``generations`` batches ago, has not plateaued."""
+    if len(bests) <= generations:
+        return False
+    before, now = bests[-1 - generations], bests[-1]
+    if not (np.isfinite(before) and np.isfinite(now)):
+        return False
+    return before - now <= improvement * abs(now)
+
+
 class Optimizer:
     """Shared bookkeeping: bounds, evaluation count, best point so far."""
 
@@ -40,6 +54,9 @@ class Optimizer:
         self.evaluations = 0
         self.best_x = self.x0.copy()
         self.best_f = np.inf
+        self.bests: list[float] = []  # the best E after each batch told, in order
+        # (generations, improvement) of the run's plateau stop (``plateaued``); None: none
+        self.plateau: tuple[int, float] | None = None
 
     @property
     def dimension(self) -> int:
@@ -58,6 +75,7 @@ class Optimizer:
         if f[k] < self.best_f:
             self.best_f = float(f[k])
             self.best_x = np.array(X[k], dtype=np.float64)
+        self.bests.append(self.best_f)
         return f
 
     def tell(self, X: np.ndarray, f: np.ndarray, grad: np.ndarray | None = None) -> None:
@@ -65,8 +83,9 @@ class Optimizer:
         self.record(X, f)
 
     def done(self) -> bool:
-        """Return True when the method has nothing more to try (budget aside)."""
-        return False
+        """Return True when the method has nothing more to try (budget aside) or the best E
+        has reached a plateau (``plateau``); a method with its own criteria adds them."""
+        return self.plateau is not None and plateaued(self.bests, *self.plateau)
 
     def status(self) -> dict:
         """Return a few numbers worth showing in a progress bar."""
@@ -81,6 +100,7 @@ class Optimizer:
             "evaluations": self.evaluations,
             "best_x": self.best_x.copy(),
             "best_f": self.best_f,
+            "bests": np.array(self.bests, dtype=np.float64),
         } | self._state()
 
     def load_state_dict(self, state: dict) -> None:
@@ -94,6 +114,8 @@ class Optimizer:
         self.evaluations = int(state["evaluations"])
         self.best_x = best_x.copy()
         self.best_f = float(state["best_f"])
+        # a checkpoint written before the plateau stop kept no bests: counted from here
+        self.bests = [float(b) for b in np.asarray(state.get("bests", []), dtype=np.float64)]
         self._load(state)
 
     def _state(self) -> dict:

@@ -109,8 +109,10 @@ class CMAES(Optimizer):
             self.es.tell(list(X), list(g))
 
     def done(self):
-        """Return True when CMA-ES meets a stop criterion other than the budget."""
-        return bool(self.es.stop()) and "maxfevals" not in self.es.stop()
+        """Return True when CMA-ES meets a stop criterion other than the budget, or the run's
+        plateau stop (``Optimizer.done``)."""
+        own = bool(self.es.stop()) and "maxfevals" not in self.es.stop()
+        return own or super().done()
 
     def status(self):
         """Return {"sigma": CMA-ES's current overall step size, in parameter units}."""

@@ -104,7 +104,10 @@ class Simplex(Optimizer):
                 self.phase = "shrink"
 
     def done(self):
-        """Return True when the simplex has collapsed below ``xatol`` and ``fatol``."""
+        """Return True when the simplex has collapsed below ``xatol`` and ``fatol``, or the
+        run's plateau stop (``Optimizer.done``)."""
+        if super().done():
+            return True
         if self.phase != "reflect" or not np.all(np.isfinite(self.fsim)):
             return False
         return bool(
