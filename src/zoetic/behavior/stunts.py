@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from zoetic.behavior.repertoire import Repertoire
-from zoetic.behavior.stunt_problem import StuntProblem, StuntRecord
+from zoetic.behavior.stunt_problem import CHECK_SIGNS, StuntProblem, StuntRecord, jittered_starts
 from zoetic.behavior.tracking import body_length
 from zoetic.behavior.tricks import Trick, parse_object
 
@@ -168,6 +168,29 @@ def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, boo
         if part == "tail":  # during a somersault: out of the water, half a turn or more done
             flags["in_somersault"] = bool(m.get("tail_strike_rotation_deg", 0.0) >= TAIL_STRIKE_DEG)
     return flags
+
+
+def perturbed_measures(
+    problem: StuntProblem, entries: np.ndarray, durations: np.ndarray, signs=CHECK_SIGNS
+) -> list[dict]:
+    """Return ``measures`` of a plan played from each start moved by ``signs`` (K, 3) x the
+    trick's jitter (depth m, heading and pitch deg; default: one at a time, each way),
+    recorded as a found stunt is (every other time step)."""
+    starts = jittered_starts(problem.trick, problem.body, signs)
+    rec = problem.record(entries[None], durations[None], record_every=2, starts=starts)
+    return [measures(problem, rec, lane) for lane in range(len(signs))]
+
+
+def perturbed_successes(
+    problem: StuntProblem, entries: np.ndarray, durations: np.ndarray, signs=CHECK_SIGNS
+) -> list[bool]:
+    """Return whether a plan still meets its trick's targets (``targets_met``) from each
+    start moved by ``signs`` (``perturbed_measures``)."""
+    trick = problem.trick
+    return [
+        all(targets_met(trick.name, m, trick).values())
+        for m in perturbed_measures(problem, entries, durations, signs)
+    ]
 
 
 def strike_speeds(rec: StuntRecord, touch: np.ndarray, lane: int = 0) -> dict:
@@ -346,6 +369,9 @@ class Stunt:
     record: StuntRecord  # the best plan, recorded every other time step
     scores: dict  # its E ('cost') and term values (B = 1)
     measures: dict  # measures() of it
+    # the plan's targets met from each of the check's perturbed starts (``CHECK_SIGNS``); empty
+    # for a trick without a jitter
+    perturbed: list[bool] = dataclasses.field(default_factory=list)
 
     def summary(self) -> dict:
         """Return the JSON-able numbers of the stunt (without the search history)."""
@@ -371,6 +397,9 @@ class Stunt:
             ],
             "evaluations": r.evaluations,
             "wall_s": round(r.wall, 2),
+            "jitter": self.problem.trick.to_dict()["jitter"],
+            "perturbed_starts_met": sum(self.perturbed),
+            "perturbed_starts": len(self.perturbed),
         }
 
 
@@ -396,4 +425,7 @@ def discover(
     opts = {"chains": min(16, budget)} if method == "anneal" else {"popsize": min(32, budget)}
     result = search(problem, method, budget, seed, progress=progress, evaluator=evaluator, **opts)
     rec = problem.record(result.entries[None], result.durations[None], record_every=2)
-    return Stunt(problem, result, rec, problem.scores(rec), measures(problem, rec))
+    checked = (
+        perturbed_successes(problem, result.entries, result.durations) if any(trick.jitter) else []
+    )
+    return Stunt(problem, result, rec, problem.scores(rec), measures(problem, rec), checked)

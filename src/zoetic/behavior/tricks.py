@@ -5,6 +5,11 @@
 ``cylinder`` and that object's fields, in world metres: a hurdle's bar, a beach ball on its
 post). The task's ``horizon`` is the stunt's duration, its ``[start]`` where the animal starts
 (e.g. at depth, at rest) and its ``[[terms]]`` the style terms (``zoetic.tasks.terms``).
+
+``[trick.jitter]`` (``depth`` m, ``heading`` and ``pitch`` deg) makes the search robust: each
+plan is played from the start and from two starts moved by those amounts (one deeper, turned
+left and pitched up; one shallower, turned right and pitched down) and scored by the worst of
+the three, so that a plan found still works when its start is slightly off.
 """
 
 from __future__ import annotations
@@ -19,7 +24,8 @@ from zoetic.physics.objects import Ball, Box, Cylinder
 from zoetic.tasks import TASK_DIR, Task, parse_task
 
 TRICK_DIR = TASK_DIR / "tricks"
-TRICK_KEYS = ("segments", "durations")
+TRICK_KEYS = ("segments", "durations", "jitter")
+JITTER_KEYS = ("depth", "heading", "pitch")  # m, deg, deg
 OBJECTS = {"ball": Ball, "box": Box, "cylinder": Cylinder}
 
 
@@ -31,6 +37,7 @@ class Trick:
     objects: tuple[Ball | Box | Cylinder, ...] = ()
     segments: int = 4
     durations: tuple[float, float] = (0.3, 2.0)
+    jitter: tuple[float, float, float] = (0.0, 0.0, 0.0)  # start depth m, heading, pitch deg
 
     @property
     def name(self) -> str:
@@ -50,6 +57,7 @@ class Trick:
             "objects": objs,
             "segments": self.segments,
             "durations": list(self.durations),
+            "jitter": dict(zip(JITTER_KEYS, self.jitter, strict=True)),
         }
 
 
@@ -86,6 +94,26 @@ def _durations(raw_trick: dict, task: Task, source: str) -> tuple[float, float]:
     return float(durations[0]), float(durations[1])
 
 
+def _jitter(raw_trick: dict, source: str) -> tuple[float, float, float]:
+    raw = raw_trick.get("jitter", {})
+    if not isinstance(raw, dict):
+        raise TaskError(f"{source}: trick: 'jitter' must be a table of {list(JITTER_KEYS)}")
+    bad = sorted(set(raw) - set(JITTER_KEYS))
+    if bad:
+        raise TaskError(
+            f"{source}: trick.jitter: unknown key(s) {bad} (allowed: {list(JITTER_KEYS)})"
+        )
+    out = []
+    for k in JITTER_KEYS:
+        v = raw.get(k, 0.0)
+        if isinstance(v, bool) or not isinstance(v, int | float) or not 0 <= v < 90:
+            raise TaskError(
+                f"{source}: trick.jitter: {k!r} must be a number >= 0 (m or deg), got {v!r}"
+            )
+        out.append(float(v))
+    return out[0], out[1], out[2]
+
+
 def parse_trick(doc: dict, source: str = "<memory>") -> Trick:
     """Return the Trick a parsed TOML document describes; TaskError names what is wrong."""
     if not isinstance(doc, dict):
@@ -106,7 +134,7 @@ def parse_trick(doc: dict, source: str = "<memory>") -> Trick:
     if not isinstance(raw_objects, list):
         raise TaskError(f"{source}: objects must be [[objects]] tables")
     objects = tuple(parse_object(o, f"{source}: objects[{k}]") for k, o in enumerate(raw_objects))
-    return Trick(task, objects, int(segments), durations)
+    return Trick(task, objects, int(segments), durations, _jitter(raw_trick, source))
 
 
 def list_tricks() -> list[str]:
