@@ -2,7 +2,7 @@
 beside the trick's objects, recorded through the one closed-loop driver and scored by the
 trick's style terms (which here also see the World's contact record and the balls).
 
-With a trick's ``jitter`` each plan is played from its start and two perturbed ones
+With a trick's ``jitter`` (and ``robust``) each plan is played from its start and two perturbed ones
 (``SEARCH_SIGNS``) and its E is the worst of them: the search then prefers plans that do not
 hinge on the exact start (a somersault found from one start turned 174-376 deg when its start
 moved a few cm or degrees). ``CHECK_SIGNS`` are the starts a found plan is checked from."""
@@ -33,6 +33,11 @@ from zoetic.tasks.terms import BodyFrame, Signals, evaluate_terms, term_names
 SEARCH_SIGNS = ((0, 0, 0), (1, 1, 1), (-1, -1, -1))
 # a found plan's check: one jitter at a time, each way (none of them a search start)
 CHECK_SIGNS = ((1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1))
+
+
+def starts_per_plan(trick: Trick) -> int:
+    """Return how many starts the search plays each plan of the trick from (3 robust, else 1)."""
+    return len(SEARCH_SIGNS) if trick.robust and any(trick.jitter) else 1
 
 
 def jittered_starts(trick: Trick, body: Body, signs) -> State:
@@ -123,7 +128,7 @@ class StuntProblem(MacroProblem):
         self.start = start_state(trick.task, body)
         # the starts every plan is scored from (the worst counts): the start, and with a
         # jitter, two perturbed ones
-        robust = any(trick.jitter)
+        robust = starts_per_plan(trick) > 1
         self.starts = jittered_starts(trick, body, SEARCH_SIGNS) if robust else self.start
         self.frame = BodyFrame.of(body)
         self.level = get_medium(body.medium).water_level

@@ -19,7 +19,13 @@ from pathlib import Path
 import numpy as np
 
 from zoetic.behavior.repertoire import Repertoire
-from zoetic.behavior.stunt_problem import CHECK_SIGNS, StuntProblem, StuntRecord, jittered_starts
+from zoetic.behavior.stunt_problem import (
+    CHECK_SIGNS,
+    StuntProblem,
+    StuntRecord,
+    jittered_starts,
+    starts_per_plan,
+)
 from zoetic.behavior.tracking import body_length
 from zoetic.behavior.tricks import Trick, parse_object
 
@@ -132,7 +138,7 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
 # the issue's targets, per built-in trick (bellyflop against clean-dive: ``splash_ratio``)
 LEAP_AIR_S, LEAP_APEX_BL, SOMERSAULT_DEG, SPLASH_RATIO = 0.4, 0.5, 360.0, 3.0
 SPIN_DEG = 360.0  # spin: a full turn about the body's own long axis in the air
-BUDGET = 9600  # plans a trick search tries by default (about a minute a trick on 2 cores)
+BUDGET = 9600  # stunt simulations a trick search runs by default (about a minute on 2 cores)
 TAIL_STRIKE_DEG = float(np.degrees(TAIL_STRIKE_TURN))  # ball-tail: a strike after half a turn
 
 
@@ -415,15 +421,18 @@ def discover(
     evaluator: str = "batch",
 ) -> Stunt:
     """Return the best stunt ``method`` (anneal: 16 chains; ga: 32 a generation) finds for the
-    trick within ``budget`` plan evaluations.
+    trick within ``budget`` stunt simulations (plans x the starts each is played from: 3 for a
+    robust trick, else 1).
 
     ``evaluator``: batch (this process) or ray (each batch of plans on Ray actors, the problem
     put in the object store once; same seed, same stunt as in process)."""
     from zoetic.behavior.macro import search
 
     problem = StuntProblem(body, repertoire, trick, segments)
-    opts = {"chains": min(16, budget)} if method == "anneal" else {"popsize": min(32, budget)}
-    result = search(problem, method, budget, seed, progress=progress, evaluator=evaluator, **opts)
+    # the budget counts stunt simulations: a robust search plays each plan from K starts
+    plans = max(1, budget // starts_per_plan(trick))
+    opts = {"chains": min(16, plans)} if method == "anneal" else {"popsize": min(32, plans)}
+    result = search(problem, method, plans, seed, progress=progress, evaluator=evaluator, **opts)
     rec = problem.record(result.entries[None], result.durations[None], record_every=2)
     checked = (
         perturbed_successes(problem, result.entries, result.durations) if any(trick.jitter) else []

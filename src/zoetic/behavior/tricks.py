@@ -6,10 +6,12 @@
 post). The task's ``horizon`` is the stunt's duration, its ``[start]`` where the animal starts
 (e.g. at depth, at rest) and its ``[[terms]]`` the style terms (``zoetic.tasks.terms``).
 
-``[trick.jitter]`` (``depth`` m, ``heading`` and ``pitch`` deg) makes the search robust: each
-plan is played from the start and from two starts moved by those amounts (one deeper, turned
-left and pitched up; one shallower, turned right and pitched down) and scored by the worst of
-the three, so that a plan found still works when its start is slightly off.
+``[trick.jitter]`` (``depth`` m, ``heading`` and ``pitch`` deg) says how far the start may be
+off: a found plan is checked from six starts moved by it (one amount at a time, each way), and
+with ``robust = true`` in ``[trick]`` (the default once there is a jitter) the search plays
+each plan from the start and from two starts moved by all of it (one deeper, turned left and
+pitched up; one shallower, turned right and pitched down) and scores it by the worst of the
+three, so that a plan found still works when its start is slightly off.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from zoetic.physics.objects import Ball, Box, Cylinder
 from zoetic.tasks import TASK_DIR, Task, parse_task
 
 TRICK_DIR = TASK_DIR / "tricks"
-TRICK_KEYS = ("segments", "durations", "jitter")
+TRICK_KEYS = ("segments", "durations", "jitter", "robust")
 JITTER_KEYS = ("depth", "heading", "pitch")  # m, deg, deg
 OBJECTS = {"ball": Ball, "box": Box, "cylinder": Cylinder}
 
@@ -38,6 +40,7 @@ class Trick:
     segments: int = 4
     durations: tuple[float, float] = (0.3, 2.0)
     jitter: tuple[float, float, float] = (0.0, 0.0, 0.0)  # start depth m, heading, pitch deg
+    robust: bool = True  # with a jitter: each plan scored by its worst of three starts
 
     @property
     def name(self) -> str:
@@ -58,6 +61,7 @@ class Trick:
             "segments": self.segments,
             "durations": list(self.durations),
             "jitter": dict(zip(JITTER_KEYS, self.jitter, strict=True)),
+            "robust": self.robust,
         }
 
 
@@ -134,7 +138,10 @@ def parse_trick(doc: dict, source: str = "<memory>") -> Trick:
     if not isinstance(raw_objects, list):
         raise TaskError(f"{source}: objects must be [[objects]] tables")
     objects = tuple(parse_object(o, f"{source}: objects[{k}]") for k, o in enumerate(raw_objects))
-    return Trick(task, objects, int(segments), durations, _jitter(raw_trick, source))
+    robust = raw_trick.get("robust", True)
+    if not isinstance(robust, bool):
+        raise TaskError(f"{source}: trick: 'robust' must be true or false, got {robust!r}")
+    return Trick(task, objects, int(segments), durations, _jitter(raw_trick, source), robust)
 
 
 def list_tricks() -> list[str]:
