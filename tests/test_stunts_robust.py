@@ -10,7 +10,13 @@ import numpy as np
 import pytest
 
 from zoetic.behavior.repertoire import Repertoire
-from zoetic.behavior.stunt_problem import CHECK_SIGNS, SEARCH_SIGNS, StuntProblem, jittered_starts
+from zoetic.behavior.stunt_problem import (
+    CHECK_SIGNS,
+    SEARCH_SIGNS,
+    StuntProblem,
+    jittered_starts,
+    starts_per_plan,
+)
 from zoetic.behavior.stunts import measures, perturbed_measures, perturbed_successes
 from zoetic.behavior.training import rest_abstraction
 from zoetic.behavior.tricks import parse_trick
@@ -125,12 +131,28 @@ def test_a_plan_is_checked_from_each_jittered_start(dolphin, repertoire):
     assert perturbed_successes(problem, e, d) == [False] * 6
 
 
+def test_a_robust_search_spends_its_budget_of_simulations_on_a_third_as_many_plans(
+    dolphin, repertoire
+):
+    from zoetic.behavior.stunts import discover
+
+    robust = parse_trick(_doc(), "up")
+    plain = parse_trick(_doc() | {"trick": _doc()["trick"] | {"robust": False}}, "up")
+    assert starts_per_plan(robust) == 3 and starts_per_plan(plain) == 1
+    assert len(StuntProblem(dolphin, repertoire, plain).starts.positions) == 1
+    found = discover(dolphin, repertoire, robust, budget=24, seed=0)
+    assert found.result.evaluations == 8
+    assert found.summary()["perturbed_starts"] == 6  # checked all the same
+
+
 def test_the_jitter_table_is_strict():
     bad = _doc(jitter={"depht": 0.05})
     with pytest.raises(TaskError, match=r"up: trick\.jitter: unknown key"):
         parse_trick(bad, "up")
     with pytest.raises(TaskError, match=r"up: trick\.jitter: 'pitch' must be"):
         parse_trick(_doc(jitter={"pitch": -1.0}), "up")
+    with pytest.raises(TaskError, match=r"up: trick: 'robust' must be true or false"):
+        parse_trick(_doc() | {"trick": {"robust": "yes"}}, "up")
 
 
 def _rising(body, heights) -> Signals:

@@ -220,6 +220,13 @@ def _report(
             f"{'over' if got['bar_crossed'] else 'not over'} the bar, "
             f"{'touched' if got.get('hurdle_touched') else 'not touched'}"
         )
+    if summary["perturbed_starts"]:
+        j = summary["jitter"]
+        console.print(
+            f"targets met from {summary['perturbed_starts_met']} of "
+            f"{summary['perturbed_starts']} perturbed starts (start {j['depth']:g} m deeper or "
+            f"shallower, turned {j['heading']:g} deg, pitched {j['pitch']:g} deg; one at a time)"
+        )
     played = [f"{p['entry']} {p['duration_s']:.2f} s" for p in summary["plan"] if p["played"]]
     console.print("plan: " + ", ".join(played))
     console.print(
