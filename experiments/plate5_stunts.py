@@ -95,7 +95,9 @@ def seed_table(body, rep, names: list[str], seeds: list[int], args) -> str:
             found = discover(body, rep, trick, args.method, args.budget, seed)
             cpu.append(time.process_time() - t0)
             s = found.summary()
-            ok = all(targets_met(name, s, trick).values())
+            flags = targets_met(name, s, trick)
+            ok = all(flags.values())
+            write_json(args.out / name / f"seed{seed}.json", s | {"targets": flags})
             met += ok
             cells.append(f"{seed}: {'yes' if ok else 'no'} "
                          f"{s['perturbed_starts_met']}/{s['perturbed_starts']}")
