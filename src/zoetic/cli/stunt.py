@@ -249,7 +249,9 @@ def bench_stunts_cmd(
         help="Comma-separated tricks.",
     ),
     method: str = typer.Option("anneal"),
-    budget: int = typer.Option(None, min=1, help="Plans per trick (default: as zoetic stunt)."),
+    budget: int = typer.Option(
+        None, min=1, help="Stunt simulations per trick (default: as zoetic stunt)."
+    ),
     seed: int = typer.Option(0),
     json: Json = False,
     quick: Quick = False,
