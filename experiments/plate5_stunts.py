@@ -16,6 +16,11 @@ The repertoire defaults to the one ``zoetic bench stunts`` trains and keys by th
 training tasks (runs/bench/dolphin-memory-<digest>), trained here if missing; the budget to
 ``zoetic stunt``'s (``behavior.stunts.BUDGET``), so the table and the bench line agree.
 
+``--seeds 0-4`` (or ``0,2,4``) prints instead a table of successes per trick over those seeds
+(no frames): each seed's targets met, how many of the six perturbed starts its plan still
+meets them from (the trick's jitter, one at a time, each way) and the CPU time per search:
+    python experiments/plate5_stunts.py --seeds 0-4 [--tricks somersault,leap]
+
 ``--launch SPEED`` starts every trick from a launch instead of its own start (SPEED m/s along
 a body pitched ``--launch-pitch`` rad nose up, ``--launch-depth`` m down): a check of the
 whole pipeline (terms, search, records, video) on a body that flies whatever its strength.
@@ -42,8 +47,7 @@ from zoetic.behavior.stunts import (
 )
 from zoetic.behavior.training import plan_digest, train_repertoire
 from zoetic.bodies import load_animal
-from zoetic.io import atomic_write_bytes, read_toml, write_json
-from zoetic.io import make_dir
+from zoetic.io import atomic_write_bytes, make_dir, read_toml, write_json
 from zoetic.viz.stunts import frame_strip, stunt_frames
 
 
@@ -68,6 +72,40 @@ def strip_times(times: np.ndarray, com_y: np.ndarray, level: float) -> list[floa
     return [float(times[i]) for i in picks]
 
 
+def parse_seeds(text: str) -> list[int]:
+    """Return the seeds of "0-4" or "0,2,4"."""
+    if "-" in text:
+        a, b = text.split("-", 1)
+        return list(range(int(a), int(b) + 1))
+    return [int(t) for t in text.split(",") if t.strip()]
+
+
+def seed_table(body, rep, names: list[str], seeds: list[int], args) -> str:
+    """Discover each trick from each seed; return a Markdown table of successes per trick."""
+    rows = [
+        f"| trick | seeds met (of {len(seeds)}) | per seed: targets met, perturbed starts met "
+        "| median CPU s a search |",
+        "|---|---|---|---|",
+    ]
+    for name in names:
+        trick = load_trick(name)
+        cells, met, cpu = [], 0, []
+        for seed in seeds:
+            t0 = time.process_time()
+            found = discover(body, rep, trick, args.method, args.budget, seed)
+            cpu.append(time.process_time() - t0)
+            s = found.summary()
+            flags = targets_met(name, s, trick)
+            ok = all(flags.values())
+            write_json(args.out / name / f"seed{seed}.json", s | {"targets": flags})
+            met += ok
+            cells.append(f"{seed}: {'yes' if ok else 'no'} "
+                         f"{s['perturbed_starts_met']}/{s['perturbed_starts']}")
+        rows.append(f"| {name} | {met} | {'; '.join(cells)} | {np.median(cpu):.0f} |")
+        print(rows[-1], flush=True)
+    return "\n".join(rows)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--memory", type=Path, default=None,
@@ -76,6 +114,8 @@ def main() -> None:
     ap.add_argument("--budget", type=int, default=BUDGET)
     ap.add_argument("--tricks", default=None, help="comma-separated (default: all built in)")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--seeds", default=None,
+                    help="e.g. 0-4: a table of successes per trick over these seeds instead")
     ap.add_argument("--method", default="anneal")
     ap.add_argument("--launch", type=float, default=None, help="start speed (m/s) for all")
     ap.add_argument("--launch-pitch", type=float, default=0.9)
@@ -92,6 +132,13 @@ def main() -> None:
         print(f"trained the repertoire in {time.perf_counter() - t0:.0f} s")
     rep = Repertoire.load(args.memory, body)
     make_dir(args.out)
+    names = list_tricks() if args.tricks is None else [
+        t.strip() for t in args.tricks.split(",") if t.strip()]
+    if args.seeds is not None:
+        table = seed_table(body, rep, names, parse_seeds(args.seeds), args)
+        atomic_write_bytes(args.out / "seeds.md", (table + "\n").encode())
+        print(f"\n{table}\n\nwrote {args.out}/seeds.md")
+        return
     rows = [
         "| trick | apex m (body lengths) | s out of water | rotation in air deg (about the "
         "left-right axis) | ball contact (part) | striker -> ball m/s | hurdle clearance m "
@@ -100,8 +147,6 @@ def main() -> None:
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     summaries = {}
-    names = list_tricks() if args.tricks is None else [
-        t.strip() for t in args.tricks.split(",") if t.strip()]
     for name in names:
         trick = load_trick(name)
         if args.launch is not None:
@@ -123,6 +168,8 @@ def main() -> None:
             f"{s['hurdle_clearance_m']:.2f}" + (" touched" if s.get("hurdle_touched") else ""))
         met = ("-" if not flags else
                ", ".join(f"{k} {'yes' if v else 'no'}" for k, v in flags.items()))
+        if s["perturbed_starts"]:
+            met += f"; perturbed starts {s['perturbed_starts_met']}/{s['perturbed_starts']}"
         rows.append(
             f"| {name} | {s['apex_above_surface_m']:.2f} ({s['apex_body_lengths']:.2f}) "
             f"| {s['air_time_s']:.2f} | {s['rotation_in_air_deg']:.0f} "

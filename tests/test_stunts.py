@@ -197,6 +197,7 @@ def test_stunt_cli_writes_its_files_and_the_macro_replays(tmp_path, capsys, dolp
         'name = "short-leap"\nrequires = ["surface"]\nhorizon = 0.5\nrecord_hz = 20.0\n'
         "[start]\ndepth = 0.6\nspeed = 1.0\npitch = 0.6\n"
         "[trick]\nsegments = 2\ndurations = [0.1, 0.4]\n"
+        "[trick.jitter]\ndepth = 0.05\nheading = 2.0\n"
         '[[terms]]\nkind = "apex_above_surface"\nweight = -1.0\n'
     )
     out = tmp_path / "leap"
@@ -218,11 +219,14 @@ def test_stunt_cli_writes_its_files_and_the_macro_replays(tmp_path, capsys, dolp
     )
     assert code == 0
     said = " ".join(capsys.readouterr().out.split())  # before the search: what it will cost
-    assert "dolphin short-leap: 6 plans by anneal, each a 0.5 s simulation" in said
+    # robust: the 6 simulations are 2 plans, each from 3 starts; checked from 6 more
+    assert "dolphin short-leap: 2 plans by anneal, each a 0.5 s simulation from 3 starts" in said
+    assert "targets met from 6 of 6 perturbed starts (start 0.05 m deeper" in said
     for f in ("macro.json", "summary.json", "score.png", "video.mp4"):
         assert (out / f).stat().st_size > 0, f
     s = json.loads((out / "summary.json").read_text())
-    assert s["evaluations"] == 6 and len(s["plan"]) == 2
+    assert s["evaluations"] == 2 and len(s["plan"]) == 2
+    assert s["perturbed_starts"] == 6 and s["jitter"] == {"depth": 0.05, "heading": 2.0, "pitch": 0}
     assert s["E"] == pytest.approx(-s["apex_above_surface_m"], abs=1e-3)
     assert s["seconds"] == pytest.approx(0.5)
     code = main(

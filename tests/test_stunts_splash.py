@@ -337,7 +337,7 @@ def test_bench_stunts_judges_tricks_against_the_targets(tmp_path, capsys, repert
             "--tricks",
             "ball-nose,bellyflop,clean-dive",
             "--budget",
-            "2",
+            "3",
             "--json",
         ]
     )
@@ -347,7 +347,8 @@ def test_bench_stunts_judges_tricks_against_the_targets(tmp_path, capsys, repert
     assert out["ball-nose"]["ball_contact"] == "no"
     assert set(out["ball-nose"]["flags"]) == {"struck_by_nose", "off_support"}
     assert out["splash_ratio"] is None and out["splash_ratio_met"] is False
-    assert out["bellyflop"]["evaluations"] == 2
+    # the budget counts simulations: the robust bellyflop plays each plan from 3 starts
+    assert out["bellyflop"]["evaluations"] == 1 and out["clean-dive"]["evaluations"] == 3
     assert out["all_wall_s"] >= out["bellyflop"]["wall_s"]
 
 

@@ -1,10 +1,16 @@
 """A trick over a repertoire as a search problem: plans of repertoire entries played in a World
 beside the trick's objects, recorded through the one closed-loop driver and scored by the
-trick's style terms (which here also see the World's contact record and the balls)."""
+trick's style terms (which here also see the World's contact record and the balls).
+
+With a trick's ``jitter`` (and ``robust``) each plan is played from its start and two perturbed ones
+(``SEARCH_SIGNS``) and its E is the worst of them: the search then prefers plans that do not
+hinge on the exact start (a somersault found from one start turned 174-376 deg when its start
+moved a few cm or degrees). ``CHECK_SIGNS`` are the starts a found plan is checked from."""
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,6 +27,36 @@ from zoetic.physics.simulate import State
 from zoetic.physics.world import World
 from zoetic.tasks import check_fits, start_state
 from zoetic.tasks.terms import BodyFrame, Signals, evaluate_terms, term_names
+
+# each start as signs of the trick's jitter (depth, heading, pitch): the start itself, one
+# deeper, turned left and nose up, one shallower, turned right and nose down
+SEARCH_SIGNS = ((0, 0, 0), (1, 1, 1), (-1, -1, -1))
+# a found plan's check: one jitter at a time, each way (none of them a search start)
+CHECK_SIGNS = ((1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1))
+
+
+def starts_per_plan(trick: Trick) -> int:
+    """Return how many starts the search plays each plan of the trick from (3 robust, else 1)."""
+    return len(SEARCH_SIGNS) if trick.robust and any(trick.jitter) else 1
+
+
+def jittered_starts(trick: Trick, body: Body, signs) -> State:
+    """Return the trick's start moved by ``signs`` (K, 3) x its jitter (depth m, heading and
+    pitch deg), one start per row (K, N, 3)."""
+    st = trick.task.starts[0]
+    dd, dh, dp = trick.jitter
+    each = []
+    for a, b, c in signs:
+        moved = dataclasses.replace(
+            st,
+            depth=None if st.depth is None else st.depth + a * dd,
+            heading=st.heading + math.radians(b * dh),
+            pitch=st.pitch + math.radians(c * dp),
+        )
+        each.append(start_state(dataclasses.replace(trick.task, starts=(moved,)), body))
+    return State(
+        np.concatenate([s.positions for s in each]), np.concatenate([s.velocities for s in each])
+    )
 
 
 @dataclass
@@ -90,31 +126,42 @@ class StuntProblem(MacroProblem):
         self.record_every = int(every)
         self.steps = max(1, int(round(trick.task.horizon / body.dt / every))) * every
         self.start = start_state(trick.task, body)
+        # the starts every plan is scored from (the worst counts): the start, and with a
+        # jitter, two perturbed ones
+        robust = starts_per_plan(trick) > 1
+        self.starts = jittered_starts(trick, body, SEARCH_SIGNS) if robust else self.start
         self.frame = BodyFrame.of(body)
         self.level = get_medium(body.medium).water_level
         self.radius = 0.0
 
-    def world(self, batch: int) -> World:
-        """Return the trick's World (the animal at the start state, the objects), B lanes."""
+    def world(self, batch: int, starts: State | None = None) -> World:
+        """Return the trick's World (the objects, the animal in B lanes): lane b starts from
+        ``starts`` row b mod K (default: the trick's start state)."""
         w = World([self.body, *self.trick.objects], medium=self.body.medium, batch=batch)
         st = w.initial_state()
-        b = (batch, self.body.n_nodes, 3)
-        pos = np.broadcast_to(self.start.positions[0], b).copy()
-        vel = np.broadcast_to(self.start.velocities[0], b).copy()
+        starts = self.start if starts is None else starts
+        rows = np.arange(batch) % len(starts.positions)
+        pos = np.array(starts.positions[rows], float)
+        vel = np.array(starts.velocities[rows], float)
         w.restore(dataclasses.replace(st, positions=(pos,), velocities=(vel,)))
         return w
 
-    def record(self, entries, durations, record_every: int | None = None) -> StuntRecord:
-        """Return what plans (B, L) do from the trick's start state over its duration: each
-        plan's activation table played in one control period, recorded every
-        ``record_every`` steps (default the problem's)."""
+    def record(
+        self, entries, durations, record_every: int | None = None, starts: State | None = None
+    ) -> StuntRecord:
+        """Return what plans (B, L) do over the trick's duration: each plan's activation
+        table played in one control period from each of ``starts`` (K rows; default the
+        trick's start state), lanes plan-major (B K), recorded every ``record_every`` steps
+        (default the problem's)."""
         e, d = np.atleast_2d(entries), np.atleast_2d(durations)
+        k = 1 if starts is None else len(starts.positions)
         dt = self.body.dt
         tables = np.stack(
             [self.sequence(a, b).table(self.steps, dt) for a, b in zip(e, d, strict=True)]
         )
+        tables = np.repeat(tables, k, axis=0)
         every = int(record_every or self.record_every)
-        world = self.world(len(e))
+        world = self.world(len(tables), starts)
         seconds = self.steps * dt
         frames = _Frames(world)
         schedule = Schedule(seconds, record_every=every, record_end=False)
@@ -165,9 +212,15 @@ class StuntProblem(MacroProblem):
         return dict(zip(term_names(self.task.terms), vals, strict=True))
 
     def evaluate(self, entries: np.ndarray, durations: np.ndarray) -> dict:
-        """Return E ('cost', inf for a blow-up) and the terms of plans (B, L), one batch."""
-        rec = self.record(entries, durations)
-        return self.scores(rec)
+        """Return E ('cost', inf for a blow-up) of plans (B, L), one batch: the worst over
+        the problem's starts; the terms (and 'nominal', the E) from the trick's own start."""
+        e = np.atleast_2d(entries)
+        k = len(self.starts.positions)
+        sc = self.scores(self.record(e, durations, starts=self.starts))
+        out = {name: v.reshape(len(e), k)[:, 0] for name, v in sc.items()}
+        out["nominal"] = out["cost"]
+        out["cost"] = sc["cost"].reshape(len(e), k).max(axis=1)
+        return out
 
     def scores(self, rec: StuntRecord) -> dict:  # type: ignore[override]
         """Return E ('cost', inf for a blow-up or a non-finite E) and each term's value (B,)."""

@@ -19,7 +19,13 @@ from pathlib import Path
 import numpy as np
 
 from zoetic.behavior.repertoire import Repertoire
-from zoetic.behavior.stunt_problem import StuntProblem, StuntRecord
+from zoetic.behavior.stunt_problem import (
+    CHECK_SIGNS,
+    StuntProblem,
+    StuntRecord,
+    jittered_starts,
+    starts_per_plan,
+)
 from zoetic.behavior.tracking import body_length
 from zoetic.behavior.tricks import Trick, parse_object
 
@@ -132,7 +138,7 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
 # the issue's targets, per built-in trick (bellyflop against clean-dive: ``splash_ratio``)
 LEAP_AIR_S, LEAP_APEX_BL, SOMERSAULT_DEG, SPLASH_RATIO = 0.4, 0.5, 360.0, 3.0
 SPIN_DEG = 360.0  # spin: a full turn about the body's own long axis in the air
-BUDGET = 9600  # plans a trick search tries by default (about a minute a trick on 2 cores)
+BUDGET = 9600  # stunt simulations a trick search runs by default (about a minute on 2 cores)
 TAIL_STRIKE_DEG = float(np.degrees(TAIL_STRIKE_TURN))  # ball-tail: a strike after half a turn
 
 
@@ -168,6 +174,29 @@ def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, boo
         if part == "tail":  # during a somersault: out of the water, half a turn or more done
             flags["in_somersault"] = bool(m.get("tail_strike_rotation_deg", 0.0) >= TAIL_STRIKE_DEG)
     return flags
+
+
+def perturbed_measures(
+    problem: StuntProblem, entries: np.ndarray, durations: np.ndarray, signs=CHECK_SIGNS
+) -> list[dict]:
+    """Return ``measures`` of a plan played from each start moved by ``signs`` (K, 3) x the
+    trick's jitter (depth m, heading and pitch deg; default: one at a time, each way),
+    recorded as a found stunt is (every other time step)."""
+    starts = jittered_starts(problem.trick, problem.body, signs)
+    rec = problem.record(entries[None], durations[None], record_every=2, starts=starts)
+    return [measures(problem, rec, lane) for lane in range(len(signs))]
+
+
+def perturbed_successes(
+    problem: StuntProblem, entries: np.ndarray, durations: np.ndarray, signs=CHECK_SIGNS
+) -> list[bool]:
+    """Return whether a plan still meets its trick's targets (``targets_met``) from each
+    start moved by ``signs`` (``perturbed_measures``)."""
+    trick = problem.trick
+    return [
+        all(targets_met(trick.name, m, trick).values())
+        for m in perturbed_measures(problem, entries, durations, signs)
+    ]
 
 
 def strike_speeds(rec: StuntRecord, touch: np.ndarray, lane: int = 0) -> dict:
@@ -346,6 +375,9 @@ class Stunt:
     record: StuntRecord  # the best plan, recorded every other time step
     scores: dict  # its E ('cost') and term values (B = 1)
     measures: dict  # measures() of it
+    # the plan's targets met from each of the check's perturbed starts (``CHECK_SIGNS``); empty
+    # for a trick without a jitter
+    perturbed: list[bool] = dataclasses.field(default_factory=list)
 
     def summary(self) -> dict:
         """Return the JSON-able numbers of the stunt (without the search history)."""
@@ -371,6 +403,9 @@ class Stunt:
             ],
             "evaluations": r.evaluations,
             "wall_s": round(r.wall, 2),
+            "jitter": self.problem.trick.to_dict()["jitter"],
+            "perturbed_starts_met": sum(self.perturbed),
+            "perturbed_starts": len(self.perturbed),
         }
 
 
@@ -386,14 +421,20 @@ def discover(
     evaluator: str = "batch",
 ) -> Stunt:
     """Return the best stunt ``method`` (anneal: 16 chains; ga: 32 a generation) finds for the
-    trick within ``budget`` plan evaluations.
+    trick within ``budget`` stunt simulations (plans x the starts each is played from: 3 for a
+    robust trick, else 1).
 
     ``evaluator``: batch (this process) or ray (each batch of plans on Ray actors, the problem
     put in the object store once; same seed, same stunt as in process)."""
     from zoetic.behavior.macro import search
 
     problem = StuntProblem(body, repertoire, trick, segments)
-    opts = {"chains": min(16, budget)} if method == "anneal" else {"popsize": min(32, budget)}
-    result = search(problem, method, budget, seed, progress=progress, evaluator=evaluator, **opts)
+    # the budget counts stunt simulations: a robust search plays each plan from K starts
+    plans = max(1, budget // starts_per_plan(trick))
+    opts = {"chains": min(16, plans)} if method == "anneal" else {"popsize": min(32, plans)}
+    result = search(problem, method, plans, seed, progress=progress, evaluator=evaluator, **opts)
     rec = problem.record(result.entries[None], result.durations[None], record_every=2)
-    return Stunt(problem, result, rec, problem.scores(rec), measures(problem, rec))
+    checked = (
+        perturbed_successes(problem, result.entries, result.durations) if any(trick.jitter) else []
+    )
+    return Stunt(problem, result, rec, problem.scores(rec), measures(problem, rec), checked)

@@ -5,6 +5,13 @@
 ``cylinder`` and that object's fields, in world metres: a hurdle's bar, a beach ball on its
 post). The task's ``horizon`` is the stunt's duration, its ``[start]`` where the animal starts
 (e.g. at depth, at rest) and its ``[[terms]]`` the style terms (``zoetic.tasks.terms``).
+
+``[trick.jitter]`` (``depth`` m, ``heading`` and ``pitch`` deg) says how far the start may be
+off: a found plan is checked from six starts moved by it (one amount at a time, each way), and
+with ``robust = true`` in ``[trick]`` (the default once there is a jitter) the search plays
+each plan from the start and from two starts moved by all of it (one deeper, turned left and
+pitched up; one shallower, turned right and pitched down) and scores it by the worst of the
+three, so that a plan found still works when its start is slightly off.
 """
 
 from __future__ import annotations
@@ -19,7 +26,8 @@ from zoetic.physics.objects import Ball, Box, Cylinder
 from zoetic.tasks import TASK_DIR, Task, parse_task
 
 TRICK_DIR = TASK_DIR / "tricks"
-TRICK_KEYS = ("segments", "durations")
+TRICK_KEYS = ("segments", "durations", "jitter", "robust")
+JITTER_KEYS = ("depth", "heading", "pitch")  # m, deg, deg
 OBJECTS = {"ball": Ball, "box": Box, "cylinder": Cylinder}
 
 
@@ -31,6 +39,8 @@ class Trick:
     objects: tuple[Ball | Box | Cylinder, ...] = ()
     segments: int = 4
     durations: tuple[float, float] = (0.3, 2.0)
+    jitter: tuple[float, float, float] = (0.0, 0.0, 0.0)  # start depth m, heading, pitch deg
+    robust: bool = True  # with a jitter: each plan scored by its worst of three starts
 
     @property
     def name(self) -> str:
@@ -50,6 +60,8 @@ class Trick:
             "objects": objs,
             "segments": self.segments,
             "durations": list(self.durations),
+            "jitter": dict(zip(JITTER_KEYS, self.jitter, strict=True)),
+            "robust": self.robust,
         }
 
 
@@ -86,6 +98,26 @@ def _durations(raw_trick: dict, task: Task, source: str) -> tuple[float, float]:
     return float(durations[0]), float(durations[1])
 
 
+def _jitter(raw_trick: dict, source: str) -> tuple[float, float, float]:
+    raw = raw_trick.get("jitter", {})
+    if not isinstance(raw, dict):
+        raise TaskError(f"{source}: trick: 'jitter' must be a table of {list(JITTER_KEYS)}")
+    bad = sorted(set(raw) - set(JITTER_KEYS))
+    if bad:
+        raise TaskError(
+            f"{source}: trick.jitter: unknown key(s) {bad} (allowed: {list(JITTER_KEYS)})"
+        )
+    out = []
+    for k in JITTER_KEYS:
+        v = raw.get(k, 0.0)
+        if isinstance(v, bool) or not isinstance(v, int | float) or not 0 <= v < 90:
+            raise TaskError(
+                f"{source}: trick.jitter: {k!r} must be a number >= 0 (m or deg), got {v!r}"
+            )
+        out.append(float(v))
+    return out[0], out[1], out[2]
+
+
 def parse_trick(doc: dict, source: str = "<memory>") -> Trick:
     """Return the Trick a parsed TOML document describes; TaskError names what is wrong."""
     if not isinstance(doc, dict):
@@ -106,7 +138,10 @@ def parse_trick(doc: dict, source: str = "<memory>") -> Trick:
     if not isinstance(raw_objects, list):
         raise TaskError(f"{source}: objects must be [[objects]] tables")
     objects = tuple(parse_object(o, f"{source}: objects[{k}]") for k, o in enumerate(raw_objects))
-    return Trick(task, objects, int(segments), durations)
+    robust = raw_trick.get("robust", True)
+    if not isinstance(robust, bool):
+        raise TaskError(f"{source}: trick: 'robust' must be true or false, got {robust!r}")
+    return Trick(task, objects, int(segments), durations, _jitter(raw_trick, source), robust)
 
 
 def list_tricks() -> list[str]:

@@ -80,7 +80,8 @@ def stunt(
         None,
         min=1,
         max=10_000_000,
-        help="Plans (stunt simulations) to evaluate (default 9600; the time is said early).",
+        help="Stunt simulations to run (default 9600: as many plans, or a third as many "
+        "for a robust trick, each played from 3 starts; the time is said early).",
     ),
     seed: Seed = 0,
     segments: int = typer.Option(None, min=1, help="Entries in a plan (default: the trick's)."),
@@ -96,6 +97,7 @@ def stunt(
     video.mp4, score.png, record.npz and summary.json."""
     use_ray_address(ray_address)
     from zoetic.behavior.repertoire import Repertoire
+    from zoetic.behavior.stunt_problem import starts_per_plan
     from zoetic.behavior.stunts import BUDGET, discover, load_trick
     from zoetic.bodies import load_animal
     from zoetic.outdir import prepare_out
@@ -105,17 +107,20 @@ def stunt(
     body = load_animal(animal)
     rep = Repertoire.load(memory, body)
     budget = budget or BUDGET
+    k = starts_per_plan(tr)
+    plans = max(1, budget // k)
+    starts = f" from {k} starts (the worst counts)" if k > 1 else ""
     console.print(
-        f"{body.name} {tr.name}: {budget} plans by {method}, each a {tr.task.horizon:g} s "
-        "simulation; the time it takes here is printed after the first steps "
-        "(--budget sets the plans)"
+        f"{body.name} {tr.name}: {plans} plans by {method}, each a {tr.task.horizon:g} s "
+        f"simulation{starts}; the time it takes here is printed after the first steps "
+        "(--budget sets the simulations)"
     )
-    countdown = Countdown(budget, "plans")
+    countdown = Countdown(plans, "plans")
     with track_bar("plans") as bar:
-        tid = bar.add_task(f"{body.name} {tr.name} ({method})", total=budget, info="")
+        tid = bar.add_task(f"{body.name} {tr.name} ({method})", total=plans, info="")
 
         def update(opt) -> None:
-            bar.update(tid, completed=min(opt.evaluations, budget), info=f"E {opt.best_f:.3f}")
+            bar.update(tid, completed=min(opt.evaluations, plans), info=f"E {opt.best_f:.3f}")
             countdown(opt.evaluations, bar.console)
 
         found = discover(
@@ -215,6 +220,13 @@ def _report(
             f"{'over' if got['bar_crossed'] else 'not over'} the bar, "
             f"{'touched' if got.get('hurdle_touched') else 'not touched'}"
         )
+    if summary["perturbed_starts"]:
+        j = summary["jitter"]
+        console.print(
+            f"targets met from {summary['perturbed_starts_met']} of "
+            f"{summary['perturbed_starts']} perturbed starts (start {j['depth']:g} m deeper or "
+            f"shallower, turned {j['heading']:g} deg, pitched {j['pitch']:g} deg; one at a time)"
+        )
     played = [f"{p['entry']} {p['duration_s']:.2f} s" for p in summary["plan"] if p["played"]]
     console.print("plan: " + ", ".join(played))
     console.print(
@@ -237,7 +249,9 @@ def bench_stunts_cmd(
         help="Comma-separated tricks.",
     ),
     method: str = typer.Option("anneal"),
-    budget: int = typer.Option(None, min=1, help="Plans per trick (default: as zoetic stunt)."),
+    budget: int = typer.Option(
+        None, min=1, help="Stunt simulations per trick (default: as zoetic stunt)."
+    ),
     seed: int = typer.Option(0),
     json: Json = False,
     quick: Quick = False,

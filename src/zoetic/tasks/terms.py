@@ -213,6 +213,19 @@ def apex_above_surface(xp, s: Signals, p: TermParams):
 
 
 @term(
+    "depth (m) the centre of mass sank below where it started before its apex, counted up to "
+    "'target' m when 'target' > 0: the run-up of a leap, diving deep before thrusting upward"
+)
+def dive_before_apex(xp, s: Signals, p: TermParams):
+    """Return (K,) m: start height of the centre of mass less its lowest before the apex
+    (>= 0, at most 'target' when that is > 0; gain)."""
+    y = s.com[:, :, 1]
+    before = xp.arange(y.shape[1])[None, :] <= xp.argmax(y, axis=1)[:, None]
+    dive = xp.maximum(y[:, 0] - xp.min(xp.where(before, y, xp.inf), axis=1), 0.0)
+    return xp.where(p.target > 0, xp.minimum(dive, p.target), dive)
+
+
+@term(
     "greatest fraction of the nodes out of the water at one instant (1: the whole body "
     "clears the water)"
 )
