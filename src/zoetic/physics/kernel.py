@@ -44,6 +44,7 @@ from zoetic.physics.kernel_terms import (
     weight,
 )
 from zoetic.physics.model import INDEX, NO_WATER, Model, field_kinds
+from zoetic.physics.noalias import njit_noalias
 
 
 @njit(cache=True, fastmath=FM, inline="always")
@@ -52,14 +53,45 @@ def _chunk_steps(
 ):
     """Step lanes b0 .. b0 + nb of model ``m`` through all rows of ``act`` in s (twelve (nodes,
     >= nb) arrays): load them from pos0/vel0, record every ``record_every`` steps (never if 0),
-    store the final state (NaN for failed lanes) in final_pos/final_vel.
+    store the final state (NaN for failed lanes) in final_pos/final_vel."""
+    _put(s[0], s[1], s[2], pos0, b0, nb)
+    _put(s[3], s[4], s[5], vel0, b0, nb)
+    _steps(*s, act, record_every, vmax, b0, nb, m, rec, failed_step)
+    _take(final_pos, s[0], s[1], s[2], failed_step, b0, nb)
+    _take(final_vel, s[3], s[4], s[5], failed_step, b0, nb)
+
+
+@njit_noalias(cache=True, fastmath=FM, error_model="numpy")
+def _steps(
+    x,
+    y,
+    z,
+    vx,
+    vy,
+    vz,
+    fx,
+    fy,
+    fz,
+    gx,
+    gy,
+    gz,
+    act,
+    record_every,
+    vmax,
+    b0,
+    nb,
+    m,
+    rec,
+    failed_step,
+):
+    """Step the chunk's state (x .. vz; fx .. gz scratch, all (nodes, >= nb) and distinct, the
+    promise of ``njit_noalias``) through all rows of ``act``, recording every ``record_every``
+    steps (never if 0).
 
     A step: every force but the stiff springs, the floor last, then the nodes no fast spring
     touches advance once, exactly as without a split, and the others take their sub-steps."""
-    x, y, z, vx, vy, vz, fx, fy, fz, gx = s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9]
+    s = (x, y, z, vx, vy, vz, fx, fy, fz, gx, gy, gz)
     arow = np.empty((act.shape[1], nb), dtype=np.float32)  # this step's activations
-    _put(x, y, z, pos0, b0, nb)
-    _put(vx, vy, vz, vel0, b0, nb)
     # what the steps share, decided once
     dt = F(m.dt)
     water_on = F(m.water_drag) > 0.0 and F(m.water_level) > NO_WATER
@@ -78,7 +110,7 @@ def _chunk_steps(
         weight(y, fx, fy, fz, nb, m)
         springs(x, y, z, vx, vy, vz, fx, fy, fz, arow, nb, m, m.slow_springs)
         if water_on:
-            water(x, y, z, vx, vy, vz, fx, fy, fz, nb, m)
+            water(x, y, z, vx, vy, vz, fx, fy, fz, gx, nb, m)
         if fins_on:
             fins(x, y, z, vx, vy, vz, fx, fy, fz, gx, arow, nb, m)
         if m.floor:
@@ -88,8 +120,6 @@ def _chunk_steps(
             _substeps(s, arow, nb, m)
         if t % 8 == 7 or t == n_steps - 1:
             _check_lanes(s, m, vmax, t, b0, nb, failed_step)
-    _take(final_pos, x, y, z, failed_step, b0, nb)
-    _take(final_vel, vx, vy, vz, failed_step, b0, nb)
 
 
 @njit(cache=True, fastmath=FM, inline="always")
@@ -208,7 +238,7 @@ def _scratch(n_nodes, nb):
         np.empty((n_nodes, nb), dtype=f32),
         np.empty((n_nodes, nb), dtype=f32),
         np.empty((n_nodes, nb), dtype=f32),
-        np.empty((n_nodes, nb), dtype=f32),
+        np.empty((max(n_nodes, 4), nb), dtype=f32),  # also the water's and fins' scratch rows
         np.empty((n_nodes, nb), dtype=f32),
         np.empty((n_nodes, nb), dtype=f32),
     )
