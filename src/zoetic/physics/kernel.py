@@ -201,17 +201,28 @@ def _substeps(s, arow, nb, m):
 @njit(cache=True, fastmath=FM, inline="always")
 def _check_lanes(s, m, vmax, t, b0, nb, failed_step):
     """Mark the lanes faster than vmax (or not finite) as failed at step t + 1, and put every
-    failed lane back to rest so that it cannot slow or poison the others."""
-    x, y, z, vx, vy, vz = s[0], s[1], s[2], s[3], s[4], s[5]
+    failed lane back to rest so that it cannot slow or poison the others.
+
+    Each lane's largest squared node speed is folded node by node into a scratch row (gy's
+    first, free between steps), so that the lane loops run with unit stride and vectorise."""
+    x, y, z, vx, vy, vz, worst = s[0], s[1], s[2], s[3], s[4], s[5], s[10][0]
     rest_pos = m.rest_pos
     n_nodes = rest_pos.shape[0]
     for b in range(nb):
-        worst = ZERO
-        for i in range(n_nodes):
+        worst[b] = ZERO
+    for i in range(n_nodes):
+        for b in range(nb):
             s2 = vx[i, b] * vx[i, b] + vy[i, b] * vy[i, b] + vz[i, b] * vz[i, b]
-            worst = s2 if s2 > worst else worst
-        if not (worst < vmax * vmax) and failed_step[b0 + b] < 0:
+            worst[b] = s2 if s2 > worst[b] else worst[b]
+    dead = 0
+    for b in range(nb):
+        if not (worst[b] < vmax * vmax) and failed_step[b0 + b] < 0:
             failed_step[b0 + b] = t + 1
+        if failed_step[b0 + b] >= 0:
+            dead += 1
+    if dead == 0:
+        return
+    for b in range(nb):
         if failed_step[b0 + b] >= 0:
             for i in range(n_nodes):
                 x[i, b] = rest_pos[i, 0]
