@@ -33,6 +33,7 @@ from numba.extending import typeof_impl
 
 from zoetic.physics.kernel_terms import (
     FM,
+    SPLIT_LANES,
     ZERO,
     F,
     advance_nodes,
@@ -56,7 +57,32 @@ def _chunk_steps(
     store the final state (NaN for failed lanes) in final_pos/final_vel."""
     _put(s[0], s[1], s[2], pos0, b0, nb)
     _put(s[3], s[4], s[5], vel0, b0, nb)
-    _steps(*s, act, record_every, vmax, b0, nb, m, rec, failed_step)
+    if nb < SPLIT_LANES:
+        x, y, z, vx, vy, vz, fx, fy, fz, gx, gy, gz = s
+        _steps_inline(
+            x,
+            y,
+            z,
+            vx,
+            vy,
+            vz,
+            fx,
+            fy,
+            fz,
+            gx,
+            gy,
+            gz,
+            act,
+            record_every,
+            vmax,
+            b0,
+            nb,
+            m,
+            rec,
+            failed_step,
+        )
+    else:
+        _steps(*s, act, record_every, vmax, b0, nb, m, rec, failed_step)
     _take(final_pos, s[0], s[1], s[2], failed_step, b0, nb)
     _take(final_vel, s[3], s[4], s[5], failed_step, b0, nb)
 
@@ -120,6 +146,10 @@ def _steps(
             _substeps(s, arow, nb, m)
         if t % 8 == 7 or t == n_steps - 1:
             _check_lanes(s, m, vmax, t, b0, nb, failed_step)
+
+
+# a few lanes (one animal in a World) run faster inlined into the caller, as plain njit code
+_steps_inline = njit(cache=True, fastmath=FM, inline="always")(_steps.py_func)
 
 
 @njit(cache=True, fastmath=FM, inline="always")
