@@ -33,6 +33,7 @@ from numba.extending import typeof_impl
 
 from zoetic.physics.kernel_terms import (
     FM,
+    SPLIT_LANES,
     ZERO,
     F,
     advance_nodes,
@@ -44,6 +45,7 @@ from zoetic.physics.kernel_terms import (
     weight,
 )
 from zoetic.physics.model import INDEX, NO_WATER, Model, field_kinds
+from zoetic.physics.noalias import njit_noalias
 
 
 @njit(cache=True, fastmath=FM, inline="always")
@@ -52,14 +54,70 @@ def _chunk_steps(
 ):
     """Step lanes b0 .. b0 + nb of model ``m`` through all rows of ``act`` in s (twelve (nodes,
     >= nb) arrays): load them from pos0/vel0, record every ``record_every`` steps (never if 0),
-    store the final state (NaN for failed lanes) in final_pos/final_vel.
+    store the final state (NaN for failed lanes) in final_pos/final_vel."""
+    _put(s[0], s[1], s[2], pos0, b0, nb)
+    _put(s[3], s[4], s[5], vel0, b0, nb)
+    if nb < SPLIT_LANES:
+        x, y, z, vx, vy, vz, fx, fy, fz, gx, gy, gz = s
+        _steps_inline(
+            x,
+            y,
+            z,
+            vx,
+            vy,
+            vz,
+            fx,
+            fy,
+            fz,
+            gx,
+            gy,
+            gz,
+            act,
+            record_every,
+            vmax,
+            b0,
+            nb,
+            m,
+            rec,
+            failed_step,
+        )
+    else:
+        _steps(*s, act, record_every, vmax, b0, nb, m, rec, failed_step)
+    _take(final_pos, s[0], s[1], s[2], failed_step, b0, nb)
+    _take(final_vel, s[3], s[4], s[5], failed_step, b0, nb)
+
+
+@njit_noalias(cache=True, fastmath=FM, error_model="numpy")
+def _steps(
+    x,
+    y,
+    z,
+    vx,
+    vy,
+    vz,
+    fx,
+    fy,
+    fz,
+    gx,
+    gy,
+    gz,
+    act,
+    record_every,
+    vmax,
+    b0,
+    nb,
+    m,
+    rec,
+    failed_step,
+):
+    """Step the chunk's state (x .. vz; fx .. gz scratch, all (nodes, >= nb) and distinct, the
+    promise of ``njit_noalias``) through all rows of ``act``, recording every ``record_every``
+    steps (never if 0).
 
     A step: every force but the stiff springs, the floor last, then the nodes no fast spring
     touches advance once, exactly as without a split, and the others take their sub-steps."""
-    x, y, z, vx, vy, vz, fx, fy, fz, gx = s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9]
+    s = (x, y, z, vx, vy, vz, fx, fy, fz, gx, gy, gz)
     arow = np.empty((act.shape[1], nb), dtype=np.float32)  # this step's activations
-    _put(x, y, z, pos0, b0, nb)
-    _put(vx, vy, vz, vel0, b0, nb)
     # what the steps share, decided once
     dt = F(m.dt)
     water_on = F(m.water_drag) > 0.0 and F(m.water_level) > NO_WATER
@@ -78,7 +136,7 @@ def _chunk_steps(
         weight(y, fx, fy, fz, nb, m)
         springs(x, y, z, vx, vy, vz, fx, fy, fz, arow, nb, m, m.slow_springs)
         if water_on:
-            water(x, y, z, vx, vy, vz, fx, fy, fz, nb, m)
+            water(x, y, z, vx, vy, vz, fx, fy, fz, gx, nb, m)
         if fins_on:
             fins(x, y, z, vx, vy, vz, fx, fy, fz, gx, arow, nb, m)
         if m.floor:
@@ -88,8 +146,10 @@ def _chunk_steps(
             _substeps(s, arow, nb, m)
         if t % 8 == 7 or t == n_steps - 1:
             _check_lanes(s, m, vmax, t, b0, nb, failed_step)
-    _take(final_pos, x, y, z, failed_step, b0, nb)
-    _take(final_vel, vx, vy, vz, failed_step, b0, nb)
+
+
+# a few lanes (one animal in a World) run faster inlined into the caller, as plain njit code
+_steps_inline = njit(cache=True, fastmath=FM, inline="always")(_steps.py_func)
 
 
 @njit(cache=True, fastmath=FM, inline="always")
@@ -171,17 +231,28 @@ def _substeps(s, arow, nb, m):
 @njit(cache=True, fastmath=FM, inline="always")
 def _check_lanes(s, m, vmax, t, b0, nb, failed_step):
     """Mark the lanes faster than vmax (or not finite) as failed at step t + 1, and put every
-    failed lane back to rest so that it cannot slow or poison the others."""
-    x, y, z, vx, vy, vz = s[0], s[1], s[2], s[3], s[4], s[5]
+    failed lane back to rest so that it cannot slow or poison the others.
+
+    Each lane's largest squared node speed is folded node by node into a scratch row (gy's
+    first, free between steps), so that the lane loops run with unit stride and vectorise."""
+    x, y, z, vx, vy, vz, worst = s[0], s[1], s[2], s[3], s[4], s[5], s[10][0]
     rest_pos = m.rest_pos
     n_nodes = rest_pos.shape[0]
     for b in range(nb):
-        worst = ZERO
-        for i in range(n_nodes):
+        worst[b] = ZERO
+    for i in range(n_nodes):
+        for b in range(nb):
             s2 = vx[i, b] * vx[i, b] + vy[i, b] * vy[i, b] + vz[i, b] * vz[i, b]
-            worst = s2 if s2 > worst else worst
-        if not (worst < vmax * vmax) and failed_step[b0 + b] < 0:
+            worst[b] = s2 if s2 > worst[b] else worst[b]
+    dead = 0
+    for b in range(nb):
+        if not (worst[b] < vmax * vmax) and failed_step[b0 + b] < 0:
             failed_step[b0 + b] = t + 1
+        if failed_step[b0 + b] >= 0:
+            dead += 1
+    if dead == 0:
+        return
+    for b in range(nb):
         if failed_step[b0 + b] >= 0:
             for i in range(n_nodes):
                 x[i, b] = rest_pos[i, 0]
@@ -208,7 +279,7 @@ def _scratch(n_nodes, nb):
         np.empty((n_nodes, nb), dtype=f32),
         np.empty((n_nodes, nb), dtype=f32),
         np.empty((n_nodes, nb), dtype=f32),
-        np.empty((n_nodes, nb), dtype=f32),
+        np.empty((max(n_nodes, 4), nb), dtype=f32),  # also the water's and fins' scratch rows
         np.empty((n_nodes, nb), dtype=f32),
         np.empty((n_nodes, nb), dtype=f32),
     )

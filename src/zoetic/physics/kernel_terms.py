@@ -41,6 +41,7 @@ ONE = F(1.0)
 HALF = F(0.5)
 TINY = F(1e-12)
 TINY2 = F(1e-30)
+SPLIT_LANES = 16  # from this many lanes a chunk, the water finds forces first, then adds
 
 
 @njit(cache=True, fastmath=FM, inline="always")
@@ -102,10 +103,97 @@ def springs(x, y, z, vx, vy, vz, fx, fy, fz, arow, nb, m, sidx):
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def water(x, y, z, vx, vy, vz, fx, fy, fz, nb, m):
+def water(x, y, z, vx, vy, vz, fx, fy, fz, tmp, nb, m):
     """Hydrodynamic reaction on each surface panel (Tu & Terzopoulos): it opposes the normal
     velocity of a panel moving outward, -c * drag * A * |v| * (n.v) * n, shared by its nodes
-    (c = ``panel_drag``, the panel's own coefficient)."""
+    (c = ``panel_drag``, the panel's own coefficient).
+
+    ``tmp`` (>= 4, nb) is scratch: a panel's normal and force magnitude per lane are found
+    first and only then added to its nodes, so that the lane loop that finds them writes
+    nothing it reads and vectorises without overlap tests. A triangle (its fourth slot repeats
+    the third node with weight 0) adds to three nodes: with four, two of the rows written
+    are one, and LLVM's overlap test sent the whole lane loop down its scalar path. Chunks
+    of fewer than ``SPLIT_LANES`` lanes (one animal in a World) take ``_water_fused``, with
+    the same result to the bit."""
+    if nb < SPLIT_LANES:
+        _water_fused(x, y, z, vx, vy, vz, fx, fy, fz, nb, m)
+        return
+    mass, panels, pw = m.mass, m.panels, m.panel_weights
+    for f in range(panels.shape[0]):
+        i0 = panels[f, 0]
+        i1 = panels[f, 1]
+        i2 = panels[f, 2]
+        i3 = panels[f, 3]
+        w0 = pw[f, 0]
+        w1 = pw[f, 1]
+        w2 = pw[f, 2]
+        w3 = pw[f, 3]
+        # the panel's own mass (weights are 1/n for its n distinct nodes)
+        mf_dt = (w0 * mass[i0] + w1 * mass[i1] + w2 * mass[i2] + w3 * mass[i3]) / (w0 * F(m.dt))
+        _panel_lanes(x, y, z, vx, vy, vz, tmp, nb, m, f, mf_dt)
+        _panel_add(fx, fy, fz, tmp, nb, i0, w0)
+        _panel_add(fx, fy, fz, tmp, nb, i1, w1)
+        _panel_add(fx, fy, fz, tmp, nb, i2, w2)
+        if i3 != i2:
+            _panel_add(fx, fy, fz, tmp, nb, i3, w3)
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def _panel_lanes(x, y, z, vx, vy, vz, tmp, nb, m, f, mf_dt):
+    """Write panel f's force magnitude into tmp[0] and its unnormalised normal into tmp[1:4]
+    for every lane."""
+    level = F(m.water_level)
+    half_drag = HALF * F(m.water_drag) * m.panel_drag[f]
+    i0, i1, i2, i3 = m.panels[f, 0], m.panels[f, 1], m.panels[f, 2], m.panels[f, 3]
+    w0, w1, w2, w3 = (
+        m.panel_weights[f, 0],
+        m.panel_weights[f, 1],
+        m.panel_weights[f, 2],
+        m.panel_weights[f, 3],
+    )
+    for b in range(nb):
+        d1x = x[i2, b] - x[i0, b]
+        d1y = y[i2, b] - y[i0, b]
+        d1z = z[i2, b] - z[i0, b]
+        d2x = x[i3, b] - x[i1, b]
+        d2y = y[i3, b] - y[i1, b]
+        d2z = z[i3, b] - z[i1, b]
+        nx = d1y * d2z - d1z * d2y
+        ny = d1z * d2x - d1x * d2z
+        nz = d1x * d2y - d1y * d2x
+        # with N the unnormalised normal (|N| = 2 area), the panel force is
+        # -(N.v)/|N|^2 * min(drag * |N|/2 * |v|, m_panel/dt) * N, only while N.v > 0
+        nn = nx * nx + ny * ny + nz * nz + TINY2
+        mvx = w0 * vx[i0, b] + w1 * vx[i1, b] + w2 * vx[i2, b] + w3 * vx[i3, b]
+        mvy = w0 * vy[i0, b] + w1 * vy[i1, b] + w2 * vy[i2, b] + w3 * vy[i3, b]
+        mvz = w0 * vz[i0, b] + w1 * vz[i1, b] + w2 * vz[i2, b] + w3 * vz[i3, b]
+        q = nx * mvx + ny * mvy + nz * mvz
+        q = q if q > ZERO else ZERO
+        vv = mvx * mvx + mvy * mvy + mvz * mvz
+        cy = w0 * y[i0, b] + w1 * y[i1, b] + w2 * y[i2, b] + w3 * y[i3, b]
+        lim = half_drag * math.sqrt(nn * vv)
+        lim = lim if lim < mf_dt else mf_dt
+        mag = q / nn * lim
+        tmp[0, b] = mag if cy < level else ZERO
+        tmp[1, b] = nx
+        tmp[2, b] = ny
+        tmp[3, b] = nz
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def _panel_add(fx, fy, fz, tmp, nb, i, w):
+    """Add node i's share w of the panel force in tmp (``_panel_lanes``) to its force rows."""
+    for b in range(nb):
+        mag = tmp[0, b]
+        fx[i, b] -= w * mag * tmp[1, b]
+        fy[i, b] -= w * mag * tmp[2, b]
+        fz[i, b] -= w * mag * tmp[3, b]
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def _water_fused(x, y, z, vx, vy, vz, fx, fy, fz, nb, m):
+    """``water`` in one lane loop a panel, adding to its nodes as it goes: for a few lanes,
+    where the loop overheads of the split form cost more than its vectorisation gains."""
     mass, panels, pw, pdrag = m.mass, m.panels, m.panel_weights, m.panel_drag
     level = F(m.water_level)
     drag = F(m.water_drag)
