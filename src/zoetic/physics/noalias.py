@@ -12,34 +12,42 @@ array twice, where either is written.
 
 from __future__ import annotations
 
-from numba.core import cpu
-from numba.core.registry import CPUDispatcher, cpu_target
+import numba
+
+try:  # Numba internals: absent or renamed in some Numba version, plain njit is used
+    from numba.core import cpu
+    from numba.core.registry import CPUDispatcher, cpu_target
+except ImportError:  # pragma: no cover - depends on the installed Numba
+    cpu = None
 
 
-class _NoAliasOptions(cpu.CPUTargetOptions):
-    """The CPU target's options, with Numba's ``noalias`` compiler flag set."""
+if cpu is not None:
 
-    def finalize(self, flags, options):
-        super().finalize(flags, options)
-        flags.noalias = True
+    class _NoAliasOptions(cpu.CPUTargetOptions):
+        """The CPU target's options, with Numba's ``noalias`` compiler flag set."""
 
+        def finalize(self, flags, options):
+            super().finalize(flags, options)
+            flags.noalias = True
 
-class _NoAliasTarget:
-    """The CPU target (same typing and target contexts) with ``_NoAliasOptions``."""
+    class _NoAliasTarget:
+        """The CPU target (same typing and target contexts) with ``_NoAliasOptions``."""
 
-    options = _NoAliasOptions
+        options = _NoAliasOptions
 
-    def __getattr__(self, name):
-        return getattr(cpu_target, name)
+        def __getattr__(self, name):
+            return getattr(cpu_target, name)
 
-
-class _NoAliasDispatcher(CPUDispatcher):
-    targetdescr = _NoAliasTarget()
+    class _NoAliasDispatcher(CPUDispatcher):
+        targetdescr = _NoAliasTarget()
 
 
 def njit_noalias(**options):
     """Return a decorator like ``numba.njit(**options)`` whose function's pointer arguments are
     all ``noalias`` (see the module's docstring for the caller's promise)."""
+
+    if cpu is None:
+        return numba.njit(**options)
 
     def decorate(fn):
         opts = dict(options)
