@@ -9,7 +9,6 @@ activations (fishes that share a motor in one batched call).
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -110,8 +109,9 @@ class Shoal:
                 conceded=given[i],
             )
             d = brain.decide({**obs, "view": view}, period, sits[i], drives[i])
+            # the demand with the body's posture (``Demand(...)``: ``replace`` is slow)
             demands.append(
-                None if d is None else replace(d, roll=roll[i], roll_rate=rate[i], bend=bend[i])
+                None if d is None else Demand(d.speed, d.turn, d.pitch, roll[i], rate[i], bend[i])
             )
         return activations(self.brains, demands, period)
 
