@@ -114,7 +114,7 @@ def probe_reach(me: Me, target: float | None = None) -> float:
     beyond it are left for after the meal, since food lies near rocks)."""
     speed = max(math.sqrt(me.velocity @ me.velocity), me.cruise)
     reach = max(3.0, LOOKAHEAD * speed)
-    if target is not None and np.isfinite(target):
+    if target is not None and math.isfinite(target):
         reach = min(reach, max(target, 0.5 * CLEARANCE))
     return reach
 
