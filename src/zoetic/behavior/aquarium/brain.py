@@ -216,7 +216,8 @@ class FishBrain:
             if v.conceded is not None:
                 free = np.where(v.conceded, np.inf, d)
                 d = free if np.isfinite(free).any() else d  # all conceded: race for one
-            candidates = reach_cost(v.me, v.food, d)
+            # the focuser takes the nearest by the way, or keeps its previous target
+            candidates = reach_cost(v.me, v.food, d, nearest=True, keep=self.mind.target)
         elif intention == "mate":
             candidates = np.where(same, v.fish_distance, np.inf)
         elif intention == "hunt":
