@@ -169,3 +169,19 @@ def test_the_focusers_nearest_way_skips_only_particles_that_cannot_be_nearest():
         assert focus(some, keep) == focus(every, keep)
         assert done[keep] == np.isfinite(every[keep])  # the previous target is weighed
     assert skipped > 1000  # most particles are skipped
+
+
+def test_every_fishs_probes_at_once_are_each_fishs_own():
+    from zoetic.behavior.aquarium.routines import Me, probe_reach, probes_ahead, probes_ahead_many
+
+    rng = np.random.default_rng(6)
+    n = 30
+    nose, com, fwd, vel = _crowd(rng, n, 6.0)
+    fwd[0] = (0.0, 1.0, 0.0)  # straight up: no horizontal heading
+    cruise = rng.uniform(0.1, 0.4, n)
+    meals = [None if k % 3 else float(rng.uniform(0.0, 5.0)) for k in range(n)]
+    meals[3] = np.inf
+    many = probes_ahead_many(nose, fwd, vel, cruise, meals)
+    for i in range(n):
+        me = Me(com[i], nose[i], fwd[i], vel[i], float(cruise[i]), 0.43)
+        assert np.array_equal(many[i], probes_ahead(me, probe_reach(me, meals[i])))

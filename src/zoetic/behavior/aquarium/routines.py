@@ -127,6 +127,30 @@ def probes_ahead(me: Me, reach: float) -> np.ndarray:
     return me.nose + along[:, None] * f
 
 
+def probes_ahead_many(
+    nose: np.ndarray,
+    forward: np.ndarray,
+    velocity: np.ndarray,
+    cruise: np.ndarray,
+    targets: list[float | None],
+) -> np.ndarray:
+    """Return every fish's probes (n, PROBES, 3): ``probes_ahead`` up to ``probe_reach`` for
+    n fishes at once (nose, forward, velocity (n, 3), cruise speeds (n,), each one's food
+    target distance or None), elementwise as the one fish's formulas: the same numbers."""
+    speed = np.maximum(np.sqrt((velocity * velocity).sum(axis=1)), cruise)
+    reach = np.maximum(3.0, LOOKAHEAD * speed)
+    meal = np.array([np.inf if t is None else t for t in targets], float)
+    near = np.isfinite(meal)
+    reach[near] = np.minimum(reach[near], np.maximum(meal[near], 0.5 * CLEARANCE))
+    f = np.array(forward, float)
+    f[:, 1] = 0.0
+    norm = np.sqrt((f * f).sum(axis=1))
+    f = np.where((norm > 1e-9)[:, None], f / np.where(norm > 1e-9, norm, 1.0)[:, None], 0.0)
+    along = _STEPS[None, :] * (reach / (PROBES - 1))[:, None]
+    along[:, -1] = reach
+    return nose[:, None, :] + along[:, :, None] * f[:, None, :]
+
+
 def side_room(me: Me, kind, center, size, reach: float) -> tuple[float, float]:
     """Return the room (m, the nearest obstacle surface) along rays 60 degrees to the left and
     to the right of the heading, probed every ``ROOM_STEP`` m or closer out to ``reach``
@@ -300,10 +324,9 @@ def _frame(me: Me, points: np.ndarray) -> tuple[float, list[float], list[float]]
     n = math.hypot(fx, fz) or 1.0
     fx, fz = fx / n, fz / n
     pts = np.atleast_2d(points)
-    dx, dz = (pts[:, 0] - me.nose[0]).tolist(), (pts[:, 2] - me.nose[2]).tolist()
-    ahead = [a * fx + b * fz for a, b in zip(dx, dz, strict=True)]
-    left = [b * fx - a * fz for a, b in zip(dx, dz, strict=True)]
-    return RADIUS_MARGIN * me.radius, ahead, left
+    dx, dz = pts[:, 0] - me.nose[0], pts[:, 2] - me.nose[2]
+    # elementwise, as Python's floats would: the same numbers
+    return RADIUS_MARGIN * me.radius, (dx * fx + dz * fz).tolist(), (dz * fx - dx * fz).tolist()
 
 
 def _way(x: float, qy: float, r: float) -> float:
@@ -359,9 +382,9 @@ def reach_cost(
         out[seen] = turn_paths(me, np.asarray(points, float)[seen]).min(axis=0)
         return out
     r, ahead, left = _frame(me, np.asarray(points, float)[seen])
-    straight = [math.hypot(x, y) for x, y in zip(ahead, left, strict=True)]
+    straight = np.hypot(ahead, left).tolist()
     best = math.inf
-    for k in sorted(range(len(seen)), key=straight.__getitem__):
+    for k in np.argsort(straight, kind="stable").tolist():
         if straight[k] > best * (1.0 + 1e-9) and seen[k] != keep:
             continue  # a longer way than the shortest found (the 1e-9: rounding)
         x, y = ahead[k], left[k]

@@ -22,8 +22,7 @@ from zoetic.behavior.aquarium.routines import (
     Me,
     collision_ahead,
     fish_threats,
-    probe_reach,
-    probes_ahead,
+    probes_ahead_many,
 )
 from zoetic.behavior.aquarium.species import Species
 from zoetic.behavior.mind import Drives, drives_many
@@ -68,6 +67,7 @@ class Shoal:
             np.array([s.habits.personal_space for s in species], float),
             np.array([s.habits.crowd for s in species]),
         )
+        self.cruise = np.array([b.cruise for b in brains], float)
         self.constants = [
             np.array([getattr(b.constants, k) for b in brains], float)
             for k in ("hunger_rate", "alpha", "libido_rate", "fear_distance")
@@ -158,9 +158,9 @@ class Shoal:
         obstacle ahead); an avoiding fish keeps the side it turned to. A hunting predator
         does not shy away from the prey it chases."""
         kind, center, size = self.statics
-        probes = [probes_ahead(m, probe_reach(m, q)) for m, q in zip(selves, meals, strict=True)]
-        ahead = obstacle_distance(np.stack(probes), kind, center, size)  # all fishes at once
         fb, seen = self.bodies, np.isfinite(pc.fish)
+        probes = probes_ahead_many(fb.nose, fb.fwd, fb.vel, self.cruise, meals)
+        ahead = obstacle_distance(probes, kind, center, size)  # all fishes at once
         for i, brain in enumerate(self.brains):
             th = brain.thought
             if th.intention == "hunt" and th.target is not None:
