@@ -169,8 +169,16 @@ class Shoal:
         _, sides, near = fish_threats(
             fb.nose, fb.com, fb.fwd, fb.vel, seen, *self.region, np.array(avoiding)
         )
+        # no obstacle within CLEARANCE of a probe and no fish threatening: nothing ahead
+        # (``collision_ahead``'s answer, without asking it for every fish of a crowd)
+        rocks = (ahead.min(axis=(1, 2)) < CLEARANCE).tolist() if len(kind) else [False] * len(sides)
         hits, aways, fish_only = [], [], []
         for i, brain in enumerate(self.brains):
+            if not rocks[i] and not sides[i]:
+                hits.append(False)
+                aways.append(None)
+                fish_only.append(False)
+                continue
             prefer = brain.avoid_side if brain.thought.intention == "avoid" else 0
             hit, away = collision_ahead(
                 selves[i], kind, center, size, int(sides[i]), prefer, meals[i], ahead[i]
@@ -181,8 +189,7 @@ class Shoal:
                 brain.avoid_side = 1 if fwd[2] * away[0] - fwd[0] * away[2] < 0 else -1
             hits.append(hit)
             aways.append(away)
-            rock = len(kind) > 0 and float(ahead[i].min()) < CLEARANCE
-            fish_only.append(bool(hit and sides[i] and not rock))
+            fish_only.append(bool(hit and sides[i] and not rocks[i]))
         return hits, aways, near.tolist(), fish_only
 
     def _drives(self, t: float, predators: np.ndarray) -> list[Drives]:
