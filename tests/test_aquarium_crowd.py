@@ -120,3 +120,68 @@ def test_a_tank_of_120_fishes_lives_and_one_of_2001_is_refused():
     assert moved > 0.05  # m in 0.3 s: a minnow swims
     with pytest.raises(SimulationError, match="at most 2000 fishes"):
         build_tank(TankConfig(fishes=2001))
+
+
+def _dense_concessions(nose, forward, food, eating, seen):
+    """Tu's focuser's concessions over every fish and every particle (the definition)."""
+    to = food[None] - nose[:, None]
+    to[..., 1] = 0.0
+    dist = np.linalg.norm(to, axis=-1)
+    heading = np.einsum("nfc,nc->nf", to, forward) / np.maximum(dist, 1e-9) > 0.7
+    out = np.zeros(dist.shape, bool)
+    for i, k in zip(*np.nonzero(seen & eating[None]), strict=True):
+        out[i] |= heading[k] & (dist[k] < dist[i])
+    return out
+
+
+def test_concessions_over_the_perceiving_pairs_are_the_definitions():
+    from zoetic.behavior.aquarium.brain import conceded
+
+    rng = np.random.default_rng(3)
+    n, food = 40, rng.uniform(-5, 5, (30, 3))
+    nose, _, fwd, _ = _crowd(rng, n, 5.0)
+    eating, seen = rng.random(n) < 0.5, rng.random((n, n)) < 0.4
+    np.fill_diagonal(seen, False)
+    want = _dense_concessions(nose, fwd, food, eating, seen)
+    assert want.sum() > 20
+    assert (conceded(nose, fwd, food, eating, seen) == want).all()
+    assert not conceded(nose, fwd, food, np.zeros(n, bool), seen).any()
+
+
+def test_the_focusers_nearest_way_skips_only_particles_that_cannot_be_nearest():
+    from zoetic.behavior.aquarium.routines import Me, reach_cost
+    from zoetic.behavior.mind import focus
+
+    rng = np.random.default_rng(4)
+    skipped = 0
+    for _ in range(200):
+        nose, com, fwd, vel = (x[0] for x in _crowd(rng, 1, 1.0))
+        me = Me(com, nose, fwd, vel, 0.25, 0.43, float(rng.uniform(0.5, 2.5)))
+        food = rng.uniform(-6, 6, (25, 3))
+        dist = np.where(rng.random(25) < 0.7, 1.0, np.inf)
+        keep = int(rng.integers(0, 25))
+        every = reach_cost(me, food, dist)
+        some = reach_cost(me, food, dist, nearest=True, keep=keep)
+        done = np.isfinite(some)
+        skipped += int((np.isfinite(every) & ~done).sum())
+        assert (some[done] == every[done]).all()  # the ways it takes are the ways
+        assert every[~done].min(initial=np.inf) > every.min()  # those it skips are longer
+        assert focus(some, keep) == focus(every, keep)
+        assert done[keep] == np.isfinite(every[keep])  # the previous target is weighed
+    assert skipped > 1000  # most particles are skipped
+
+
+def test_every_fishs_probes_at_once_are_each_fishs_own():
+    from zoetic.behavior.aquarium.routines import Me, probe_reach, probes_ahead, probes_ahead_many
+
+    rng = np.random.default_rng(6)
+    n = 30
+    nose, com, fwd, vel = _crowd(rng, n, 6.0)
+    fwd[0] = (0.0, 1.0, 0.0)  # straight up: no horizontal heading
+    cruise = rng.uniform(0.1, 0.4, n)
+    meals = [None if k % 3 else float(rng.uniform(0.0, 5.0)) for k in range(n)]
+    meals[3] = np.inf
+    many = probes_ahead_many(nose, fwd, vel, cruise, meals)
+    for i in range(n):
+        me = Me(com[i], nose[i], fwd[i], vel[i], float(cruise[i]), 0.43)
+        assert np.array_equal(many[i], probes_ahead(me, probe_reach(me, meals[i])))

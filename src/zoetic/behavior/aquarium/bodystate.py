@@ -8,8 +8,6 @@ closed loop (``control.loop``), how deep any fish has gone into a rock or anothe
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from zoetic.behavior.aquarium.locomotion import bend_nodes
@@ -40,20 +38,28 @@ def kinematics(
 ):
     """Return each fish's node positions, and (n, 3) centres, unit headings, centre velocities
     and noses; weights: each fish's node masses over its total; ``allpos``:
-    ``world.node_positions()`` when already taken this step."""
+    ``world.node_positions()`` when already taken this step. The fishes of one node count
+    are measured together (stacked matrix products: the same numbers as one fish at a
+    time)."""
     allpos = world.node_positions(0) if allpos is None else allpos
     allvel = world.node_velocities(0)
-    off = world.offsets.tolist()
-    com, fwd, cv, nose, pos = [], [], [], [], []
-    for a, (w, c, h) in enumerate(zip(weights, cw, heads, strict=True)):
-        p, v = allpos[off[a] : off[a + 1]], allvel[off[a] : off[a + 1]]
-        pos.append(p)
-        com.append(w @ p)
-        cv.append(w @ v)
-        fr = c @ p
-        fwd.append(fr / (math.sqrt(fr @ fr) + 1e-12))  # np.linalg.norm's formula
-        nose.append(p[h])
-    return pos, np.array(com), np.array(fwd), np.array(cv), np.array(nose)
+    off = world.offsets
+    n = len(weights)
+    com, fwd, cv = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
+    sizes = off[1:] - off[:-1]
+    for size in np.unique(sizes).tolist():
+        idx = np.flatnonzero(sizes == size)
+        rows = off[idx][:, None] + np.arange(size)  # (k, N) the group's rows
+        p, v = allpos[rows], allvel[rows]  # (k, N, 3)
+        w = np.stack([weights[a] for a in idx.tolist()])[:, None, :]  # (k, 1, N)
+        c = np.stack([cw[a] for a in idx.tolist()])[:, None, :]
+        com[idx], cv[idx] = np.matmul(w, p)[:, 0], np.matmul(w, v)[:, 0]
+        fr = np.matmul(c, p)[:, 0]
+        # np.linalg.norm's formula, fish by fish: sqrt(x x + y y + z z)
+        fwd[idx] = fr / (np.sqrt((fr * fr).sum(axis=1)) + 1e-12)[:, None]
+    pos = [allpos[o0:o1] for o0, o1 in zip(off[:-1].tolist(), off[1:].tolist(), strict=True)]
+    nose = allpos[off[:-1] + np.asarray(heads, int)]
+    return pos, com, fwd, cv, nose
 
 
 def roll_pairs(bodies: list[Body], offsets: np.ndarray) -> list[tuple[np.ndarray, ...]]:

@@ -49,6 +49,9 @@ from zoetic.control.policy import Period
 # how ``go_to`` approaches each intention's target: eat it, court beside a mate (0.6 m), aim
 # 0.5 s ahead of a prey
 GO_TO: dict[str, dict[str, float]] = {"eat": {}, "mate": {"beside": 0.6}, "hunt": {"lead": 0.5}}
+# the routines that read the perceived fishes (``Around.fish``, ``same``, ``predators``):
+# for the others ``_around`` leaves them empty (a crowd's fishes masked for nothing)
+CROWD_ROUTINES = frozenset(("escape", "school", "leave"))
 
 
 @dataclass(frozen=True)
@@ -138,7 +141,8 @@ class FishBrain:
 
     def kinds(self, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Return (same species, hunters, prey) masks over the tank's fishes (cached)."""
-        if getattr(self, "_names", None) != names:
+        known = getattr(self, "_names", None)
+        if known is not names and known != names:  # the tank's own tuple: no compare
             arr = np.array(names)
             self._names = names
             self._masks = (
@@ -212,7 +216,8 @@ class FishBrain:
             if v.conceded is not None:
                 free = np.where(v.conceded, np.inf, d)
                 d = free if np.isfinite(free).any() else d  # all conceded: race for one
-            candidates = reach_cost(v.me, v.food, d)
+            # the focuser takes the nearest by the way, or keeps its previous target
+            candidates = reach_cost(v.me, v.food, d, nearest=True, keep=self.mind.target)
         elif intention == "mate":
             candidates = np.where(same, v.fish_distance, np.inf)
         elif intention == "hunt":
@@ -227,18 +232,23 @@ class FishBrain:
     def _around(
         self, v: View, intention: str, target: int | None, masks: tuple[np.ndarray, ...]
     ) -> Around:
-        """Return what the routines read of the fish's surroundings: the fishes it sees, the
-        predators among them, its target (and the target fish's velocity), the way out of a
-        collision and the nearest obstacle's (or threatening fish's) distance; masks: the
-        fishes' ``kinds``."""
-        same, hunters, _ = masks
-        seen = np.isfinite(v.fish_distance)
+        """Return what the routines read of the fish's surroundings: the fishes it sees and
+        the predators among them (for the routines that read them: ``CROWD_ROUTINES``), its
+        target (and the target fish's velocity), the way out of a collision and the nearest
+        obstacle's (or threatening fish's) distance; masks: the fishes' ``kinds``."""
         food = intention == "eat"
+        crowd = {}
+        if intention in CROWD_ROUTINES:
+            same, hunters, _ = masks
+            seen = np.isfinite(v.fish_distance)
+            crowd = dict(
+                fish=v.fish_com[seen],
+                fish_forward=v.fish_forward[seen],
+                same=same[seen],
+                predators=v.fish_com[seen & hunters],
+            )
         return Around(
-            fish=v.fish_com[seen],
-            fish_forward=v.fish_forward[seen],
-            same=same[seen],
-            predators=v.fish_com[seen & hunters],
+            **crowd,
             target=None if target is None else (v.food if food else v.fish_com)[target],
             target_velocity=None if target is None or food else v.fish_velocity[target],
             away=v.away,
@@ -339,24 +349,28 @@ def conceded(
     a lost meal, while another particle is free. Our addition to Tu's focuser (which takes
     the nearest food): with ten fishes after fifteen particles the minnows otherwise
     converged on the same particles and collided there. nose, forward (n, 3); food (F, 3)."""
-    to = food[None, :, :] - nose[:, None, :]  # (n, F, 3)
-    to[..., 1] = 0.0
-    dist = np.linalg.norm(to, axis=-1)
-    cos = np.einsum("nfc,nc->nf", to, forward) / np.maximum(dist, 1e-9)
     eating = np.asarray(eating, bool)
-    heading = cos > CONCEDE_COS  # (k, F)
+    n = len(nose)
     # the pairs (i, k) of a fish i and an eating fish k it perceives, and for each pair the
     # particles i wants (a crowd's fishes see a few particles each, a few fishes each)
     ii, kk = np.nonzero(np.asarray(seen, bool) & eating[None, :])
-    want = np.ones(dist.shape, bool) if wanted is None else np.asarray(wanted, bool)
+    want = np.ones((n, len(food)), bool) if wanted is None else np.asarray(wanted, bool)
     rows, cols = np.nonzero(want)
-    start = np.searchsorted(rows, np.arange(len(dist) + 1))
+    start = np.searchsorted(rows, np.arange(n + 1))
     count = (start[1:] - start[:-1])[ii]
     pair = np.repeat(np.arange(len(ii)), count)
     at = np.arange(len(pair)) - np.repeat(np.cumsum(count) - count, count)
     i, k, p = ii[pair], kk[pair], cols[start[ii][pair] + at]
-    given = heading[k, p] & (dist[k, p] < dist[i, p])  # k is nearer to p than i, heading there
-    out = np.zeros(dist.shape, bool)
+    out = np.zeros(want.shape, bool)
+    if len(p) == 0:
+        return out
+    # nose to particle, horizontally, of the eating fish k and of i, for these triples only
+    # (every fish to every particle is n F vectors: 36 MB at 1000 fishes)
+    to_k, to_i = food[p] - nose[k], food[p] - nose[i]
+    to_k[:, 1] = to_i[:, 1] = 0.0
+    d_k, d_i = np.linalg.norm(to_k, axis=-1), np.linalg.norm(to_i, axis=-1)
+    cos = np.einsum("mc,mc->m", to_k, forward[k]) / np.maximum(d_k, 1e-9)
+    given = (cos > CONCEDE_COS) & (d_k < d_i)  # k is nearer to p than i, heading there
     out[i[given], p[given]] = True
     return out
 

@@ -114,7 +114,7 @@ def probe_reach(me: Me, target: float | None = None) -> float:
     beyond it are left for after the meal, since food lies near rocks)."""
     speed = max(math.sqrt(me.velocity @ me.velocity), me.cruise)
     reach = max(3.0, LOOKAHEAD * speed)
-    if target is not None and np.isfinite(target):
+    if target is not None and math.isfinite(target):
         reach = min(reach, max(target, 0.5 * CLEARANCE))
     return reach
 
@@ -125,6 +125,30 @@ def probes_ahead(me: Me, reach: float) -> np.ndarray:
     along = _STEPS * (reach / (PROBES - 1))  # np.linspace(0, reach, PROBES)'s own formula
     along[-1] = reach
     return me.nose + along[:, None] * f
+
+
+def probes_ahead_many(
+    nose: np.ndarray,
+    forward: np.ndarray,
+    velocity: np.ndarray,
+    cruise: np.ndarray,
+    targets: list[float | None],
+) -> np.ndarray:
+    """Return every fish's probes (n, PROBES, 3): ``probes_ahead`` up to ``probe_reach`` for
+    n fishes at once (nose, forward, velocity (n, 3), cruise speeds (n,), each one's food
+    target distance or None), elementwise as the one fish's formulas: the same numbers."""
+    speed = np.maximum(np.sqrt((velocity * velocity).sum(axis=1)), cruise)
+    reach = np.maximum(3.0, LOOKAHEAD * speed)
+    meal = np.array([np.inf if t is None else t for t in targets], float)
+    near = np.isfinite(meal)
+    reach[near] = np.minimum(reach[near], np.maximum(meal[near], 0.5 * CLEARANCE))
+    f = np.array(forward, float)
+    f[:, 1] = 0.0
+    norm = np.sqrt((f * f).sum(axis=1))
+    f = np.where((norm > 1e-9)[:, None], f / np.where(norm > 1e-9, norm, 1.0)[:, None], 0.0)
+    along = _STEPS[None, :] * (reach / (PROBES - 1))[:, None]
+    along[:, -1] = reach
+    return nose[:, None, :] + along[:, :, None] * f[:, None, :]
 
 
 def side_room(me: Me, kind, center, size, reach: float) -> tuple[float, float]:
@@ -293,42 +317,80 @@ def leave(me: Me, around: Around) -> Demand:
     return steer(me, me.com - around.fish.mean(axis=0), me.cruise)
 
 
+def _frame(me: Me, points: np.ndarray) -> tuple[float, list[float], list[float]]:
+    """Return the planning radius and each point (P, 3) relative to the nose in the fish's
+    horizontal frame: how far ahead, how far to the left (m)."""
+    fx, fz = float(me.forward[0]), float(me.forward[2])
+    n = math.hypot(fx, fz) or 1.0
+    fx, fz = fx / n, fz / n
+    pts = np.atleast_2d(points)
+    dx, dz = pts[:, 0] - me.nose[0], pts[:, 2] - me.nose[2]
+    # elementwise, as Python's floats would: the same numbers
+    return RADIUS_MARGIN * me.radius, (dx * fx + dz * fz).tolist(), (dz * fx - dx * fz).tolist()
+
+
+def _way(x: float, qy: float, r: float) -> float:
+    """Return the length (m) of the way to a point ``x`` m ahead and ``qy`` m beside the centre
+    of a turning circle of radius ``r`` on the fish's side (the fish starts at -pi/2 on it):
+    the arc turned to the tangent through the point, then straight on; inf inside the
+    circle."""
+    rho = math.hypot(x, qy)
+    if rho < r:
+        return math.inf
+    theta = math.atan2(qy, x) - math.acos(min(r / max(rho, 1e-9), 1.0))
+    arc = (theta + math.pi / 2) % (2 * math.pi)
+    return r * arc + math.sqrt(max(rho * rho - r * r, 0.0))
+
+
 def turn_paths(me: Me, points: np.ndarray) -> np.ndarray:
     """Return the lengths (m) of the shortest ways from the nose to each point (P, 3) in the
     horizontal plane for a fish that turns no tighter than ``me.radius`` (times
     ``RADIUS_MARGIN``), as (2, P): a turn to the left, then straight on (row 0), and the same
     turning right first (row 1). A point inside the left turning circle cannot be reached by a
     left turn (inf): the fish would circle it."""
-    r = RADIUS_MARGIN * me.radius
-    fx, fz = float(me.forward[0]), float(me.forward[2])
-    n = math.hypot(fx, fz) or 1.0
-    fx, fz = fx / n, fz / n
-    pts = np.atleast_2d(points)
-    dx, dz = (pts[:, 0] - me.nose[0]).tolist(), (pts[:, 2] - me.nose[2]).tolist()
-    out = [[math.inf] * len(dx), [math.inf] * len(dx)]
     # a handful of points: plain Python over lists beats numpy's per-call overhead
-    for k in range(len(dx)):
-        x, y = dx[k] * fx + dz[k] * fz, dz[k] * fx - dx[k] * fz  # ahead, to the left
-        for j, qy in ((0, y - r), (1, -y - r)):  # from the left (right) circle's centre
-            rho = math.hypot(x, qy)
-            if rho >= r:
-                # the arc turned before the tangent to the point (the fish starts at -pi/2)
-                theta = math.atan2(qy, x) - math.acos(min(r / max(rho, 1e-9), 1.0))
-                arc = (theta + math.pi / 2) % (2 * math.pi)
-                out[j][k] = r * arc + math.sqrt(max(rho * rho - r * r, 0.0))
-    return np.array(out)
+    r, ahead, left = _frame(me, points)
+    return np.array(
+        [
+            [_way(x, y - r, r) for x, y in zip(ahead, left, strict=True)],
+            [_way(x, -y - r, r) for x, y in zip(ahead, left, strict=True)],
+        ]
+    )
 
 
-def reach_cost(me: Me, points: np.ndarray, distances: np.ndarray) -> np.ndarray:
+def reach_cost(
+    me: Me,
+    points: np.ndarray,
+    distances: np.ndarray,
+    nearest: bool = False,
+    keep: int | None = None,
+) -> np.ndarray:
     """Return how far (m) the fish must swim to reach each point (``turn_paths``' shorter
     way), inf where ``distances`` is (not perceived): what a focuser weighs, so that a
-    particle ahead wins over a nearer one beside the fish that needs a loop."""
+    particle ahead wins over a nearer one beside the fish that needs a loop.
+
+    nearest: only the points that may be nearest by the way (and ``keep``, the focuser's
+    previous target) get their way; the others are left inf: the points are taken in the
+    order of their straight distance from the nose, which no way is shorter than, until that
+    distance passes the shortest way found (the nearest point and its way are the same)."""
     d = np.asarray(distances, float)
     seen = np.flatnonzero(d < np.inf)
     out = np.full(d.shape, np.inf)
-    if len(seen):
-        ways = turn_paths(me, np.asarray(points, float)[seen])
-        out[seen] = ways.min(axis=0)
+    if not len(seen):
+        return out
+    if not nearest:
+        out[seen] = turn_paths(me, np.asarray(points, float)[seen]).min(axis=0)
+        return out
+    r, ahead, left = _frame(me, np.asarray(points, float)[seen])
+    straight = np.hypot(ahead, left).tolist()
+    best = math.inf
+    for k in np.argsort(straight, kind="stable").tolist():
+        if straight[k] > best * (1.0 + 1e-9) and seen[k] != keep:
+            continue  # a longer way than the shortest found (the 1e-9: rounding)
+        x, y = ahead[k], left[k]
+        way = min(_way(x, y - r, r), _way(x, -y - r, r))
+        out[seen[k]] = way
+        best = min(best, way)
     return out
 
 

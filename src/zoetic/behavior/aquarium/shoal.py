@@ -9,7 +9,6 @@ activations (fishes that share a motor in one batched call).
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -23,8 +22,7 @@ from zoetic.behavior.aquarium.routines import (
     Me,
     collision_ahead,
     fish_threats,
-    probe_reach,
-    probes_ahead,
+    probes_ahead_many,
 )
 from zoetic.behavior.aquarium.species import Species
 from zoetic.behavior.mind import Drives, drives_many
@@ -69,6 +67,7 @@ class Shoal:
             np.array([s.habits.personal_space for s in species], float),
             np.array([s.habits.crowd for s in species]),
         )
+        self.cruise = np.array([b.cruise for b in brains], float)
         self.constants = [
             np.array([getattr(b.constants, k) for b in brains], float)
             for k in ("hunger_rate", "alpha", "libido_rate", "fear_distance")
@@ -110,8 +109,9 @@ class Shoal:
                 conceded=given[i],
             )
             d = brain.decide({**obs, "view": view}, period, sits[i], drives[i])
+            # the demand with the body's posture (``Demand(...)``: ``replace`` is slow)
             demands.append(
-                None if d is None else replace(d, roll=roll[i], roll_rate=rate[i], bend=bend[i])
+                None if d is None else Demand(d.speed, d.turn, d.pitch, roll[i], rate[i], bend[i])
             )
         return activations(self.brains, demands, period)
 
@@ -158,9 +158,9 @@ class Shoal:
         obstacle ahead); an avoiding fish keeps the side it turned to. A hunting predator
         does not shy away from the prey it chases."""
         kind, center, size = self.statics
-        probes = [probes_ahead(m, probe_reach(m, q)) for m, q in zip(selves, meals, strict=True)]
-        ahead = obstacle_distance(np.stack(probes), kind, center, size)  # all fishes at once
         fb, seen = self.bodies, np.isfinite(pc.fish)
+        probes = probes_ahead_many(fb.nose, fb.fwd, fb.vel, self.cruise, meals)
+        ahead = obstacle_distance(probes, kind, center, size)  # all fishes at once
         for i, brain in enumerate(self.brains):
             th = brain.thought
             if th.intention == "hunt" and th.target is not None:
@@ -169,8 +169,16 @@ class Shoal:
         _, sides, near = fish_threats(
             fb.nose, fb.com, fb.fwd, fb.vel, seen, *self.region, np.array(avoiding)
         )
+        # no obstacle within CLEARANCE of a probe and no fish threatening: nothing ahead
+        # (``collision_ahead``'s answer, without asking it for every fish of a crowd)
+        rocks = (ahead.min(axis=(1, 2)) < CLEARANCE).tolist() if len(kind) else [False] * len(sides)
         hits, aways, fish_only = [], [], []
         for i, brain in enumerate(self.brains):
+            if not rocks[i] and not sides[i]:
+                hits.append(False)
+                aways.append(None)
+                fish_only.append(False)
+                continue
             prefer = brain.avoid_side if brain.thought.intention == "avoid" else 0
             hit, away = collision_ahead(
                 selves[i], kind, center, size, int(sides[i]), prefer, meals[i], ahead[i]
@@ -181,8 +189,7 @@ class Shoal:
                 brain.avoid_side = 1 if fwd[2] * away[0] - fwd[0] * away[2] < 0 else -1
             hits.append(hit)
             aways.append(away)
-            rock = len(kind) > 0 and float(ahead[i].min()) < CLEARANCE
-            fish_only.append(bool(hit and sides[i] and not rock))
+            fish_only.append(bool(hit and sides[i] and not rocks[i]))
         return hits, aways, near.tolist(), fish_only
 
     def _drives(self, t: float, predators: np.ndarray) -> list[Drives]:
