@@ -19,9 +19,12 @@ def bench_aquarium(
     predator_skills: str | None = None,
     skills: str | None = None,
     plants: str = "static",
+    predators: int = 1,
+    seeing: int = 1,
 ) -> dict:
     """Return the realtime factor of the tank (brains, perception and physics together, no
-    video; ``perception`` oracle, or vision for the first predator), the same world's
+    video; ``perception`` oracle, or vision for the first ``seeing`` of the ``predators``),
+    the same world's
     physics alone, and the run's outcome figures. ``skills``: every fish's motor skills
     ("built-in", "learned" or a repertoire's directory; default the species files'), or
     "both": the built-in and the learned tank one after the other, each line under its name,
@@ -30,7 +33,17 @@ def bench_aquarium(
     if skills == BOTH:
         out = {
             k: bench_aquarium(
-                fishes, food, obstacles, seconds, seed, perception, predator_skills, k, plants
+                fishes,
+                food,
+                obstacles,
+                seconds,
+                seed,
+                perception,
+                predator_skills,
+                k,
+                plants,
+                predators,
+                seeing,
             )
             for k in ("built-in", "learned")
         }
@@ -39,18 +52,21 @@ def bench_aquarium(
     # no video: positions recorded once a brain period (the CLI records 20 frames a second)
     cfg = TankConfig(
         fishes=fishes,
+        predators=predators,
         food=food,
         obstacles=obstacles,
         seconds=seconds,
         seed=seed,
         record_period=0.1,
         perception=perception,
+        seeing=seeing,
         predator_skills=predator_skills,
         skills=skills,
         plants=plants,
     )
     warm = TankConfig(
         fishes=2,
+        predators=1,
         food=1,
         obstacles=2,  # a rock and a seaweed clump: compiles the plants' contacts too
         seconds=0.2,
@@ -59,8 +75,8 @@ def bench_aquarium(
         skills=skills,
         plants=plants,
     )
+    tank = build_tank(cfg)  # a bad option is refused before the warm-up
     live(build_tank(warm))  # compile, calibrate the motor controllers
-    tank = build_tank(cfg)
     c0 = time.process_time()
     life = live(tank)
     cpu = time.process_time() - c0
@@ -72,7 +88,8 @@ def bench_aquarium(
 
     return {
         "scene": f"{fishes} fishes, {cfg.food} food, {cfg.obstacles} obstacles, {seconds:g} s",
-        "perception": perception if perception == "oracle" else f"{perception} (one predator)",
+        "perception": perception if perception == "oracle" else f"{perception} ({seeing} seeing)",
+        "predators": predators,
         "skills": skills or "species files",
         "predator_skills": predator_skills or skills or "species file",
         "plants": plants,

@@ -27,8 +27,11 @@ def aquarium(
     out: Path = typer.Option(Path("runs/tank"), help="Output directory."),
     perception: str = typer.Option(
         "oracle",
-        help="oracle (the world model) or vision (the first predator sees with "
+        help="oracle (the world model) or vision (the first --seeing predators see with "
         "animat vision: rendered eyes, colour recognition, gaze; the rest use the oracle).",
+    ),
+    seeing: str = typer.Option(
+        "1", help="With --perception vision: how many predators see (the first ones), or all."
     ),
     prey: str = typer.Option("minnow", help="Prey species: a built-in name or a .toml file."),
     predator: str = typer.Option("shark", help="Predator species: a name or a .toml file."),
@@ -76,6 +79,7 @@ def aquarium(
         predator_species=predator,
         control_period=control_period,
         perception=perception,
+        seeing=seeing_count(seeing, predators),
         record_period=min(0.05, control_period),
         predator_skills=None if predator_skills is None else str(predator_skills),
         skills=skills,
@@ -93,6 +97,19 @@ def aquarium(
         _write_video(out / "video.mp4", cfg, tank, life, labels)
     write_json(out / "summary.json", summary)
     _report(summary, out, video)
+
+
+def seeing_count(text: str, predators: int) -> int:
+    """Return the number of seeing predators ``--seeing`` asks for: a whole number, or all of
+    the ``predators``; raise ZoeticError (exit 2) for anything else."""
+    from zoetic.errors import ZoeticError
+
+    word = text.strip().lower()
+    if word == "all":
+        return max(predators, 1)
+    if not word.isdigit() or int(word) < 1:
+        raise ZoeticError(f"--seeing: a whole number of predators from 1, or all; got {text!r}")
+    return int(word)
 
 
 def _write_video(path: Path, cfg, tank, life, labels: bool) -> None:
@@ -147,7 +164,13 @@ def bench_aquarium_cmd(
     obstacles: int = typer.Option(None, help="Rocks and seaweed [default: 5 sqrt(fishes / 10)]."),
     seconds: float = typer.Option(60.0, min=0.5),
     seed: int = typer.Option(0),
-    perception: str = typer.Option("oracle", help="oracle, or vision for the first predator."),
+    predators: int = typer.Option(1, help="How many of the fishes are predators (sharks)."),
+    perception: str = typer.Option(
+        "oracle", help="oracle, or vision for the first --seeing predators."
+    ),
+    seeing: str = typer.Option(
+        "1", help="With --perception vision: how many predators see (the first ones), or all."
+    ),
     predator_skills: Path = typer.Option(
         None, "--predator-skills", help="A learned repertoire's directory for the predator."
     ),
@@ -162,13 +185,25 @@ def bench_aquarium_cmd(
     json: Json = False,
     quick: Quick = False,
 ) -> None:
-    """Realtime factor of a tank (oracle perception, or animat vision for one predator),
-    against its physics alone."""
+    """Realtime factor of a tank (oracle perception, or animat vision for --seeing
+    predators), against its physics alone."""
     from zoetic.bench.aquarium import bench_aquarium
 
     pred = None if predator_skills is None else str(predator_skills)
     seconds = capped(quick, seconds, 5.0)
     emit(
-        bench_aquarium(fishes, food, obstacles, seconds, seed, perception, pred, skills, plants),
+        bench_aquarium(
+            fishes,
+            food,
+            obstacles,
+            seconds,
+            seed,
+            perception,
+            pred,
+            skills,
+            plants,
+            predators,
+            seeing_count(seeing, predators),
+        ),
         json,
     )

@@ -26,7 +26,13 @@ from zoetic.perception.eyes import (
     gaze_direction,
     pixel_direction,
 )
-from zoetic.perception.recognition import backproject, histogram, intersection, locate
+from zoetic.perception.recognition import (
+    Recognition,
+    backproject,
+    histogram,
+    intersection,
+    locate,
+)
 from zoetic.render import Cameras
 
 
@@ -243,18 +249,36 @@ class GazeController:
         )
 
     def step(
-        self, state: GazeState, frame: HeadFrame, images: np.ndarray, cameras: Cameras
+        self,
+        state: GazeState,
+        frame: HeadFrame,
+        images: np.ndarray,
+        cameras: Cameras,
+        seen: Recognition | None = None,
     ) -> GazeState:
         """Return the gaze state after one frame: stabilise each eye on its fovea's motion,
-        re-foveate (saccade) when the target drifts or is lost, verge both eyes on it."""
+        re-foveate (saccade) when the target drifts or is lost, verge both eyes on it.
+        ``seen``: the model already looked for in all 2 x levels images (``recognise``, left
+        eye's levels first), as a batch of fishes' eyes does; else looked for here."""
         n = self.spec.levels
+
+        def held(eye: int) -> bool:
+            h = histogram(images[eye, n - 1]) if seen is None else seen.histograms[eye * n + n - 1]
+            return intersection(h, self.model) >= self.match
+
+        def detect(eye: int, lev: int):
+            return (
+                locate(images[eye, lev], self.model)
+                if seen is None
+                else seen.detections[eye * n + lev]
+            )
+
         s = self.spec.size
         new = GazeState(state.angles.copy(), state.locked.copy(), list(state.fovea), state.saccades)
         aim: list = [None, None]  # the foveal pixel each eye now centres on, when it has one
         for eye in (LEFT, RIGHT):
             fov = images[eye, n - 1]
-            held = intersection(histogram(fov), self.model) >= self.match
-            if new.locked[eye] and held and new.fovea[eye] is not None:
+            if new.locked[eye] and held(eye) and new.fovea[eye] is not None:
                 u, v = image_shift(new.fovea[eye], fov)
                 if np.hypot(u, v) <= self.max_shift:  # optokinetic: follow the image motion
                     th, ph = saccade(frame, cameras, eye * n + n - 1, 0.5 * s + u, 0.5 * s + v)
@@ -264,7 +288,7 @@ class GazeController:
                     new.locked[eye] = False
             found = None
             for lev in range(n - 1, -1, -1):  # finest level that sees the target
-                det = locate(images[eye, lev], self.model)
+                det = detect(eye, lev)
                 if det.strength >= self.threshold:
                     found = (lev, det)
                     break

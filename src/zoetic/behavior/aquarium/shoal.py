@@ -1,7 +1,7 @@
 """Every fish of a tank deciding at once: the closed loop's ``decide`` for the aquarium.
 
 Once a control period ``Shoal`` perceives the tank for every fish (the oracle, and animat
-vision for one predator's prey), probes ahead of each for obstacles, reads every fish's
+vision for the seeing predators' prey), probes ahead of each for obstacles, reads every fish's
 situation and drives in one step over arrays, asks each brain for its motor demand with the
 roll and bend its body has now (``FishBodies.posture``), and turns the demands into muscle
 activations (fishes that share a motor in one batched call).
@@ -30,14 +30,14 @@ from zoetic.control.policy import Period
 from zoetic.physics.world import World
 
 if TYPE_CHECKING:  # the eyes' renderer loads only for a tank with vision
-    from zoetic.behavior.aquarium.vision import FishEyes
+    from zoetic.behavior.aquarium.vision import TankEyes
 
 
 class Shoal:
     """The tank's fishes' brains over their bodies, asked for activations once a period.
 
     statics: the tank's obstacles (kind, center, size) as ``pack_statics`` returns them;
-    eyes: animat vision for one predator (None: every fish perceives by the oracle).
+    eyes: animat vision for the seeing predators (None: every fish perceives by the oracle).
     """
 
     def __init__(
@@ -46,7 +46,7 @@ class Shoal:
         brains: list[FishBrain],
         bodies: FishBodies,
         statics: tuple[np.ndarray, ...],
-        eyes: FishEyes | None = None,
+        eyes: TankEyes | None = None,
     ) -> None:
         self.species, self.brains, self.bodies = species, brains, bodies
         self.statics, self.eyes = statics, eyes
@@ -124,17 +124,23 @@ class Shoal:
         left = ~world.food_eaten[0]
         pc = perceive(b.nose, b.fwd, b.com, alive, food, left, kind, center, size, *self.senses)
         seen: dict[int, np.ndarray] = {}
-        if self.eyes is None or not alive[self.eyes.animal]:
+        if self.eyes is None:
             return pc, seen
-        a = self.eyes.animal
-        hunted = self.species[a].prey
-        prey = [j for j in range(len(alive)) if alive[j] and j != a and self.names[j] in hunted]
-        sight = self.eyes.see(world, np.array(prey, int))
-        pc.fish[a, prey] = np.inf  # prey only as the eyes see it
-        seen[a] = b.com.copy()
-        if sight is not None:
-            pc.fish[a, sight.fish] = sight.distance
-            seen[a][sight.fish] = sight.point
+        prey = {
+            a: np.array(
+                [j for j in range(len(alive)) if alive[j] and j != a and self.names[j] in hunted],
+                int,
+            )
+            for a in self.eyes.animals
+            if alive[a]
+            for hunted in [self.species[a].prey]
+        }
+        for a, sight in self.eyes.see(world, prey).items():
+            pc.fish[a, prey[a]] = np.inf  # prey only as the eyes see it
+            seen[a] = b.com.copy()
+            if sight is not None:
+                pc.fish[a, sight.fish] = sight.distance
+                seen[a][sight.fish] = sight.point
         return pc, seen
 
     def _selves(self, pc: Percepts) -> tuple[list[Me], list[float | None]]:

@@ -63,7 +63,8 @@ class TankConfig:
     predator_species: str = "shark"
     food_radius: float = 0.25
     food_margin: float = 3.0  # m from the walls food is dropped: 1.5 turning radii of a fish
-    perception: str = "oracle"  # or "vision": the first predator sees with animat vision
+    perception: str = "oracle"  # or "vision": the first ``seeing`` predators see with animat vision
+    seeing: int = 1
     predator_skills: str | None = None  # a learned repertoire's directory for the predator
     # every species' motor skills ("built-in", "learned" or a repertoire's directory) instead
     # of what the species files say (``predator_skills`` then still names the predator's)
@@ -137,6 +138,10 @@ def _check(cfg: TankConfig) -> None:
         )
     if cfg.perception == "vision" and cfg.predators < 1:
         raise SimulationError("--perception vision gives a predator eyes: need --predators >= 1")
+    if cfg.perception == "vision" and not 1 <= cfg.seeing <= cfg.predators:
+        raise SimulationError(
+            f"--seeing must be from 1 to the {cfg.predators} predator(s), got {cfg.seeing}"
+        )
     if cfg.plants not in PLANTS:
         raise SimulationError(f"plants must be one of {', '.join(PLANTS)}, got {cfg.plants!r}")
     if not 0 < cfg.control_period <= 1.0 or not 0 < cfg.record_period <= cfg.control_period:
@@ -349,18 +354,26 @@ class _Progress(Observer):
 
 
 def _eyes(tank: Tank):
-    """Return animat-vision eyes for the tank's first predator (``aquarium.vision``)."""
-    from zoetic.behavior.aquarium.vision import FishEyes
+    """Return animat-vision eyes for the tank's first ``seeing`` predators
+    (``aquarium.vision``)."""
+    from zoetic.behavior.aquarium.vision import FishEyes, TankEyes
 
-    a = next(i for i, f in enumerate(tank.fishes) if f.species.predator)
-    me = tank.fishes[a]
-    prey = next((f for f in tank.fishes if f.species.name in me.species.prey), None)
-    prey_body, prey_color = (prey.body, prey.species.color) if prey else (me.body, me.species.color)
+    hunters = [i for i, f in enumerate(tank.fishes) if f.species.predator]
     colors = [np.array(f.species.color) / 255.0 for f in tank.fishes]
-    rng, extent = me.species.senses.view_range, 2 * tank.config.size()
-    return FishEyes.build(
-        a, me.body, colors, prey_body, np.array(prey_color) / 255.0, rng, -HEIGHT, extent
-    )
+    eyes = []
+    for a in hunters[: tank.config.seeing]:
+        me = tank.fishes[a]
+        prey = next((f for f in tank.fishes if f.species.name in me.species.prey), None)
+        prey_body, prey_color = (
+            (prey.body, prey.species.color) if prey else (me.body, me.species.color)
+        )
+        rng, extent = me.species.senses.view_range, 2 * tank.config.size()
+        eyes.append(
+            FishEyes.build(
+                a, me.body, colors, prey_body, np.array(prey_color) / 255.0, rng, -HEIGHT, extent
+            )
+        )
+    return TankEyes(eyes, eyes[0].scenery)
 
 
 def live(

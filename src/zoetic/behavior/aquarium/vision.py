@@ -18,10 +18,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from zoetic.bodies import Body
-from zoetic.perception.eyes import EyeSpec, head_frame, look
+from zoetic.perception.eyes import EyeSpec, HeadFrame, eye_cameras, head_frame
 from zoetic.perception.gaze import GazeController, GazeState, fixation
 from zoetic.perception.pursuit import FOG, Scenery, learn_model
+from zoetic.perception.recognition import Recognition, recognise
 from zoetic.physics.world import World
+from zoetic.render import Cameras, render
+from zoetic.render.scene import Mesh
 
 
 @dataclass(frozen=True)
@@ -36,7 +39,8 @@ class Sighting:
 
 @dataclass
 class FishEyes:
-    """One fish's eyes in a tank: ``see`` once a brain period."""
+    """One fish's eyes in a tank: ``see`` once a brain period (alone), or ``aim`` its cameras
+    and ``react`` to the images they took (``TankEyes`` renders all fishes' eyes at once)."""
 
     animal: int
     body: Body
@@ -68,16 +72,45 @@ class FishEyes:
     def see(self, world: World, prey: np.ndarray) -> Sighting | None:
         """Render, recognise, move the eyes; return the prey fish the gaze rests on (among
         the indices ``prey``: live prey fishes) or None."""
+        frame, cams = self.aim(world)
         spec = self.gaze.spec
+        images = render_eyes(self.scenery.mesh(world), cams, spec)
+        return self.react(world, frame, images[0], cams, prey)
+
+    def aim(self, world: World) -> tuple[HeadFrame, Cameras]:
+        """Return the head frame now and the eyes' cameras, the gaze held on its world
+        directions through the head's motion since the last frame."""
         frame = head_frame(self.body, world.positions(self.animal)[0])
         self.state = self.gaze.hold(self.state, frame)
-        images, cams = look(self.scenery.mesh(world), frame, self.state.angles, spec, FOG)
-        self.state = self.gaze.step(self.state, frame, images, cams)
+        return frame, eye_cameras(frame, self.state.angles, self.gaze.spec)
+
+    def react(
+        self,
+        world: World,
+        frame: HeadFrame,
+        images: np.ndarray,
+        cams: Cameras,
+        prey: np.ndarray,
+        seen: Recognition | None = None,
+    ) -> Sighting | None:
+        """Recognise the prey in the images (2, levels, size, size, 3) the cameras ``cams``
+        took (or take what ``recognise`` found in them: ``seen``), move the eyes; return the
+        prey fish the gaze rests on or None."""
+        spec = self.gaze.spec
+        self.state = self.gaze.step(self.state, frame, images, cams, seen)
         self.frames += 1
         locked = self.state.locked
         if not locked.any() or len(prey) == 0:
             return None
-        eyes = cams.eye[:: spec.levels]
+        return self._sighting(world, frame, cams.eye[:: spec.levels], prey)
+
+    def _sighting(
+        self, world: World, frame: HeadFrame, eyes: np.ndarray, prey: np.ndarray
+    ) -> Sighting | None:
+        """Return the prey fish some locked eye's gaze ray passes within twice the fovea's
+        half angle of, nearest first, at the triangulated range (or along the ray)."""
+        spec = self.gaze.spec
+        locked = self.state.locked
         dirs = self.state.directions
         use = np.flatnonzero(locked)
         half = 0.5 * spec.fovs[-1]
@@ -100,3 +133,73 @@ class FishEyes:
             rng = float(max(along[np.argmin(miss)], 0.0))
             point = e + rng * d
         return Sighting(best, float(rng), np.asarray(point, float))
+
+
+def render_eyes(mesh: Mesh, cams: Cameras, spec: EyeSpec) -> np.ndarray:
+    """Return the images (F, 2, levels, size, size, 3) uint8 of F fishes' eyes' cameras
+    (2 levels cameras a fish, in ``eye_cameras``' order, one after another) in one pass."""
+    img = render(mesh.vertices, mesh.triangles, mesh.colors, cams, FOG, spec.visibility)
+    return img.reshape(-1, 2, spec.levels, spec.size, spec.size, 3)
+
+
+@dataclass
+class TankEyes:
+    """The eyes of every seeing fish of a tank, rendered together once a brain period: the
+    world's triangles built once (``scenery``), all fishes' cameras drawn in one rasteriser
+    call (one per eye design, should the seeing species differ)."""
+
+    eyes: list[FishEyes]
+    scenery: Scenery
+
+    @property
+    def animals(self) -> list[int]:
+        """Return the seeing fishes' indices in the tank."""
+        return [e.animal for e in self.eyes]
+
+    def see(self, world: World, prey: dict[int, np.ndarray]) -> dict[int, Sighting | None]:
+        """Render every seeing fish of ``prey`` (animal -> indices of the live prey fishes it
+        hunts), recognise, move the eyes; return per fish the prey its gaze rests on."""
+        seers = [e for e in self.eyes if e.animal in prey]
+        if not seers:
+            return {}
+        aims = [e.aim(world) for e in seers]
+        mesh = self.scenery.mesh(world)
+        images: list = [None] * len(seers)
+        for spec in dict.fromkeys(e.gaze.spec for e in seers):
+            idx = [k for k, e in enumerate(seers) if e.gaze.spec == spec]
+            drawn = render_eyes(mesh, _stack([aims[k][1] for k in idx]), spec)
+            for n, k in enumerate(idx):
+                images[k] = drawn[n]
+        seen = _recognise(seers, images)
+        return {
+            e.animal: e.react(world, frame, images[k], c, prey[e.animal], seen[k])
+            for k, (e, (frame, c)) in enumerate(zip(seers, aims, strict=True))
+        }
+
+
+def _recognise(seers: list[FishEyes], images: list[np.ndarray]) -> list[Recognition]:
+    """Return per fish what its prey's colour model finds in each of its images
+    (2, levels, size, size, 3), all fishes' images of one size binned in one pass."""
+    out: list = [None] * len(seers)
+    for shape in dict.fromkeys(i.shape for i in images):
+        idx = [k for k, i in enumerate(images) if i.shape == shape]
+        per = shape[0] * shape[1]  # images a fish
+        flat = np.concatenate([images[k].reshape(per, *shape[2:]) for k in idx])
+        models = np.repeat(np.stack([seers[k].gaze.model for k in idx]), per, 0)
+        found = recognise(flat, models)
+        for n, k in enumerate(idx):
+            part = slice(n * per, (n + 1) * per)
+            out[k] = Recognition(found.histograms[part], found.detections[part])
+    return out
+
+
+def _stack(cams: list[Cameras]) -> Cameras:
+    """Return one Cameras holding several's (all of one image size)."""
+    if len(cams) == 1:
+        return cams[0]
+    return Cameras(
+        np.concatenate([c.eye for c in cams]),
+        np.concatenate([c.rotation for c in cams]),
+        np.concatenate([c.fov for c in cams]),
+        cams[0].size,
+    )
