@@ -15,6 +15,7 @@ from zoetic.cli import main
 from zoetic.cli.aquarium import seeing_count
 from zoetic.errors import SimulationError, ZoeticError
 from zoetic.perception.eyes import look
+from zoetic.perception.gaze import _gray, target_image
 from zoetic.perception.pursuit import FOG
 from zoetic.perception.recognition import histogram, locate, recognise
 from zoetic.physics.world import Animal, World
@@ -96,6 +97,8 @@ def test_recognising_a_batch_gives_each_images_histogram_and_detection():
     for k, img in enumerate(imgs):
         assert np.array_equal(got.histograms[k], histogram(img))
         assert got.detections[k] == locate(img, models[k])
+        assert np.array_equal(got.grays[k], _gray(img))
+        assert np.array_equal(got.targets[k], target_image(img, models[k]))
 
 
 def test_batched_eyes_see_and_move_as_each_fishs_eyes_alone():

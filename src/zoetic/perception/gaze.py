@@ -13,7 +13,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.ndimage import gaussian_filter
 from scipy.ndimage import shift as nd_shift
 
 from zoetic.perception.eyes import (
@@ -27,8 +26,10 @@ from zoetic.perception.eyes import (
     pixel_direction,
 )
 from zoetic.perception.recognition import (
+    TARGET_RADIUS,
     Recognition,
     backproject,
+    gray,
     histogram,
     intersection,
     locate,
@@ -75,7 +76,7 @@ def vergence_range(theta_left: float, theta_right: float, baseline: float) -> fl
 
 
 def _gray(img: np.ndarray) -> np.ndarray:
-    return gaussian_filter(np.asarray(img, float).mean(-1) / 255.0, 1.0)
+    return gray(img)
 
 
 def image_shift(prev: np.ndarray, cur: np.ndarray, iterations: int = 3) -> tuple[float, float]:
@@ -185,14 +186,15 @@ def target_image(image: np.ndarray, model: np.ndarray) -> np.ndarray:
     """Return the gray image (H, W) weighted by the backprojection of the target's colour
     ``model``: what the two eyes' vergence should match, the target's own pixels,
     not the background behind it (which lies at another disparity)."""
-    return _gray(image) * backproject(image, model, radius=2)
+    return _gray(image) * backproject(image, model, radius=TARGET_RADIUS)
 
 
 @dataclass
 class GazeState:
     """What the gaze controller remembers: angles (2, 2) rows (theta, phi) for the left and
     right eyes relative to the head, whether each eye holds the target, its last foveal
-    image, and the gaze directions (2, 3) in the world (None before the first frame)."""
+    image in gray (``recognition.gray``), and the gaze directions (2, 3) in the world (None
+    before the first frame)."""
 
     angles: np.ndarray = field(default_factory=lambda: np.zeros((2, 2)))
     locked: np.ndarray = field(default_factory=lambda: np.zeros(2, bool))
@@ -266,6 +268,9 @@ class GazeController:
             h = histogram(images[eye, n - 1]) if seen is None else seen.histograms[eye * n + n - 1]
             return intersection(h, self.model) >= self.match
 
+        def fovea(eye: int) -> np.ndarray:
+            return _gray(images[eye, n - 1]) if seen is None else seen.grays[eye * n + n - 1]
+
         def detect(eye: int, lev: int):
             return (
                 locate(images[eye, lev], self.model)
@@ -277,7 +282,7 @@ class GazeController:
         new = GazeState(state.angles.copy(), state.locked.copy(), list(state.fovea), state.saccades)
         aim: list = [None, None]  # the foveal pixel each eye now centres on, when it has one
         for eye in (LEFT, RIGHT):
-            fov = images[eye, n - 1]
+            fov = fovea(eye)
             if new.locked[eye] and held(eye) and new.fovea[eye] is not None:
                 u, v = image_shift(new.fovea[eye], fov)
                 if np.hypot(u, v) <= self.max_shift:  # optokinetic: follow the image motion
@@ -311,7 +316,7 @@ class GazeController:
             # near: verged under near_range m last frame, or not verged at all (rays apart)
             last = fixation(frame, state.angles, self.spec)[1]
             near = last < self.near_range or not np.isfinite(last)
-            found = self.vergence(images, aim[LEFT], bool(state.locked.all() and near))
+            found = self.vergence(images, aim[LEFT], bool(state.locked.all() and near), seen)
             if found is not None:
                 lev, col, row = found
                 new.angles[RIGHT] = saccade(frame, cameras, RIGHT * n + lev, col, row)
@@ -320,7 +325,13 @@ class GazeController:
         new.directions = gaze_direction(frame, new.angles[:, 0], new.angles[:, 1])
         return new
 
-    def vergence(self, images: np.ndarray, aim: tuple[float, float], near: bool):
+    def vergence(
+        self,
+        images: np.ndarray,
+        aim: tuple[float, float],
+        near: bool,
+        seen: Recognition | None = None,
+    ):
         """Return (level, col, row): where in the right eye's component image of that level
         lies the spot of the target the left fovea centres on (``aim``, left foveal px), or
         None when no match is good enough. On the target's own pixels (``target_image``). A far
@@ -331,16 +342,23 @@ class GazeController:
         ``match_peak``),
         coarse to fine: in the level below the fovea (twice its field, so a near target's
         disparity stays in view), then within a few px of that in the fovea, whose pixels
-        are half the size: the finer the image, the finer the vergence angle and the range."""
+        are half the size: the finer the image, the finer the vergence angle and the range.
+        ``seen``: the target images already made (``recognise``)."""
         n, s = self.spec.levels, self.spec.size
         c = 0.5 * s
-        left, right = (target_image(images[e, n - 1], self.model) for e in (LEFT, RIGHT))
+
+        def target(eye: int, lev: int) -> np.ndarray:
+            if seen is None:
+                return target_image(images[eye, lev], self.model)
+            return seen.targets[eye * n + lev]
+
+        left, right = (target(e, n - 1) for e in (LEFT, RIGHT))
         if n < 2 or not near:
             u, v, peak = correlate(left, right)
             if peak >= self.verge_peak and np.hypot(u, v) < 0.25 * s:
                 return n - 1, aim[0] + u, aim[1] + v
             return None
-        lo, ro = (target_image(images[e, n - 2], self.model) for e in (LEFT, RIGHT))
+        lo, ro = (target(e, n - 2) for e in (LEFT, RIGHT))
         coarse = (c + 0.5 * (aim[0] - c), c + 0.5 * (aim[1] - c))
         col, row, score = match(lo, ro, *coarse, self.verge_half)
         if score < self.match_peak:

@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import convolve
+from scipy.ndimage import convolve, gaussian_filter
 
 BINS = (16, 16, 8)
 N_BINS = BINS[0] * BINS[1] * BINS[2]
@@ -101,21 +101,46 @@ def _peak(raw: np.ndarray, b: np.ndarray, window: int) -> Detection:
     )
 
 
+def gray(images: np.ndarray) -> np.ndarray:
+    """Return the gray levels (..., H, W) in [0, 1] of RGB images (..., H, W, 3), smoothed by
+    a Gaussian of 1 px within each image: what the gaze's flow and vergence compare."""
+    g = np.asarray(images, float).mean(-1) / 255.0
+    return gaussian_filter(g, (0.0,) * (g.ndim - 2) + (1.0, 1.0))
+
+
 @dataclass(frozen=True)
 class Recognition:
     """What colour indexing finds in K images at once: each image's histogram (K, 2048) as
-    fractions of its pixels, and its model's ``locate`` detection (K of them)."""
+    fractions of its pixels, its model's ``locate`` detection (K of them), its ``gray``
+    (K, H, W) and its target image (K, H, W): the gray weighted by the model's
+    backprojection smoothed over ``TARGET_RADIUS`` px (``gaze.target_image``)."""
 
     histograms: np.ndarray
     detections: list[Detection]
+    grays: np.ndarray
+    targets: np.ndarray
+
+    def part(self, start: int, stop: int) -> Recognition:
+        """Return what was found in images ``start`` to ``stop`` - 1."""
+        return Recognition(
+            self.histograms[start:stop],
+            self.detections[start:stop],
+            self.grays[start:stop],
+            self.targets[start:stop],
+        )
+
+
+TARGET_RADIUS = 2  # px: the disk smoothing a target image's backprojection
 
 
 def recognise(
     images: np.ndarray, models: np.ndarray, radius: int = 1, window: int = 8
 ) -> Recognition:
-    """Return the histograms of K RGB images (K, H, W, 3) and where each image's model
-    (K, 2048) peaks in it: ``histogram`` and ``locate`` of every image, the pixels binned,
-    counted and backprojected for all images in one pass (the same numbers image by image)."""
+    """Return the histograms of K RGB images (K, H, W, 3), where each image's model
+    (K, 2048) peaks in it, their grays and target images: ``histogram``, ``locate``,
+    ``gray`` and ``gaze.target_image`` of every image, the pixels binned, counted,
+    backprojected and smoothed for all images in one pass (the same numbers image by
+    image)."""
     idx = bin_index(images)
     k = idx.shape[0]
     flat = idx.reshape(k, -1)
@@ -125,4 +150,6 @@ def recognise(
     ratio = np.minimum(np.where(hist > 0, models / np.maximum(hist, 1e-12), 0.0), 1.0)
     raw = np.take_along_axis(ratio, flat, 1).reshape(idx.shape)
     b = convolve(raw, _disk(radius)[None], mode="constant") if radius > 0 else raw
-    return Recognition(hist, [_peak(raw[n], b[n], window) for n in range(k)])
+    g = gray(images)
+    target = g * convolve(raw, _disk(TARGET_RADIUS)[None], mode="constant")
+    return Recognition(hist, [_peak(raw[n], b[n], window) for n in range(k)], g, target)

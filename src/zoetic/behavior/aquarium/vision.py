@@ -188,8 +188,7 @@ def _recognise(seers: list[FishEyes], images: list[np.ndarray]) -> list[Recognit
         models = np.repeat(np.stack([seers[k].gaze.model for k in idx]), per, 0)
         found = recognise(flat, models)
         for n, k in enumerate(idx):
-            part = slice(n * per, (n + 1) * per)
-            out[k] = Recognition(found.histograms[part], found.detections[part])
+            out[k] = found.part(n * per, (n + 1) * per)
     return out
 
 
