@@ -1,6 +1,7 @@
-"""Animat vision for a fish of the tank (``--perception vision``): the perception issue's two
-foveated eyes (``perception.eyes``), colour-model recognition (``perception.recognition``) and
-gaze control (``perception.gaze``), as ``zoetic pursue`` uses them (``perception.pursuit``).
+"""Animat vision for the seeing fishes of the tank (``--perception vision``, the first
+``--seeing`` predators): the perception issue's two foveated eyes (``perception.eyes``),
+colour-model recognition (``perception.recognition``) and gaze control
+(``perception.gaze``), as ``zoetic pursue`` uses them (``perception.pursuit``).
 
 Every brain period the fish renders what its eyes see of the tank (fishes in their species'
 colours, rocks, seaweed and walls through the water's fog), foveates whatever matches the
@@ -9,6 +10,9 @@ live prey fish the gaze rests on (some node within twice the fovea's half angle 
 ray), at the range the eyes triangulate (or, with one eye locked, along that eye's ray at the
 distance of the fish's nearest node to it), and placed at the point the gaze fixates: the
 brain hunts what it sees, where it sees it. Everything else it perceives stays the oracle's.
+``TankEyes`` makes all the seeing fishes' retinas at once: one mesh and one rasteriser call
+for every eye, one recognition pass over every image (the same images and numbers as each
+fish's eyes alone, ``FishEyes.see``).
 """
 
 from __future__ import annotations
