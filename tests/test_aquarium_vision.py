@@ -35,7 +35,7 @@ def _two_fish_tank(prey_at, seconds=1.0):
 
 def test_the_predators_eyes_find_the_prey_ahead_and_range_it():
     tank = _two_fish_tank((2.5, 0.0, 0.6))
-    eyes = tk._eyes(tank)
+    eyes = tk._eyes(tank).eyes[0]  # one seeing predator by default
     assert eyes.animal == 0
     sights = [eyes.see(tank.world, np.array([1])) for _ in range(4)]
     seen = [s for s in sights if s is not None]
@@ -44,7 +44,7 @@ def test_the_predators_eyes_find_the_prey_ahead_and_range_it():
     assert seen[-1].distance == pytest.approx(true, rel=0.35)
     # nothing of the prey's colour in view: nothing seen
     empty = _two_fish_tank((-6.0, 0.0, 0.0))  # straight behind, out of the eyes' field
-    eyes = tk._eyes(empty)
+    eyes = tk._eyes(empty).eyes[0]
     assert all(eyes.see(empty.world, np.array([1])) is None for _ in range(2))
 
 
