@@ -365,6 +365,7 @@ class MacroResult:
     wall: float
     horizon: float
     history: list[tuple[int, float]] = field(default_factory=list)
+    stopped: bool = False  # ended before its budget: ``stop`` said the best plan was good enough
 
     def summary(self) -> dict:
         """Return the numbers worth printing and saving."""
@@ -411,9 +412,11 @@ def search(
     seed: int = 0,
     progress: Callable[[_Search], None] | None = None,
     evaluator: str = "batch",
+    stop: Callable[[_Search], bool] | None = None,
     **options,
 ) -> MacroResult:
-    """Return the best plan ``method`` (anneal or ga) finds within ``budget`` evaluations.
+    """Return the best plan ``method`` (anneal or ga) finds within ``budget`` evaluations, or
+    as soon as ``stop`` (asked after each batch) says the search's best plan will do.
 
     ``evaluator``: batch (this process) or ray (learning.ray_eval: RAY_ADDRESS, else a local Ray).
     """
@@ -436,13 +439,15 @@ def search(
 
     history = []
     start = time.perf_counter()
+    stopped = False
     try:
-        while opt.evaluations < budget:
+        while opt.evaluations < budget and not stopped:
             e, d = opt.ask()
             opt.tell(e, d, cost(e, d))
             history.append((opt.evaluations, opt.best_f))
             if progress is not None:
                 progress(opt)
+            stopped = stop is not None and opt.evaluations < budget and bool(stop(opt))
     finally:
         if pool is not None:
             pool.close()
@@ -460,4 +465,5 @@ def search(
         wall=wall,
         horizon=problem.task.horizon,
         history=history,
+        stopped=stopped,
     )

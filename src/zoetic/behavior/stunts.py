@@ -140,6 +140,11 @@ LEAP_AIR_S, LEAP_APEX_BL, SOMERSAULT_DEG, SPLASH_RATIO = 0.4, 0.5, 360.0, 3.0
 SPIN_DEG = 360.0  # spin: a full turn about the body's own long axis in the air
 BUDGET = 9600  # stunt simulations a trick search runs by default (about a minute on 2 cores)
 TAIL_STRIKE_DEG = float(np.degrees(TAIL_STRIKE_TURN))  # ball-tail: a strike after half a turn
+# the tricks ``targets_met`` has targets for
+TARGET_TRICKS = (
+    "leap", "hurdle", "somersault", "spin", "bellyflop", "clean-dive", "ball-nose", "ball-tail"
+)  # fmt: skip
+STOP_CHECK_EVERY = 4  # batches at least between two checks of the search's best plan
 
 
 def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, bool]:
@@ -197,6 +202,29 @@ def perturbed_successes(
         all(targets_met(trick.name, m, trick).values())
         for m in perturbed_measures(problem, entries, durations, signs)
     ]
+
+
+class StopWhenMet:
+    """The stop rule of a ``stop_when_met`` trick's search: true once the search's best plan
+    meets the trick's targets (``targets_met``) from the start and from each of the check's
+    perturbed starts (``CHECK_SIGNS``; the start alone without a jitter). Asked after every
+    batch, it replays a best plan that improved since its last check, at most once every
+    ``every`` batches (a check is 7 stunts, a seventh of a robust batch of 16 plans)."""
+
+    def __init__(self, problem: StuntProblem, every: int = STOP_CHECK_EVERY):
+        self.problem, self.every = problem, int(every)
+        jitter = any(problem.trick.jitter)
+        self.signs = ((0, 0, 0), *CHECK_SIGNS) if jitter else ((0, 0, 0),)
+        self.waited, self.checked_f, self.checks = 0, np.inf, 0
+
+    def __call__(self, opt) -> bool:
+        self.waited += 1
+        if not opt.best_f < self.checked_f or self.waited < self.every:
+            return False
+        self.waited, self.checked_f = 0, opt.best_f
+        self.checks += 1
+        e, d = opt.best
+        return all(perturbed_successes(self.problem, e, d, self.signs))
 
 
 def strike_speeds(rec: StuntRecord, touch: np.ndarray, lane: int = 0) -> dict:
@@ -402,6 +430,7 @@ class Stunt:
                 for n, t, d in zip(r.names, starts, r.durations, strict=True)
             ],
             "evaluations": r.evaluations,
+            "stopped_when_met": r.stopped,
             "wall_s": round(r.wall, 2),
             "jitter": self.problem.trick.to_dict()["jitter"],
             "perturbed_starts_met": sum(self.perturbed),
@@ -425,14 +454,19 @@ def discover(
     robust trick, else 1).
 
     ``evaluator``: batch (this process) or ray (each batch of plans on Ray actors, the problem
-    put in the object store once; same seed, same stunt as in process)."""
+    put in the object store once; same seed, same stunt as in process). A ``stop_when_met``
+    trick with targets ends its search once they are met from every checked start
+    (``StopWhenMet``)."""
     from zoetic.behavior.macro import search
 
     problem = StuntProblem(body, repertoire, trick, segments)
     # the budget counts stunt simulations: a robust search plays each plan from K starts
     plans = max(1, budget // starts_per_plan(trick))
     opts = {"chains": min(16, plans)} if method == "anneal" else {"popsize": min(32, plans)}
-    result = search(problem, method, plans, seed, progress=progress, evaluator=evaluator, **opts)
+    stop = StopWhenMet(problem) if trick.stop_when_met and trick.name in TARGET_TRICKS else None
+    result = search(
+        problem, method, plans, seed, progress=progress, evaluator=evaluator, stop=stop, **opts
+    )
     rec = problem.record(result.entries[None], result.durations[None], record_every=2)
     checked = (
         perturbed_successes(problem, result.entries, result.durations) if any(trick.jitter) else []

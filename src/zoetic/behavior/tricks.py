@@ -11,7 +11,10 @@ off: a found plan is checked from six starts moved by it (one amount at a time, 
 with ``robust = true`` in ``[trick]`` (the default once there is a jitter) the search plays
 each plan from the start and from two starts moved by all of it (one deeper, turned left and
 pitched up; one shallower, turned right and pitched down) and scores it by the worst of the
-three, so that a plan found still works when its start is slightly off.
+three, so that a plan found still works when its start is slightly off. ``stop_when_met = true``
+ends the search as soon as its best plan meets the trick's targets from the start and from all
+six moved starts (off by default: a trick whose style is scored beyond its targets, such as
+the leap's height or the bellyflop's splash, uses the whole budget).
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ from zoetic.physics.objects import Ball, Box, Cylinder
 from zoetic.tasks import TASK_DIR, Task, parse_task
 
 TRICK_DIR = TASK_DIR / "tricks"
-TRICK_KEYS = ("segments", "durations", "jitter", "robust")
+TRICK_KEYS = ("segments", "durations", "jitter", "robust", "stop_when_met")
 JITTER_KEYS = ("depth", "heading", "pitch")  # m, deg, deg
 OBJECTS = {"ball": Ball, "box": Box, "cylinder": Cylinder}
 
@@ -41,6 +44,10 @@ class Trick:
     durations: tuple[float, float] = (0.3, 2.0)
     jitter: tuple[float, float, float] = (0.0, 0.0, 0.0)  # start depth m, heading, pitch deg
     robust: bool = True  # with a jitter: each plan scored by its worst of three starts
+    # end the search once its best plan meets the trick's targets from the start and from
+    # every perturbed start of the check (a built-in trick's targets; the rest of the budget
+    # could only polish the style)
+    stop_when_met: bool = False
 
     @property
     def name(self) -> str:
@@ -62,6 +69,7 @@ class Trick:
             "durations": list(self.durations),
             "jitter": dict(zip(JITTER_KEYS, self.jitter, strict=True)),
             "robust": self.robust,
+            "stop_when_met": self.stop_when_met,
         }
 
 
@@ -138,10 +146,12 @@ def parse_trick(doc: dict, source: str = "<memory>") -> Trick:
     if not isinstance(raw_objects, list):
         raise TaskError(f"{source}: objects must be [[objects]] tables")
     objects = tuple(parse_object(o, f"{source}: objects[{k}]") for k, o in enumerate(raw_objects))
-    robust = raw_trick.get("robust", True)
-    if not isinstance(robust, bool):
-        raise TaskError(f"{source}: trick: 'robust' must be true or false, got {robust!r}")
-    return Trick(task, objects, int(segments), durations, _jitter(raw_trick, source), robust)
+    robust, stop = (raw_trick.get(k, d) for k, d in (("robust", True), ("stop_when_met", False)))
+    for key, value in (("robust", robust), ("stop_when_met", stop)):
+        if not isinstance(value, bool):
+            raise TaskError(f"{source}: trick: {key!r} must be true or false, got {value!r}")
+    jitter = _jitter(raw_trick, source)
+    return Trick(task, objects, int(segments), durations, jitter, robust, stop)
 
 
 def list_tricks() -> list[str]:
