@@ -52,9 +52,7 @@ def repertoire(dolphin):
     return rep
 
 
-def test_a_search_stops_at_its_first_check_once_the_targets_are_met_everywhere(
-    dolphin, repertoire
-):
+def test_a_search_stops_at_its_first_check_once_the_targets_are_met_everywhere(dolphin, repertoire):
     budget = 10 * CHAINS
     found = discover(dolphin, repertoire, _trick(DROPPED, stop=True), budget=budget)
     # the best plan meets the targets from every start: the first check (after
@@ -74,9 +72,7 @@ def test_a_search_whose_targets_are_not_met_spends_its_budget(dolphin, repertoir
     assert not any(found.perturbed)
 
 
-def test_the_stop_rule_checks_an_improved_best_plan_at_most_every_few_batches(
-    dolphin, repertoire
-):
+def test_the_stop_rule_checks_an_improved_best_plan_at_most_every_few_batches(dolphin, repertoire):
     problem = StuntProblem(dolphin, repertoire, _trick(UNDER, stop=True))
     rule = StopWhenMet(problem, every=3)
 
