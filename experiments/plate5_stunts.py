@@ -18,7 +18,9 @@ training tasks (runs/bench/dolphin-memory-<digest>), trained here if missing; th
 
 ``--seeds 0-4`` (or ``0,2,4``) prints instead a table of successes per trick over those seeds
 (no frames): each seed's targets met, how many of the six perturbed starts its plan still
-meets them from (the trick's jitter, one at a time, each way) and the CPU time per search:
+meets them from (the trick's jitter, one at a time, each way), the plans searched (fewer
+than the budget's where a ``stop_when_met`` trick met its targets from every start), the
+wall time of each search and the median CPU time per search:
     python experiments/plate5_stunts.py --seeds 0-4 [--tricks somersault,leap]
 
 ``--launch SPEED`` starts every trick from a launch instead of its own start (SPEED m/s along
@@ -83,8 +85,8 @@ def parse_seeds(text: str) -> list[int]:
 def seed_table(body, rep, names: list[str], seeds: list[int], args) -> str:
     """Discover each trick from each seed; return a Markdown table of successes per trick."""
     rows = [
-        f"| trick | seeds met (of {len(seeds)}) | per seed: targets met, perturbed starts met "
-        "| median CPU s a search |",
+        f"| trick | seeds met (of {len(seeds)}) | per seed: targets met, perturbed starts met, "
+        "plans searched (stopped: once met from every start), wall s | median CPU s a search |",
         "|---|---|---|---|",
     ]
     for name in names:
@@ -99,8 +101,10 @@ def seed_table(body, rep, names: list[str], seeds: list[int], args) -> str:
             ok = all(flags.values())
             write_json(args.out / name / f"seed{seed}.json", s | {"targets": flags})
             met += ok
+            stopped = " stopped" if s.get("stopped_when_met") else ""
             cells.append(f"{seed}: {'yes' if ok else 'no'} "
-                         f"{s['perturbed_starts_met']}/{s['perturbed_starts']}")
+                         f"{s['perturbed_starts_met']}/{s['perturbed_starts']}, "
+                         f"{s['evaluations']} plans{stopped}, {s['wall_s']:.0f} s")
         rows.append(f"| {name} | {met} | {'; '.join(cells)} | {np.median(cpu):.0f} |")
         print(rows[-1], flush=True)
     return "\n".join(rows)

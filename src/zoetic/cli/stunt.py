@@ -200,8 +200,9 @@ def _report(
     name: str, method: str, result, summary: dict, got: dict, out: Path, video: bool
 ) -> None:
     """Print what a discovered stunt achieved and what was written."""
+    stopped = ", stopped once met from every start" if result.stopped else ""
     console.print(
-        f"{name} ({method}, {result.evaluations} plans, {result.wall:.1f} s): "
+        f"{name} ({method}, {result.evaluations} plans{stopped}, {result.wall:.1f} s): "
         f"E = {summary['E']:.4f}; apex {got['apex_above_surface_m']:.3f} m above the surface "
         f"({got['apex_body_lengths']:.2f} body lengths), {got['air_time_s']:.2f} s wholly in "
         f"the air, {got['rotation_in_air_deg']:.0f} deg rotation in the air "
