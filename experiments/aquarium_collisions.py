@@ -34,10 +34,45 @@ def _angle(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.degrees(np.arctan2(a[0] * b[2] - a[2] * b[0], a @ b)))
 
 
+def _along(nodes: np.ndarray, v: np.ndarray, point: np.ndarray) -> float:
+    """Return where ``point`` lies along a body of ``nodes`` (N, 3) swimming along ``v``
+    (horizontal): +1 at its foremost node (the nose), -1 at its rearmost (the tail)."""
+    f = v / max(float(np.linalg.norm(v)), 1e-9)
+    x = (nodes - nodes.mean(axis=0)) @ f
+    half = max(float(x.max() - x.min()) / 2.0, 1e-9)
+    return round(float((point - nodes.mean(axis=0)) @ f / half), 1)
+
+
+def _contact(life, i: int, j: int, r: int, vi: np.ndarray, vj: np.ndarray) -> list[float]:
+    """Return where the two bodies came nearest at record r, along each (``_along``)."""
+    a, b = life.positions[i][r], life.positions[j][r]
+    d = np.linalg.norm(a[:, None] - b[None], axis=-1)
+    p, q = np.unravel_index(int(d.argmin()), d.shape)
+    return [_along(a, vi, a[p]), _along(b, vj, b[q])]
+
+
+def kind_of(c: dict) -> str:
+    """The collision's kind: a predator against the prey it caught (the body stays in the
+    water, seen by no one), else by where each body was touched: a fish's head (+0.5 to +1
+    along it) into the other's flank or tail is a strike by it; both heads, nose to nose;
+    neither head, side by side (flank or tail swept into the other)."""
+    if c["caught"]:
+        return "caught prey"
+    head = [x >= 0.5 for x in c["contact"]]
+    if all(head):
+        return "nose to nose"
+    if any(head):
+        return "strike"
+    return "side by side"
+
+
 def describe(tank, life, t: float, a: str, b: str) -> dict:
     """Return what the two fishes did at the collision at time t."""
     names = [f.name for f in tank.fishes]
     i, j = names.index(a), names.index(b)
+    caught = any(
+        e[2] == "catch" and {e[1], e[3]} == {a, b} and e[0] <= t + 1e-6 for e in life.events
+    )
     k = int(np.searchsorted(life.brain_times, t - 1e-6) - 1)
     k0 = max(k - 20, 0)
     r = int(np.searchsorted(life.times, t - 1e-6))
@@ -60,6 +95,8 @@ def describe(tank, life, t: float, a: str, b: str) -> dict:
         "bearing_deg": [round(_angle(vi, cj - ci)), round(_angle(vj, ci - cj))],
         "speeds": [round(float(np.linalg.norm(vi)), 2), round(float(np.linalg.norm(vj)), 2)],
         "closing_m_s": round(closing, 2),
+        "contact": _contact(life, i, j, r, vi, vj),
+        "caught": caught,
     }
 
 
@@ -76,6 +113,7 @@ def run(seed: int, seconds: float) -> dict:
         "seed": seed,
         "food_eaten": round(s["food_eaten_fraction"], 3),
         "fish_collisions_per_minute": round(60 * s["collisions_between_fishes"] / s["seconds"], 2),
+        "caught_prey_touches": sum(kind_of(c) == "caught prey" for c in hits),
         "avoid": round(s["intention_share"]["avoid"], 3),
         "cpu_realtime_factor": round(seconds / cpu, 2),
         "collisions": hits,
@@ -85,10 +123,15 @@ def run(seed: int, seconds: float) -> dict:
 def kinds(rows: list[dict]) -> dict:
     """Count the collisions by kind: species pair, intentions, heading class."""
     out: dict[str, collections.Counter] = {
-        k: collections.Counter() for k in ("pair", "intentions", "avoided_before", "heading")
+        k: collections.Counter()
+        for k in ("kind", "striker", "pair", "intentions", "avoided_before", "heading")
     }
     for row in rows:
         for c in row["collisions"]:
+            out["kind"][kind_of(c)] += 1
+            if kind_of(c) == "strike":  # the striking fish's species and intention
+                s = 0 if c["contact"][0] >= 0.5 else 1
+                out["striker"][f"{c['pair'][s]} {c['intentions'][s]}"] += 1
             out["pair"]["-".join(sorted(c["pair"]))] += 1
             out["intentions"]["+".join(sorted(c["intentions"]))] += 1
             out["avoided_before"][str(sum(c["avoided_before"]))] += 1
@@ -115,6 +158,19 @@ def main() -> None:
                 "mean_food_eaten": round(float(np.mean([r["food_eaten"] for r in rows])), 3),
                 "mean_fish_collisions_per_minute": round(
                     float(np.mean([r["fish_collisions_per_minute"] for r in rows])), 2
+                ),
+                # a predator touching the prey it caught is a catch, not a failed avoidance
+                "mean_without_caught_prey_per_minute": round(
+                    float(
+                        np.mean(
+                            [
+                                r["fish_collisions_per_minute"]
+                                - 60 * r["caught_prey_touches"] / args.seconds
+                                for r in rows
+                            ]
+                        )
+                    ),
+                    2,
                 ),
                 "kinds": kinds(rows),
             }
