@@ -429,6 +429,13 @@ def test_the_threat_of_a_fish_on_a_collision_course_is_as_near_as_the_travel_to_
     assert (
         time_to_contact(*args, line + [0, 0, 0.7], np.zeros((1, 3)), np.array([2.0]))[0] == np.inf
     )
+    # another fish 1 m aside coming at 0.5 m/s at the rear of the body (its nearest point
+    # 0.9 m behind the nose): contact for the whole body after (1 - CONTACT) / 0.5 s (the
+    # next instant tested, 0.25 s apart), none for the head alone (its front 0.3)
+    rear, closing = line + [-0.9, 0.0, 0.7], np.array([[0.0, 0.0, -0.5]])
+    whole = time_to_contact(*args, rear, closing, np.array([2.0]))[0]
+    assert (1.0 - CONTACT) / 0.5 <= whole <= (1.0 - CONTACT) / 0.5 + 0.25
+    assert time_to_contact(*args, rear, closing, np.array([2.0]), 0.3)[0] == np.inf
 
 
 @pytest.mark.parametrize("skills", [None, "built-in"])

@@ -164,8 +164,10 @@ def fish_threats(
     prefer: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Return for each of n fishes the fish that threatens a collision (index, -1: none), the
-    side to turn to (+1 left, -1 right, 0: none) and how far (m) the threat's centre line is
-    from its nose now (inf: none).
+    side to turn to (+1 left, -1 right, 0: none) and how near (m) the threat is (inf: none):
+    the distance from its nose to the threat's centre line now or, when less, how far it
+    swims until that line comes within ``CONTACT`` of its head (``time_to_contact``, its
+    front ``HEAD``, over at most ``CONTACT_HORIZON`` s), which its brake weighs (``avoid``).
 
     Tu's collision sensitivity region: a box ahead of each fish in the horizontal plane, from
     its nose to ``reach`` m ahead and ``half_width`` m to either side (n,).
