@@ -38,6 +38,10 @@ URGENT = 1.5
 # s of travel: an avoiding fish whose nose is nearer than this to another fish that threatens
 # it (no obstacle ahead) brakes: the half turn with no forward speed asked (``avoid``)
 URGENT_FISH = 1.5
+# a still target nearer than NEAR m and farther off the heading than BRAKE_BEARING rad is
+# turned to about on the spot (``go_to``): the steer's circle is wider than its distance
+NEAR = 2.0
+BRAKE_BEARING = math.pi / 3
 # m between two fishes' centre lines under which they touch (bodies are 0.24 m wide and bend)
 CONTACT = 0.35
 CONTACT_TIMES = 9  # instants from now to the anticipation horizon tested for a contact
@@ -455,6 +459,12 @@ def go_to(
         aim = aim + beside * _unit(off)
     to = _flat(aim - me.nose)
     dist = math.sqrt(to @ to)
+    off = bearing(me.forward, to)
+    if around.target_velocity is None and not beside and dist < NEAR and abs(off) > BRAKE_BEARING:
+        # a still target near and well off the heading: the half turn with no forward speed
+        # asked (the brake of ``avoid``), which turns the fish about where it is; the steer
+        # (a wide turn at the approach speed) circled such a particle 1.3-2 m away for good
+        return Demand(0.0, np.pi if off > 0.0 else -np.pi)
     speed = me.top if dist > 2.0 else max(me.cruise * 0.6, me.top * dist / 2.0)
     # always turn towards the target, even one inside the turning circle: swimming on to gain
     # room first costs a fish that turns 90 degrees in 7 s a 15 s detour (and its target
