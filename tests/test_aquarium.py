@@ -359,7 +359,10 @@ def test_a_way_out_of_another_fish_does_not_lead_into_a_wall():
     region = [np.full(2, x) for x in (1.0, 0.4, 2.0)]
     j, side, near = fish_threats(nose, com, fwd, vel, ~np.eye(2, dtype=bool), *region)
     assert j.tolist() == [1, 0] and side.tolist() == [-1, -1]  # both keep to the right
-    assert near[0] == pytest.approx(np.hypot(1.0, 0.2))
+    # head on, 0.2 m aside, closing at 0.8 m/s: the centre lines come within CONTACT after
+    # about 0.9 s (the first instant tested at or after it: 1 s), 0.4 m of fish 0's travel,
+    # nearer than the 1.02 m between them now (what the brake weighs)
+    assert near[0] == pytest.approx(0.4 * 1.0)
     hit, away = collision_ahead(me, kind, center, size, int(side[0]))
     assert hit and away[2] > 0.9  # left, away from the wall
     hit, away = collision_ahead(me, np.zeros(0, int), np.zeros((0, 3)), np.zeros((0, 3)), -1)
@@ -390,6 +393,49 @@ def test_a_fish_crossing_ahead_is_seen_coming_and_turned_away_from():
     region[2][:] = 0.0
     j, _, _ = fish_threats(nose, com, fwd, vel, ~np.eye(2, dtype=bool), *region)
     assert j[0] == -1
+
+
+def test_the_threat_of_a_fish_on_a_collision_course_is_as_near_as_the_travel_to_contact():
+    from zoetic.behavior.aquarium.routines import CONTACT, fish_threats, time_to_contact
+
+    f = np.array([1.0, 0.0, 0.0])
+    region = [np.full(2, x) for x in (1.0, 0.4, 2.0)]
+    seen = ~np.eye(2, dtype=bool)
+
+    def threat(aside: float, other_speed: float) -> tuple[int, float]:
+        # fish 0 at 0.3 m/s; fish 1 coming head on, its nose 1.2 m ahead, ``aside`` m left
+        nose = np.array([[0.0, 0.0, 0.0], [1.2, 0.0, aside]])
+        com = nose + np.stack([-0.5 * f, 0.5 * f])
+        vel = np.stack([0.3 * f, -other_speed * f])
+        j, _, near = fish_threats(nose, com, np.stack([f, -f]), vel, seen, *region)
+        return int(j[0]), float(near[0])
+
+    # a fish coming straight at it: contact in (1.2 - CONTACT) / 0.6 s, at most 0.25 s
+    # later (the instants tested), 0.3 m/s of own travel each second
+    j, near = threat(0.0, 0.3)
+    t = (1.2 - CONTACT) / 0.6
+    assert j == 1 and 0.3 * t <= near <= 0.3 * (t + 0.25) + 1e-9
+    # the same fish coming only half as fast: contact later, the threat farther
+    assert near < threat(0.0, 0.15)[1] < 1.2
+    # a fish that passes 0.39 m aside (centre lines farther apart than CONTACT): the
+    # distance to it now, as for any threat without a contact coming
+    j, near = threat(0.39, 0.3)
+    assert j == 1 and near == pytest.approx(np.hypot(1.2, 0.39))
+    # time_to_contact itself: a fish alongside and overlapping is in contact now; one 1 m
+    # aside never within 2 s
+    line = np.array([[0.0, 0.0, 0.3], [-1.0, 0.0, 0.3]])[:, None]
+    args = (np.zeros((1, 3)), f[None], -0.5 * f[None])
+    assert time_to_contact(*args, line, np.zeros((1, 3)), np.array([2.0]))[0] == 0.0
+    assert (
+        time_to_contact(*args, line + [0, 0, 0.7], np.zeros((1, 3)), np.array([2.0]))[0] == np.inf
+    )
+    # another fish 1 m aside coming at 0.5 m/s at the rear of the body (its nearest point
+    # 0.9 m behind the nose): contact for the whole body after (1 - CONTACT) / 0.5 s (the
+    # next instant tested, 0.25 s apart), none for the head alone (its front 0.3)
+    rear, closing = line + [-0.9, 0.0, 0.7], np.array([[0.0, 0.0, -0.5]])
+    whole = time_to_contact(*args, rear, closing, np.array([2.0]))[0]
+    assert (1.0 - CONTACT) / 0.5 <= whole <= (1.0 - CONTACT) / 0.5 + 0.25
+    assert time_to_contact(*args, rear, closing, np.array([2.0]), 0.3)[0] == np.inf
 
 
 @pytest.mark.parametrize("skills", [None, "built-in"])

@@ -65,7 +65,8 @@ def test_splitting_the_steps_changes_nothing_in_the_world():
             np.testing.assert_array_equal(e, eaten[step // 20 * 20])
 
 
-@pytest.mark.parametrize("seed", [1, 2])
+# seeds whose 4 s hold a collision (16: a minnow touches a rock; 2: a minnow the wall)
+@pytest.mark.parametrize("seed", [16, 2])
 def test_the_record_period_does_not_change_an_aquarium_run(seed):
     def run(record):
         cfg = TankConfig(

@@ -38,6 +38,18 @@ URGENT = 1.5
 # s of travel: an avoiding fish whose nose is nearer than this to another fish that threatens
 # it (no obstacle ahead) brakes: the half turn with no forward speed asked (``avoid``)
 URGENT_FISH = 1.5
+# a still target nearer than NEAR m and farther off the heading than BRAKE_BEARING rad is
+# turned to about on the spot (``go_to``): the steer's circle is wider than its distance
+NEAR = 2.0
+BRAKE_BEARING = math.pi / 3
+# m between two fishes' centre lines under which they touch (bodies are 0.24 m wide and bend)
+CONTACT = 0.35
+CONTACT_TIMES = 9  # instants from now to the anticipation horizon tested for a contact
+CONTACT_HORIZON = 2.0  # s: the longest a contact is anticipated (at most the anticipation)
+# the front of a fish whose contact with another it anticipates: a fish brakes early for its
+# own head running into another, not for another's head running into its flank (that one
+# brakes; this one swims on out of its way)
+HEAD = 0.3
 
 
 @dataclass(frozen=True)
@@ -180,8 +192,10 @@ def fish_threats(
     prefer: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Return for each of n fishes the fish that threatens a collision (index, -1: none), the
-    side to turn to (+1 left, -1 right, 0: none) and how far (m) the threat's centre line is
-    from its nose now (inf: none).
+    side to turn to (+1 left, -1 right, 0: none) and how near (m) the threat is (inf: none):
+    the distance from its nose to the threat's centre line now or, when less, how far it
+    swims until that line comes within ``CONTACT`` of its head (``time_to_contact``, its
+    front ``HEAD``, over at most ``CONTACT_HORIZON`` s), which its brake weighs (``avoid``).
 
     Tu's collision sensitivity region: a box ahead of each fish in the horizontal plane, from
     its nose to ``reach`` m ahead and ``half_width`` m to either side (n,).
@@ -219,9 +233,18 @@ def fish_threats(
     best = order[np.r_[True, ii[order][1:] != ii[order][:-1]]] if len(order) else order
     j = np.full(n, -1)
     j[ii[best]] = jj[best]
-    dist_of = dict(zip(ii[best].tolist(), dist[best].tolist(), strict=True))
     side = np.zeros(n, int)
     near = np.full(n, np.inf)
+    if len(best):
+        me, other = ii[best], jj[best]
+        horizon = np.minimum(anticipation[me], CONTACT_HORIZON)
+        contact = time_to_contact(
+            nose[me], f[me], com[me], line[:, other], rel_v[best], horizon, HEAD
+        )
+        speed = np.linalg.norm(velocity[me], axis=1)
+        # how far it swims before they touch (a still fish: 0 m, it is in the way already)
+        travel = np.where(np.isfinite(contact), speed * np.minimum(contact, 1e9), np.inf)
+        near[me] = np.minimum(dist[best], travel)
     for i in np.flatnonzero(j >= 0).tolist():
         k = int(j[i])
         # away from where it is now: two fishes that both turn away from each other end up
@@ -232,8 +255,34 @@ def fish_threats(
         else:  # nearly dead ahead: the side already taken, else to the right (as ships do:
             # two fishes meeting head on then both turn right and pass each other)
             side[i] = int(prefer[i]) if prefer is not None and prefer[i] else -1
-        near[i] = dist_of[i]
     return j, side, near
+
+
+def time_to_contact(
+    nose: np.ndarray,
+    forward: np.ndarray,
+    com: np.ndarray,
+    line: np.ndarray,
+    rel_v: np.ndarray,
+    horizon: np.ndarray,
+    part: float = 1.0,
+) -> np.ndarray:
+    """Return (m,) the time (s) until another fish's centre line comes within ``CONTACT`` m of
+    each of m fishes' own centre line (its front ``part`` of it, from the nose: 1 the whole
+    body), both swimming on as they swim now; inf when it does not within ``horizon`` (m,) s
+    (tested at ``CONTACT_TIMES`` instants).
+
+    nose, com (m, 3); forward (m, 3) unit horizontal headings; line (P, m, 3): the other
+    fishes' centre line points now; rel_v (m, 3): their velocities relative to the fishes'."""
+    t = np.linspace(0.0, 1.0, CONTACT_TIMES)[:, None] * horizon[None, :]  # (T, m)
+    rel = line[None] - nose[None, None] + t[:, None, :, None] * rel_v[None, None]  # (T,P,m,3)
+    ahead = np.einsum("tpmc,mc->tpm", rel, forward)
+    length = np.einsum("mc,mc->m", nose - com, forward) * 2.0 * part  # m: from the nose
+    behind = ahead - np.clip(ahead, -length[None, None], 0.0)  # along, off the own segment
+    off2 = np.einsum("tpmc,tpmc->tpm", rel, rel) - ahead**2  # squared, across the heading
+    close = (np.maximum(off2, 0.0) + behind**2).min(axis=1) < CONTACT**2  # (T, m)
+    first = close.argmax(axis=0)
+    return np.where(close.any(axis=0), t[first, np.arange(t.shape[1])], np.inf)
 
 
 def collision_ahead(
@@ -410,6 +459,12 @@ def go_to(
         aim = aim + beside * _unit(off)
     to = _flat(aim - me.nose)
     dist = math.sqrt(to @ to)
+    off = bearing(me.forward, to)
+    if around.target_velocity is None and not beside and dist < NEAR and abs(off) > BRAKE_BEARING:
+        # a still target near and well off the heading: the half turn with no forward speed
+        # asked (the brake of ``avoid``), which turns the fish about where it is; the steer
+        # (a wide turn at the approach speed) circled such a particle 1.3-2 m away for good
+        return Demand(0.0, np.pi if off > 0.0 else -np.pi)
     speed = me.top if dist > 2.0 else max(me.cruise * 0.6, me.top * dist / 2.0)
     # always turn towards the target, even one inside the turning circle: swimming on to gain
     # room first costs a fish that turns 90 degrees in 7 s a 15 s detour (and its target

@@ -172,9 +172,11 @@ class Shoal:
             if th.intention == "hunt" and th.target is not None:
                 seen[i, th.target] = False
         avoiding = [b.avoid_side if b.thought.intention == "avoid" else 0 for b in self.brains]
-        _, sides, near = fish_threats(
+        threat, sides, near = fish_threats(
             fb.nose, fb.com, fb.fwd, fb.vel, seen, *self.region, np.array(avoiding)
         )
+        on = right_of_way(threat, meals)
+        sides[on], near[on] = 0, np.inf  # the other fish yields: this one swims on to its food
         # no obstacle within CLEARANCE of a probe and no fish threatening: nothing ahead
         # (``collision_ahead``'s answer, without asking it for every fish of a crowd)
         rocks = (ahead.min(axis=(1, 2)) < CLEARANCE).tolist() if len(kind) else [False] * len(sides)
@@ -205,6 +207,25 @@ class Shoal:
         arrays = drives_many(*meals, [m.mating_time for m in minds], t, *self.constants, predators)
         hunger, libido, fear = (x.tolist() for x in arrays)
         return [Drives(h, lib, f) for h, lib, f in zip(hunger, libido, fear, strict=True)]
+
+
+def right_of_way(threat: np.ndarray, meals: list[float | None]) -> np.ndarray:
+    """Return (n,) bools: the fishes that swim on to their food past a fish that yields.
+
+    Of two fishes that threaten each other (``threat`` (n,): each one's threatening fish,
+    ``fish_threats``; -1 none), a fish going for food (``meals``: the distance (m) to the
+    particle it is eating, None when not eating) keeps its course and the other yields (it
+    avoids this one, as it would anyway); of two going for food, the one nearer its particle
+    keeps its course (the first on a tie). Braking for each other cost the eater its meal:
+    two fishes stopped, and the particle went to another fish or was left. A fish that
+    threatens one that does not see it coming (a flank struck from behind) has no right of
+    way: only the fish that would strike can avoid the touch."""
+    n = len(threat)
+    meal = np.array([np.inf if m is None else m for m in meals], float)
+    other = np.where(threat >= 0, threat, np.arange(n))
+    mutual = (threat >= 0) & (threat[other] == np.arange(n))
+    first = (meal < meal[other]) | ((meal == meal[other]) & (np.arange(n) < other))
+    return mutual & np.isfinite(meal) & first
 
 
 def activations(

@@ -1,0 +1,119 @@
+"""Foraging that avoidance does not cost: of two fishes on a collision course the one going
+for food keeps its course and the other yields (``shoal.right_of_way``); a particle near and
+well off the heading is turned to on the spot (``routines.go_to``)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from zoetic.behavior.aquarium import tank as tk
+from zoetic.behavior.aquarium.brain import tank_brains
+from zoetic.behavior.aquarium.shoal import right_of_way
+from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live
+from zoetic.behavior.mind import INTENTIONS, initial_mind
+
+SECONDS, FOOD = 6.0, (3.0, 0.0, 0.0)
+
+
+def test_of_two_fishes_threatening_each_other_the_one_going_for_food_swims_on():
+    # fishes 0 and 1 threaten each other, 2 and 3 too, 4 threatens 5 (which does not see it)
+    threat = np.array([1, 0, 3, 2, 5, -1])
+    # 0 eats, 1 does not: 0 swims on; 2 and 3 both eat: the nearer its particle (3) swims on;
+    # 4 eats but 5 does not see it coming: 4 must avoid it itself
+    meals = [2.0, None, 1.5, 0.8, 1.0, None]
+    assert right_of_way(threat, meals).tolist() == [True, False, False, True, False, False]
+    # neither going for food: both avoid, as before
+    assert not right_of_way(np.array([1, 0]), [None, None]).any()
+    # two at the same distance from their particles: the first swims on
+    assert right_of_way(np.array([1, 0]), [1.0, 1.0]).tolist() == [True, False]
+
+
+def test_a_fish_going_for_food_swims_on_and_the_fish_coming_head_on_yields(monkeypatch):
+    # a hungry minnow swims for a particle 4.5 m ahead; a sated one (hunger 0: it wanders)
+    # comes at it head on, 0.1 m aside: the sated one avoids (brakes, turns away) first
+    from zoetic.physics.objects import Food
+    from zoetic.physics.world import World, placed_pose
+
+    def brains(*args):
+        out = tank_brains(*args)
+        out[1].mind = initial_mind(0.0, out[1].species.mind.hunger_rate)
+        return out
+
+    monkeypatch.setattr(tk, "tank_brains", brains)
+    cfg = TankConfig(
+        fishes=2, predators=0, food=0, obstacles=0, seconds=SECONDS, seed=0, half_size=8.0
+    )
+    t = build_tank(cfg)
+    world = World([*t.world.animals, *t.world.statics, Food(FOOD, 0.25)], medium="water")
+    tank = tk.Tank(cfg, world, t.fishes, t.kind, t.center, t.size, t.static_names)
+    body = tank.fishes[0].body
+    poses = [((-2.0, 0.0, 0.0), 0.0), ((1.0, 0.0, 0.1), np.pi)]
+    state = world.state
+    speed = tank.fishes[0].species.motor.cruise_speed
+    heading = [np.array([np.cos(yaw), 0.0, np.sin(yaw)]) for _, yaw in poses]
+    world.restore(
+        replace(
+            state,
+            positions=tuple(placed_pose(body, p, yaw)[None] for p, yaw in poses),
+            velocities=tuple(
+                np.zeros_like(v) + speed * h for v, h in zip(state.velocities, heading, strict=True)
+            ),
+        )
+    )
+    life = live(tank)
+    avoid, eat = INTENTIONS.index("avoid"), INTENTIONS.index("eat")
+    yields = np.flatnonzero(life.intentions[:, 1] == avoid)
+    assert len(yields)  # the sated fish saw the eater coming and yielded
+    # the eater swims on to its food through the first half second of the yield (without a
+    # right of way both braked for each other, the eater within a period of the other); the
+    # yielding fish then brakes across its way, and the eater avoids it in turn
+    first = int(yields[0])
+    assert (life.intentions[: first + 5, 0] == eat).all()
+    assert not [e for e in life.events if e[2] == "collision"]
+
+
+def test_go_to_turns_on_the_spot_to_a_particle_near_and_well_off_the_heading():
+    from zoetic.behavior.aquarium.routines import BRAKE_BEARING, NEAR, Around, Me, go_to
+
+    f = np.array([1.0, 0.0, 0.0])
+    me = Me(np.zeros(3), 0.5 * f, f, 0.25 * f, 0.25, 0.43, radius=0.1)
+    rng = np.random.default_rng(0)
+
+    def demand(x: float, z: float, **kw):
+        return go_to(me, Around(target=np.array([x, 0.0, z]), **kw), rng)
+
+    # 1.2 m to the left, nearly square to the heading: the half turn, no forward speed
+    beside = demand(0.5, 1.2)
+    assert beside.speed == 0.0 and beside.turn == pytest.approx(np.pi)
+    assert demand(0.0, -1.0).turn == pytest.approx(-np.pi)  # behind on the right
+    # nearly ahead, or well off the heading but farther than NEAR: swim and steer to it
+    ahead = demand(1.5, 0.3)
+    assert ahead.speed > 0.0 and 0.0 < ahead.turn < BRAKE_BEARING
+    far = demand(0.5, NEAR + 0.5)
+    assert far.speed == pytest.approx(0.43) and far.turn == pytest.approx(np.pi / 2)
+    # a moving target (a mate, a prey) is steered to as before
+    moving = demand(0.5, 1.2, target_velocity=np.zeros(3))
+    assert moving.speed > 0.0 and moving.turn == pytest.approx(np.pi / 2)
+
+
+def test_a_minnow_eats_a_particle_beside_it_instead_of_circling_it():
+    # a minnow cruising along x with a particle 1.2 m to the left of its centre: steering to
+    # it at the approach speed circled it 1.3-2 m away for 30 s; turned to on the spot, it
+    # eats it within 10 s
+    from zoetic.physics.objects import Food
+    from zoetic.physics.world import Animal, World
+
+    cfg = TankConfig(
+        fishes=1, predators=0, food=0, obstacles=0, seconds=10.0, seed=1, half_size=12.0
+    )
+    t = build_tank(cfg)
+    body = t.fishes[0].body
+    com0 = body.mass @ body.rest_pos / body.total_mass
+    fish = Animal(body, tuple(-com0), 0.0, (0.25, 0.0, 0.0))
+    world = World([fish, *t.world.statics, Food((0.0, 0.0, 1.2), 0.25)], medium="water")
+    tank = tk.Tank(cfg, world, t.fishes, t.kind, t.center, t.size, t.static_names)
+    life = live(tank)
+    assert [e[2] for e in life.events if e[2] == "eat"] == ["eat"]
