@@ -18,6 +18,7 @@ from zoetic.physics.model import Model
 from zoetic.physics.simulate import VMAX, chunk_size
 
 F32 = np.float32
+KEEP = 64  # sets of animals whose lanes a group keeps
 PAD = 8  # lanes: a group's buffers come in multiples of this (the SIMD width of AVX2 float32)
 
 
@@ -75,6 +76,7 @@ class LaneGroup:
         self.column = {a: k for k, a in enumerate(members)}  # member -> its block of columns
         self._buffers: dict[int, tuple] = {}  # padded lane count -> (stepper, arrays)
         self._tables: dict[tuple[int, int], np.ndarray] = {}  # (padded lanes, steps) -> table
+        self._lanes: dict[tuple[int, ...], tuple[np.ndarray, ...]] = {}  # animals -> lanes
 
     def _buffer(self, m: int, steps: int):
         """Return the stepper and buffers (pos, vel, fs, failed, table) for m lanes."""
@@ -91,7 +93,17 @@ class LaneGroup:
         return got[0], (*got[1], table)
 
     def lanes(self, animals: list[int]) -> tuple[np.ndarray, ...]:
-        """Return the rows, batch lanes, animals and table columns of the animals' lanes."""
+        """Return the rows, batch lanes, animals and table columns of the animals' lanes
+        (kept for the latest sets of animals asked for: a slice asks for the same ones again)."""
+        key = tuple(animals)
+        got = self._lanes.get(key)
+        if got is None:
+            if len(self._lanes) >= KEEP:
+                self._lanes.clear()
+            got = self._lanes[key] = self._new_lanes(animals)
+        return got
+
+    def _new_lanes(self, animals: list[int]) -> tuple[np.ndarray, ...]:
         a = np.repeat(np.asarray(animals, np.int64), self.batch)
         lane = np.tile(np.arange(self.batch, dtype=np.int64), len(animals))
         col = np.array([self.column[x] for x in animals], np.int64)
