@@ -3,11 +3,12 @@ and the slices in which contacts are resolved step by step (``ContactSlices``).
 
 Each animal's lanes are stepped by the same compiled kernel as ``physics.simulate`` (a
 ``kernel.Stepper`` over the world's own state arrays), so a lone animal stepped in slices
-follows the open-loop trajectory. Where the broad phase (``broadphase``) finds a node within
-reach of an object or of another animal, the contacts are resolved every time step: a node
-against a fixed shape feels a penalty force and a ball is resolved by impulses
-(``physics.contacts``), and animals push each other with dissipative penalties
-(``physics.bodycontact``).
+follows the open-loop trajectory; the animals that share a model (a tank's fishes of one body)
+step as the lanes of one call (``lanes.LaneGroup``), each lane as it would alone. Where the
+broad phase (``broadphase``) finds a node within reach of an object or of another animal, the
+contacts are resolved every time step: a node against a fixed shape feels a penalty force and a
+ball is resolved by impulses (``physics.contacts``), and animals push each other with
+dissipative penalties (``physics.bodycontact``).
 """
 
 from __future__ import annotations
