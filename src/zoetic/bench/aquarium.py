@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import time
 
 from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live, summarize
@@ -24,9 +25,9 @@ def bench_aquarium(
 ) -> dict:
     """Return the realtime factor of the tank (brains, perception and physics together, no
     video; ``perception`` oracle, or vision for the first ``seeing`` of the ``predators``),
-    the same world's
-    physics alone, and the run's outcome figures. ``skills``: every fish's motor skills
-    ("built-in", "learned" or a repertoire's directory; default the species files'), or
+    the same world's physics alone, and the run's outcome figures. ``skills``: every fish's
+    motor skills ("built-in", "learned" or a repertoire's directory; default the species
+    files'), or
     "both": the built-in and the learned tank one after the other, each line under its name,
     with the learned tank's CPU realtime factor over the built-in's. ``plants``: the
     seaweed dynamic (swaying strands) or static (fixed cylinders)."""
@@ -49,17 +50,32 @@ def bench_aquarium(
         }
         cpu = [out[k]["cpu_realtime_factor"] for k in ("learned", "built-in")]
         return out | {"learned_over_built_in_cpu": cpu[0] / cpu[1] if all(cpu) else None}
+    cfg, warm = _configs(
+        fishes, food, obstacles, seconds, seed, perception, predator_skills, skills, plants
+    )
+    cfg = dataclasses.replace(cfg, predators=predators, seeing=seeing)
+    tank = build_tank(cfg)  # a bad option is refused before the warm-up
+    live(build_tank(warm))  # compile, calibrate the motor controllers
+    c0 = time.process_time()
+    life = live(tank)
+    cpu = time.process_time() - c0
+    return _figures(cfg, summarize(tank, life), cpu, *_physics_alone(cfg))
+
+
+def _configs(
+    fishes, food, obstacles, seconds, seed, perception, predator_skills, skills, plants
+) -> tuple[TankConfig, TankConfig]:
+    """Return the benchmarked tank's config and a small one that compiles and calibrates
+    the same code first (``bench_aquarium``'s arguments)."""
     # no video: positions recorded once a brain period (the CLI records 20 frames a second)
     cfg = TankConfig(
         fishes=fishes,
-        predators=predators,
         food=food,
         obstacles=obstacles,
         seconds=seconds,
         seed=seed,
         record_period=0.1,
         perception=perception,
-        seeing=seeing,
         predator_skills=predator_skills,
         skills=skills,
         plants=plants,
@@ -75,24 +91,26 @@ def bench_aquarium(
         skills=skills,
         plants=plants,
     )
-    tank = build_tank(cfg)  # a bad option is refused before the warm-up
-    live(build_tank(warm))  # compile, calibrate the motor controllers
-    c0 = time.process_time()
-    life = live(tank)
-    cpu = time.process_time() - c0
-    s = summarize(tank, life)
-    physics, physics_cpu = _physics_alone(cfg)
+    return cfg, warm
+
+
+def _figures(cfg: TankConfig, s: dict, cpu: float, physics: float, physics_cpu: float) -> dict:
+    """Return the benchmark's line: the tank's summary ``s``, its CPU seconds and the wall
+    and CPU seconds of its physics alone."""
+    seconds, perception = cfg.seconds, cfg.perception
 
     def per_minute(count: int) -> float | None:
         return 60.0 * count / s["seconds"] if s["seconds"] > 0 else None
 
     return {
-        "scene": f"{fishes} fishes, {cfg.food} food, {cfg.obstacles} obstacles, {seconds:g} s",
-        "perception": perception if perception == "oracle" else f"{perception} ({seeing} seeing)",
-        "predators": predators,
-        "skills": skills or "species files",
-        "predator_skills": predator_skills or skills or "species file",
-        "plants": plants,
+        "scene": f"{cfg.fishes} fishes, {cfg.food} food, {cfg.obstacles} obstacles, {seconds:g} s",
+        "perception": perception
+        if perception == "oracle"
+        else f"{perception} ({cfg.seeing} seeing)",
+        "predators": cfg.predators,
+        "skills": cfg.skills or "species files",
+        "predator_skills": cfg.predator_skills or cfg.skills or "species file",
+        "plants": cfg.plants,
         "realtime_factor": s["realtime_factor"],
         "wall_seconds": s["wall_seconds"],
         "physics_only_realtime_factor": seconds / physics if physics > 0 else None,

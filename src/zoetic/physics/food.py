@@ -20,27 +20,53 @@ from zoetic.physics.objects import Food
 def eaten_on_path(h0, h1, f0, f1, radius, eaten) -> None:
     """Mark eaten (B, F) the food particles (before f0, after f1: (B, F, 3)) that a head
     (before h0, after h1: (animals, B, 3)) came within ``radius`` (F,) of during the slice:
-    the closest point of the head's path relative to the particle (a straight segment)."""
+    the closest point of the head's path relative to the particle (a straight segment).
+
+    Only the heads whose start lies within a particle's radius plus the farthest any path
+    moved (along x, heads sorted by x) are tested: the closest point of a path moved no
+    farther along x than that, so the others cannot come within the radius."""
     for b in range(f0.shape[0]):
+        xs = h0[:, b, 0].copy()
+        order = np.argsort(xs)
+        xs = xs[order]
+        move = 0.0  # the farthest any relative path moves along a coordinate (NaN: skipped)
+        for a in range(h0.shape[0]):
+            for k in range(3):
+                m = abs(h1[a, b, k] - h0[a, b, k])
+                move = m if m > move else move
+        drift = 0.0
+        for q in range(f0.shape[1]):
+            for k in range(3):
+                m = abs(f1[b, q, k] - f0[b, q, k])
+                drift = m if m > drift else drift
         for q in range(f0.shape[1]):
             if eaten[b, q]:
                 continue
-            for a in range(h0.shape[0]):
-                a0 = h0[a, b, 0] - f0[b, q, 0]
-                a1 = h0[a, b, 1] - f0[b, q, 1]
-                a2 = h0[a, b, 2] - f0[b, q, 2]
-                d0 = (h1[a, b, 0] - f1[b, q, 0]) - a0
-                d1 = (h1[a, b, 1] - f1[b, q, 1]) - a1
-                d2 = (h1[a, b, 2] - f1[b, q, 2]) - a2
-                s = -(a0 * d0 + a1 * d1 + a2 * d2) / ((d0 * d0 + d1 * d1 + d2 * d2) + 1e-12)
-                s = min(max(s, 0.0), 1.0)
-                c0 = a0 + s * d0
-                c1 = a1 + s * d1
-                c2 = a2 + s * d2
-                closest = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
-                if math.isfinite(closest) and closest < radius[q]:
+            reach = radius[q] + move + drift + 1e-6
+            lo = np.searchsorted(xs, f0[b, q, 0] - reach)
+            hi = np.searchsorted(xs, f0[b, q, 0] + reach, side="right")
+            for i in range(lo, hi):
+                if _passes(h0, h1, f0, f1, radius, order[i], b, q):
                     eaten[b, q] = True
                     break
+
+
+@njit(cache=True, inline="always")
+def _passes(h0, h1, f0, f1, radius, a, b, q) -> bool:
+    """Return True if head a's path in lane b came within radius[q] of particle q."""
+    a0 = h0[a, b, 0] - f0[b, q, 0]
+    a1 = h0[a, b, 1] - f0[b, q, 1]
+    a2 = h0[a, b, 2] - f0[b, q, 2]
+    d0 = (h1[a, b, 0] - f1[b, q, 0]) - a0
+    d1 = (h1[a, b, 1] - f1[b, q, 1]) - a1
+    d2 = (h1[a, b, 2] - f1[b, q, 2]) - a2
+    s = -(a0 * d0 + a1 * d1 + a2 * d2) / ((d0 * d0 + d1 * d1 + d2 * d2) + 1e-12)
+    s = min(max(s, 0.0), 1.0)
+    c0 = a0 + s * d0
+    c1 = a1 + s * d1
+    c2 = a2 + s * d2
+    closest = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+    return math.isfinite(closest) and closest < radius[q]
 
 
 class Pantry:

@@ -3,11 +3,12 @@ and the slices in which contacts are resolved step by step (``ContactSlices``).
 
 Each animal's lanes are stepped by the same compiled kernel as ``physics.simulate`` (a
 ``kernel.Stepper`` over the world's own state arrays), so a lone animal stepped in slices
-follows the open-loop trajectory. Where the broad phase (``broadphase``) finds a node within
-reach of an object or of another animal, the contacts are resolved every time step: a node
-against a fixed shape feels a penalty force and a ball is resolved by impulses
-(``physics.contacts``), and animals push each other with dissipative penalties
-(``physics.bodycontact``).
+follows the open-loop trajectory; the animals that share a model (a tank's fishes of one body)
+step as the lanes of one call (``lanes.LaneGroup``), each lane as it would alone. Where the
+broad phase (``broadphase``) finds a node within reach of an object or of another animal, the
+contacts are resolved every time step: a node against a fixed shape feels a penalty force and a
+ball is resolved by impulses (``physics.contacts``), and animals push each other with
+dissipative penalties (``physics.bodycontact``).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from zoetic.physics.bodycontact import CONTACT_STEPS, pair_contacts
 from zoetic.physics.broadphase import BroadPhase
 from zoetic.physics.contacts import balls_step, node_contacts
 from zoetic.physics.kernel import make_stepper
+from zoetic.physics.lanes import LaneGroup, fingerprint
 from zoetic.physics.media import Medium
 from zoetic.physics.model import Model
 from zoetic.physics.objects import Solids
@@ -67,14 +69,17 @@ def _kernel(parallel: bool):
 
 class Drive:
     """The kernel side of a world: one Stepper per animal (its float32 model over its views
-    (pos, vel) of the world's state, its failure marks ``fs`` and ``failed``), the activation
-    tables they read, and the kernel entry, threaded when the work is worth the pool."""
+    (pos, vel) of the world's state, its failure marks ``fs`` and ``failed``), the animals
+    that share a model stepped together as lanes (``lanes.LaneGroup``), the activation tables
+    they read, and the kernel entry, threaded when the work is worth the pool.
 
-    def __init__(
-        self, bodies: list[Body], models: list[Model], views, fs, failed, batch: int
-    ) -> None:
+    state: the world's (pos, vel (N_all, 3, B), fs, failed (animals, B)) arrays; first: each
+    animal's first row."""
+
+    def __init__(self, bodies: list[Body], models: list[Model], views, state, first) -> None:
         self.bodies = bodies
-        self.batch = batch
+        pos, vel, fs, failed = state
+        self.batch = batch = pos.shape[2]
         self.serial = _kernel(False)
         self.parallel = _kernel(True) if batch > 8 else self.serial
         self.chunk = chunk_size(batch)
@@ -82,22 +87,53 @@ class Drive:
             make_stepper(m, p, v, f, fl, self.chunk, VMAX)
             for m, (p, v), f, fl in zip(models, views, fs, failed, strict=True)
         ]
+        self.kernels = (self.serial, _kernel(True), PARALLEL_FROM)
+        keys: dict[tuple, list[int]] = {}
+        for a, m in enumerate(models):
+            keys.setdefault(fingerprint(m), []).append(a)
+        self.groups = [
+            LaneGroup(idx, models[idx[0]], (*state, batch), first, bodies[idx[0]].n_actuators)
+            for idx in keys.values()
+        ]
+        self.group_of = np.zeros(len(bodies), np.int64)
+        for g, grp in enumerate(self.groups):
+            self.group_of[grp.members] = g
         self._tables: dict[tuple[int, int], tuple[np.ndarray, tuple]] = {}
+        self._wide: dict[tuple[int, int], np.ndarray] = {}  # (group, steps) -> its table
 
     def kernel(self, steps: int):
         """Return the kernel entry for a call of ``steps`` steps of every lane."""
         return self.parallel if self.batch * steps >= PARALLEL_FROM else self.serial
 
     def run(self, a: int, table: np.ndarray, t0: int, t1: int, base: int) -> None:
-        """Step animal a through rows t0 .. t1 of its table (the world's step ``base`` at t0)."""
+        """Step animal a (alone in its group) through rows t0 .. t1 of its table (the world's
+        step ``base`` at t0)."""
         kernel = self.parallel if self.batch * (t1 - t0) >= PARALLEL_FROM else self.serial
         kernel(self.steppers[a], table, t0, t1, base)
 
     def run_all(self, tables, t0: int, t1: int, base: int) -> None:
         """Step every animal through rows t0 .. t1 of its table."""
-        kernel = self.parallel if self.batch * (t1 - t0) >= PARALLEL_FROM else self.serial
-        for stepper, table in zip(self.steppers, tables, strict=False):
-            kernel(stepper, table, t0, t1, base)
+        self.run_some(range(len(self.bodies)), tables, t0, t1, base)
+
+    def run_some(self, animals, tables, t0: int, t1: int, base: int) -> None:
+        """Step the ``animals`` (in order) through rows t0 .. t1 of their tables: an animal
+        alone in its group by its own stepper, the others of a group as lanes of one call."""
+        picked: dict[int, list[int]] = {}
+        for a in animals:
+            picked.setdefault(int(self.group_of[a]), []).append(a)
+        for g, members in picked.items():
+            grp = self.groups[g]
+            if len(grp.members) == 1:
+                self.run(members[0], tables[members[0]], t0, t1, base)
+            else:
+                grp.run(
+                    self.kernels,
+                    members,
+                    self._wide[(g, tables[members[0]].shape[0])],
+                    t0,
+                    t1,
+                    base,
+                )
 
     def tables(self, activations, steps: int) -> list[np.ndarray]:
         """Return each animal's table for ``steps`` steps (``World.step``'s activations)."""
@@ -116,7 +152,7 @@ class Drive:
         body = self.bodies[a]
         na = body.n_actuators
         if cached is None:
-            out = np.zeros((steps, max(1, na), self.batch), F32)
+            out = self._view(a, steps)
             self._tables[(a, steps)] = (out, (self.batch, steps, na))
         else:
             out = cached[0]
@@ -127,6 +163,18 @@ class Drive:
         if not fill_table(u3, out):
             raise SimulationError(f"activations for the {body.name} contain non-finite values")
         return out
+
+    def _view(self, a: int, steps: int) -> np.ndarray:
+        """Return animal a's (T, A, B) columns of its group's table for ``steps`` steps (the
+        whole table, C-contiguous, for an animal alone in its group)."""
+        g = int(self.group_of[a])
+        grp = self.groups[g]
+        wide = self._wide.get((g, steps))
+        if wide is None:
+            shape = (steps, grp.n_act, len(grp.members) * self.batch)
+            wide = self._wide[(g, steps)] = np.zeros(shape, F32)
+        c = grp.column[a] * self.batch
+        return wide if len(grp.members) == 1 else wide[:, :, c : c + self.batch]
 
     def _rows(self, body: Body, u: np.ndarray, steps: int) -> np.ndarray:
         """Return activations (A,), (B, A) or (B, T, A) as (B|1, T|1, A), or refuse them."""
@@ -219,33 +267,31 @@ class ContactSlices:
     def apart(
         self, tables, t: int, t1: int, n: int, impulse, near_now: np.ndarray, pairs=(), between=None
     ) -> None:
-        """Step steps t .. t1 of animals that no balls couple: each near a fixed shape
-        (``near_now``) one step at a time with its contacts, each other one in one kernel
-        call; the animals of ``pairs`` (that may touch one another) in lockstep, one step at a
-        time."""
-        drive = self.drive
-        kernel = drive.kernel(t1 - t)
-        one = drive.kernel(1)
-        busy = sorted({a for p in pairs for a in p})
-        for a, (stepper, table) in enumerate(zip(drive.steppers, tables, strict=False)):
-            if a in busy:
-                continue
-            if not near_now[a]:
-                kernel(stepper, table, t, t1, n + t)
-                continue
-            for s in range(t, t1):
-                self.node_contacts(a, impulse)
-                one(stepper, table, s, s + 1, n + s)
+        """Step steps t .. t1 of animals that no balls couple: the animals near no fixed shape
+        (``near_now``) and in no pair in one kernel call, those near one one step at a time
+        with their contacts; the animals of ``pairs`` (that may touch one another) in
+        lockstep, one step at a time (``_pairs_apart``). Animals that share a model step as
+        lanes of one call (``Drive.run_some``)."""
+        busy = {a for p in pairs for a in p}
+        alone = [a for a in range(len(self.views)) if a not in busy]
+        self.drive.run_some([a for a in alone if not near_now[a]], tables, t, t1, n + t)
+        near = [a for a in alone if near_now[a]]
         if busy:
-            self._pairs_apart(tables, t, t1, n, impulse, near_now, pairs, busy, between)
+            self._pairs_apart(
+                tables, t, t1, n, impulse, near_now, pairs, (sorted(busy), near), between
+            )
+            return
+        for s in range(t, t1):
+            for a in near:
+                self.node_contacts(a, impulse)
+            self.drive.run_some(near, tables, s, s + 1, n + s)
 
-    def _pairs_apart(self, tables, t, t1, n, impulse, near_now, pairs, busy, between) -> None:
-        """``apart`` for the animals of ``pairs``: the pairs are checked again every
-        SUB_SLICE steps (on the world's grid, as the slices); an animal of a pair not close
-        now takes the sub-slice in one kernel call."""
-        drive = self.drive
-        kernel = drive.kernel(t1 - t)
-        one = drive.kernel(1)
+    def _pairs_apart(self, tables, t, t1, n, impulse, near_now, pairs, who, between) -> None:
+        """``apart`` for ``who``: the animals of ``pairs`` and those in no pair but near a
+        fixed shape. The pairs are checked again every SUB_SLICE steps (on the world's grid,
+        as the slices); an animal of a pair not close now takes the sub-slice in one kernel
+        call (the pairs' contact impulses recorded in ``between``)."""
+        busy, near = who
         near_shape = [a for a in busy if self.solids.any and near_now[a]]
         s = t
         while s < t1:
@@ -253,16 +299,15 @@ class ContactSlices:
             s1 = min(t1, end - n)
             now = self.broad.close_now(pairs, end, n + s)
             tight = sorted({a for p in now for a in p} | set(near_shape))
-            for a in busy:
-                if a not in tight:
-                    kernel(drive.steppers[a], tables[a], s, s1, n + s)
+            self.drive.run_some([a for a in busy if a not in tight], tables, s, s1, n + s)
+            touch = near_shape + near
+            step = sorted(tight + near)
             for u in range(s, s1):
                 for a, c in now:
                     self.pair(a, c, between)
-                for a in near_shape:
+                for a in touch:
                     self.node_contacts(a, impulse)
-                for a in tight:
-                    one(drive.steppers[a], tables[a], u, u + 1, n + u)
+                self.drive.run_some(step, tables, u, u + 1, n + u)
             s = s1
 
     def pair(self, a: int, c: int, between: np.ndarray) -> None:

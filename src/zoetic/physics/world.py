@@ -97,7 +97,8 @@ class World:
             self._touchy,
         )
         models = [compile_model(b, self.medium, self.dt) for b in self.bodies]
-        self._drive = Drive(self.bodies, models, self._views, self._fs, self._failed, self.batch)
+        state = (self._pos, self._vel, self._fs_all, self._failed_all)
+        self._drive = Drive(self.bodies, models, self._views, state, self._off[:-1])
         self._chunk = self._drive.chunk
         self._contacts = ContactSlices(
             self._drive,
@@ -141,8 +142,10 @@ class World:
         self._vel = np.zeros_like(self._pos)
         rows = zip(self._off[:-1], self._off[1:], strict=True)
         self._views = [(self._pos[o0:o1], self._vel[o0:o1]) for o0, o1 in rows]
-        self._fs = [-np.ones(self.batch, dtype=np.int64) for _ in self.bodies]
-        self._failed = [-np.ones(self.batch, dtype=np.int64) for _ in self.bodies]
+        # one row an animal (views of one array each, so that a lane group reads them all)
+        self._fs_all = -np.ones((len(self.bodies), self.batch), dtype=np.int64)
+        self._failed_all = -np.ones_like(self._fs_all)
+        self._fs, self._failed = list(self._fs_all), list(self._failed_all)
         heads = [o + b.head for o, b in zip(self._off[:-1], self.bodies, strict=True)]
         self._head_rows = np.array(heads, int)
         self._lone = len(self.animals) == 1

@@ -255,68 +255,94 @@ def tank_frames(
     ``obstacles`` as grey buoys), uneaten food as orange buoys, and, when ``labels`` (R, n)
     ("name: intention") are given, each fish's intention as a tag and a legend; ``plants``
     (R, S, M, 3): dynamic seaweed's strands, drawn in their simulated shape."""
-    from PIL import Image, ImageDraw
+    scene = _scene(bodies, positions[focus], times, colors, looks, half_size, size, statics)
+    obstacles = np.asarray(obstacles, float).reshape(-1, 3)
+    for r in range(len(scene["times"])):
+        pos = [np.asarray(p[r], float) for p in positions]
+        strands = None if plants is None else np.asarray(plants[r], float)
+        shapes = (statics, obstacles, strands)
+        yield _frame(scene, r, pos, focus, food[r][~eaten[r]], shapes, labels)
 
+
+def _scene(bodies, followed, times, colors, looks, half_size, size, statics) -> dict:
+    """Return what every frame of ``tank_frames`` shares: the skins (fine, and coarse for
+    fishes far from the camera), the camera's rays and its path following the fish whose
+    nodes are ``followed`` (R, N, 3), the floor, the fonts and each fish's colour."""
     from zoetic.physics.media import get_medium
-    from zoetic.viz.paint import label_font, paint_items
-    from zoetic.viz.render3d import (
-        animal_skins,
-        background,
-        face_items,
-        look_at,
-        skins_mesh,
-        skins_vertices,
-    )
+    from zoetic.viz.paint import label_font
+    from zoetic.viz.render3d import animal_skins
 
-    medium = get_medium("water")
     times = np.asarray(times, float)
     skins = animal_skins(bodies, colors, looks)
-    coarse = animal_skins(bodies, colors, looks, levels=1)  # for fishes far from the camera
     w, h = size
-    fov = 50.0
-    focal = 0.5 * h / np.tan(np.radians(fov) / 2)
-    xs = ((np.arange(w) + 0.5 - w / 2) / focal).astype(np.float32)
-    ys = ((h / 2 - np.arange(h) - 0.5) / focal).astype(np.float32)
-    eyes, targets = follow_camera(positions[focus], times, half_size, distance=7.0)
-    floor = -2.0 if statics is None else float(np.min(statics[1][:, 1] - statics[2][:, 1]))
-    obstacles = np.asarray(obstacles, float).reshape(-1, 3)
-    font, small = label_font(max(12, h // 26)), label_font(max(11, h // 32))
-    fish_rgb = [255.0 * s.face_colors.mean(axis=0) for s in skins]
-    for r in range(len(times)):
-        eye, rot = eyes[r], look_at(eyes[r], targets[r])
-        view = (eye, rot, focal, size, medium)
-        img = Image.fromarray(background(medium, eye, rot, xs, ys, floor, FOG))
-        pos = [np.asarray(p[r], float) for p in positions]
-        shown, dist = in_sight(pos, view)
-        drawn = [skins[i] if dist[i] < NEAR else coarse[i] for i in shown]
-        shown_pos = [pos[i] for i in shown]
-        items = face_items(skins_vertices(drawn, shown_pos), skins_mesh(drawn), *view, fog=FOG)
-        left = food[r][~eaten[r]]
-        items += _buoys(left, FOOD, 0.1, view)
-        ghosts: list[tuple] = []
-        if statics is not None:
-            here = pos[focus].mean(0)
-            solid, ghosts = _static_items(statics, view, float(times[r]), here, plants is None)
-            items += solid
-        if plants is not None:
-            items += _strand_items(np.asarray(plants[r], float), view)
-        else:
-            items += _buoys(obstacles, (120.0, 120, 120), 0.4, view)
-        paint_items(ImageDraw.Draw(img), items)
-        img = _see_through(img, ghosts)
-        draw = ImageDraw.Draw(img)
-        if labels is not None:
-            corner = (w - h // 3 - 16, 0, w, h // 3 + 60)  # the map and the species key
-            taken = [(0, 0, 260, 34), corner, (0, h - 26, w, h)]
-            _tags(draw, [labels[r][i] for i in shown], shown_pos, view, small, taken)
-            _legend(draw, labels, h, small)
-        _species_key(draw, looks, fish_rgb, w, size[1] // 3 + 20, small)
-        strands = None if plants is None else plants[r]
-        _minimap(img, pos, fish_rgb, left, statics, obstacles, half_size, targets[r], strands)
-        caught = 0 if labels is None else sum(lb.endswith(": caught") for lb in labels[r])
-        text = f"t = {times[r]:5.1f} s" + (f"    caught {caught}" if labels is not None else "")
-        draw.text((10, 8), text, font=font, **_STYLE)
-        yield np.array(img)
+    focal = 0.5 * h / np.tan(np.radians(50.0) / 2)  # a 50 degree field of view
+    eyes, targets = follow_camera(followed, times, half_size, distance=7.0)
+    return {
+        "medium": get_medium("water"),
+        "times": times,
+        "skins": skins,
+        "coarse": animal_skins(bodies, colors, looks, levels=1),
+        "focal": focal,
+        "size": size,
+        "rays": (
+            ((np.arange(w) + 0.5 - w / 2) / focal).astype(np.float32),
+            ((h / 2 - np.arange(h) - 0.5) / focal).astype(np.float32),
+        ),
+        "camera": (eyes, targets),
+        "floor": -2.0 if statics is None else float(np.min(statics[1][:, 1] - statics[2][:, 1])),
+        "fonts": (label_font(max(12, h // 26)), label_font(max(11, h // 32))),
+        "fish_rgb": [255.0 * s.face_colors.mean(axis=0) for s in skins],
+        "looks": looks,
+        "half_size": half_size,
+    }
+
+
+def _frame(scene: dict, r: int, pos, focus: int, left, shapes, labels) -> np.ndarray:
+    """Return frame r of ``tank_frames`` (``scene``: ``_scene``): the fishes at ``pos``
+    (the camera on fish ``focus``), the uneaten food ``left``, the ``shapes`` (statics,
+    obstacles as buoys, dynamic seaweed's strands), the labels' tags and legend, the map and
+    the clock."""
+    from PIL import Image, ImageDraw
+
+    from zoetic.viz.paint import paint_items
+    from zoetic.viz.render3d import background, face_items, look_at, skins_mesh, skins_vertices
+
+    statics, obstacles, strands = shapes
+    (w, h), medium, t = scene["size"], scene["medium"], float(scene["times"][r])
+    eyes, targets = scene["camera"]
+    eye, rot = eyes[r], look_at(eyes[r], targets[r])
+    view = (eye, rot, scene["focal"], scene["size"], medium)
+    img = Image.fromarray(background(medium, eye, rot, *scene["rays"], scene["floor"], FOG))
+    shown, dist = in_sight(pos, view)
+    drawn = [scene["skins"][i] if dist[i] < NEAR else scene["coarse"][i] for i in shown]
+    shown_pos = [pos[i] for i in shown]
+    items = face_items(skins_vertices(drawn, shown_pos), skins_mesh(drawn), *view, fog=FOG)
+    items += _buoys(left, FOOD, 0.1, view)
+    ghosts: list[tuple] = []
+    if statics is not None:
+        solid, ghosts = _static_items(statics, view, t, pos[focus].mean(0), strands is None)
+        items += solid
+    if strands is not None:
+        items += _strand_items(strands, view)
+    else:
+        items += _buoys(obstacles, (120.0, 120, 120), 0.4, view)
+    paint_items(ImageDraw.Draw(img), items)
+    img = _see_through(img, ghosts)
+    draw = ImageDraw.Draw(img)
+    font, small = scene["fonts"]
+    if labels is not None:
+        corner = (w - h // 3 - 16, 0, w, h // 3 + 60)  # the map and the species key
+        taken = [(0, 0, 260, 34), corner, (0, h - 26, w, h)]
+        _tags(draw, [labels[r][i] for i in shown], shown_pos, view, small, taken)
+        _legend(draw, labels, h, small)
+    fish_rgb = scene["fish_rgb"]
+    _species_key(draw, scene["looks"], fish_rgb, w, h // 3 + 20, small)
+    half = scene["half_size"]
+    _minimap(img, pos, fish_rgb, left, statics, obstacles, half, targets[r], strands)
+    caught = 0 if labels is None else sum(lb.endswith(": caught") for lb in labels[r])
+    text = f"t = {t:5.1f} s" + (f"    caught {caught}" if labels is not None else "")
+    draw.text((10, 8), text, font=font, **_STYLE)
+    return np.array(img)
 
 
 _STYLE = {"fill": (255, 255, 255), "stroke_width": 2, "stroke_fill": (0, 0, 0)}

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
+from functools import lru_cache
 
 import numpy as np
 
@@ -143,13 +144,9 @@ class FishBrain:
         """Return (same species, hunters, prey) masks over the tank's fishes (cached)."""
         known = getattr(self, "_names", None)
         if known is not names and known != names:  # the tank's own tuple: no compare
-            arr = np.array(names)
             self._names = names
-            self._masks = (
-                arr == self.species.name,
-                np.isin(arr, list(self.hunted_by)),
-                np.isin(arr, list(self.species.prey)),
-            )
+            prey = tuple(self.species.prey)
+            self._masks = kind_masks(names, self.species.name, self.hunted_by, prey)
         return self._masks
 
     def _situation(self, v: View) -> Situation:
@@ -373,6 +370,21 @@ def conceded(
     given = (cos > CONCEDE_COS) & (d_k < d_i)  # k is nearer to p than i, heading there
     out[i[given], p[given]] = True
     return out
+
+
+@lru_cache(maxsize=16)
+def kind_masks(
+    names: tuple[str, ...], name: str, hunted_by: frozenset[str], prey: tuple[str, ...]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return (same species, hunters, prey) masks (read-only) over the fishes' species
+    ``names`` for a fish of species ``name``: worked out once for all the fishes of a
+    species (a crowd's thousand fishes of two species ask twice)."""
+    same = np.array([x == name for x in names], bool)
+    hunters = np.array([x in hunted_by for x in names], bool)
+    hunted = np.array([x in prey for x in names], bool)
+    for mask in (same, hunters, hunted):
+        mask.setflags(write=False)
+    return same, hunters, hunted
 
 
 def tank_brains(

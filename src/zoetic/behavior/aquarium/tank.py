@@ -246,9 +246,18 @@ def _fishes(
     obstacles (``free``) and 2 m from the others, at a random heading, swimming at cruise."""
     placed: list[np.ndarray] = []
     fishes, animals = [], []
+    spots = np.empty((cfg.fishes, 3))  # the placed fishes' points, row by row
 
     def apart(p: np.ndarray) -> bool:
-        return free(p, 1.5) and all(np.linalg.norm(p - q) > 2.0 for q in placed)
+        if not free(p, 1.5):
+            return False
+        # all at once, then one by one only where the squared distance is too close to call
+        d2 = ((spots[: len(placed)] - p) ** 2).sum(axis=1)
+        if (d2 > 4.0 * (1 + 1e-9)).all():
+            return True
+        return not (d2 < 4.0 * (1 - 1e-9)).any() and all(
+            np.linalg.norm(p - q) > 2.0 for q in placed
+        )
 
     for i in range(cfg.fishes):
         spec = pred if i < cfg.predators else prey
@@ -256,6 +265,7 @@ def _fishes(
         if body.medium not in ("water", "sea"):
             raise SpeciesError(f"{spec.source}: body {spec.body!r} does not live in water")
         p = _place(rng, half, apart, 1.0)
+        spots[len(placed)] = p
         placed.append(p)
         yaw = float(rng.uniform(-np.pi, np.pi))
         # the offset places the rest pose; shift it so that the body's centre lands on p
