@@ -21,7 +21,14 @@ from zoetic.bodies import Body
 from zoetic.control import Controller
 from zoetic.errors import ZoeticError
 from zoetic.learning.abstraction import Abstraction, abstract, compare
-from zoetic.learning.config import LearnConfig, stroke_nodes
+from zoetic.learning.config import (
+    PAPER_BUDGET,
+    REPERTOIRE_BUDGET,
+    REPERTOIRE_OPTIMIZER,
+    REPERTOIRE_START,
+    LearnConfig,
+    stroke_nodes,
+)
 from zoetic.learning.optimizers import OPTIMIZERS
 from zoetic.tasks import Task
 
@@ -53,12 +60,23 @@ def check_training(pipeline: str, optimizer: str | None, threshold: float) -> st
     return optimizer or "cmaes"
 
 
-def entry_config(pipeline: str, body: Body, task: Task, nodes: int | None) -> dict:
-    """Return the LearnConfig settings the pipeline adds for one entry (controller, nodes)."""
+def entry_config(
+    pipeline: str, body: Body, task: Task, nodes: int | None, optimizer: str = "cmaes"
+) -> dict:
+    """Return the LearnConfig settings the pipeline adds for one entry (controller, nodes;
+    the periodic pipeline's CMA-ES starts from the animal's wave with a small step)."""
     if pipeline == "paper":
         m = nodes or stroke_nodes(body.wave_frequency, task.horizon)
         return {"controller": "time", "nodes": m}
-    return {"nodes": nodes}
+    if optimizer != "cmaes":
+        return {"nodes": nodes}
+    extra = {"optimizer": dict(REPERTOIRE_OPTIMIZER)}
+    return {"nodes": nodes, "start": REPERTOIRE_START, "extra": extra}
+
+
+def default_budget(pipeline: str) -> int:
+    """Return the evaluations per entry the pipeline learns by default."""
+    return PAPER_BUDGET if pipeline == "paper" else REPERTOIRE_BUDGET
 
 
 def check_resumed(pipeline: str, config: LearnConfig, where: str) -> None:
