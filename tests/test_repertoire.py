@@ -13,7 +13,7 @@ from zoetic.behavior.repertoire import Repertoire
 from zoetic.behavior.training import build_sequence, parse_sequence, plan_for
 from zoetic.bodies import load_animal
 from zoetic.cli import main
-from zoetic.control import load_controller, wave_controller
+from zoetic.control import load_controller
 from zoetic.control.abstract import AbstractController, SequenceController
 from zoetic.errors import ZoeticError
 
@@ -73,20 +73,6 @@ def test_training_writes_a_reloadable_mirrored_repertoire(trained, shark):
     assert (trained / "runs" / "go-straight" / "controller.json").exists()
     # do nothing: muscles relaxed, fins held level
     assert np.all(rep.controllers["do-nothing"].raw(t) == np.nan_to_num(shark.wave_held))
-
-
-def test_training_starts_each_entry_from_the_animals_wave(trained, shark):
-    from zoetic.behavior.pipelines import default_budget
-    from zoetic.io import read_toml
-    from zoetic.learning.run import Run, start_point
-
-    for entry in plan_for(shark):
-        run = Run.resume(trained / "runs" / entry.name)
-        config = read_toml(trained / "runs" / entry.name / "config.toml")["run"]
-        assert config["start"] == "wave" and config["extra"]["optimizer"]["sigma"] == 0.1
-        wave = run.setup.objective.params_of(wave_controller(shark))
-        assert np.allclose(start_point(run.setup.config, run.setup.objective), wave)
-    assert default_budget("periodic") == 1500 and default_budget("paper") == 3000
 
 
 def test_training_again_resumes_without_learning_more(trained):

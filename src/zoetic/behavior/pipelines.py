@@ -21,14 +21,7 @@ from zoetic.bodies import Body
 from zoetic.control import Controller
 from zoetic.errors import ZoeticError
 from zoetic.learning.abstraction import Abstraction, abstract, compare
-from zoetic.learning.config import (
-    PAPER_BUDGET,
-    REPERTOIRE_BUDGET,
-    REPERTOIRE_OPTIMIZER,
-    REPERTOIRE_START,
-    LearnConfig,
-    stroke_nodes,
-)
+from zoetic.learning.config import LearnConfig, stroke_nodes
 from zoetic.learning.optimizers import OPTIMIZERS
 from zoetic.tasks import Task
 
@@ -60,23 +53,12 @@ def check_training(pipeline: str, optimizer: str | None, threshold: float) -> st
     return optimizer or "cmaes"
 
 
-def entry_config(
-    pipeline: str, body: Body, task: Task, nodes: int | None, optimizer: str = "cmaes"
-) -> dict:
-    """Return the LearnConfig settings the pipeline adds for one entry (controller, nodes;
-    the periodic pipeline's CMA-ES starts from the animal's wave with a small step)."""
+def entry_config(pipeline: str, body: Body, task: Task, nodes: int | None) -> dict:
+    """Return the LearnConfig settings the pipeline adds for one entry (controller, nodes)."""
     if pipeline == "paper":
         m = nodes or stroke_nodes(body.wave_frequency, task.horizon)
         return {"controller": "time", "nodes": m}
-    if optimizer != "cmaes":
-        return {"nodes": nodes}
-    extra = {"optimizer": dict(REPERTOIRE_OPTIMIZER)}
-    return {"nodes": nodes, "start": REPERTOIRE_START, "extra": extra}
-
-
-def default_budget(pipeline: str) -> int:
-    """Return the evaluations per entry the pipeline learns by default."""
-    return PAPER_BUDGET if pipeline == "paper" else REPERTOIRE_BUDGET
+    return {"nodes": nodes}
 
 
 def check_resumed(pipeline: str, config: LearnConfig, where: str) -> None:

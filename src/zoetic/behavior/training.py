@@ -34,7 +34,6 @@ import numpy as np
 from zoetic.behavior.pipelines import (
     check_resumed,
     check_training,
-    default_budget,
     entry_config,
     paper_abstraction,
 )
@@ -333,7 +332,7 @@ def plan_digest(animal: str | Path, speeds: bool = False, radii: bool = False) -
 def train_repertoire(
     animal: str | Path | Body,
     out: str | Path,
-    budget: int | None = None,
+    budget: int = 3000,
     seed: int = 0,
     optimizer: str | None = None,
     modes: str | int = "auto",
@@ -350,7 +349,6 @@ def train_repertoire(
     """Learn, abstract and save the basic repertoire of ``animal`` (a zoo name, an animal
     file or a Body, learned as given) into ``out``; return it.
 
-    budget: evaluations per entry, the pipeline's own when None (``pipelines.default_budget``).
     optimizer: the pipeline's own when None (periodic: cmaes; paper: anneal). nodes:
     controller nodes per actuator (default: each task's; the paper pipeline's, 4 per stroke
     period). on_entry(name, run) is called for each entry before learning starts;
@@ -363,7 +361,6 @@ def train_repertoire(
     from zoetic.learning.together import learn_together
 
     optimizer = check_training(pipeline, optimizer, threshold)
-    budget = budget or default_budget(pipeline)
     body = animal if isinstance(animal, Body) else load_animal(animal)
     name = body.name if isinstance(animal, Body) else str(animal)
     out = Path(out)
@@ -371,8 +368,7 @@ def train_repertoire(
     runs = []
     for k, entry in enumerate(entries):
         settings = {"animal": name, "optimizer": optimizer, "budget": budget, "seed": seed + k}
-        settings |= {"evaluator": evaluator}
-        settings |= entry_config(pipeline, body, entry.task, nodes, optimizer)
+        settings |= {"evaluator": evaluator} | entry_config(pipeline, body, entry.task, nodes)
         runs.append(
             _entry_run(out / "runs" / entry.name, entry, body, settings, resume_budget, pipeline)
         )

@@ -64,13 +64,7 @@ def train_cmd(
     ctx: typer.Context,
     animal: str = typer.Argument(..., help="Zoo animal name or animal .toml file."),
     out: Path = typer.Option(None, help="Repertoire directory (default memory/<animal>)."),
-    budget: int | None = typer.Option(
-        None,
-        min=10,
-        max=10_000_000,
-        help="Evaluations per learned entry (default: 1500 periodic, from the animal's wave; "
-        "3000 paper).",
-    ),
+    budget: int = typer.Option(3000, min=10, max=10_000_000, help="Evaluations per learned entry."),
     pipeline: str = typer.Option(
         "periodic",
         help="periodic (a constant and two stroke harmonics per actuator, CMA-ES) or paper "

@@ -60,18 +60,6 @@ DEMO_OPTIMIZER = {"diagonal": True, "sigma": 0.05}
 DEMO_START = "wave"
 
 
-# ``zoetic repertoire train``'s periodic pipeline: each entry's CMA-ES starts from the animal's
-# own travelling wave with a step of 0.1 of the box and learns 1500 evaluations. Measured on
-# the shark (docs/performance.md, "Learning in seconds: the repertoire from the wave"): from the
-# wave, 1500 evaluations reach a lower E than 3000 from a random start on every entry, and keep
-# every promise once the climbs' E costs a broken roll or turn (roll_excess, turn_excess); the
-# paper's pipeline keeps its random start and 3000 evaluations
-REPERTOIRE_BUDGET = 1500
-PAPER_BUDGET = 3000
-REPERTOIRE_START = "wave"
-REPERTOIRE_OPTIMIZER = {"sigma": 0.1}
-
-
 def demo_config(budget: int = DEMO_BUDGET, seed: int = 0) -> LearnConfig:
     """Return the learning of ``zoetic demo``: a shark learns to swim straight farther than
     its own travelling wave takes it (separable CMA-ES started from the wave, 48 candidates a
