@@ -31,3 +31,24 @@ def test_default_training_keeps_its_tasks_promises(tmp_path, animal):
         if not v["met"] and name not in NOT_YET.get(animal, set())
     ]
     assert not broken, broken
+
+
+@pytest.mark.parametrize("name", ["swim-up", "swim-down"])
+def test_a_climbs_E_costs_a_broken_roll_or_turn_promise_more_than_the_climb_gains(name):
+    """At the edge of its roll or turn promise, a climb pays more in E than it gains by rising
+    from the least its promise allows to its target: the E optimum does not climb by turning
+    or rolling over (issue 27)."""
+    import math
+
+    from zoetic.tasks import load_task
+
+    task = load_task(name)
+    terms = {t.kind: t for t in task.terms}
+    promise = {p.quantity: p for p in task.promises}
+    height = terms["height_change"]
+    least = min(abs(promise["climb_m"].low), abs(promise["climb_m"].high))
+    gain = height.weight * (abs(height.target) - least) ** 2
+    for kind, quantity in (("roll_excess", "roll_deg"), ("turn_excess", "turn_deg")):
+        edge = math.radians(promise[quantity].high)
+        assert terms[kind].target < edge  # costs begin inside the promise
+        assert terms[kind].weight * (edge - terms[kind].target) ** 2 > gain, (kind, gain)

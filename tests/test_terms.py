@@ -383,3 +383,48 @@ def test_body_heading_change_follows_the_body_axis_not_a_swung_head():
     assert axis[0] == pytest.approx(0.0, abs=1e-10) and head[0] == pytest.approx(0.0, abs=1e-10)
     # the head-based heading counts the swing as a turn; the body axis barely moves
     assert math.sqrt(head[1]) > 0.08 and math.sqrt(axis[1]) < 0.2 * math.sqrt(head[1])
+
+
+def test_promise_terms_cost_only_a_roll_or_turn_beyond_their_bound():
+    body = load_animal("shark")
+    rest = body.rest_pos
+    com = body.mass @ rest / body.total_mass
+    f = body.forward / np.linalg.norm(body.forward)
+
+    def rolled(angle: float) -> np.ndarray:  # about the forward axis (Rodrigues)
+        k = np.array([[0, -f[2], f[1]], [f[2], 0, -f[0]], [-f[1], f[0], 0]])
+        r = np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * k @ k
+        return (rest - com) @ r.T + com
+
+    def turned(angle: float) -> np.ndarray:  # about the vertical, left positive
+        c, s = math.cos(angle), math.sin(angle)
+        return (rest - com) @ np.array([[c, 0, -s], [0, 1, 0], [s, 0, c]]).T + com
+
+    pos = np.stack(
+        [
+            [rest, rolled(0.2), rest],  # a small roll, within the bound
+            [rest, rolled(0.5), rest],  # 0.5 rad at its worst instant
+            [rest, rolled(-0.5), rest],  # the other way
+            [rest, rolled(math.pi), rolled(math.pi)],  # upside down
+            [rest, turned(0.4), turned(0.4)],  # a turn of 0.4 rad left ...
+            [rest, turned(-0.4), turned(-0.4)],  # ... and right
+            [rest, turned(0.05), turned(0.05)],  # a turn within the bound
+        ]
+    )
+    terms = [
+        {"kind": "roll_excess", "target": 0.3},
+        {"kind": "turn_excess", "target": 0.1},
+        {"kind": "roll_keeping"},
+    ]
+    task = parse_task(_task(terms=terms))
+    roll, turn, keep = (
+        np.asarray(v) for v in evaluate_terms(np, signals(task, body, pos, None, 0.05), task.terms)
+    )
+    assert roll[0] == pytest.approx(0.0, abs=1e-10)
+    assert roll[1] == pytest.approx(0.2**2, rel=1e-6) and roll[2] == pytest.approx(roll[1])
+    # upside down costs the whole half turn, where roll_keeping reads it as upright
+    assert roll[3] == pytest.approx((math.pi - 0.3) ** 2, rel=1e-6) and keep[3] < 1e-6
+    assert np.allclose(roll[4:], 0.0, atol=1e-10)  # a turn is no roll
+    assert turn[4] == pytest.approx(0.3**2, rel=1e-6) and turn[5] == pytest.approx(turn[4])
+    assert turn[6] == pytest.approx(0.0, abs=1e-12)
+    assert np.allclose(turn[:4], 0.0, atol=1e-10)  # a roll is no turn

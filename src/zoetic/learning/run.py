@@ -54,7 +54,7 @@ PERIODIC_AMPLITUDE = 1.0  # bound on the periodic controller's harmonic amplitud
 # is learned mirror-symmetric ("auto" coupling -> "wave")
 SYMMETRIC_TERMS = frozenset(
     "distance_along_heading lateral_deviation depth_keeping roll_keeping final_pitch "
-    "pitch_change speed_deviation mean_speed effort max_height".split()
+    "pitch_change speed_deviation mean_speed effort max_height roll_excess turn_excess".split()
 )
 # terms that prefer neither side when their target is 0 (keep the heading: no turn either way)
 SYMMETRIC_AT_ZERO = frozenset({"heading_change", "body_heading_change"})

@@ -208,6 +208,15 @@ class Signals:
         return roll_angle(self.xp, self.positions, self.frame.left, self.frame.right)
 
     @cached_property
+    def body_roll(self):
+        """Roll (K, R), rad, over +-pi (pi upside down): the tilt of the left-right axis
+        against the horizontal left of the body's forward axis (``body_forward``), as a task's
+        roll promise measures it; ``roll`` reads a fish upside down as upright."""
+        return roll_angle(
+            self.xp, self.positions, self.frame.left, self.frame.right, self.body_forward
+        )
+
+    @cached_property
     def body_angle(self):
         """Unwrapped angle (K, R), rad, of the head about the centre of mass in the vertical
         plane of the start heading: 0 level, pi/2 nose up, 2 pi after a full back somersault."""

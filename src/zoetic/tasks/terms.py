@@ -169,6 +169,28 @@ def length_keeping(xp, s: Signals, p: TermParams):
     return xp.mean(xp.maximum(1.0 - length / length[:, :1], 0.0) ** 2, axis=1)
 
 
+@term(
+    "squared excess of the greatest roll over the motion (``Signals.body_roll``: either way, "
+    "upside down counted, as a task's roll promise measures it) above 'target' rad (rad^2, 0 "
+    "while the body stays within it): a promise to stay upright as a term"
+)
+def roll_excess(xp, s: Signals, p: TermParams):
+    """Return (K,) rad^2: squared excess of the greatest |roll| over 'target' (>= 0; cost)."""
+    return xp.maximum(xp.max(xp.abs(s.body_roll), axis=1) - p.target, 0.0) ** 2
+
+
+@term(
+    "squared excess of the body axis's heading change, end minus start (``Signals."
+    "body_heading``, as a task's turn promise measures it), beyond +-'target' rad (rad^2, 0 "
+    "within): a promise to keep the heading as a term"
+)
+def turn_excess(xp, s: Signals, p: TermParams):
+    """Return (K,) rad^2: squared excess of |end-minus-start body heading| over 'target'
+    (>= 0; cost)."""
+    turned = s.body_heading[:, -1] - s.body_heading[:, 0]
+    return xp.maximum(xp.abs(turned) - p.target, 0.0) ** 2
+
+
 @term("greatest height of the centre of mass above its start (m): leaps")
 def max_height(xp, s: Signals, p: TermParams):
     """Return (K,) m: greatest rise of the centre of mass above its start height (>= 0; gain)."""
