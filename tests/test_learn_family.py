@@ -15,16 +15,9 @@ import pytest
 
 from conftest import write_short_task
 from zoetic.errors import RunDirError
+from zoetic.learning.checkpoint import CHECKPOINT, PREVIOUS, Log, checkpoint_bytes, read_checkpoint
 from zoetic.learning.optimizers import OPTIMIZERS, make_optimizer
-from zoetic.learning.run import (
-    CHECKPOINT,
-    PREVIOUS,
-    LearnConfig,
-    Log,
-    Run,
-    checkpoint_bytes,
-    read_checkpoint,
-)
+from zoetic.learning.run import LearnConfig, Run
 
 TARGET = np.array([0.3, 0.7, 0.2, 0.55, 0.8])
 

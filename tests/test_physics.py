@@ -212,6 +212,20 @@ def test_blow_up_is_reported_not_passed_on():
     assert not ok.failed.any()
 
 
+def test_a_lane_whose_state_goes_nan_is_reported_as_blown_up():
+    """A NaN speed fails the speed check like an infinite one, at the first check after it
+    appears (every 8 steps), even while other nodes are still finite: the lane's running
+    maximum of squared node speeds must not skip it."""
+    body = load_animal("shark")
+    act = wave_controller(body).table(200, body.dt)
+    state = rest_state(body, 2)
+    state.velocities[0, 3, 1] = np.nan  # one node of lane 0
+    tr = simulate(body, np.stack([act, act]), state=state)
+    assert 0 < tr.failed_step[0] <= 8
+    assert np.isnan(tr.final.positions[0]).all()
+    assert tr.failed_step[1] == -1 and np.isfinite(tr.final.positions[1]).all()
+
+
 _PLACE_CHECK = """
 import numpy as np
 from zoetic.bodies import list_animals, load_animal

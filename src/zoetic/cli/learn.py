@@ -129,7 +129,6 @@ def learn(
     checkpoint_every: float = typer.Option(2.0, min=0.0, help="Seconds between checkpoints."),
 ) -> None:
     """Learn a controller for an animal and a task; writes a resumable run directory."""
-    from zoetic.learning.run import LearnConfig
     from zoetic.runs import finish_run
     from zoetic.viz.media import learning_media
 
@@ -139,30 +138,22 @@ def learn(
     else:
         if animal is None:
             raise typer.BadParameter("give an ANIMAL (or --resume RUN_DIR)")
-        config = LearnConfig(
-            animal=animal,
-            task=task,
-            optimizer=optimizer,
-            budget=budget,
-            seed=seed,
-            controller=controller,
-            nodes=nodes,
-            interp=interp,
-            popsize=popsize,
-            chains=chains,
-            evaluator=evaluator,
-            coupling=coupling,
-            fins=fins,
-            frequency=frequency,
-            start=None if start == "random" else start,
-            stop_generations=stop_generations,
-            stop_improvement=stop_improvement,
-        )
+        config = _new_config(ctx)
         run = _create(config, out, force)
     cfg = run.setup.config
     run_with_progress(run, f"{cfg.animal} {cfg.optimizer}", checkpoint_every)
     summary = finish_run(run, partial(learning_media, video=video))
     _print_summary(summary)
+
+
+def _new_config(ctx: typer.Context):
+    """Return the LearnConfig of a new run: the stored options (``STORED``) and the budget as
+    given ("random" start: the config's None)."""
+    from zoetic.learning.run import LearnConfig
+
+    options = {name: ctx.params[name] for name in STORED + ["budget"]}
+    options["start"] = None if options["start"] == "random" else options["start"]
+    return LearnConfig(**options)
 
 
 def _resume(resume: Path, ctx: typer.Context, budget: int):

@@ -115,23 +115,7 @@ def train_cmd(
     flags += ["--pipeline", pipeline] * (pipeline != "periodic")
     out, again = _training_dir(animal, out, resume, force, flags)
     with learn_bar() as bar:
-        state: dict = {}
-
-        def on_entry(name: str, run) -> None:
-            state[id(run)] = bar.add_task(
-                name,
-                total=run.setup.config.budget,
-                completed=run.evaluations,
-                best="-",
-                status="",
-                rate="-",
-            )
-
-        def progress(run) -> None:
-            bar.update(
-                state[id(run)], completed=run.evaluations, best=f"{run.setup.optimizer.best_f:.4g}"
-            )
-
+        on_entry, progress = _entry_lines(bar)
         try:
             train_repertoire(
                 animal,
@@ -154,6 +138,29 @@ def train_cmd(
             interrupted(f"{out} keeps what was learned; continue with: {again}")
     _print_rows(show_repertoire(out), f"{out}")
     _report_promises(out, strict)
+
+
+def _entry_lines(bar):
+    """Return the callbacks that give each repertoire entry its own line of the learning bar
+    (``learn_bar``): on_entry(name, run) as an entry starts, progress(run) as it learns."""
+    lines: dict = {}
+
+    def on_entry(name: str, run) -> None:
+        lines[id(run)] = bar.add_task(
+            name,
+            total=run.setup.config.budget,
+            completed=run.evaluations,
+            best="-",
+            status="",
+            rate="-",
+        )
+
+    def progress(run) -> None:
+        bar.update(
+            lines[id(run)], completed=run.evaluations, best=f"{run.setup.optimizer.best_f:.4g}"
+        )
+
+    return on_entry, progress
 
 
 def _training_dir(

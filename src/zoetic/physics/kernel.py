@@ -233,8 +233,9 @@ def _check_lanes(s, m, vmax, t, b0, nb, failed_step):
     """Mark the lanes faster than vmax (or not finite) as failed at step t + 1, and put every
     failed lane back to rest so that it cannot slow or poison the others.
 
-    Each lane's largest squared node speed is folded node by node into a scratch row (gy's
-    first, free between steps), so that the lane loops run with unit stride and vectorise."""
+    Each lane's largest squared node speed (NaN if any is NaN) is folded node by node into a
+    scratch row (gy's first, free between steps), so that the lane loops run with unit stride
+    and vectorise."""
     x, y, z, vx, vy, vz, worst = s[0], s[1], s[2], s[3], s[4], s[5], s[10][0]
     rest_pos = m.rest_pos
     n_nodes = rest_pos.shape[0]
@@ -243,7 +244,9 @@ def _check_lanes(s, m, vmax, t, b0, nb, failed_step):
     for i in range(n_nodes):
         for b in range(nb):
             s2 = vx[i, b] * vx[i, b] + vy[i, b] * vy[i, b] + vz[i, b] * vz[i, b]
-            worst[b] = s2 if s2 > worst[b] else worst[b]
+            # s2 * 0 is 0, or NaN for a NaN or infinite speed: the maximum then stays NaN
+            # (every later comparison with it is false), and NaN fails the check below
+            worst[b] = (s2 if s2 > worst[b] else worst[b]) + s2 * ZERO
     dead = 0
     for b in range(nb):
         if not (worst[b] < vmax * vmax) and failed_step[b0 + b] < 0:

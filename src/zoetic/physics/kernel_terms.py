@@ -144,40 +144,48 @@ def _panel_lanes(x, y, z, vx, vy, vz, tmp, nb, m, f, mf_dt):
     for every lane."""
     level = F(m.water_level)
     half_drag = HALF * F(m.water_drag) * m.panel_drag[f]
-    i0, i1, i2, i3 = m.panels[f, 0], m.panels[f, 1], m.panels[f, 2], m.panels[f, 3]
-    w0, w1, w2, w3 = (
-        m.panel_weights[f, 0],
-        m.panel_weights[f, 1],
-        m.panel_weights[f, 2],
-        m.panel_weights[f, 3],
-    )
+    panels, pw = m.panels, m.panel_weights
+    nodes = (panels[f, 0], panels[f, 1], panels[f, 2], panels[f, 3])
+    weights = (pw[f, 0], pw[f, 1], pw[f, 2], pw[f, 3])
     for b in range(nb):
-        d1x = x[i2, b] - x[i0, b]
-        d1y = y[i2, b] - y[i0, b]
-        d1z = z[i2, b] - z[i0, b]
-        d2x = x[i3, b] - x[i1, b]
-        d2y = y[i3, b] - y[i1, b]
-        d2z = z[i3, b] - z[i1, b]
-        nx = d1y * d2z - d1z * d2y
-        ny = d1z * d2x - d1x * d2z
-        nz = d1x * d2y - d1y * d2x
-        # with N the unnormalised normal (|N| = 2 area), the panel force is
-        # -(N.v)/|N|^2 * min(drag * |N|/2 * |v|, m_panel/dt) * N, only while N.v > 0
-        nn = nx * nx + ny * ny + nz * nz + TINY2
-        mvx = w0 * vx[i0, b] + w1 * vx[i1, b] + w2 * vx[i2, b] + w3 * vx[i3, b]
-        mvy = w0 * vy[i0, b] + w1 * vy[i1, b] + w2 * vy[i2, b] + w3 * vy[i3, b]
-        mvz = w0 * vz[i0, b] + w1 * vz[i1, b] + w2 * vz[i2, b] + w3 * vz[i3, b]
-        q = nx * mvx + ny * mvy + nz * mvz
-        q = q if q > ZERO else ZERO
-        vv = mvx * mvx + mvy * mvy + mvz * mvz
-        cy = w0 * y[i0, b] + w1 * y[i1, b] + w2 * y[i2, b] + w3 * y[i3, b]
-        lim = half_drag * math.sqrt(nn * vv)
-        lim = lim if lim < mf_dt else mf_dt
-        mag = q / nn * lim
-        tmp[0, b] = mag if cy < level else ZERO
+        mag, nx, ny, nz = _panel_force(
+            x, y, z, vx, vy, vz, b, nodes, weights, half_drag, mf_dt, level
+        )
+        tmp[0, b] = mag
         tmp[1, b] = nx
         tmp[2, b] = ny
         tmp[3, b] = nz
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def _panel_force(x, y, z, vx, vy, vz, b, nodes, weights, half_drag, mf_dt, level):
+    """Return lane b's force magnitude on a panel (nodes i0 .. i3 with weights w0 .. w3; 0
+    above the water ``level``) and its unnormalised normal N (|N| = 2 area): the force is
+    -mag * N, -(N.v)/|N|^2 * min(drag * |N|/2 * |v|, m_panel/dt) * N while N.v > 0, with v
+    the panel's mean velocity, half_drag = drag/2 and mf_dt = m_panel/dt."""
+    i0, i1, i2, i3 = nodes
+    w0, w1, w2, w3 = weights
+    d1x = x[i2, b] - x[i0, b]
+    d1y = y[i2, b] - y[i0, b]
+    d1z = z[i2, b] - z[i0, b]
+    d2x = x[i3, b] - x[i1, b]
+    d2y = y[i3, b] - y[i1, b]
+    d2z = z[i3, b] - z[i1, b]
+    nx = d1y * d2z - d1z * d2y
+    ny = d1z * d2x - d1x * d2z
+    nz = d1x * d2y - d1y * d2x
+    nn = nx * nx + ny * ny + nz * nz + TINY2
+    mvx = w0 * vx[i0, b] + w1 * vx[i1, b] + w2 * vx[i2, b] + w3 * vx[i3, b]
+    mvy = w0 * vy[i0, b] + w1 * vy[i1, b] + w2 * vy[i2, b] + w3 * vy[i3, b]
+    mvz = w0 * vz[i0, b] + w1 * vz[i1, b] + w2 * vz[i2, b] + w3 * vz[i3, b]
+    q = nx * mvx + ny * mvy + nz * mvz
+    q = q if q > ZERO else ZERO
+    vv = mvx * mvx + mvy * mvy + mvz * mvz
+    cy = w0 * y[i0, b] + w1 * y[i1, b] + w2 * y[i2, b] + w3 * y[i3, b]
+    lim = half_drag * math.sqrt(nn * vv)
+    lim = lim if lim < mf_dt else mf_dt
+    mag = q / nn * lim
+    return (mag if cy < level else ZERO), nx, ny, nz
 
 
 @njit(cache=True, fastmath=FM, inline="always")
@@ -210,30 +218,12 @@ def _water_fused(x, y, z, vx, vy, vz, fx, fy, fz, nb, m):
         w3 = pw[f, 3]
         # the panel's own mass (weights are 1/n for its n distinct nodes)
         mf_dt = (w0 * mass[i0] + w1 * mass[i1] + w2 * mass[i2] + w3 * mass[i3]) / (w0 * dt)
+        nodes = (i0, i1, i2, i3)
+        weights = (w0, w1, w2, w3)
         for b in range(nb):
-            d1x = x[i2, b] - x[i0, b]
-            d1y = y[i2, b] - y[i0, b]
-            d1z = z[i2, b] - z[i0, b]
-            d2x = x[i3, b] - x[i1, b]
-            d2y = y[i3, b] - y[i1, b]
-            d2z = z[i3, b] - z[i1, b]
-            nx = d1y * d2z - d1z * d2y
-            ny = d1z * d2x - d1x * d2z
-            nz = d1x * d2y - d1y * d2x
-            # with N the unnormalised normal (|N| = 2 area), the panel force is
-            # -(N.v)/|N|^2 * min(drag * |N|/2 * |v|, m_panel/dt) * N, only while N.v > 0
-            nn = nx * nx + ny * ny + nz * nz + TINY2
-            mvx = w0 * vx[i0, b] + w1 * vx[i1, b] + w2 * vx[i2, b] + w3 * vx[i3, b]
-            mvy = w0 * vy[i0, b] + w1 * vy[i1, b] + w2 * vy[i2, b] + w3 * vy[i3, b]
-            mvz = w0 * vz[i0, b] + w1 * vz[i1, b] + w2 * vz[i2, b] + w3 * vz[i3, b]
-            q = nx * mvx + ny * mvy + nz * mvz
-            q = q if q > ZERO else ZERO
-            vv = mvx * mvx + mvy * mvy + mvz * mvz
-            cy = w0 * y[i0, b] + w1 * y[i1, b] + w2 * y[i2, b] + w3 * y[i3, b]
-            lim = half_drag * math.sqrt(nn * vv)
-            lim = lim if lim < mf_dt else mf_dt
-            mag = q / nn * lim
-            mag = mag if cy < level else ZERO
+            mag, nx, ny, nz = _panel_force(
+                x, y, z, vx, vy, vz, b, nodes, weights, half_drag, mf_dt, level
+            )
             fx[i0, b] -= w0 * mag * nx
             fy[i0, b] -= w0 * mag * ny
             fz[i0, b] -= w0 * mag * nz

@@ -1,5 +1,6 @@
 """The triangles of a world: animals' deformed surfaces in their own colours, rocks (boxes),
-seaweed (upright cylinders) and a checkered seabed, flat-shaded by one light from above."""
+seaweed (upright cylinders) and a checkered seabed, flat-shaded by one light from above; and
+the shapes of a record's objects and plant strands (``solid``, ``strand_tube``)."""
 
 from __future__ import annotations
 
@@ -89,6 +90,39 @@ def _sphere(center, radius, n: int = 6):
             p, q = i * m + j, i * m + (j + 1) % m
             tris += [(p, q, p + m), (q, q + m, p + m)]
     return center + radius * v, np.array(tris)
+
+
+_OCTAHEDRON = np.array(
+    [[0, 2, 4], [4, 2, 1], [1, 2, 5], [5, 2, 0], [4, 3, 0], [1, 3, 4], [5, 3, 1], [0, 3, 5]]
+)
+
+
+def solid(shape: str, size, axis: str = "y", marker: float = 0.1):
+    """Return the vertices (V, 3) about the origin and triangles of a record object's shape
+    (``record.Thing``): box (half sizes), cylinder (radius, length along ``axis``, 12 sides),
+    sphere (radius); anything else a point, drawn as an octahedron reaching ``marker`` m."""
+    if shape == "box":
+        return _box(np.zeros(3), size)
+    if shape == "cylinder":
+        return _cylinder(np.zeros(3), size[0], size[1], axis, sides=12)
+    if shape == "sphere":
+        return _sphere(np.zeros(3), size[0])
+    v = np.float32([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]])
+    return v * np.float32(marker), _OCTAHEDRON
+
+
+def strand_tube(centres: np.ndarray, radius: float, sides: int = 6):
+    """Return a tube of ``radius`` m along the M points ``centres`` (M, 3) (a plant's strand):
+    its vertices (M * sides, 3) float32, a horizontal ring of ``sides`` about each point; its
+    triangles (T, 3); and the point (M,) each vertex rings, to skin it to the strand's nodes."""
+    m = centres.shape[0]
+    ang = 2 * np.pi * np.arange(sides) / sides
+    ring = radius * np.stack([np.cos(ang), np.zeros(sides), np.sin(ang)], 1)
+    verts = (centres[:, None] + ring[None]).reshape(-1, 3).astype(np.float32)
+    j, k = np.meshgrid(np.arange(m - 1), np.arange(sides), indexing="ij")
+    a, c = j * sides + k, j * sides + (k + 1) % sides
+    faces = np.stack([a, a + sides, c, c, a + sides, c + sides], -1).reshape(-1, 3)
+    return verts, faces, np.repeat(np.arange(m), sides)
 
 
 def seabed(center_xz=(0.0, 0.0), level: float = -2.0, extent: float = 40.0, tile: float = 1.0):

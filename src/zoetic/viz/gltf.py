@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from zoetic.io import atomic_write_bytes
+from zoetic.render.scene import solid, strand_tube
 from zoetic.render.skin import Skin, look_of, make_skin, skin_vertices
 from zoetic.viz.scene import Animal, Creature, Scene, Thing
 
@@ -375,20 +376,7 @@ def _add_creature(b: _Builder, tracks: _Tracks, k: int, creature: Creature) -> N
 
 def _solid(thing: Thing, marker: float) -> tuple[np.ndarray, np.ndarray]:
     """Return the vertices (V, 3) about the object's centre and triangles of its shape."""
-    from zoetic.render.scene import _box, _cylinder, _sphere
-
-    if thing.shape == "box":
-        v, f = _box(np.zeros(3), thing.size)
-    elif thing.shape == "cylinder":
-        v, f = _cylinder(np.zeros(3), thing.size[0], thing.size[1], thing.axis, sides=12)
-    elif thing.shape == "sphere":
-        v, f = _sphere(np.zeros(3), thing.size[0])
-    else:  # a point (a target): an octahedron sized to the scene
-        v = np.float32([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]])
-        v = v * np.float32(marker)
-        f = np.array(
-            [[0, 2, 4], [4, 2, 1], [1, 2, 5], [5, 2, 0], [4, 3, 0], [1, 3, 4], [5, 3, 1], [0, 3, 5]]
-        )
+    v, f = solid(thing.shape, thing.size, thing.axis, marker)
     return to_gltf_axes(v), np.asarray(f)[:, ::-1].astype(np.uint16)
 
 
@@ -435,15 +423,10 @@ def _add_strand(b: _Builder, tracks: _Tracks, name: str, thing: Thing, materials
     """Add a dynamic plant's strand: a tube of its radius whose rings are skinned, one to a
     joint, to its nodes, keyframed where they were."""
     nodes = to_gltf_axes(_fill_frames(np.asarray(thing.positions, np.float32)))  # (R, M, 3)
-    rest, (m, sides) = nodes[0], (nodes.shape[1], 6)
-    ang = 2 * np.pi * np.arange(sides) / sides
-    ring = thing.size[0] * np.stack([np.cos(ang), np.zeros(sides), np.sin(ang)], 1)
-    verts = (rest[:, None] + ring[None]).reshape(-1, 3).astype(np.float32)
-    j, k = np.meshgrid(np.arange(m - 1), np.arange(sides), indexing="ij")
-    a, c = j * sides + k, j * sides + (k + 1) % sides
-    faces = np.stack([a, a + sides, c, c, a + sides, c + sides], -1).reshape(-1, 3)
+    rest, m = nodes[0], nodes.shape[1]
+    verts, faces, ring_of = strand_tube(rest, thing.size[0])
     ids = np.zeros((len(verts), 4), np.uint16)
-    ids[:, 0] = np.repeat(np.arange(m), sides)
+    ids[:, 0] = ring_of
     weights = np.zeros((len(verts), 4), np.float32)
     weights[:, 0] = 1.0
     attrs = {
