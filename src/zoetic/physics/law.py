@@ -84,8 +84,11 @@ def rows(xp, q, idx):
 def gather_sum(xp, values, targets: np.ndarray, n: int):
     """Return (3, n, B): the rows of ``values`` (3, M, B) summed onto the nodes ``targets`` (M,)
     they belong to (a scatter-add written as a gather of constant indices)."""
+    zeros = xp.zeros((values.shape[0], n, values.shape[-1]), dtype=values.dtype)
     if targets.size == 0:
-        return xp.zeros((values.shape[0], n, values.shape[-1]), dtype=values.dtype)
+        return zeros
+    if hasattr(zeros, "at"):  # JAX: one scatter-add of whole B-lane rows, no padded table
+        return xp.stack([zeros[c].at[targets].add(values[c]) for c in range(values.shape[0])])
     table = incidence(targets, n)
     padded = xp.concatenate([values, xp.zeros_like(values[:, :1])], axis=1)
     return xp.sum(rows(xp, padded, table), axis=2)
