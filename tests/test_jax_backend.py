@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import io
+import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,6 +16,7 @@ pytest.importorskip("optax")
 
 import jax.numpy as jnp  # noqa: E402
 
+import zoetic  # noqa: E402
 from zoetic.bodies import list_animals, load_animal  # noqa: E402
 from zoetic.control import frequency_domain, time_domain, wave_controller  # noqa: E402
 from zoetic.control.jax_sampling import jax_table  # noqa: E402
@@ -205,3 +208,65 @@ def test_a_batch_in_chunks_matches_the_kernel_and_shared_activations_match_one_b
     for k in range(3):
         rec_k, _, _ = roll(st.positions[k], st.velocities[k], act[0])
         assert np.abs(np.asarray(rec_b[k]) - np.asarray(rec_k)).max() < 1e-6
+
+
+def test_cache_dir_follows_the_environment(monkeypatch, tmp_path):
+    from zoetic.physics.jax_backend import CACHE_ENV, cache_dir
+
+    monkeypatch.setenv(CACHE_ENV, str(tmp_path / "mine"))
+    assert cache_dir() == tmp_path / "mine"
+    monkeypatch.setenv(CACHE_ENV, "")
+    assert cache_dir() is None  # empty: no persistent cache
+    monkeypatch.delenv(CACHE_ENV)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert cache_dir() == tmp_path / "xdg" / "zoetic" / "jax"
+
+
+def _cache_dir_in_a_fresh_process(env: dict) -> str:
+    code = (
+        "import jax, jax.numpy as jnp\n"
+        "import zoetic.physics.jax_backend as jb\n"
+        "from zoetic.bodies import load_animal\n"
+        "from zoetic.physics import rest_state\n"
+        "body = load_animal('shark')\n"
+        "st = rest_state(body, 1)\n"
+        "act = jnp.zeros((1, 3, body.n_actuators))\n"
+        "jb.make_rollout(body)(st.positions, st.velocities, act)\n"
+        "print(jax.config.jax_compilation_cache_dir)\n"
+    )
+    full = {k: v for k, v in os.environ.items() if not k.startswith(("JAX_", "ZOETIC_JAX"))}
+    full.update(env, JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS="0")
+    full["PYTHONPATH"] = str(Path(zoetic.__file__).parents[1])  # this checkout's package
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=full)
+    assert out.returncode == 0, out.stderr
+    return out.stdout.strip().splitlines()[-1]
+
+
+def test_compiled_programs_persist_where_zoetic_or_the_user_says(tmp_path):
+    ours = tmp_path / "ours"
+    assert _cache_dir_in_a_fresh_process({"ZOETIC_JAX_CACHE": str(ours)}) == str(ours)
+    assert any(ours.iterdir())  # the rollout's compiled program was written there
+    theirs = tmp_path / "theirs"
+    env = {"ZOETIC_JAX_CACHE": str(ours), "JAX_COMPILATION_CACHE_DIR": str(theirs)}
+    assert _cache_dir_in_a_fresh_process(env) == str(theirs)  # the user's own setting wins
+    assert any(theirs.iterdir())
+    assert _cache_dir_in_a_fresh_process({"ZOETIC_JAX_CACHE": ""}) == "None"
+
+
+def test_the_bench_times_a_cold_cache_and_restores_the_users(tmp_path):
+    from zoetic.bench.jax_sim import compile_cold_and_cached, fresh_compilation_cache
+
+    before = jax.config.jax_compilation_cache_dir
+    seen = []
+
+    def make():
+        seen.append(jax.config.jax_compilation_cache_dir)
+        return lambda: jax.jit(lambda q: q * 2.0 + 1.0)(jnp.ones(3))
+
+    cold, cached = compile_cold_and_cached(make)
+    assert cold > 0 and cached > 0
+    assert len(seen) == 2 and seen[0] == seen[1] != before  # one fresh directory for both
+    assert jax.config.jax_compilation_cache_dir == before
+    with fresh_compilation_cache():
+        assert jax.config.jax_compilation_cache_dir != before
+    assert jax.config.jax_compilation_cache_dir == before

@@ -190,6 +190,13 @@ FIGURES: tuple[Figure, ...] = (
         higher=False,
     ),
     Figure(
+        "learn.gradient_compile_cached",
+        "gradient: JAX compile, cached (a later run)",
+        "s",
+        at("learn", "gradient_compile_seconds_cached"),
+        higher=False,
+    ),
+    Figure(
         "train.demo",
         "demo learning, 2400 evals (quick 400)",
         "s",
@@ -284,6 +291,13 @@ FIGURES: tuple[Figure, ...] = (
         baseline_label="Numba kernel (CPU), this run",
     ),
     Figure("jax.compile", "JAX compile", "s", at("jax", "jax", "compile_seconds"), higher=False),
+    Figure(
+        "jax.compile_cached",
+        "JAX compile, cached (a later run)",
+        "s",
+        at("jax", "jax", "compile_seconds_cached"),
+        higher=False,
+    ),
     Figure(
         "san.search",
         "SAN search, walker",

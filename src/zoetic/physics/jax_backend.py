@@ -12,6 +12,9 @@ becomes large or non-finite, and ``blown_up`` tells which ones did.
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import jax
 import jax.numpy as jnp
 
@@ -24,6 +27,34 @@ from zoetic.physics.simulate import VMAX
 
 F32 = jnp.float32
 CPU_LANES = 128  # candidates stepped together on a CPU (measured: 64-256 alike, 1024 slower)
+CACHE_ENV = "ZOETIC_JAX_CACHE"  # where compiled programs persist; set empty for none
+
+
+def cache_dir() -> Path | None:
+    """Return where zoetic keeps JAX's compiled programs between runs: $ZOETIC_JAX_CACHE
+    (empty: nowhere), else $XDG_CACHE_HOME/zoetic/jax, else ~/.cache/zoetic/jax."""
+    given = os.environ.get(CACHE_ENV)
+    if given is not None:
+        return Path(given).expanduser() if given.strip() else None
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "zoetic" / "jax"
+
+
+def use_compilation_cache() -> str | None:
+    """Point JAX's persistent compilation cache at ``cache_dir()`` unless one is set already
+    (``JAX_COMPILATION_CACHE_DIR`` or ``jax.config``), so that a later process skips XLA's
+    compile of the same program (the gradient's takes seconds); return the directory in use."""
+    current = jax.config.jax_compilation_cache_dir
+    if current:
+        return current
+    where = cache_dir()
+    if where is None:
+        return None
+    jax.config.update("jax_compilation_cache_dir", str(where))
+    return str(where)
+
+
+use_compilation_cache()
 
 
 def make_step(body: Body, medium: str | Medium | None = None, dt: float | None = None):

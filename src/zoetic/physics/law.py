@@ -12,14 +12,14 @@ motion in one step, fins, a penalty floor with implicit directional Coulomb fric
 nodal damping, semi-implicit Euler with the stiff springs sub-stepped after one kick of
 everything else (``multirate.split``). Conformance tests hold the three equal.
 
-Nothing is written in place, and nothing is scattered: a term's contributions to the nodes
-(spring ends, panel and fin corners) are gathered back per node through a padded incidence
-table built once from the model's constant indices (``incidence``) and summed, the same code in
-NumPy and JAX (XLA's scatter is serial on a CPU; a gather of whole B-lane rows is a copy).
-Whatever is summed (dot products over xyz, corner means, the per-node sums) is written as a
-reduction (``sum`` over an axis): XLA's CPU fusion copies an elementwise producer into every
-fusion that reads it, so a value read through gathers would be recomputed per element read,
-while a reduction is computed once into a buffer. NumPy sums those short axes in order.
+Nothing is written in place. A term's contributions to the nodes (spring ends, panel and fin
+corners) are summed onto them by ``gather_sum``: in JAX one scatter-add of whole B-lane rows
+per component, in NumPy through a padded incidence table built once from the model's
+constant indices (``incidence``), summed in order (in XLA that table's gather and reduction
+cost twice the scatter). Dot products over xyz and corner means are written as reductions
+(``sum`` over an axis): XLA's CPU fusion copies an elementwise producer into every fusion that
+reads it, so a value read through gathers would be recomputed per element read, while a
+reduction is computed once into a buffer. NumPy sums those short axes in order.
 Square roots and unit vectors are guarded (the double-``where`` trick) so that JAX gradients
 stay finite at rest, where velocities are exactly zero.
 """
@@ -83,9 +83,12 @@ def rows(xp, q, idx):
 
 def gather_sum(xp, values, targets: np.ndarray, n: int):
     """Return (3, n, B): the rows of ``values`` (3, M, B) summed onto the nodes ``targets`` (M,)
-    they belong to (a scatter-add written as a gather of constant indices)."""
+    they belong to: a scatter-add per component in JAX, the incidence table's sum in NumPy."""
+    zeros = xp.zeros((values.shape[0], n, values.shape[-1]), dtype=values.dtype)
     if targets.size == 0:
-        return xp.zeros((values.shape[0], n, values.shape[-1]), dtype=values.dtype)
+        return zeros
+    if hasattr(zeros, "at"):  # JAX: one scatter-add of whole B-lane rows, no padded table
+        return xp.stack([zeros[c].at[targets].add(values[c]) for c in range(values.shape[0])])
     table = incidence(targets, n)
     padded = xp.concatenate([values, xp.zeros_like(values[:, :1])], axis=1)
     return xp.sum(rows(xp, padded, table), axis=2)
