@@ -158,3 +158,23 @@ def test_rerun_past_its_timeout_is_stopped(tmp_path):
     exp = Experiment("slow", (str(script),), (), (), (), False, "")
     with pytest.raises(ZoeticError, match="slow: did not finish within 2 s"):
         run_experiment(exp, quick=True, timeout=2, figures=tmp_path / "figs")
+
+
+def test_a_rerun_prints_its_own_numbers_not_the_claims_best_record(monkeypatch, capsys):
+    """A quick rerun of a claim that also has a full record prints the quick run's values."""
+    import zoetic.reproduce.regenerate as regenerate
+
+    claim = load_registry().claim("gt95-sec3-paper-pipeline")
+    numbers: dict = {}
+    for i, key in enumerate(claim.keys):
+        name, _, path = key.partition(":")
+        node = numbers.setdefault(name, {})
+        parts = path.split("/")
+        for part in parts[:-1]:
+            node = node.setdefault(part, {})
+        node[parts[-1]] = 1000 + i
+    fake = {"mode": "quick", "wall_s": 1.0, "files": {}, "numbers": numbers}
+    monkeypatch.setattr(regenerate, "run_experiment", lambda *a, **k: fake)
+    assert main(["reproduce", "gt95-sec3-paper-pipeline", "--quick", "--json"]) in (0, None)
+    out = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert out["values"] == {k: 1000 + i for i, k in enumerate(claim.keys)}

@@ -29,7 +29,7 @@ def reproduce(
     """List every checkable claim of the papers with its status, or regenerate one."""
     from zoetic.reproduce.docs import counts
     from zoetic.reproduce.docs import write_docs as write
-    from zoetic.reproduce.regenerate import claim_row, run_experiment
+    from zoetic.reproduce.regenerate import claim_row, lookup, run_experiment
     from zoetic.reproduce.registry import load_registry
 
     reg = load_registry()
@@ -48,7 +48,8 @@ def reproduce(
             "wall_s": rec["wall_s"],
             "files": len(rec["files"]),
             "stale": row["stale"],
-            "values": row["run"]["values"],
+            # this run's numbers: a quick rerun's, even where a full record is the claim's best
+            "values": {k: lookup(rec["numbers"], k) for k in c.keys},
         }
         print(json.dumps(out)) if as_json else console.print(out)
         if write_docs:
