@@ -221,6 +221,7 @@ def test_stunt_cli_writes_its_files_and_the_macro_replays(tmp_path, capsys, dolp
     said = " ".join(capsys.readouterr().out.split())  # before the search: what it will cost
     # robust: the 6 simulations are 2 plans, each from 3 starts; checked from 6 more
     assert "dolphin short-leap: 2 plans by anneal, each a 0.5 s simulation from 3 starts" in said
+    assert "stops early" not in said  # the trick file does not ask to stop once met
     assert "targets met from 6 of 6 perturbed starts (start 0.05 m deeper" in said
     for f in ("macro.json", "summary.json", "score.png", "video.mp4"):
         assert (out / f).stat().st_size > 0, f
@@ -295,3 +296,19 @@ def test_final_height_is_zero_only_once_the_whole_body_is_back_in_the_water(dolp
     for end, want in ((1.0, 1.0 + top), (-0.1, top - 0.1), (-1.0, 0.0)):
         s = _signals(dolphin, _lifted(dolphin, np.array([-2.0, 1.5, end])))
         assert _term("final_height", s) == pytest.approx(want, abs=1e-9)
+
+
+def test_stunt_cli_says_a_search_may_stop_early_when_its_trick_asks(tmp_path, capsys, repertoire):
+    memory = tmp_path / "memory"
+    repertoire.save(memory)
+    trick = tmp_path / "stop-leap.toml"
+    trick.write_text(
+        'name = "stop-leap"\nrequires = ["surface"]\nhorizon = 0.3\nrecord_hz = 20.0\n'
+        "[start]\ndepth = 0.6\nspeed = 1.0\npitch = 0.6\n"
+        "[trick]\nsegments = 1\ndurations = [0.1, 0.3]\nstop_when_met = true\n"
+        '[[terms]]\nkind = "apex_above_surface"\nweight = -1.0\n'
+    )
+    args = ["stunt", "dolphin", "--memory", str(memory), "--trick", str(trick), "--budget", "2"]
+    assert main([*args, "--out", str(tmp_path / "s"), "--no-video"]) == 0
+    said = " ".join(capsys.readouterr().out.split())
+    assert "it stops early once a plan meets the targets from every moved start" in said

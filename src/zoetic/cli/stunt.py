@@ -114,6 +114,11 @@ def stunt(
         f"{body.name} {tr.name}: {plans} plans by {method}, each a {tr.task.horizon:g} s "
         f"simulation{starts}; the time it takes here is printed after the first steps "
         "(--budget sets the simulations)"
+        + (
+            "; it stops early once a plan meets the targets from every moved start"
+            if tr.stop_when_met
+            else ""
+        )
     )
     countdown = Countdown(plans, "plans")
     with track_bar("plans") as bar:
