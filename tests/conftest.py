@@ -21,6 +21,28 @@ def write_short_task(folder: Path, horizon: float, nodes: int) -> Path:
     return path
 
 
+def cruise_from(world, body, poses, speed: float) -> None:
+    """Place a world's animals (all of ``body``) at ``poses`` ((x, y, z) in m, yaw in rad), each
+    moving at ``speed`` m/s along its heading: a scene's start of fishes already cruising."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from zoetic.physics.world import placed_pose
+
+    state = world.state
+    heading = [np.array([np.cos(yaw), 0.0, np.sin(yaw)]) for _, yaw in poses]
+    world.restore(
+        replace(
+            state,
+            positions=tuple(placed_pose(body, p, yaw)[None] for p, yaw in poses),
+            velocities=tuple(
+                np.zeros_like(v) + speed * h for v, h in zip(state.velocities, heading, strict=True)
+            ),
+        )
+    )
+
+
 @pytest.fixture(scope="session")
 def dolphin():
     """The zoo dolphin, loaded once for the stunt and contact tests."""

@@ -8,6 +8,7 @@ import json
 import numpy as np
 import pytest
 
+from conftest import cruise_from
 from zoetic.behavior.aquarium.perception import blocked, obstacle_distance, perceive
 from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live
 from zoetic.cli import main
@@ -299,10 +300,7 @@ def test_two_minnows_on_a_collision_course_avoid_each_other(other):
     # crossing at right angles, both reaching the crossing together): each senses the other
     # in its collision sensitivity region in time, and they pass without touching (on main,
     # which sensed another fish only 0.8 m between centres, both pairs touched)
-    from dataclasses import replace
-
     from zoetic.behavior.mind import INTENTIONS
-    from zoetic.physics.world import placed_pose
 
     cfg = TankConfig(
         fishes=2, predators=0, food=0, obstacles=0, seconds=10.0, seed=0, half_size=8.0
@@ -310,18 +308,7 @@ def test_two_minnows_on_a_collision_course_avoid_each_other(other):
     tank = build_tank(cfg)
     world, body = tank.world, tank.fishes[0].body
     poses = [((-2.0, 0.0, 0.0), 0.0), other]
-    state = world.state
-    speed = tank.fishes[0].species.motor.cruise_speed
-    heading = [np.array([np.cos(yaw), 0.0, np.sin(yaw)]) for _, yaw in poses]
-    world.restore(
-        replace(
-            state,
-            positions=tuple(placed_pose(body, p, yaw)[None] for p, yaw in poses),
-            velocities=tuple(
-                np.zeros_like(v) + speed * h for v, h in zip(state.velocities, heading, strict=True)
-            ),
-        )
-    )
+    cruise_from(world, body, poses, tank.fishes[0].species.motor.cruise_speed)
     life = live(tank)
     assert [e for e in life.events if e[2] == "collision"] == [] and life.deepest_fish == 0.0
     assert INTENTIONS.index("avoid") in life.intentions  # they did see each other coming

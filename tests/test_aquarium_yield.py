@@ -4,11 +4,10 @@ well off the heading is turned to on the spot (``routines.go_to``)."""
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 
+from conftest import cruise_from
 from zoetic.behavior.aquarium import tank as tk
 from zoetic.behavior.aquarium.brain import tank_brains
 from zoetic.behavior.aquarium.shoal import right_of_way
@@ -35,7 +34,7 @@ def test_a_fish_going_for_food_swims_on_and_the_fish_coming_head_on_yields(monke
     # a hungry minnow swims for a particle 4.5 m ahead; a sated one (hunger 0: it wanders)
     # comes at it head on, 0.1 m aside: the sated one avoids (brakes, turns away) first
     from zoetic.physics.objects import Food
-    from zoetic.physics.world import World, placed_pose
+    from zoetic.physics.world import World
 
     def brains(*args):
         out = tank_brains(*args)
@@ -51,18 +50,7 @@ def test_a_fish_going_for_food_swims_on_and_the_fish_coming_head_on_yields(monke
     tank = tk.Tank(cfg, world, t.fishes, t.kind, t.center, t.size, t.static_names)
     body = tank.fishes[0].body
     poses = [((-2.0, 0.0, 0.0), 0.0), ((1.0, 0.0, 0.1), np.pi)]
-    state = world.state
-    speed = tank.fishes[0].species.motor.cruise_speed
-    heading = [np.array([np.cos(yaw), 0.0, np.sin(yaw)]) for _, yaw in poses]
-    world.restore(
-        replace(
-            state,
-            positions=tuple(placed_pose(body, p, yaw)[None] for p, yaw in poses),
-            velocities=tuple(
-                np.zeros_like(v) + speed * h for v, h in zip(state.velocities, heading, strict=True)
-            ),
-        )
-    )
+    cruise_from(world, body, poses, tank.fishes[0].species.motor.cruise_speed)
     life = live(tank)
     avoid, eat = INTENTIONS.index("avoid"), INTENTIONS.index("eat")
     yields = np.flatnonzero(life.intentions[:, 1] == avoid)
