@@ -13,7 +13,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.ndimage import shift as nd_shift
 
 from zoetic.perception.eyes import (
     LEFT,
@@ -25,6 +24,7 @@ from zoetic.perception.eyes import (
     gaze_direction,
     pixel_direction,
 )
+from zoetic.perception.kernels import flow_shift, ncc_scores
 from zoetic.perception.recognition import (
     TARGET_RADIUS,
     Recognition,
@@ -85,21 +85,8 @@ def image_shift(prev: np.ndarray, cur: np.ndarray, iterations: int = 3) -> tuple
     Ix u + Iy v + It = 0 over the image, refined by warping a few times."""
     a = _gray(prev) if prev.ndim == 3 else np.asarray(prev, float)
     b = _gray(cur) if cur.ndim == 3 else np.asarray(cur, float)
-    u = v = 0.0
-    m = 3  # ignore the margin, where warping invents pixels
-    for _ in range(iterations):
-        w = nd_shift(a, (v, u), order=1, mode="nearest") if (u or v) else a
-        gy, gx = np.gradient(0.5 * (w + b))
-        gt = b - w
-        gx, gy, gt = gx[m:-m, m:-m], gy[m:-m, m:-m], gt[m:-m, m:-m]
-        mat = np.array([[(gx * gx).sum(), (gx * gy).sum()], [(gx * gy).sum(), (gy * gy).sum()]])
-        rhs = -np.array([(gx * gt).sum(), (gy * gt).sum()])
-        if np.linalg.det(mat) < 1e-9:
-            break
-        du, dv = np.linalg.solve(mat, rhs)
-        u, v = u + du, v + dv
-        if abs(du) + abs(dv) < 1e-3:
-            break
+    # ignore a 3 px margin, where warping invents pixels
+    u, v = flow_shift(np.ascontiguousarray(a), np.ascontiguousarray(b), iterations, 3)
     return float(u), float(v)
 
 
@@ -126,7 +113,7 @@ def _peak_offset(m1: float, m0: float, p1: float) -> float:
     """Return the sub-pixel offset (px, within +-0.5) of a parabola's vertex through three
     samples around a peak."""
     den = m1 - 2 * m0 + p1
-    return float(np.clip(0.5 * (m1 - p1) / den, -0.5, 0.5)) if abs(den) > 1e-12 else 0.0
+    return min(max(0.5 * (m1 - p1) / den, -0.5), 0.5) if abs(den) > 1e-12 else 0.0
 
 
 def match(
@@ -150,19 +137,19 @@ def match(
     tpl = pa[j : j + k, i : i + k]
     tpl = tpl - tpl.mean()
     tn = float(np.sqrt((tpl * tpl).sum()))
-    win = np.lib.stride_tricks.sliding_window_view(np.pad(np.asarray(b, float), half), (k, k))
-    h, w = win.shape[:2]
+    pb = np.pad(np.asarray(b, float), half)
+    h, w = pb.shape[0] - k + 1, pb.shape[1] - k + 1
     rows, cols = slice(0, h), slice(0, w)
     if near is not None:
         nj, ni = int(np.floor(near[1])), int(np.floor(near[0]))
         rows = slice(max(nj - radius, 0), max(min(nj + radius + 1, h), 0))
         cols = slice(max(ni - radius, 0), max(min(ni + radius + 1, w), 0))
-    sub = win[rows, cols]
-    if tn < 1e-9 or sub.size == 0:
+    if tn < 1e-9 or rows.stop <= rows.start or cols.stop <= cols.start:
         return col, row, 0.0
-    sub = sub - sub.mean(axis=(-2, -1), keepdims=True)
-    norm = np.sqrt((sub * sub).sum(axis=(-2, -1))) * tn
-    score = np.where(norm > 1e-9, np.einsum("hwij,ij->hw", sub, tpl) / np.maximum(norm, 1e-9), -1)
+    score = np.empty((rows.stop - rows.start, cols.stop - cols.start))
+    ncc_scores(
+        np.ascontiguousarray(tpl), tn, pb, rows.start, rows.stop, cols.start, cols.stop, score
+    )
     y, x = np.unravel_index(int(np.argmax(score)), score.shape)
     dy = (
         _peak_offset(score[y - 1, x], score[y, x], score[y + 1, x])

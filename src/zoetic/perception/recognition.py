@@ -12,7 +12,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import convolve, gaussian_filter
+
+from zoetic.perception.kernels import (
+    backprojections,
+    colour_bins,
+    disk_smooth,
+    gray_levels,
+    peaks,
+)
 
 BINS = (16, 16, 8)
 N_BINS = BINS[0] * BINS[1] * BINS[2]
@@ -20,12 +27,17 @@ N_BINS = BINS[0] * BINS[1] * BINS[2]
 
 def bin_index(image: np.ndarray) -> np.ndarray:
     """Return the colour bin (..., H, W) int of each pixel of RGB images (..., H, W, 3)."""
-    c = np.asarray(image, dtype=np.int32)
-    r, g, b = c[..., 0], c[..., 1], c[..., 2]
-    rg = (r - g + 255) * BINS[0] // 511
-    by = (2 * b - r - g + 510) * BINS[1] // 1021
-    wb = (r + g + b) * BINS[2] // 766
-    return (rg * BINS[1] + by) * BINS[2] + wb
+    c = np.asarray(image)
+    if c.dtype != np.uint8:
+        c = np.asarray(c, dtype=np.int32)
+        r, g, b = c[..., 0], c[..., 1], c[..., 2]
+        rg = (r - g + 255) * BINS[0] // 511
+        by = (2 * b - r - g + 510) * BINS[1] // 1021
+        wb = (r + g + b) * BINS[2] // 766
+        return (rg * BINS[1] + by) * BINS[2] + wb
+    out = np.empty(c.shape[:-1], np.int64)
+    colour_bins(np.ascontiguousarray(c).reshape(-1, 3), BINS, out.reshape(-1))
+    return out
 
 
 def histogram(image: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
@@ -45,12 +57,6 @@ def intersection(image_hist: np.ndarray, model: np.ndarray) -> float:
     return float(np.minimum(image_hist, model).sum() / m) if m > 0 else 0.0
 
 
-def _disk(radius: int) -> np.ndarray:
-    y, x = np.mgrid[-radius : radius + 1, -radius : radius + 1]
-    d = (x * x + y * y <= radius * radius).astype(float)
-    return d / d.sum()
-
-
 def _ratio(image: np.ndarray, model: np.ndarray) -> np.ndarray:
     idx = bin_index(image)
     ih = np.bincount(idx.ravel(), minlength=N_BINS) / idx.size
@@ -62,7 +68,14 @@ def backproject(image: np.ndarray, model: np.ndarray, radius: int = 1) -> np.nda
     """Return the backprojection (H, W) in [0, 1] of a model histogram onto an RGB image:
     each pixel gets min(M_j / I_j, 1) of its bin j, smoothed with a disk of ``radius`` px."""
     b = _ratio(image, model)
-    return convolve(b, _disk(radius), mode="constant") if radius > 0 else b
+    return _smooth(b[None], radius)[0] if radius > 0 else b
+
+
+def _smooth(raw: np.ndarray, radius: int) -> np.ndarray:
+    """Return images (K, H, W) each averaged over a disk of ``radius`` px (zero outside)."""
+    out = np.empty_like(raw)
+    disk_smooth(np.ascontiguousarray(raw, float), radius, out)
+    return out
 
 
 @dataclass(frozen=True)
@@ -80,32 +93,29 @@ class Detection:
 def locate(image: np.ndarray, model: np.ndarray, radius: int = 1, window: int = 8) -> Detection:
     """Return the peak of the smoothed backprojection of ``model`` in ``image``, refined to
     the centroid of the raw backprojection within ``window`` px of it."""
-    raw = _ratio(image, model)
-    b = convolve(raw, _disk(radius), mode="constant") if radius > 0 else raw
-    return _peak(raw, b, window)
+    raw = _ratio(image, model)[None]
+    b = _smooth(raw, radius) if radius > 0 else raw
+    return _peaks(raw, b, window)[0]
 
 
-def _peak(raw: np.ndarray, b: np.ndarray, window: int) -> Detection:
-    """Return the peak of the smoothed backprojection ``b`` (H, W), refined to the centroid
-    of the raw backprojection ``raw`` within ``window`` px of it."""
-    j, i = np.unravel_index(int(np.argmax(b)), b.shape)
-    j0, j1 = max(j - window, 0), min(j + window + 1, b.shape[0])
-    i0, i1 = max(i - window, 0), min(i + window + 1, b.shape[1])
-    win = raw[j0:j1, i0:i1]
-    m = float(win.sum())
-    if m <= 0:
-        return Detection(i + 0.5, j + 0.5, 0.0, 0.0)
-    yy, xx = np.mgrid[j0:j1, i0:i1]
-    return Detection(
-        float((xx * win).sum() / m) + 0.5, float((yy * win).sum() / m) + 0.5, float(b[j, i]), m
-    )
+def _peaks(raw: np.ndarray, b: np.ndarray, window: int) -> list[Detection]:
+    """Return each image's peak of the smoothed backprojection ``b`` (K, H, W), refined to
+    the centroid of the raw backprojection ``raw`` within ``window`` px of it."""
+    out = np.empty((len(raw), 4))
+    peaks(np.ascontiguousarray(raw, float), np.ascontiguousarray(b, float), window, out)
+    return [Detection(*(float(x) for x in row)) for row in out.tolist()]
 
 
 def gray(images: np.ndarray) -> np.ndarray:
     """Return the gray levels (..., H, W) in [0, 1] of RGB images (..., H, W, 3), smoothed by
     a Gaussian of 1 px within each image: what the gaze's flow and vergence compare."""
-    g = np.asarray(images, float).mean(-1) / 255.0
-    return gaussian_filter(g, (0.0,) * (g.ndim - 2) + (1.0, 1.0))
+    img = np.asarray(images)
+    if img.dtype != np.uint8:
+        img = img.astype(float)
+    flat = np.ascontiguousarray(img.reshape(-1, *img.shape[-3:]))
+    out = np.empty(flat.shape[:-1])
+    gray_levels(flat, out)
+    return out.reshape(img.shape[:-1])
 
 
 @dataclass(frozen=True)
@@ -142,14 +152,10 @@ def recognise(
     backprojected and smoothed for all images in one pass (the same numbers image by
     image)."""
     idx = bin_index(images)
-    k = idx.shape[0]
-    flat = idx.reshape(k, -1)
-    offsets = N_BINS * np.arange(k)[:, None]
-    counts = np.bincount((flat + offsets).ravel(), minlength=k * N_BINS).reshape(k, N_BINS)
-    hist = counts / flat.shape[1]
-    ratio = np.minimum(np.where(hist > 0, models / np.maximum(hist, 1e-12), 0.0), 1.0)
-    raw = np.take_along_axis(ratio, flat, 1).reshape(idx.shape)
-    b = convolve(raw, _disk(radius)[None], mode="constant") if radius > 0 else raw
+    hist = np.empty((len(idx), N_BINS))
+    raw = np.empty(idx.shape)
+    backprojections(idx, np.ascontiguousarray(models, float), hist, raw)
+    b = _smooth(raw, radius) if radius > 0 else raw
     g = gray(images)
-    target = g * convolve(raw, _disk(TARGET_RADIUS)[None], mode="constant")
-    return Recognition(hist, [_peak(raw[n], b[n], window) for n in range(k)], g, target)
+    target = g * _smooth(raw, TARGET_RADIUS)
+    return Recognition(hist, _peaks(raw, b, window), g, target)
