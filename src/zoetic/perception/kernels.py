@@ -72,20 +72,21 @@ def disk_smooth(raw, radius: int, out) -> None:
                 n += 1
     wt = 1.0 / n
     pad = np.zeros((h + 2 * r, w + 2 * r))
+    acc = np.empty(w)
     for k in range(k_n):
         for j in range(h):
             for i in range(w):
                 pad[j + r, i + r] = raw[k, j, i]
         for j in range(h):
-            for i in range(w):
-                out[k, j, i] = 0.0
+            acc[:] = 0.0
             for dy in range(-r, r + 1):
                 for dx in range(-r, r + 1):
                     if dx * dx + dy * dy <= r * r:
+                        src = pad[j + r + dy]
                         for i in range(w):
-                            out[k, j, i] += pad[j + r + dy, i + r + dx]
+                            acc[i] += src[i + r + dx]
             for i in range(w):
-                out[k, j, i] *= wt
+                out[k, j, i] = acc[i] * wt
 
 
 @njit(cache=True)

@@ -83,21 +83,21 @@ def project(points, cameras: Cameras) -> tuple[np.ndarray, np.ndarray]:
 
 
 @njit(cache=True, fastmath=True)
-def _raster(vert, tris, colors, eyes, rots, focal, width, height, fog_color, fog_dist, out, depth):
+def _raster(vert, tris, eyes, rots, focal, width, height, nearest, depth):
+    """Write into nearest (C, H, W) the triangle each camera sees at each pixel (-1 none)
+    and into depth (C, H, W) its depth (m along the view axis; inf for none)."""
     n_cam = eyes.shape[0]
     n_tri = tris.shape[0]
+    nv = vert.shape[0]
+    sx = np.empty(nv)
+    sy = np.empty(nv)
+    sz = np.empty(nv)
+    out = np.empty(nv, np.int64)  # which sides of the picture each vertex lies beyond
     for c in range(n_cam):
         zbuf = depth[c]
-        img = out[c]
-        for j in range(height):
-            for i in range(width):
-                zbuf[j, i] = np.inf
-                for k in range(3):
-                    img[j, i, k] = fog_color[k]
-        nv = vert.shape[0]
-        sx = np.empty(nv)
-        sy = np.empty(nv)
-        sz = np.empty(nv)
+        hit = nearest[c]
+        zbuf[:, :] = np.inf
+        hit[:, :] = -1
         for v in range(nv):
             dx = vert[v, 0] - eyes[c, 0]
             dy = vert[v, 1] - eyes[c, 1]
@@ -109,41 +109,87 @@ def _raster(vert, tris, colors, eyes, rots, focal, width, height, fog_color, fog
             if z > NEAR:
                 sx[v] = 0.5 * width + focal[c] * x / z
                 sy[v] = 0.5 * height - focal[c] * y / z
+                out[v] = (
+                    (sx[v] < 0.0) + 2 * (sx[v] > width) + 4 * (sy[v] < 0.0) + 8 * (sy[v] > height)
+                )
             else:
                 sx[v] = 0.0
                 sy[v] = 0.0
+                out[v] = 16
         for t in range(n_tri):
             a, b, d = tris[t, 0], tris[t, 1], tris[t, 2]
-            if sz[a] <= NEAR or sz[b] <= NEAR or sz[d] <= NEAR:
+            # skipped: a vertex too near (or behind), or all three beyond one side
+            if (out[a] | out[b] | out[d]) & 16 or out[a] & out[b] & out[d]:
                 continue
-            x0, y0, x1, y1, x2, y2 = sx[a], sy[a], sx[b], sy[b], sx[d], sy[d]
-            area = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
-            if abs(area) < 1e-12:
+            _fill(sx[a], sy[a], sx[b], sy[b], sx[d], sy[d], sz[a], sz[b], sz[d], t, zbuf, hit)
+
+
+@njit(cache=True, fastmath=True, inline="always")
+def _fill(x0, y0, x1, y1, x2, y2, za, zb, zd, t, zbuf, hit):
+    """Draw triangle t (screen corners (x, y), depths z) into one camera's buffers: each
+    pixel whose centre it covers, where it is the nearest so far. Each row is tested only
+    across the triangle's span on it (a pixel wider on both sides)."""
+    height, width = zbuf.shape
+    area = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
+    if abs(area) < 1e-12:
+        return
+    i0 = max(int(np.floor(min(x0, x1, x2))), 0)
+    i1 = min(int(np.ceil(max(x0, x1, x2))), width - 1)
+    j0 = max(int(np.floor(min(y0, y1, y2))), 0)
+    j1 = min(int(np.ceil(max(y0, y1, y2))), height - 1)
+    if i0 > i1 or j0 > j1:
+        return
+    # perspective-correct depth: 1/z is affine in screen space
+    iz0, iz1, iz2 = 1.0 / za, 1.0 / zb, 1.0 / zd
+    inv = 1.0 / area
+    for j in range(j0, j1 + 1):
+        py = j + 0.5
+        lo, hi = _cut(x0, y0, x1, y1, py, np.inf, -np.inf)
+        lo, hi = _cut(x1, y1, x2, y2, py, lo, hi)
+        lo, hi = _cut(x2, y2, x0, y0, py, lo, hi)
+        if lo > hi:
+            continue
+        for i in range(max(i0, int(np.floor(lo)) - 1), min(i1, int(np.ceil(hi)) + 1) + 1):
+            px = i + 0.5
+            w0 = ((x1 - px) * (y2 - py) - (x2 - px) * (y1 - py)) * inv
+            w1 = ((x2 - px) * (y0 - py) - (x0 - px) * (y2 - py)) * inv
+            w2 = 1.0 - w0 - w1
+            if w0 < 0.0 or w1 < 0.0 or w2 < 0.0:
                 continue
-            i0 = max(int(np.floor(min(x0, x1, x2))), 0)
-            i1 = min(int(np.ceil(max(x0, x1, x2))), width - 1)
-            j0 = max(int(np.floor(min(y0, y1, y2))), 0)
-            j1 = min(int(np.ceil(max(y0, y1, y2))), height - 1)
-            if i0 > i1 or j0 > j1:
-                continue
-            # perspective-correct depth: 1/z is affine in screen space
-            iz0, iz1, iz2 = 1.0 / sz[a], 1.0 / sz[b], 1.0 / sz[d]
-            inv = 1.0 / area
-            for j in range(j0, j1 + 1):
-                py = j + 0.5
-                for i in range(i0, i1 + 1):
-                    px = i + 0.5
-                    w0 = ((x1 - px) * (y2 - py) - (x2 - px) * (y1 - py)) * inv
-                    w1 = ((x2 - px) * (y0 - py) - (x0 - px) * (y2 - py)) * inv
-                    w2 = 1.0 - w0 - w1
-                    if w0 < 0.0 or w1 < 0.0 or w2 < 0.0:
-                        continue
-                    z = 1.0 / (w0 * iz0 + w1 * iz1 + w2 * iz2)
-                    if z < zbuf[j, i]:
-                        zbuf[j, i] = z
-                        fog = 1.0 - np.exp(-z / fog_dist) if fog_dist > 0 else 0.0
-                        for k in range(3):
-                            img[j, i, k] = colors[t, k] * (1.0 - fog) + fog_color[k] * fog
+            z = 1.0 / (w0 * iz0 + w1 * iz1 + w2 * iz2)
+            if z < zbuf[j, i]:
+                zbuf[j, i] = z
+                hit[j, i] = t
+
+
+@njit(cache=True, inline="always")
+def _cut(xa, ya, xb, yb, py, lo, hi):
+    """Return the span (lo, hi) widened to the points where edge a-b meets row py."""
+    if ya == yb:
+        if ya == py:
+            return min(lo, xa, xb), max(hi, xa, xb)
+        return lo, hi
+    if min(ya, yb) <= py <= max(ya, yb):
+        xc = xa + (py - ya) * (xb - xa) / (yb - ya)
+        return min(lo, xc), max(hi, xc)
+    return lo, hi
+
+
+@njit(cache=True, fastmath=True)
+def _shade(nearest, depth, colors, fog_color, fog_dist, out):
+    """Write into out (C, H, W, 3) uint8 each pixel's triangle colour through the fog of
+    its depth (the fog's colour where no triangle was drawn)."""
+    n_cam, height, width = nearest.shape
+    for c in range(n_cam):
+        for j in range(height):
+            for i in range(width):
+                t = nearest[c, j, i]
+                fog = 1.0
+                if t >= 0:
+                    fog = 1.0 - np.exp(-depth[c, j, i] / fog_dist) if fog_dist > 0 else 0.0
+                for k in range(3):
+                    v = fog_color[k] if t < 0 else colors[t, k] * (1.0 - fog) + fog_color[k] * fog
+                    out[c, j, i, k] = int(min(max(v * 255.0 + 0.5, 0.0), 255.0))
 
 
 def render(
@@ -170,10 +216,10 @@ def render(
         raise RenderError(f"triangle indices must lie in [0, {len(v)})")
     w, h = cameras.size
     n = len(cameras.eye)
-    out = np.empty((n, h, w, 3))
+    nearest = np.empty((n, h, w), np.int32)
     depth = np.empty((n, h, w))
     eye, rot = np.ascontiguousarray(cameras.eye), np.ascontiguousarray(cameras.rotation)
-    fog = np.asarray(fog_color, float)
-    _raster(v, t, col, eye, rot, cameras.focal, w, h, fog, float(visibility), out, depth)
-    img = np.clip(out * 255.0 + 0.5, 0, 255).astype(np.uint8)
+    _raster(v, t, eye, rot, cameras.focal, w, h, nearest, depth)
+    img = np.empty((n, h, w, 3), np.uint8)
+    _shade(nearest, depth, col, np.asarray(fog_color, float), float(visibility), img)
     return (img, depth) if with_depth else img
