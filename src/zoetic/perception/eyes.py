@@ -11,6 +11,7 @@ pose onto the current one, so it wags with the body as the fish undulates.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -92,7 +93,13 @@ def head_cluster(body: Body) -> np.ndarray:
 
 def head_frame(body: Body, positions: np.ndarray) -> HeadFrame:
     """Return the head frame of one animal's pose (N, 3), its origin at the eyes' node."""
-    return _fitted_frame(body, positions, head_cluster(body), eye_node(body))
+    return _fitted_frame(body, positions, _head_cluster(body), eye_node(body))
+
+
+@lru_cache(maxsize=64)
+def _head_cluster(body: Body) -> np.ndarray:
+    """``head_cluster`` of a body, found once (a brain period asks for it every frame)."""
+    return head_cluster(body)
 
 
 def body_frame(body: Body, positions: np.ndarray) -> HeadFrame:

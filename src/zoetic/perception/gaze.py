@@ -11,6 +11,7 @@ point of the target's surface and the range is that point's.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 
@@ -95,11 +96,11 @@ def correlate(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
     phase correlation (sub-pixel by a parabola through the peak), and the peak's height."""
     ga = _gray(a) if a.ndim == 3 else np.asarray(a, float)
     gb = _gray(b) if b.ndim == 3 else np.asarray(b, float)
-    win = np.outer(np.hanning(ga.shape[0]), np.hanning(ga.shape[1]))
-    fa = np.fft.fft2((ga - ga.mean()) * win)
-    fb = np.fft.fft2((gb - gb.mean()) * win)
+    win = _hanning(*ga.shape)
+    fa = np.fft.rfft2((ga - ga.mean()) * win)
+    fb = np.fft.rfft2((gb - gb.mean()) * win)
     cross = fb * np.conj(fa)
-    r = np.real(np.fft.ifft2(cross / (np.abs(cross) + 1e-12)))
+    r = np.fft.irfft2(cross / (np.abs(cross) + 1e-12), ga.shape)
     j, i = np.unravel_index(int(np.argmax(r)), r.shape)
     h, w = r.shape
     di = _peak_offset(r[j, i - 1], r[j, i], r[j, (i + 1) % w])
@@ -107,6 +108,12 @@ def correlate(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
     u = (i + w // 2) % w - w // 2 + di
     v = (j + h // 2) % h - h // 2 + dj
     return float(u), float(v), float(r[j, i])
+
+
+@lru_cache(maxsize=8)
+def _hanning(h: int, w: int) -> np.ndarray:
+    """Return the (h, w) Hann window that tapers images to their edges before an FFT."""
+    return np.outer(np.hanning(h), np.hanning(w))
 
 
 def _peak_offset(m1: float, m0: float, p1: float) -> float:

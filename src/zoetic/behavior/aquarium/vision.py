@@ -118,14 +118,19 @@ class FishEyes:
         dirs = self.state.directions
         use = np.flatnonzero(locked)
         half = 0.5 * spec.fovs[-1]
-        best, best_off = None, 2.0 * half
-        for j in prey:
-            nodes = world.positions(int(j))[0]
-            to = nodes[None] - eyes[use, None]
-            to /= np.linalg.norm(to, axis=-1, keepdims=True)
-            off = float(np.arccos(np.clip((to * dirs[use, None]).sum(-1), -1, 1)).min())
-            if off < best_off:
-                best, best_off = int(j), off
+        # every prey node's angle off the nearest locked gaze ray, all prey at once
+        off0 = world.offsets
+        nodes = world.node_positions()
+        rows = np.concatenate([np.arange(off0[j], off0[j + 1]) for j in prey])
+        owner = np.repeat(np.arange(len(prey)), [off0[j + 1] - off0[j] for j in prey])
+        to = nodes[rows][None] - eyes[use, None]
+        to /= np.linalg.norm(to, axis=-1, keepdims=True)
+        cos = np.clip((to * dirs[use, None]).sum(-1), -1, 1).max(0)
+        near = np.full(len(prey), -np.inf)
+        np.maximum.at(near, owner, cos)
+        k = int(np.argmax(near))  # the first prey fish nearest a gaze ray
+        off = float(np.arccos(near[k]))
+        best = int(prey[k]) if off < 2.0 * half else None
         if best is None:
             return None
         point, rng = fixation(frame, self.state.angles, spec) if locked.all() else (None, np.inf)
