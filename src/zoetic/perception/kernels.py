@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+BINS = (16, 16, 8)  # colour bins along rg, by, wb (Swain & Ballard's opponent axes)
 GAUSS = np.exp(-0.5 * np.arange(-4, 5) ** 2.0)
 GAUSS /= GAUSS.sum()  # sigma 1 px, truncated at 4 sigma (scipy's gaussian_filter)
 
@@ -214,10 +215,10 @@ def backprojections(bins, models, hist, raw) -> None:
 
 
 @njit(cache=True)
-def colour_bins(pixels, bins: tuple[int, int, int], out) -> None:
+def colour_bins(pixels, out) -> None:
     """Write into out (P,) the colour bin of each RGB pixel (P, 3): rg = R - G,
-    by = 2B - R - G and wb = R + G + B binned ``bins`` ways each (``recognition.bin_index``)."""
-    n_rg, n_by, n_wb = bins
+    by = 2B - R - G and wb = R + G + B binned ``BINS`` ways each (``recognition.bin_index``)."""
+    n_rg, n_by, n_wb = BINS
     for p in range(pixels.shape[0]):
         r, g, b = int(pixels[p, 0]), int(pixels[p, 1]), int(pixels[p, 2])
         rg = (r - g + 255) * n_rg // 511

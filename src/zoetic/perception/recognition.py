@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from zoetic.perception.kernels import (
+    BINS,
     backprojections,
     colour_bins,
     disk_smooth,
@@ -21,7 +22,6 @@ from zoetic.perception.kernels import (
     peaks,
 )
 
-BINS = (16, 16, 8)
 N_BINS = BINS[0] * BINS[1] * BINS[2]
 
 
@@ -36,7 +36,7 @@ def bin_index(image: np.ndarray) -> np.ndarray:
         wb = (r + g + b) * BINS[2] // 766
         return (rg * BINS[1] + by) * BINS[2] + wb
     out = np.empty(c.shape[:-1], np.int64)
-    colour_bins(np.ascontiguousarray(c).reshape(-1, 3), BINS, out.reshape(-1))
+    colour_bins(np.ascontiguousarray(c).reshape(-1, 3), out.reshape(-1))
     return out
 
 
@@ -144,18 +144,26 @@ TARGET_RADIUS = 2  # px: the disk smoothing a target image's backprojection
 
 
 def recognise(
-    images: np.ndarray, models: np.ndarray, radius: int = 1, window: int = 8
+    images: np.ndarray,
+    models: np.ndarray,
+    radius: int = 1,
+    window: int = 8,
+    keep: np.ndarray | None = None,
 ) -> Recognition:
     """Return the histograms of K RGB images (K, H, W, 3), where each image's model
     (K, 2048) peaks in it, their grays and target images: ``histogram``, ``locate``,
     ``gray`` and ``gaze.target_image`` of every image, the pixels binned, counted,
     backprojected and smoothed for all images in one pass (the same numbers image by
-    image)."""
+    image). ``keep`` (K,) bool: the images whose gray and target image are wanted (the
+    others' left zero); default all."""
     idx = bin_index(images)
     hist = np.empty((len(idx), N_BINS))
     raw = np.empty(idx.shape)
     backprojections(idx, np.ascontiguousarray(models, float), hist, raw)
     b = _smooth(raw, radius) if radius > 0 else raw
-    g = gray(images)
-    target = g * _smooth(raw, TARGET_RADIUS)
+    g = np.zeros(raw.shape)
+    target = np.zeros(raw.shape)
+    sel = slice(None) if keep is None else np.asarray(keep, bool)
+    g[sel] = gray(images[sel])
+    target[sel] = g[sel] * _smooth(raw[sel], TARGET_RADIUS)
     return Recognition(hist, _peaks(raw, b, window), g, target)

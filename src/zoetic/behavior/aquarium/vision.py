@@ -188,14 +188,17 @@ class TankEyes:
 
 def _recognise(seers: list[FishEyes], images: list[np.ndarray]) -> list[Recognition]:
     """Return per fish what its prey's colour model finds in each of its images
-    (2, levels, size, size, 3), all fishes' images of one size binned in one pass."""
+    (2, levels, size, size, 3), all fishes' images of one size binned in one pass (the
+    grays and target images of the two finest levels, all ``GazeController`` reads)."""
     out: list = [None] * len(seers)
     for shape in dict.fromkeys(i.shape for i in images):
         idx = [k for k, i in enumerate(images) if i.shape == shape]
         per = shape[0] * shape[1]  # images a fish
         flat = np.concatenate([images[k].reshape(per, *shape[2:]) for k in idx])
         models = np.repeat(np.stack([seers[k].gaze.model for k in idx]), per, 0)
-        found = recognise(flat, models)
+        # the gaze compares the grays and target images of the two finest levels only
+        keep = np.tile(np.arange(shape[1]) >= shape[1] - 2, len(flat) // shape[1])
+        found = recognise(flat, models, keep=keep)
         for n, k in enumerate(idx):
             out[k] = found.part(n * per, (n + 1) * per)
     return out
