@@ -63,7 +63,8 @@ def _gray_levels(images, weights, rows, cols, out) -> None:
 @njit(cache=True)
 def disk_smooth(raw, radius: int, out) -> None:
     """Write into out (K, H, W) the mean of raw (K, H, W) over a disk of ``radius`` px around
-    each pixel, zeros outside the image."""
+    each pixel, zeros outside the image. Each nonzero pixel is spread over its disk (a
+    backprojection is mostly zeros); every sum still runs over its disk row by row."""
     k_n, h, w = raw.shape
     r = radius
     n = 0
@@ -72,22 +73,21 @@ def disk_smooth(raw, radius: int, out) -> None:
             if dx * dx + dy * dy <= r * r:
                 n += 1
     wt = 1.0 / n
-    pad = np.zeros((h + 2 * r, w + 2 * r))
-    acc = np.empty(w)
     for k in range(k_n):
+        o = out[k]
+        o[:, :] = 0.0
         for j in range(h):
             for i in range(w):
-                pad[j + r, i + r] = raw[k, j, i]
+                v = raw[k, j, i]
+                if v == 0.0:
+                    continue
+                for dy in range(max(-r, -j), min(r, h - 1 - j) + 1):
+                    for dx in range(max(-r, -i), min(r, w - 1 - i) + 1):
+                        if dx * dx + dy * dy <= r * r:
+                            o[j + dy, i + dx] += v
         for j in range(h):
-            acc[:] = 0.0
-            for dy in range(-r, r + 1):
-                for dx in range(-r, r + 1):
-                    if dx * dx + dy * dy <= r * r:
-                        src = pad[j + r + dy]
-                        for i in range(w):
-                            acc[i] += src[i + r + dx]
             for i in range(w):
-                out[k, j, i] = acc[i] * wt
+                o[j, i] *= wt
 
 
 @njit(cache=True)
