@@ -10,9 +10,10 @@ live prey fish the gaze rests on (some node within twice the fovea's half angle 
 ray), at the range the eyes triangulate (or, with one eye locked, along that eye's ray at the
 distance of the fish's nearest node to it), and placed at the point the gaze fixates: the
 brain hunts what it sees, where it sees it. Everything else it perceives stays the oracle's.
-``TankEyes`` makes all the seeing fishes' retinas at once: one mesh and one rasteriser call
-for every eye, one recognition pass over every image (the same images and numbers as each
-fish's eyes alone, ``FishEyes.see``).
+``TankEyes`` makes all the seeing fishes' retinas at once: one mesh, one rasteriser call and
+one recognition pass for the two finest levels of every eye, and one more for the coarser
+levels of the fishes whose fine levels miss their prey (the same images and numbers as each
+fish's eyes alone, ``FishEyes.see``, wherever the gaze looks).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from zoetic.bodies import Body
 from zoetic.perception.eyes import EyeSpec, HeadFrame, eye_cameras, head_frame
 from zoetic.perception.gaze import GazeController, GazeState, fixation
 from zoetic.perception.pursuit import FOG, Scenery, learn_model
-from zoetic.perception.recognition import Recognition, recognise
+from zoetic.perception.recognition import N_BINS, Recognition, recognise
 from zoetic.physics.world import World
 from zoetic.render import Cameras, render
 from zoetic.render.scene import Mesh
@@ -154,8 +155,8 @@ def render_eyes(mesh: Mesh, cams: Cameras, spec: EyeSpec) -> np.ndarray:
 @dataclass
 class TankEyes:
     """The eyes of every seeing fish of a tank, rendered together once a brain period: the
-    world's triangles built once (``scenery``), all fishes' cameras drawn in one rasteriser
-    call (one per eye design, should the seeing species differ)."""
+    world's triangles built once (``scenery``), all fishes' cameras drawn in one or two
+    rasteriser calls (``_look``; per eye design, should the seeing species differ)."""
 
     eyes: list[FishEyes]
     scenery: Scenery
@@ -174,34 +175,67 @@ class TankEyes:
         aims = [e.aim(world) for e in seers]
         mesh = self.scenery.mesh(world)
         images: list = [None] * len(seers)
+        seen: list = [None] * len(seers)
         for spec in dict.fromkeys(e.gaze.spec for e in seers):
             idx = [k for k, e in enumerate(seers) if e.gaze.spec == spec]
-            drawn = render_eyes(mesh, _stack([aims[k][1] for k in idx]), spec)
+            drawn, found = _look(mesh, [seers[k] for k in idx], [aims[k][1] for k in idx], spec)
             for n, k in enumerate(idx):
-                images[k] = drawn[n]
-        seen = _recognise(seers, images)
+                images[k], seen[k] = drawn[n], found[n]
         return {
             e.animal: e.react(world, frame, images[k], c, prey[e.animal], seen[k])
             for k, (e, (frame, c)) in enumerate(zip(seers, aims, strict=True))
         }
 
 
-def _recognise(seers: list[FishEyes], images: list[np.ndarray]) -> list[Recognition]:
-    """Return per fish what its prey's colour model finds in each of its images
-    (2, levels, size, size, 3), all fishes' images of one size binned in one pass (the
-    grays and target images of the two finest levels, all ``GazeController`` reads)."""
-    out: list = [None] * len(seers)
-    for shape in dict.fromkeys(i.shape for i in images):
-        idx = [k for k, i in enumerate(images) if i.shape == shape]
-        per = shape[0] * shape[1]  # images a fish
-        flat = np.concatenate([images[k].reshape(per, *shape[2:]) for k in idx])
-        models = np.repeat(np.stack([seers[k].gaze.model for k in idx]), per, 0)
-        # the gaze compares the grays and target images of the two finest levels only
-        keep = np.tile(np.arange(shape[1]) >= shape[1] - 2, len(flat) // shape[1])
-        found = recognise(flat, models, keep=keep)
-        for n, k in enumerate(idx):
-            out[k] = found.part(n * per, (n + 1) * per)
-    return out
+def _look(
+    mesh: Mesh, seers: list[FishEyes], cams: list[Cameras], spec: EyeSpec
+) -> tuple[np.ndarray, list[Recognition]]:
+    """Return the images (F, 2, levels, size, size, 3) of F fishes' eyes of one design and
+    what each fish's prey model finds in them (``recognise``, per fish its 2 x levels
+    images). The two finest levels of every eye are drawn and recognised first, all fishes
+    in one rasteriser call; the coarser ones only for the fishes with an eye whose fine
+    levels miss the prey, since the gaze looks in a coarser level only then
+    (``GazeController.step``). The others' coarser images stay blank and unrecognised."""
+    n, f, size = spec.levels, len(seers), spec.size
+    images = np.zeros((f, 2, n, size, size, 3), np.uint8)
+    hist = np.zeros((f, 2, n, N_BINS))
+    grays = np.zeros((f, 2, n, size, size))
+    targets = np.zeros((f, 2, n, size, size))
+    dets = np.full((f, 2, n), None, object)
+    every = _stack(cams)
+    models = np.stack([e.gaze.model for e in seers])
+
+    def draw(sel: np.ndarray, compared: bool) -> None:
+        """Draw and recognise the cameras ``sel`` (F, 2, levels) marks; their grays and
+        target images too if ``compared``."""
+        use = np.flatnonzero(sel)
+        sub = Cameras(every.eye[use], every.rotation[use], every.fov[use], every.size)
+        img = render(mesh.vertices, mesh.triangles, mesh.colors, sub, FOG, spec.visibility)
+        keep = None if compared else np.zeros(len(img), bool)
+        found = recognise(img, models[use // (2 * n)], keep=keep)
+        images[sel], hist[sel] = img, found.histograms
+        grays[sel], targets[sel] = found.grays, found.targets
+        listed = np.empty(len(use), object)
+        listed[:] = found.detections
+        dets[sel] = listed
+
+    fine = np.broadcast_to(np.arange(n) >= n - 2, (f, 2, n))
+    draw(fine, True)
+    thresholds = np.array([e.gaze.threshold for e in seers])[:, None, None]
+    strength = np.array([[[d.strength if d else 0.0 for d in lev] for lev in eye] for eye in dets])
+    missed = ~((strength >= thresholds) & fine).any(2).all(1)  # a fish with an eye that misses
+    if missed.any() and n > 2:
+        draw(~fine & missed[:, None, None], False)
+    found = [
+        Recognition(
+            hist[k].reshape(2 * n, N_BINS),
+            list(dets[k].ravel()),
+            grays[k].reshape(2 * n, size, size),
+            targets[k].reshape(2 * n, size, size),
+        )
+        for k in range(f)
+    ]
+    return images, found
 
 
 def _stack(cams: list[Cameras]) -> Cameras:
