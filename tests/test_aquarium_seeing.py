@@ -10,7 +10,7 @@ import pytest
 
 from zoetic.behavior.aquarium import tank as tk
 from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live
-from zoetic.behavior.aquarium.vision import FishEyes, TankEyes, _stack, render_eyes
+from zoetic.behavior.aquarium.vision import FishEyes, TankEyes, _look, _stack, render_eyes
 from zoetic.cli import main
 from zoetic.cli.aquarium import seeing_count
 from zoetic.errors import SimulationError, ZoeticError
@@ -99,6 +99,31 @@ def test_recognising_a_batch_gives_each_images_histogram_and_detection():
         assert got.detections[k] == locate(img, models[k])
         assert np.array_equal(got.grays[k], _gray(img))
         assert np.array_equal(got.targets[k], target_image(img, models[k]))
+
+
+def test_the_coarse_levels_are_drawn_only_for_a_fish_whose_fine_levels_miss_its_prey():
+    tank = _tank()
+    eyes = tk._eyes(tank)
+    world = tank.world
+    eyes.eyes[1].state.angles[:, 1] = np.radians(40.0)  # the middle shark looks up, away
+    aims = [e.aim(world) for e in eyes.eyes]
+    mesh = eyes.scenery.mesh(world)
+    spec = eyes.eyes[0].gaze.spec
+    n, s = spec.levels, spec.size
+    images, found = _look(mesh, eyes.eyes, [c for _, c in aims], spec)
+    full = render_eyes(mesh, _stack([c for _, c in aims]), spec)
+    assert np.array_equal(images[:, :, n - 2 :], full[:, :, n - 2 :])
+    assert np.array_equal(images[1], full[1])  # its minnow only in its periphery: all drawn
+    assert not images[[0, 2], :, : n - 2].any()  # the others see theirs in the fine levels
+    models = np.repeat(np.stack([e.gaze.model for e in eyes.eyes]), 2 * n, 0)
+    whole = recognise(full.reshape(-1, s, s, 3), models)
+    for k in range(3):
+        drawn = range(2 * n) if k == 1 else [i for i in range(2 * n) if i % n >= n - 2]
+        for i in drawn:
+            assert found[k].detections[i] == whole.detections[2 * n * k + i]
+            assert np.array_equal(found[k].histograms[i], whole.histograms[2 * n * k + i])
+    strength = [d.strength for d in found[1].detections]
+    assert max(strength[: n - 2]) >= eyes.eyes[1].gaze.threshold > max(strength[n - 2 : n])
 
 
 def test_batched_eyes_see_and_move_as_each_fishs_eyes_alone():
