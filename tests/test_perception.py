@@ -198,6 +198,28 @@ def test_matching_a_point_finds_it_in_the_other_image_to_a_fraction_of_a_pixel()
     assert near[:2] == pytest.approx((col, row))
 
 
+def test_the_whole_image_correlation_by_fft_scores_every_square_as_one_by_one():
+    from scipy.ndimage import gaussian_filter
+
+    from zoetic.perception.gaze import ncc_everywhere
+    from zoetic.perception.kernels import ncc_scores
+
+    rng = np.random.default_rng(4)
+    img = gaussian_filter(rng.random((64, 64)), 1.0)
+    img[:, :20] = 0.0  # no target there: all-zero squares
+    img[40:, 30:] = 0.3  # a flat patch
+    pb = np.pad(img, 8)
+    tpl = pb[30:47, 25:42] - pb[30:47, 25:42].mean()
+    tn = float(np.sqrt((tpl * tpl).sum()))
+    one = np.empty((64, 64))
+    ncc_scores(tpl, tn, pb, 0, 64, 0, 64, one)
+    every = ncc_everywhere(tpl, tn, pb)
+    assert (one == -1.0).sum() > 300  # the flat squares are there
+    assert np.array_equal(every == -1.0, one == -1.0)
+    assert np.abs(every - one).max() < 1e-9
+    assert np.unravel_index(np.argmax(every), every.shape) == (30, 25)  # the template's own
+
+
 def _prey_range_error(dist: float, yaw: float, bearing: float, frames: int = 6) -> float:
     """Return the relative error of the range two eyes at FRAME triangulate to a prey shark
     whose centre of mass lies ``dist`` m from them at ``bearing`` rad, turned ``yaw`` rad,

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
+from scipy.signal import fftconvolve
 
 from zoetic.perception.eyes import (
     LEFT,
@@ -25,7 +26,7 @@ from zoetic.perception.eyes import (
     gaze_direction,
     pixel_direction,
 )
-from zoetic.perception.kernels import flow_shift, ncc_scores
+from zoetic.perception.kernels import box_sums, flow_shift, ncc_scores
 from zoetic.perception.recognition import (
     TARGET_RADIUS,
     Recognition,
@@ -153,10 +154,13 @@ def match(
         cols = slice(max(ni - radius, 0), max(min(ni + radius + 1, w), 0))
     if tn < 1e-9 or rows.stop <= rows.start or cols.stop <= cols.start:
         return col, row, 0.0
-    score = np.empty((rows.stop - rows.start, cols.stop - cols.start))
-    ncc_scores(
-        np.ascontiguousarray(tpl), tn, pb, rows.start, rows.stop, cols.start, cols.stop, score
-    )
+    if near is None:
+        score = ncc_everywhere(np.ascontiguousarray(tpl), tn, pb)
+    else:
+        score = np.empty((rows.stop - rows.start, cols.stop - cols.start))
+        ncc_scores(
+            np.ascontiguousarray(tpl), tn, pb, rows.start, rows.stop, cols.start, cols.stop, score
+        )
     y, x = np.unravel_index(int(np.argmax(score)), score.shape)
     dy = (
         _peak_offset(score[y - 1, x], score[y, x], score[y + 1, x])
@@ -174,6 +178,25 @@ def match(
         float(rows.start + y + dy + (row - j)),
         float(score[y, x]),
     )
+
+
+def ncc_everywhere(tpl: np.ndarray, tn: float, pb: np.ndarray) -> np.ndarray:
+    """Return the normalised cross-correlation (H - k + 1, W - k + 1) of the template ``tpl``
+    (k, k; less its mean, ``tn`` its norm) with every k x k square of ``pb`` (H, W) less its
+    mean, as ``kernels.ncc_scores`` gives it square by square: the products summed for all
+    squares at once by FFT, each square's mean and spread from its sums; -1 where a square
+    is flat (its spread under 1e-12 of its energy: all zeros, or one value to rounding)."""
+    k = tpl.shape[0]
+    n = k * k
+    s1 = np.empty((pb.shape[0] - k + 1, pb.shape[1] - k + 1))
+    s2 = np.empty_like(s1)
+    box_sums(pb, k, s1, s2)
+    mean = s1 / n
+    num = fftconvolve(pb, tpl[::-1, ::-1], mode="valid") - mean * tpl.sum()
+    spread = s2 - s1 * mean
+    norm = np.sqrt(np.maximum(spread, 0.0)) * tn
+    flat = (spread <= 1e-12 * s2) | (norm <= 1e-9)
+    return np.where(flat, -1.0, num / np.where(flat, 1.0, norm))
 
 
 def target_image(image: np.ndarray, model: np.ndarray) -> np.ndarray:

@@ -225,3 +225,27 @@ def colour_bins(pixels, out) -> None:
         by = (2 * b - r - g + 510) * n_by // 1021
         wb = (r + g + b) * n_wb // 766
         out[p] = (rg * n_by + by) * n_wb + wb
+
+
+@njit(cache=True)
+def box_sums(x, k: int, s1, s2) -> None:
+    """Write into s1 and s2 (H - k + 1, W - k + 1) the sums of x (H, W) and of its squares
+    over each k x k square (cornered at the index), added up square by square, rows first."""
+    h, w = x.shape
+    rows1 = np.zeros((h, w - k + 1))
+    rows2 = np.zeros((h, w - k + 1))
+    for j in range(h):
+        for i in range(w - k + 1):
+            a = b = 0.0
+            for d in range(k):
+                v = x[j, i + d]
+                a += v
+                b += v * v
+            rows1[j, i], rows2[j, i] = a, b
+    for j in range(h - k + 1):
+        for i in range(w - k + 1):
+            a = b = 0.0
+            for d in range(k):
+                a += rows1[j + d, i]
+                b += rows2[j + d, i]
+            s1[j, i], s2[j, i] = a, b
