@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
+from scipy import fft as sfft
 from scipy.signal import fftconvolve
 
 from zoetic.perception.eyes import (
@@ -98,10 +99,10 @@ def correlate(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
     ga = _gray(a) if a.ndim == 3 else np.asarray(a, float)
     gb = _gray(b) if b.ndim == 3 else np.asarray(b, float)
     win = _hanning(*ga.shape)
-    fa = np.fft.rfft2((ga - ga.mean()) * win)
-    fb = np.fft.rfft2((gb - gb.mean()) * win)
+    fa = sfft.rfft2((ga - ga.mean()) * win)
+    fb = sfft.rfft2((gb - gb.mean()) * win)
     cross = fb * np.conj(fa)
-    r = np.fft.irfft2(cross / (np.abs(cross) + 1e-12), ga.shape)
+    r = sfft.irfft2(cross / (np.abs(cross) + 1e-12), ga.shape)
     j, i = np.unravel_index(int(np.argmax(r)), r.shape)
     h, w = r.shape
     di = _peak_offset(r[j, i - 1], r[j, i], r[j, (i + 1) % w])
