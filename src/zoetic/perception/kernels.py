@@ -33,61 +33,73 @@ def gray_levels(images, out) -> None:
 
 @njit(cache=True)
 def _gray_levels(images, weights, rows, cols, out) -> None:
-    k_n, h, w = out.shape
+    g = np.empty(out.shape[1:])
+    t = np.empty(out.shape[1:])
+    p = np.empty(out.shape[2] + len(weights) - 1)
+    for k in range(out.shape[0]):
+        _gray_one(images[k], weights, rows, cols, g, t, p, out[k])
+
+
+@njit(cache=True)
+def _gray_one(image, weights, rows, cols, g, t, p, out) -> None:
+    """Write into out (H, W) the gray of one RGB image (``gray_levels``); g, t (H, W) and
+    p (W + taps - 1) are scratch."""
+    h, w = out.shape
     r = len(weights) // 2
-    g = np.empty((h, w))
-    t = np.empty((h, w))
-    p = np.empty(w + 2 * r)
-    for k in range(k_n):
-        for j in range(h):
+    for j in range(h):
+        for i in range(w):
+            c = image[j, i]
+            g[j, i] = (float(c[0]) + float(c[1]) + float(c[2])) / (3.0 * 255.0)
+    t[:] = 0.0
+    for j in range(h):
+        for d in range(2 * r + 1):
+            jj = rows[j + d]
+            wd = weights[d]
             for i in range(w):
-                c = images[k, j, i]
-                g[j, i] = (float(c[0]) + float(c[1]) + float(c[2])) / (3.0 * 255.0)
-        t[:] = 0.0
-        for j in range(h):
+                t[j, i] += wd * g[jj, i]
+    for j in range(h):
+        for i in range(w + 2 * r):
+            p[i] = t[j, cols[i]]
+        for i in range(w):
+            acc = 0.0
             for d in range(2 * r + 1):
-                jj = rows[j + d]
-                wd = weights[d]
-                for i in range(w):
-                    t[j, i] += wd * g[jj, i]
-        for j in range(h):
-            for i in range(w + 2 * r):
-                p[i] = t[j, cols[i]]
-            for i in range(w):
-                s = 0.0
-                for d in range(2 * r + 1):
-                    s += weights[d] * p[i + d]
-                out[k, j, i] = s
+                acc += weights[d] * p[i + d]
+            out[j, i] = acc
 
 
 @njit(cache=True)
 def disk_smooth(raw, radius: int, out) -> None:
     """Write into out (K, H, W) the mean of raw (K, H, W) over a disk of ``radius`` px around
-    each pixel, zeros outside the image. Each nonzero pixel is spread over its disk (a
-    backprojection is mostly zeros); every sum still runs over its disk row by row."""
-    k_n, h, w = raw.shape
-    r = radius
+    each pixel, zeros outside the image."""
+    for k in range(raw.shape[0]):
+        _disk_one(raw[k], radius, out[k])
+
+
+@njit(cache=True)
+def _disk_one(raw, r: int, o) -> None:
+    """Write into o (H, W) the mean of raw (H, W) over a disk of r px around each pixel
+    (zeros outside). Each nonzero pixel is spread over its disk (a backprojection is mostly
+    zeros); every sum still runs over its disk row by row."""
+    h, w = raw.shape
     n = 0
     for dy in range(-r, r + 1):
         for dx in range(-r, r + 1):
             if dx * dx + dy * dy <= r * r:
                 n += 1
     wt = 1.0 / n
-    for k in range(k_n):
-        o = out[k]
-        o[:, :] = 0.0
-        for j in range(h):
-            for i in range(w):
-                v = raw[k, j, i]
-                if v == 0.0:
-                    continue
-                for dy in range(max(-r, -j), min(r, h - 1 - j) + 1):
-                    for dx in range(max(-r, -i), min(r, w - 1 - i) + 1):
-                        if dx * dx + dy * dy <= r * r:
-                            o[j + dy, i + dx] += v
-        for j in range(h):
-            for i in range(w):
-                o[j, i] *= wt
+    o[:, :] = 0.0
+    for j in range(h):
+        for i in range(w):
+            v = raw[j, i]
+            if v == 0.0:
+                continue
+            for dy in range(max(-r, -j), min(r, h - 1 - j) + 1):
+                for dx in range(max(-r, -i), min(r, w - 1 - i) + 1):
+                    if dx * dx + dy * dy <= r * r:
+                        o[j + dy, i + dx] += v
+    for j in range(h):
+        for i in range(w):
+            o[j, i] *= wt
 
 
 @njit(cache=True)
@@ -95,24 +107,30 @@ def peaks(raw, smooth, window: int, out) -> None:
     """Write into out (K, 4) each image's (col, row, strength, mass): the first maximum of
     ``smooth`` (K, H, W), refined to the centroid of ``raw`` within ``window`` px of it
     (pixel centres at index + 0.5; the peak's own pixel and no mass when raw is empty)."""
-    k_n, h, w = raw.shape
-    for k in range(k_n):
-        best, bj, bi = -np.inf, 0, 0
-        for j in range(h):
-            for i in range(w):
-                if smooth[k, j, i] > best:
-                    best, bj, bi = smooth[k, j, i], j, i
-        m = sx = sy = 0.0
-        for j in range(max(bj - window, 0), min(bj + window + 1, h)):
-            for i in range(max(bi - window, 0), min(bi + window + 1, w)):
-                v = raw[k, j, i]
-                m += v
-                sx += i * v
-                sy += j * v
-        if m <= 0:
-            out[k, 0], out[k, 1], out[k, 2], out[k, 3] = bi + 0.5, bj + 0.5, 0.0, 0.0
-        else:
-            out[k, 0], out[k, 1], out[k, 2], out[k, 3] = sx / m + 0.5, sy / m + 0.5, best, m
+    for k in range(raw.shape[0]):
+        _peak_one(raw[k], smooth[k], window, out[k])
+
+
+@njit(cache=True)
+def _peak_one(raw, smooth, window: int, out) -> None:
+    """Write into out (4,) one image's peak (``peaks``)."""
+    h, w = raw.shape
+    best, bj, bi = -np.inf, 0, 0
+    for j in range(h):
+        for i in range(w):
+            if smooth[j, i] > best:
+                best, bj, bi = smooth[j, i], j, i
+    m = sx = sy = 0.0
+    for j in range(max(bj - window, 0), min(bj + window + 1, h)):
+        for i in range(max(bi - window, 0), min(bi + window + 1, w)):
+            v = raw[j, i]
+            m += v
+            sx += i * v
+            sy += j * v
+    if m <= 0:
+        out[0], out[1], out[2], out[3] = bi + 0.5, bj + 0.5, 0.0, 0.0
+    else:
+        out[0], out[1], out[2], out[3] = sx / m + 0.5, sy / m + 0.5, best, m
 
 
 @njit(cache=True)
@@ -194,24 +212,91 @@ def flow_shift(a, b, iterations: int, margin: int) -> tuple[float, float]:
 
 
 @njit(cache=True)
-def backprojections(bins, models, hist, raw) -> None:
-    """Write into hist (K, B) each image's colour histogram as fractions of its pixels, from
-    the pixels' colour bins (K, H, W), and into raw (K, H, W) each pixel's backprojection
-    min(M_j / I_j, 1) of its bin j under the image's model (K, B)."""
-    k_n, h, w = bins.shape
-    n_b = hist.shape[1]
-    ratio = np.empty(n_b)
+def _backproject_one(bins, model, hist, raw, ratio) -> None:
+    """Write into hist (B,) one image's colour histogram as fractions of its pixels, from
+    its pixels' colour bins (H, W), and into raw (H, W) each pixel's backprojection
+    min(M_j / I_j, 1) of its bin j under the model (B,); ratio (B,) is scratch."""
+    h, w = bins.shape
+    hist[:] = 0.0
+    for j in range(h):
+        for i in range(w):
+            hist[bins[j, i]] += 1.0
+    for b in range(len(hist)):
+        hist[b] /= h * w
+        ratio[b] = min(model[b] / hist[b], 1.0) if hist[b] > 0 else 0.0
+    for j in range(h):
+        for i in range(w):
+            raw[j, i] = ratio[bins[j, i]]
+
+
+def recognise_all(images, models, keep, radius: int, target_radius: int, window: int):
+    """Return what colour indexing finds in K RGB images (K, H, W, 3) uint8 under their
+    models (K, B): histograms (K, B), peaks (K, 4) as ``peaks`` (backprojection smoothed
+    over ``radius`` px), and for the images ``keep`` (K,) marks their grays and target
+    images (K, H, W) (the gray times the backprojection smoothed over ``target_radius``
+    px; zeros for the rest): each image binned, counted, backprojected, smoothed and
+    located in one pass, by the same loops as the separate kernels."""
+    k, h, w = images.shape[:3]
+    hist = np.empty((k, models.shape[1]))
+    found = np.empty((k, 4))
+    grays = np.zeros((k, h, w))
+    targets = np.zeros((k, h, w))
+    r = len(GAUSS) // 2
+    rows, cols = _reflected(h, r), _reflected(w, r)
+    _recognise_all(
+        images,
+        models,
+        keep,
+        radius,
+        target_radius,
+        window,
+        GAUSS,
+        rows,
+        cols,
+        hist,
+        found,
+        grays,
+        targets,
+    )
+    return hist, found, grays, targets
+
+
+@njit(cache=True)
+def _recognise_all(
+    images,
+    models,
+    keep,
+    radius,
+    target_radius,
+    window,
+    weights,
+    rows,
+    cols,
+    hist,
+    found,
+    grays,
+    targets,
+) -> None:
+    k_n, h, w = images.shape[:3]
+    bins = np.empty((h, w), np.int64)
+    raw = np.empty((h, w))
+    smooth = np.empty((h, w))
+    ratio = np.empty(hist.shape[1])
+    g, t, p = np.empty((h, w)), np.empty((h, w)), np.empty(w + len(weights) - 1)
     for k in range(k_n):
-        hist[k, :] = 0.0
-        for j in range(h):
-            for i in range(w):
-                hist[k, bins[k, j, i]] += 1.0
-        for b in range(n_b):
-            hist[k, b] /= h * w
-            ratio[b] = min(models[k, b] / hist[k, b], 1.0) if hist[k, b] > 0 else 0.0
-        for j in range(h):
-            for i in range(w):
-                raw[k, j, i] = ratio[bins[k, j, i]]
+        colour_bins(images[k].reshape(h * w, 3), bins.reshape(h * w))
+        _backproject_one(bins, models[k], hist[k], raw, ratio)
+        if radius > 0:
+            _disk_one(raw, radius, smooth)
+            _peak_one(raw, smooth, window, found[k])
+        else:
+            _peak_one(raw, raw, window, found[k])
+        if keep[k]:
+            _gray_one(images[k], weights, rows, cols, g, t, p, grays[k])
+            _disk_one(raw, target_radius, smooth)
+            for j in range(h):
+                for i in range(w):
+                    targets[k, j, i] = grays[k, j, i] * smooth[j, i]
 
 
 @njit(cache=True)

@@ -15,11 +15,11 @@ import numpy as np
 
 from zoetic.perception.kernels import (
     BINS,
-    backprojections,
     colour_bins,
     disk_smooth,
     gray_levels,
     peaks,
+    recognise_all,
 )
 
 N_BINS = BINS[0] * BINS[1] * BINS[2]
@@ -156,14 +156,10 @@ def recognise(
     backprojected and smoothed for all images in one pass (the same numbers image by
     image). ``keep`` (K,) bool: the images whose gray and target image are wanted (the
     others' left zero); default all."""
-    idx = bin_index(images)
-    hist = np.empty((len(idx), N_BINS))
-    raw = np.empty(idx.shape)
-    backprojections(idx, np.ascontiguousarray(models, float), hist, raw)
-    b = _smooth(raw, radius) if radius > 0 else raw
-    g = np.zeros(raw.shape)
-    target = np.zeros(raw.shape)
-    sel = slice(None) if keep is None else np.asarray(keep, bool)
-    g[sel] = gray(images[sel])
-    target[sel] = g[sel] * _smooth(raw[sel], TARGET_RADIUS)
-    return Recognition(hist, _peaks(raw, b, window), g, target)
+    img = np.ascontiguousarray(images, np.uint8)
+    sel = np.ones(len(img), bool) if keep is None else np.asarray(keep, bool)
+    hist, found, g, target = recognise_all(
+        img, np.ascontiguousarray(models, float), sel, radius, TARGET_RADIUS, window
+    )
+    dets = [Detection(*(float(x) for x in row)) for row in found.tolist()]
+    return Recognition(hist, dets, g, target)
