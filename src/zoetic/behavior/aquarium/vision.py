@@ -202,6 +202,7 @@ def _look(
     grays = np.zeros((f, 2, n, size, size))
     targets = np.zeros((f, 2, n, size, size))
     dets = np.full((f, 2, n), None, object)
+    strength = np.zeros((f, 2, n))
     every = _stack(cams)
     models = np.stack([e.gaze.model for e in seers])
 
@@ -218,11 +219,11 @@ def _look(
         listed = np.empty(len(use), object)
         listed[:] = found.detections
         dets[sel] = listed
+        strength[sel] = [d.strength for d in found.detections]
 
     fine = np.broadcast_to(np.arange(n) >= n - 2, (f, 2, n))
     draw(fine, True)
     thresholds = np.array([e.gaze.threshold for e in seers])[:, None, None]
-    strength = np.array([[[d.strength if d else 0.0 for d in lev] for lev in eye] for eye in dets])
     missed = ~((strength >= thresholds) & fine).any(2).all(1)  # a fish with an eye that misses
     if missed.any() and n > 2:
         draw(~fine & missed[:, None, None], False)
