@@ -123,12 +123,11 @@ class FishEyes:
         off0 = world.offsets
         nodes = world.node_positions()
         rows = np.concatenate([np.arange(off0[j], off0[j + 1]) for j in prey])
-        owner = np.repeat(np.arange(len(prey)), [off0[j + 1] - off0[j] for j in prey])
+        starts = np.cumsum([0] + [off0[j + 1] - off0[j] for j in prey[:-1]])
         to = nodes[rows][None] - eyes[use, None]
-        to /= np.linalg.norm(to, axis=-1, keepdims=True)
+        to /= np.sqrt((to * to).sum(-1))[..., None]
         cos = np.clip((to * dirs[use, None]).sum(-1), -1, 1).max(0)
-        near = np.full(len(prey), -np.inf)
-        np.maximum.at(near, owner, cos)
+        near = np.maximum.reduceat(cos, starts)
         k = int(np.argmax(near))  # the first prey fish nearest a gaze ray
         off = float(np.arccos(near[k]))
         best = int(prey[k]) if off < 2.0 * half else None
