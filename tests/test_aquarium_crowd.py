@@ -148,27 +148,38 @@ def test_concessions_over_the_perceiving_pairs_are_the_definitions():
     assert not conceded(nose, fwd, food, np.zeros(n, bool), seen).any()
 
 
-def test_the_focusers_nearest_way_skips_only_particles_that_cannot_be_nearest():
-    from zoetic.behavior.aquarium.routines import Me, reach_cost
-    from zoetic.behavior.mind import focus
+def test_every_fishs_ways_to_its_food_at_once_are_each_fishs_own():
+    from zoetic.behavior.aquarium.reach import reach_costs, turn_paths
 
     rng = np.random.default_rng(4)
-    skipped = 0
-    for _ in range(200):
-        nose, com, fwd, vel = (x[0] for x in _crowd(rng, 1, 1.0))
-        me = Me(com, nose, fwd, vel, 0.25, 0.43, float(rng.uniform(0.5, 2.5)))
-        food = rng.uniform(-6, 6, (25, 3))
-        dist = np.where(rng.random(25) < 0.7, 1.0, np.inf)
-        keep = int(rng.integers(0, 25))
-        every = reach_cost(me, food, dist)
-        some = reach_cost(me, food, dist, nearest=True, keep=keep)
-        done = np.isfinite(some)
-        skipped += int((np.isfinite(every) & ~done).sum())
-        assert (some[done] == every[done]).all()  # the ways it takes are the ways
-        assert every[~done].min(initial=np.inf) > every.min()  # those it skips are longer
-        assert focus(some, keep) == focus(every, keep)
-        assert done[keep] == np.isfinite(every[keep])  # the previous target is weighed
-    assert skipped > 1000  # most particles are skipped
+    n = 60
+    nose, _, fwd, _ = _crowd(rng, n, 6.0)
+    fwd[0] = (0.0, 1.0, 0.0)  # straight up: no horizontal heading
+    radius = rng.uniform(0.5, 2.5, n)
+    food = rng.uniform(-6, 6, (25, 3))
+    dist = np.where(rng.random((n, 25)) < 0.7, 1.0, np.inf)
+    costs = reach_costs(nose, fwd, radius, food, dist)
+    assert np.isfinite(costs).sum() > 500
+    for i in range(n):
+        own = turn_paths(nose[i], fwd[i], radius[i], food).min(axis=0)
+        seen = np.isfinite(dist[i])
+        assert (costs[i, seen] == own[seen]).all()  # the same numbers, bit for bit
+        assert (costs[i, ~seen] == np.inf).all()
+
+
+def test_every_minds_focus_at_once_is_each_minds_own():
+    from zoetic.behavior.mind import focus, focus_many
+
+    rng = np.random.default_rng(5)
+    d = np.where(rng.random((300, 8)) < 0.5, rng.uniform(1.0, 3.0, (300, 8)), np.inf)
+    d[:20] = np.inf  # none perceived
+    previous = rng.integers(-1, 9, 300)  # -1 none, 8 out of range
+    many = focus_many(d, previous)
+    own = [focus(row, None if p < 0 else int(p)) for row, p in zip(d, previous, strict=True)]
+    assert many.tolist() == [-1 if t is None else t for t in own]
+    kept = (previous >= 0) & (previous < 8) & (many == previous)
+    assert kept.sum() > 30 and (many[20:] != d[20:].argmin(axis=1)).sum() > 10  # kept some
+    assert (many[:20] == -1).all()
 
 
 def test_every_fishs_probes_at_once_are_each_fishs_own():

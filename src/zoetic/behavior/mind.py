@@ -210,19 +210,30 @@ def persist(previous: str, since: float, candidate: str, t: float, persistence: 
 def focus(distances, previous: int | None = None, keep_within: float = 1.25) -> int | None:
     """Return the index of the target to attend to among candidates at ``distances`` (inf:
     not perceived): the nearest, but the previous target is kept while it is perceived and
-    no more than ``keep_within`` times farther than the nearest (no dithering)."""
-    d = np.asarray(distances, dtype=float).reshape(-1)
-    if d.size == 0:
-        return None
-    best = int(d.argmin())
-    near = float(d[best])
-    if not math.isfinite(near):  # none perceived (the nearest is at infinity)
-        return None
-    if previous is not None and 0 <= previous < d.size:
-        x = float(d[previous])
-        if math.isfinite(x) and x <= keep_within * near:
-            return previous
-    return best
+    no more than ``keep_within`` times farther than the nearest (no dithering); None when
+    none is perceived (``focus_many`` for one mind)."""
+    d = np.asarray(distances, dtype=float).reshape(1, -1)
+    k = int(focus_many(d, np.array([-1 if previous is None else previous]), keep_within)[0])
+    return None if k < 0 else k
+
+
+def focus_many(distances, previous, keep_within: float = 1.25) -> np.ndarray:
+    """Return (n,) the targets the focusers of n minds attend to (-1: none), each row of
+    ``distances`` (n, M) one mind's candidates (inf: not perceived) and ``previous`` (n,) its
+    previous target (-1: none): the nearest, but the previous target kept while it is
+    perceived and no more than ``keep_within`` times farther than the nearest."""
+    d = np.asarray(distances, dtype=float)
+    n, m = d.shape
+    if m == 0:
+        return np.full(n, -1)
+    rows = np.arange(n)
+    best = d.argmin(axis=1)
+    near = d[rows, best]
+    prev = np.asarray(previous, int)
+    valid = (prev >= 0) & (prev < m)
+    x = d[rows, np.where(valid, prev, 0)]
+    keep = valid & np.isfinite(x) & (x <= keep_within * near)
+    return np.where(np.isfinite(near), np.where(keep, prev, best), -1)
 
 
 def think(

@@ -20,6 +20,7 @@ from zoetic.behavior.aquarium.locomotion import (
     MotorLocomotion,
     learned_motor,
 )
+from zoetic.behavior.aquarium.reach import reach_costs
 from zoetic.behavior.aquarium.routines import (
     Around,
     Me,
@@ -28,7 +29,6 @@ from zoetic.behavior.aquarium.routines import (
     go_to,
     keep_depth,
     leave,
-    reach_cost,
     school,
     wander,
 )
@@ -39,7 +39,7 @@ from zoetic.behavior.mind import (
     Situation,
     ate,
     drives,
-    focus,
+    focus_many,
     initial_mind,
     think,
 )
@@ -183,48 +183,47 @@ class FishBrain:
         d: Drives | None = None,
     ) -> Demand | None:
         """Return the motor demand for the period from the fish's percept (None: dead).
-        ``sit`` and ``d``: the situation and drives when already computed for all the fishes
-        at once (``situations``, ``mind.drives_many``); by default from the percept."""
+        ``sit`` and ``d``: the situation and drives when already computed (``situations``,
+        ``mind.drives_many``); by default from the percept. A tank's ``Shoal`` takes the same
+        steps for all its fishes at once: ``think``, ``focus_targets``, ``respond``."""
         if not self.alive:
             return None
         v: View = observation["view"]
-        sp = self.species
-        if sit is None:
-            sit = self._situation(v)
-        self.mind, drives = think(
-            self.mind, period.t0, self.constants, sp.habits, sit, sp.predator, d
+        drives = self.think(period.t0, self._situation(v) if sit is None else sit, d)
+        me, masks = v.me, self.kinds(v.fish_species)
+        (target,) = focus_targets(
+            [self.mind.intention],
+            [self.mind.target],
+            me.nose[None],
+            me.forward[None],
+            np.array([me.radius]),
+            v.food,
+            v.food_distance[None],
+            None if v.conceded is None else v.conceded[None],
+            v.fish_distance[None],
+            masks[0][None],
+            masks[2][None],
         )
+        return self.respond(v, target, drives)
+
+    def think(self, t: float, sit: Situation, d: Drives | None = None) -> Drives:
+        """Let the mind choose its intention at time ``t`` s in the situation (drives ``d``
+        when already computed); return the drives."""
+        sp = self.species
+        self.mind, drives = think(self.mind, t, self.constants, sp.habits, sit, sp.predator, d)
+        return drives
+
+    def respond(self, v: View, target: int | None, drives: Drives) -> Demand:
+        """Return the motor demand of the routine that serves the mind's intention, for the
+        target the focuser picked (kept in the mind), and keep the thought."""
+        if target != self.mind.target:
+            self.mind = replace(self.mind, target=target)
         intention = self.mind.intention
-        masks = self.kinds(v.fish_species)
-        target = self._focus(v, intention, masks)
-        around = self._around(v, intention, target, masks)
+        around = self._around(v, intention, target, self.kinds(v.fish_species))
         demand = self._routine(intention, v.me, around)
         demand = keep_depth(v.me, demand, None if around.target is None else around.target[1])
         self.thought = Thought(drives.hunger, drives.libido, drives.fear, intention, target)
         return demand
-
-    def _focus(self, v: View, intention: str, masks: tuple[np.ndarray, ...]) -> int | None:
-        """Return the target the focuser picks for the intention (a food particle, a mate or
-        a prey: its index; None for an intention without one), kept in the mind; masks: the
-        fishes' ``kinds``."""
-        same, _, prey = masks
-        if intention == "eat":
-            d = v.food_distance
-            if v.conceded is not None:
-                free = np.where(v.conceded, np.inf, d)
-                d = free if np.isfinite(free).any() else d  # all conceded: race for one
-            # the focuser takes the nearest by the way, or keeps its previous target
-            candidates = reach_cost(v.me, v.food, d, nearest=True, keep=self.mind.target)
-        elif intention == "mate":
-            candidates = np.where(same, v.fish_distance, np.inf)
-        elif intention == "hunt":
-            candidates = np.where(prey, v.fish_distance, np.inf)
-        else:
-            candidates = None
-        target = None if candidates is None else focus(candidates, self.mind.target)
-        if target != self.mind.target:
-            self.mind = replace(self.mind, target=target)
-        return target
 
     def _around(
         self, v: View, intention: str, target: int | None, masks: tuple[np.ndarray, ...]
@@ -269,6 +268,48 @@ class FishBrain:
         if intention == "leave":
             return leave(me, around)
         return wander(me, around, self.rng)
+
+
+def focus_targets(
+    intentions: list[str],
+    previous: list[int | None],
+    nose: np.ndarray,
+    forward: np.ndarray,
+    radius: np.ndarray,
+    food: np.ndarray,
+    food_distance: np.ndarray,
+    given: np.ndarray | None,
+    fish_distance: np.ndarray,
+    same: np.ndarray,
+    prey: np.ndarray,
+) -> list[int | None]:
+    """Return the target each of n focusers picks for its mind's intention (a food particle,
+    a mate or a prey: its index; None for an intention without one, or none perceived), all
+    at once over arrays (``mind.focus_many``); previous: each mind's target.
+
+    Eat: the particles by the way to them (``reach_costs``), not those left to another
+    (``given`` (n, F), ``conceded``; all conceded: it races for one); mate and hunt: the
+    nearest fish of its species, or of its prey (``same``, ``prey`` (n, M) masks over the
+    perceived fishes' distances ``fish_distance`` (n, M)). nose, forward (n, 3); radius (n,):
+    the fishes' sharpest turns (m); food (F, 3), food_distance (n, F) as perceived."""
+    out: list[int | None] = [None] * len(intentions)
+    prev = np.array([-1 if p is None else p for p in previous], int)
+    for intention in ("eat", "mate", "hunt"):
+        rows = np.array([k for k, x in enumerate(intentions) if x == intention], int)
+        if not len(rows):
+            continue
+        if intention == "eat":
+            d = food_distance[rows]
+            if given is not None:
+                free = np.where(given[rows], np.inf, d)
+                d = np.where(np.isfinite(free).any(axis=1)[:, None], free, d)
+            cand = reach_costs(nose[rows], forward[rows], radius[rows], food, d)
+        else:
+            mask = (same if intention == "mate" else prey)[rows]
+            cand = np.where(mask, fish_distance[rows], np.inf)
+        for k, t in zip(rows.tolist(), focus_many(cand, prev[rows]).tolist(), strict=True):
+            out[k] = None if t < 0 else t
+    return out
 
 
 def situations(

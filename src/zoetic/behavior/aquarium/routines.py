@@ -31,7 +31,6 @@ CENTRE_LINE = 5  # points along another fish's centre line, nose to tail, tested
 THREAT_TIMES = 4  # instants from now to the anticipation horizon at which they are tested
 ROOM_STEP = 0.4  # m between the probes of the room to either side (walls are 0.5 m thick)
 _SIN60 = math.sqrt(3) / 2
-RADIUS_MARGIN = 1.1  # the turning circle a fish plans with, over its calibrated sharpest turn
 # s of travel: an avoiding fish whose nose is nearer than this to an obstacle turns as hard as
 # its motor can (a half turn asked at once), not at its steady steering rate
 URGENT = 1.5
@@ -364,83 +363,6 @@ def leave(me: Me, around: Around) -> Demand:
     if len(around.fish) == 0:
         return Demand(me.cruise, 0.0)
     return steer(me, me.com - around.fish.mean(axis=0), me.cruise)
-
-
-def _frame(me: Me, points: np.ndarray) -> tuple[float, list[float], list[float]]:
-    """Return the planning radius and each point (P, 3) relative to the nose in the fish's
-    horizontal frame: how far ahead, how far to the left (m)."""
-    fx, fz = float(me.forward[0]), float(me.forward[2])
-    n = math.hypot(fx, fz) or 1.0
-    fx, fz = fx / n, fz / n
-    pts = np.atleast_2d(points)
-    dx, dz = pts[:, 0] - me.nose[0], pts[:, 2] - me.nose[2]
-    # elementwise, as Python's floats would: the same numbers
-    return RADIUS_MARGIN * me.radius, (dx * fx + dz * fz).tolist(), (dz * fx - dx * fz).tolist()
-
-
-def _way(x: float, qy: float, r: float) -> float:
-    """Return the length (m) of the way to a point ``x`` m ahead and ``qy`` m beside the centre
-    of a turning circle of radius ``r`` on the fish's side (the fish starts at -pi/2 on it):
-    the arc turned to the tangent through the point, then straight on; inf inside the
-    circle."""
-    rho = math.hypot(x, qy)
-    if rho < r:
-        return math.inf
-    theta = math.atan2(qy, x) - math.acos(min(r / max(rho, 1e-9), 1.0))
-    arc = (theta + math.pi / 2) % (2 * math.pi)
-    return r * arc + math.sqrt(max(rho * rho - r * r, 0.0))
-
-
-def turn_paths(me: Me, points: np.ndarray) -> np.ndarray:
-    """Return the lengths (m) of the shortest ways from the nose to each point (P, 3) in the
-    horizontal plane for a fish that turns no tighter than ``me.radius`` (times
-    ``RADIUS_MARGIN``), as (2, P): a turn to the left, then straight on (row 0), and the same
-    turning right first (row 1). A point inside the left turning circle cannot be reached by a
-    left turn (inf): the fish would circle it."""
-    # a handful of points: plain Python over lists beats numpy's per-call overhead
-    r, ahead, left = _frame(me, points)
-    return np.array(
-        [
-            [_way(x, y - r, r) for x, y in zip(ahead, left, strict=True)],
-            [_way(x, -y - r, r) for x, y in zip(ahead, left, strict=True)],
-        ]
-    )
-
-
-def reach_cost(
-    me: Me,
-    points: np.ndarray,
-    distances: np.ndarray,
-    nearest: bool = False,
-    keep: int | None = None,
-) -> np.ndarray:
-    """Return how far (m) the fish must swim to reach each point (``turn_paths``' shorter
-    way), inf where ``distances`` is (not perceived): what a focuser weighs, so that a
-    particle ahead wins over a nearer one beside the fish that needs a loop.
-
-    nearest: only the points that may be nearest by the way (and ``keep``, the focuser's
-    previous target) get their way; the others are left inf: the points are taken in the
-    order of their straight distance from the nose, which no way is shorter than, until that
-    distance passes the shortest way found (the nearest point and its way are the same)."""
-    d = np.asarray(distances, float)
-    seen = np.flatnonzero(d < np.inf)
-    out = np.full(d.shape, np.inf)
-    if not len(seen):
-        return out
-    if not nearest:
-        out[seen] = turn_paths(me, np.asarray(points, float)[seen]).min(axis=0)
-        return out
-    r, ahead, left = _frame(me, np.asarray(points, float)[seen])
-    straight = np.hypot(ahead, left).tolist()
-    best = math.inf
-    for k in np.argsort(straight, kind="stable").tolist():
-        if straight[k] > best * (1.0 + 1e-9) and seen[k] != keep:
-            continue  # a longer way than the shortest found (the 1e-9: rounding)
-        x, y = ahead[k], left[k]
-        way = min(_way(x, y - r, r), _way(x, -y - r, r))
-        out[seen[k]] = way
-        best = min(best, way)
-    return out
 
 
 def go_to(

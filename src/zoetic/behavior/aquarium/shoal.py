@@ -14,7 +14,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from zoetic.behavior.aquarium.bodystate import FishBodies
-from zoetic.behavior.aquarium.brain import FishBrain, View, conceded, situations
+from zoetic.behavior.aquarium.brain import (
+    FishBrain,
+    View,
+    conceded,
+    focus_targets,
+    situations,
+)
 from zoetic.behavior.aquarium.locomotion import Demand, LearnedLocomotion
 from zoetic.behavior.aquarium.perception import Percepts, obstacle_distance, perceive
 from zoetic.behavior.aquarium.routines import (
@@ -68,6 +74,7 @@ class Shoal:
             np.array([s.habits.crowd for s in species]),
         )
         self.cruise = np.array([b.cruise for b in brains], float)
+        self.radius = np.array([b.radius for b in brains], float)
         self.constants = [
             np.array([getattr(b.constants, k) for b in brains], float)
             for k in ("hunger_rate", "alpha", "libido_rate", "fear_distance")
@@ -89,9 +96,24 @@ class Shoal:
         given = conceded(b.nose, b.fwd, food, eating, sees, np.isfinite(pc.food))
         drives = self._drives(period.t0, predators)
         roll, rate, bend = (x.tolist() for x in self.bodies.posture(world, period.t0))
-        b, obs = self.bodies, {"time": np.array([period.t0])}
-        demands: list[Demand | None] = []
-        for i, brain in enumerate(self.brains):
+        b, living = self.bodies, [i for i, brain in enumerate(self.brains) if brain.alive]
+        thought = {i: self.brains[i].think(period.t0, sits[i], drives[i]) for i in living}
+        minds = [self.brains[i].mind if i in thought else None for i in range(len(self.brains))]
+        targets = focus_targets(
+            ["" if m is None else m.intention for m in minds],
+            [None if m is None else m.target for m in minds],
+            b.nose,
+            b.fwd,
+            self.radius,
+            food,
+            pc.food,
+            given,
+            pc.fish,
+            self.masks[0],
+            self.masks[2],
+        )
+        demands: list[Demand | None] = [None] * len(self.brains)
+        for i in living:
             view = View(
                 me=selves[i],
                 fish_distance=pc.fish[i],
@@ -108,11 +130,9 @@ class Shoal:
                 fish_only=fish_only[i],
                 conceded=given[i],
             )
-            d = brain.decide({**obs, "view": view}, period, sits[i], drives[i])
+            d = self.brains[i].respond(view, targets[i], thought[i])
             # the demand with the body's posture (``Demand(...)``: ``replace`` is slow)
-            demands.append(
-                None if d is None else Demand(d.speed, d.turn, d.pitch, roll[i], rate[i], bend[i])
-            )
+            demands[i] = Demand(d.speed, d.turn, d.pitch, roll[i], rate[i], bend[i])
         return activations(self.brains, demands, period)
 
     def perceive(
