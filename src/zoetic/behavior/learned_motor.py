@@ -19,7 +19,7 @@ from functools import cached_property
 
 import numpy as np
 
-from zoetic.behavior.motor import fin_activation, fin_rows, grid_rates, interp
+from zoetic.behavior.motor import fin_activations, fin_rows, grid_rates, interp
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.bodies import Body
 from zoetic.control.abstract import AbstractController
@@ -237,7 +237,40 @@ class LearnedMotor:
 
     def _swim_raw(self, times: np.ndarray, a: float) -> np.ndarray:
         """The swim gait of weight ``a`` (do-nothing blended with go-straight), unclipped."""
-        return (1 - a) * self._raw(self.bases[0], times) + a * self._raw(self.bases[1], times)
+        return self.swim_raws(times, np.array([a], float))[0]
+
+    def swim_raws(self, times: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """Return (D, T, A) the swim gaits of D weights ``a`` (D,) at ``times``, unclipped
+        (each the same numbers as one weight's)."""
+        w = np.asarray(a, float)[:, None, None]
+        return (1 - w) * self._raw(self.bases[0], times) + w * self._raw(self.bases[1], times)
+
+    def steer_raws(self, side: int, times: np.ndarray, u: np.ndarray, w: np.ndarray) -> np.ndarray:
+        """Return (D, T, A): (1 - w) of the swim gaits ``u`` (D, T, A) plus ``w`` (D,) of the
+        steering gait of ``side`` (0 left, 1 right) at ``times``, unclipped."""
+        w = np.asarray(w, float)[:, None, None]
+        return (1 - w) * u + w * self._steer_raw(side, times)[None]
+
+    def fins(self, u: np.ndarray, pitch: np.ndarray, lean: np.ndarray | None = None) -> np.ndarray:
+        """Return activations (D, T, A) from the raw blends ``u`` (D, T, A; changed in place):
+        clipped to [0, 1], the fins of row k at ``pitch[k]`` rad and, where ``lean`` (D,) is
+        given (not nan), the left ones ``lean[k]`` rad more and the right ones less
+        (``righting``)."""
+        pitch = np.asarray(pitch, float)
+        for act, value in self._fin_values(pitch, np.zeros(len(pitch))):
+            u[:, :, act] = value[:, None]
+        np.clip(u, 0.0, 1.0, out=u)
+        if lean is None:
+            return u
+        lean = np.asarray(lean, float)
+        on = ~np.isnan(lean)
+        for act, value in self._fin_values(pitch[on], lean[on]):
+            u[on, :, act] = value[:, None]
+        return u
+
+    def _fin_values(self, pitch: np.ndarray, lean: np.ndarray) -> list[tuple[int, np.ndarray]]:
+        """``fin_activations`` of each row's pitch and lean (D,), per fin actuator."""
+        return fin_activations(self._fin_rows, pitch, lean)
 
     def _raw(self, gait: AbstractController, times: np.ndarray, shift: float = 0.0) -> np.ndarray:
         """Return ``gait.raw(times + shift)`` (read-only), evaluated once for the same times:
@@ -266,19 +299,11 @@ class LearnedMotor:
         return self._fins(u, pitch)
 
     def _fins(self, u: np.ndarray, pitch: float) -> np.ndarray:
-        return np.clip(self.lean(u, pitch, 0.0), 0.0, 1.0)
-
-    def lean(self, u: np.ndarray, pitch: float, lean: float) -> np.ndarray:
-        """Set the fins of activations ``u`` (T, A; changed in place and returned) to
-        ``pitch`` rad, the left ones ``lean`` rad more and the right ones less
-        (``righting``)."""
-        for k, act in fin_activation(self.body, float(pitch), self._fin_rows, lean).items():
-            u[:, k] = act
-        return u
+        return self.fins(u[None], np.array([pitch], float))[0]
 
     @cached_property
     def _fin_rows(self) -> list[tuple[int, float, float, float]]:
-        """``fin_rows(body)``, kept (``_fins`` runs once a fish and control period)."""
+        """``fin_rows(body)``, kept (``fins`` runs once a control period)."""
         return fin_rows(self.body)
 
     def summary(self) -> dict:

@@ -78,6 +78,22 @@ def fin_activation(
     return out
 
 
+def fin_activations(
+    rows: list[tuple[int, float, float, float]], angle: np.ndarray, lean: np.ndarray
+) -> list[tuple[int, np.ndarray]]:
+    """Return ``fin_activation`` for D fishes at once: per fin actuator of ``rows``
+    (``fin_rows``), the activations (D,) that set its fins to ``angle`` (D,) rad, the left
+    fins ``lean`` (D,) rad more and the right ones less (the same numbers as one fish's)."""
+    out = []
+    for act, lo, hi, side in rows:
+        a = angle + side * lean
+        if hi == lo:
+            out.append((act, np.zeros_like(a)))
+        else:
+            out.append((act, np.minimum(np.maximum((a - lo) / (hi - lo), 0.0), 1.0)))
+    return out
+
+
 # The righting reflex: the water model has no restoring roll moment (a fish laid on its side
 # stays there), but the pectoral fins pitched differentially (the left fin ``lean`` rad nose
 # up, the right one ``lean`` nose down) roll a swimming fish, with a moment that grows with

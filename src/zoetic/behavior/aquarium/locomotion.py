@@ -17,7 +17,7 @@ from typing import Protocol
 
 import numpy as np
 
-from zoetic.behavior.learned_motor import LearnedMotor
+from zoetic.behavior.learned_motor import LEARNED_STRENGTH, LearnedMotor
 from zoetic.behavior.motor import righting
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.behavior.wave_motor import WaveMotor
@@ -183,21 +183,17 @@ class LearnedLocomotion:
 
     def activations(self, demand: Demand, times: np.ndarray) -> np.ndarray:
         """Return activations (T, A) for the demand over the control period at ``times`` (s):
-        the gait (``play``), the fins leaning by the righting reflex."""
-        out = self.play(demand, times)
-        if not self.righting:
-            return out
-        return self.motor.lean(out, demand.fin_pitch, righting(demand.roll, demand.roll_rate))
+        the gait (``plan``), the fins leaning by the righting reflex."""
+        return learned_activations([self], [demand], times)[0]
 
-    def play(self, demand: Demand, times: np.ndarray) -> np.ndarray:
-        """Return activations (T, A) of the gait for the demand over the control period at
-        ``times`` (s), fins at the demand's pitch."""
+    def plan(self, demand: Demand, times: np.ndarray) -> Gait:
+        """Return the gait to play for the demand over the control period at ``times`` (s),
+        and keep the turn under way (``learned_activations`` plays it)."""
         t0 = float(times[0])
-        pitch = demand.fin_pitch
         if demand.bend < BEND_GUARD and demand.speed < GUARD_SPEED:  # fold guard: straighten
             if self.turning is not None:
                 self._end_turn(t0)
-            return self.motor.swim_signal(times, self.motor.swim(demand.speed), pitch)
+            return Gait(self.motor.swim(demand.speed))
         if self.turning is not None:
             side, start, duration = self.turning
             other_way = demand.turn < -TURN_MIN if side == 0 else demand.turn > TURN_MIN
@@ -207,23 +203,17 @@ class LearnedLocomotion:
         if self.turning is None and steer and t0 - self.last[1] >= TURN_REST - 1e-9:
             a = self.motor.swim(demand.speed)
             side, w = self.motor.steer(demand.turn / STEER_SECONDS, a)
-            return self.motor.steer_signal(times, a, w, side, pitch)
+            return Gait(a, "steer", side, w)
         if self.turning is None and abs(demand.turn) >= TURN_MIN and not steer:
             side, duration = self.motor.turn(demand.turn)
             if t0 - self.last[1] < TURN_REST - 1e-9:
-                return self.motor.swim_signal(times, self.motor.swim(demand.speed), pitch)
+                return Gait(self.motor.swim(demand.speed))
             duration = min(max(duration, float(times[-1] - t0) + self.body.dt), TURN_BURST)
             self.turning = (side, t0, duration)
         if self.turning is None:
-            return self.motor.swim_signal(times, self.motor.swim(demand.speed), pitch)
+            return Gait(self.motor.swim(demand.speed))
         side, start, duration = self.turning
-        a = self.motor.swim(demand.speed)
-        out = self.motor.turn_signal(times - start, times, side, a, pitch)
-        after = times - start >= duration
-        if after.any():
-            # at the whole period's times (the gaits shared by the fishes of this motor)
-            out[after] = self.motor.swim_signal(times, a, pitch)[after]
-        return out
+        return Gait(self.motor.swim(demand.speed), "turn", side, start=start, duration=duration)
 
     def _end_turn(self, t0: float) -> None:
         """End the turn under way at ``t0`` s (or where it was to end, if earlier): the rest
@@ -232,9 +222,47 @@ class LearnedLocomotion:
         self.turning = None
         self.last = (side, min(t0, start + duration))
 
-    def activations_many(self, demands: list[Demand], times: np.ndarray) -> np.ndarray:
-        """Return activations (D, T, A) for several demands (one fish's state: use one)."""
-        return np.stack([self.activations(d, times) for d in demands])
+
+@dataclass(frozen=True)
+class Gait:
+    """What a learned motor plays for a control period: the swim of weight ``a``, a steer
+    (``w`` of the steering gait of ``side``, 0 left, 1 right) or the sharp turn of ``side``
+    that started at ``start`` s and lasts ``duration`` s (then the swim)."""
+
+    a: float
+    kind: str = "swim"  # "swim", "steer" or "turn"
+    side: int = 0
+    w: float = 0.0
+    start: float = 0.0
+    duration: float = 0.0
+
+
+def learned_activations(
+    fishes: list[LearnedLocomotion], demands: list[Demand], times: np.ndarray
+) -> np.ndarray:
+    """Return activations (D, T, A) of D fishes that share a learned motor for their demands
+    over the control period at ``times`` (s): each fish's gait (``LearnedLocomotion.plan``,
+    which keeps its turn under way), the gaits blended for all at once, the fins at each
+    demand's pitch leaning by the righting reflex."""
+    motor = fishes[0].motor
+    gaits = [f.plan(d, times) for f, d in zip(fishes, demands, strict=True)]
+    swim = motor.swim_raws(times, np.array([g.a for g in gaits], float))
+    u = swim.copy()
+    for side in (0, 1):
+        rows = [k for k, g in enumerate(gaits) if g.kind == "steer" and g.side == side]
+        if rows:
+            u[rows] = motor.steer_raws(side, times, swim[rows], [gaits[k].w for k in rows])
+    for k, g in enumerate(gaits):
+        if g.kind == "turn":
+            u[k] = LEARNED_STRENGTH * motor.bases[2 + g.side].raw(times - g.start)
+            u[k] += (1 - LEARNED_STRENGTH) * swim[k]
+            after = times - g.start >= g.duration
+            u[k, after] = swim[k, after]  # the swim once the turn is over
+    lean = [
+        righting(d.roll, d.roll_rate) if f.righting else np.nan
+        for f, d in zip(fishes, demands, strict=True)
+    ]
+    return motor.fins(u, [d.fin_pitch for d in demands], np.array(lean, float))
 
 
 _LEARNED_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # body -> {dir: motor}

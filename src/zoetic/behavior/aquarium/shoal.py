@@ -21,7 +21,7 @@ from zoetic.behavior.aquarium.brain import (
     focus_targets,
     situations,
 )
-from zoetic.behavior.aquarium.locomotion import Demand, LearnedLocomotion
+from zoetic.behavior.aquarium.locomotion import Demand, LearnedLocomotion, learned_activations
 from zoetic.behavior.aquarium.perception import Percepts, obstacle_distance, perceive
 from zoetic.behavior.aquarium.routines import (
     CLEARANCE,
@@ -252,21 +252,23 @@ def activations(
     brains: list[FishBrain], demands: list[Demand | None], period: Period
 ) -> list[np.ndarray]:
     """Return each fish's activations (1, T, A) for its demand (zeros when dead): fishes that
-    share a motor (body and wave frequency) in one batched call."""
+    share a motor (body and wave frequency, or body and learned repertoire) in one batched
+    call (each learned fish with its own turn under way)."""
     rows: list[np.ndarray] = [np.empty(0)] * len(brains)
     groups: dict[int, list[int]] = {}
     times = period.times
     for i, (b, d) in enumerate(zip(brains, demands, strict=True)):
         if d is None:
             rows[i] = np.zeros((1, period.steps, b.body.n_actuators))
-        elif isinstance(b.locomotion, LearnedLocomotion):
-            # each fish its own turn under way; the gaits evaluated once for the fishes of a
-            # motor (``LearnedMotor._raw``)
-            rows[i] = b.locomotion.activations(d, times)[None]
         else:
             groups.setdefault(id(b.locomotion.motor), []).append(i)
     for idx in groups.values():
-        acts = brains[idx[0]].locomotion.activations_many([demands[i] for i in idx], times)
+        first = brains[idx[0]].locomotion
+        if isinstance(first, LearnedLocomotion):
+            fishes = [brains[i].locomotion for i in idx]
+            acts = learned_activations(fishes, [demands[i] for i in idx], times)
+        else:
+            acts = first.activations_many([demands[i] for i in idx], times)
         for k, i in enumerate(idx):
             rows[i] = acts[k : k + 1]
     return rows
