@@ -165,18 +165,36 @@ def probes_ahead_many(
 def side_room(me: Me, kind, center, size, reach: float) -> tuple[float, float]:
     """Return the room (m, the nearest obstacle surface) along rays 60 degrees to the left and
     to the right of the heading, probed every ``ROOM_STEP`` m or closer out to ``reach``
-    (close enough that a 0.5 m thick wall is never stepped over)."""
-    f = _unit(_flat(me.forward))
-    fx, fz = float(f[0]), float(f[2])
-    k = max(2, math.ceil((reach - 0.3) / ROOM_STEP) + 1)
-    along = np.linspace(0.3, max(reach, 0.3), k)
-    pts = np.empty((2, k, 3))
-    pts[:, :, 1] = me.nose[1]
+    (close enough that a 0.5 m thick wall is never stepped over): ``side_rooms`` of one fish."""
+    left, right = side_rooms(
+        me.nose[None], me.forward[None], np.array([reach]), kind, center, size
+    )[0]
+    return float(left), float(right)
+
+
+def side_rooms(
+    nose: np.ndarray, forward: np.ndarray, reach: np.ndarray, kind, center, size
+) -> np.ndarray:
+    """Return (n, 2) the room (m) to the left and to the right of each of n fishes (nose,
+    forward (n, 3)) out to its ``reach`` (n,) m: ``side_room`` for all at once, each ray's
+    points as ``np.linspace`` spaces them (a shorter ray's last point repeated)."""
+    f = np.array(forward, float)
+    f[:, 1] = 0.0
+    norm = np.sqrt((f * f).sum(axis=1))
+    f = np.where((norm > 1e-9)[:, None], f / np.where(norm > 1e-9, norm, 1.0)[:, None], 0.0)
+    fx, fz = f[:, 0:1], f[:, 2:3]
+    reach = np.asarray(reach, float)
+    k = np.maximum(2, np.ceil((reach - 0.3) / ROOM_STEP).astype(int) + 1)
+    stop = np.maximum(reach, 0.3)[:, None]
+    steps = np.arange(int(k.max()), dtype=float)[None, :]
+    along = steps * ((stop - 0.3) / (k - 1)[:, None]) + 0.3  # np.linspace's own formula
+    along = np.where(steps >= (k - 1)[:, None], stop, along)
+    pts = np.empty((len(f), 2, along.shape[1], 3))
+    pts[..., 1] = nose[:, 1, None, None]
     for j, sgn in enumerate((1.0, -1.0)):  # the ray (cos 60, sin 60) to the left, then right
-        pts[j, :, 0] = me.nose[0] + along * (0.5 * fx - sgn * _SIN60 * fz)
-        pts[j, :, 2] = me.nose[2] + along * (0.5 * fz + sgn * _SIN60 * fx)
-    d = obstacle_distance(pts, kind, center, size).min(axis=(1, 2))
-    return float(d[0]), float(d[1])
+        pts[:, j, :, 0] = nose[:, 0:1] + along * (0.5 * fx - sgn * _SIN60 * fz)
+        pts[:, j, :, 2] = nose[:, 2:3] + along * (0.5 * fz + sgn * _SIN60 * fx)
+    return obstacle_distance(pts, kind, center, size).min(axis=(2, 3))
 
 
 def fish_threats(
@@ -293,6 +311,7 @@ def collision_ahead(
     prefer: int = 0,
     target: float | None = None,
     ahead: np.ndarray | None = None,
+    room: tuple[float, float] | None = None,
 ) -> tuple[bool, np.ndarray | None]:
     """Return (imminent?, the unit way out): probes along the heading (``probes_ahead`` up to
     ``probe_reach``) against the obstacles (clearance CLEARANCE m), then another fish that
@@ -301,7 +320,8 @@ def collision_ahead(
     unless obstacles close that side and the other side is open; a way out of another fish's
     path is also checked against the obstacles (it must not lead into a rock or a wall);
     target: the distance (m) to a food particle the fish is about to eat; ahead: the probes'
-    obstacle distances (PROBES, S) when already computed (the tank does all fishes at once)."""
+    obstacle distances (PROBES, S) and room: the ``side_room`` (left, right) when already
+    computed (the tank does all fishes at once)."""
     reach = probe_reach(me, target)
     f = _unit(_flat(me.forward))
     side = np.array([-f[2], 0.0, f[0]])  # the fish's left
@@ -311,7 +331,7 @@ def collision_ahead(
         both closed the side is kept: flipping between them would ram the fish into a corner)."""
         if not len(kind):
             return side * sgn
-        left, right = side_room(me, kind, center, size, reach)
+        left, right = side_room(me, kind, center, size, reach) if room is None else room
         mine, other = (left, right) if sgn > 0 else (right, left)
         return side * (-sgn if mine < CLEARANCE <= other else sgn)
 
@@ -325,7 +345,7 @@ def collision_ahead(
             if prefer:
                 return True, way_out(prefer)
             # turn to the side with more room
-            left, right = side_room(me, kind, center, size, reach)
+            left, right = side_room(me, kind, center, size, reach) if room is None else room
             return True, side if left >= right else -side
     if fish_side:
         return True, way_out(fish_side)

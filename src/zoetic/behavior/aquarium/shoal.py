@@ -28,7 +28,9 @@ from zoetic.behavior.aquarium.routines import (
     Me,
     collision_ahead,
     fish_threats,
+    probe_reach,
     probes_ahead_many,
+    side_rooms,
 )
 from zoetic.behavior.aquarium.species import Species
 from zoetic.behavior.mind import Drives, drives_many
@@ -201,6 +203,13 @@ class Shoal:
         # (``collision_ahead``'s answer, without asking it for every fish of a crowd)
         rocks = (ahead.min(axis=(1, 2)) < CLEARANCE).tolist() if len(kind) else [False] * len(sides)
         hits, aways, fish_only = [], [], []
+        # the room to either side of every fish something lies ahead of, all at once
+        asked = [i for i in range(len(sides)) if rocks[i] or sides[i]]
+        rooms = {}
+        if asked and len(kind):
+            reach = np.array([probe_reach(selves[i], meals[i]) for i in asked])
+            room = side_rooms(fb.nose[asked], fb.fwd[asked], reach, kind, center, size)
+            rooms = dict(zip(asked, map(tuple, room.tolist()), strict=True))
         for i, brain in enumerate(self.brains):
             if not rocks[i] and not sides[i]:
                 hits.append(False)
@@ -209,7 +218,15 @@ class Shoal:
                 continue
             prefer = brain.avoid_side if brain.thought.intention == "avoid" else 0
             hit, away = collision_ahead(
-                selves[i], kind, center, size, int(sides[i]), prefer, meals[i], ahead[i]
+                selves[i],
+                kind,
+                center,
+                size,
+                int(sides[i]),
+                prefer,
+                meals[i],
+                ahead[i],
+                rooms.get(i),
             )
             if hit and away is not None:
                 # the vertical component of fwd x away: which side the way out lies on
