@@ -216,14 +216,25 @@ class FishBrain:
     def respond(self, v: View, target: int | None, drives: Drives) -> Demand:
         """Return the motor demand of the routine that serves the mind's intention, for the
         target the focuser picked (kept in the mind), and keep the thought."""
-        if target != self.mind.target:
-            self.mind = replace(self.mind, target=target)
+        demand, height = self.routine(v, target)
+        self.remember(drives, target)
+        return keep_depth(v.me, demand, height)
+
+    def routine(self, v: View, target: int | None) -> tuple[Demand, float | None]:
+        """Return the demand of the routine that serves the mind's intention for the target
+        (before ``keep_depth``), and the height (m) to keep: the target's (None: its layer)."""
         intention = self.mind.intention
         around = self._around(v, intention, target, self.kinds(v.fish_species))
         demand = self._routine(intention, v.me, around)
-        demand = keep_depth(v.me, demand, None if around.target is None else around.target[1])
-        self.thought = Thought(drives.hunger, drives.libido, drives.fear, intention, target)
-        return demand
+        return demand, None if around.target is None else float(around.target[1])
+
+    def remember(self, drives: Drives, target: int | None) -> None:
+        """Keep the focused target in the mind and the period's thought."""
+        if target != self.mind.target:
+            self.mind = replace(self.mind, target=target)
+        self.thought = Thought(
+            drives.hunger, drives.libido, drives.fear, self.mind.intention, target
+        )
 
     def _around(
         self, v: View, intention: str, target: int | None, masks: tuple[np.ndarray, ...]

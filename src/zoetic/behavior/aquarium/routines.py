@@ -111,12 +111,20 @@ def steer(me: Me, direction: np.ndarray, speed: float) -> Demand:
 
 def keep_depth(me: Me, demand: Demand, height: float | None = None) -> Demand:
     """Return the demand with the fins pitched to bring the fish to ``height`` m (default its
-    layer): a climb angle proportional to the depth error (at most ``MAX_CLIMB``), the fins
-    pitched by the difference between it and the body's climb angle."""
+    layer): ``keep_depths`` for one fish."""
     y = me.layer if height is None else float(height)
-    climb = min(max(float(DEPTH_GAIN * (y - me.com[1])), -MAX_CLIMB), MAX_CLIMB)
-    now = float(np.arcsin(min(max(float(me.forward[1]), -1.0), 1.0)))
-    return Demand(demand.speed, demand.turn, PITCH_GAIN * (climb - now))
+    pitch = keep_depths(np.array([me.com[1]]), np.array([me.forward[1]]), np.array([y]))
+    return Demand(demand.speed, demand.turn, float(pitch[0]))
+
+
+def keep_depths(height: np.ndarray, climb_now: np.ndarray, wanted: np.ndarray) -> np.ndarray:
+    """Return (n,) the fin pitches (rad) that bring n fishes at ``height`` (n,) m, their
+    headings' vertical components ``climb_now`` (n,), to the heights ``wanted`` (n,) m: a
+    climb angle proportional to the depth error (at most ``MAX_CLIMB``), the fins pitched by
+    the difference between it and the body's climb angle."""
+    climb = np.minimum(np.maximum(DEPTH_GAIN * (wanted - height), -MAX_CLIMB), MAX_CLIMB)
+    now = np.arcsin(np.minimum(np.maximum(climb_now, -1.0), 1.0))
+    return PITCH_GAIN * (climb - now)
 
 
 def probe_reach(me: Me, target: float | None = None) -> float:
@@ -390,29 +398,77 @@ def go_to(
 ) -> Demand:
     """Swim to the focused target (eat, mate, hunt; ahead of a moving one by ``lead`` s, or
     to a point ``beside`` m to its side, a suitor's place); wander in search of one when
-    none is perceived."""
+    none is perceived (``go_to_many`` for one fish)."""
     if around.target is None:
         return wander(me, around, rng)
-    aim = around.target + (
-        lead * around.target_velocity if around.target_velocity is not None else 0.0
+    v = around.target_velocity
+    speed, turn = go_to_many(
+        *(np.asarray(x, float)[None] for x in (me.nose, me.com, me.forward)),
+        np.array([me.cruise]),
+        np.array([me.top]),
+        np.asarray(around.target, float)[None],
+        np.full((1, 3), np.nan) if v is None else np.asarray(v, float)[None],
+        np.array([lead]),
+        np.array([beside]),
     )
-    if beside:
-        off = _flat(me.com - aim)
-        aim = aim + beside * _unit(off)
-    to = _flat(aim - me.nose)
-    dist = math.sqrt(to @ to)
-    off = bearing(me.forward, to)
-    if around.target_velocity is None and not beside and dist < NEAR and abs(off) > BRAKE_BEARING:
-        # a still target near and well off the heading: the half turn with no forward speed
-        # asked (the brake of ``avoid``), which turns the fish about where it is; the steer
-        # (a wide turn at the approach speed) circled such a particle 1.3-2 m away for good
-        return Demand(0.0, np.pi if off > 0.0 else -np.pi)
-    speed = me.top if dist > 2.0 else max(me.cruise * 0.6, me.top * dist / 2.0)
+    return Demand(float(speed[0]), float(turn[0]))
+
+
+def go_to_many(
+    nose: np.ndarray,
+    com: np.ndarray,
+    forward: np.ndarray,
+    cruise: np.ndarray,
+    top: np.ndarray,
+    target: np.ndarray,
+    velocity: np.ndarray,
+    lead: np.ndarray,
+    beside: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return the speeds (m/s) and turns (rad) (n,) of n fishes swimming to their targets
+    (n, 3): ahead of a moving one (``velocity`` (n, 3), nan rows: a still target, food) by
+    ``lead`` (n,) s, or to a point ``beside`` (n,) m to its side (0: none). nose, com,
+    forward (n, 3); cruise, top (n,) m/s."""
+    still = np.isnan(velocity[:, 0])
+    aim = target + np.where(still[:, None], 0.0, lead[:, None] * velocity)
+    off = _flats(com - aim)
+    aim = np.where((beside != 0)[:, None], aim + beside[:, None] * _units(off), aim)
+    to = _flats(aim - nose)
+    dist = np.sqrt((to * to).sum(axis=1))
+    turn = bearings(forward, to)
+    # a still target near and well off the heading: the half turn with no forward speed
+    # asked (the brake of ``avoid``), which turns the fish about where it is; the steer
+    # (a wide turn at the approach speed) circled such a particle 1.3-2 m away for good
+    brake = still & (beside == 0) & (dist < NEAR) & (np.abs(turn) > BRAKE_BEARING)
+    speed = np.where(dist > 2.0, top, np.maximum(cruise * 0.6, top * dist / 2.0))
     # always turn towards the target, even one inside the turning circle: swimming on to gain
     # room first costs a fish that turns 90 degrees in 7 s a 15 s detour (and its target
     # to the focuser, or to another fish), while the turn at the slower approach speed is
     # tighter and the target drifts (docs/aquarium.md, "Why the fishes foraged badly")
-    return steer(me, aim - me.nose, speed)
+    turn = np.where(dist < 1e-9, 0.0, turn)  # ``steer``: no way to turn to
+    return (
+        np.where(brake, 0.0, speed),
+        np.where(brake, np.where(turn > 0.0, np.pi, -np.pi), turn),
+    )
+
+
+def _flats(v: np.ndarray) -> np.ndarray:
+    """Vectors (n, 3) flattened to the horizontal plane (a copy)."""
+    v = np.array(v, float)
+    v[:, 1] = 0.0
+    return v
+
+
+def _units(v: np.ndarray) -> np.ndarray:
+    """Vectors (n, 3) as unit vectors (zero where shorter than 1e-9): ``_unit`` of each."""
+    n = np.sqrt((v * v).sum(axis=1))[:, None]
+    return np.where(n > 1e-9, v / np.where(n > 1e-9, n, 1.0), 0.0)
+
+
+def bearings(forward: np.ndarray, direction: np.ndarray) -> np.ndarray:
+    """Return ``bearing`` (n,) of n headings and directions (n, 3) at once."""
+    a = np.arctan2(direction[:, 2], direction[:, 0]) - np.arctan2(forward[:, 2], forward[:, 0])
+    return (a + np.pi) % (2 * np.pi) - np.pi
 
 
 def escape(me: Me, around: Around) -> Demand:

@@ -15,6 +15,7 @@ import numpy as np
 
 from zoetic.behavior.aquarium.bodystate import FishBodies
 from zoetic.behavior.aquarium.brain import (
+    GO_TO,
     FishBrain,
     View,
     conceded,
@@ -28,6 +29,8 @@ from zoetic.behavior.aquarium.routines import (
     Me,
     collision_ahead,
     fish_threats,
+    go_to_many,
+    keep_depths,
     probe_reach,
     probes_ahead_many,
     side_rooms,
@@ -77,6 +80,7 @@ class Shoal:
         )
         self.cruise = np.array([b.cruise for b in brains], float)
         self.radius = np.array([b.radius for b in brains], float)
+        self.top = np.array([b.top for b in brains], float)
         self.constants = [
             np.array([getattr(b.constants, k) for b in brains], float)
             for k in ("hunger_rate", "alpha", "libido_rate", "fear_distance")
@@ -114,8 +118,15 @@ class Shoal:
             self.masks[0],
             self.masks[2],
         )
-        demands: list[Demand | None] = [None] * len(self.brains)
+        # the fishes going to a target, all at once (``go_to_many``); the others one by one
+        go = [i for i in living if minds[i].intention in GO_TO and targets[i] is not None]
+        speed, turn, wanted = self._go_to(go, targets, food, seen)
+        moves = {i: (s, t) for i, s, t in zip(go, speed.tolist(), turn.tolist(), strict=True)}
+        heights = dict(zip(go, wanted.tolist(), strict=True))
         for i in living:
+            if i in moves:
+                self.brains[i].remember(thought[i], targets[i])
+                continue
             view = View(
                 me=selves[i],
                 fish_distance=pc.fish[i],
@@ -132,10 +143,39 @@ class Shoal:
                 fish_only=fish_only[i],
                 conceded=given[i],
             )
-            d = self.brains[i].respond(view, targets[i], thought[i])
+            d, height = self.brains[i].routine(view, targets[i])
+            self.brains[i].remember(thought[i], targets[i])
+            moves[i] = (d.speed, d.turn)
+            heights[i] = selves[i].layer if height is None else height
+        pitch = keep_depths(b.com[living, 1], b.fwd[living, 1], [heights[i] for i in living])
+        demands: list[Demand | None] = [None] * len(self.brains)
+        for i, p in zip(living, pitch.tolist(), strict=True):
             # the demand with the body's posture (``Demand(...)``: ``replace`` is slow)
-            demands[i] = Demand(d.speed, d.turn, d.pitch, roll[i], rate[i], bend[i])
+            demands[i] = Demand(*moves[i], p, roll[i], rate[i], bend[i])
         return activations(self.brains, demands, period)
+
+    def _go_to(
+        self, go: list[int], targets: list[int | None], food: np.ndarray, seen: dict
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Return the speeds and turns (``go_to_many``) of the fishes ``go`` to their
+        targets (food particles, or fishes as each perceives them: ``seen``), and the
+        targets' heights (m)."""
+        b, rows = self.bodies, np.array(go, int)
+        aim, velocity = np.empty((len(go), 3)), np.full((len(go), 3), np.nan)
+        lead, beside = np.zeros(len(go)), np.zeros(len(go))
+        for k, i in enumerate(go):
+            intention, t = self.brains[i].mind.intention, targets[i]
+            lead[k] = GO_TO[intention].get("lead", 0.0)
+            beside[k] = GO_TO[intention].get("beside", 0.0)
+            if intention == "eat":
+                aim[k] = food[t]
+            else:
+                aim[k], velocity[k] = seen.get(i, b.com)[t], b.vel[t]
+        speed, turn = go_to_many(
+            b.nose[rows], b.com[rows], b.fwd[rows], self.cruise[rows], self.top[rows],
+            aim, velocity, lead, beside,
+        )  # fmt: skip
+        return speed, turn, aim[:, 1]
 
     def perceive(
         self, world: World, alive: np.ndarray, food: np.ndarray
