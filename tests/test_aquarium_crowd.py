@@ -196,3 +196,25 @@ def test_every_fishs_probes_at_once_are_each_fishs_own():
     for i in range(n):
         me = Me(com[i], nose[i], fwd[i], vel[i], float(cruise[i]), 0.43)
         assert np.array_equal(many[i], probes_ahead(me, probe_reach(me, meals[i])))
+
+
+def test_every_fishs_way_to_its_target_at_once_is_each_fishs_own():
+    from zoetic.behavior.aquarium.routines import Around, Me, go_to, go_to_many
+
+    rng = np.random.default_rng(7)
+    n = 80
+    nose, com, fwd, vel = _crowd(rng, n, 6.0)
+    cruise, top = rng.uniform(0.1, 0.3, n), rng.uniform(0.35, 0.6, n)
+    target = rng.uniform(-6, 6, (n, 3))
+    target[:10] = nose[:10] + 0.3 * rng.normal(size=(10, 3))  # near: some brake
+    moving = rng.random(n) < 0.5
+    velocity = np.where(moving[:, None], rng.normal(0, 0.3, (n, 3)), np.nan)
+    lead = np.where(moving & (rng.random(n) < 0.5), 0.5, 0.0)
+    beside = np.where(moving & (lead == 0.0), 0.6, 0.0)
+    speed, turn = go_to_many(nose, com, fwd, cruise, top, target, velocity, lead, beside)
+    assert (speed == 0.0).sum() >= 1 and (np.abs(turn) > 0.1).sum() > 20
+    for i in range(n):
+        me = Me(com[i], nose[i], fwd[i], vel[i], cruise[i], top[i])
+        around = Around(target=target[i], target_velocity=velocity[i] if moving[i] else None)
+        own = go_to(me, around, rng, float(lead[i]), float(beside[i]))
+        assert (own.speed, own.turn) == (speed[i], turn[i])
