@@ -169,10 +169,20 @@ class LearnedMotor:
         """Return (side, seconds): play sharp-turn-left (0) or -right (1) for that long from its
         start to turn ``angle`` rad (left positive); the whole turn when it turns less."""
         side = 0 if angle >= 0 else 1
-        x = np.concatenate([[0.0], np.abs(self.turned[side])])
-        y = np.concatenate([[0.0], LEARNED_TURN])
-        keep = np.concatenate([[True], np.diff(x) > 0])  # interp needs increasing angles
-        return side, float(np.interp(abs(angle), x[keep], y[keep]))
+        x, y = self._turn_table[side]
+        return side, float(np.interp(abs(angle), x, y))
+
+    @cached_property
+    def _turn_table(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+        """Per side, the angles turned (increasing, from 0) and the seconds played that
+        ``turn`` interpolates (computed once, not once a fish and turn)."""
+        out = []
+        for side in (0, 1):
+            x = np.concatenate([[0.0], np.abs(self.turned[side])])
+            y = np.concatenate([[0.0], LEARNED_TURN])
+            keep = np.concatenate([[True], np.diff(x) > 0])  # interp needs increasing angles
+            out.append((x[keep], y[keep]))
+        return tuple(out)
 
     @property
     def steer_top(self) -> float:
@@ -195,14 +205,21 @@ class LearnedMotor:
         if self.steer_rates is None:
             raise ZoeticError("this repertoire has no steering entries (steer-left/right)")
         side = 0 if rate >= 0 else 1
-        sw = LEARNED_SWIM.tolist()
+        sw, rates, weights = self._steer_table
         a = min(max(float(a), sw[0]), sw[-1])
         j = min(max(bisect_left(sw, a) - 1, 0), len(sw) - 2)
         f = (a - sw[j]) / (sw[j + 1] - sw[j])
-        row = ((1 - f) * self.steer_rates[j] + f * self.steer_rates[j + 1]).tolist()
+        # the rates at ``a``, elementwise as numpy would blend the two rows: the same numbers
+        row = [(1 - f) * r0 + f * r1 for r0, r1 in zip(rates[j], rates[j + 1], strict=True)]
         if row[-1] <= row[0]:
             return side, 0.0
-        return side, interp(abs(float(rate)), row, STEER_WEIGHTS.tolist())
+        return side, interp(abs(float(rate)), row, weights)
+
+    @cached_property
+    def _steer_table(self) -> tuple[list[float], list[list[float]], list[float]]:
+        """The swim weights, steering rates and steer weights ``steer`` reads, as lists
+        (computed once, not once a fish and control period)."""
+        return LEARNED_SWIM.tolist(), np.asarray(self.steer_rates).tolist(), STEER_WEIGHTS.tolist()
 
     def steer_signal(
         self, times: np.ndarray, a: float, w: float, side: int, pitch: float

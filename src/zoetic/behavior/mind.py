@@ -149,6 +149,9 @@ def drives_many(
     h = np.minimum(np.maximum(1.0 - eaten * r / alpha, 0.0), 1.0)
     lib = np.minimum(np.maximum(p1 * (t - np.asarray(mating_time, float)) * (1.0 - h), 0.0), 1.0)
     d = np.asarray(predators, float).reshape(len(h), -1)
+    # only the columns of a predator someone perceives (a crowd has a few): the terms of the
+    # other columns are 0, and a running sum adds nothing for them
+    d = d[:, np.isfinite(d).any(axis=0)]
     if d.shape[1] == 0:
         return h, lib, np.zeros(len(h))
     each = np.where(

@@ -252,9 +252,13 @@ def learned_activations(
         rows = [k for k, g in enumerate(gaits) if g.kind == "steer" and g.side == side]
         if rows:
             u[rows] = motor.steer_raws(side, times, swim[rows], [gaits[k].w for k in rows])
+    turns: dict[tuple[int, float], np.ndarray] = {}  # the sharp turns that started together
     for k, g in enumerate(gaits):
         if g.kind == "turn":
-            u[k] = LEARNED_STRENGTH * motor.bases[2 + g.side].raw(times - g.start)
+            key = (g.side, g.start)
+            if key not in turns:
+                turns[key] = motor.bases[2 + g.side].raw(times - g.start)
+            u[k] = LEARNED_STRENGTH * turns[key]
             u[k] += (1 - LEARNED_STRENGTH) * swim[k]
             after = times - g.start >= g.duration
             u[k, after] = swim[k, after]  # the swim once the turn is over
