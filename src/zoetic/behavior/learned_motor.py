@@ -13,13 +13,12 @@ of a few durations.
 from __future__ import annotations
 
 import weakref
-from bisect import bisect_left
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 
-from zoetic.behavior.motor import fin_activations, fin_rows, grid_rates, interp
+from zoetic.behavior.motor import fin_activations, fin_rows, grid_rates, interps
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.bodies import Body
 from zoetic.control.abstract import AbstractController
@@ -149,28 +148,39 @@ class LearnedMotor:
 
     def swim(self, speed: float) -> float:
         """Return the swim weight that swims ``speed`` m/s (clipped to the calibrated range;
-        below the smallest weight's speed, scaled down towards rest)."""
+        below the smallest weight's speed, scaled down towards rest): ``swims`` of one."""
+        return float(self.swims(np.array([speed], float))[0])
+
+    def swims(self, speed: np.ndarray) -> np.ndarray:
+        """Return the swim weights (D,) that swim the speeds (D,) m/s (``swim`` of each)."""
+        speed = np.asarray(speed, float)
         lo = float(self.speeds[0])
-        if speed < lo:
-            return float(LEARNED_SWIM[0] * max(speed, 0.0) / max(lo, 1e-9))
         sp, w = self._swim_table
-        return float(interp(float(speed), sp, w))
+        slow = LEARNED_SWIM[0] * np.maximum(speed, 0.0) / max(lo, 1e-9)
+        return np.where(speed < lo, slow, interps(speed, sp, w))
 
     @cached_property
-    def _swim_table(self) -> tuple[list[float], list[float]]:
+    def _swim_table(self) -> tuple[np.ndarray, np.ndarray]:
         """The speeds (ascending) and swim weights ``swim`` interpolates: the weights up to
         the fastest, sorted by speed (computed once, not once a fish and period)."""
         top = int(np.argmax(self.speeds))
         sp, w = self.speeds[: top + 1], LEARNED_SWIM[: top + 1]
         order = np.argsort(sp)
-        return sp[order].tolist(), w[order].tolist()
+        return sp[order], w[order]
 
     def turn(self, angle: float) -> tuple[int, float]:
         """Return (side, seconds): play sharp-turn-left (0) or -right (1) for that long from its
         start to turn ``angle`` rad (left positive); the whole turn when it turns less."""
-        side = 0 if angle >= 0 else 1
-        x, y = self._turn_table[side]
-        return side, float(np.interp(abs(angle), x, y))
+        side, seconds = self.turns(np.array([angle], float))
+        return int(side[0]), float(seconds[0])
+
+    def turns(self, angle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Return (side, seconds) (D,) of ``turn`` for each of the angles (D,) rad."""
+        angle = np.asarray(angle, float)
+        side = np.where(angle >= 0, 0, 1)
+        (x0, y0), (x1, y1) = self._turn_table
+        a = np.abs(angle)
+        return side, np.where(side == 0, np.interp(a, x0, y0), np.interp(a, x1, y1))
 
     @cached_property
     def _turn_table(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
@@ -201,25 +211,27 @@ class LearnedMotor:
         """Return (side, weight w): steer left (0) or right (1) at ``rate`` rad/s (left
         positive) while swimming at swim weight ``a``: the smallest steer weight whose
         calibrated rate is reached (the rates at ``a`` interpolated between swim weights);
-        beyond the table, w = 1."""
+        beyond the table, w = 1 (``steers`` of one)."""
+        side, w = self.steers_at(np.array([rate], float), np.array([a], float))
+        return int(side[0]), float(w[0])
+
+    def steers_at(self, rate: np.ndarray, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Return (side, w) (D,) of ``steer`` for each of the rates and swim weights (D,)."""
         if self.steer_rates is None:
             raise ZoeticError("this repertoire has no steering entries (steer-left/right)")
-        side = 0 if rate >= 0 else 1
+        rate = np.asarray(rate, float)
         sw, rates, weights = self._steer_table
-        a = min(max(float(a), sw[0]), sw[-1])
-        j = min(max(bisect_left(sw, a) - 1, 0), len(sw) - 2)
-        f = (a - sw[j]) / (sw[j + 1] - sw[j])
-        # the rates at ``a``, elementwise as numpy would blend the two rows: the same numbers
-        row = [(1 - f) * r0 + f * r1 for r0, r1 in zip(rates[j], rates[j + 1], strict=True)]
-        if row[-1] <= row[0]:
-            return side, 0.0
-        return side, interp(abs(float(rate)), row, weights)
+        a = np.minimum(np.maximum(np.asarray(a, float), sw[0]), sw[-1])
+        j = np.clip(np.searchsorted(sw, a, side="left") - 1, 0, len(sw) - 2)
+        f = ((a - sw[j]) / (sw[j + 1] - sw[j]))[:, None]
+        row = (1 - f) * rates[j] + f * rates[j + 1]  # the rates at ``a``
+        w = interps(np.abs(rate), row, weights)
+        return np.where(rate >= 0, 0, 1), np.where(row[:, -1] <= row[:, 0], 0.0, w)
 
     @cached_property
-    def _steer_table(self) -> tuple[list[float], list[list[float]], list[float]]:
-        """The swim weights, steering rates and steer weights ``steer`` reads, as lists
-        (computed once, not once a fish and control period)."""
-        return LEARNED_SWIM.tolist(), np.asarray(self.steer_rates).tolist(), STEER_WEIGHTS.tolist()
+    def _steer_table(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The swim weights, steering rates and steer weights ``steer`` reads."""
+        return LEARNED_SWIM, np.asarray(self.steer_rates, float), STEER_WEIGHTS
 
     def steer_signal(
         self, times: np.ndarray, a: float, w: float, side: int, pitch: float

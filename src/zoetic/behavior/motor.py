@@ -224,6 +224,21 @@ def interp(x: float, xp: list, fp: list) -> float:
     return (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j]) * (x - xp[j]) + fp[j]
 
 
+def interps(x: np.ndarray, xp: np.ndarray, fp) -> np.ndarray:
+    """Return ``interp`` of each of the values ``x`` (D,) at once: over the points ``xp`` (P,)
+    non-decreasing, or each value over its own row of ``xp`` (D, P); ``fp`` (P,) (the same
+    numbers as ``interp`` of each)."""
+    x, xp, fp = np.asarray(x, float), np.asarray(xp, float), np.asarray(fp, float)
+    rows = np.broadcast_to(xp, (len(x), xp.shape[-1]))
+    j = (rows <= x[:, None]).sum(axis=1) - 1  # bisect_right - 1: xp[j] <= x < xp[j + 1]
+    j = np.clip(j, 0, rows.shape[1] - 2)
+    lo = np.take_along_axis(rows, j[:, None], 1)[:, 0]
+    hi = np.take_along_axis(rows, j[:, None] + 1, 1)[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):  # the ends are taken as they are
+        mid = (fp[j + 1] - fp[j]) / (hi - lo) * (x - lo) + fp[j]
+    return np.where(x <= rows[:, 0], fp[0], np.where(x >= rows[:, -1], fp[-1], mid))
+
+
 def grid_rates(
     com: np.ndarray, heading: np.ndarray, t: np.ndarray, shape: tuple[int, int]
 ) -> tuple[np.ndarray, np.ndarray]:

@@ -186,55 +186,68 @@ class LearnedLocomotion:
         the gait (``plan``), the fins leaning by the righting reflex."""
         return learned_activations([self], [demand], times)[0]
 
-    def plan(self, demand: Demand, times: np.ndarray) -> Gait:
-        """Return the gait to play for the demand over the control period at ``times`` (s),
-        and keep the turn under way (``learned_activations`` plays it)."""
-        t0 = float(times[0])
-        if demand.bend < BEND_GUARD and demand.speed < GUARD_SPEED:  # fold guard: straighten
-            if self.turning is not None:
-                self._end_turn(t0)
-            return Gait(self.motor.swim(demand.speed))
-        if self.turning is not None:
-            side, start, duration = self.turning
-            other_way = demand.turn < -TURN_MIN if side == 0 else demand.turn > TURN_MIN
-            if t0 - start >= duration - 1e-9 or other_way:
-                self._end_turn(t0)
-        steer = self.motor.steers and abs(demand.turn) < STEER_MAX
-        if self.turning is None and steer and t0 - self.last[1] >= TURN_REST - 1e-9:
-            a = self.motor.swim(demand.speed)
-            side, w = self.motor.steer(demand.turn / STEER_SECONDS, a)
-            return Gait(a, "steer", side, w)
-        if self.turning is None and abs(demand.turn) >= TURN_MIN and not steer:
-            side, duration = self.motor.turn(demand.turn)
-            if t0 - self.last[1] < TURN_REST - 1e-9:
-                return Gait(self.motor.swim(demand.speed))
-            duration = min(max(duration, float(times[-1] - t0) + self.body.dt), TURN_BURST)
-            self.turning = (side, t0, duration)
-        if self.turning is None:
-            return Gait(self.motor.swim(demand.speed))
-        side, start, duration = self.turning
-        return Gait(self.motor.swim(demand.speed), "turn", side, start=start, duration=duration)
 
-    def _end_turn(self, t0: float) -> None:
-        """End the turn under way at ``t0`` s (or where it was to end, if earlier): the rest
-        before the next turn counts from there."""
-        side, start, duration = self.turning
-        self.turning = None
-        self.last = (side, min(t0, start + duration))
+SWIM, STEER, TURN = 0, 1, 2  # the kinds of gait a learned motor plays (``Gaits.kind``)
 
 
 @dataclass(frozen=True)
-class Gait:
-    """What a learned motor plays for a control period: the swim of weight ``a``, a steer
-    (``w`` of the steering gait of ``side``, 0 left, 1 right) or the sharp turn of ``side``
-    that started at ``start`` s and lasts ``duration`` s (then the swim)."""
+class Gaits:
+    """What a learned motor plays for D fishes over a control period, (D,) each: the swim of
+    weight ``a``, a steer (``w`` of the steering gait of ``side``, 0 left, 1 right) or the
+    sharp turn of ``side`` that started at ``start`` s and lasts ``duration`` s (then the
+    swim), as ``kind`` says (``SWIM``, ``STEER``, ``TURN``)."""
 
-    a: float
-    kind: str = "swim"  # "swim", "steer" or "turn"
-    side: int = 0
-    w: float = 0.0
-    start: float = 0.0
-    duration: float = 0.0
+    a: np.ndarray
+    kind: np.ndarray
+    side: np.ndarray
+    w: np.ndarray
+    start: np.ndarray
+    duration: np.ndarray
+
+
+def plan(fishes: list[LearnedLocomotion], demands: list[Demand], times: np.ndarray) -> Gaits:
+    """Return the gaits D fishes that share a learned motor play for their demands over the
+    control period at ``times`` (s), and keep each fish's turn under way (``turning``,
+    ``last``): the rules of ``LearnedLocomotion``, over arrays."""
+    motor, t0 = fishes[0].motor, float(times[0])
+    speed, turn, bent = (
+        np.array([getattr(d, k) for d in demands], float) for k in ("speed", "turn", "bend")
+    )
+    was = [f.turning for f in fishes]
+    on = np.array([t is not None for t in was])
+    side, start, duration = (np.array([t[k] if t else 0 for t in was], float) for k in range(3))
+    last = np.array([f.last[1] for f in fishes], float)
+    guard = (bent < BEND_GUARD) & (speed < GUARD_SPEED)  # fold guard: straighten
+    other_way = np.where(side == 0, turn < -TURN_MIN, turn > TURN_MIN)
+    end = on & (guard | (t0 - start >= duration - 1e-9) | other_way)
+    # the turn ends now, or where it was to end if earlier: the rest counts from there
+    last = np.where(end, np.minimum(t0, start + duration), last)
+    on &= ~end
+    steer = bool(motor.steers) & (np.abs(turn) < STEER_MAX)
+    rested = t0 - last >= TURN_REST - 1e-9
+    steering = ~guard & ~on & steer & rested
+    new = ~guard & ~on & ~steer & (np.abs(turn) >= TURN_MIN) & rested
+    a = motor.swims(speed)
+    turn_side, turn_for = motor.turns(turn)
+    turn_for = np.minimum(
+        np.maximum(turn_for, float(times[-1] - t0) + fishes[0].body.dt), TURN_BURST
+    )
+    side = np.where(new, turn_side, side).astype(int)
+    start, duration = np.where(new, t0, start), np.where(new, turn_for, duration)
+    on |= new
+    steer_side, w = (
+        motor.steers_at(turn / STEER_SECONDS, a) if steering.any() else (side, np.zeros_like(a))
+    )
+    for k in np.flatnonzero(end | new).tolist():
+        f = fishes[k]
+        if end[k]:
+            f.turning, f.last = None, (was[k][0], float(last[k]))
+        if new[k]:
+            f.turning = (int(side[k]), t0, float(duration[k]))
+    kind = np.where(on, TURN, np.where(steering, STEER, SWIM))
+    return Gaits(
+        a, kind, np.where(steering, steer_side, side), np.where(steering, w, 0.0), start, duration
+    )
 
 
 def learned_activations(
@@ -245,23 +258,22 @@ def learned_activations(
     which keeps its turn under way), the gaits blended for all at once, the fins at each
     demand's pitch leaning by the righting reflex."""
     motor = fishes[0].motor
-    gaits = [f.plan(d, times) for f, d in zip(fishes, demands, strict=True)]
-    swim = motor.swim_raws(times, np.array([g.a for g in gaits], float))
+    g = plan(fishes, demands, times)
+    swim = motor.swim_raws(times, g.a)
     u = swim.copy()
     for side in (0, 1):
-        rows = [k for k, g in enumerate(gaits) if g.kind == "steer" and g.side == side]
-        if rows:
-            u[rows] = motor.steer_raws(side, times, swim[rows], [gaits[k].w for k in rows])
+        rows = np.flatnonzero((g.kind == STEER) & (g.side == side))
+        if len(rows):
+            u[rows] = motor.steer_raws(side, times, swim[rows], g.w[rows])
     turns: dict[tuple[int, float], np.ndarray] = {}  # the sharp turns that started together
-    for k, g in enumerate(gaits):
-        if g.kind == "turn":
-            key = (g.side, g.start)
-            if key not in turns:
-                turns[key] = motor.bases[2 + g.side].raw(times - g.start)
-            u[k] = LEARNED_STRENGTH * turns[key]
-            u[k] += (1 - LEARNED_STRENGTH) * swim[k]
-            after = times - g.start >= g.duration
-            u[k, after] = swim[k, after]  # the swim once the turn is over
+    for k in np.flatnonzero(g.kind == TURN).tolist():
+        key = (int(g.side[k]), float(g.start[k]))
+        if key not in turns:
+            turns[key] = motor.bases[2 + key[0]].raw(times - key[1])
+        u[k] = LEARNED_STRENGTH * turns[key]
+        u[k] += (1 - LEARNED_STRENGTH) * swim[k]
+        after = times - key[1] >= g.duration[k]
+        u[k, after] = swim[k, after]  # the swim once the turn is over
     lean = [
         righting(d.roll, d.roll_rate) if f.righting else np.nan
         for f, d in zip(fishes, demands, strict=True)
