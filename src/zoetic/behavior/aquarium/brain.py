@@ -34,14 +34,15 @@ from zoetic.behavior.aquarium.routines import (
 )
 from zoetic.behavior.aquarium.species import BUILT_IN, Species
 from zoetic.behavior.mind import (
-    Drives,
     MindState,
-    Situation,
+    Situations,
+    Tempers,
     ate,
     drives,
+    drives_many,
     focus_many,
     initial_mind,
-    think,
+    think_many,
 )
 from zoetic.behavior.mind import mated as mind_mated
 from zoetic.bodies import Body
@@ -110,6 +111,7 @@ class FishBrain:
         self.cruise = min(m.cruise_speed, self.top)
         self.radius = self.locomotion.turn_radius
         self.constants = species.fear_constants()
+        self.tempers = Tempers.of([self.constants], [species.habits], [species.predator])
         self.alive = True
         self.avoid_side = 0
         self.reset(0)
@@ -149,11 +151,11 @@ class FishBrain:
             self._masks = kind_masks(names, self.species.name, self.hunted_by, prey)
         return self._masks
 
-    def _situation(self, v: View) -> Situation:
-        """The fish's ``Situation`` from its own view (``situations`` for one fish)."""
+    def _situation(self, v: View) -> tuple[Situations, np.ndarray]:
+        """The fish's situation from its own view (``situations`` for one fish)."""
         same, hunters, prey = self.kinds(v.fish_species)
         h = self.species.habits
-        sits, _ = situations(
+        return situations(
             v.fish_distance[None],
             v.food_distance[None],
             v.obstacle_distance[None],
@@ -165,7 +167,6 @@ class FishBrain:
             [v.collision],
             [v.fish_only],
         )
-        return sits[0]
 
     def act(self, observation: Mapping, period: Period) -> np.ndarray:
         """Return activations (1, T, A) for the period from the fish's percept (the percept
@@ -175,21 +176,20 @@ class FishBrain:
             return np.zeros((1, period.steps, self.body.n_actuators))
         return self.locomotion.activations(demand, period.times)[None]
 
-    def decide(
-        self,
-        observation: Mapping,
-        period: Period,
-        sit: Situation | None = None,
-        d: Drives | None = None,
-    ) -> Demand | None:
-        """Return the motor demand for the period from the fish's percept (None: dead).
-        ``sit`` and ``d``: the situation and drives when already computed (``situations``,
-        ``mind.drives_many``); by default from the percept. A tank's ``Shoal`` takes the same
-        steps for all its fishes at once: ``think``, ``focus_targets``, ``respond``."""
+    def decide(self, observation: Mapping, period: Period) -> Demand | None:
+        """Return the motor demand for the period from the fish's percept (None: dead). A
+        tank's ``Shoal`` takes the same steps for all its fishes at once: ``situations``,
+        ``drives_many``, ``think_many``, ``focus_targets``, ``respond``."""
         if not self.alive:
             return None
         v: View = observation["view"]
-        drives = self.think(period.t0, self._situation(v) if sit is None else sit, d)
+        sit, predators = self._situation(v)
+        m, c = self.mind, self.constants
+        drives = drives_many(
+            [m.eaten], [m.meal_time], [m.mating_time], period.t0,
+            c.hunger_rate, c.alpha, c.libido_rate, c.fear_distance, predators,
+        )  # fmt: skip
+        (self.mind,) = think_many([m], period.t0, self.tempers, sit, *drives)
         me, masks = v.me, self.kinds(v.fish_species)
         (target,) = focus_targets(
             [self.mind.intention],
@@ -204,16 +204,9 @@ class FishBrain:
             masks[0][None],
             masks[2][None],
         )
-        return self.respond(v, target, drives)
+        return self.respond(v, target, tuple(float(x[0]) for x in drives))
 
-    def think(self, t: float, sit: Situation, d: Drives | None = None) -> Drives:
-        """Let the mind choose its intention at time ``t`` s in the situation (drives ``d``
-        when already computed); return the drives."""
-        sp = self.species
-        self.mind, drives = think(self.mind, t, self.constants, sp.habits, sit, sp.predator, d)
-        return drives
-
-    def respond(self, v: View, target: int | None, drives: Drives) -> Demand:
+    def respond(self, v: View, target: int | None, drives: tuple[float, ...]) -> Demand:
         """Return the motor demand of the routine that serves the mind's intention, for the
         target the focuser picked (kept in the mind), and keep the thought."""
         demand, height = self.routine(v, target)
@@ -228,13 +221,13 @@ class FishBrain:
         demand = self._routine(intention, v.me, around)
         return demand, None if around.target is None else float(around.target[1])
 
-    def remember(self, drives: Drives, target: int | None) -> None:
-        """Keep the focused target in the mind and the period's thought."""
+    def remember(self, drives: tuple[float, ...], target: int | None) -> None:
+        """Keep the focused target in the mind and the period's thought (drives: hunger,
+        libido, fear)."""
         if target != self.mind.target:
             self.mind = replace(self.mind, target=target)
-        self.thought = Thought(
-            drives.hunger, drives.libido, drives.fear, self.mind.intention, target
-        )
+        hunger, libido, fear = drives
+        self.thought = Thought(hunger, libido, fear, self.mind.intention, target)
 
     def _around(
         self, v: View, intention: str, target: int | None, masks: tuple[np.ndarray, ...]
@@ -332,11 +325,12 @@ def situations(
     prey: np.ndarray,
     personal_space: np.ndarray,
     crowd: np.ndarray,
-    collision: np.ndarray,
-    fish_only: np.ndarray | None = None,
-) -> tuple[list[Situation], np.ndarray]:
-    """Return every fish's ``Situation`` from all the percepts at once, and (n, n) the
-    distances of the predators each perceives (inf elsewhere, for ``mind.drives_many``).
+    collision,
+    fish_only=None,
+) -> tuple[Situations, np.ndarray]:
+    """Return every fish's situation from all the percepts at once (``Situations``), and
+    (n, n) the distances of the predators each perceives (inf elsewhere, for
+    ``mind.drives_many``).
 
     fish (n, M), food (n, F), obstacles (n, S): the distances perceived by each of n fishes
     (inf: not perceived, ``Percepts``; M = n in the tank, one row for ``FishBrain._situation``);
@@ -345,37 +339,21 @@ def situations(
     collision threatens from another fish only (default none)."""
     n = len(fish)
     inf = np.full(n, np.inf)
-    fish_only = [False] * n if fish_only is None else fish_only
-    seen = np.isfinite(fish)
     predators = np.where(hunters, fish, np.inf)
-    food_near = food.min(axis=1) if food.shape[1] else inf
-    mate = np.where(same, fish, np.inf).min(axis=1) if n else inf
-    prey_near = np.where(prey, fish, np.inf).min(axis=1) if n else inf
-    crowded = ((fish < personal_space[:, None]).sum(axis=1) > crowd).tolist()
-    alone = (~seen.any(axis=1)).tolist()
     near_obstacle = (
-        (obstacles.min(axis=1) < personal_space).tolist() if obstacles.shape[1] else [False] * n
+        obstacles.min(axis=1) < personal_space if obstacles.shape[1] else np.zeros(n, bool)
     )
-    near_predators: list[list[float]] = [[] for _ in range(n)]
-    ii, jj = np.nonzero(np.isfinite(predators))
-    for i, x in zip(ii.tolist(), predators[ii, jj].tolist(), strict=True):
-        near_predators[i].append(x)
-    out = [
-        Situation(bool(c), tuple(pd), f, m, q, bool(cr), bool(al), bool(no), bool(fo))
-        for c, pd, f, m, q, cr, al, no, fo in zip(
-            collision,
-            near_predators,
-            food_near.tolist(),
-            mate.tolist(),
-            prey_near.tolist(),
-            crowded,
-            alone,
-            near_obstacle,
-            fish_only,
-            strict=True,
-        )
-    ]
-    return out, predators
+    sits = Situations(
+        collision=np.array(collision, bool),
+        food_distance=food.min(axis=1) if food.shape[1] else inf,
+        mate_distance=np.where(same, fish, np.inf).min(axis=1) if n else inf,
+        prey_distance=np.where(prey, fish, np.inf).min(axis=1) if n else inf,
+        crowded=(fish < personal_space[:, None]).sum(axis=1) > crowd,
+        alone=~np.isfinite(fish).any(axis=1),
+        near_obstacle=near_obstacle,
+        fish_only=np.zeros(n, bool) if fish_only is None else np.array(fish_only, bool),
+    )
+    return sits, predators
 
 
 CONCEDE_COS = 0.7  # a fish heads for a particle within about 45 degrees of its heading

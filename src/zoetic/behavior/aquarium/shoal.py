@@ -36,7 +36,7 @@ from zoetic.behavior.aquarium.routines import (
     side_rooms,
 )
 from zoetic.behavior.aquarium.species import Species
-from zoetic.behavior.mind import Drives, drives_many
+from zoetic.behavior.mind import MindState, Tempers, drives_many, think_many
 from zoetic.control.policy import Period
 from zoetic.physics.world import World
 
@@ -79,6 +79,11 @@ class Shoal:
             np.array([s.habits.crowd for s in species]),
         )
         self.cruise = np.array([b.cruise for b in brains], float)
+        self.tempers = Tempers.of(
+            [b.constants for b in brains],
+            [s.habits for s in species],
+            [s.predator for s in species],
+        )
         self.radius = np.array([b.radius for b in brains], float)
         self.top = np.array([b.top for b in brains], float)
         self.constants = [
@@ -100,11 +105,17 @@ class Shoal:
         b = self.bodies
         sees = np.isfinite(pc.fish)
         given = conceded(b.nose, b.fwd, food, eating, sees, np.isfinite(pc.food))
-        drives = self._drives(period.t0, predators)
+        hunger, libido, fear = self._drives(period.t0, predators)
         roll, rate, bend = (x.tolist() for x in self.bodies.posture(world, period.t0))
         b, living = self.bodies, [i for i, brain in enumerate(self.brains) if brain.alive]
-        thought = {i: self.brains[i].think(period.t0, sits[i], drives[i]) for i in living}
-        minds = [self.brains[i].mind if i in thought else None for i in range(len(self.brains))]
+        # every mind thinks at once (the dead ones' thoughts are dropped)
+        thinking = [brain.mind for brain in self.brains]
+        thinking = think_many(thinking, period.t0, self.tempers, sits, hunger, libido, fear)
+        minds: list[MindState | None] = [None] * len(self.brains)
+        for i in living:
+            self.brains[i].mind = minds[i] = thinking[i]
+        felt = list(zip(hunger.tolist(), libido.tolist(), fear.tolist(), strict=True))
+        thought = {i: felt[i] for i in living}
         targets = focus_targets(
             ["" if m is None else m.intention for m in minds],
             [None if m is None else m.target for m in minds],
@@ -277,13 +288,11 @@ class Shoal:
             fish_only.append(bool(hit and sides[i] and not rocks[i]))
         return hits, aways, near.tolist(), fish_only
 
-    def _drives(self, t: float, predators: np.ndarray) -> list[Drives]:
-        """Return every fish's drives at time ``t`` s in one step over arrays."""
+    def _drives(self, t: float, predators: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Return every fish's hunger, libido and fear (n,) at time ``t`` s at once."""
         minds = [b.mind for b in self.brains]
         meals = [m.eaten for m in minds], [m.meal_time for m in minds]
-        arrays = drives_many(*meals, [m.mating_time for m in minds], t, *self.constants, predators)
-        hunger, libido, fear = (x.tolist() for x in arrays)
-        return [Drives(h, lib, f) for h, lib, f in zip(hunger, libido, fear, strict=True)]
+        return drives_many(*meals, [m.mating_time for m in minds], t, *self.constants, predators)
 
 
 def right_of_way(threat: np.ndarray, meals: list[float | None]) -> np.ndarray:
