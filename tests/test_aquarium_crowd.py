@@ -199,7 +199,8 @@ def test_every_fishs_probes_at_once_are_each_fishs_own():
 
 
 def test_every_fishs_way_to_its_target_at_once_is_each_fishs_own():
-    from zoetic.behavior.aquarium.routines import Around, Me, go_to, go_to_many
+    from zoetic.behavior.aquarium.routines import Around, Me, go_to
+    from zoetic.behavior.aquarium.steering import go_to_many
 
     rng = np.random.default_rng(7)
     n = 80

@@ -18,29 +18,21 @@ import numpy as np
 
 from zoetic.behavior.aquarium.locomotion import Demand
 from zoetic.behavior.aquarium.perception import obstacle_distance
+from zoetic.behavior.aquarium.steering import (
+    avoid_many,
+    go_to_many,
+    keep_depths,
+)
 
 LOOKAHEAD = 10.0  # s of travel (at least 3 m) probed ahead for an imminent collision
 PROBES = 8  # points probed along the heading
 _STEPS = np.arange(PROBES, dtype=float)
 CLEARANCE = 0.5  # m: a probe nearer than this to an obstacle means a collision is imminent
 TURN_RADIUS = 1.9  # m: default radius of a fish's sharpest turn (the brain gives its own)
-DEPTH_GAIN = 1.0  # rad of climb per m of depth error (capped at MAX_CLIMB)
-MAX_CLIMB = 0.4  # rad: the steepest climb or dive asked for
-PITCH_GAIN = 2.0  # rad of fin pitch per rad of climb-angle error
 CENTRE_LINE = 5  # points along another fish's centre line, nose to tail, tested for a threat
 THREAT_TIMES = 4  # instants from now to the anticipation horizon at which they are tested
 ROOM_STEP = 0.4  # m between the probes of the room to either side (walls are 0.5 m thick)
 _SIN60 = math.sqrt(3) / 2
-# s of travel: an avoiding fish whose nose is nearer than this to an obstacle turns as hard as
-# its motor can (a half turn asked at once), not at its steady steering rate
-URGENT = 1.5
-# s of travel: an avoiding fish whose nose is nearer than this to another fish that threatens
-# it (no obstacle ahead) brakes: the half turn with no forward speed asked (``avoid``)
-URGENT_FISH = 1.5
-# a still target nearer than NEAR m and farther off the heading than BRAKE_BEARING rad is
-# turned to about on the spot (``go_to``): the steer's circle is wider than its distance
-NEAR = 2.0
-BRAKE_BEARING = math.pi / 3
 # m between two fishes' centre lines under which they touch (bodies are 0.24 m wide and bend)
 CONTACT = 0.35
 CONTACT_TIMES = 9  # instants from now to the anticipation horizon tested for a contact
@@ -115,16 +107,6 @@ def keep_depth(me: Me, demand: Demand, height: float | None = None) -> Demand:
     y = me.layer if height is None else float(height)
     pitch = keep_depths(np.array([me.com[1]]), np.array([me.forward[1]]), np.array([y]))
     return Demand(demand.speed, demand.turn, float(pitch[0]))
-
-
-def keep_depths(height: np.ndarray, climb_now: np.ndarray, wanted: np.ndarray) -> np.ndarray:
-    """Return (n,) the fin pitches (rad) that bring n fishes at ``height`` (n,) m, their
-    headings' vertical components ``climb_now`` (n,), to the heights ``wanted`` (n,) m: a
-    climb angle proportional to the depth error (at most ``MAX_CLIMB``), the fins pitched by
-    the difference between it and the body's climb angle."""
-    climb = np.minimum(np.maximum(DEPTH_GAIN * (wanted - height), -MAX_CLIMB), MAX_CLIMB)
-    now = np.arcsin(np.minimum(np.maximum(climb_now, -1.0), 1.0))
-    return PITCH_GAIN * (climb - now)
 
 
 def probe_reach(me: Me, target: float | None = None) -> float:
@@ -361,24 +343,15 @@ def collision_ahead(
 
 
 def avoid(me: Me, around: Around) -> Demand:
-    """Turn hard to the side of the way out (kept while the avoidance lasts), beating hard:
-    a quarter turn asked in ``TURN_SECONDS``, or a half turn (as hard as the motor can turn)
-    once an obstacle is nearer than ``URGENT`` s of travel. Another fish alone (no obstacle
-    ahead) nearer than ``URGENT_FISH`` s of travel: the half turn with no forward speed asked,
-    a brake (the learned sharp turn's bursts turn the fish about 10 degrees each and all but
-    stop it; the swim asked between them at top speed carried it on into the other fish)."""
-    if around.away is None:
-        return Demand(me.cruise, 0.0)
-    f = _unit(_flat(me.forward))
-    left = float(around.away @ np.array([-f[2], 0.0, f[0]])) >= 0.0
-    speed = max(math.sqrt(me.velocity @ me.velocity), me.cruise)
-    urgent = URGENT_FISH if around.fish_only else URGENT
-    if around.obstacle >= urgent * speed:
-        return Demand(me.top, np.pi / 2 if left else -np.pi / 2)
-    # a fish close ahead: the sharp turn's bursts stop the fish, and between them it glides
-    # instead of swimming on at top speed into the fish it avoids
-    brake = around.fish_only
-    return Demand(0.0 if brake else me.top, np.pi if left else -np.pi)
+    """Turn hard to the side of the way out (kept while the avoidance lasts), beating hard
+    (``avoid_many`` for one fish)."""
+    away = np.full((1, 3), np.nan) if around.away is None else np.asarray(around.away)[None]
+    speed, turn = avoid_many(
+        np.asarray(me.forward, float)[None], np.asarray(me.velocity, float)[None],
+        np.array([me.cruise]), np.array([me.top]), away, np.array([around.obstacle]),
+        np.array([around.fish_only]),
+    )  # fmt: skip
+    return Demand(float(speed[0]), float(turn[0]))
 
 
 def wander(me: Me, around: Around, rng: np.random.Generator) -> Demand:
@@ -412,63 +385,6 @@ def go_to(
         np.array([beside]),
     )
     return Demand(float(speed[0]), float(turn[0]))
-
-
-def go_to_many(
-    nose: np.ndarray,
-    com: np.ndarray,
-    forward: np.ndarray,
-    cruise: np.ndarray,
-    top: np.ndarray,
-    target: np.ndarray,
-    velocity: np.ndarray,
-    lead: np.ndarray,
-    beside: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Return the speeds (m/s) and turns (rad) (n,) of n fishes swimming to their targets
-    (n, 3): ahead of a moving one (``velocity`` (n, 3), nan rows: a still target, food) by
-    ``lead`` (n,) s, or to a point ``beside`` (n,) m to its side (0: none). nose, com,
-    forward (n, 3); cruise, top (n,) m/s."""
-    still = np.isnan(velocity[:, 0])
-    aim = target + np.where(still[:, None], 0.0, lead[:, None] * velocity)
-    off = _flats(com - aim)
-    aim = np.where((beside != 0)[:, None], aim + beside[:, None] * _units(off), aim)
-    to = _flats(aim - nose)
-    dist = np.sqrt((to * to).sum(axis=1))
-    turn = bearings(forward, to)
-    # a still target near and well off the heading: the half turn with no forward speed
-    # asked (the brake of ``avoid``), which turns the fish about where it is; the steer
-    # (a wide turn at the approach speed) circled such a particle 1.3-2 m away for good
-    brake = still & (beside == 0) & (dist < NEAR) & (np.abs(turn) > BRAKE_BEARING)
-    speed = np.where(dist > 2.0, top, np.maximum(cruise * 0.6, top * dist / 2.0))
-    # always turn towards the target, even one inside the turning circle: swimming on to gain
-    # room first costs a fish that turns 90 degrees in 7 s a 15 s detour (and its target
-    # to the focuser, or to another fish), while the turn at the slower approach speed is
-    # tighter and the target drifts (docs/aquarium.md, "Why the fishes foraged badly")
-    turn = np.where(dist < 1e-9, 0.0, turn)  # ``steer``: no way to turn to
-    return (
-        np.where(brake, 0.0, speed),
-        np.where(brake, np.where(turn > 0.0, np.pi, -np.pi), turn),
-    )
-
-
-def _flats(v: np.ndarray) -> np.ndarray:
-    """Vectors (n, 3) flattened to the horizontal plane (a copy)."""
-    v = np.array(v, float)
-    v[:, 1] = 0.0
-    return v
-
-
-def _units(v: np.ndarray) -> np.ndarray:
-    """Vectors (n, 3) as unit vectors (zero where shorter than 1e-9): ``_unit`` of each."""
-    n = np.sqrt((v * v).sum(axis=1))[:, None]
-    return np.where(n > 1e-9, v / np.where(n > 1e-9, n, 1.0), 0.0)
-
-
-def bearings(forward: np.ndarray, direction: np.ndarray) -> np.ndarray:
-    """Return ``bearing`` (n,) of n headings and directions (n, 3) at once."""
-    a = np.arctan2(direction[:, 2], direction[:, 0]) - np.arctan2(forward[:, 2], forward[:, 0])
-    return (a + np.pi) % (2 * np.pi) - np.pi
 
 
 def escape(me: Me, around: Around) -> Demand:

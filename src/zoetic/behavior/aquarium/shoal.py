@@ -29,13 +29,12 @@ from zoetic.behavior.aquarium.routines import (
     Me,
     collision_ahead,
     fish_threats,
-    go_to_many,
-    keep_depths,
     probe_reach,
     probes_ahead_many,
     side_rooms,
 )
 from zoetic.behavior.aquarium.species import Species
+from zoetic.behavior.aquarium.steering import avoid_many, go_to_many, keep_depths
 from zoetic.behavior.mind import MindState, Tempers, drives_many, think_many
 from zoetic.control.policy import Period
 from zoetic.physics.world import World
@@ -134,6 +133,11 @@ class Shoal:
         speed, turn, wanted = self._go_to(go, targets, food, seen)
         moves = {i: (s, t) for i, s, t in zip(go, speed.tolist(), turn.tolist(), strict=True)}
         heights = dict(zip(go, wanted.tolist(), strict=True))
+        # the avoiding fishes all at once (``avoid_many``), at their layers
+        ducks = [i for i in living if minds[i].intention == "avoid"]
+        speed, turn = self._avoid(ducks, pc, aways, threats, fish_only)
+        moves |= {i: (s, t) for i, s, t in zip(ducks, speed.tolist(), turn.tolist(), strict=True)}
+        heights |= {i: selves[i].layer for i in ducks}
         for i in living:
             if i in moves:
                 self.brains[i].remember(thought[i], targets[i])
@@ -187,6 +191,25 @@ class Shoal:
             aim, velocity, lead, beside,
         )  # fmt: skip
         return speed, turn, aim[:, 1]
+
+    def _avoid(
+        self,
+        ducks: list[int],
+        pc: Percepts,
+        aways: list[np.ndarray | None],
+        threats: list[float],
+        fish_only: list[bool],
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Return the speeds and turns (``avoid_many``) of the avoiding fishes ``ducks``: each
+        turning to its way out (``aways``), as urgently as the nearest obstacle or the
+        threatening fish (``threats``, m) is near."""
+        b, rows = self.bodies, np.array(ducks, int)
+        away = np.array([np.full(3, np.nan) if aways[i] is None else aways[i] for i in ducks])
+        near = pc.obstacles[rows].min(axis=1) if pc.obstacles.shape[1] else np.inf
+        obstacle = np.minimum(near, np.array([threats[i] for i in ducks], float))
+        only = np.array([fish_only[i] for i in ducks], bool)
+        cruise, top, away = self.cruise[rows], self.top[rows], away.reshape(-1, 3)
+        return avoid_many(b.fwd[rows], b.vel[rows], cruise, top, away, obstacle, only)
 
     def perceive(
         self, world: World, alive: np.ndarray, food: np.ndarray
