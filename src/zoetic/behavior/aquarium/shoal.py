@@ -9,6 +9,7 @@ activations (fishes that share a motor in one batched call).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -26,21 +27,44 @@ from zoetic.behavior.aquarium.locomotion import Demand, LearnedLocomotion, learn
 from zoetic.behavior.aquarium.perception import Percepts, obstacle_distance, perceive
 from zoetic.behavior.aquarium.routines import (
     CLEARANCE,
+    Around,
     Me,
     collision_ahead,
     fish_threats,
     probe_reach,
     probes_ahead_many,
     side_rooms,
+    wander,
 )
 from zoetic.behavior.aquarium.species import Species
 from zoetic.behavior.aquarium.steering import avoid_many, go_to_many, keep_depths
-from zoetic.behavior.mind import MindState, Tempers, drives_many, think_many
+from zoetic.behavior.mind import MindState, Situations, Tempers, drives_many, think_many
 from zoetic.control.policy import Period
 from zoetic.physics.world import World
 
 if TYPE_CHECKING:  # the eyes' renderer loads only for a tank with vision
     from zoetic.behavior.aquarium.vision import TankEyes
+
+
+NOTHING = Around()  # what a wanderer reads of its surroundings: nothing
+
+
+@dataclass(frozen=True)
+class Moment:
+    """What the fishes sense at a control period's start: the food (F, 3), the percepts and
+    the fishes' centres as the fishes with eyes see them (``Shoal.perceive``), each fish as
+    its routines see itself, what lies ahead of each (``Shoal._ahead``: hits, ways out,
+    threats, fish only), the situations and the predators' distances (``situations``) and
+    the food each leaves to another (``conceded``)."""
+
+    food: np.ndarray
+    pc: Percepts
+    seen: dict[int, np.ndarray]
+    selves: list[Me]
+    ahead: tuple[list, list, list, list]
+    sits: Situations
+    predators: np.ndarray
+    given: np.ndarray
 
 
 class Shoal:
@@ -92,6 +116,44 @@ class Shoal:
 
     def __call__(self, world: World, period: Period) -> list[np.ndarray]:
         """Return every fish's activations (1, T, A) for the period: perceive, think, act."""
+        now = self._sense(world)
+        t, b = period.t0, self.bodies
+        hunger, libido, fear = self._drives(t, now.predators)
+        roll, rate, bend = (x.tolist() for x in self.bodies.posture(world, t))
+        living = [i for i, brain in enumerate(self.brains) if brain.alive]
+        # every mind thinks at once (the dead ones' thoughts are dropped)
+        thinking = [brain.mind for brain in self.brains]
+        thinking = think_many(thinking, t, self.tempers, now.sits, hunger, libido, fear)
+        minds: list[MindState | None] = [None] * len(self.brains)
+        for i in living:
+            self.brains[i].mind = minds[i] = thinking[i]
+        targets = focus_targets(
+            ["" if m is None else m.intention for m in minds],
+            [None if m is None else m.target for m in minds],
+            b.nose,
+            b.fwd,
+            self.radius,
+            now.food,
+            now.pc.food,
+            now.given,
+            now.pc.fish,
+            self.masks[0],
+            self.masks[2],
+        )
+        moves, heights = self._respond(living, minds, targets, now)
+        felt = list(zip(hunger.tolist(), libido.tolist(), fear.tolist(), strict=True))
+        for i in living:
+            self.brains[i].remember(felt[i], targets[i])
+        pitch = keep_depths(b.com[living, 1], b.fwd[living, 1], [heights[i] for i in living])
+        demands: list[Demand | None] = [None] * len(self.brains)
+        for i, p in zip(living, pitch.tolist(), strict=True):
+            # the demand with the body's posture (``Demand(...)``: ``replace`` is slow)
+            demands[i] = Demand(*moves[i], p, roll[i], rate[i], bend[i])
+        return activations(self.brains, demands, period)
+
+    def _sense(self, world: World) -> Moment:
+        """Return what the fishes perceive now, what lies ahead of each, their situations
+        and the food each leaves to another (``Moment``)."""
         alive = np.array([b.alive for b in self.brains])
         food = world.food_positions[0]
         pc, seen = self.perceive(world, alive, food)
@@ -104,70 +166,54 @@ class Shoal:
         b = self.bodies
         sees = np.isfinite(pc.fish)
         given = conceded(b.nose, b.fwd, food, eating, sees, np.isfinite(pc.food))
-        hunger, libido, fear = self._drives(period.t0, predators)
-        roll, rate, bend = (x.tolist() for x in self.bodies.posture(world, period.t0))
-        b, living = self.bodies, [i for i, brain in enumerate(self.brains) if brain.alive]
-        # every mind thinks at once (the dead ones' thoughts are dropped)
-        thinking = [brain.mind for brain in self.brains]
-        thinking = think_many(thinking, period.t0, self.tempers, sits, hunger, libido, fear)
-        minds: list[MindState | None] = [None] * len(self.brains)
-        for i in living:
-            self.brains[i].mind = minds[i] = thinking[i]
-        felt = list(zip(hunger.tolist(), libido.tolist(), fear.tolist(), strict=True))
-        thought = {i: felt[i] for i in living}
-        targets = focus_targets(
-            ["" if m is None else m.intention for m in minds],
-            [None if m is None else m.target for m in minds],
-            b.nose,
-            b.fwd,
-            self.radius,
-            food,
-            pc.food,
-            given,
-            pc.fish,
-            self.masks[0],
-            self.masks[2],
-        )
-        # the fishes going to a target, all at once (``go_to_many``); the others one by one
+        ahead = (hits, aways, threats, fish_only)
+        return Moment(food, pc, seen, selves, ahead, sits, predators, given)
+
+    def _respond(
+        self, living: list[int], minds: list, targets: list[int | None], now: Moment
+    ) -> tuple[dict[int, tuple[float, float]], dict[int, float]]:
+        """Return each living fish's speed and turn, and the height (m) it keeps, from the
+        routine that serves its intention: the fishes going to a target and the avoiding
+        ones all at once, the wanderers each with its own random turn, the others (escape,
+        school, leave: they read the crowd they see) one by one."""
+        b, selves = self.bodies, now.selves
         go = [i for i in living if minds[i].intention in GO_TO and targets[i] is not None]
-        speed, turn, wanted = self._go_to(go, targets, food, seen)
+        speed, turn, wanted = self._go_to(go, targets, now.food, now.seen)
         moves = {i: (s, t) for i, s, t in zip(go, speed.tolist(), turn.tolist(), strict=True)}
         heights = dict(zip(go, wanted.tolist(), strict=True))
-        # the avoiding fishes all at once (``avoid_many``), at their layers
         ducks = [i for i in living if minds[i].intention == "avoid"]
-        speed, turn = self._avoid(ducks, pc, aways, threats, fish_only)
+        speed, turn = self._avoid(ducks, now)
         moves |= {i: (s, t) for i, s, t in zip(ducks, speed.tolist(), turn.tolist(), strict=True)}
-        heights |= {i: selves[i].layer for i in ducks}
+        hits, aways, threats, fish_only = now.ahead
         for i in living:
             if i in moves:
-                self.brains[i].remember(thought[i], targets[i])
+                continue
+            if minds[i].intention in GO_TO or minds[i].intention == "wander":
+                d = wander(selves[i], NOTHING, self.brains[i].rng)  # (no target: it searches)
+                moves[i] = (d.speed, d.turn)
                 continue
             view = View(
                 me=selves[i],
-                fish_distance=pc.fish[i],
-                fish_com=seen.get(i, b.com),
+                fish_distance=now.pc.fish[i],
+                fish_com=now.seen.get(i, b.com),
                 fish_forward=b.fwd,
                 fish_velocity=b.vel,
                 fish_species=self.names,
-                food_distance=pc.food[i],
-                food=food,
-                obstacle_distance=pc.obstacles[i],
+                food_distance=now.pc.food[i],
+                food=now.food,
+                obstacle_distance=now.pc.obstacles[i],
                 collision=hits[i],
                 away=aways[i],
                 threat=threats[i],
                 fish_only=fish_only[i],
-                conceded=given[i],
+                conceded=now.given[i],
             )
             d, height = self.brains[i].routine(view, targets[i])
-            self.brains[i].remember(thought[i], targets[i])
             moves[i] = (d.speed, d.turn)
-            heights[i] = selves[i].layer if height is None else height
-        pitch = keep_depths(b.com[living, 1], b.fwd[living, 1], [heights[i] for i in living])
-        demands: list[Demand | None] = [None] * len(self.brains)
-        for i, p in zip(living, pitch.tolist(), strict=True):
-            # the demand with the body's posture (``Demand(...)``: ``replace`` is slow)
-            demands[i] = Demand(*moves[i], p, roll[i], rate[i], bend[i])
-        return activations(self.brains, demands, period)
+            if height is not None:
+                heights[i] = height
+        # the others keep their layers
+        return moves, {i: heights.get(i, selves[i].layer) for i in living}
 
     def _go_to(
         self, go: list[int], targets: list[int | None], food: np.ndarray, seen: dict
@@ -192,20 +238,15 @@ class Shoal:
         )  # fmt: skip
         return speed, turn, aim[:, 1]
 
-    def _avoid(
-        self,
-        ducks: list[int],
-        pc: Percepts,
-        aways: list[np.ndarray | None],
-        threats: list[float],
-        fish_only: list[bool],
-    ) -> tuple[np.ndarray, np.ndarray]:
+    def _avoid(self, ducks: list[int], now: Moment) -> tuple[np.ndarray, np.ndarray]:
         """Return the speeds and turns (``avoid_many``) of the avoiding fishes ``ducks``: each
-        turning to its way out (``aways``), as urgently as the nearest obstacle or the
-        threatening fish (``threats``, m) is near."""
+        turning to its way out, as urgently as the nearest obstacle or the threatening fish
+        is near."""
         b, rows = self.bodies, np.array(ducks, int)
+        _, aways, threats, fish_only = now.ahead
         away = np.array([np.full(3, np.nan) if aways[i] is None else aways[i] for i in ducks])
-        near = pc.obstacles[rows].min(axis=1) if pc.obstacles.shape[1] else np.inf
+        obstacles = now.pc.obstacles
+        near = obstacles[rows].min(axis=1) if obstacles.shape[1] else np.inf
         obstacle = np.minimum(near, np.array([threats[i] for i in ducks], float))
         only = np.array([fish_only[i] for i in ducks], bool)
         cruise, top, away = self.cruise[rows], self.top[rows], away.reshape(-1, 3)
