@@ -177,6 +177,15 @@ def test_every_minds_focus_at_once_is_each_minds_own():
     many = focus_many(d, previous)
     own = [focus(row, None if p < 0 else int(p)) for row, p in zip(d, previous, strict=True)]
     assert many.tolist() == [-1 if t is None else t for t in own]
+
+    def rule(row, p):  # the focuser's rule, one row in plain Python
+        near = min(row.tolist())
+        if near == np.inf:
+            return -1
+        kept = 0 <= p < len(row) and row[p] < np.inf and row[p] <= 1.25 * near
+        return int(p) if kept else row.tolist().index(near)
+
+    assert many.tolist() == [rule(row, p) for row, p in zip(d, previous, strict=True)]
     kept = (previous >= 0) & (previous < 8) & (many == previous)
     assert kept.sum() > 30 and (many[20:] != d[20:].argmin(axis=1)).sum() > 10  # kept some
     assert (many[:20] == -1).all()

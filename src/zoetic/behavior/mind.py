@@ -320,20 +320,39 @@ def focus(distances, previous: int | None = None, keep_within: float = 1.25) -> 
 def focus_many(distances, previous, keep_within: float = 1.25) -> np.ndarray:
     """Return (n,) the targets the focusers of n minds attend to (-1: none), each row of
     ``distances`` (n, M) one mind's candidates (inf: not perceived) and ``previous`` (n,) its
-    previous target (-1: none): the nearest, but the previous target kept while it is
-    perceived and no more than ``keep_within`` times farther than the nearest."""
+    previous target (-1: none): ``focus_pairs`` of the perceived ones."""
     d = np.asarray(distances, dtype=float)
-    n, m = d.shape
-    if m == 0:
-        return np.full(n, -1)
-    rows = np.arange(n)
-    best = d.argmin(axis=1)
-    near = d[rows, best]
+    ii, jj = np.nonzero(np.isfinite(d))
+    return focus_pairs(len(d), ii, jj, d[ii, jj], previous, keep_within)
+
+
+def focus_pairs(n: int, rows, cols, distances, previous, keep_within: float = 1.25):
+    """Return (n,) the targets the focusers of n minds attend to (-1: none) among the
+    candidates each perceives: mind ``rows[k]`` perceives candidate ``cols[k]`` at
+    ``distances[k]`` (the pairs in row order, each row's columns ascending); ``previous``
+    (n,) each mind's previous target (-1: none). The nearest (the first on a tie), but the
+    previous target is kept while it is perceived and no more than ``keep_within`` times
+    farther than the nearest (no dithering)."""
+    d = np.asarray(distances, float)
+    ok = np.isfinite(d)  # an infinite candidate is not perceived
+    rows, cols, d = np.asarray(rows, int)[ok], np.asarray(cols, int)[ok], d[ok]
+    out = np.full(n, -1)
+    if not len(rows):
+        return out
+    order = np.lexsort((cols, d, rows))  # by mind, then distance, then column
+    first = order[np.r_[True, rows[order][1:] != rows[order][:-1]]]
+    who = rows[first]
+    out[who] = cols[first]
+    near = np.full(n, np.inf)
+    near[who] = d[first]
+    # the previous target's distance, where it is among the mind's candidates
     prev = np.asarray(previous, int)
-    valid = (prev >= 0) & (prev < m)
-    x = d[rows, np.where(valid, prev, 0)]
-    keep = valid & np.isfinite(x) & (x <= keep_within * near)
-    return np.where(np.isfinite(near), np.where(keep, prev, best), -1)
+    width = int(max(cols.max(), prev.max(initial=0))) + 1
+    key = rows * width + cols  # ascending: the pairs are in row order, columns ascending
+    want = np.arange(n) * width + np.maximum(prev, 0)
+    at = np.minimum(np.searchsorted(key, want), len(key) - 1)
+    keep = (prev >= 0) & (key[at] == want) & (d[at] <= keep_within * near)
+    return np.where(keep, prev, out)
 
 
 def think(

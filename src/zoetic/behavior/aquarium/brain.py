@@ -20,7 +20,7 @@ from zoetic.behavior.aquarium.locomotion import (
     MotorLocomotion,
     learned_motor,
 )
-from zoetic.behavior.aquarium.reach import reach_costs
+from zoetic.behavior.aquarium.reach import reach_pairs
 from zoetic.behavior.aquarium.routines import (
     Around,
     Me,
@@ -41,6 +41,7 @@ from zoetic.behavior.mind import (
     drives,
     drives_many,
     focus_many,
+    focus_pairs,
     initial_mind,
     think_many,
 )
@@ -302,16 +303,19 @@ def focus_targets(
         rows = np.array([k for k, x in enumerate(intentions) if x == intention], int)
         if not len(rows):
             continue
-        if intention == "eat":
-            d = food_distance[rows]
+        if intention == "eat":  # the pairs of a fish and a particle it perceives
+            ii, pp = np.nonzero(food_distance[rows] < np.inf)
             if given is not None:
-                free = np.where(given[rows], np.inf, d)
-                d = np.where(np.isfinite(free).any(axis=1)[:, None], free, d)
-            cand = reach_costs(nose[rows], forward[rows], radius[rows], food, d)
+                left = given[rows[ii], pp]
+                free = np.bincount(ii[~left], minlength=len(rows)) > 0
+                keep = ~left | ~free[ii]  # all conceded: it races for one
+                ii, pp = ii[keep], pp[keep]
+            cost = reach_pairs(nose, forward, radius, food, rows[ii], pp)
+            picked = focus_pairs(len(rows), ii, pp, cost, prev[rows])
         else:
             mask = (same if intention == "mate" else prey)[rows]
-            cand = np.where(mask, fish_distance[rows], np.inf)
-        for k, t in zip(rows.tolist(), focus_many(cand, prev[rows]).tolist(), strict=True):
+            picked = focus_many(np.where(mask, fish_distance[rows], np.inf), prev[rows])
+        for k, t in zip(rows.tolist(), picked.tolist(), strict=True):
             out[k] = None if t < 0 else t
     return out
 

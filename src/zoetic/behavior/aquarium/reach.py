@@ -70,13 +70,28 @@ def reach_costs(
     distances: np.ndarray,
 ) -> np.ndarray:
     """Return (n, P): how far (m) each of n fishes must swim to reach each point (P, 3)
-    (``turn_paths``' shorter way), inf where ``distances`` (n, P) is (not perceived): what
-    a focuser weighs, so that a particle ahead wins over a nearer one beside the fish that
-    needs a loop. nose, forward (n, 3); radius (n,) the fishes' sharpest turns (m)."""
+    (``reach_pairs``), inf where ``distances`` (n, P) is (not perceived). nose, forward
+    (n, 3); radius (n,) the fishes' sharpest turns (m)."""
     out = np.full(np.shape(distances), np.inf)
     ii, pp = np.nonzero(np.asarray(distances) < np.inf)  # only the pairs perceived
-    if len(ii):
-        ahead, left = frame(nose[ii], forward[ii], points[pp])
-        r = RADIUS_MARGIN * np.asarray(radius, float)[ii]
-        out[ii, pp] = np.minimum(way(ahead, left - r, r), way(ahead, -left - r, r))
+    out[ii, pp] = reach_pairs(nose, forward, radius, points, ii, pp)
     return out
+
+
+def reach_pairs(
+    nose: np.ndarray,
+    forward: np.ndarray,
+    radius: np.ndarray,
+    points: np.ndarray,
+    fish: np.ndarray,
+    point: np.ndarray,
+) -> np.ndarray:
+    """Return (m,): how far (m) fish ``fish[k]`` must swim to reach point ``point[k]``
+    (``turn_paths``' shorter way), for m pairs: what a focuser weighs, so that a particle
+    ahead wins over a nearer one beside the fish that needs a loop. nose, forward (n, 3);
+    radius (n,) the fishes' sharpest turns (m); points (P, 3)."""
+    if not len(fish):
+        return np.zeros(0)
+    ahead, left = frame(nose[fish], forward[fish], points[point])
+    r = RADIUS_MARGIN * np.asarray(radius, float)[fish]
+    return np.minimum(way(ahead, left - r, r), way(ahead, -left - r, r))
