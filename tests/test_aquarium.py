@@ -470,8 +470,7 @@ def test_a_fish_leaves_a_particle_to_a_nearer_fish_heading_for_it():
 
 
 def test_an_avoiding_fish_brakes_for_a_fish_close_ahead_and_not_for_a_rock():
-    from zoetic.behavior.aquarium.routines import Around, Me, avoid
-    from zoetic.behavior.aquarium.steering import URGENT_FISH
+    from zoetic.behavior.aquarium.routines import URGENT_FISH, Around, Me, avoid
 
     f, left = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0])
     me = Me(np.array([-0.5, 0.0, 0.0]), np.zeros(3), f, 0.25 * f, 0.25, 0.43)

@@ -16,14 +16,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from zoetic.behavior.aquarium import steering
 from zoetic.behavior.aquarium.locomotion import Demand
 from zoetic.behavior.aquarium.perception import obstacle_distance
-from zoetic.behavior.aquarium.steering import (
-    avoid_many,
-    go_to_many,
-    keep_depths,
-)
+from zoetic.behavior.aquarium.steering import avoid_many, go_to_many, keep_depths
 
+# the routines' constants, defined with their arithmetic over arrays (``steering``)
+NEAR, BRAKE_BEARING = steering.NEAR, steering.BRAKE_BEARING
+URGENT, URGENT_FISH = steering.URGENT, steering.URGENT_FISH
+DEPTH_GAIN, MAX_CLIMB, PITCH_GAIN = steering.DEPTH_GAIN, steering.MAX_CLIMB, steering.PITCH_GAIN
 LOOKAHEAD = 10.0  # s of travel (at least 3 m) probed ahead for an imminent collision
 PROBES = 8  # points probed along the heading
 _STEPS = np.arange(PROBES, dtype=float)
