@@ -317,19 +317,20 @@ def test_two_minnows_on_a_collision_course_avoid_each_other(other):
 
 
 def test_the_focuser_weighs_food_by_the_way_to_it_not_the_distance():
-    from zoetic.behavior.aquarium.routines import Me, reach_cost, turn_paths
+    from zoetic.behavior.aquarium.reach import reach_costs, turn_paths
     from zoetic.behavior.mind import focus
 
-    me = Me(np.zeros(3), np.zeros(3), np.array([1.0, 0.0, 0.0]), np.zeros(3), 0.2, 0.4, radius=2.0)
+    nose, fwd = np.zeros((1, 3)), np.array([[1.0, 0.0, 0.0]])
     ahead, beside = np.array([4.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.5])
-    left, right = turn_paths(me, np.stack([ahead, beside]))  # rows: left, right first
+    left, right = turn_paths(nose[0], fwd[0], 2.0, np.stack([ahead, beside]))  # left, right
     assert left[0] == pytest.approx(4.0) and right[0] == pytest.approx(4.0)
     # inside the left turning circle (radius 2.2 with the margin): no left turn reaches it,
     # the way round to the right is more than three quarters of a circle
     assert left[1] == np.inf and right[1] > 1.5 * np.pi * 2.2
-    cost = reach_cost(me, np.stack([ahead, beside]), np.array([4.0, 1.5]))
+    cost = reach_costs(nose, fwd, np.array([2.0]), np.stack([ahead, beside]), [[4.0, 1.5]])[0]
     assert focus(cost) == 0 and focus(np.array([4.0, 1.5])) == 1
-    assert reach_cost(me, np.stack([ahead, beside]), np.array([np.inf, 1.5]))[0] == np.inf
+    seen = np.array([[np.inf, 1.5]])
+    assert reach_costs(nose, fwd, np.array([2.0]), np.stack([ahead, beside]), seen)[0, 0] == np.inf
 
 
 def test_a_way_out_of_another_fish_does_not_lead_into_a_wall():

@@ -213,6 +213,7 @@ def test_situations_of_all_fishes_equal_each_fishs_own():
     from zoetic.behavior.aquarium.brain import FishBrain, View, situations
     from zoetic.behavior.aquarium.routines import Me
     from zoetic.behavior.aquarium.species import load_species
+    from zoetic.behavior.mind import Situations
     from zoetic.bodies import load_animal
 
     minnow, shark = load_species("minnow"), load_species("shark")
@@ -257,12 +258,13 @@ def test_situations_of_all_fishes_equal_each_fishs_own():
                 hits[i],
                 None,
             )
-            assert (
-                sits[i]
-                == b._situation(v)
-                == _situation_of(b, fish[i], food[i], obst[i], masks[i], hits[i])
-            )
+            own, own_pred = b._situation(v)
+            ref = _situation_of(b, fish[i], food[i], obst[i], masks[i], hits[i])
+            for k in Situations.__dataclass_fields__:
+                assert getattr(sits, k)[i] == getattr(own, k)[0] == getattr(ref, k), k
             assert np.array_equal(pred[i], np.where(masks[i][1], fish[i], np.inf))
+            assert np.array_equal(own_pred[0], pred[i])
+            assert tuple(pred[i][np.isfinite(pred[i])]) == ref.predator_distances
 
 
 def test_world_reads_all_positions_at_once_and_names_the_animals_it_tested_for_contact():
@@ -290,3 +292,55 @@ def test_world_reads_all_positions_at_once_and_names_the_animals_it_tested_for_c
         for a in range(2):  # an animal not tested got no impulse
             assert a in c.near or not c.touching[0, a].any()
     assert np.array(touched)[:, 0, 0].any()  # the first minnow did hit the rock
+
+
+def test_every_minds_thought_at_once_is_each_minds_own():
+    from zoetic.behavior.aquarium.species import load_species
+    from zoetic.behavior.mind import (
+        INTENTIONS,
+        Drives,
+        Situation,
+        Situations,
+        Tempers,
+        think,
+        think_many,
+    )
+
+    minnow, shark = load_species("minnow"), load_species("shark")
+    rng = np.random.default_rng(9)
+    n = 400
+    kinds = [shark if k % 7 == 0 else minnow for k in range(n)]
+    consts = [s.fear_constants() for s in kinds]
+    tempers = Tempers.of(consts, [s.habits for s in kinds], [s.predator for s in kinds])
+    minds = [
+        MindState(
+            intention=str(rng.choice(INTENTIONS)),
+            since=float(rng.uniform(8.0, 10.0)),
+            reflex=bool(rng.random() < 0.5),
+            threatened=float(rng.uniform(9.0, 10.0)),
+        )
+        for _ in range(n)
+    ]
+    far = lambda: float(rng.choice([np.inf, rng.uniform(0.02, 3.0)]))  # noqa: E731
+    sits = [
+        Situation(
+            bool(rng.random() < 0.2),
+            (),
+            far(),
+            far(),
+            far(),
+            bool(rng.random() < 0.3),
+            bool(rng.random() < 0.3),
+            bool(rng.random() < 0.3),
+            bool(rng.random() < 0.5),
+        )  # fmt: skip
+        for _ in range(n)
+    ]
+    hunger, libido, fear = rng.uniform(0, 1, (3, n)).round(1)  # ties between hunger and libido
+    many = think_many(minds, 10.0, tempers, Situations.of(sits), hunger, libido, fear)
+    for k in range(n):
+        d = Drives(float(hunger[k]), float(libido[k]), float(fear[k]))
+        own, _ = think(minds[k], 10.0, consts[k], kinds[k].habits, sits[k], kinds[k].predator, d)
+        assert many[k] == own
+    assert len({m.intention for m in many}) >= 7  # every branch met
+    assert sum(m.intention != s.intention for m, s in zip(many, minds, strict=True)) > 50

@@ -148,27 +148,47 @@ def test_concessions_over_the_perceiving_pairs_are_the_definitions():
     assert not conceded(nose, fwd, food, np.zeros(n, bool), seen).any()
 
 
-def test_the_focusers_nearest_way_skips_only_particles_that_cannot_be_nearest():
-    from zoetic.behavior.aquarium.routines import Me, reach_cost
-    from zoetic.behavior.mind import focus
+def test_every_fishs_ways_to_its_food_at_once_are_each_fishs_own():
+    from zoetic.behavior.aquarium.reach import reach_costs, turn_paths
 
     rng = np.random.default_rng(4)
-    skipped = 0
-    for _ in range(200):
-        nose, com, fwd, vel = (x[0] for x in _crowd(rng, 1, 1.0))
-        me = Me(com, nose, fwd, vel, 0.25, 0.43, float(rng.uniform(0.5, 2.5)))
-        food = rng.uniform(-6, 6, (25, 3))
-        dist = np.where(rng.random(25) < 0.7, 1.0, np.inf)
-        keep = int(rng.integers(0, 25))
-        every = reach_cost(me, food, dist)
-        some = reach_cost(me, food, dist, nearest=True, keep=keep)
-        done = np.isfinite(some)
-        skipped += int((np.isfinite(every) & ~done).sum())
-        assert (some[done] == every[done]).all()  # the ways it takes are the ways
-        assert every[~done].min(initial=np.inf) > every.min()  # those it skips are longer
-        assert focus(some, keep) == focus(every, keep)
-        assert done[keep] == np.isfinite(every[keep])  # the previous target is weighed
-    assert skipped > 1000  # most particles are skipped
+    n = 60
+    nose, _, fwd, _ = _crowd(rng, n, 6.0)
+    fwd[0] = (0.0, 1.0, 0.0)  # straight up: no horizontal heading
+    radius = rng.uniform(0.5, 2.5, n)
+    food = rng.uniform(-6, 6, (25, 3))
+    dist = np.where(rng.random((n, 25)) < 0.7, 1.0, np.inf)
+    costs = reach_costs(nose, fwd, radius, food, dist)
+    assert np.isfinite(costs).sum() > 500
+    for i in range(n):
+        own = turn_paths(nose[i], fwd[i], radius[i], food).min(axis=0)
+        seen = np.isfinite(dist[i])
+        assert (costs[i, seen] == own[seen]).all()  # the same numbers, bit for bit
+        assert (costs[i, ~seen] == np.inf).all()
+
+
+def test_every_minds_focus_at_once_is_each_minds_own():
+    from zoetic.behavior.mind import focus, focus_many
+
+    rng = np.random.default_rng(5)
+    d = np.where(rng.random((300, 8)) < 0.5, rng.uniform(1.0, 3.0, (300, 8)), np.inf)
+    d[:20] = np.inf  # none perceived
+    previous = rng.integers(-1, 9, 300)  # -1 none, 8 out of range
+    many = focus_many(d, previous)
+    own = [focus(row, None if p < 0 else int(p)) for row, p in zip(d, previous, strict=True)]
+    assert many.tolist() == [-1 if t is None else t for t in own]
+
+    def rule(row, p):  # the focuser's rule, one row in plain Python
+        near = min(row.tolist())
+        if near == np.inf:
+            return -1
+        kept = 0 <= p < len(row) and row[p] < np.inf and row[p] <= 1.25 * near
+        return int(p) if kept else row.tolist().index(near)
+
+    assert many.tolist() == [rule(row, p) for row, p in zip(d, previous, strict=True)]
+    kept = (previous >= 0) & (previous < 8) & (many == previous)
+    assert kept.sum() > 30 and (many[20:] != d[20:].argmin(axis=1)).sum() > 10  # kept some
+    assert (many[:20] == -1).all()
 
 
 def test_every_fishs_probes_at_once_are_each_fishs_own():
@@ -185,3 +205,26 @@ def test_every_fishs_probes_at_once_are_each_fishs_own():
     for i in range(n):
         me = Me(com[i], nose[i], fwd[i], vel[i], float(cruise[i]), 0.43)
         assert np.array_equal(many[i], probes_ahead(me, probe_reach(me, meals[i])))
+
+
+def test_every_fishs_way_to_its_target_at_once_is_each_fishs_own():
+    from zoetic.behavior.aquarium.routines import Around, Me, go_to
+    from zoetic.behavior.aquarium.steering import go_to_many
+
+    rng = np.random.default_rng(7)
+    n = 80
+    nose, com, fwd, vel = _crowd(rng, n, 6.0)
+    cruise, top = rng.uniform(0.1, 0.3, n), rng.uniform(0.35, 0.6, n)
+    target = rng.uniform(-6, 6, (n, 3))
+    target[:10] = nose[:10] + 0.3 * rng.normal(size=(10, 3))  # near: some brake
+    moving = rng.random(n) < 0.5
+    velocity = np.where(moving[:, None], rng.normal(0, 0.3, (n, 3)), np.nan)
+    lead = np.where(moving & (rng.random(n) < 0.5), 0.5, 0.0)
+    beside = np.where(moving & (lead == 0.0), 0.6, 0.0)
+    speed, turn = go_to_many(nose, com, fwd, cruise, top, target, velocity, lead, beside)
+    assert (speed == 0.0).sum() >= 1 and (np.abs(turn) > 0.1).sum() > 20
+    for i in range(n):
+        me = Me(com[i], nose[i], fwd[i], vel[i], cruise[i], top[i])
+        around = Around(target=target[i], target_velocity=velocity[i] if moving[i] else None)
+        own = go_to(me, around, rng, float(lead[i]), float(beside[i]))
+        assert (own.speed, own.turn) == (speed[i], turn[i])

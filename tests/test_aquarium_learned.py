@@ -343,3 +343,36 @@ def test_a_slow_steering_learned_fish_keeps_its_tail():
     life = live(tank)
     ends = [float(bend(f.body, p[-1])) for f, p in zip(tank.fishes, life.positions, strict=True)]
     assert min(ends) > FOLDED
+
+
+def test_a_crowds_learned_gaits_at_once_are_each_fishs_own():
+    from zoetic.behavior.aquarium.locomotion import learned_activations
+    from zoetic.behavior.aquarium.species import load_species
+
+    minnow = load_species("minnow")
+    body = load_animal(minnow.body)
+    motor = learned_motor(body, minnow.motor.skills)
+    rng = np.random.default_rng(8)
+    n, steps = 12, max(1, int(round(0.1 / body.dt)))
+    crowd = [LearnedLocomotion(body, motor) for _ in range(n)]
+    alone = [LearnedLocomotion(body, motor) for _ in range(n)]
+    turned = 0
+    for period in range(40):
+        times = (period * steps + np.arange(steps)) * body.dt
+        demands = [
+            Demand(
+                float(rng.uniform(0.0, 0.5)),
+                float(rng.choice([0.0, 0.5, -1.0, 2.5, -3.0])),
+                float(rng.uniform(-0.5, 0.5)),
+                float(rng.normal(0, 0.1)),
+                float(rng.normal(0, 0.3)),
+                float(rng.choice([1.0, 0.8])),  # now and then bent: the fold guard
+            )
+            for _ in range(n)
+        ]
+        together = learned_activations(crowd, demands, times)
+        for k in range(n):
+            assert (together[k] == alone[k].activations(demands[k], times)).all()
+            assert (crowd[k].turning, crowd[k].last) == (alone[k].turning, alone[k].last)
+        turned += sum(f.turning is not None for f in crowd)
+    assert turned > 20  # sharp turns were under way

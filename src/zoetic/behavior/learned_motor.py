@@ -13,13 +13,12 @@ of a few durations.
 from __future__ import annotations
 
 import weakref
-from bisect import bisect_left
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 
-from zoetic.behavior.motor import fin_activation, fin_rows, grid_rates, interp
+from zoetic.behavior.motor import fin_activations, fin_rows, grid_rates, interps
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.bodies import Body
 from zoetic.control.abstract import AbstractController
@@ -149,30 +148,51 @@ class LearnedMotor:
 
     def swim(self, speed: float) -> float:
         """Return the swim weight that swims ``speed`` m/s (clipped to the calibrated range;
-        below the smallest weight's speed, scaled down towards rest)."""
+        below the smallest weight's speed, scaled down towards rest): ``swims`` of one."""
+        return float(self.swims(np.array([speed], float))[0])
+
+    def swims(self, speed: np.ndarray) -> np.ndarray:
+        """Return the swim weights (D,) that swim the speeds (D,) m/s (``swim`` of each)."""
+        speed = np.asarray(speed, float)
         lo = float(self.speeds[0])
-        if speed < lo:
-            return float(LEARNED_SWIM[0] * max(speed, 0.0) / max(lo, 1e-9))
         sp, w = self._swim_table
-        return float(interp(float(speed), sp, w))
+        slow = LEARNED_SWIM[0] * np.maximum(speed, 0.0) / max(lo, 1e-9)
+        return np.where(speed < lo, slow, interps(speed, sp, w))
 
     @cached_property
-    def _swim_table(self) -> tuple[list[float], list[float]]:
+    def _swim_table(self) -> tuple[np.ndarray, np.ndarray]:
         """The speeds (ascending) and swim weights ``swim`` interpolates: the weights up to
         the fastest, sorted by speed (computed once, not once a fish and period)."""
         top = int(np.argmax(self.speeds))
         sp, w = self.speeds[: top + 1], LEARNED_SWIM[: top + 1]
         order = np.argsort(sp)
-        return sp[order].tolist(), w[order].tolist()
+        return sp[order], w[order]
 
     def turn(self, angle: float) -> tuple[int, float]:
         """Return (side, seconds): play sharp-turn-left (0) or -right (1) for that long from its
         start to turn ``angle`` rad (left positive); the whole turn when it turns less."""
-        side = 0 if angle >= 0 else 1
-        x = np.concatenate([[0.0], np.abs(self.turned[side])])
-        y = np.concatenate([[0.0], LEARNED_TURN])
-        keep = np.concatenate([[True], np.diff(x) > 0])  # interp needs increasing angles
-        return side, float(np.interp(abs(angle), x[keep], y[keep]))
+        side, seconds = self.turns(np.array([angle], float))
+        return int(side[0]), float(seconds[0])
+
+    def turns(self, angle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Return (side, seconds) (D,) of ``turn`` for each of the angles (D,) rad."""
+        angle = np.asarray(angle, float)
+        side = np.where(angle >= 0, 0, 1)
+        (x0, y0), (x1, y1) = self._turn_table
+        a = np.abs(angle)
+        return side, np.where(side == 0, np.interp(a, x0, y0), np.interp(a, x1, y1))
+
+    @cached_property
+    def _turn_table(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+        """Per side, the angles turned (increasing, from 0) and the seconds played that
+        ``turn`` interpolates (computed once, not once a fish and turn)."""
+        out = []
+        for side in (0, 1):
+            x = np.concatenate([[0.0], np.abs(self.turned[side])])
+            y = np.concatenate([[0.0], LEARNED_TURN])
+            keep = np.concatenate([[True], np.diff(x) > 0])  # interp needs increasing angles
+            out.append((x[keep], y[keep]))
+        return tuple(out)
 
     @property
     def steer_top(self) -> float:
@@ -191,18 +211,27 @@ class LearnedMotor:
         """Return (side, weight w): steer left (0) or right (1) at ``rate`` rad/s (left
         positive) while swimming at swim weight ``a``: the smallest steer weight whose
         calibrated rate is reached (the rates at ``a`` interpolated between swim weights);
-        beyond the table, w = 1."""
+        beyond the table, w = 1 (``steers`` of one)."""
+        side, w = self.steers_at(np.array([rate], float), np.array([a], float))
+        return int(side[0]), float(w[0])
+
+    def steers_at(self, rate: np.ndarray, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Return (side, w) (D,) of ``steer`` for each of the rates and swim weights (D,)."""
         if self.steer_rates is None:
             raise ZoeticError("this repertoire has no steering entries (steer-left/right)")
-        side = 0 if rate >= 0 else 1
-        sw = LEARNED_SWIM.tolist()
-        a = min(max(float(a), sw[0]), sw[-1])
-        j = min(max(bisect_left(sw, a) - 1, 0), len(sw) - 2)
-        f = (a - sw[j]) / (sw[j + 1] - sw[j])
-        row = ((1 - f) * self.steer_rates[j] + f * self.steer_rates[j + 1]).tolist()
-        if row[-1] <= row[0]:
-            return side, 0.0
-        return side, interp(abs(float(rate)), row, STEER_WEIGHTS.tolist())
+        rate = np.asarray(rate, float)
+        sw, rates, weights = self._steer_table
+        a = np.minimum(np.maximum(np.asarray(a, float), sw[0]), sw[-1])
+        j = np.clip(np.searchsorted(sw, a, side="left") - 1, 0, len(sw) - 2)
+        f = ((a - sw[j]) / (sw[j + 1] - sw[j]))[:, None]
+        row = (1 - f) * rates[j] + f * rates[j + 1]  # the rates at ``a``
+        w = interps(np.abs(rate), row, weights)
+        return np.where(rate >= 0, 0, 1), np.where(row[:, -1] <= row[:, 0], 0.0, w)
+
+    @cached_property
+    def _steer_table(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The swim weights, steering rates and steer weights ``steer`` reads."""
+        return LEARNED_SWIM, np.asarray(self.steer_rates, float), STEER_WEIGHTS
 
     def steer_signal(
         self, times: np.ndarray, a: float, w: float, side: int, pitch: float
@@ -237,7 +266,40 @@ class LearnedMotor:
 
     def _swim_raw(self, times: np.ndarray, a: float) -> np.ndarray:
         """The swim gait of weight ``a`` (do-nothing blended with go-straight), unclipped."""
-        return (1 - a) * self._raw(self.bases[0], times) + a * self._raw(self.bases[1], times)
+        return self.swim_raws(times, np.array([a], float))[0]
+
+    def swim_raws(self, times: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """Return (D, T, A) the swim gaits of D weights ``a`` (D,) at ``times``, unclipped
+        (each the same numbers as one weight's)."""
+        w = np.asarray(a, float)[:, None, None]
+        return (1 - w) * self._raw(self.bases[0], times) + w * self._raw(self.bases[1], times)
+
+    def steer_raws(self, side: int, times: np.ndarray, u: np.ndarray, w: np.ndarray) -> np.ndarray:
+        """Return (D, T, A): (1 - w) of the swim gaits ``u`` (D, T, A) plus ``w`` (D,) of the
+        steering gait of ``side`` (0 left, 1 right) at ``times``, unclipped."""
+        w = np.asarray(w, float)[:, None, None]
+        return (1 - w) * u + w * self._steer_raw(side, times)[None]
+
+    def fins(self, u: np.ndarray, pitch: np.ndarray, lean: np.ndarray | None = None) -> np.ndarray:
+        """Return activations (D, T, A) from the raw blends ``u`` (D, T, A; changed in place):
+        clipped to [0, 1], the fins of row k at ``pitch[k]`` rad and, where ``lean`` (D,) is
+        given (not nan), the left ones ``lean[k]`` rad more and the right ones less
+        (``righting``)."""
+        pitch = np.asarray(pitch, float)
+        for act, value in self._fin_values(pitch, np.zeros(len(pitch))):
+            u[:, :, act] = value[:, None]
+        np.clip(u, 0.0, 1.0, out=u)
+        if lean is None:
+            return u
+        lean = np.asarray(lean, float)
+        on = ~np.isnan(lean)
+        for act, value in self._fin_values(pitch[on], lean[on]):
+            u[on, :, act] = value[:, None]
+        return u
+
+    def _fin_values(self, pitch: np.ndarray, lean: np.ndarray) -> list[tuple[int, np.ndarray]]:
+        """``fin_activations`` of each row's pitch and lean (D,), per fin actuator."""
+        return fin_activations(self._fin_rows, pitch, lean)
 
     def _raw(self, gait: AbstractController, times: np.ndarray, shift: float = 0.0) -> np.ndarray:
         """Return ``gait.raw(times + shift)`` (read-only), evaluated once for the same times:
@@ -266,19 +328,11 @@ class LearnedMotor:
         return self._fins(u, pitch)
 
     def _fins(self, u: np.ndarray, pitch: float) -> np.ndarray:
-        return np.clip(self.lean(u, pitch, 0.0), 0.0, 1.0)
-
-    def lean(self, u: np.ndarray, pitch: float, lean: float) -> np.ndarray:
-        """Set the fins of activations ``u`` (T, A; changed in place and returned) to
-        ``pitch`` rad, the left ones ``lean`` rad more and the right ones less
-        (``righting``)."""
-        for k, act in fin_activation(self.body, float(pitch), self._fin_rows, lean).items():
-            u[:, k] = act
-        return u
+        return self.fins(u[None], np.array([pitch], float))[0]
 
     @cached_property
     def _fin_rows(self) -> list[tuple[int, float, float, float]]:
-        """``fin_rows(body)``, kept (``_fins`` runs once a fish and control period)."""
+        """``fin_rows(body)``, kept (``fins`` runs once a control period)."""
         return fin_rows(self.body)
 
     def summary(self) -> dict:

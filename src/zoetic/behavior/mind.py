@@ -149,6 +149,9 @@ def drives_many(
     h = np.minimum(np.maximum(1.0 - eaten * r / alpha, 0.0), 1.0)
     lib = np.minimum(np.maximum(p1 * (t - np.asarray(mating_time, float)) * (1.0 - h), 0.0), 1.0)
     d = np.asarray(predators, float).reshape(len(h), -1)
+    # only the columns of a predator someone perceives (a crowd has a few): the terms of the
+    # other columns are 0, and a running sum adds nothing for them
+    d = d[:, np.isfinite(d).any(axis=0)]
     if d.shape[1] == 0:
         return h, lib, np.zeros(len(h))
     each = np.where(
@@ -167,6 +170,109 @@ def desire(drive: float, distance: float, q: tuple[float, float]) -> float:
     return min(1.0, drive * (1.0 + float(ramp(s, q[0], q[1]))))
 
 
+def desires(drive: np.ndarray, distance: np.ndarray, q1: np.ndarray, q2: np.ndarray):
+    """Return ``desire`` (n,) of n drives and their targets' distances (n,), each with its
+    own ramp (q1, q2 (n,)): the same numbers as ``desire`` of each."""
+    d = np.asarray(distance, float)
+    ok = np.isfinite(d) & (d > 0)
+    s = np.where(ok, 1.0 / np.where(ok, d, 1.0), 0.0)
+    mid = (s - q1) / np.maximum(2 * q2 - q1 - s, 1e-12)
+    r = np.where(s <= q1, 0.0, np.where(s >= q2, 1.0, mid))
+    return np.minimum(1.0, drive * (1.0 + r))
+
+
+@dataclass(frozen=True)
+class Tempers:
+    """n minds' constants and habits as arrays (n,) each, for ``think_many``: the fear,
+    panic and desire thresholds, the hunger and libido ramps (q1, q2), the persistence (s),
+    and the habits the intention generator reads; and which are predators."""
+
+    fear_threshold: np.ndarray
+    panic_threshold: np.ndarray
+    hunger_q: tuple[np.ndarray, np.ndarray]
+    libido_q: tuple[np.ndarray, np.ndarray]
+    desire_threshold: np.ndarray
+    persistence: np.ndarray
+    schooling: np.ndarray
+    no_crowd: np.ndarray  # dislikes crowds
+    no_obstacles: np.ndarray  # dislikes obstacles near
+    company: np.ndarray  # likes company
+    predator: np.ndarray
+
+    @classmethod
+    def of(cls, constants: list, habits: list, predator: list[bool]) -> Tempers:
+        """Return the tempers of minds with these constants (``MindConstants``), habits and
+        predator flags, one each."""
+
+        def col(get) -> np.ndarray:
+            return np.array([get(c, h) for c, h in zip(constants, habits, strict=True)])
+
+        return cls(
+            col(lambda c, h: c.fear_threshold),
+            col(lambda c, h: c.panic_threshold),
+            (col(lambda c, h: c.hunger_ramp[0]), col(lambda c, h: c.hunger_ramp[1])),
+            (col(lambda c, h: c.libido_ramp[0]), col(lambda c, h: c.libido_ramp[1])),
+            col(lambda c, h: c.desire_threshold),
+            col(lambda c, h: c.persistence),
+            col(lambda c, h: bool(h.schooling)),
+            col(lambda c, h: "crowd" in h.dislikes),
+            col(lambda c, h: "obstacles" in h.dislikes),
+            col(lambda c, h: "company" in h.likes),
+            np.array(predator, bool),
+        )
+
+
+@dataclass(frozen=True)
+class Situations:
+    """n minds' situations as arrays (n,) each: the fields of ``Situation`` the intention
+    generator reads (the predators' distances go to the drives)."""
+
+    collision: np.ndarray
+    food_distance: np.ndarray
+    mate_distance: np.ndarray
+    prey_distance: np.ndarray
+    crowded: np.ndarray
+    alone: np.ndarray
+    near_obstacle: np.ndarray
+    fish_only: np.ndarray
+
+    @classmethod
+    def of(cls, sits: list[Situation]) -> Situations:
+        """Return the situations as arrays."""
+        names = cls.__dataclass_fields__
+        return cls(**{k: np.array([getattr(x, k) for x in sits]) for k in names})
+
+
+CODE = {name: k for k, name in enumerate(INTENTIONS)}
+LEVELS = np.array([LEVEL[name] for name in INTENTIONS])
+
+
+def intend_many(
+    hunger: np.ndarray, libido: np.ndarray, fear: np.ndarray, sit: Situations, c: Tempers,
+    previous: np.ndarray,
+) -> np.ndarray:  # fmt: skip
+    """Return the intentions (n,) (indices into ``INTENTIONS``) the priorities give n minds
+    (before persistence), for their drives (n,) in their situations; previous: their
+    intentions now (indices)."""
+    target = np.where(c.predator, sit.prey_distance, sit.food_distance)
+    h = desires(hunger, target, *c.hunger_q)
+    lib = desires(libido, sit.mate_distance, *c.libido_q)
+    feed = np.where(c.predator, CODE["hunt"], CODE["eat"])
+    kept = (previous == feed) | (previous == CODE["mate"])  # a tie: the one followed
+    want = np.where(h > lib, feed, np.where(lib > h, CODE["mate"], np.where(kept, previous, feed)))
+    content = ~(
+        (c.no_crowd & sit.crowded)
+        | (c.no_obstacles & sit.near_obstacle)
+        | (c.company & sit.alone & ~c.schooling)
+    )
+    out = np.where(content, CODE["wander"], CODE["leave"])
+    out = np.where((h > c.desire_threshold) | (lib > c.desire_threshold), want, out)
+    afraid = ~c.predator & (fear > c.fear_threshold)
+    school = c.schooling & (fear < c.panic_threshold)
+    out = np.where(afraid, np.where(school, CODE["school"], CODE["escape"]), out)
+    return np.where(sit.collision, CODE["avoid"], out)
+
+
 def intend(
     d: Drives,
     sit: Situation,
@@ -175,54 +281,78 @@ def intend(
     predator: bool = False,
     previous: str = "wander",
 ) -> str:
-    """Return the intention the priorities give (before persistence), for drives ``d``."""
-    if sit.collision:
-        return "avoid"
-    if not predator and d.fear > c.fear_threshold:
-        if habits.schooling and d.fear < c.panic_threshold:
-            return "school"
-        return "escape"
-    h = desire(d.hunger, sit.prey_distance if predator else sit.food_distance, c.hunger_ramp)
-    lib = desire(d.libido, sit.mate_distance, c.libido_ramp)
-    if max(h, lib) > c.desire_threshold:
-        feed = "hunt" if predator else "eat"
-        if h > lib:
-            return feed
-        if lib > h:
-            return "mate"
-        return previous if previous in (feed, "mate") else feed
-    content = not (
-        ("crowd" in habits.dislikes and sit.crowded)
-        or ("obstacles" in habits.dislikes and sit.near_obstacle)
-        or ("company" in habits.likes and sit.alone and not habits.schooling)
-    )
-    return "wander" if content else "leave"
+    """Return the intention the priorities give (before persistence), for drives ``d``
+    (``intend_many`` for one mind)."""
+    code = intend_many(
+        np.array([d.hunger]), np.array([d.libido]), np.array([d.fear]), Situations.of([sit]),
+        Tempers.of([c], [habits], [predator]), np.array([CODE[previous]]),
+    )  # fmt: skip
+    return INTENTIONS[int(code[0])]
 
 
 def persist(previous: str, since: float, candidate: str, t: float, persistence: float) -> str:
     """Return the intention to follow: the candidate if more urgent than the previous one or
     once the previous has lasted ``persistence`` s, else the previous one."""
-    if candidate == previous or LEVEL[candidate] < LEVEL[previous]:
-        return candidate
-    return candidate if t - since >= persistence else previous
+    return (
+        candidate if persists(CODE[previous], since, CODE[candidate], t, persistence) else previous
+    )
+
+
+def persists(previous, since, candidate, t: float, persistence) -> np.ndarray:
+    """Return whether each candidate (indices into ``INTENTIONS``) replaces the previous
+    intention (``persist``'s rule over arrays): the same one, a more urgent one, or after
+    the previous has lasted ``persistence`` s."""
+    previous, candidate = np.asarray(previous), np.asarray(candidate)
+    urgent = (candidate == previous) | (LEVELS[candidate] < LEVELS[previous])
+    return urgent | (t - np.asarray(since, float) >= persistence)
 
 
 def focus(distances, previous: int | None = None, keep_within: float = 1.25) -> int | None:
     """Return the index of the target to attend to among candidates at ``distances`` (inf:
     not perceived): the nearest, but the previous target is kept while it is perceived and
-    no more than ``keep_within`` times farther than the nearest (no dithering)."""
-    d = np.asarray(distances, dtype=float).reshape(-1)
-    if d.size == 0:
-        return None
-    best = int(d.argmin())
-    near = float(d[best])
-    if not math.isfinite(near):  # none perceived (the nearest is at infinity)
-        return None
-    if previous is not None and 0 <= previous < d.size:
-        x = float(d[previous])
-        if math.isfinite(x) and x <= keep_within * near:
-            return previous
-    return best
+    no more than ``keep_within`` times farther than the nearest (no dithering); None when
+    none is perceived (``focus_many`` for one mind)."""
+    d = np.asarray(distances, dtype=float).reshape(1, -1)
+    k = int(focus_many(d, np.array([-1 if previous is None else previous]), keep_within)[0])
+    return None if k < 0 else k
+
+
+def focus_many(distances, previous, keep_within: float = 1.25) -> np.ndarray:
+    """Return (n,) the targets the focusers of n minds attend to (-1: none), each row of
+    ``distances`` (n, M) one mind's candidates (inf: not perceived) and ``previous`` (n,) its
+    previous target (-1: none): ``focus_pairs`` of the perceived ones."""
+    d = np.asarray(distances, dtype=float)
+    ii, jj = np.nonzero(np.isfinite(d))
+    return focus_pairs(len(d), ii, jj, d[ii, jj], previous, keep_within)
+
+
+def focus_pairs(n: int, rows, cols, distances, previous, keep_within: float = 1.25):
+    """Return (n,) the targets the focusers of n minds attend to (-1: none) among the
+    candidates each perceives: mind ``rows[k]`` perceives candidate ``cols[k]`` at
+    ``distances[k]`` (the pairs in row order, each row's columns ascending); ``previous``
+    (n,) each mind's previous target (-1: none). The nearest (the first on a tie), but the
+    previous target is kept while it is perceived and no more than ``keep_within`` times
+    farther than the nearest (no dithering)."""
+    d = np.asarray(distances, float)
+    ok = np.isfinite(d)  # an infinite candidate is not perceived
+    rows, cols, d = np.asarray(rows, int)[ok], np.asarray(cols, int)[ok], d[ok]
+    out = np.full(n, -1)
+    if not len(rows):
+        return out
+    order = np.lexsort((cols, d, rows))  # by mind, then distance, then column
+    first = order[np.r_[True, rows[order][1:] != rows[order][:-1]]]
+    who = rows[first]
+    out[who] = cols[first]
+    near = np.full(n, np.inf)
+    near[who] = d[first]
+    # the previous target's distance, where it is among the mind's candidates
+    prev = np.asarray(previous, int)
+    width = int(max(cols.max(), prev.max(initial=0))) + 1
+    key = rows * width + cols  # ascending: the pairs are in row order, columns ascending
+    want = np.arange(n) * width + np.maximum(prev, 0)
+    at = np.minimum(np.searchsorted(key, want), len(key) - 1)
+    keep = (prev >= 0) & (key[at] == want) & (d[at] <= keep_within * near)
+    return np.where(keep, prev, out)
 
 
 def think(
@@ -235,24 +365,48 @@ def think(
     d: Drives | None = None,
 ) -> tuple[MindState, Drives]:
     """Return the mind after one brain period at time t, and its drives (``d`` when given,
-    e.g. from ``drives_many``): the intention the priorities and persistence choose (the
-    target is left to the focuser); an avoidance of another fish alone ends ``REFLEX_HOLD`` s
-    after no collision threatens, not held the whole persistence."""
+    e.g. from ``drives_many``): ``think_many`` for one mind."""
     if d is None:
         d = drives(state, t, c, sit.predator_distances)
-    cand = intend(d, sit, c, habits, predator, state.intention)
-    if sit.collision and sit.fish_only:
-        state = replace(state, threatened=t)
-    passed = not sit.collision and t - state.threatened >= REFLEX_HOLD - 1e-9
-    if state.intention == "avoid" and state.reflex and passed:
-        chosen = cand  # the fish it avoided has passed: back to what it was doing
-    else:
-        chosen = persist(state.intention, state.since, cand, t, c.persistence)
-    if chosen != state.intention:
-        state = replace(state, intention=chosen, since=t, target=None)
-    if chosen == "avoid" and sit.collision and state.reflex != sit.fish_only:
-        state = replace(state, reflex=sit.fish_only)
-    return state, d
+    (mind,) = think_many(
+        [state], t, Tempers.of([c], [habits], [predator]), Situations.of([sit]),
+        np.array([d.hunger]), np.array([d.libido]), np.array([d.fear]),
+    )  # fmt: skip
+    return mind, d
+
+
+def think_many(
+    minds: list[MindState],
+    t: float,
+    c: Tempers,
+    sit: Situations,
+    hunger: np.ndarray,
+    libido: np.ndarray,
+    fear: np.ndarray,
+) -> list[MindState]:
+    """Return n minds after one brain period at time t, for their drives (n,) in their
+    situations: the intention the priorities and persistence choose (the target is left to
+    the focuser); an avoidance of another fish alone ends ``REFLEX_HOLD`` s after no
+    collision threatens, not held the whole persistence."""
+    now = np.array([CODE[m.intention] for m in minds], int)
+    since = np.array([m.since for m in minds], float)
+    reflex = np.array([m.reflex for m in minds], bool)
+    was = np.array([m.threatened for m in minds], float)
+    cand = intend_many(hunger, libido, fear, sit, c, now)
+    threatened = np.where(sit.collision & sit.fish_only, t, was)
+    passed = ~sit.collision & (t - threatened >= REFLEX_HOLD - 1e-9)
+    back = (now == CODE["avoid"]) & reflex & passed  # the fish it avoided has passed
+    chosen = np.where(back | persists(now, since, cand, t, c.persistence), cand, now)
+    changed = chosen != now
+    flip = (chosen == CODE["avoid"]) & sit.collision & (reflex != sit.fish_only)
+    reflex = np.where(flip, sit.fish_only, reflex)
+    out = list(minds)
+    for k in np.flatnonzero(changed | flip | (threatened != was)).tolist():
+        m = replace(minds[k], threatened=float(threatened[k]), reflex=bool(reflex[k]))
+        if changed[k]:
+            m = replace(m, intention=INTENTIONS[chosen[k]], since=t, target=None)
+        out[k] = m
+    return out
 
 
 def ate(state: MindState, t: float, particles: float = 1.0) -> MindState:

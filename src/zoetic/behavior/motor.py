@@ -78,6 +78,22 @@ def fin_activation(
     return out
 
 
+def fin_activations(
+    rows: list[tuple[int, float, float, float]], angle: np.ndarray, lean: np.ndarray
+) -> list[tuple[int, np.ndarray]]:
+    """Return ``fin_activation`` for D fishes at once: per fin actuator of ``rows``
+    (``fin_rows``), the activations (D,) that set its fins to ``angle`` (D,) rad, the left
+    fins ``lean`` (D,) rad more and the right ones less (the same numbers as one fish's)."""
+    out = []
+    for act, lo, hi, side in rows:
+        a = angle + side * lean
+        if hi == lo:
+            out.append((act, np.zeros_like(a)))
+        else:
+            out.append((act, np.minimum(np.maximum((a - lo) / (hi - lo), 0.0), 1.0)))
+    return out
+
+
 # The righting reflex: the water model has no restoring roll moment (a fish laid on its side
 # stays there), but the pectoral fins pitched differentially (the left fin ``lean`` rad nose
 # up, the right one ``lean`` nose down) roll a swimming fish, with a moment that grows with
@@ -206,6 +222,21 @@ def interp(x: float, xp: list, fp: list) -> float:
         return fp[-1]
     j = bisect_right(xp, x) - 1  # xp[j] <= x < xp[j + 1]
     return (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j]) * (x - xp[j]) + fp[j]
+
+
+def interps(x: np.ndarray, xp: np.ndarray, fp) -> np.ndarray:
+    """Return ``interp`` of each of the values ``x`` (D,) at once: over the points ``xp`` (P,)
+    non-decreasing, or each value over its own row of ``xp`` (D, P); ``fp`` (P,) (the same
+    numbers as ``interp`` of each)."""
+    x, xp, fp = np.asarray(x, float), np.asarray(xp, float), np.asarray(fp, float)
+    rows = np.broadcast_to(xp, (len(x), xp.shape[-1]))
+    j = (rows <= x[:, None]).sum(axis=1) - 1  # bisect_right - 1: xp[j] <= x < xp[j + 1]
+    j = np.clip(j, 0, rows.shape[1] - 2)
+    lo = np.take_along_axis(rows, j[:, None], 1)[:, 0]
+    hi = np.take_along_axis(rows, j[:, None] + 1, 1)[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):  # the ends are taken as they are
+        mid = (fp[j + 1] - fp[j]) / (hi - lo) * (x - lo) + fp[j]
+    return np.where(x <= rows[:, 0], fp[0], np.where(x >= rows[:, -1], fp[-1], mid))
 
 
 def grid_rates(

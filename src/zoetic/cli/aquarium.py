@@ -60,7 +60,8 @@ def aquarium(
 ) -> None:
     """Let a tank of fishes live: write events.csv, mind.png, summary.json, record.npz and
     video.mp4."""
-    from zoetic.behavior.aquarium.tank import TankConfig, build_tank, events_csv, live, summarize
+    from zoetic.behavior.aquarium.events import events_csv
+    from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live, summarize
     from zoetic.cli.records import write_aquarium_record
     from zoetic.io import atomic_write_bytes, make_dir, write_json
     from zoetic.outdir import prepare_out
@@ -89,7 +90,7 @@ def aquarium(
     with console.status("the fishes live...") as status:
         life = live(tank, progress=lambda t: status.update(f"t = {t:.1f} s"))
     make_dir(out)
-    atomic_write_bytes(out / "events.csv", events_csv(life).encode())
+    atomic_write_bytes(out / "events.csv", events_csv(life.events).encode())
     summary = summarize(tank, life)
     record = write_aquarium_record(out, tank, life, summary)
     mind_media(read_record(record), out)

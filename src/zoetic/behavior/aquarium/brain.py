@@ -20,6 +20,7 @@ from zoetic.behavior.aquarium.locomotion import (
     MotorLocomotion,
     learned_motor,
 )
+from zoetic.behavior.aquarium.reach import reach_pairs
 from zoetic.behavior.aquarium.routines import (
     Around,
     Me,
@@ -28,20 +29,21 @@ from zoetic.behavior.aquarium.routines import (
     go_to,
     keep_depth,
     leave,
-    reach_cost,
     school,
     wander,
 )
 from zoetic.behavior.aquarium.species import BUILT_IN, Species
 from zoetic.behavior.mind import (
-    Drives,
     MindState,
-    Situation,
+    Situations,
+    Tempers,
     ate,
     drives,
-    focus,
+    drives_many,
+    focus_many,
+    focus_pairs,
     initial_mind,
-    think,
+    think_many,
 )
 from zoetic.behavior.mind import mated as mind_mated
 from zoetic.bodies import Body
@@ -110,6 +112,7 @@ class FishBrain:
         self.cruise = min(m.cruise_speed, self.top)
         self.radius = self.locomotion.turn_radius
         self.constants = species.fear_constants()
+        self.tempers = Tempers.of([self.constants], [species.habits], [species.predator])
         self.alive = True
         self.avoid_side = 0
         self.reset(0)
@@ -149,11 +152,11 @@ class FishBrain:
             self._masks = kind_masks(names, self.species.name, self.hunted_by, prey)
         return self._masks
 
-    def _situation(self, v: View) -> Situation:
-        """The fish's ``Situation`` from its own view (``situations`` for one fish)."""
+    def _situation(self, v: View) -> tuple[Situations, np.ndarray]:
+        """The fish's situation from its own view (``situations`` for one fish)."""
         same, hunters, prey = self.kinds(v.fish_species)
         h = self.species.habits
-        sits, _ = situations(
+        return situations(
             v.fish_distance[None],
             v.food_distance[None],
             v.obstacle_distance[None],
@@ -165,7 +168,6 @@ class FishBrain:
             [v.collision],
             [v.fish_only],
         )
-        return sits[0]
 
     def act(self, observation: Mapping, period: Period) -> np.ndarray:
         """Return activations (1, T, A) for the period from the fish's percept (the percept
@@ -175,56 +177,58 @@ class FishBrain:
             return np.zeros((1, period.steps, self.body.n_actuators))
         return self.locomotion.activations(demand, period.times)[None]
 
-    def decide(
-        self,
-        observation: Mapping,
-        period: Period,
-        sit: Situation | None = None,
-        d: Drives | None = None,
-    ) -> Demand | None:
-        """Return the motor demand for the period from the fish's percept (None: dead).
-        ``sit`` and ``d``: the situation and drives when already computed for all the fishes
-        at once (``situations``, ``mind.drives_many``); by default from the percept."""
+    def decide(self, observation: Mapping, period: Period) -> Demand | None:
+        """Return the motor demand for the period from the fish's percept (None: dead). A
+        tank's ``Shoal`` takes the same steps for all its fishes at once: ``situations``,
+        ``drives_many``, ``think_many``, ``focus_targets``, ``respond``."""
         if not self.alive:
             return None
         v: View = observation["view"]
-        sp = self.species
-        if sit is None:
-            sit = self._situation(v)
-        self.mind, drives = think(
-            self.mind, period.t0, self.constants, sp.habits, sit, sp.predator, d
+        sit, predators = self._situation(v)
+        m, c = self.mind, self.constants
+        drives = drives_many(
+            [m.eaten], [m.meal_time], [m.mating_time], period.t0,
+            c.hunger_rate, c.alpha, c.libido_rate, c.fear_distance, predators,
+        )  # fmt: skip
+        (self.mind,) = think_many([m], period.t0, self.tempers, sit, *drives)
+        me, masks = v.me, self.kinds(v.fish_species)
+        (target,) = focus_targets(
+            [self.mind.intention],
+            [self.mind.target],
+            me.nose[None],
+            me.forward[None],
+            np.array([me.radius]),
+            v.food,
+            v.food_distance[None],
+            None if v.conceded is None else v.conceded[None],
+            v.fish_distance[None],
+            masks[0][None],
+            masks[2][None],
         )
-        intention = self.mind.intention
-        masks = self.kinds(v.fish_species)
-        target = self._focus(v, intention, masks)
-        around = self._around(v, intention, target, masks)
-        demand = self._routine(intention, v.me, around)
-        demand = keep_depth(v.me, demand, None if around.target is None else around.target[1])
-        self.thought = Thought(drives.hunger, drives.libido, drives.fear, intention, target)
-        return demand
+        return self.respond(v, target, tuple(float(x[0]) for x in drives))
 
-    def _focus(self, v: View, intention: str, masks: tuple[np.ndarray, ...]) -> int | None:
-        """Return the target the focuser picks for the intention (a food particle, a mate or
-        a prey: its index; None for an intention without one), kept in the mind; masks: the
-        fishes' ``kinds``."""
-        same, _, prey = masks
-        if intention == "eat":
-            d = v.food_distance
-            if v.conceded is not None:
-                free = np.where(v.conceded, np.inf, d)
-                d = free if np.isfinite(free).any() else d  # all conceded: race for one
-            # the focuser takes the nearest by the way, or keeps its previous target
-            candidates = reach_cost(v.me, v.food, d, nearest=True, keep=self.mind.target)
-        elif intention == "mate":
-            candidates = np.where(same, v.fish_distance, np.inf)
-        elif intention == "hunt":
-            candidates = np.where(prey, v.fish_distance, np.inf)
-        else:
-            candidates = None
-        target = None if candidates is None else focus(candidates, self.mind.target)
+    def respond(self, v: View, target: int | None, drives: tuple[float, ...]) -> Demand:
+        """Return the motor demand of the routine that serves the mind's intention, for the
+        target the focuser picked (kept in the mind), and keep the thought."""
+        demand, height = self.routine(v, target)
+        self.remember(drives, target)
+        return keep_depth(v.me, demand, height)
+
+    def routine(self, v: View, target: int | None) -> tuple[Demand, float | None]:
+        """Return the demand of the routine that serves the mind's intention for the target
+        (before ``keep_depth``), and the height (m) to keep: the target's (None: its layer)."""
+        intention = self.mind.intention
+        around = self._around(v, intention, target, self.kinds(v.fish_species))
+        demand = self._routine(intention, v.me, around)
+        return demand, None if around.target is None else float(around.target[1])
+
+    def remember(self, drives: tuple[float, ...], target: int | None) -> None:
+        """Keep the focused target in the mind and the period's thought (drives: hunger,
+        libido, fear)."""
         if target != self.mind.target:
             self.mind = replace(self.mind, target=target)
-        return target
+        hunger, libido, fear = drives
+        self.thought = Thought(hunger, libido, fear, self.mind.intention, target)
 
     def _around(
         self, v: View, intention: str, target: int | None, masks: tuple[np.ndarray, ...]
@@ -271,6 +275,51 @@ class FishBrain:
         return wander(me, around, self.rng)
 
 
+def focus_targets(
+    intentions: list[str],
+    previous: list[int | None],
+    nose: np.ndarray,
+    forward: np.ndarray,
+    radius: np.ndarray,
+    food: np.ndarray,
+    food_distance: np.ndarray,
+    given: np.ndarray | None,
+    fish_distance: np.ndarray,
+    same: np.ndarray,
+    prey: np.ndarray,
+) -> list[int | None]:
+    """Return the target each of n focusers picks for its mind's intention (a food particle,
+    a mate or a prey: its index; None for an intention without one, or none perceived), all
+    at once over arrays (``mind.focus_many``); previous: each mind's target.
+
+    Eat: the particles by the way to them (``reach_costs``), not those left to another
+    (``given`` (n, F), ``conceded``; all conceded: it races for one); mate and hunt: the
+    nearest fish of its species, or of its prey (``same``, ``prey`` (n, M) masks over the
+    perceived fishes' distances ``fish_distance`` (n, M)). nose, forward (n, 3); radius (n,):
+    the fishes' sharpest turns (m); food (F, 3), food_distance (n, F) as perceived."""
+    out: list[int | None] = [None] * len(intentions)
+    prev = np.array([-1 if p is None else p for p in previous], int)
+    for intention in ("eat", "mate", "hunt"):
+        rows = np.array([k for k, x in enumerate(intentions) if x == intention], int)
+        if not len(rows):
+            continue
+        if intention == "eat":  # the pairs of a fish and a particle it perceives
+            ii, pp = np.nonzero(food_distance[rows] < np.inf)
+            if given is not None:
+                left = given[rows[ii], pp]
+                free = np.bincount(ii[~left], minlength=len(rows)) > 0
+                keep = ~left | ~free[ii]  # all conceded: it races for one
+                ii, pp = ii[keep], pp[keep]
+            cost = reach_pairs(nose, forward, radius, food, rows[ii], pp)
+            picked = focus_pairs(len(rows), ii, pp, cost, prev[rows])
+        else:
+            mask = (same if intention == "mate" else prey)[rows]
+            picked = focus_many(np.where(mask, fish_distance[rows], np.inf), prev[rows])
+        for k, t in zip(rows.tolist(), picked.tolist(), strict=True):
+            out[k] = None if t < 0 else t
+    return out
+
+
 def situations(
     fish: np.ndarray,
     food: np.ndarray,
@@ -280,11 +329,12 @@ def situations(
     prey: np.ndarray,
     personal_space: np.ndarray,
     crowd: np.ndarray,
-    collision: np.ndarray,
-    fish_only: np.ndarray | None = None,
-) -> tuple[list[Situation], np.ndarray]:
-    """Return every fish's ``Situation`` from all the percepts at once, and (n, n) the
-    distances of the predators each perceives (inf elsewhere, for ``mind.drives_many``).
+    collision,
+    fish_only=None,
+) -> tuple[Situations, np.ndarray]:
+    """Return every fish's situation from all the percepts at once (``Situations``), and
+    (n, n) the distances of the predators each perceives (inf elsewhere, for
+    ``mind.drives_many``).
 
     fish (n, M), food (n, F), obstacles (n, S): the distances perceived by each of n fishes
     (inf: not perceived, ``Percepts``; M = n in the tank, one row for ``FishBrain._situation``);
@@ -293,37 +343,21 @@ def situations(
     collision threatens from another fish only (default none)."""
     n = len(fish)
     inf = np.full(n, np.inf)
-    fish_only = [False] * n if fish_only is None else fish_only
-    seen = np.isfinite(fish)
     predators = np.where(hunters, fish, np.inf)
-    food_near = food.min(axis=1) if food.shape[1] else inf
-    mate = np.where(same, fish, np.inf).min(axis=1) if n else inf
-    prey_near = np.where(prey, fish, np.inf).min(axis=1) if n else inf
-    crowded = ((fish < personal_space[:, None]).sum(axis=1) > crowd).tolist()
-    alone = (~seen.any(axis=1)).tolist()
     near_obstacle = (
-        (obstacles.min(axis=1) < personal_space).tolist() if obstacles.shape[1] else [False] * n
+        obstacles.min(axis=1) < personal_space if obstacles.shape[1] else np.zeros(n, bool)
     )
-    near_predators: list[list[float]] = [[] for _ in range(n)]
-    ii, jj = np.nonzero(np.isfinite(predators))
-    for i, x in zip(ii.tolist(), predators[ii, jj].tolist(), strict=True):
-        near_predators[i].append(x)
-    out = [
-        Situation(bool(c), tuple(pd), f, m, q, bool(cr), bool(al), bool(no), bool(fo))
-        for c, pd, f, m, q, cr, al, no, fo in zip(
-            collision,
-            near_predators,
-            food_near.tolist(),
-            mate.tolist(),
-            prey_near.tolist(),
-            crowded,
-            alone,
-            near_obstacle,
-            fish_only,
-            strict=True,
-        )
-    ]
-    return out, predators
+    sits = Situations(
+        collision=np.array(collision, bool),
+        food_distance=food.min(axis=1) if food.shape[1] else inf,
+        mate_distance=np.where(same, fish, np.inf).min(axis=1) if n else inf,
+        prey_distance=np.where(prey, fish, np.inf).min(axis=1) if n else inf,
+        crowded=(fish < personal_space[:, None]).sum(axis=1) > crowd,
+        alone=~np.isfinite(fish).any(axis=1),
+        near_obstacle=near_obstacle,
+        fish_only=np.zeros(n, bool) if fish_only is None else np.array(fish_only, bool),
+    )
+    return sits, predators
 
 
 CONCEDE_COS = 0.7  # a fish heads for a particle within about 45 degrees of its heading

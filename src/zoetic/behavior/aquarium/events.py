@@ -138,3 +138,16 @@ class Events(Observer):
                 brains[j].mated(t)
                 self.log.append((t, self.names[i], "mate", self.names[j]))
                 self.log.append((t, self.names[j], "mate", self.names[i]))
+
+
+def events_csv(events: list[Event]) -> str:
+    """Return the events as CSV text: columns time, fish, event, detail."""
+    import csv
+    import io
+
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["time", "fish", "event", "detail"])
+    for t, fish, event, detail in events:
+        w.writerow([f"{t:.2f}", fish, event, detail])
+    return buf.getvalue()

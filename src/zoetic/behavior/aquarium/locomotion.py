@@ -17,7 +17,7 @@ from typing import Protocol
 
 import numpy as np
 
-from zoetic.behavior.learned_motor import LearnedMotor
+from zoetic.behavior.learned_motor import LEARNED_STRENGTH, LearnedMotor
 from zoetic.behavior.motor import righting
 from zoetic.behavior.repertoire import Repertoire
 from zoetic.behavior.wave_motor import WaveMotor
@@ -183,58 +183,102 @@ class LearnedLocomotion:
 
     def activations(self, demand: Demand, times: np.ndarray) -> np.ndarray:
         """Return activations (T, A) for the demand over the control period at ``times`` (s):
-        the gait (``play``), the fins leaning by the righting reflex."""
-        out = self.play(demand, times)
-        if not self.righting:
-            return out
-        return self.motor.lean(out, demand.fin_pitch, righting(demand.roll, demand.roll_rate))
+        the gait (``plan``), the fins leaning by the righting reflex."""
+        return learned_activations([self], [demand], times)[0]
 
-    def play(self, demand: Demand, times: np.ndarray) -> np.ndarray:
-        """Return activations (T, A) of the gait for the demand over the control period at
-        ``times`` (s), fins at the demand's pitch."""
-        t0 = float(times[0])
-        pitch = demand.fin_pitch
-        if demand.bend < BEND_GUARD and demand.speed < GUARD_SPEED:  # fold guard: straighten
-            if self.turning is not None:
-                self._end_turn(t0)
-            return self.motor.swim_signal(times, self.motor.swim(demand.speed), pitch)
-        if self.turning is not None:
-            side, start, duration = self.turning
-            other_way = demand.turn < -TURN_MIN if side == 0 else demand.turn > TURN_MIN
-            if t0 - start >= duration - 1e-9 or other_way:
-                self._end_turn(t0)
-        steer = self.motor.steers and abs(demand.turn) < STEER_MAX
-        if self.turning is None and steer and t0 - self.last[1] >= TURN_REST - 1e-9:
-            a = self.motor.swim(demand.speed)
-            side, w = self.motor.steer(demand.turn / STEER_SECONDS, a)
-            return self.motor.steer_signal(times, a, w, side, pitch)
-        if self.turning is None and abs(demand.turn) >= TURN_MIN and not steer:
-            side, duration = self.motor.turn(demand.turn)
-            if t0 - self.last[1] < TURN_REST - 1e-9:
-                return self.motor.swim_signal(times, self.motor.swim(demand.speed), pitch)
-            duration = min(max(duration, float(times[-1] - t0) + self.body.dt), TURN_BURST)
-            self.turning = (side, t0, duration)
-        if self.turning is None:
-            return self.motor.swim_signal(times, self.motor.swim(demand.speed), pitch)
-        side, start, duration = self.turning
-        a = self.motor.swim(demand.speed)
-        out = self.motor.turn_signal(times - start, times, side, a, pitch)
-        after = times - start >= duration
-        if after.any():
-            # at the whole period's times (the gaits shared by the fishes of this motor)
-            out[after] = self.motor.swim_signal(times, a, pitch)[after]
-        return out
 
-    def _end_turn(self, t0: float) -> None:
-        """End the turn under way at ``t0`` s (or where it was to end, if earlier): the rest
-        before the next turn counts from there."""
-        side, start, duration = self.turning
-        self.turning = None
-        self.last = (side, min(t0, start + duration))
+SWIM, STEER, TURN = 0, 1, 2  # the kinds of gait a learned motor plays (``Gaits.kind``)
 
-    def activations_many(self, demands: list[Demand], times: np.ndarray) -> np.ndarray:
-        """Return activations (D, T, A) for several demands (one fish's state: use one)."""
-        return np.stack([self.activations(d, times) for d in demands])
+
+@dataclass(frozen=True)
+class Gaits:
+    """What a learned motor plays for D fishes over a control period, (D,) each: the swim of
+    weight ``a``, a steer (``w`` of the steering gait of ``side``, 0 left, 1 right) or the
+    sharp turn of ``side`` that started at ``start`` s and lasts ``duration`` s (then the
+    swim), as ``kind`` says (``SWIM``, ``STEER``, ``TURN``)."""
+
+    a: np.ndarray
+    kind: np.ndarray
+    side: np.ndarray
+    w: np.ndarray
+    start: np.ndarray
+    duration: np.ndarray
+
+
+def plan(fishes: list[LearnedLocomotion], demands: list[Demand], times: np.ndarray) -> Gaits:
+    """Return the gaits D fishes that share a learned motor play for their demands over the
+    control period at ``times`` (s), and keep each fish's turn under way (``turning``,
+    ``last``): the rules of ``LearnedLocomotion``, over arrays."""
+    motor, t0 = fishes[0].motor, float(times[0])
+    speed, turn, bent = (
+        np.array([getattr(d, k) for d in demands], float) for k in ("speed", "turn", "bend")
+    )
+    was = [f.turning for f in fishes]
+    on = np.array([t is not None for t in was])
+    side, start, duration = (np.array([t[k] if t else 0 for t in was], float) for k in range(3))
+    last = np.array([f.last[1] for f in fishes], float)
+    guard = (bent < BEND_GUARD) & (speed < GUARD_SPEED)  # fold guard: straighten
+    other_way = np.where(side == 0, turn < -TURN_MIN, turn > TURN_MIN)
+    end = on & (guard | (t0 - start >= duration - 1e-9) | other_way)
+    # the turn ends now, or where it was to end if earlier: the rest counts from there
+    last = np.where(end, np.minimum(t0, start + duration), last)
+    on &= ~end
+    steer = bool(motor.steers) & (np.abs(turn) < STEER_MAX)
+    rested = t0 - last >= TURN_REST - 1e-9
+    steering = ~guard & ~on & steer & rested
+    new = ~guard & ~on & ~steer & (np.abs(turn) >= TURN_MIN) & rested
+    a = motor.swims(speed)
+    turn_side, turn_for = motor.turns(turn)
+    turn_for = np.minimum(
+        np.maximum(turn_for, float(times[-1] - t0) + fishes[0].body.dt), TURN_BURST
+    )
+    side = np.where(new, turn_side, side).astype(int)
+    start, duration = np.where(new, t0, start), np.where(new, turn_for, duration)
+    on |= new
+    steer_side, w = (
+        motor.steers_at(turn / STEER_SECONDS, a) if steering.any() else (side, np.zeros_like(a))
+    )
+    for k in np.flatnonzero(end | new).tolist():
+        f = fishes[k]
+        if end[k]:
+            f.turning, f.last = None, (was[k][0], float(last[k]))
+        if new[k]:
+            f.turning = (int(side[k]), t0, float(duration[k]))
+    kind = np.where(on, TURN, np.where(steering, STEER, SWIM))
+    return Gaits(
+        a, kind, np.where(steering, steer_side, side), np.where(steering, w, 0.0), start, duration
+    )
+
+
+def learned_activations(
+    fishes: list[LearnedLocomotion], demands: list[Demand], times: np.ndarray
+) -> np.ndarray:
+    """Return activations (D, T, A) of D fishes that share a learned motor for their demands
+    over the control period at ``times`` (s): each fish's gait (``LearnedLocomotion.plan``,
+    which keeps its turn under way), the gaits blended for all at once, the fins at each
+    demand's pitch leaning by the righting reflex."""
+    motor = fishes[0].motor
+    g = plan(fishes, demands, times)
+    swim = motor.swim_raws(times, g.a)
+    u = swim.copy()
+    for side in (0, 1):
+        rows = np.flatnonzero((g.kind == STEER) & (g.side == side))
+        if len(rows):
+            u[rows] = motor.steer_raws(side, times, swim[rows], g.w[rows])
+    turns: dict[tuple[int, float], np.ndarray] = {}  # the sharp turns that started together
+    for k in np.flatnonzero(g.kind == TURN).tolist():
+        key = (int(g.side[k]), float(g.start[k]))
+        if key not in turns:
+            turns[key] = motor.bases[2 + key[0]].raw(times - key[1])
+        u[k] = LEARNED_STRENGTH * turns[key]
+        u[k] += (1 - LEARNED_STRENGTH) * swim[k]
+        after = times - key[1] >= g.duration[k]
+        u[k, after] = swim[k, after]  # the swim once the turn is over
+    lean = [
+        righting(d.roll, d.roll_rate) if f.righting else np.nan
+        for f, d in zip(fishes, demands, strict=True)
+    ]
+    return motor.fins(u, [d.fin_pitch for d in demands], np.array(lean, float))
 
 
 _LEARNED_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # body -> {dir: motor}

@@ -16,32 +16,24 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from zoetic.behavior.aquarium import steering
 from zoetic.behavior.aquarium.locomotion import Demand
 from zoetic.behavior.aquarium.perception import obstacle_distance
+from zoetic.behavior.aquarium.steering import avoid_many, go_to_many, keep_depths
 
+# the routines' constants, defined with their arithmetic over arrays (``steering``)
+NEAR, BRAKE_BEARING = steering.NEAR, steering.BRAKE_BEARING
+URGENT, URGENT_FISH = steering.URGENT, steering.URGENT_FISH
+DEPTH_GAIN, MAX_CLIMB, PITCH_GAIN = steering.DEPTH_GAIN, steering.MAX_CLIMB, steering.PITCH_GAIN
 LOOKAHEAD = 10.0  # s of travel (at least 3 m) probed ahead for an imminent collision
 PROBES = 8  # points probed along the heading
 _STEPS = np.arange(PROBES, dtype=float)
 CLEARANCE = 0.5  # m: a probe nearer than this to an obstacle means a collision is imminent
 TURN_RADIUS = 1.9  # m: default radius of a fish's sharpest turn (the brain gives its own)
-DEPTH_GAIN = 1.0  # rad of climb per m of depth error (capped at MAX_CLIMB)
-MAX_CLIMB = 0.4  # rad: the steepest climb or dive asked for
-PITCH_GAIN = 2.0  # rad of fin pitch per rad of climb-angle error
 CENTRE_LINE = 5  # points along another fish's centre line, nose to tail, tested for a threat
 THREAT_TIMES = 4  # instants from now to the anticipation horizon at which they are tested
 ROOM_STEP = 0.4  # m between the probes of the room to either side (walls are 0.5 m thick)
 _SIN60 = math.sqrt(3) / 2
-RADIUS_MARGIN = 1.1  # the turning circle a fish plans with, over its calibrated sharpest turn
-# s of travel: an avoiding fish whose nose is nearer than this to an obstacle turns as hard as
-# its motor can (a half turn asked at once), not at its steady steering rate
-URGENT = 1.5
-# s of travel: an avoiding fish whose nose is nearer than this to another fish that threatens
-# it (no obstacle ahead) brakes: the half turn with no forward speed asked (``avoid``)
-URGENT_FISH = 1.5
-# a still target nearer than NEAR m and farther off the heading than BRAKE_BEARING rad is
-# turned to about on the spot (``go_to``): the steer's circle is wider than its distance
-NEAR = 2.0
-BRAKE_BEARING = math.pi / 3
 # m between two fishes' centre lines under which they touch (bodies are 0.24 m wide and bend)
 CONTACT = 0.35
 CONTACT_TIMES = 9  # instants from now to the anticipation horizon tested for a contact
@@ -112,12 +104,10 @@ def steer(me: Me, direction: np.ndarray, speed: float) -> Demand:
 
 def keep_depth(me: Me, demand: Demand, height: float | None = None) -> Demand:
     """Return the demand with the fins pitched to bring the fish to ``height`` m (default its
-    layer): a climb angle proportional to the depth error (at most ``MAX_CLIMB``), the fins
-    pitched by the difference between it and the body's climb angle."""
+    layer): ``keep_depths`` for one fish."""
     y = me.layer if height is None else float(height)
-    climb = min(max(float(DEPTH_GAIN * (y - me.com[1])), -MAX_CLIMB), MAX_CLIMB)
-    now = float(np.arcsin(min(max(float(me.forward[1]), -1.0), 1.0)))
-    return Demand(demand.speed, demand.turn, PITCH_GAIN * (climb - now))
+    pitch = keep_depths(np.array([me.com[1]]), np.array([me.forward[1]]), np.array([y]))
+    return Demand(demand.speed, demand.turn, float(pitch[0]))
 
 
 def probe_reach(me: Me, target: float | None = None) -> float:
@@ -166,18 +156,36 @@ def probes_ahead_many(
 def side_room(me: Me, kind, center, size, reach: float) -> tuple[float, float]:
     """Return the room (m, the nearest obstacle surface) along rays 60 degrees to the left and
     to the right of the heading, probed every ``ROOM_STEP`` m or closer out to ``reach``
-    (close enough that a 0.5 m thick wall is never stepped over)."""
-    f = _unit(_flat(me.forward))
-    fx, fz = float(f[0]), float(f[2])
-    k = max(2, math.ceil((reach - 0.3) / ROOM_STEP) + 1)
-    along = np.linspace(0.3, max(reach, 0.3), k)
-    pts = np.empty((2, k, 3))
-    pts[:, :, 1] = me.nose[1]
+    (close enough that a 0.5 m thick wall is never stepped over): ``side_rooms`` of one fish."""
+    left, right = side_rooms(
+        me.nose[None], me.forward[None], np.array([reach]), kind, center, size
+    )[0]
+    return float(left), float(right)
+
+
+def side_rooms(
+    nose: np.ndarray, forward: np.ndarray, reach: np.ndarray, kind, center, size
+) -> np.ndarray:
+    """Return (n, 2) the room (m) to the left and to the right of each of n fishes (nose,
+    forward (n, 3)) out to its ``reach`` (n,) m: ``side_room`` for all at once, each ray's
+    points as ``np.linspace`` spaces them (a shorter ray's last point repeated)."""
+    f = np.array(forward, float)
+    f[:, 1] = 0.0
+    norm = np.sqrt((f * f).sum(axis=1))
+    f = np.where((norm > 1e-9)[:, None], f / np.where(norm > 1e-9, norm, 1.0)[:, None], 0.0)
+    fx, fz = f[:, 0:1], f[:, 2:3]
+    reach = np.asarray(reach, float)
+    k = np.maximum(2, np.ceil((reach - 0.3) / ROOM_STEP).astype(int) + 1)
+    stop = np.maximum(reach, 0.3)[:, None]
+    steps = np.arange(int(k.max()), dtype=float)[None, :]
+    along = steps * ((stop - 0.3) / (k - 1)[:, None]) + 0.3  # np.linspace's own formula
+    along = np.where(steps >= (k - 1)[:, None], stop, along)
+    pts = np.empty((len(f), 2, along.shape[1], 3))
+    pts[..., 1] = nose[:, 1, None, None]
     for j, sgn in enumerate((1.0, -1.0)):  # the ray (cos 60, sin 60) to the left, then right
-        pts[j, :, 0] = me.nose[0] + along * (0.5 * fx - sgn * _SIN60 * fz)
-        pts[j, :, 2] = me.nose[2] + along * (0.5 * fz + sgn * _SIN60 * fx)
-    d = obstacle_distance(pts, kind, center, size).min(axis=(1, 2))
-    return float(d[0]), float(d[1])
+        pts[:, j, :, 0] = nose[:, 0:1] + along * (0.5 * fx - sgn * _SIN60 * fz)
+        pts[:, j, :, 2] = nose[:, 2:3] + along * (0.5 * fz + sgn * _SIN60 * fx)
+    return obstacle_distance(pts, kind, center, size).min(axis=(2, 3))
 
 
 def fish_threats(
@@ -294,6 +302,7 @@ def collision_ahead(
     prefer: int = 0,
     target: float | None = None,
     ahead: np.ndarray | None = None,
+    room: tuple[float, float] | None = None,
 ) -> tuple[bool, np.ndarray | None]:
     """Return (imminent?, the unit way out): probes along the heading (``probes_ahead`` up to
     ``probe_reach``) against the obstacles (clearance CLEARANCE m), then another fish that
@@ -302,7 +311,8 @@ def collision_ahead(
     unless obstacles close that side and the other side is open; a way out of another fish's
     path is also checked against the obstacles (it must not lead into a rock or a wall);
     target: the distance (m) to a food particle the fish is about to eat; ahead: the probes'
-    obstacle distances (PROBES, S) when already computed (the tank does all fishes at once)."""
+    obstacle distances (PROBES, S) and room: the ``side_room`` (left, right) when already
+    computed (the tank does all fishes at once)."""
     reach = probe_reach(me, target)
     f = _unit(_flat(me.forward))
     side = np.array([-f[2], 0.0, f[0]])  # the fish's left
@@ -312,7 +322,7 @@ def collision_ahead(
         both closed the side is kept: flipping between them would ram the fish into a corner)."""
         if not len(kind):
             return side * sgn
-        left, right = side_room(me, kind, center, size, reach)
+        left, right = side_room(me, kind, center, size, reach) if room is None else room
         mine, other = (left, right) if sgn > 0 else (right, left)
         return side * (-sgn if mine < CLEARANCE <= other else sgn)
 
@@ -326,7 +336,7 @@ def collision_ahead(
             if prefer:
                 return True, way_out(prefer)
             # turn to the side with more room
-            left, right = side_room(me, kind, center, size, reach)
+            left, right = side_room(me, kind, center, size, reach) if room is None else room
             return True, side if left >= right else -side
     if fish_side:
         return True, way_out(fish_side)
@@ -334,24 +344,15 @@ def collision_ahead(
 
 
 def avoid(me: Me, around: Around) -> Demand:
-    """Turn hard to the side of the way out (kept while the avoidance lasts), beating hard:
-    a quarter turn asked in ``TURN_SECONDS``, or a half turn (as hard as the motor can turn)
-    once an obstacle is nearer than ``URGENT`` s of travel. Another fish alone (no obstacle
-    ahead) nearer than ``URGENT_FISH`` s of travel: the half turn with no forward speed asked,
-    a brake (the learned sharp turn's bursts turn the fish about 10 degrees each and all but
-    stop it; the swim asked between them at top speed carried it on into the other fish)."""
-    if around.away is None:
-        return Demand(me.cruise, 0.0)
-    f = _unit(_flat(me.forward))
-    left = float(around.away @ np.array([-f[2], 0.0, f[0]])) >= 0.0
-    speed = max(math.sqrt(me.velocity @ me.velocity), me.cruise)
-    urgent = URGENT_FISH if around.fish_only else URGENT
-    if around.obstacle >= urgent * speed:
-        return Demand(me.top, np.pi / 2 if left else -np.pi / 2)
-    # a fish close ahead: the sharp turn's bursts stop the fish, and between them it glides
-    # instead of swimming on at top speed into the fish it avoids
-    brake = around.fish_only
-    return Demand(0.0 if brake else me.top, np.pi if left else -np.pi)
+    """Turn hard to the side of the way out (kept while the avoidance lasts), beating hard
+    (``avoid_many`` for one fish)."""
+    away = np.full((1, 3), np.nan) if around.away is None else np.asarray(around.away)[None]
+    speed, turn = avoid_many(
+        np.asarray(me.forward, float)[None], np.asarray(me.velocity, float)[None],
+        np.array([me.cruise]), np.array([me.top]), away, np.array([around.obstacle]),
+        np.array([around.fish_only]),
+    )  # fmt: skip
+    return Demand(float(speed[0]), float(turn[0]))
 
 
 def wander(me: Me, around: Around, rng: np.random.Generator) -> Demand:
@@ -366,111 +367,25 @@ def leave(me: Me, around: Around) -> Demand:
     return steer(me, me.com - around.fish.mean(axis=0), me.cruise)
 
 
-def _frame(me: Me, points: np.ndarray) -> tuple[float, list[float], list[float]]:
-    """Return the planning radius and each point (P, 3) relative to the nose in the fish's
-    horizontal frame: how far ahead, how far to the left (m)."""
-    fx, fz = float(me.forward[0]), float(me.forward[2])
-    n = math.hypot(fx, fz) or 1.0
-    fx, fz = fx / n, fz / n
-    pts = np.atleast_2d(points)
-    dx, dz = pts[:, 0] - me.nose[0], pts[:, 2] - me.nose[2]
-    # elementwise, as Python's floats would: the same numbers
-    return RADIUS_MARGIN * me.radius, (dx * fx + dz * fz).tolist(), (dz * fx - dx * fz).tolist()
-
-
-def _way(x: float, qy: float, r: float) -> float:
-    """Return the length (m) of the way to a point ``x`` m ahead and ``qy`` m beside the centre
-    of a turning circle of radius ``r`` on the fish's side (the fish starts at -pi/2 on it):
-    the arc turned to the tangent through the point, then straight on; inf inside the
-    circle."""
-    rho = math.hypot(x, qy)
-    if rho < r:
-        return math.inf
-    theta = math.atan2(qy, x) - math.acos(min(r / max(rho, 1e-9), 1.0))
-    arc = (theta + math.pi / 2) % (2 * math.pi)
-    return r * arc + math.sqrt(max(rho * rho - r * r, 0.0))
-
-
-def turn_paths(me: Me, points: np.ndarray) -> np.ndarray:
-    """Return the lengths (m) of the shortest ways from the nose to each point (P, 3) in the
-    horizontal plane for a fish that turns no tighter than ``me.radius`` (times
-    ``RADIUS_MARGIN``), as (2, P): a turn to the left, then straight on (row 0), and the same
-    turning right first (row 1). A point inside the left turning circle cannot be reached by a
-    left turn (inf): the fish would circle it."""
-    # a handful of points: plain Python over lists beats numpy's per-call overhead
-    r, ahead, left = _frame(me, points)
-    return np.array(
-        [
-            [_way(x, y - r, r) for x, y in zip(ahead, left, strict=True)],
-            [_way(x, -y - r, r) for x, y in zip(ahead, left, strict=True)],
-        ]
-    )
-
-
-def reach_cost(
-    me: Me,
-    points: np.ndarray,
-    distances: np.ndarray,
-    nearest: bool = False,
-    keep: int | None = None,
-) -> np.ndarray:
-    """Return how far (m) the fish must swim to reach each point (``turn_paths``' shorter
-    way), inf where ``distances`` is (not perceived): what a focuser weighs, so that a
-    particle ahead wins over a nearer one beside the fish that needs a loop.
-
-    nearest: only the points that may be nearest by the way (and ``keep``, the focuser's
-    previous target) get their way; the others are left inf: the points are taken in the
-    order of their straight distance from the nose, which no way is shorter than, until that
-    distance passes the shortest way found (the nearest point and its way are the same)."""
-    d = np.asarray(distances, float)
-    seen = np.flatnonzero(d < np.inf)
-    out = np.full(d.shape, np.inf)
-    if not len(seen):
-        return out
-    if not nearest:
-        out[seen] = turn_paths(me, np.asarray(points, float)[seen]).min(axis=0)
-        return out
-    r, ahead, left = _frame(me, np.asarray(points, float)[seen])
-    straight = np.hypot(ahead, left).tolist()
-    best = math.inf
-    for k in np.argsort(straight, kind="stable").tolist():
-        if straight[k] > best * (1.0 + 1e-9) and seen[k] != keep:
-            continue  # a longer way than the shortest found (the 1e-9: rounding)
-        x, y = ahead[k], left[k]
-        way = min(_way(x, y - r, r), _way(x, -y - r, r))
-        out[seen[k]] = way
-        best = min(best, way)
-    return out
-
-
 def go_to(
     me: Me, around: Around, rng: np.random.Generator, lead: float = 0.0, beside: float = 0.0
 ) -> Demand:
     """Swim to the focused target (eat, mate, hunt; ahead of a moving one by ``lead`` s, or
     to a point ``beside`` m to its side, a suitor's place); wander in search of one when
-    none is perceived."""
+    none is perceived (``go_to_many`` for one fish)."""
     if around.target is None:
         return wander(me, around, rng)
-    aim = around.target + (
-        lead * around.target_velocity if around.target_velocity is not None else 0.0
+    v = around.target_velocity
+    speed, turn = go_to_many(
+        *(np.asarray(x, float)[None] for x in (me.nose, me.com, me.forward)),
+        np.array([me.cruise]),
+        np.array([me.top]),
+        np.asarray(around.target, float)[None],
+        np.full((1, 3), np.nan) if v is None else np.asarray(v, float)[None],
+        np.array([lead]),
+        np.array([beside]),
     )
-    if beside:
-        off = _flat(me.com - aim)
-        aim = aim + beside * _unit(off)
-    to = _flat(aim - me.nose)
-    dist = math.sqrt(to @ to)
-    off = bearing(me.forward, to)
-    if around.target_velocity is None and not beside and dist < NEAR and abs(off) > BRAKE_BEARING:
-        # a still target near and well off the heading: the half turn with no forward speed
-        # asked (the brake of ``avoid``), which turns the fish about where it is; the steer
-        # (a wide turn at the approach speed) circled such a particle 1.3-2 m away for good
-        return Demand(0.0, np.pi if off > 0.0 else -np.pi)
-    speed = me.top if dist > 2.0 else max(me.cruise * 0.6, me.top * dist / 2.0)
-    # always turn towards the target, even one inside the turning circle: swimming on to gain
-    # room first costs a fish that turns 90 degrees in 7 s a 15 s detour (and its target
-    # to the focuser, or to another fish), while the turn at the slower approach speed is
-    # tighter and the target drifts (docs/aquarium.md, "Why the fishes foraged badly")
-    return steer(me, aim - me.nose, speed)
+    return Demand(float(speed[0]), float(turn[0]))
 
 
 def escape(me: Me, around: Around) -> Demand:

@@ -9,28 +9,62 @@ activations (fishes that share a motor in one batched call).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from zoetic.behavior.aquarium.bodystate import FishBodies
-from zoetic.behavior.aquarium.brain import FishBrain, View, conceded, situations
-from zoetic.behavior.aquarium.locomotion import Demand, LearnedLocomotion
+from zoetic.behavior.aquarium.brain import (
+    GO_TO,
+    FishBrain,
+    View,
+    conceded,
+    focus_targets,
+    situations,
+)
+from zoetic.behavior.aquarium.locomotion import Demand, LearnedLocomotion, learned_activations
 from zoetic.behavior.aquarium.perception import Percepts, obstacle_distance, perceive
 from zoetic.behavior.aquarium.routines import (
     CLEARANCE,
+    Around,
     Me,
     collision_ahead,
     fish_threats,
+    probe_reach,
     probes_ahead_many,
+    side_rooms,
+    wander,
 )
 from zoetic.behavior.aquarium.species import Species
-from zoetic.behavior.mind import Drives, drives_many
+from zoetic.behavior.aquarium.steering import avoid_many, go_to_many, keep_depths
+from zoetic.behavior.mind import MindState, Situations, Tempers, drives_many, think_many
 from zoetic.control.policy import Period
 from zoetic.physics.world import World
 
 if TYPE_CHECKING:  # the eyes' renderer loads only for a tank with vision
     from zoetic.behavior.aquarium.vision import TankEyes
+
+
+NOTHING = Around()  # what a wanderer reads of its surroundings: nothing
+
+
+@dataclass(frozen=True)
+class Moment:
+    """What the fishes sense at a control period's start: the food (F, 3), the percepts and
+    the fishes' centres as the fishes with eyes see them (``Shoal.perceive``), each fish as
+    its routines see itself, what lies ahead of each (``Shoal._ahead``: hits, ways out,
+    threats, fish only), the situations and the predators' distances (``situations``) and
+    the food each leaves to another (``conceded``)."""
+
+    food: np.ndarray
+    pc: Percepts
+    seen: dict[int, np.ndarray]
+    selves: list[Me]
+    ahead: tuple[list, list, list, list]
+    sits: Situations
+    predators: np.ndarray
+    given: np.ndarray
 
 
 class Shoal:
@@ -68,6 +102,13 @@ class Shoal:
             np.array([s.habits.crowd for s in species]),
         )
         self.cruise = np.array([b.cruise for b in brains], float)
+        self.tempers = Tempers.of(
+            [b.constants for b in brains],
+            [s.habits for s in species],
+            [s.predator for s in species],
+        )
+        self.radius = np.array([b.radius for b in brains], float)
+        self.top = np.array([b.top for b in brains], float)
         self.constants = [
             np.array([getattr(b.constants, k) for b in brains], float)
             for k in ("hunger_rate", "alpha", "libido_rate", "fear_distance")
@@ -75,6 +116,44 @@ class Shoal:
 
     def __call__(self, world: World, period: Period) -> list[np.ndarray]:
         """Return every fish's activations (1, T, A) for the period: perceive, think, act."""
+        now = self._sense(world)
+        t, b = period.t0, self.bodies
+        hunger, libido, fear = self._drives(t, now.predators)
+        roll, rate, bend = (x.tolist() for x in self.bodies.posture(world, t))
+        living = [i for i, brain in enumerate(self.brains) if brain.alive]
+        # every mind thinks at once (the dead ones' thoughts are dropped)
+        thinking = [brain.mind for brain in self.brains]
+        thinking = think_many(thinking, t, self.tempers, now.sits, hunger, libido, fear)
+        minds: list[MindState | None] = [None] * len(self.brains)
+        for i in living:
+            self.brains[i].mind = minds[i] = thinking[i]
+        targets = focus_targets(
+            ["" if m is None else m.intention for m in minds],
+            [None if m is None else m.target for m in minds],
+            b.nose,
+            b.fwd,
+            self.radius,
+            now.food,
+            now.pc.food,
+            now.given,
+            now.pc.fish,
+            self.masks[0],
+            self.masks[2],
+        )
+        moves, heights = self._respond(living, minds, targets, now)
+        felt = list(zip(hunger.tolist(), libido.tolist(), fear.tolist(), strict=True))
+        for i in living:
+            self.brains[i].remember(felt[i], targets[i])
+        pitch = keep_depths(b.com[living, 1], b.fwd[living, 1], [heights[i] for i in living])
+        demands: list[Demand | None] = [None] * len(self.brains)
+        for i, p in zip(living, pitch.tolist(), strict=True):
+            # the demand with the body's posture (``Demand(...)``: ``replace`` is slow)
+            demands[i] = Demand(*moves[i], p, roll[i], rate[i], bend[i])
+        return activations(self.brains, demands, period)
+
+    def _sense(self, world: World) -> Moment:
+        """Return what the fishes perceive now, what lies ahead of each, their situations
+        and the food each leaves to another (``Moment``)."""
         alive = np.array([b.alive for b in self.brains])
         food = world.food_positions[0]
         pc, seen = self.perceive(world, alive, food)
@@ -87,33 +166,91 @@ class Shoal:
         b = self.bodies
         sees = np.isfinite(pc.fish)
         given = conceded(b.nose, b.fwd, food, eating, sees, np.isfinite(pc.food))
-        drives = self._drives(period.t0, predators)
-        roll, rate, bend = (x.tolist() for x in self.bodies.posture(world, period.t0))
-        b, obs = self.bodies, {"time": np.array([period.t0])}
-        demands: list[Demand | None] = []
-        for i, brain in enumerate(self.brains):
+        ahead = (hits, aways, threats, fish_only)
+        return Moment(food, pc, seen, selves, ahead, sits, predators, given)
+
+    def _respond(
+        self, living: list[int], minds: list, targets: list[int | None], now: Moment
+    ) -> tuple[dict[int, tuple[float, float]], dict[int, float]]:
+        """Return each living fish's speed and turn, and the height (m) it keeps, from the
+        routine that serves its intention: the fishes going to a target and the avoiding
+        ones all at once, the wanderers each with its own random turn, the others (escape,
+        school, leave: they read the crowd they see) one by one."""
+        b, selves = self.bodies, now.selves
+        go = [i for i in living if minds[i].intention in GO_TO and targets[i] is not None]
+        speed, turn, wanted = self._go_to(go, targets, now.food, now.seen)
+        moves = {i: (s, t) for i, s, t in zip(go, speed.tolist(), turn.tolist(), strict=True)}
+        heights = dict(zip(go, wanted.tolist(), strict=True))
+        ducks = [i for i in living if minds[i].intention == "avoid"]
+        speed, turn = self._avoid(ducks, now)
+        moves |= {i: (s, t) for i, s, t in zip(ducks, speed.tolist(), turn.tolist(), strict=True)}
+        hits, aways, threats, fish_only = now.ahead
+        for i in living:
+            if i in moves:
+                continue
+            if minds[i].intention in GO_TO or minds[i].intention == "wander":
+                d = wander(selves[i], NOTHING, self.brains[i].rng)  # (no target: it searches)
+                moves[i] = (d.speed, d.turn)
+                continue
             view = View(
                 me=selves[i],
-                fish_distance=pc.fish[i],
-                fish_com=seen.get(i, b.com),
+                fish_distance=now.pc.fish[i],
+                fish_com=now.seen.get(i, b.com),
                 fish_forward=b.fwd,
                 fish_velocity=b.vel,
                 fish_species=self.names,
-                food_distance=pc.food[i],
-                food=food,
-                obstacle_distance=pc.obstacles[i],
+                food_distance=now.pc.food[i],
+                food=now.food,
+                obstacle_distance=now.pc.obstacles[i],
                 collision=hits[i],
                 away=aways[i],
                 threat=threats[i],
                 fish_only=fish_only[i],
-                conceded=given[i],
+                conceded=now.given[i],
             )
-            d = brain.decide({**obs, "view": view}, period, sits[i], drives[i])
-            # the demand with the body's posture (``Demand(...)``: ``replace`` is slow)
-            demands.append(
-                None if d is None else Demand(d.speed, d.turn, d.pitch, roll[i], rate[i], bend[i])
-            )
-        return activations(self.brains, demands, period)
+            d, height = self.brains[i].routine(view, targets[i])
+            moves[i] = (d.speed, d.turn)
+            if height is not None:
+                heights[i] = height
+        # the others keep their layers
+        return moves, {i: heights.get(i, selves[i].layer) for i in living}
+
+    def _go_to(
+        self, go: list[int], targets: list[int | None], food: np.ndarray, seen: dict
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Return the speeds and turns (``go_to_many``) of the fishes ``go`` to their
+        targets (food particles, or fishes as each perceives them: ``seen``), and the
+        targets' heights (m)."""
+        b, rows = self.bodies, np.array(go, int)
+        aim, velocity = np.empty((len(go), 3)), np.full((len(go), 3), np.nan)
+        lead, beside = np.zeros(len(go)), np.zeros(len(go))
+        for k, i in enumerate(go):
+            intention, t = self.brains[i].mind.intention, targets[i]
+            lead[k] = GO_TO[intention].get("lead", 0.0)
+            beside[k] = GO_TO[intention].get("beside", 0.0)
+            if intention == "eat":
+                aim[k] = food[t]
+            else:
+                aim[k], velocity[k] = seen.get(i, b.com)[t], b.vel[t]
+        speed, turn = go_to_many(
+            b.nose[rows], b.com[rows], b.fwd[rows], self.cruise[rows], self.top[rows],
+            aim, velocity, lead, beside,
+        )  # fmt: skip
+        return speed, turn, aim[:, 1]
+
+    def _avoid(self, ducks: list[int], now: Moment) -> tuple[np.ndarray, np.ndarray]:
+        """Return the speeds and turns (``avoid_many``) of the avoiding fishes ``ducks``: each
+        turning to its way out, as urgently as the nearest obstacle or the threatening fish
+        is near."""
+        b, rows = self.bodies, np.array(ducks, int)
+        _, aways, threats, fish_only = now.ahead
+        away = np.array([np.full(3, np.nan) if aways[i] is None else aways[i] for i in ducks])
+        obstacles = now.pc.obstacles
+        near = obstacles[rows].min(axis=1) if obstacles.shape[1] else np.inf
+        obstacle = np.minimum(near, np.array([threats[i] for i in ducks], float))
+        only = np.array([fish_only[i] for i in ducks], bool)
+        cruise, top, away = self.cruise[rows], self.top[rows], away.reshape(-1, 3)
+        return avoid_many(b.fwd[rows], b.vel[rows], cruise, top, away, obstacle, only)
 
     def perceive(
         self, world: World, alive: np.ndarray, food: np.ndarray
@@ -181,6 +318,13 @@ class Shoal:
         # (``collision_ahead``'s answer, without asking it for every fish of a crowd)
         rocks = (ahead.min(axis=(1, 2)) < CLEARANCE).tolist() if len(kind) else [False] * len(sides)
         hits, aways, fish_only = [], [], []
+        # the room to either side of every fish something lies ahead of, all at once
+        asked = [i for i in range(len(sides)) if rocks[i] or sides[i]]
+        rooms = {}
+        if asked and len(kind):
+            reach = np.array([probe_reach(selves[i], meals[i]) for i in asked])
+            room = side_rooms(fb.nose[asked], fb.fwd[asked], reach, kind, center, size)
+            rooms = dict(zip(asked, map(tuple, room.tolist()), strict=True))
         for i, brain in enumerate(self.brains):
             if not rocks[i] and not sides[i]:
                 hits.append(False)
@@ -189,7 +333,15 @@ class Shoal:
                 continue
             prefer = brain.avoid_side if brain.thought.intention == "avoid" else 0
             hit, away = collision_ahead(
-                selves[i], kind, center, size, int(sides[i]), prefer, meals[i], ahead[i]
+                selves[i],
+                kind,
+                center,
+                size,
+                int(sides[i]),
+                prefer,
+                meals[i],
+                ahead[i],
+                rooms.get(i),
             )
             if hit and away is not None:
                 # the vertical component of fwd x away: which side the way out lies on
@@ -200,13 +352,11 @@ class Shoal:
             fish_only.append(bool(hit and sides[i] and not rocks[i]))
         return hits, aways, near.tolist(), fish_only
 
-    def _drives(self, t: float, predators: np.ndarray) -> list[Drives]:
-        """Return every fish's drives at time ``t`` s in one step over arrays."""
+    def _drives(self, t: float, predators: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Return every fish's hunger, libido and fear (n,) at time ``t`` s at once."""
         minds = [b.mind for b in self.brains]
         meals = [m.eaten for m in minds], [m.meal_time for m in minds]
-        arrays = drives_many(*meals, [m.mating_time for m in minds], t, *self.constants, predators)
-        hunger, libido, fear = (x.tolist() for x in arrays)
-        return [Drives(h, lib, f) for h, lib, f in zip(hunger, libido, fear, strict=True)]
+        return drives_many(*meals, [m.mating_time for m in minds], t, *self.constants, predators)
 
 
 def right_of_way(threat: np.ndarray, meals: list[float | None]) -> np.ndarray:
@@ -232,21 +382,23 @@ def activations(
     brains: list[FishBrain], demands: list[Demand | None], period: Period
 ) -> list[np.ndarray]:
     """Return each fish's activations (1, T, A) for its demand (zeros when dead): fishes that
-    share a motor (body and wave frequency) in one batched call."""
+    share a motor (body and wave frequency, or body and learned repertoire) in one batched
+    call (each learned fish with its own turn under way)."""
     rows: list[np.ndarray] = [np.empty(0)] * len(brains)
     groups: dict[int, list[int]] = {}
     times = period.times
     for i, (b, d) in enumerate(zip(brains, demands, strict=True)):
         if d is None:
             rows[i] = np.zeros((1, period.steps, b.body.n_actuators))
-        elif isinstance(b.locomotion, LearnedLocomotion):
-            # each fish its own turn under way; the gaits evaluated once for the fishes of a
-            # motor (``LearnedMotor._raw``)
-            rows[i] = b.locomotion.activations(d, times)[None]
         else:
             groups.setdefault(id(b.locomotion.motor), []).append(i)
     for idx in groups.values():
-        acts = brains[idx[0]].locomotion.activations_many([demands[i] for i in idx], times)
+        first = brains[idx[0]].locomotion
+        if isinstance(first, LearnedLocomotion):
+            fishes = [brains[i].locomotion for i in idx]
+            acts = learned_activations(fishes, [demands[i] for i in idx], times)
+        else:
+            acts = first.activations_many([demands[i] for i in idx], times)
         for k, i in enumerate(idx):
             rows[i] = acts[k : k + 1]
     return rows

@@ -477,19 +477,6 @@ def summarize(tank: Tank, life: Life) -> dict:
     }
 
 
-def events_csv(life: Life) -> str:
-    """Return the events as CSV text: columns time, fish, event, detail."""
-    import csv
-    import io
-
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["time", "fish", "event", "detail"])
-    for t, fish, event, detail in life.events:
-        w.writerow([f"{t:.2f}", fish, event, detail])
-    return buf.getvalue()
-
-
 def frame_labels(life: Life, names: list[str]) -> list[list[str]]:
     """Return per record time one label per fish: its name and the intention it followed."""
     k = np.clip(
