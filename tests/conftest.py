@@ -2,11 +2,26 @@
 
 from __future__ import annotations
 
+import os
+import shutil
+import tempfile
 from pathlib import Path
 
 import pytest
 
-from zoetic.bodies import load_animal
+# JAX's compiled programs go to a directory of this test session, removed at its end, never to
+# the user's cache (~/.cache/zoetic/jax or their JAX_COMPILATION_CACHE_DIR); set before any
+# test imports JAX, and inherited by the command-line runs the tests start.
+JAX_TEST_CACHE = tempfile.mkdtemp(prefix="zoetic-test-jax-")
+os.environ["ZOETIC_JAX_CACHE"] = JAX_TEST_CACHE
+os.environ.pop("JAX_COMPILATION_CACHE_DIR", None)
+
+from zoetic.bodies import load_animal  # noqa: E402
+
+
+def pytest_sessionfinish(session, exitstatus) -> None:
+    """Remove the session's JAX compilation cache."""
+    shutil.rmtree(JAX_TEST_CACHE, ignore_errors=True)
 
 
 def write_short_task(folder: Path, horizon: float, nodes: int) -> Path:

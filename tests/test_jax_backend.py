@@ -270,3 +270,11 @@ def test_the_bench_times_a_cold_cache_and_restores_the_users(tmp_path):
     with fresh_compilation_cache():
         assert jax.config.jax_compilation_cache_dir != before
     assert jax.config.jax_compilation_cache_dir == before
+
+
+def test_the_suite_keeps_compiled_programs_out_of_the_users_cache():
+    from conftest import JAX_TEST_CACHE
+    from zoetic.physics.jax_backend import cache_dir
+
+    assert cache_dir() == Path(JAX_TEST_CACHE)
+    assert jax.config.jax_compilation_cache_dir == JAX_TEST_CACHE
