@@ -14,7 +14,7 @@ from zoetic.behavior.aquarium.brain import tank_brains
 from zoetic.behavior.aquarium.routines import closest_lateral, fish_threats
 from zoetic.behavior.aquarium.shoal import carcasses
 from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live
-from zoetic.behavior.mind import INTENTIONS
+from zoetic.behavior.mind import INTENTIONS, initial_mind
 
 REGION = (1.0, 0.4, 2.0)  # reach, half width (m), anticipation (s)
 SEEN = ~np.eye(3, dtype=bool)
@@ -112,4 +112,38 @@ def test_a_fish_going_for_food_swims_around_a_dead_fish_in_its_way(monkeypatch):
     cruise_from(world, body, poses, tank.fishes[0].species.motor.cruise_speed)
     life = live(tank)
     assert (life.intentions[:, 0] == INTENTIONS.index("avoid")).any()
+    assert not [e for e in life.events if e[2] == "collision"]
+
+
+def test_an_eater_passes_behind_a_fish_crossing_its_way_from_the_right(monkeypatch):
+    # a hungry minnow swims +x for a particle; a sated one (it wanders) crosses its way
+    # from the right, 3 m ahead: the eater turns right, behind it, and is on to its food
+    # after 1.9 s of avoiding; turning left, away from where the crosser was, it swam
+    # alongside it and avoided it for 5.6 s of the 8
+    from dataclasses import replace
+
+    from zoetic.physics.objects import Food
+    from zoetic.physics.world import World
+
+    def brains(*args):
+        out = tank_brains(*args)
+        out[1].mind = initial_mind(0.0, out[1].species.mind.hunger_rate)
+        for b in out:  # no courting: the two only meet
+            b.constants = replace(b.constants, libido_rate=0.0)
+        return out
+
+    monkeypatch.setattr(tk, "tank_brains", brains)
+    cfg = TankConfig(fishes=2, predators=0, food=0, obstacles=0, seconds=8.0, seed=0, half_size=8.0)
+    t = build_tank(cfg)
+    world = World([*t.world.animals, *t.world.statics, Food((4.0, 0.0, 0.0), 0.25)], medium="water")
+    tank = tk.Tank(cfg, world, t.fishes, t.kind, t.center, t.size, t.static_names)
+    poses = [((-2.0, 0.0, 0.0), 0.0), ((1.0, 0.0, -1.5), np.pi / 2)]
+    cruise_from(world, tank.fishes[0].body, poses, tank.fishes[0].species.motor.cruise_speed)
+    life = live(tank)
+    avoiding = life.intentions[:, 0] == INTENTIONS.index("avoid")
+    assert 0 < avoiding.sum() * cfg.control_period < 3.0
+    # the eater's centre went right (-z) of its line before the crosser crossed it
+    eater = life.positions[0].mean(axis=1)
+    crossed = int(np.argmax(life.positions[1].mean(axis=1)[:, 2] > 0.0))
+    assert crossed > 0 and eater[:crossed, 2].min() < -0.02
     assert not [e for e in life.events if e[2] == "collision"]
