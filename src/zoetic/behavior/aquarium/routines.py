@@ -237,9 +237,9 @@ def fish_threats(
     side = np.zeros(n, int)
     near = np.full(n, np.inf)
     if len(hit):
-        # every threatening fish: the nearest contact brakes, and where the threats will be
-        # nearest (each weighed by its points in the box) gives the way out, so that a fish
-        # between two does not turn from one into the other and back (it dithered)
+        # every threatening fish: the nearest contact brakes, and the threats' sides (each
+        # weighed by its points in the box) give the way out, so that a fish between two
+        # does not turn from one into the other and back (it dithered, swimming on)
         me, other = ii[hit], jj[hit]
         horizon = np.minimum(anticipation[me], CONTACT_HORIZON)
         contact = time_to_contact(
@@ -250,26 +250,21 @@ def fish_threats(
         travel = np.where(np.isfinite(contact), speed * np.minimum(contact, 1e9), np.inf)
         np.minimum.at(near, me, np.minimum(dist[hit], travel))
         lateral = closest_lateral(com[other] - nose[me], rel_v[hit], left[me], anticipation[me])
+        # +1 a threat nearest on the left, -1 on the right, 0 nearly dead ahead
+        sign = np.where(np.abs(lateral) >= 0.25 * half_width[me], np.sign(lateral), 0.0)
         pull = np.zeros(n)
-        np.add.at(pull, me, count[hit] * lateral)
+        np.add.at(pull, me, count[hit] * sign)
         total = np.zeros(n)
         np.add.at(total, me, count[hit])
-        lateral = pull / np.maximum(total, 1)  # (n,) m to the left, the threats' weighed mean
     for i in np.flatnonzero(j >= 0).tolist():
         # away from where the threats will be nearest: a fish crossing its way turned from
         # where it is now, turned into its path (alongside it, the way it goes) and met it
         kept = int(prefer[i]) if prefer is not None and prefer[i] else 0
-        if kept:
-            # the side already taken is kept while the avoidance lasts (Tu's): the nearest
-            # approach, foreseen from velocities that sway with each tail beat, crossed from
-            # side to side, and the fish turned one way and the other, going nowhere;
-            # unless the threats will lie on that side, beyond the half width
-            side[i] = -kept if lateral[i] * kept > half_width[i] else kept
-        elif abs(lateral[i]) >= 0.25 * half_width[i]:
-            side[i] = -1 if lateral[i] > 0.0 else 1
-        else:  # nearly dead ahead: to the right (as ships do: two fishes meeting head on
-            # both turn right and pass each other)
-            side[i] = -1
+        if abs(pull[i]) > (0.5 * total[i] if kept else 0.0):
+            side[i] = -1 if pull[i] > 0.0 else 1
+        else:  # nearly dead ahead, or threats on both sides: the side already taken, else
+            # to the right (as ships do: two fishes meeting head on both turn right and pass)
+            side[i] = kept or -1
     return j, side, near
 
 
