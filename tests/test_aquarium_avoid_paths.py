@@ -148,33 +148,3 @@ def test_an_eater_passes_behind_a_fish_crossing_its_way_from_the_right(monkeypat
     assert crossed > 0 and eater[:crossed, 2].min() < -0.02
     assert not [e for e in life.events if e[2] == "collision"]
 
-
-def test_a_fish_yielding_head_on_swims_off_the_eaters_line(monkeypatch):
-    # the right of way's head-on pair (tests/test_aquarium_yield.py): a sated minnow meets
-    # a hungry one head on, 0.1 m aside. It yields and, foreseeing the eater's nearest
-    # approach along the headings, keeps turning the one way: 0.3 m off the line within
-    # 5 s, the eater avoiding it for under 2 s; foreseen from the centres' velocities
-    # (they sway with each tail beat), the side flipped period by period, the yielder
-    # stopped on the line and the eater avoided it for 3 s
-    from zoetic.physics.objects import Food
-    from zoetic.physics.world import World
-
-    def brains(*args):
-        out = tank_brains(*args)
-        out[1].mind = initial_mind(0.0, out[1].species.mind.hunger_rate)
-        return out
-
-    monkeypatch.setattr(tk, "tank_brains", brains)
-    cfg = TankConfig(fishes=2, predators=0, food=0, obstacles=0, seconds=7.0, seed=0, half_size=8.0)
-    t = build_tank(cfg)
-    world = World([*t.world.animals, *t.world.statics, Food((3.0, 0.0, 0.0), 0.25)], medium="water")
-    tank = tk.Tank(cfg, world, t.fishes, t.kind, t.center, t.size, t.static_names)
-    poses = [((-2.0, 0.0, 0.0), 0.0), ((1.0, 0.0, 0.1), np.pi)]
-    cruise_from(world, tank.fishes[0].body, poses, tank.fishes[0].species.motor.cruise_speed)
-    life = live(tank)
-    avoiding = life.intentions[:, 0] == INTENTIONS.index("avoid")
-    assert avoiding.sum() * cfg.control_period < 2.0
-    yielder = life.positions[1].mean(axis=1)
-    by5 = int(np.searchsorted(life.times, 5.0))
-    assert np.abs(yielder[:by5, 2]).max() > 0.3
-    assert not [e for e in life.events if e[2] == "collision"]

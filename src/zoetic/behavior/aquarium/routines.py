@@ -249,13 +249,7 @@ def fish_threats(
         # how far it swims before they touch (a still fish: 0 m, it is in the way already)
         travel = np.where(np.isfinite(contact), speed * np.minimum(contact, 1e9), np.inf)
         np.minimum.at(near, me, np.minimum(dist[hit], travel))
-        # each swimming on along its heading at its speed along it: the centre's velocity
-        # sways across with each tail beat, and foreseen over 2 s the sway put a threat
-        # nearly ahead on one side and the other by turns (the fish stopped in its way)
-        along = f * np.einsum("nc,nc->n", velocity, f)[:, None]
-        lateral = closest_lateral(
-            com[other] - nose[me], along[other] - along[me], left[me], anticipation[me]
-        )
+        lateral = closest_lateral(com[other] - nose[me], rel_v[hit], left[me], anticipation[me])
         # +1 a threat nearest on the left, -1 on the right, 0 nearly dead ahead
         sign = np.where(np.abs(lateral) >= 0.25 * half_width[me], np.sign(lateral), 0.0)
         pull = np.zeros(n)
