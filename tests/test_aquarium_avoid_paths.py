@@ -147,4 +147,3 @@ def test_an_eater_passes_behind_a_fish_crossing_its_way_from_the_right(monkeypat
     crossed = int(np.argmax(life.positions[1].mean(axis=1)[:, 2] > 0.0))
     assert crossed > 0 and eater[:crossed, 2].min() < -0.02
     assert not [e for e in life.events if e[2] == "collision"]
-
