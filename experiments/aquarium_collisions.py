@@ -53,11 +53,14 @@ def _contact(life, i: int, j: int, r: int, vi: np.ndarray, vj: np.ndarray) -> li
 
 def kind_of(c: dict) -> str:
     """The collision's kind: a predator against the prey it caught (the body stays in the
-    water, seen by no one), else by where each body was touched: a fish's head (+0.5 to +1
-    along it) into the other's flank or tail is a strike by it; both heads, nose to nose;
-    neither head, side by side (flank or tail swept into the other)."""
+    water), a fish against the body of one caught before (a dead body), else by where each
+    body was touched: a fish's head (+0.5 to +1 along it) into the other's flank or tail is
+    a strike by it; both heads, nose to nose; neither head, side by side (flank or tail
+    swept into the other)."""
     if c["caught"]:
         return "caught prey"
+    if c.get("dead"):
+        return "dead body"
     head = [x >= 0.5 for x in c["contact"]]
     if all(head):
         return "nose to nose"
@@ -73,6 +76,8 @@ def describe(tank, life, t: float, a: str, b: str) -> dict:
     caught = any(
         e[2] == "catch" and {e[1], e[3]} == {a, b} and e[0] <= t + 1e-6 for e in life.events
     )
+    # one of the two was caught before by another fish: its body lay in the water
+    dead = any(e[2] == "catch" and e[3] in (a, b) and e[0] < t - 1e-6 for e in life.events)
     k = int(np.searchsorted(life.brain_times, t - 1e-6) - 1)
     k0 = max(k - 20, 0)
     r = int(np.searchsorted(life.times, t - 1e-6))
@@ -97,6 +102,7 @@ def describe(tank, life, t: float, a: str, b: str) -> dict:
         "closing_m_s": round(closing, 2),
         "contact": _contact(life, i, j, r, vi, vj),
         "caught": caught,
+        "dead": dead and not caught,
     }
 
 
@@ -114,6 +120,7 @@ def run(seed: int, seconds: float) -> dict:
         "food_eaten": round(s["food_eaten_fraction"], 3),
         "fish_collisions_per_minute": round(60 * s["collisions_between_fishes"] / s["seconds"], 2),
         "caught_prey_touches": sum(kind_of(c) == "caught prey" for c in hits),
+        "dead_body_touches": sum(kind_of(c) == "dead body" for c in hits),
         "avoid": round(s["intention_share"]["avoid"], 3),
         "cpu_realtime_factor": round(seconds / cpu, 2),
         "collisions": hits,
@@ -166,6 +173,22 @@ def main() -> None:
                             [
                                 r["fish_collisions_per_minute"]
                                 - 60 * r["caught_prey_touches"] / args.seconds
+                                for r in rows
+                            ]
+                        )
+                    ),
+                    2,
+                ),
+                # nor a fish against a body in the water (perceived by no one until fishes
+                # learned to avoid it: ``shoal.carcasses``)
+                "mean_without_caught_prey_or_dead_bodies_per_minute": round(
+                    float(
+                        np.mean(
+                            [
+                                r["fish_collisions_per_minute"]
+                                - 60
+                                * (r["caught_prey_touches"] + r["dead_body_touches"])
+                                / args.seconds
                                 for r in rows
                             ]
                         )

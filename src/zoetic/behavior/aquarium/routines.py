@@ -211,9 +211,10 @@ def fish_threats(
     line (nose to tail, ``CENTRE_LINE`` points) lies in the box now or will, moving as both
     fishes move now, within ``anticipation`` s (n,); the most dangerous is the one with the
     most points in the box over those instants (the nearest on a tie). The way out is away
-    from where the threat's centre is now (Tu's avoid-fish routine turns away from the
-    obstacle's relative position); a threat nearly dead ahead (within a quarter of the half
-    width) is turned away from on the side ``prefer`` (n,) gives (+1, -1; 0: none), the side
+    from where the threat's centre will be when nearest (``closest_lateral``; Tu's
+    avoid-fish routine turns away from the obstacle's relative position); a threat nearly
+    dead ahead (within a quarter of the half width) is turned away from on the side
+    ``prefer`` (n,) gives (+1, -1; 0: none), the side
     an avoidance already turns to, so that the fish does not dither, else to the right (two
     fishes meeting head on both turn right and pass). nose, com, forward, velocity: (n, 3)."""
     n = len(nose)
@@ -243,27 +244,54 @@ def fish_threats(
     j[ii[best]] = jj[best]
     side = np.zeros(n, int)
     near = np.full(n, np.inf)
-    if len(best):
-        me, other = ii[best], jj[best]
+    if len(hit):
+        # every threatening fish: the nearest contact brakes, and the threats' sides (each
+        # weighed by its points in the box) give the way out, so that a fish between two
+        # does not turn from one into the other and back (it dithered, swimming on)
+        me, other = ii[hit], jj[hit]
         horizon = np.minimum(anticipation[me], CONTACT_HORIZON)
         contact = time_to_contact(
-            nose[me], f[me], com[me], line[:, other], rel_v[best], horizon, HEAD
+            nose[me], f[me], com[me], line[:, other], rel_v[hit], horizon, HEAD
         )
         speed = np.linalg.norm(velocity[me], axis=1)
         # how far it swims before they touch (a still fish: 0 m, it is in the way already)
         travel = np.where(np.isfinite(contact), speed * np.minimum(contact, 1e9), np.inf)
-        near[me] = np.minimum(dist[best], travel)
+        np.minimum.at(near, me, np.minimum(dist[hit], travel))
+        lateral = closest_lateral(com[other] - nose[me], rel_v[hit], left[me], anticipation[me])
+        # +1 a threat nearest on the left, -1 on the right, 0 nearly dead ahead
+        sign = np.where(np.abs(lateral) >= 0.25 * half_width[me], np.sign(lateral), 0.0)
+        pull = np.zeros(n)
+        np.add.at(pull, me, count[hit] * sign)
+        total = np.zeros(n)
+        np.add.at(total, me, count[hit])
     for i in np.flatnonzero(j >= 0).tolist():
-        k = int(j[i])
-        # away from where it is now: two fishes that both turn away from each other end up
-        # swimming apart or alongside, whichever way they met
-        lateral = float((com[k] - nose[i]) @ left[i])
-        if abs(lateral) >= 0.25 * half_width[i]:
-            side[i] = -1 if lateral > 0.0 else 1
-        else:  # nearly dead ahead: the side already taken, else to the right (as ships do:
-            # two fishes meeting head on then both turn right and pass each other)
-            side[i] = int(prefer[i]) if prefer is not None and prefer[i] else -1
+        # away from where the threats will be nearest: a fish crossing its way turned from
+        # where it is now, turned into its path (alongside it, the way it goes) and met it
+        kept = int(prefer[i]) if prefer is not None and prefer[i] else 0
+        if abs(pull[i]) > (0.5 * total[i] if kept else 0.0):
+            side[i] = -1 if pull[i] > 0.0 else 1
+        else:  # nearly dead ahead, or threats on both sides: the side already taken, else
+            # to the right (as ships do: two fishes meeting head on both turn right and pass)
+            side[i] = kept or -1
     return j, side, near
+
+
+def closest_lateral(
+    rel: np.ndarray, rel_v: np.ndarray, left: np.ndarray, horizon: np.ndarray
+) -> np.ndarray:
+    """Return (m,) how far (m) to the left of each of m fishes another fish's centre will lie
+    when it is nearest (in the horizontal plane, both swimming on as they swim now, within
+    ``horizon`` (m,) s, now at the soonest): the side a fish turns away from. Turning away
+    from that point widens the miss (the fish's change of velocity moves the other's
+    nearest approach the opposite way); a fish crossing ahead from the right will be
+    nearest on the left, so the fish turns right and passes behind it.
+
+    rel (m, 3): the other's centre relative to the nose now; rel_v (m, 3): its velocity
+    relative to the fish's; left (m, 3): the fishes' unit horizontal left."""
+    r, v = _flat(rel), _flat(rel_v)
+    vv = np.einsum("mc,mc->m", v, v)
+    t = np.clip(-np.einsum("mc,mc->m", r, v) / np.maximum(vv, 1e-12), 0.0, horizon)
+    return np.einsum("mc,mc->m", r + t[:, None] * v, left)
 
 
 def time_to_contact(

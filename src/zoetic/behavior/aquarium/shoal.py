@@ -158,7 +158,7 @@ class Shoal:
         food = world.food_positions[0]
         pc, seen = self.perceive(world, alive, food)
         selves, meals = self._selves(pc)
-        hits, aways, threats, fish_only = self._ahead(pc, selves, meals)
+        hits, aways, threats, fish_only = self._ahead(pc, selves, meals, alive)
         sits, predators = situations(
             pc.fish, pc.food, pc.obstacles, *self.masks, *self.habits, hits, fish_only
         )
@@ -294,14 +294,16 @@ class Shoal:
         return selves, meals
 
     def _ahead(
-        self, pc: Percepts, selves: list[Me], meals: list[float | None]
+        self, pc: Percepts, selves: list[Me], meals: list[float | None], alive: np.ndarray
     ) -> tuple[list[bool], list[np.ndarray | None], list[float], list[bool]]:
         """Return for each fish whether an obstacle or fish lies ahead, the way out, how
         far (m) a threatening fish is (inf: none), and whether only a fish threatens (no
         obstacle ahead); an avoiding fish keeps the side it turned to. A hunting predator
-        does not shy away from the prey it chases."""
+        does not shy away from the prey it chases; a dead fish's body (``carcasses``) is
+        avoided as a fish is."""
         kind, center, size = self.statics
-        fb, seen = self.bodies, np.isfinite(pc.fish)
+        fb = self.bodies
+        seen = np.isfinite(pc.fish) | carcasses(fb.nose, fb.com, alive, self.senses[1])
         probes = probes_ahead_many(fb.nose, fb.fwd, fb.vel, self.cruise, meals)
         ahead = obstacle_distance(probes, kind, center, size)  # all fishes at once
         for i, brain in enumerate(self.brains):
@@ -357,6 +359,21 @@ class Shoal:
         minds = [b.mind for b in self.brains]
         meals = [m.eaten for m in minds], [m.meal_time for m in minds]
         return drives_many(*meals, [m.mating_time for m in minds], t, *self.constants, predators)
+
+
+def carcasses(
+    nose: np.ndarray, com: np.ndarray, alive: np.ndarray, view_range: np.ndarray
+) -> np.ndarray:
+    """Return (n, n): the dead fishes' bodies (columns) that each live fish (rows) has in
+    view range (m, its nose to the body's centre): a body left in the water (a catch) is
+    perceived by no one as a fish, yet it is in the way, and fishes ran into it."""
+    dead = ~np.asarray(alive, bool)
+    out = np.zeros((len(nose), len(nose)), bool)
+    if dead.any():
+        d = np.linalg.norm(com[None, dead] - nose[:, None], axis=-1)
+        out[:, dead] = d < view_range[:, None]
+        out[dead] = False
+    return out
 
 
 def right_of_way(threat: np.ndarray, meals: list[float | None]) -> np.ndarray:
