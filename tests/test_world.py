@@ -126,6 +126,31 @@ def test_a_shark_cannot_swim_through_a_wall_or_a_post():
     assert world.positions(0)[0, body.head, 0] < post.center[0]
 
 
+def test_impulses_take_memory_only_for_the_animals_that_touched_something():
+    """Food and untouched animals cost the contact record nothing: an animal that touched
+    nothing gets one zero seen through every index, the one that hit the wall its impulses
+    at the wall's column only (food never pushes)."""
+    body = load_animal("shark")
+    nose = body.rest_pos[body.head] + body.start_offset
+    wall = Box(center=tuple(nose + 0.5 * body.forward), half_size=(0.1, 2.0, 2.0))
+    food = [Food((20.0 + k, 0.5, 20.0)) for k in range(50)]
+    far = Animal(body, offset=tuple(body.start_offset + (0.0, 0.0, 10.0)))
+    world = World(
+        [*food[:25], Animal(body, velocity=tuple(2.0 * body.forward)), wall, far, *food[25:]],
+        medium="vacuum",
+        batch=2,
+    )
+    hit = None
+    for _ in range(30):
+        c = world.step(1 / 30)
+        assert c.impulse[1].shape == (2, body.n_nodes, 51, 3)
+        assert c.impulse[1].strides == (0, 0, 0, 0) and not c.impulse[1].any()
+        if c.touching[:, 0].any():
+            hit = c.impulse[0]
+    assert hit is not None and hit.strides != (0, 0, 0, 0)
+    assert hit[:, :, 25].any() and not np.delete(hit, 25, axis=2).any()
+
+
 def test_food_drifts_and_is_eaten_by_a_passing_head():
     body = load_animal("shark")
     nose = body.rest_pos[body.head] + body.start_offset

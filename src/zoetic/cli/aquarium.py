@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Annotated
 
 import typer
 
@@ -11,62 +12,87 @@ from zoetic.cli.bench import bench_app, capped
 from zoetic.cli.options import Force, Json, Quick
 from zoetic.cli.output import console, emit
 
+Food = Annotated[
+    int, typer.Option(help="Food particles drifting in the current [default: 1.5 a fish].")
+]
+"""How many food particles the tank holds."""
 
-@app.command()
-def aquarium(
-    fishes: int = typer.Option(10, help="Fishes in the tank, predators included."),
-    predators: int = typer.Option(1, help="How many of them are predators (sharks)."),
-    food: int = typer.Option(
-        None, help="Food particles drifting in the current [default: 1.5 a fish]."
-    ),
-    obstacles: int = typer.Option(
-        None, help="Rocks and seaweed [default: 5 for 10 fishes, 5 sqrt(fishes / 10)]."
-    ),
-    seconds: float = typer.Option(60.0, help="Simulated time (s)."),
-    seed: int = typer.Option(0, help="Seed of the layout and of the fishes' wandering."),
-    out: Path = typer.Option(Path("runs/tank"), help="Output directory."),
-    perception: str = typer.Option(
-        "oracle",
+Obstacles = Annotated[
+    int, typer.Option(help="Rocks and seaweed [default: 5 for 10 fishes, 5 sqrt(fishes / 10)].")
+]
+"""How many rocks and seaweed clumps the tank holds."""
+
+Perception = Annotated[
+    str,
+    typer.Option(
         help="oracle (the world model) or vision (the first --seeing predators see with "
         "animat vision: rendered eyes, colour recognition, gaze; the rest use the oracle).",
     ),
-    seeing: str = typer.Option(
-        "1", help="With --perception vision: how many predators see (the first ones), or all."
-    ),
-    prey: str = typer.Option("minnow", help="Prey species: a built-in name or a .toml file."),
-    predator: str = typer.Option("shark", help="Predator species: a name or a .toml file."),
-    predator_skills: Path = typer.Option(
-        None,
+]
+"""How the fishes perceive the tank."""
+
+Seeing = Annotated[
+    str,
+    typer.Option(help="With --perception vision: how many predators see (the first ones), or all."),
+]
+"""How many predators see with animat vision (``seeing_count``)."""
+
+PredatorSkills = Annotated[
+    Path,
+    typer.Option(
         "--predator-skills",
         help="A learned repertoire's directory (zoetic repertoire "
         "train) the predator swims by instead of its species' motor skills.",
     ),
-    skills: str = typer.Option(
-        None,
+]
+"""The learned repertoire the predator swims by."""
+
+Skills = Annotated[
+    str,
+    typer.Option(
         "--skills",
         help="Every fish's motor skills instead of its species file's: "
         "learned (the repertoire shipped for its body, the species' default), built-in (the "
         "calibrated wave) or a learned repertoire's directory.",
     ),
-    video: bool = typer.Option(True, help="Write video.mp4."),
-    labels: bool = typer.Option(True, help="Label each fish with its intention in the video."),
-    control_period: float = typer.Option(0.1, help="Brain period (s)."),
-    plants: str = typer.Option(
-        "static",
+]
+"""Every fish's motor skills."""
+
+Plants = Annotated[
+    str,
+    typer.Option(
         help="Seaweed as static plants (fixed cylinders) or dynamic (light strands that sway "
         "in the current and part around the fishes; about a fifth more CPU time).",
     ),
+]
+"""How the seaweed is simulated."""
+
+
+@app.command()
+def aquarium(
+    fishes: int = typer.Option(10, help="Fishes in the tank, predators included."),
+    predators: int = typer.Option(1, help="How many of them are predators (sharks)."),
+    food: Food = None,
+    obstacles: Obstacles = None,
+    seconds: float = typer.Option(60.0, help="Simulated time (s)."),
+    seed: int = typer.Option(0, help="Seed of the layout and of the fishes' wandering."),
+    out: Path = typer.Option(Path("runs/tank"), help="Output directory."),
+    perception: Perception = "oracle",
+    seeing: Seeing = "1",
+    prey: str = typer.Option("minnow", help="Prey species: a built-in name or a .toml file."),
+    predator: str = typer.Option("shark", help="Predator species: a name or a .toml file."),
+    predator_skills: PredatorSkills = None,
+    skills: Skills = None,
+    video: bool = typer.Option(True, help="Write video.mp4."),
+    labels: bool = typer.Option(True, help="Label each fish with its intention in the video."),
+    control_period: float = typer.Option(0.1, help="Brain period (s)."),
+    plants: Plants = "static",
     force: Force = False,
 ) -> None:
     """Let a tank of fishes live: write events.csv, mind.png, summary.json, record.npz and
     video.mp4."""
-    from zoetic.behavior.aquarium.events import events_csv
-    from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live, summarize
-    from zoetic.cli.records import write_aquarium_record
-    from zoetic.io import atomic_write_bytes, make_dir, write_json
+    from zoetic.behavior.aquarium.tank import TankConfig, build_tank, live
     from zoetic.outdir import prepare_out
-    from zoetic.record import read_record
-    from zoetic.viz.media import mind_media
 
     prepare_out(out, force)
     cfg = TankConfig(
@@ -89,6 +115,19 @@ def aquarium(
     tank = build_tank(cfg)
     with console.status("the fishes live...") as status:
         life = live(tank, progress=lambda t: status.update(f"t = {t:.1f} s"))
+    _write_outputs(out, cfg, tank, life, video, labels)
+
+
+def _write_outputs(out: Path, cfg, tank, life, video: bool, labels: bool) -> None:
+    """Write the tank's life into ``out``: events.csv, record.npz, mind.png, video.mp4 (with
+    ``video``; labelled with ``labels``) and summary.json, then say what the fishes did."""
+    from zoetic.behavior.aquarium.events import events_csv
+    from zoetic.behavior.aquarium.tank import summarize
+    from zoetic.cli.records import write_aquarium_record
+    from zoetic.io import atomic_write_bytes, make_dir, write_json
+    from zoetic.record import read_record
+    from zoetic.viz.media import mind_media
+
     make_dir(out)
     atomic_write_bytes(out / "events.csv", events_csv(life.events).encode())
     summary = summarize(tank, life)
@@ -169,9 +208,7 @@ def bench_aquarium_cmd(
     perception: str = typer.Option(
         "oracle", help="oracle, or vision for the first --seeing predators."
     ),
-    seeing: str = typer.Option(
-        "1", help="With --perception vision: how many predators see (the first ones), or all."
-    ),
+    seeing: Seeing = "1",
     predator_skills: Path = typer.Option(
         None, "--predator-skills", help="A learned repertoire's directory for the predator."
     ),

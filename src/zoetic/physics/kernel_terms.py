@@ -118,19 +118,11 @@ def water(x, y, z, vx, vy, vz, fx, fy, fz, tmp, nb, m):
     if nb < SPLIT_LANES:
         _water_fused(x, y, z, vx, vy, vz, fx, fy, fz, nb, m)
         return
-    mass, panels, pw = m.mass, m.panels, m.panel_weights
-    for f in range(panels.shape[0]):
-        i0 = panels[f, 0]
-        i1 = panels[f, 1]
-        i2 = panels[f, 2]
-        i3 = panels[f, 3]
-        w0 = pw[f, 0]
-        w1 = pw[f, 1]
-        w2 = pw[f, 2]
-        w3 = pw[f, 3]
-        # the panel's own mass (weights are 1/n for its n distinct nodes)
-        mf_dt = (w0 * mass[i0] + w1 * mass[i1] + w2 * mass[i2] + w3 * mass[i3]) / (w0 * F(m.dt))
-        _panel_lanes(x, y, z, vx, vy, vz, tmp, nb, m, f, mf_dt)
+    level = F(m.water_level)
+    for f in range(m.panels.shape[0]):
+        i0, i1, i2, i3, w0, w1, w2, w3, half_drag, mf_dt = _panel(m, f)
+        nodes, weights = (i0, i1, i2, i3), (w0, w1, w2, w3)
+        _panel_lanes(x, y, z, vx, vy, vz, tmp, nb, nodes, weights, half_drag, mf_dt, level)
         _panel_add(fx, fy, fz, tmp, nb, i0, w0)
         _panel_add(fx, fy, fz, tmp, nb, i1, w1)
         _panel_add(fx, fy, fz, tmp, nb, i2, w2)
@@ -139,14 +131,23 @@ def water(x, y, z, vx, vy, vz, fx, fy, fz, tmp, nb, m):
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def _panel_lanes(x, y, z, vx, vy, vz, tmp, nb, m, f, mf_dt):
-    """Write panel f's force magnitude into tmp[0] and its unnormalised normal into tmp[1:4]
-    for every lane."""
-    level = F(m.water_level)
+def _panel(m, f):
+    """Return panel f's nodes i0 .. i3, their weights w0 .. w3 (1/n for its n distinct nodes),
+    half its drag (drag/2 times its ``panel_drag``) and its own mass over dt, as one flat
+    tuple (nodes and weights returned as tuples in a tuple failed numba's parallel array
+    analysis of the kernel)."""
+    panels, pw, mass = m.panels, m.panel_weights, m.mass
+    i0, i1, i2, i3 = panels[f, 0], panels[f, 1], panels[f, 2], panels[f, 3]
+    w0, w1, w2, w3 = pw[f, 0], pw[f, 1], pw[f, 2], pw[f, 3]
     half_drag = HALF * F(m.water_drag) * m.panel_drag[f]
-    panels, pw = m.panels, m.panel_weights
-    nodes = (panels[f, 0], panels[f, 1], panels[f, 2], panels[f, 3])
-    weights = (pw[f, 0], pw[f, 1], pw[f, 2], pw[f, 3])
+    mf_dt = (w0 * mass[i0] + w1 * mass[i1] + w2 * mass[i2] + w3 * mass[i3]) / (w0 * F(m.dt))
+    return i0, i1, i2, i3, w0, w1, w2, w3, half_drag, mf_dt
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def _panel_lanes(x, y, z, vx, vy, vz, tmp, nb, nodes, weights, half_drag, mf_dt, level):
+    """Write a panel's force magnitude into tmp[0] and its unnormalised normal into tmp[1:4]
+    for every lane (the panel as ``_panel`` gives it)."""
     for b in range(nb):
         mag, nx, ny, nz = _panel_force(
             x, y, z, vx, vy, vz, b, nodes, weights, half_drag, mf_dt, level
@@ -202,24 +203,10 @@ def _panel_add(fx, fy, fz, tmp, nb, i, w):
 def _water_fused(x, y, z, vx, vy, vz, fx, fy, fz, nb, m):
     """``water`` in one lane loop a panel, adding to its nodes as it goes: for a few lanes,
     where the loop overheads of the split form cost more than its vectorisation gains."""
-    mass, panels, pw, pdrag = m.mass, m.panels, m.panel_weights, m.panel_drag
     level = F(m.water_level)
-    drag = F(m.water_drag)
-    dt = F(m.dt)
-    for f in range(panels.shape[0]):
-        half_drag = HALF * drag * pdrag[f]
-        i0 = panels[f, 0]
-        i1 = panels[f, 1]
-        i2 = panels[f, 2]
-        i3 = panels[f, 3]
-        w0 = pw[f, 0]
-        w1 = pw[f, 1]
-        w2 = pw[f, 2]
-        w3 = pw[f, 3]
-        # the panel's own mass (weights are 1/n for its n distinct nodes)
-        mf_dt = (w0 * mass[i0] + w1 * mass[i1] + w2 * mass[i2] + w3 * mass[i3]) / (w0 * dt)
-        nodes = (i0, i1, i2, i3)
-        weights = (w0, w1, w2, w3)
+    for f in range(m.panels.shape[0]):
+        i0, i1, i2, i3, w0, w1, w2, w3, half_drag, mf_dt = _panel(m, f)
+        nodes, weights = (i0, i1, i2, i3), (w0, w1, w2, w3)
         for b in range(nb):
             mag, nx, ny, nz = _panel_force(
                 x, y, z, vx, vy, vz, b, nodes, weights, half_drag, mf_dt, level

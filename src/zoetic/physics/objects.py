@@ -147,7 +147,10 @@ class Solids:
     pos, vel: the balls' state (K, 3, B) in m and m/s (stepped in place); force: (K, 3, B) the
     force the animals' contacts put on each ball over a step; par: ``pack_balls``; kind,
     center, size: ``pack_statics``; ball_obj, static_obj: each one's index among the world's
-    objects (what the contact records are indexed by).
+    objects (what the contact records are indexed by); columns: the objects a node can touch
+    (the balls and fixed shapes, food never pushes) in the world's order, and ball_col,
+    static_col: each ball's and fixed shape's place among them (the columns of the contact
+    kernels' impulse buffers, which leave the food out).
     """
 
     def __init__(self, objects: list[Thing], batch: int) -> None:
@@ -163,6 +166,9 @@ class Solids:
         self.force = np.zeros_like(self.pos)
         self.par = pack_balls(self.balls)
         self.kind, self.center, self.size = pack_statics(self.statics)
+        self.columns = np.sort(np.concatenate([self.ball_obj, self.static_obj]))
+        self.ball_col = np.searchsorted(self.columns, self.ball_obj).astype(np.int64)
+        self.static_col = np.searchsorted(self.columns, self.static_obj).astype(np.int64)
 
     @property
     def any(self) -> bool:

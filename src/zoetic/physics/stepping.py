@@ -252,8 +252,8 @@ class ContactSlices:
 
     def lockstep(self, tables, t: int, t1: int, n: int, impulse, pairs, between) -> None:
         """Step steps t .. t1 of a call that started at the world's step n, every animal one
-        step at a time with its contacts (impulses into ``impulse``, those between animals
-        into ``between``)."""
+        step at a time with its contacts (impulses into ``impulse``, by animal as
+        ``node_contacts`` makes them, those between animals into ``between``)."""
         for s in range(t, t1):
             self.solids.force[:] = 0.0
             for a, c in pairs:
@@ -333,12 +333,16 @@ class ContactSlices:
         between[:, a, c] += buf[0]
         between[:, c, a] += buf[1]
 
-    def node_contacts(self, a: int, impulse) -> None:
+    def node_contacts(self, a: int, impulse: dict[int, np.ndarray]) -> None:
         """One step's contacts of animal a's nodes with the objects (``contacts.node_contacts``;
-        impulses recorded in ``impulse[a]``, the balls' reactions in ``solids.force``)."""
+        impulses recorded in ``impulse[a]``, (N, S, 3, B) over the ``solids.columns``, made at
+        the animal's first test, the balls' reactions in ``solids.force``)."""
         self.tested.add(a)
         p, v = self.views[a]
         s = self.solids
+        got = impulse.get(a)
+        if got is None:
+            got = impulse[a] = np.zeros((p.shape[0], len(s.columns), 3, p.shape[2]))
         node_contacts(
             p,
             v,
@@ -350,14 +354,14 @@ class ContactSlices:
             s.kind,
             s.center,
             s.size,
-            s.ball_obj,
-            s.static_obj,
+            s.ball_col,
+            s.static_col,
             self.dt,
             self.w,
             self.zeta,
             self.mu,
             s.force,
-            impulse[a],
+            got,
         )
 
     def balls(self, steps: int) -> None:

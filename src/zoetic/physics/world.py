@@ -334,10 +334,8 @@ class World:
     def _step_slices(self, tables, steps: int) -> Contacts:
         """``step`` with objects about or animals that may touch: slice by slice of the
         world's grid, each stepped as the broad phase decides, the food tested at its ends."""
-        n_obj = len(self.objects)
-        # one zeroed buffer for all the animals' impulses, each a view of its rows
-        whole = np.zeros((int(self._off[-1]), n_obj, 3, self.batch))
-        impulse = [whole[o0:o1] for o0, o1 in zip(self._off[:-1], self._off[1:], strict=True)]
+        # the impulses of the animals tested against the objects, made at each one's first test
+        impulse: dict[int, np.ndarray] = {}
         self._contacts.tested = set()
         n_an = len(self.animals)
         between = np.zeros((self.batch, n_an, n_an)) if self._touchy else None
@@ -364,11 +362,29 @@ class World:
                 self._pantry.update(end, self._heads())
         self._n += steps
         return Contacts(
-            tuple(i.transpose(3, 0, 1, 2) for i in impulse),
+            self._impulses(impulse),
             tuple(o.name for o in self.objects),
             between if between is not None and between.any() else None,
             tuple(sorted(self._contacts.tested)),
         )
+
+    def _impulses(self, found: dict[int, np.ndarray]) -> tuple[np.ndarray, ...]:
+        """Return each animal's impulses (B, N, O, 3) from those ``found`` (N, S, 3, B) over
+        the objects a node can touch (``Solids.columns``): an animal that touched nothing gets
+        a read-only view of one zero, so that the memory follows the touches, not the
+        animals times the objects (food included)."""
+        n_obj, cols = len(self.objects), self._solids.columns
+        out = []
+        for a, body in enumerate(self.bodies):
+            shape = (self.batch, body.n_nodes, n_obj, 3)
+            got = found.get(a)
+            if got is None or not got.any():
+                out.append(np.broadcast_to(0.0, shape))
+                continue
+            full = np.zeros(shape)
+            full[:, :, cols] = got.transpose(3, 0, 1, 2)
+            out.append(full)
+        return tuple(out)
 
     def _heads(self) -> np.ndarray:
         """Return the animals' head nodes (animals, B, 3) in m."""

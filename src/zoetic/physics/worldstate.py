@@ -132,10 +132,11 @@ class Contacts:
 
     impulse: per animal (B, N, O, 3), the impulse each node got from each object
     (objects indexed as in ``World.objects``; food and fixed shapes included, food never
-    pushes). An object received minus the sum over nodes. between: (B, A, A) the normal
-    impulse animal i got from animal j's skin (None: no animal touched another). near: the
-    animals whose nodes were tested against the objects (every other animal's impulses are
-    zero; None: not known, any may be non-zero).
+    pushes; an animal that touched nothing gets a read-only view of zeros). An object
+    received minus the sum over nodes. between: (B, A, A) the normal impulse animal i got
+    from animal j's skin (None: no animal touched another). near: the animals whose nodes
+    were tested against the objects (every other animal's impulses are zero; None: not
+    known, any may be non-zero).
     """
 
     impulse: tuple[np.ndarray, ...]
