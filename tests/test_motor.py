@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from zoetic.behavior.handmade import handmade_repertoire
-from zoetic.behavior.motor import MotorControllers, blend, motor_repertoire
+from zoetic.behavior.motor import MotorControllers, blend, interp, interps, motor_repertoire
 from zoetic.bodies import load_animal
 from zoetic.learning.objective import heading_angles
 from zoetic.physics import simulate
@@ -51,3 +51,15 @@ def test_motor_entries_join_a_repertoire(motor):
     rep = motor_repertoire(motor, speeds=[0.2], turns=[45, -45], pitches=[0.3])
     assert {"swim-0.2", "turn-45", "turn--45", "pitch-0.3", "go-straight"} <= set(rep.names)
     assert rep.info["turn-45"]["source"] == "motor"
+
+
+def test_interps_one_table_and_a_table_per_row_give_interp_of_each():
+    """``interps`` over one table (P,) and over that table repeated per row (D, P) are each
+    value's ``interp``, ends and repeated points included (the one table is indexed directly,
+    not copied per row)."""
+    xp = np.array([0.0, 0.5, 0.5, 1.0, 2.0])
+    fp = np.array([1.0, 3.0, 4.0, 2.0, 5.0])
+    x = np.array([-1.0, 0.0, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0])
+    want = [interp(v, xp.tolist(), fp.tolist()) for v in x.tolist()]
+    assert interps(x, xp, fp).tolist() == want
+    assert interps(x, np.tile(xp, (len(x), 1)), fp).tolist() == want

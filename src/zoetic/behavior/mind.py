@@ -340,7 +340,8 @@ def focus_pairs(n: int, rows, cols, distances, previous, keep_within: float = 1.
     if not len(rows):
         return out
     order = np.lexsort((cols, d, rows))  # by mind, then distance, then column
-    first = order[np.r_[True, rows[order][1:] != rows[order][:-1]]]
+    by = rows[order]
+    first = order[np.concatenate(([True], by[1:] != by[:-1]))]
     who = rows[first]
     out[who] = cols[first]
     near = np.full(n, np.inf)

@@ -229,14 +229,18 @@ def interps(x: np.ndarray, xp: np.ndarray, fp) -> np.ndarray:
     non-decreasing, or each value over its own row of ``xp`` (D, P); ``fp`` (P,) (the same
     numbers as ``interp`` of each)."""
     x, xp, fp = np.asarray(x, float), np.asarray(xp, float), np.asarray(fp, float)
-    rows = np.broadcast_to(xp, (len(x), xp.shape[-1]))
-    j = (rows <= x[:, None]).sum(axis=1) - 1  # bisect_right - 1: xp[j] <= x < xp[j + 1]
-    j = np.clip(j, 0, rows.shape[1] - 2)
-    lo = np.take_along_axis(rows, j[:, None], 1)[:, 0]
-    hi = np.take_along_axis(rows, j[:, None] + 1, 1)[:, 0]
+    if xp.ndim == 1:  # one table for all: index it directly (no (D, P) copy of it)
+        j = np.clip(np.searchsorted(xp, x, side="right") - 1, 0, len(xp) - 2)
+        lo, hi, first, last = xp[j], xp[j + 1], xp[0], xp[-1]
+    else:
+        j = (xp <= x[:, None]).sum(axis=1) - 1  # bisect_right - 1: xp[j] <= x < xp[j + 1]
+        j = np.clip(j, 0, xp.shape[1] - 2)
+        lo = np.take_along_axis(xp, j[:, None], 1)[:, 0]
+        hi = np.take_along_axis(xp, j[:, None] + 1, 1)[:, 0]
+        first, last = xp[:, 0], xp[:, -1]
     with np.errstate(divide="ignore", invalid="ignore"):  # the ends are taken as they are
         mid = (fp[j + 1] - fp[j]) / (hi - lo) * (x - lo) + fp[j]
-    return np.where(x <= rows[:, 0], fp[0], np.where(x >= rows[:, -1], fp[-1], mid))
+    return np.where(x <= first, fp[0], np.where(x >= last, fp[-1], mid))
 
 
 def grid_rates(

@@ -210,13 +210,12 @@ def plan(fishes: list[LearnedLocomotion], demands: list[Demand], times: np.ndarr
     control period at ``times`` (s), and keep each fish's turn under way (``turning``,
     ``last``): the rules of ``LearnedLocomotion``, over arrays."""
     motor, t0 = fishes[0].motor, float(times[0])
-    speed, turn, bent = (
-        np.array([getattr(d, k) for d in demands], float) for k in ("speed", "turn", "bend")
-    )
+    # one array of every fish's numbers, read apart (one conversion, not one a column)
+    speed, turn, bent = np.array([(d.speed, d.turn, d.bend) for d in demands], float).T
     was = [f.turning for f in fishes]
     on = np.array([t is not None for t in was])
-    side, start, duration = (np.array([t[k] if t else 0 for t in was], float) for k in range(3))
-    last = np.array([f.last[1] for f in fishes], float)
+    state = [(*(t or (0, 0, 0)), f.last[1]) for t, f in zip(was, fishes, strict=True)]
+    side, start, duration, last = np.array(state, float).T
     guard = (bent < BEND_GUARD) & (speed < GUARD_SPEED)  # fold guard: straighten
     other_way = np.where(side == 0, turn < -TURN_MIN, turn > TURN_MIN)
     end = on & (guard | (t0 - start >= duration - 1e-9) | other_way)
