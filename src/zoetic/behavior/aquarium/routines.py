@@ -265,8 +265,8 @@ def fish_threats(
         total = np.zeros(n)
         np.add.at(total, me, count[hit])
     for i in np.flatnonzero(j >= 0).tolist():
-        # away from where the threats will be nearest: a fish crossing its way turned from
-        # where it is now, turned into its path (alongside it, the way it goes) and met it
+        # away from the side where the threats will be nearest (``closest_lateral``), not
+        # where they are now: turning away from a fish crossing ahead leads into its path
         kept = int(prefer[i]) if prefer is not None and prefer[i] else 0
         if abs(pull[i]) > (0.5 * total[i] if kept else 0.0):
             side[i] = -1 if pull[i] > 0.0 else 1
