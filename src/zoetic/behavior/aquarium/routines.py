@@ -244,10 +244,29 @@ def fish_threats(
         lateral = closest_lateral(com[other] - nose[me], rel_v[hit], left[me], anticipation[me])
         # +1 a threat nearest on the left, -1 on the right, 0 nearly dead ahead
         sign = np.where(np.abs(lateral) >= 0.25 * half_width[me], np.sign(lateral), 0.0)
-        pull = np.zeros(n)
-        np.add.at(pull, me, count[hit] * sign)
-        total = np.zeros(n)
-        np.add.at(total, me, count[hit])
+        side = side_vote(j, me, count[hit], sign, prefer)
+    return j, side, near
+
+
+def side_vote(
+    j: np.ndarray,
+    me: np.ndarray,
+    weight: np.ndarray,
+    sign: np.ndarray,
+    prefer: np.ndarray | None,
+) -> np.ndarray:
+    """Return the side (n,) each of n fishes turns to from its threats (+1 left, -1 right, 0
+    for a fish without one, ``j`` (n,) -1): a vote of its threatening fishes, threat k of
+    fish ``me[k]`` on the side ``sign[k]`` (+1 left, -1 right, 0 nearly dead ahead) weighed
+    by its points in the box ``weight[k]``. A fish turns away from the side that outweighs
+    the other; holding a side already (``prefer`` (n,), 0: none), only from one that
+    outweighs half the votes; else it keeps its side, or turns right."""
+    n = len(j)
+    pull = np.zeros(n)
+    np.add.at(pull, me, weight * sign)
+    total = np.zeros(n)
+    np.add.at(total, me, weight)
+    side = np.zeros(n, int)
     for i in np.flatnonzero(j >= 0).tolist():
         # away from the side where the threats will be nearest (``closest_lateral``), not
         # where they are now: turning away from a fish crossing ahead leads into its path
@@ -257,7 +276,7 @@ def fish_threats(
         else:  # nearly dead ahead, or threats on both sides: the side already taken, else
             # to the right (as ships do: two fishes meeting head on both turn right and pass)
             side[i] = kept or -1
-    return j, side, near
+    return side
 
 
 def closest_lateral(
