@@ -15,7 +15,14 @@ from functools import cached_property
 
 import numpy as np
 
-from zoetic.behavior.motor import fin_activation, fin_rows, grid_rates, interp
+from zoetic.behavior.motor import (
+    fin_activation,
+    fin_activations,
+    fin_rows,
+    grid_rates,
+    interp,
+    interps,
+)
 from zoetic.bodies import Body
 from zoetic.learning.objective import heading_angles
 from zoetic.physics import simulate
@@ -150,12 +157,37 @@ class WaveMotor:
         ``steered_wave`` evaluation broadcast over the demands."""
         from zoetic.control import steered_wave
 
-        ab = [self.turn(t, seconds, self.swim(v)) for v, t in zip(speeds, turns, strict=True)]
-        amp = np.array([a for a, _ in ab])[:, None, None]
-        bias = np.array([b for _, b in ab])[:, None, None]
-        leans = [0.0] * len(pitches) if leans is None else leans
-        fins = np.array([self.fins(p, q) for p, q in zip(pitches, leans, strict=True)])[:, None]
-        return steered_wave(self.body, times, amp, bias, fins, self.frequency)
+        speeds, turns = np.asarray(speeds, float), np.asarray(turns, float)
+        amp, bias = self.turns(turns, seconds, interps(speeds, *self._tables[:2]))
+        pitches = np.asarray(pitches, float)
+        leans = np.zeros_like(pitches) if leans is None else np.asarray(leans, float)
+        fins = np.zeros((len(pitches), self.body.n_actuators))
+        level = dict(fin_activations(self._fin_rows, np.zeros_like(pitches), np.zeros_like(leans)))
+        for act, v in fin_activations(self._fin_rows, pitches, leans):
+            fins[:, act] = v - level[act]
+        return steered_wave(
+            self.body, times, amp[:, None, None], bias[:, None, None], fins[:, None], self.frequency
+        )
+
+    def turns(
+        self, angle: np.ndarray, seconds: float, amplitude: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Return ``turn`` of D angles (D,) rad at least at amplitudes (D,) at once: the
+        amplitudes and biases (D,) (the rate rows are non-decreasing, so ``interps`` of each
+        row finds the bias)."""
+        need = np.abs(angle) / max(seconds, 1e-9)
+        amps, biases = np.array(_AMPS), np.array(_BIASES)
+        reach, rates = np.array(self._tables[2]), np.array(self._tables[3])
+        amp = np.minimum(np.maximum(amplitude, amps[0]), 1.0)
+        # too weak to turn that fast: the smallest amplitude whose sharpest turn is (or full)
+        ok = reach[None, :] >= need[:, None]
+        least = np.where(ok.any(axis=1), amps[np.argmax(ok, axis=1)], 1.0)
+        amp = np.where(need > interps(amp, amps, reach), np.maximum(amp, least), amp)
+        k = np.clip(np.searchsorted(amps, amp, side="left") - 1, 0, len(amps) - 2)
+        w = (amp - amps[k]) / (amps[k + 1] - amps[k])
+        row = (1 - w)[:, None] * rates[k] + w[:, None] * rates[k + 1]
+        bias = np.where(row[:, -1] > row[:, 0], interps(need, row, biases), 0.0)
+        return amp, np.where(angle >= 0, bias, -bias)
 
     def summary(self) -> dict:
         """Return the calibration tables (speeds in m/s, turning rates in deg/s)."""
