@@ -179,8 +179,8 @@ def main() -> None:
                     ),
                     2,
                 ),
-                # nor a fish against a body in the water (perceived by no one until fishes
-                # learned to avoid it: ``shoal.carcasses``)
+                # nor a fish against a dead fish's body in the water (``dead_body_touches``;
+                # the fishes steer round bodies as obstacles, ``shoal.carcasses``)
                 "mean_without_caught_prey_or_dead_bodies_per_minute": round(
                     float(
                         np.mean(

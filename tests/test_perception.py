@@ -25,7 +25,7 @@ from zoetic.perception.gaze import (
     saccade,
     vergence_range,
 )
-from zoetic.perception.recognition import histogram, intersection, locate
+from zoetic.perception.recognition import N_BINS, histogram, intersection, locate, recognise
 from zoetic.physics.world import placed_pose
 from zoetic.render import project
 from zoetic.render.scene import Mesh, _sphere, shade
@@ -278,3 +278,14 @@ def test_the_vestibulo_ocular_reflex_keeps_the_gaze_on_the_target_as_the_head_tu
     assert locate(img[0, -1], model).strength > 0.5  # still in the fovea
     img, _ = look(mesh, turned, state.angles, spec)  # without the reflex it has left it
     assert locate(img[0, -1], model).strength < 0.2
+
+
+def test_recognise_refuses_images_that_are_not_uint8():
+    models = np.full((1, N_BINS), 1.0 / N_BINS)
+    for dtype in (np.float64, np.int64):
+        with pytest.raises(ValueError, match=np.dtype(dtype).name):
+            recognise(np.full((1, 16, 16, 3), 300, dtype), models)
+    img = np.zeros((1, 16, 16, 3), np.uint8)
+    img[0, 4:8, 4:8] = (200, 30, 30)
+    got = recognise(img, models)
+    assert np.array_equal(got.histograms[0], histogram(img[0]))

@@ -84,13 +84,13 @@ def test_a_chase_stops_at_the_catch_with_the_frames_the_eyes_saw():
 
 def test_the_predator_steers_through_its_turn_motor_controller_with_theta_p(monkeypatch):
     asked = []
-    real = WaveMotor.turn
+    real = WaveMotor.turns
 
-    def spy(self, angle, seconds=1.0, amplitude=1.0):
-        asked.append(angle)
+    def spy(self, angle, seconds, amplitude):
+        asked.extend(np.asarray(angle).tolist())
         return real(self, angle, seconds, amplitude)
 
-    monkeypatch.setattr(WaveMotor, "turn", spy)
+    monkeypatch.setattr(WaveMotor, "turns", spy)
     chase = make_chase(0, distractors=0, rocks=False, start_distance=2.0)
     run_chase(chase, 1.0, fps=15.0)
     log = chase.predator.log

@@ -23,7 +23,6 @@ Pure functions over plain numbers and small arrays; constants in SI (see ``aquar
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -44,7 +43,7 @@ LEVEL = {
 REFLEX_HOLD = 0.3
 
 
-def ramp(s, q1: float, q2: float):
+def ramp(s, q1: float | np.ndarray, q2: float | np.ndarray):
     """Return the stimulus ramp of s: 0 below q1, 1 above q2, (s - q1)/(2 q2 - q1 - s) between."""
     if isinstance(s, float | int):  # one stimulus: plain floats, the same formula
         s = float(s)
@@ -163,22 +162,14 @@ def drives_many(
     return h, lib, np.minimum(np.cumsum(each, axis=1)[:, -1], 1.0)
 
 
-def desire(drive: float, distance: float, q: tuple[float, float]) -> float:
-    """Return a motive: the drive times (1 + the ramp of the stimulus 1/d of the nearest
-    target), capped at 1 (a target in reach at most doubles an appetite)."""
-    s = 1.0 / distance if math.isfinite(distance) and distance > 0 else 0.0
-    return min(1.0, drive * (1.0 + float(ramp(s, q[0], q[1]))))
-
-
 def desires(drive: np.ndarray, distance: np.ndarray, q1: np.ndarray, q2: np.ndarray):
-    """Return ``desire`` (n,) of n drives and their targets' distances (n,), each with its
-    own ramp (q1, q2 (n,)): the same numbers as ``desire`` of each."""
+    """Return n motives (n,): each drive times (1 + the ``ramp`` of the stimulus 1/d of its
+    nearest target, d (n,) m, inf or 0 for none), capped at 1 (a target in reach at most
+    doubles an appetite); each with its own ramp (q1, q2 (n,))."""
     d = np.asarray(distance, float)
     ok = np.isfinite(d) & (d > 0)
     s = np.where(ok, 1.0 / np.where(ok, d, 1.0), 0.0)
-    mid = (s - q1) / np.maximum(2 * q2 - q1 - s, 1e-12)
-    r = np.where(s <= q1, 0.0, np.where(s >= q2, 1.0, mid))
-    return np.minimum(1.0, drive * (1.0 + r))
+    return np.minimum(1.0, drive * (1.0 + ramp(s, q1, q2)))
 
 
 @dataclass(frozen=True)

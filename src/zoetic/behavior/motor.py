@@ -17,7 +17,6 @@ steered wave) and ``learned_motor.LearnedMotor`` (a learned repertoire's gaits).
 
 from __future__ import annotations
 
-from bisect import bisect_right
 from dataclasses import dataclass
 
 import numpy as np
@@ -69,21 +68,19 @@ def fin_activation(
     """Return, per fin actuator, the activation that sets its fins to ``angle`` rad (clipped),
     the left fins ``lean`` rad more and the right ones ``lean`` less (``righting``: a
     differential pitch rolls the fish); ``rows``: ``fin_rows(body)`` when kept (a caller many
-    times a second)."""
-    out = {}
-    for act, lo, hi, side in fin_rows(body) if rows is None else rows:
-        a = angle + side * lean
-        # np.clip's result for a scalar, without its per-call overhead
-        out[act] = min(max(float((a - lo) / (hi - lo)), 0.0), 1.0) if hi != lo else 0.0
-    return out
+    times a second). ``fin_activations`` of one fish."""
+    got = fin_activations(
+        fin_rows(body) if rows is None else rows, np.array([angle], float), np.array([lean], float)
+    )
+    return {act: float(v[0]) for act, v in got}
 
 
 def fin_activations(
     rows: list[tuple[int, float, float, float]], angle: np.ndarray, lean: np.ndarray
 ) -> list[tuple[int, np.ndarray]]:
-    """Return ``fin_activation`` for D fishes at once: per fin actuator of ``rows``
-    (``fin_rows``), the activations (D,) that set its fins to ``angle`` (D,) rad, the left
-    fins ``lean`` (D,) rad more and the right ones less (the same numbers as one fish's)."""
+    """Return for D fishes, per fin actuator of ``rows`` (``fin_rows``), the activations (D,)
+    in [0, 1] that set its fins to ``angle`` (D,) rad, the left fins ``lean`` (D,) rad more
+    and the right ones less (0 for a fin whose angle range is empty)."""
     out = []
     for act, lo, hi, side in rows:
         a = angle + side * lean
@@ -213,21 +210,15 @@ def motor_repertoire(motor: MotorControllers, speeds=(), turns=(), pitches=()) -
     return rep
 
 
-def interp(x: float, xp: list, fp: list) -> float:
-    """Return ``np.interp(x, xp, fp)`` for a float and short lists (xp non-decreasing), without
-    numpy's per-call overhead (the motors interpolate once a fish and control period)."""
-    if x <= xp[0]:
-        return fp[0]
-    if x >= xp[-1]:
-        return fp[-1]
-    j = bisect_right(xp, x) - 1  # xp[j] <= x < xp[j + 1]
-    return (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j]) * (x - xp[j]) + fp[j]
+def interp(x: float, xp, fp) -> float:
+    """Return ``np.interp(x, xp, fp)`` for a float over points ``xp`` (P,) non-decreasing and
+    values ``fp`` (P,): ``interps`` of one value."""
+    return float(interps(np.array([x], float), xp, fp)[0])
 
 
 def interps(x: np.ndarray, xp: np.ndarray, fp) -> np.ndarray:
-    """Return ``interp`` of each of the values ``x`` (D,) at once: over the points ``xp`` (P,)
-    non-decreasing, or each value over its own row of ``xp`` (D, P); ``fp`` (P,) (the same
-    numbers as ``interp`` of each)."""
+    """Return ``np.interp`` of each of the values ``x`` (D,) at once: over the points ``xp``
+    (P,) non-decreasing, or each value over its own row of ``xp`` (D, P); ``fp`` (P,)."""
     x, xp, fp = np.asarray(x, float), np.asarray(xp, float), np.asarray(fp, float)
     if xp.ndim == 1:  # one table for all: index it directly (no (D, P) copy of it)
         j = np.clip(np.searchsorted(xp, x, side="right") - 1, 0, len(xp) - 2)

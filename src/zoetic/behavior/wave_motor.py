@@ -9,13 +9,17 @@ they say.
 from __future__ import annotations
 
 import weakref
-from bisect import bisect_left
 from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 
-from zoetic.behavior.motor import fin_activation, fin_rows, grid_rates, interp
+from zoetic.behavior.motor import (
+    fin_activations,
+    fin_rows,
+    grid_rates,
+    interps,
+)
 from zoetic.bodies import Body
 from zoetic.learning.objective import heading_angles
 from zoetic.physics import simulate
@@ -26,7 +30,6 @@ WAVE_SETTLE = 2.0  # s from rest before the speed and turning rate are measured
 WAVE_MEASURE = 3.0  # s over which they are measured
 # calibrations per body object (an edited body is another object), then per frequency
 _WAVE_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-_AMPS, _BIASES = WAVE_AMPLITUDES.tolist(), WAVE_BIASES.tolist()
 
 
 @dataclass(frozen=True)
@@ -76,51 +79,27 @@ class WaveMotor:
         return float(self.speeds.max())
 
     @cached_property
-    def _tables(self) -> tuple[list, list, list, list]:
-        """The tables as Python lists (the per-demand scalar work skips numpy's overhead):
-        speeds sorted, their amplitudes, the sharpest turn per amplitude, the rate rows."""
+    def _tables(self) -> tuple[np.ndarray, np.ndarray]:
+        """The speeds sorted (m/s) and their amplitudes: what ``interps`` reads a swim by."""
         order = np.argsort(self.speeds)
-        return (
-            self.speeds[order].tolist(),
-            WAVE_AMPLITUDES[order].tolist(),
-            self.rates[:, -1].tolist(),
-            self.rates.tolist(),
-        )
+        return self.speeds[order], WAVE_AMPLITUDES[order]
 
     def swim(self, speed: float) -> float:
         """Return the amplitude that swims ``speed`` m/s (clipped to the calibrated range)."""
-        speeds, amps = self._tables[0], self._tables[1]
-        return interp(float(speed), speeds, amps)
+        return float(interps(np.array([speed], float), *self._tables)[0])
 
     def turn(
         self, angle: float, seconds: float = 1.0, amplitude: float = 1.0
     ) -> tuple[float, float]:
         """Return (amplitude, bias) turning ``angle`` rad (left positive) in ``seconds`` s at
-        least at ``amplitude``: the smallest bias whose rate turns it in time; a wave too weak
-        to turn that fast beats harder (up to amplitude 1), beyond that the sharpest turn."""
-        need = abs(angle) / max(seconds, 1e-9)
-        amps, biases = _AMPS, _BIASES
-        amp = min(max(float(amplitude), amps[0]), 1.0)
-        reach, rates = self._tables[2], self._tables[3]
-        if need > interp(amp, amps, reach):
-            # the smallest amplitude whose sharpest turn is fast enough (or full amplitude)
-            ok = [a for a, r in zip(amps, reach, strict=True) if r >= need]
-            amp = max(amp, ok[0] if ok else 1.0)
-        k = min(max(bisect_left(amps, amp) - 1, 0), len(amps) - 2)
-        w = (amp - amps[k]) / (amps[k + 1] - amps[k])
-        row = [(1 - w) * a + w * b for a, b in zip(rates[k], rates[k + 1], strict=True)]
-        bias = interp(need, row, biases) if row[-1] > row[0] else 0.0
-        return amp, bias if angle >= 0 else -bias
+        least at ``amplitude``: ``turns`` of one angle."""
+        amp, bias = self.turns(np.array([angle], float), seconds, np.array([amplitude], float))
+        return float(amp[0]), float(bias[0])
 
     def fins(self, pitch: float, lean: float = 0.0) -> np.ndarray:
         """Return (A,) what to add to each fin's held (level) activation to pitch it ``pitch``
-        rad, the left fins ``lean`` rad more and the right ones less (``fin_activation`` of
-        the angle less that of level; 0 on the muscles and without fins)."""
-        out = np.zeros(self.body.n_actuators)
-        level = fin_activation(self.body, 0.0, self._fin_rows)
-        for act, v in fin_activation(self.body, pitch, self._fin_rows, lean).items():
-            out[act] = v - level[act]
-        return out
+        rad, the left fins ``lean`` rad more and the right ones less: ``fins_many`` of one."""
+        return self.fins_many(np.array([pitch], float), np.array([lean], float))[0]
 
     @cached_property
     def _fin_rows(self) -> list[tuple[int, float, float, float]]:
@@ -150,12 +129,47 @@ class WaveMotor:
         ``steered_wave`` evaluation broadcast over the demands."""
         from zoetic.control import steered_wave
 
-        ab = [self.turn(t, seconds, self.swim(v)) for v, t in zip(speeds, turns, strict=True)]
-        amp = np.array([a for a, _ in ab])[:, None, None]
-        bias = np.array([b for _, b in ab])[:, None, None]
-        leans = [0.0] * len(pitches) if leans is None else leans
-        fins = np.array([self.fins(p, q) for p, q in zip(pitches, leans, strict=True)])[:, None]
-        return steered_wave(self.body, times, amp, bias, fins, self.frequency)
+        speeds, turns = np.asarray(speeds, float), np.asarray(turns, float)
+        amp, bias = self.turns(turns, seconds, interps(speeds, *self._tables))
+        pitches = np.asarray(pitches, float)
+        fins = self.fins_many(pitches, np.zeros_like(pitches) if leans is None else leans)
+        return steered_wave(
+            self.body, times, amp[:, None, None], bias[:, None, None], fins[:, None], self.frequency
+        )
+
+    def fins_many(self, pitch: np.ndarray, lean: np.ndarray) -> np.ndarray:
+        """Return (D, A) what to add to each fin's held (level) activation to pitch D fishes'
+        fins ``pitch`` (D,) rad, the left fins ``lean`` (D,) rad more and the right ones less
+        (``fin_activations`` of the angles less those of level; 0 on the muscles and without
+        fins)."""
+        pitch, lean = np.asarray(pitch, float), np.asarray(lean, float)
+        out = np.zeros((len(pitch), self.body.n_actuators))
+        level = dict(fin_activations(self._fin_rows, np.zeros_like(pitch), np.zeros_like(lean)))
+        for act, v in fin_activations(self._fin_rows, pitch, lean):
+            out[:, act] = v - level[act]
+        return out
+
+    def turns(
+        self, angle: np.ndarray, seconds: float, amplitude: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Return the amplitudes and biases (D,) turning D ``angle`` (D,) rad (left positive) in
+        ``seconds`` s at least at ``amplitude`` (D,): the smallest bias whose rate turns it in
+        time; a wave too weak to turn that fast beats harder (up to amplitude 1), beyond that
+        the sharpest turn. The rate rows are non-decreasing (``grid_rates``), so ``interps``
+        of each fish's row finds its bias."""
+        need = np.abs(angle) / max(seconds, 1e-9)
+        amps, biases, rates = WAVE_AMPLITUDES, WAVE_BIASES, self.rates
+        reach = rates[:, -1]  # the sharpest turn (rad/s) at each amplitude
+        amp = np.minimum(np.maximum(amplitude, amps[0]), 1.0)
+        # too weak to turn that fast: the smallest amplitude whose sharpest turn is (or full)
+        ok = reach[None, :] >= need[:, None]
+        least = np.where(ok.any(axis=1), amps[np.argmax(ok, axis=1)], 1.0)
+        amp = np.where(need > interps(amp, amps, reach), np.maximum(amp, least), amp)
+        k = np.clip(np.searchsorted(amps, amp, side="left") - 1, 0, len(amps) - 2)
+        w = (amp - amps[k]) / (amps[k + 1] - amps[k])
+        row = (1 - w)[:, None] * rates[k] + w[:, None] * rates[k + 1]
+        bias = np.where(row[:, -1] > row[:, 0], interps(need, row, biases), 0.0)
+        return amp, np.where(angle >= 0, bias, -bias)
 
     def summary(self) -> dict:
         """Return the calibration tables (speeds in m/s, turning rates in deg/s)."""

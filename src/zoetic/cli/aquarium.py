@@ -205,13 +205,9 @@ def bench_aquarium_cmd(
     seconds: float = typer.Option(60.0, min=0.5),
     seed: int = typer.Option(0),
     predators: int = typer.Option(1, help="How many of the fishes are predators (sharks)."),
-    perception: str = typer.Option(
-        "oracle", help="oracle, or vision for the first --seeing predators."
-    ),
+    perception: Perception = "oracle",
     seeing: Seeing = "1",
-    predator_skills: Path = typer.Option(
-        None, "--predator-skills", help="A learned repertoire's directory for the predator."
-    ),
+    predator_skills: PredatorSkills = None,
     skills: str = typer.Option(
         None,
         "--skills",

@@ -1,9 +1,9 @@
 """Compiled loops (Numba) for the retinas' pixel arithmetic: the gray levels and the colour
 backprojection of a batch of images, the normalised cross-correlation of a stereo point match
-and the least-squares optical flow of the stabiliser. Each does what a chain of NumPy/SciPy
-calls did, in one pass without temporaries (the numbers agree to rounding): the gaze of ten
-fishes does these a few hundred times a second on 64 x 64 images, where the calls' overhead
-and temporaries cost more than the arithmetic.
+and the least-squares optical flow of the stabiliser. Each makes one pass over the pixels
+without temporary arrays (its numbers equal the plain NumPy formulas' to rounding): the gaze
+of ten fishes does these a few hundred times a second on 64 x 64 images, where array calls'
+overhead and temporaries would cost more than the arithmetic.
 """
 
 from __future__ import annotations

@@ -155,8 +155,12 @@ def recognise(
     ``gray`` and ``gaze.target_image`` of every image, the pixels binned, counted,
     backprojected and smoothed for all images in one pass (the same numbers image by
     image). ``keep`` (K,) bool: the images whose gray and target image are wanted (the
-    others' left zero); default all."""
-    img = np.ascontiguousarray(images, np.uint8)
+    others' left zero); default all. Raises ValueError for images not uint8 (0-255 a channel,
+    as the rasteriser draws them): a cast would wrap or truncate other values silently."""
+    img = np.asarray(images)
+    if img.dtype != np.uint8:
+        raise ValueError(f"recognise takes uint8 RGB images (0-255 a channel), not {img.dtype}")
+    img = np.ascontiguousarray(img)
     sel = np.ones(len(img), bool) if keep is None else np.asarray(keep, bool)
     hist, found, g, target = recognise_all(
         img, np.ascontiguousarray(models, float), sel, radius, TARGET_RADIUS, window

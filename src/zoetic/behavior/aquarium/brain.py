@@ -292,7 +292,7 @@ def focus_targets(
     a mate or a prey: its index; None for an intention without one, or none perceived), all
     at once over arrays (``mind.focus_many``); previous: each mind's target.
 
-    Eat: the particles by the way to them (``reach_costs``), not those left to another
+    Eat: the particles by the way to them (``reach_pairs``), not those left to another
     (``given`` (n, F), ``conceded``; all conceded: it races for one); mate and hunt: the
     nearest fish of its species, or of its prey (``same``, ``prey`` (n, M) masks over the
     perceived fishes' distances ``fish_distance`` (n, M)). nose, forward (n, 3); radius (n,):

@@ -16,9 +16,9 @@ RADIUS_MARGIN = 1.1  # the turning circle a fish plans with, over its calibrated
 
 
 def hypot(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Return ``math.hypot`` of the arrays elementwise (its rounding, which ``np.hypot``'s
-    differs from in the last bit now and then: the ways are the same numbers as one fish's
-    plain Python formulas gave)."""
+    """Return ``math.hypot`` of the arrays elementwise: its rounding, which ``np.hypot``'s
+    differs from in the last bit now and then; the focuser picks between near-equal ways by
+    these bits, so a tank's run (its record) depends on them."""
     x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
     flat = map(math.hypot, x.ravel().tolist(), y.ravel().tolist())
     return np.fromiter(flat, float, x.size).reshape(x.shape)

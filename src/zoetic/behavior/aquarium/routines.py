@@ -19,7 +19,14 @@ import numpy as np
 from zoetic.behavior.aquarium import steering
 from zoetic.behavior.aquarium.locomotion import Demand
 from zoetic.behavior.aquarium.perception import obstacle_distance
-from zoetic.behavior.aquarium.steering import avoid_many, go_to_many, keep_depths
+from zoetic.behavior.aquarium.steering import (
+    avoid_many,
+    bearings,
+    flats,
+    go_to_many,
+    keep_depths,
+    units,
+)
 
 # the routines' constants, defined with their arithmetic over arrays (``steering``)
 NEAR, BRAKE_BEARING = steering.NEAR, steering.BRAKE_BEARING
@@ -76,30 +83,13 @@ class Around:
     fish_only: bool = False  # the threat is another fish alone (no obstacle ahead)
 
 
-def _flat(v: np.ndarray) -> np.ndarray:
-    v = np.array(v, float)
-    v[..., 1] = 0.0
-    return v
-
-
-def _unit(v: np.ndarray) -> np.ndarray:
-    n = math.sqrt(v @ v)  # np.linalg.norm's own formula, without its overhead
-    return v / n if n > 1e-9 else np.zeros_like(v)
-
-
-def bearing(forward: np.ndarray, direction: np.ndarray) -> float:
-    """Return the horizontal angle (rad, left positive, in (-pi, pi]) from forward to direction."""
-    a = np.arctan2(direction[2], direction[0]) - np.arctan2(forward[2], forward[0])
-    return float((a + np.pi) % (2 * np.pi) - np.pi)
-
-
 def steer(me: Me, direction: np.ndarray, speed: float) -> Demand:
     """Return the demand to swim along ``direction`` at ``speed`` (the turn motor controller
     beats harder by itself when the turn needs it)."""
-    d = _flat(direction)
+    d = flats(direction)
     if math.sqrt(d @ d) < 1e-9:
         return Demand(speed, 0.0)
-    return Demand(speed, bearing(me.forward, d))
+    return Demand(speed, float(bearings(me.forward, d)))
 
 
 def keep_depth(me: Me, demand: Demand, height: float | None = None) -> Demand:
@@ -123,7 +113,7 @@ def probe_reach(me: Me, target: float | None = None) -> float:
 
 def probes_ahead(me: Me, reach: float) -> np.ndarray:
     """Return the PROBES points (PROBES, 3) along the heading from the nose up to ``reach`` m."""
-    f = _unit(_flat(me.forward))
+    f = units(flats(me.forward))
     along = _STEPS * (reach / (PROBES - 1))  # np.linspace(0, reach, PROBES)'s own formula
     along[-1] = reach
     return me.nose + along[:, None] * f
@@ -144,10 +134,7 @@ def probes_ahead_many(
     meal = np.array([np.inf if t is None else t for t in targets], float)
     near = np.isfinite(meal)
     reach[near] = np.minimum(reach[near], np.maximum(meal[near], 0.5 * CLEARANCE))
-    f = np.array(forward, float)
-    f[:, 1] = 0.0
-    norm = np.sqrt((f * f).sum(axis=1))
-    f = np.where((norm > 1e-9)[:, None], f / np.where(norm > 1e-9, norm, 1.0)[:, None], 0.0)
+    f = units(flats(forward))
     along = _STEPS[None, :] * (reach / (PROBES - 1))[:, None]
     along[:, -1] = reach
     return nose[:, None, :] + along[:, :, None] * f[:, None, :]
@@ -169,10 +156,7 @@ def side_rooms(
     """Return (n, 2) the room (m) to the left and to the right of each of n fishes (nose,
     forward (n, 3)) out to its ``reach`` (n,) m: ``side_room`` for all at once, each ray's
     points as ``np.linspace`` spaces them (a shorter ray's last point repeated)."""
-    f = np.array(forward, float)
-    f[:, 1] = 0.0
-    norm = np.sqrt((f * f).sum(axis=1))
-    f = np.where((norm > 1e-9)[:, None], f / np.where(norm > 1e-9, norm, 1.0)[:, None], 0.0)
+    f = units(flats(forward))
     fx, fz = f[:, 0:1], f[:, 2:3]
     reach = np.asarray(reach, float)
     k = np.maximum(2, np.ceil((reach - 0.3) / ROOM_STEP).astype(int) + 1)
@@ -260,20 +244,39 @@ def fish_threats(
         lateral = closest_lateral(com[other] - nose[me], rel_v[hit], left[me], anticipation[me])
         # +1 a threat nearest on the left, -1 on the right, 0 nearly dead ahead
         sign = np.where(np.abs(lateral) >= 0.25 * half_width[me], np.sign(lateral), 0.0)
-        pull = np.zeros(n)
-        np.add.at(pull, me, count[hit] * sign)
-        total = np.zeros(n)
-        np.add.at(total, me, count[hit])
+        side = side_vote(j, me, count[hit], sign, prefer)
+    return j, side, near
+
+
+def side_vote(
+    j: np.ndarray,
+    me: np.ndarray,
+    weight: np.ndarray,
+    sign: np.ndarray,
+    prefer: np.ndarray | None,
+) -> np.ndarray:
+    """Return the side (n,) each of n fishes turns to from its threats (+1 left, -1 right, 0
+    for a fish without one, ``j`` (n,) -1): a vote of its threatening fishes, threat k of
+    fish ``me[k]`` on the side ``sign[k]`` (+1 left, -1 right, 0 nearly dead ahead) weighed
+    by its points in the box ``weight[k]``. A fish turns away from the side that outweighs
+    the other; holding a side already (``prefer`` (n,), 0: none), only from one that
+    outweighs half the votes; else it keeps its side, or turns right."""
+    n = len(j)
+    pull = np.zeros(n)
+    np.add.at(pull, me, weight * sign)
+    total = np.zeros(n)
+    np.add.at(total, me, weight)
+    side = np.zeros(n, int)
     for i in np.flatnonzero(j >= 0).tolist():
-        # away from where the threats will be nearest: a fish crossing its way turned from
-        # where it is now, turned into its path (alongside it, the way it goes) and met it
+        # away from the side where the threats will be nearest (``closest_lateral``), not
+        # where they are now: turning away from a fish crossing ahead leads into its path
         kept = int(prefer[i]) if prefer is not None and prefer[i] else 0
         if abs(pull[i]) > (0.5 * total[i] if kept else 0.0):
             side[i] = -1 if pull[i] > 0.0 else 1
         else:  # nearly dead ahead, or threats on both sides: the side already taken, else
             # to the right (as ships do: two fishes meeting head on both turn right and pass)
             side[i] = kept or -1
-    return j, side, near
+    return side
 
 
 def closest_lateral(
@@ -288,7 +291,7 @@ def closest_lateral(
 
     rel (m, 3): the other's centre relative to the nose now; rel_v (m, 3): its velocity
     relative to the fish's; left (m, 3): the fishes' unit horizontal left."""
-    r, v = _flat(rel), _flat(rel_v)
+    r, v = flats(rel), flats(rel_v)
     vv = np.einsum("mc,mc->m", v, v)
     t = np.clip(-np.einsum("mc,mc->m", r, v) / np.maximum(vv, 1e-12), 0.0, horizon)
     return np.einsum("mc,mc->m", r + t[:, None] * v, left)
@@ -342,7 +345,7 @@ def collision_ahead(
     obstacle distances (PROBES, S) and room: the ``side_room`` (left, right) when already
     computed (the tank does all fishes at once)."""
     reach = probe_reach(me, target)
-    f = _unit(_flat(me.forward))
+    f = units(flats(me.forward))
     side = np.array([-f[2], 0.0, f[0]])  # the fish's left
 
     def way_out(sgn: int) -> np.ndarray:
@@ -420,7 +423,7 @@ def escape(me: Me, around: Around) -> Demand:
     """Flee at full speed, away from the predators (nearer ones weigh more)."""
     if len(around.predators) == 0:
         return Demand(me.top, 0.0)
-    rel = _flat(me.com - around.predators)
+    rel = flats(me.com - around.predators)
     w = 1.0 / np.maximum(np.linalg.norm(rel, axis=1), 0.1) ** 2
     return steer(me, (w[:, None] * rel).sum(0), me.top)
 
@@ -432,13 +435,13 @@ def school(me: Me, around: Around) -> Demand:
     if len(mates) == 0:
         return escape(me, around)
     heads = around.fish_forward[around.same]
-    rel = _flat(mates - me.com)
+    rel = flats(mates - me.com)
     dist = np.maximum(np.linalg.norm(rel, axis=1), 1e-3)
-    cohesion = _unit(rel.mean(0))
-    alignment = _unit(_flat(heads.mean(0)))
-    separation = _unit(-(rel / dist[:, None] ** 2 * (dist < 1.0)[:, None]).sum(0))
+    cohesion = units(rel.mean(0))
+    alignment = units(flats(heads.mean(0)))
+    separation = units(-(rel / dist[:, None] ** 2 * (dist < 1.0)[:, None]).sum(0))
     flee = np.zeros(3)
     if len(around.predators):
-        flee = _unit(_flat(me.com - around.predators.mean(0)))
+        flee = units(flats(me.com - around.predators.mean(0)))
     direction = 0.8 * cohesion + 1.0 * alignment + 1.2 * separation + 1.0 * flee
     return steer(me, direction, 0.5 * (me.cruise + me.top))

@@ -45,7 +45,7 @@ def avoid_many(forward, velocity, cruise, top, away, obstacle, fish_only):
     travel: the half turn with no forward speed asked, a brake (the learned sharp turn's
     bursts turn the fish about 10 degrees each and all but stop it; the swim asked between
     them at top speed carried it on into the other fish). forward, velocity (n, 3)."""
-    f = _units(_flats(forward))
+    f = units(flats(forward))
     left = away[:, 0] * -f[:, 2] + away[:, 1] * 0.0 + away[:, 2] * f[:, 0] >= 0.0
     speed = np.maximum(np.sqrt((velocity * velocity).sum(axis=1)), cruise)
     urgent = np.where(fish_only, URGENT_FISH, URGENT)
@@ -76,9 +76,9 @@ def go_to_many(
     forward (n, 3); cruise, top (n,) m/s."""
     still = np.isnan(velocity[:, 0])
     aim = target + np.where(still[:, None], 0.0, lead[:, None] * velocity)
-    off = _flats(com - aim)
-    aim = np.where((beside != 0)[:, None], aim + beside[:, None] * _units(off), aim)
-    to = _flats(aim - nose)
+    off = flats(com - aim)
+    aim = np.where((beside != 0)[:, None], aim + beside[:, None] * units(off), aim)
+    to = flats(aim - nose)
     dist = np.sqrt((to * to).sum(axis=1))
     turn = bearings(forward, to)
     # a still target near and well off the heading: the half turn with no forward speed
@@ -97,20 +97,22 @@ def go_to_many(
     )
 
 
-def _flats(v: np.ndarray) -> np.ndarray:
-    """Vectors (n, 3) flattened to the horizontal plane (a copy)."""
+def flats(v: np.ndarray) -> np.ndarray:
+    """Vectors (..., 3) flattened to the horizontal plane (a copy, y = 0)."""
     v = np.array(v, float)
-    v[:, 1] = 0.0
+    v[..., 1] = 0.0
     return v
 
 
-def _units(v: np.ndarray) -> np.ndarray:
-    """Vectors (n, 3) as unit vectors (zero where shorter than 1e-9): ``_unit`` of each."""
-    n = np.sqrt((v * v).sum(axis=1))[:, None]
+def units(v: np.ndarray) -> np.ndarray:
+    """Vectors (..., 3) as unit vectors (zero where shorter than 1e-9 m)."""
+    n = np.sqrt((v * v).sum(axis=-1))[..., None]
     return np.where(n > 1e-9, v / np.where(n > 1e-9, n, 1.0), 0.0)
 
 
 def bearings(forward: np.ndarray, direction: np.ndarray) -> np.ndarray:
-    """Return ``bearing`` (n,) of n headings and directions (n, 3) at once."""
-    a = np.arctan2(direction[:, 2], direction[:, 0]) - np.arctan2(forward[:, 2], forward[:, 0])
+    """Return the horizontal angles (...,) (rad, left positive, in (-pi, pi]) from headings
+    to directions (..., 3)."""
+    a = np.arctan2(direction[..., 2], direction[..., 0])
+    a = a - np.arctan2(forward[..., 2], forward[..., 0])
     return (a + np.pi) % (2 * np.pi) - np.pi
