@@ -15,9 +15,9 @@ import argparse
 import json
 
 import numpy as np
-from zoetic.reproduce import figures_dir
 
 from zoetic.learning.run import LearnConfig, build
+from zoetic.reproduce import figures_dir
 
 OUT = figures_dir()
 

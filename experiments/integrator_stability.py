@@ -15,13 +15,13 @@ from __future__ import annotations
 import json
 
 import numpy as np
-from zoetic.reproduce import figures_dir
 
 from zoetic.bodies import list_animals, load_animal
 from zoetic.control import wave_controller
 from zoetic.physics import get_medium, rest_state, simulate
 from zoetic.physics.reference import step_semi_implicit
 from zoetic.physics.simulate import stable_dt
+from zoetic.reproduce import figures_dir
 
 OUT = figures_dir() / "integrator_stability.json"
 STEPS = (0.0025, 0.005, 0.0075, 0.01, 0.015, 0.02, 0.03, 0.04)

@@ -26,8 +26,8 @@ import json
 import time
 
 import numpy as np
-from zoetic.reproduce import figures_dir
 
+from zoetic.reproduce import figures_dir
 from zoetic.san import load_creature
 from zoetic.san.network import SanPolicy
 from zoetic.san.search import search, speed_cm_s

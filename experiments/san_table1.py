@@ -26,8 +26,8 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from zoetic.reproduce import figures_dir
 
+from zoetic.reproduce import figures_dir
 from zoetic.san import list_creatures, load_creature
 from zoetic.san.search import search, speed_cm_s, useful_mask, useful_threshold_cm_s
 from zoetic.san.tune import tune
