@@ -243,40 +243,16 @@ def recognise_all(images, models, keep, radius: int, target_radius: int, window:
     targets = np.zeros((k, h, w))
     r = len(GAUSS) // 2
     rows, cols = _reflected(h, r), _reflected(w, r)
-    _recognise_all(
-        images,
-        models,
-        keep,
-        radius,
-        target_radius,
-        window,
-        GAUSS,
-        rows,
-        cols,
-        hist,
-        found,
-        grays,
-        targets,
-    )
+    out = (hist, found, grays, targets)
+    _recognise_all(images, models, keep, radius, target_radius, window, GAUSS, rows, cols, out)
     return hist, found, grays, targets
 
 
 @njit(cache=True)
 def _recognise_all(
-    images,
-    models,
-    keep,
-    radius,
-    target_radius,
-    window,
-    weights,
-    rows,
-    cols,
-    hist,
-    found,
-    grays,
-    targets,
+    images, models, keep, radius, target_radius, window, weights, rows, cols, out
 ) -> None:
+    hist, found, grays, targets = out
     k_n, h, w = images.shape[:3]
     bins = np.empty((h, w), np.int64)
     raw = np.empty((h, w))

@@ -242,12 +242,11 @@ def node_contacts(
     (``solve``, impulses); its velocity change adds to ``bforce`` (K, 3, B) as the force that
     makes it over one step (applied by ``balls_step``). Then each fixed shape a node overlaps
     pushes it with a penalty force (v += dt F / m). Node velocities change in place; each
-    node's impulse from each object accumulates in ``impulse`` (N, C, 3, B) at the object's
-    column among the balls and fixed shapes: ``ball_obj``, ``static_obj`` hold each ball's and
-    fixed shape's column (``Solids.ball_col``, ``static_col``; the food has none).
-    w = pi / (contact_steps dt): the penalty's frequency, and a ball's overlap is removed over
-    about contact_steps steps; zeta: the penalty's damping ratio,
-    which also sets the balls' restitution (``restitution``).
+    node's impulse from each object accumulates in ``impulse`` (N, C, 3, B) at the column
+    ``ball_obj``, ``static_obj`` give it among the balls and fixed shapes (``Solids.ball_col``,
+    ``static_col``; food has none). w = pi / (contact_steps dt): the penalty's frequency, and a
+    ball's overlap is removed over about contact_steps steps; zeta: the penalty's damping
+    ratio, which also sets the balls' restitution (``restitution``).
     """
     e = restitution(zeta)
     rate = w * dt / math.pi
