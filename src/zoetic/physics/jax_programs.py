@@ -1,0 +1,143 @@
+"""JAX programs kept between runs past their tracing: a later process skips trace and lowering.
+
+JAX's persistent compilation cache (``jax_backend.use_compilation_cache``) skips XLA's compile
+in a later process, but that process still traces and lowers the function to find its cache
+entry: for the gradient objective most of its start (JAX's differentiation machinery in
+Python). ``stored_jit`` keeps the traced program itself: the first call exports it
+(``jax.export``: StableHLO with the model's arrays as constants) into a folder next to JAX's
+cache; a later process whose key matches deserializes it and calls it, and XLA's compile of
+that finds its executable in JAX's cache.
+
+The key is everything the program depends on: the caller's fingerprint of the values the
+function closes over (``fingerprint``: the model's or the objective's arrays), the
+arguments' shapes and dtypes, the backend, JAX's version and the source of the whole
+``zoetic`` package (any edit makes new programs). With no JAX cache directory there is no
+store: ``stored_jit`` is ``jax.jit``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import os
+import pickle
+import tempfile
+from collections.abc import Callable
+from functools import lru_cache
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.experimental.serialize_executable import deserialize_and_load, serialize
+
+STORE = "zoetic-programs"  # the folder inside JAX's compilation cache directory
+
+
+def fingerprint(*parts) -> str:
+    """Return a hex digest of ``parts``: arrays (dtype, shape, bytes), numbers, strings,
+    None, and tuples, lists, dicts and dataclasses of these, recursively; anything else
+    raises TypeError, so that no value a program depends on drops out of its key."""
+    h = hashlib.sha256()
+    for part in parts:
+        _feed(h, part)
+    return h.hexdigest()
+
+
+def _feed(h, q) -> None:
+    if isinstance(q, np.ndarray | jax.Array | np.generic):
+        a = np.ascontiguousarray(q)
+        h.update(f"<a {a.dtype.str} {a.shape}>".encode())
+        h.update(a.tobytes())
+    elif q is None or isinstance(q, bool | int | float | str):
+        h.update(f"<{type(q).__name__} {q!r}>".encode())
+    elif dataclasses.is_dataclass(q) and not isinstance(q, type):
+        h.update(f"<{type(q).__qualname__}>".encode())
+        for f in dataclasses.fields(q):
+            _feed(h, getattr(q, f.name))
+    elif isinstance(q, tuple | list):
+        h.update(f"<{type(q).__qualname__} {len(q)}>".encode())
+        for item in q:
+            _feed(h, item)
+    elif isinstance(q, dict):
+        h.update(f"<dict {len(q)}>".encode())
+        for k in sorted(q, key=repr):
+            _feed(h, k)
+            _feed(h, q[k])
+    else:
+        raise TypeError(f"fingerprint: cannot key a {type(q).__qualname__}")
+
+
+@lru_cache(maxsize=1)
+def code_version() -> str:
+    """Return a digest of every ``.py`` file of the ``zoetic`` package and JAX's version."""
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.sha256(f"jax {jax.__version__}".encode())
+    for path in sorted(root.rglob("*.py")):
+        h.update(str(path.relative_to(root)).encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()
+
+
+def store_dir() -> Path | None:
+    """Return where exported programs are kept: ``STORE`` inside JAX's compilation cache
+    directory in use, or None when JAX has none (then nothing is stored)."""
+    cache = jax.config.jax_compilation_cache_dir
+    return Path(cache) / STORE if cache else None
+
+
+def stored_jit(build: Callable[[], Callable], key: str) -> Callable:
+    """Return the jitted function ``build()`` makes, its compiled program kept in
+    ``store_dir()`` under ``key`` (the caller's ``fingerprint`` of what that function closes
+    over) and the arguments' shapes and dtypes: a later process with the same key loads the
+    program and neither builds nor traces the function. Positional array arguments only."""
+    programs: dict = {}
+
+    def call(*args):
+        specs = [jax.ShapeDtypeStruct(np.shape(a), _dtype(a)) for a in args]
+        sig = tuple((s.shape, s.dtype.str) for s in specs)
+        if sig not in programs:
+            programs[sig] = _program(build, key, specs)
+        return programs[sig](*args)
+
+    return call
+
+
+def _dtype(a) -> np.dtype:
+    """Return the dtype JAX gives argument ``a`` (float64 as float32 unless x64 is on)."""
+    dtype = a.dtype if hasattr(a, "dtype") else np.result_type(a)
+    return np.dtype(jax.dtypes.canonicalize_dtype(dtype))
+
+
+def _program(build: Callable[[], Callable], key: str, specs: list) -> Callable:
+    """Return the compiled program for ``specs``: loaded from the store, else built, traced,
+    compiled and stored; ``jax.jit(build())`` when there is no store."""
+    where = store_dir()
+    if where is None:
+        return jax.jit(build())
+    sig = [(s.shape, s.dtype.str) for s in specs]
+    path = where / f"{fingerprint(key, sig, jax.default_backend(), code_version())}.bin"
+    try:
+        payload, in_tree, out_tree = pickle.loads(path.read_bytes())
+        compiled = deserialize_and_load(payload, in_tree, out_tree)
+    except (OSError, ValueError, pickle.UnpicklingError, EOFError):  # none yet, or unreadable
+        compiled = jax.jit(build()).lower(*specs).compile()
+        _write(path, pickle.dumps(serialize(compiled)))
+
+    def run(*args):
+        return compiled(*(jnp.asarray(a, s.dtype) for a, s in zip(args, specs, strict=True)))
+
+    return run
+
+
+def _write(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` whole or not at all (a rename), so that processes sharing
+    the store never read half a program."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-")
+    try:
+        with os.fdopen(fd, "wb") as out:
+            out.write(data)
+        os.replace(tmp, path)
+    except OSError:
+        Path(tmp).unlink(missing_ok=True)
