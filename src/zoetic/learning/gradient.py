@@ -29,7 +29,7 @@ from zoetic.bodies import Body
 from zoetic.control import Controller
 from zoetic.control.jax_sampling import jax_table
 from zoetic.physics.jax_backend import F32, rollout_fn
-from zoetic.physics.jax_programs import fingerprint, stored_jit
+from zoetic.physics.jax_programs import StoredProgram, fingerprint
 from zoetic.physics.simulate import rest_state
 from zoetic.tasks.terms import BodyFrame, Signals, evaluate_terms
 
@@ -310,7 +310,7 @@ def value_and_grad(objective: Objective, X: np.ndarray) -> tuple[Evaluation, np.
     vg = _COMPILED.get(objective)
     if vg is None:
         ref = weakref.ref(objective)  # the cache's entry must not keep its key alive
-        vg = stored_jit(
+        vg = StoredProgram(
             lambda: jax.value_and_grad(jax_objective(ref()), has_aux=True),
             fingerprint("value_and_grad", *objective_inputs(objective)),
         )

@@ -21,7 +21,7 @@ import jax.numpy as jnp
 from zoetic.bodies import Body
 from zoetic.errors import SimulationError
 from zoetic.physics import law
-from zoetic.physics.jax_programs import fingerprint, stored_jit
+from zoetic.physics.jax_programs import StoredProgram, fingerprint
 from zoetic.physics.media import Medium
 from zoetic.physics.model import compile_model
 from zoetic.physics.simulate import VMAX
@@ -158,10 +158,10 @@ def make_rollout(body: Body, medium=None, dt: float | None = None, record_every:
 
     ``rec`` is (B, R, N, 3); the final positions and velocities are (B, N, 3). It compiles
     once per shape; a second call with the same shapes reuses the compiled code, and a later
-    process loads the traced program (``jax_programs.stored_jit``, keyed on the model).
+    process loads the traced program (``jax_programs.StoredProgram``, keyed on the model).
     """
     key = fingerprint("rollout", compile_model(body, medium, dt), record_every)
-    return stored_jit(lambda: rollout_fn(body, medium, dt, record_every), key)
+    return StoredProgram(lambda: rollout_fn(body, medium, dt, record_every), key)
 
 
 def blown_up(positions: jax.Array, velocities: jax.Array) -> jax.Array:

@@ -1,18 +1,20 @@
-"""JAX programs kept between runs past their tracing: a later process skips trace and lowering.
+"""Compiled JAX programs kept between runs: a later process neither traces nor compiles them.
 
 JAX's persistent compilation cache (``jax_backend.use_compilation_cache``) skips XLA's compile
 in a later process, but that process still traces and lowers the function to find its cache
-entry: for the gradient objective most of its start (JAX's differentiation machinery in
-Python). ``stored_jit`` keeps the traced program itself: the first call exports it
-(``jax.export``: StableHLO with the model's arrays as constants) into a folder next to JAX's
-cache; a later process whose key matches deserializes it and calls it, and XLA's compile of
-that finds its executable in JAX's cache.
+entry: for the gradient objective most of its start (JAX's differentiation machinery, in
+Python). ``StoredProgram`` keeps the compiled program itself: the first call traces and
+compiles it and writes the executable (``jax.experimental.serialize_executable``, a pickle)
+into a folder inside JAX's cache directory; a later process whose key matches loads it.
+(``jax.export`` would keep portable StableHLO instead, but its serialization needs the
+``flatbuffers`` package, not a dependency here.) Like JAX's own cache the store is trusted:
+loading a program runs what it holds, so it lives in the user's cache directory only.
 
 The key is everything the program depends on: the caller's fingerprint of the values the
 function closes over (``fingerprint``: the model's or the objective's arrays), the
 arguments' shapes and dtypes, the backend, JAX's version and the source of the whole
 ``zoetic`` package (any edit makes new programs). With no JAX cache directory there is no
-store: ``stored_jit`` is ``jax.jit``.
+store, and a ``StoredProgram`` is ``jax.jit`` of its function.
 """
 
 from __future__ import annotations
@@ -79,6 +81,18 @@ def code_version() -> str:
     return h.hexdigest()
 
 
+def machine() -> tuple:
+    """Return what a compiled program is specific to besides its code: the backend, the
+    devices' kind and number, and the XLA flags it was compiled under."""
+    devices = jax.devices()
+    return (
+        jax.default_backend(),
+        devices[0].device_kind,
+        len(devices),
+        os.environ.get("XLA_FLAGS", ""),
+    )
+
+
 def store_dir() -> Path | None:
     """Return where exported programs are kept: ``STORE`` inside JAX's compilation cache
     directory in use, or None when JAX has none (then nothing is stored)."""
@@ -86,21 +100,23 @@ def store_dir() -> Path | None:
     return Path(cache) / STORE if cache else None
 
 
-def stored_jit(build: Callable[[], Callable], key: str) -> Callable:
-    """Return the jitted function ``build()`` makes, its compiled program kept in
-    ``store_dir()`` under ``key`` (the caller's ``fingerprint`` of what that function closes
-    over) and the arguments' shapes and dtypes: a later process with the same key loads the
-    program and neither builds nor traces the function. Positional array arguments only."""
-    programs: dict = {}
+class StoredProgram:
+    """The jitted function ``build()`` makes, its compiled program kept in ``store_dir()``
+    under ``key`` (the caller's ``fingerprint`` of what that function closes over) and the
+    arguments' shapes and dtypes: a later process with the same key loads the program and
+    neither builds nor traces the function. Positional array arguments only; one program
+    per distinct shapes and dtypes, as ``jax.jit``."""
 
-    def call(*args):
+    def __init__(self, build: Callable[[], Callable], key: str) -> None:
+        self.build, self.key = build, key
+        self.programs: dict[tuple, Callable] = {}
+
+    def __call__(self, *args):
         specs = [jax.ShapeDtypeStruct(np.shape(a), _dtype(a)) for a in args]
         sig = tuple((s.shape, s.dtype.str) for s in specs)
-        if sig not in programs:
-            programs[sig] = _program(build, key, specs)
-        return programs[sig](*args)
-
-    return call
+        if sig not in self.programs:
+            self.programs[sig] = _program(self.build, fingerprint(self.key, sig), specs)
+        return self.programs[sig](*args)
 
 
 def _dtype(a) -> np.dtype:
@@ -115,14 +131,16 @@ def _program(build: Callable[[], Callable], key: str, specs: list) -> Callable:
     where = store_dir()
     if where is None:
         return jax.jit(build())
-    sig = [(s.shape, s.dtype.str) for s in specs]
-    path = where / f"{fingerprint(key, sig, jax.default_backend(), code_version())}.bin"
+    path = where / f"{fingerprint(key, machine(), code_version())}.bin"
     try:
         payload, in_tree, out_tree = pickle.loads(path.read_bytes())
         compiled = deserialize_and_load(payload, in_tree, out_tree)
-    except (OSError, ValueError, pickle.UnpicklingError, EOFError):  # none yet, or unreadable
+    except Exception:  # none yet, or whatever a broken or foreign file raises: compile anew
         compiled = jax.jit(build()).lower(*specs).compile()
-        _write(path, pickle.dumps(serialize(compiled)))
+        try:
+            _write(path, pickle.dumps(serialize(compiled)))
+        except (ValueError, NotImplementedError):  # a program JAX cannot serialize: not kept
+            pass
 
     def run(*args):
         return compiled(*(jnp.asarray(a, s.dtype) for a, s in zip(args, specs, strict=True)))
