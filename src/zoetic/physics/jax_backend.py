@@ -12,7 +12,9 @@ becomes large or non-finite, and ``blown_up`` tells which ones did.
 
 from __future__ import annotations
 
+import functools
 import os
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import jax
@@ -71,7 +73,8 @@ def make_step(body: Body, medium: str | Medium | None = None, dt: float | None =
 
 def lanes() -> int | None:
     """Return how many candidates the rollout steps together on this JAX backend: on a CPU a
-    chunk whose arrays stay in the core's cache (larger batches run chunk after chunk), on an
+    chunk whose arrays stay in the core's cache (larger batches run as several chunks, on
+    all cores in ``make_rollout``, one after another inside ``rollout_fn``), on an
     accelerator the whole batch (None)."""
     return CPU_LANES if jax.default_backend() == "cpu" else None
 
@@ -154,14 +157,46 @@ def _in_chunks(run, x, v, act, chunk: int | None):
 
 
 def make_rollout(body: Body, medium=None, dt: float | None = None, record_every: int = 1):
-    """Return the jitted batch rollout ``(pos0 (B,N,3), vel0, act (B,T,A)) -> (rec, x, v)``.
+    """Return the compiled batch rollout ``(pos0 (B,N,3), vel0, act (B,T,A)) -> (rec, x, v)``.
 
     ``rec`` is (B, R, N, 3); the final positions and velocities are (B, N, 3). It compiles
     once per shape; a second call with the same shapes reuses the compiled code, and a later
-    process loads the traced program (``jax_programs.StoredProgram``, keyed on the model).
+    process loads the compiled program (``jax_programs.StoredProgram``, keyed on the model).
+    On a CPU a batch wider than ``lanes()`` runs as chunks of that many candidates, several
+    at once (``_chunks_at_once``).
     """
-    key = fingerprint("rollout", compile_model(body, medium, dt), record_every)
-    return StoredProgram(lambda: rollout_fn(body, medium, dt, record_every), key)
+    key = fingerprint("rollout", compile_model(body, medium, dt), record_every, lanes())
+    program = StoredProgram(lambda: rollout_fn(body, medium, dt, record_every), key)
+    chunk = lanes()
+    if chunk is None:
+        return program
+    return functools.partial(_chunks_at_once, program, chunk)
+
+
+def _chunks_at_once(program, chunk: int, x0, v0, act):
+    """Return ``program(x0, v0, act)`` for a batch (B, N, 3) run ``chunk`` candidates at a
+    time (the last chunk padded with copies of its last candidate), as many chunks in flight
+    as the host has cores: XLA runs each call on a thread of its own pool, so the chunks
+    share the cores, where one program's ``lax.map`` runs them one after another on one."""
+    x0, v0 = jnp.asarray(x0, F32), jnp.asarray(v0, F32)
+    if x0.ndim != 3 or x0.shape[0] <= chunk:
+        return program(x0, v0, act)
+    act = jnp.asarray(act, F32)
+    shared = act.ndim == 2
+    b = x0.shape[0]
+    starts = range(0, b, chunk)
+
+    def part(q, k):
+        q = q[k : k + chunk]
+        return jnp.concatenate([q, jnp.repeat(q[-1:], chunk - q.shape[0], axis=0)])
+
+    def one(k):
+        args = (part(x0, k), part(v0, k), act if shared else part(act, k))
+        return jax.block_until_ready(program(*args))
+
+    with ThreadPoolExecutor(min(len(starts), len(os.sched_getaffinity(0)))) as pool:
+        outs = list(pool.map(one, starts))
+    return tuple(jnp.concatenate(q)[:b] for q in zip(*outs, strict=True))
 
 
 def blown_up(positions: jax.Array, velocities: jax.Array) -> jax.Array:

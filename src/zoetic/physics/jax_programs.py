@@ -24,6 +24,7 @@ import hashlib
 import os
 import pickle
 import tempfile
+import threading
 from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
@@ -110,12 +111,14 @@ class StoredProgram:
     def __init__(self, build: Callable[[], Callable], key: str) -> None:
         self.build, self.key = build, key
         self.programs: dict[tuple, Callable] = {}
+        self._compiling = threading.Lock()  # threads calling at once compile a program once
 
     def __call__(self, *args):
         specs = [jax.ShapeDtypeStruct(np.shape(a), _dtype(a)) for a in args]
         sig = tuple((s.shape, s.dtype.str) for s in specs)
-        if sig not in self.programs:
-            self.programs[sig] = _program(self.build, fingerprint(self.key, sig), specs)
+        with self._compiling:
+            if sig not in self.programs:
+                self.programs[sig] = _program(self.build, fingerprint(self.key, sig), specs)
         return self.programs[sig](*args)
 
 
