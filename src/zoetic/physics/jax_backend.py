@@ -194,9 +194,15 @@ def _chunks_at_once(program, chunk: int, x0, v0, act):
         args = (part(x0, k), part(v0, k), act if shared else part(act, k))
         return jax.block_until_ready(program(*args))
 
-    with ThreadPoolExecutor(min(len(starts), len(os.sched_getaffinity(0)))) as pool:
+    with ThreadPoolExecutor(min(len(starts), _cores())) as pool:
         outs = list(pool.map(one, starts))
     return tuple(jnp.concatenate(q)[:b] for q in zip(*outs, strict=True))
+
+
+def _cores() -> int:
+    """Return how many cores this process may run on."""
+    affinity = getattr(os, "sched_getaffinity", None)
+    return len(affinity(0)) if affinity else os.cpu_count() or 1
 
 
 def blown_up(positions: jax.Array, velocities: jax.Array) -> jax.Array:
