@@ -12,7 +12,6 @@ becomes large or non-finite, and ``blown_up`` tells which ones did.
 
 from __future__ import annotations
 
-import functools
 import os
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -163,40 +162,48 @@ def make_rollout(body: Body, medium=None, dt: float | None = None, record_every:
     once per shape; a second call with the same shapes reuses the compiled code, and a later
     process loads the compiled program (``jax_programs.StoredProgram``, keyed on the model).
     On a CPU a batch wider than ``lanes()`` runs as chunks of that many candidates, several
-    at once (``_chunks_at_once``).
+    at once (``ChunksAtOnce``).
     """
     key = fingerprint("rollout", compile_model(body, medium, dt), record_every, lanes())
     program = StoredProgram(lambda: rollout_fn(body, medium, dt, record_every), key)
     chunk = lanes()
-    if chunk is None:
-        return program
-    return functools.partial(_chunks_at_once, program, chunk)
+    return program if chunk is None else ChunksAtOnce(program, chunk)
 
 
-def _chunks_at_once(program, chunk: int, x0, v0, act):
-    """Return ``program(x0, v0, act)`` for a batch (B, N, 3) run ``chunk`` candidates at a
-    time (the last chunk padded with copies of its last candidate), as many chunks in flight
-    as the host has cores: XLA runs each call on a thread of its own pool, so the chunks
-    share the cores, where one program's ``lax.map`` runs them one after another on one."""
-    x0, v0 = jnp.asarray(x0, F32), jnp.asarray(v0, F32)
-    if x0.ndim != 3 or x0.shape[0] <= chunk:
-        return program(x0, v0, act)
-    act = jnp.asarray(act, F32)
-    shared = act.ndim == 2
-    b = x0.shape[0]
-    starts = range(0, b, chunk)
+class ChunksAtOnce:
+    """A CPU batch rollout: ``program`` run ``chunk`` candidates at a time (the last chunk
+    padded with copies of its last candidate), as many chunks in flight as the host has
+    cores: XLA runs each call on a thread of its own pool, so the chunks share the cores,
+    where one program's ``lax.map`` runs them one after another on one."""
 
-    def part(q, k):
-        q = q[k : k + chunk]
-        return jnp.concatenate([q, jnp.repeat(q[-1:], chunk - q.shape[0], axis=0)])
+    def __init__(self, program: StoredProgram, chunk: int) -> None:
+        self.program, self.chunk = program, chunk
 
-    def one(k):
-        args = (part(x0, k), part(v0, k), act if shared else part(act, k))
-        return jax.block_until_ready(program(*args))
+    @property
+    def programs(self) -> dict:
+        """The compiled programs, one per shape of the arguments (``StoredProgram``)."""
+        return self.program.programs
 
-    with ThreadPoolExecutor(min(len(starts), _cores())) as pool:
-        outs = list(pool.map(one, starts))
-    return tuple(jnp.concatenate(q)[:b] for q in zip(*outs, strict=True))
+    def __call__(self, x0, v0, act):
+        x0, v0, chunk = jnp.asarray(x0, F32), jnp.asarray(v0, F32), self.chunk
+        if x0.ndim != 3 or x0.shape[0] <= chunk:
+            return self.program(x0, v0, act)
+        act = jnp.asarray(act, F32)
+        shared = act.ndim == 2
+        b = x0.shape[0]
+        starts = range(0, b, chunk)
+
+        def part(q, k):
+            q = q[k : k + chunk]
+            return jnp.concatenate([q, jnp.repeat(q[-1:], chunk - q.shape[0], axis=0)])
+
+        def one(k):
+            args = (part(x0, k), part(v0, k), act if shared else part(act, k))
+            return jax.block_until_ready(self.program(*args))
+
+        with ThreadPoolExecutor(min(len(starts), _cores())) as pool:
+            outs = list(pool.map(one, starts))
+        return tuple(jnp.concatenate(q)[:b] for q in zip(*outs, strict=True))
 
 
 def _cores() -> int:
