@@ -29,6 +29,7 @@ from zoetic.bodies import Body
 from zoetic.control import Controller
 from zoetic.control.jax_sampling import jax_table
 from zoetic.physics.jax_backend import F32, rollout_fn
+from zoetic.physics.jax_programs import StoredProgram, fingerprint
 from zoetic.physics.simulate import rest_state
 from zoetic.tasks.terms import BodyFrame, Signals, evaluate_terms
 
@@ -278,6 +279,27 @@ def jax_objective(objective: Objective) -> Callable:
     return evaluate
 
 
+def objective_inputs(objective: Objective) -> tuple:
+    """Return every value ``jax_objective`` builds its function from (its program's key)."""
+    n_rec = objective.steps // objective.record_every + 1
+    return (
+        objective.task,
+        objective.body,
+        objective.medium,
+        objective.dt,
+        objective.steps,
+        objective.record_every,
+        linear_map(objective),
+        objective._basis,
+        objective._node_basis,
+        objective.full_shape,
+        objective.starts.positions,
+        objective.starts.velocities,
+        objective.record_rows(n_rec),
+        objective.h,
+    )
+
+
 _COMPILED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # objective -> jitted E, dE
 
 
@@ -287,7 +309,11 @@ def value_and_grad(objective: Objective, X: np.ndarray) -> tuple[Evaluation, np.
 
     vg = _COMPILED.get(objective)
     if vg is None:
-        vg = jax.jit(jax.value_and_grad(jax_objective(objective), has_aux=True))
+        ref = weakref.ref(objective)  # the cache's entry must not keep its key alive
+        vg = StoredProgram(
+            lambda: jax.value_and_grad(jax_objective(ref()), has_aux=True),
+            fingerprint("value_and_grad", *objective_inputs(objective)),
+        )
         _COMPILED[objective] = vg
     out = [vg(jnp.asarray(x, F32)) for x in np.atleast_2d(X)]
     E = np.array([float(o[0][0]) for o in out])

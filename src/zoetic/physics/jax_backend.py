@@ -13,6 +13,7 @@ becomes large or non-finite, and ``blown_up`` tells which ones did.
 from __future__ import annotations
 
 import os
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import jax
@@ -21,6 +22,7 @@ import jax.numpy as jnp
 from zoetic.bodies import Body
 from zoetic.errors import SimulationError
 from zoetic.physics import law
+from zoetic.physics.jax_programs import StoredProgram, fingerprint
 from zoetic.physics.media import Medium
 from zoetic.physics.model import compile_model
 from zoetic.physics.simulate import VMAX
@@ -70,7 +72,8 @@ def make_step(body: Body, medium: str | Medium | None = None, dt: float | None =
 
 def lanes() -> int | None:
     """Return how many candidates the rollout steps together on this JAX backend: on a CPU a
-    chunk whose arrays stay in the core's cache (larger batches run chunk after chunk), on an
+    chunk whose arrays stay in the core's cache (larger batches run as several chunks, on
+    all cores in ``make_rollout``, one after another inside ``rollout_fn``), on an
     accelerator the whole batch (None)."""
     return CPU_LANES if jax.default_backend() == "cpu" else None
 
@@ -153,12 +156,60 @@ def _in_chunks(run, x, v, act, chunk: int | None):
 
 
 def make_rollout(body: Body, medium=None, dt: float | None = None, record_every: int = 1):
-    """Return the jitted batch rollout ``(pos0 (B,N,3), vel0, act (B,T,A)) -> (rec, x, v)``.
+    """Return the compiled batch rollout ``(pos0 (B,N,3), vel0, act (B,T,A)) -> (rec, x, v)``.
 
     ``rec`` is (B, R, N, 3); the final positions and velocities are (B, N, 3). It compiles
-    once per shape; a second call with the same shapes reuses the compiled code.
+    once per shape; a second call with the same shapes reuses the compiled code, and a later
+    process loads the compiled program (``jax_programs.StoredProgram``, keyed on the model).
+    On a CPU a batch wider than ``lanes()`` runs as chunks of that many candidates, several
+    at once (``ChunksAtOnce``).
     """
-    return jax.jit(rollout_fn(body, medium, dt, record_every))
+    key = fingerprint("rollout", compile_model(body, medium, dt), record_every, lanes())
+    program = StoredProgram(lambda: rollout_fn(body, medium, dt, record_every), key)
+    chunk = lanes()
+    return program if chunk is None else ChunksAtOnce(program, chunk)
+
+
+class ChunksAtOnce:
+    """A CPU batch rollout: ``program`` run ``chunk`` candidates at a time (the last chunk
+    padded with copies of its last candidate), as many chunks in flight as the host has
+    cores: XLA runs each call on a thread of its own pool, so the chunks share the cores,
+    where one program's ``lax.map`` runs them one after another on one."""
+
+    def __init__(self, program: StoredProgram, chunk: int) -> None:
+        self.program, self.chunk = program, chunk
+
+    @property
+    def programs(self) -> dict:
+        """The compiled programs, one per shape of the arguments (``StoredProgram``)."""
+        return self.program.programs
+
+    def __call__(self, x0, v0, act):
+        x0, v0, chunk = jnp.asarray(x0, F32), jnp.asarray(v0, F32), self.chunk
+        if x0.ndim != 3 or x0.shape[0] <= chunk:
+            return self.program(x0, v0, act)
+        act = jnp.asarray(act, F32)
+        shared = act.ndim == 2
+        b = x0.shape[0]
+        starts = range(0, b, chunk)
+
+        def part(q, k):
+            q = q[k : k + chunk]
+            return jnp.concatenate([q, jnp.repeat(q[-1:], chunk - q.shape[0], axis=0)])
+
+        def one(k):
+            args = (part(x0, k), part(v0, k), act if shared else part(act, k))
+            return jax.block_until_ready(self.program(*args))
+
+        with ThreadPoolExecutor(min(len(starts), _cores())) as pool:
+            outs = list(pool.map(one, starts))
+        return tuple(jnp.concatenate(q)[:b] for q in zip(*outs, strict=True))
+
+
+def _cores() -> int:
+    """Return how many cores this process may run on."""
+    affinity = getattr(os, "sched_getaffinity", None)
+    return len(affinity(0)) if affinity else os.cpu_count() or 1
 
 
 def blown_up(positions: jax.Array, velocities: jax.Array) -> jax.Array:
