@@ -1,4 +1,5 @@
-"""The grid that finds which targets may lie within a fish's range misses no pair."""
+"""What the tank works out only near each fish or obstacle equals working out everything: the
+grid of pairs within range misses no pair, and the deepest point inside an obstacle."""
 
 from __future__ import annotations
 
@@ -6,6 +7,8 @@ import numpy as np
 import pytest
 
 from zoetic.behavior.aquarium.neighbours import near_pairs
+from zoetic.behavior.aquarium.perception import deepest_inside, obstacle_distance
+from zoetic.physics.objects import Box, Cylinder, pack_statics
 
 
 def _within(eyes, targets, reach):
@@ -40,9 +43,28 @@ def test_grid_pairs_hold_every_pair_within_range(seed):
 def test_a_narrow_tank_or_an_endless_range_gives_all_pairs():
     rng = np.random.default_rng(0)
     eyes, targets = rng.uniform(-5, 5, (7, 3)), rng.uniform(-5, 5, (9, 3))
-    for reach in (6.0, np.inf):
+    for reach in (6.0, np.inf):  # 6 m: three cells wide, all neighbours
         rows, cols = near_pairs(eyes, targets, reach)
         assert np.array_equal(rows, np.repeat(np.arange(7), 9))
         assert np.array_equal(cols, np.tile(np.arange(9), 7))
     rows, cols = near_pairs(eyes, np.zeros((0, 3)), 1.0)
     assert len(rows) == len(cols) == 0
+
+
+def test_deepest_inside_equals_the_least_signed_distance_of_every_point():
+    kind, center, size = pack_statics(
+        [
+            Box((0.0, 0.0, 0.0), (1.0, 2.0, 0.6)),
+            Cylinder((3.0, 0.0, -2.0), 0.7, 4.0, "y"),
+            Box((-3.0, 0.0, 2.5), (0.4, 2.0, 1.2)),
+        ]
+    )
+    rng = np.random.default_rng(2)
+    points = rng.uniform(-5, 5, (400, 3))
+    want = max(0.0, float(-obstacle_distance(points, kind, center, size).min()))
+    assert want > 0.1  # some points lie well inside
+    assert deepest_inside(points, kind, center, size) == want
+    outside = points[obstacle_distance(points, kind, center, size).min(axis=1) > 0]
+    assert deepest_inside(outside, kind, center, size) == 0.0
+    on_face = np.array([[1.0, 0.0, 0.0], [-0.5, 0.0, 0.6]])  # on the box's faces: 0 deep
+    assert deepest_inside(on_face, kind, center, size) == 0.0

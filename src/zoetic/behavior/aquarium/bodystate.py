@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from zoetic.behavior.aquarium.locomotion import bend_nodes
-from zoetic.behavior.aquarium.perception import obstacle_distance
+from zoetic.behavior.aquarium.perception import deepest_inside
 from zoetic.bodies import Body
 from zoetic.control.loop import Observer
 from zoetic.control.policy import Period
@@ -225,9 +225,7 @@ class FishBodies(Observer):
         centres, headings, velocities and noses for the next period."""
         allpos = self.nodes(world)
         kind, center, size = self.statics
-        if len(kind):
-            into = float(-obstacle_distance(allpos, kind, center, size).min())
-            self.deepest = max(self.deepest, into)
+        self.deepest = max(self.deepest, deepest_inside(allpos, kind, center, size))
         into_fish = fish_depth(self.bodies, self.split(allpos), self.extent, self.masses)
         self.deepest_fish = max(self.deepest_fish, into_fish)
         self._update(world)

@@ -76,17 +76,13 @@ def near_pairs(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Return (rows, cols): pairs of an eye (n, 3) and a target (m, 3), every pair within
     ``reach`` m of each other among them (and some farther), by eye then target ascending.
-    An infinite reach (or a tank no wider than three cells) gives all the pairs."""
+    An infinite reach gives all the pairs."""
     eyes = np.ascontiguousarray(eyes, float).reshape(-1, 3)
     targets = np.ascontiguousarray(targets, float).reshape(-1, 3)
     n, m = len(eyes), len(targets)
     width = reach * (1.0 + SLACK) + SLACK
     finite = np.isfinite(eyes).all() and np.isfinite(targets).all()
     if n and m and math.isfinite(width) and finite:
-        span = max(
-            np.ptp(np.r_[eyes[:, 0], targets[:, 0]]), np.ptp(np.r_[eyes[:, 2], targets[:, 2]])
-        )
-        if span > 3.0 * width:
-            return _grid_pairs(eyes, targets, width)
+        return _grid_pairs(eyes, targets, width)
     rows, cols = np.divmod(np.arange(n * m), max(m, 1))
     return rows, cols

@@ -104,12 +104,27 @@ def _blocked_pairs(eyes, targets, rows, cols, ask, kind, center, size, step, out
     k = max(2, int(math.ceil(longest / step)))
     lo, hi = _bounds(kind, center, size)
     near = np.empty(kind.shape[0], np.int64)
+    # the obstacles whose bounding box comes within the longest segment of the eye (no
+    # segment asked reaches farther; a margin over its rounding), for the eye asked last
+    reach = longest * (1.0 + 1e-9) + 1e-9
+    around, count, last = np.empty(kind.shape[0], np.int64), 0, -1
     for q in range(rows.shape[0]):
         if not ask[q]:
             continue
         e, t = rows[q], cols[q]
+        if e != last:
+            last, count = e, 0
+            for s in range(kind.shape[0]):
+                apart = False
+                for c in range(3):
+                    if eyes[e, c] + reach < lo[s, c] or eyes[e, c] - reach > hi[s, c]:
+                        apart = True
+                if not apart:
+                    around[count] = s
+                    count += 1
         m = 0
-        for s in range(kind.shape[0]):
+        for r in range(count):
+            s = around[r]
             apart = False
             for c in range(3):
                 if (
@@ -138,6 +153,37 @@ def _blocked_pairs(eyes, targets, rows, cols, ask, kind, center, size, step, out
             if hit:
                 break
         out[q] = hit
+
+
+@njit(cache=True)
+def _deepest(p, kind, center, size) -> float:
+    """Return ``deepest_inside`` of the points p (P, 3)."""
+    lo, hi = _bounds(kind, center, size)
+    out = 0.0
+    for i in range(p.shape[0]):
+        for s in range(kind.shape[0]):
+            inside = True
+            for c in range(3):
+                if p[i, c] < lo[s, c] or p[i, c] > hi[s, c]:
+                    inside = False
+            if inside:
+                out = max(out, -_sdf1(p[i, 0], p[i, 1], p[i, 2], kind, center, size, s))
+    return out
+
+
+def deepest_inside(points: np.ndarray, kind, center, size) -> float:
+    """Return how deep (m) the deepest of the points (P, 3) lies inside an obstacle (0 when
+    none does): minus the least signed distance (``obstacle_distance``) where it is below 0,
+    the signed distances worked out only for the points within an obstacle's bounding box
+    (a point outside every box is outside every obstacle)."""
+    if len(kind) == 0 or len(points) == 0:
+        return 0.0
+    return _deepest(
+        np.ascontiguousarray(points, float).reshape(-1, 3),
+        np.asarray(kind, np.int64),
+        np.ascontiguousarray(center, float),
+        np.ascontiguousarray(size, float),
+    )
 
 
 def obstacle_distance(points: np.ndarray, kind, center, size) -> np.ndarray:
