@@ -1,11 +1,13 @@
 """What the tank works out only near each fish or obstacle equals working out everything: the
-grid of pairs within range misses no pair, and the deepest point inside an obstacle."""
+grid of pairs within range misses no pair, the fish threats of the near pairs are those of
+every pair, and the deepest point inside an obstacle is the deepest."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from zoetic.behavior.aquarium import routines
 from zoetic.behavior.aquarium.neighbours import near_pairs
 from zoetic.behavior.aquarium.perception import deepest_inside, obstacle_distance
 from zoetic.physics.objects import Box, Cylinder, pack_statics
@@ -68,3 +70,28 @@ def test_deepest_inside_equals_the_least_signed_distance_of_every_point():
     assert deepest_inside(outside, kind, center, size) == 0.0
     on_face = np.array([[1.0, 0.0, 0.0], [-0.5, 0.0, 0.6]])  # on the box's faces: 0 deep
     assert deepest_inside(on_face, kind, center, size) == 0.0
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_fish_threats_of_near_pairs_equal_those_of_every_pair(seed, monkeypatch):
+    # a crowd swimming every way in 12 x 12 m: some fishes threaten each other, many seen
+    # pairs are too far apart to; dropping those (``_within_box_reach``) changes nothing
+    rng = np.random.default_rng(seed)
+    n = 120
+    com = np.column_stack([rng.uniform(-6, 6, n), rng.uniform(-0.3, 0.3, n), rng.uniform(-6, 6, n)])
+    fwd = rng.normal(size=(n, 3)) * [1.0, 0.1, 1.0]
+    fwd /= np.linalg.norm(fwd, axis=1, keepdims=True)
+    nose = com + 0.35 * fwd
+    vel = fwd * rng.uniform(0.0, 1.2, (n, 1)) + rng.normal(0, 0.1, (n, 3))
+    seen = rng.random((n, n)) < 0.8
+    np.fill_diagonal(seen, False)
+    region = (np.full(n, 0.7), np.full(n, 0.45), np.full(n, 1.5))  # reach, half width, s
+    prefer = rng.integers(-1, 2, n)
+    got = routines.fish_threats(nose, com, fwd, vel, seen, *region, prefer)
+    kept = routines._within_box_reach(*np.nonzero(seen), nose, com, vel, *region)
+    monkeypatch.setattr(routines, "_within_box_reach", lambda ii, jj, *rest: (ii, jj))
+    want = routines.fish_threats(nose, com, fwd, vel, seen, *region, prefer)
+    for a, b in zip(got, want, strict=True):
+        assert np.array_equal(a, b)
+    assert (want[0] >= 0).sum() > 10  # threats found
+    assert len(kept[0]) < 0.5 * seen.sum()  # and most pairs dropped
