@@ -42,6 +42,16 @@ def test_grid_pairs_hold_every_pair_within_range(seed):
     assert np.array_equal(order, np.arange(len(rows)))
 
 
+def test_a_point_flung_far_away_loses_no_pair():
+    # the grid is at most MAX_CELLS wide: its cells grow, and every pair within range stays
+    rng = np.random.default_rng(5)
+    eyes, targets = rng.uniform(-40, 40, (200, 3)), rng.uniform(-40, 40, (300, 3))
+    eyes[0], targets[0] = [3e7, 0.0, -2e7], [3e7 + 2.0, 0.0, -2e7]
+    rows, cols = near_pairs(eyes, targets, 6.0)
+    got = set(zip(rows.tolist(), cols.tolist(), strict=True))
+    assert _within(eyes, targets, 6.0) <= got and (0, 0) in got
+
+
 def test_a_narrow_tank_or_an_endless_range_gives_all_pairs():
     rng = np.random.default_rng(0)
     eyes, targets = rng.uniform(-5, 5, (7, 3)), rng.uniform(-5, 5, (9, 3))

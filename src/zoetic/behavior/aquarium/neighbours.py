@@ -17,6 +17,7 @@ import numpy as np
 from numba import njit
 
 SLACK = 1e-3  # m (and a thousandth of the range) the cells are wider than the range
+MAX_CELLS = 256  # cells along a side of the grid at most (2 km of 8 m cells)
 
 
 @njit(cache=True)
@@ -39,8 +40,10 @@ def _grid_pairs(eyes, targets, width):
     z0 = min(eyes[:, 2].min(), targets[:, 2].min())
     x1 = max(eyes[:, 0].max(), targets[:, 0].max())
     z1 = max(eyes[:, 2].max(), targets[:, 2].max())
-    nx = int((x1 - x0) / width) + 1
-    nz = int((z1 - z0) / width) + 1
+    # at most MAX_CELLS a side: a point flung far away clips to the edge cells (clipping
+    # brings no two cells' indices farther apart, so no pair within range is lost)
+    nx = int(min((x1 - x0) / width, MAX_CELLS - 1)) + 1
+    nz = int(min((z1 - z0) / width, MAX_CELLS - 1)) + 1
     tx, tz = _cells(targets, x0, z0, width, nx, nz)
     ex, ez = _cells(eyes, x0, z0, width, nx, nz)
     # the targets sorted by cell (a stable sort: ascending within a cell), and each cell's start
