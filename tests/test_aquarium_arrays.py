@@ -54,6 +54,29 @@ def _blocked_by_points(eyes, targets, ask, kind, center, size):
     return out
 
 
+def _oracle(eyes, fwd, fish, alive, food, left, kind, center, size, va, vr, sr):
+    """The oracle's formulas, every eye against every target in numpy: (fish, food,
+    obstacles) distances perceived (inf where not)."""
+    rel = fish[None] - eyes[:, None]
+    d = np.linalg.norm(rel, axis=-1)
+    cos = (rel * fwd[:, None]).sum(-1) / np.maximum(d, 1e-9)
+    half = np.cos(np.radians(va) / 2)[:, None]
+    vf = (d <= vr[:, None]) & (cos >= half) & alive[None]
+    vf &= ~_blocked_by_points(eyes, fish, vf, kind, center, size)
+    np.fill_diagonal(vf, False)
+    rel = food[None] - eyes[:, None]
+    dd = np.linalg.norm(rel, axis=-1)
+    cos = (rel * fwd[:, None]).sum(-1) / np.maximum(dd, 1e-9)
+    vd = (dd <= vr[:, None]) & (cos >= half) & left[None]
+    vd &= ~_blocked_by_points(eyes, food, vd, kind, center, size)
+    vd = (vd | (dd <= sr[:, None])) & left[None]
+    do = obstacle_distance(eyes, kind, center, size)
+    to_c = center[None] - eyes[:, None]
+    cos = (to_c * fwd[:, None]).sum(-1) / np.maximum(np.linalg.norm(to_c, axis=-1), 1e-9)
+    seen = (do <= vr[:, None]) & ((cos >= half) | (do < 1.0))
+    return np.where(vf, d, np.inf), np.where(vd, dd, np.inf), np.where(seen, do, np.inf)
+
+
 @pytest.mark.parametrize("seed", range(4))
 def test_compiled_perception_equals_the_oracles_formulas(seed):
     rng = np.random.default_rng(seed)
@@ -64,31 +87,44 @@ def test_compiled_perception_equals_the_oracles_formulas(seed):
     va = rng.uniform(200, 330, len(eyes))
     vr = rng.uniform(4, 12, len(eyes))
     sr = rng.uniform(0, 3, len(eyes))
-    pc = perceive(eyes, fwd, fish, alive, food, left, kind, center, size, va, vr, sr)
-    # the formulas, target by target in numpy
-    rel = fish[None] - eyes[:, None]
-    d = np.linalg.norm(rel, axis=-1)
-    cos = (rel * fwd[:, None]).sum(-1) / np.maximum(d, 1e-9)
-    half = np.cos(np.radians(va) / 2)[:, None]
-    vf = (d <= vr[:, None]) & (cos >= half) & alive[None]
-    vf &= ~_blocked_by_points(eyes, fish, vf, kind, center, size)
-    np.fill_diagonal(vf, False)
-    assert np.array_equal(pc.fish, np.where(vf, d, np.inf))
-    rel = food[None] - eyes[:, None]
-    dd = np.linalg.norm(rel, axis=-1)
-    cos = (rel * fwd[:, None]).sum(-1) / np.maximum(dd, 1e-9)
-    vd = (dd <= vr[:, None]) & (cos >= half) & left[None]
-    vd &= ~_blocked_by_points(eyes, food, vd, kind, center, size)
-    vd = (vd | (dd <= sr[:, None])) & left[None]
-    assert np.array_equal(pc.food, np.where(vd, dd, np.inf))
-    do = obstacle_distance(eyes, kind, center, size)
-    to_c = center[None] - eyes[:, None]
-    cos = (to_c * fwd[:, None]).sum(-1) / np.maximum(np.linalg.norm(to_c, axis=-1), 1e-9)
-    seen = (do <= vr[:, None]) & ((cos >= half) | (do < 1.0))
-    assert np.array_equal(pc.obstacles, np.where(seen, do, np.inf))
+    args = (eyes, fwd, fish, alive, food, left, kind, center, size, va, vr, sr)
+    pc = perceive(*args)
+    want_fish, want_food, want_obstacles = _oracle(*args)
+    assert np.array_equal(pc.fish, want_fish)
+    assert np.array_equal(pc.food, want_food)
+    assert np.array_equal(pc.obstacles, want_obstacles)
     # the scene is not trivial: some sight lines are blocked, some targets out of view
     assert np.isfinite(pc.fish).sum() > 5 and (np.isinf(pc.fish).sum() > len(eyes))
-    assert _blocked_by_points(eyes, fish, np.ones_like(vf), kind, center, size).any()
+    every = np.ones((len(eyes), len(fish)), bool)
+    assert _blocked_by_points(eyes, fish, every, kind, center, size).any()
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_perception_of_a_wide_crowd_equals_every_pair_tested(seed):
+    # a tank 60 m wide, ranges a tenth of it: the oracle tests only the pairs its grid
+    # finds near each other (``neighbours``), and must perceive exactly what testing every
+    # pair perceives, fishes exactly at the range's edge included
+    rng = np.random.default_rng(seed)
+    eyes, fwd, fish, food, kind, center, size = _scene(rng, n=150, m=150, f=200)
+    eyes = np.round(eyes * [20.0, 4.0, 20.0]) / 4.0  # quarter metres: the edges exact
+    food *= [5.0, 1.0, 5.0]
+    vr = rng.choice([3.0, 6.0], len(eyes))
+    fish = eyes + 0.3 * fwd
+    fish[:20] = eyes[20:40] + [[6.0, 0.0, 0.0]]  # at the edge of eye 20-39's view (if 6 m)
+    fish[20:40] = eyes[20:40] + 0.3 * fwd[20:40]
+    food[:20] = eyes[40:60] - [[0.0, 0.0, 3.0]]  # at the edge of the smell (3 m)
+    alive = rng.random(len(fish)) > 0.1
+    left = rng.random(len(food)) > 0.1
+    va = rng.uniform(200, 330, len(eyes))
+    sr = np.full(len(eyes), 3.0)
+    args = (eyes, fwd, fish, alive, food, left, kind, center, size, va, vr, sr)
+    pc = perceive(*args)
+    want_fish, want_food, want_obstacles = _oracle(*args)
+    assert np.array_equal(pc.fish, want_fish)
+    assert np.array_equal(pc.food, want_food)
+    assert np.array_equal(pc.obstacles, want_obstacles)
+    assert (pc.fish == 6.0).any() and (pc.food == 3.0).any()  # edge pairs perceived
+    assert np.isfinite(pc.fish).sum() > 100 and np.isfinite(pc.food).sum() > 50
 
 
 def test_blocked_with_bounding_boxes_equals_every_point_against_every_obstacle():

@@ -375,11 +375,14 @@ class World:
         animals times the objects (food included)."""
         n_obj, cols = len(self.objects), self._solids.columns
         out = []
+        zeros: dict[tuple[int, ...], np.ndarray] = {}  # one read-only zero view a shape
         for a, body in enumerate(self.bodies):
             shape = (self.batch, body.n_nodes, n_obj, 3)
             got = found.get(a)
             if got is None or not got.any():
-                out.append(np.broadcast_to(0.0, shape))
+                if shape not in zeros:
+                    zeros[shape] = np.broadcast_to(0.0, shape)
+                out.append(zeros[shape])
                 continue
             full = np.zeros(shape)
             full[:, :, cols] = got.transpose(3, 0, 1, 2)

@@ -8,16 +8,21 @@ closed loop (``control.loop``), how deep any fish has gone into a rock or anothe
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import TypeVar
+
 import numpy as np
 
 from zoetic.behavior.aquarium.locomotion import bend_nodes
-from zoetic.behavior.aquarium.perception import obstacle_distance
+from zoetic.behavior.aquarium.perception import deepest_inside
 from zoetic.bodies import Body
 from zoetic.control.loop import Observer
 from zoetic.control.policy import Period
 from zoetic.physics.bodycontact import deepest as deepest_into
 from zoetic.physics.world import World
 from zoetic.tasks.terms import BodyFrame, roll_angle
+
+T = TypeVar("T")
 
 
 def heading_weights(body: Body) -> np.ndarray:
@@ -62,13 +67,22 @@ def kinematics(
     return pos, com, fwd, cv, nose
 
 
+def per_body(of: Callable[[Body], T], bodies: list[Body]) -> list[T]:
+    """Return ``of(body)`` for each body, worked out once for each body object (a tank's
+    fishes of one species share one compiled body: a crowd's thousand fishes ask twice)."""
+    done: dict[int, T] = {}
+    for body in bodies:
+        if id(body) not in done:
+            done[id(body)] = of(body)
+    return [done[id(body)] for body in bodies]
+
+
 def roll_pairs(bodies: list[Body], offsets: np.ndarray) -> list[tuple[np.ndarray, ...]]:
     """Return the fishes' mirror node pairs (``BodyFrame.left``, ``.right``) as indices into
     the world's node array (``offsets``: each fish's first node), grouped by pair count: a
     list of (fishes (k,), left (k, P), right (k, P)); fishes without pairs are left out."""
     groups: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {}
-    for a, body in enumerate(bodies):
-        frame = BodyFrame.of(body)
+    for a, frame in enumerate(per_body(BodyFrame.of, bodies)):
         if len(frame.left):
             o = int(offsets[a])
             groups.setdefault(len(frame.left), []).append((a, o + frame.left, o + frame.right))
@@ -180,12 +194,12 @@ class FishBodies(Observer):
         self.offsets = off.tolist()
         self.masses = [(b.mass, b.total_mass) for b in bodies]
         self.weights = [m / total for m, total in self.masses]
-        self.headings = [heading_weights(b) for b in bodies]
+        self.headings = per_body(heading_weights, bodies)
         self.heads = [b.head for b in bodies]
         self.pairs = roll_pairs(bodies, off)
         self.bends = bend_indices(bodies, off)
         # the bounding spheres of fish_depth
-        self.extent = np.array([1.25 * rest_reach(b) for b in bodies])
+        self.extent = 1.25 * np.array(per_body(rest_reach, bodies))
         self.deepest = 0.0
         self.deepest_fish = 0.0
         self.last_roll: tuple[np.ndarray, float] | None = None  # rolls at the last reading
@@ -225,9 +239,7 @@ class FishBodies(Observer):
         centres, headings, velocities and noses for the next period."""
         allpos = self.nodes(world)
         kind, center, size = self.statics
-        if len(kind):
-            into = float(-obstacle_distance(allpos, kind, center, size).min())
-            self.deepest = max(self.deepest, into)
+        self.deepest = max(self.deepest, deepest_inside(allpos, kind, center, size))
         into_fish = fish_depth(self.bodies, self.split(allpos), self.extent, self.masses)
         self.deepest_fish = max(self.deepest_fish, into_fish)
         self._update(world)

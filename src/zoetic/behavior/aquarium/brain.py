@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 
@@ -112,10 +112,15 @@ class FishBrain:
         self.cruise = min(m.cruise_speed, self.top)
         self.radius = self.locomotion.turn_radius
         self.constants = species.fear_constants()
-        self.tempers = Tempers.of([self.constants], [species.habits], [species.predator])
         self.alive = True
         self.avoid_side = 0
         self.reset(0)
+
+    @cached_property
+    def tempers(self) -> Tempers:
+        """Return the mind's tempers for ``decide`` (one fish; a tank's ``Shoal`` keeps all
+        its fishes' at once, so a crowd's brains never work out their own)."""
+        return Tempers.of([self.constants], [self.species.habits], [self.species.predator])
 
     def reset(self, seed: int | None = None) -> None:
         """Start a life: a fresh mind with the species' initial hunger, a reseeded wander."""

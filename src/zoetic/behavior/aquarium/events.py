@@ -119,6 +119,10 @@ class Events(Observer):
         from the bodies at the period's end."""
         com, pos, nose, brains = self.bodies.com, self.bodies.pos, self.bodies.nose, self.brains
         near = near_pairs(com, np.full(len(com), NEAR / 2))  # i < j, nearer than NEAR
+        # the pairs surely too far apart to mate (their centres' distance, all at once, over
+        # MATE_NEAR by more than its rounding): the others' distance is taken one by one
+        gap = np.sqrt(((com[near[:, 0]] - com[near[:, 1]]) ** 2).sum(axis=1))
+        far = set(map(tuple, near[gap > MATE_NEAR * (1.0 + 1e-9)].tolist()))
         both = np.concatenate([near, near[:, ::-1]])
         for i, j in both[np.lexsort((both[:, 1], both[:, 0]))].tolist():
             f, g = self.species[i], self.species[j]
@@ -130,7 +134,9 @@ class Events(Observer):
                     brains[i].ate(t, 3.0)
                     self.log.append((t, self.names[i], "catch", self.names[j]))
                     continue
-            if j < i or f.name != g.name or float(np.linalg.norm(com[i] - com[j])) >= MATE_NEAR:
+            if j < i or f.name != g.name or (i, j) in far:
+                continue
+            if float(np.linalg.norm(com[i] - com[j])) >= MATE_NEAR:
                 continue
             courting = "mate" in (brains[i].thought.intention, brains[j].thought.intention)
             if courting and brains[i].willing(t) and brains[j].willing(t):

@@ -10,8 +10,10 @@ body can).
 
 from __future__ import annotations
 
+import os
 import weakref
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import Protocol
 
@@ -283,11 +285,18 @@ def learned_activations(
 _LEARNED_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # body -> {dir: motor}
 
 
+@lru_cache(maxsize=64)
+def _resolved(directory: str, cwd: str) -> str:
+    """Return the absolute path of ``directory`` (relative to ``cwd``, the working directory
+    it was named in), links resolved: once for a tank's thousand fishes of one species."""
+    return str(Path(cwd, directory).resolve())
+
+
 def learned_motor(body: Body, directory: str | Path) -> LearnedMotor:
     """Return ``LearnedMotor.calibrate`` on the repertoire in ``directory`` (checked against
     the body), cached per body object and directory for the process (a tank of one species
     calibrates once; an edited body is another object, calibrated afresh)."""
-    where = str(Path(directory).resolve())
+    where = _resolved(str(directory), os.getcwd())
     cached = _LEARNED_CACHE.setdefault(body, {})
     if where not in cached:
         cached[where] = LearnedMotor.calibrate(body, Repertoire.load(directory, body))

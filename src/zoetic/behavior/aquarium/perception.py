@@ -17,6 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from zoetic.behavior.aquarium.neighbours import near_pairs
+
 STEP = 0.25  # m between occlusion probes along a sight line
 
 
@@ -74,56 +76,114 @@ def _bounds(kind, center, size):
 
 @njit(cache=True)
 def _blocked(eyes, targets, ask, kind, center, size, step, out) -> None:
-    """Set out[e, t] for the pairs asked (ask (n, m) bools) whose segment from eye e to target
-    t passes inside an obstacle at one of the k - 1 inner points i/k (k from the longest
-    segment asked, as ``blocked`` documents). Only the obstacles whose bounding box meets the
-    segment's are probed (no point of the segment can lie inside the others); a segment stops
-    at its first point inside."""
+    """Set out[e, t] for the pairs asked (ask (n, m) bools) whose segment from eye e to
+    target t is blocked (``_blocked_pairs``)."""
+    rows, cols = np.nonzero(ask)
+    hit = np.zeros(rows.shape[0], np.bool_)
+    _blocked_pairs(eyes, targets, rows, cols, np.ones(rows.shape[0], np.bool_), kind, center,
+                   size, step, hit)  # fmt: skip
+    for q in range(rows.shape[0]):
+        out[rows[q], cols[q]] = hit[q]
+
+
+@njit(cache=True)
+def _blocked_pairs(eyes, targets, rows, cols, ask, kind, center, size, step, out) -> None:
+    """Set out[q] for the pairs q asked (eye rows[q], target cols[q]; ask (K,) bools) whose
+    segment from the eye to the target passes inside an obstacle at one of the k - 1 inner
+    points i/k (k from the longest segment asked, as ``blocked`` documents). Only the
+    obstacles whose bounding box meets the segment's are probed (no point of the segment can
+    lie inside the others); a segment stops at its first point inside."""
     longest = 0.0
-    for e in range(ask.shape[0]):
-        for t in range(ask.shape[1]):
-            if ask[e, t]:
-                a0 = targets[t, 0] - eyes[e, 0]
-                a1 = targets[t, 1] - eyes[e, 1]
-                a2 = targets[t, 2] - eyes[e, 2]
-                longest = max(longest, math.sqrt(a0 * a0 + a1 * a1 + a2 * a2))
+    for q in range(rows.shape[0]):
+        if ask[q]:
+            e, t = rows[q], cols[q]
+            a0 = targets[t, 0] - eyes[e, 0]
+            a1 = targets[t, 1] - eyes[e, 1]
+            a2 = targets[t, 2] - eyes[e, 2]
+            longest = max(longest, math.sqrt(a0 * a0 + a1 * a1 + a2 * a2))
     k = max(2, int(math.ceil(longest / step)))
     lo, hi = _bounds(kind, center, size)
     near = np.empty(kind.shape[0], np.int64)
-    for e in range(ask.shape[0]):
-        for t in range(ask.shape[1]):
-            if not ask[e, t]:
-                continue
-            m = 0
+    # the obstacles whose bounding box comes within the longest segment of the eye (no
+    # segment asked reaches farther; a margin over its rounding), for the eye asked last
+    reach = longest * (1.0 + 1e-9) + 1e-9
+    around, count, last = np.empty(kind.shape[0], np.int64), 0, -1
+    for q in range(rows.shape[0]):
+        if not ask[q]:
+            continue
+        e, t = rows[q], cols[q]
+        if e != last:
+            last, count = e, 0
             for s in range(kind.shape[0]):
                 apart = False
                 for c in range(3):
-                    if (
-                        max(eyes[e, c], targets[t, c]) < lo[s, c]
-                        or min(eyes[e, c], targets[t, c]) > hi[s, c]
-                    ):
+                    if eyes[e, c] + reach < lo[s, c] or eyes[e, c] - reach > hi[s, c]:
                         apart = True
                 if not apart:
-                    near[m] = s
-                    m += 1
-            if m == 0:
-                continue
-            s0 = targets[t, 0] - eyes[e, 0]
-            s1 = targets[t, 1] - eyes[e, 1]
-            s2 = targets[t, 2] - eyes[e, 2]
-            hit = False
-            for i in range(1, k):
-                u = i / k
-                x0 = eyes[e, 0] + u * s0
-                x1 = eyes[e, 1] + u * s1
-                x2 = eyes[e, 2] + u * s2
-                for q in range(m):
-                    if _sdf1(x0, x1, x2, kind, center, size, near[q]) < 0.0:
-                        hit = True
-                        break
-                if hit:
+                    around[count] = s
+                    count += 1
+        m = 0
+        for r in range(count):
+            s = around[r]
+            apart = False
+            for c in range(3):
+                if (
+                    max(eyes[e, c], targets[t, c]) < lo[s, c]
+                    or min(eyes[e, c], targets[t, c]) > hi[s, c]
+                ):
+                    apart = True
+            if not apart:
+                near[m] = s
+                m += 1
+        if m == 0:
+            continue
+        s0 = targets[t, 0] - eyes[e, 0]
+        s1 = targets[t, 1] - eyes[e, 1]
+        s2 = targets[t, 2] - eyes[e, 2]
+        hit = False
+        for i in range(1, k):
+            u = i / k
+            x0 = eyes[e, 0] + u * s0
+            x1 = eyes[e, 1] + u * s1
+            x2 = eyes[e, 2] + u * s2
+            for r in range(m):
+                if _sdf1(x0, x1, x2, kind, center, size, near[r]) < 0.0:
+                    hit = True
                     break
-            out[e, t] = hit
+            if hit:
+                break
+        out[q] = hit
+
+
+@njit(cache=True)
+def _deepest(p, kind, center, size) -> float:
+    """Return ``deepest_inside`` of the points p (P, 3)."""
+    lo, hi = _bounds(kind, center, size)
+    out = 0.0
+    for i in range(p.shape[0]):
+        for s in range(kind.shape[0]):
+            inside = True
+            for c in range(3):
+                if p[i, c] < lo[s, c] or p[i, c] > hi[s, c]:
+                    inside = False
+            if inside:
+                out = max(out, -_sdf1(p[i, 0], p[i, 1], p[i, 2], kind, center, size, s))
+    return out
+
+
+def deepest_inside(points: np.ndarray, kind, center, size) -> float:
+    """Return how deep (m) the deepest of the points (P, 3) lies inside an obstacle (0 when
+    none does): minus the least signed distance (``obstacle_distance``) where it is below 0,
+    the signed distances worked out only for the points within an obstacle's bounding box
+    (a point outside every box is outside every obstacle)."""
+    if len(kind) == 0 or len(points) == 0:
+        return 0.0
+    return _deepest(
+        np.ascontiguousarray(points, float).reshape(-1, 3),
+        np.asarray(kind, np.int64),
+        np.ascontiguousarray(center, float),
+        np.ascontiguousarray(size, float),
+    )
 
 
 def obstacle_distance(points: np.ndarray, kind, center, size) -> np.ndarray:
@@ -164,20 +224,24 @@ def blocked(
 
 
 @njit(cache=True)
+def _look(eyes, forwards, targets, i, j, cos_half, view_range):
+    """Return the distance from eye i to target j and whether it lies within the eye's range
+    and view cone (cos_half: the cosine of its half angle)."""
+    r0 = targets[j, 0] - eyes[i, 0]
+    r1 = targets[j, 1] - eyes[i, 1]
+    r2 = targets[j, 2] - eyes[i, 2]
+    dist = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+    cos = (r0 * forwards[i, 0] + r1 * forwards[i, 1] + r2 * forwards[i, 2]) / max(dist, 1e-9)
+    return dist, dist <= view_range[i] and cos >= cos_half[i]
+
+
+@njit(cache=True)
 def _in_view(eyes, forwards, targets, cos_half, view_range, d, ok) -> None:
     """Fill d (n, m) with the distances from the eyes to the targets and ok with whether each
-    lies within the eye's range and view cone (cos_half: the cosine of its half angle)."""
+    lies within the eye's range and view cone (``_look``)."""
     for i in range(eyes.shape[0]):
         for j in range(targets.shape[0]):
-            r0 = targets[j, 0] - eyes[i, 0]
-            r1 = targets[j, 1] - eyes[i, 1]
-            r2 = targets[j, 2] - eyes[i, 2]
-            dist = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
-            cos = (r0 * forwards[i, 0] + r1 * forwards[i, 1] + r2 * forwards[i, 2]) / max(
-                dist, 1e-9
-            )
-            d[i, j] = dist
-            ok[i, j] = dist <= view_range[i] and cos >= cos_half[i]
+            d[i, j], ok[i, j] = _look(eyes, forwards, targets, i, j, cos_half, view_range)
 
 
 def in_view(eyes, forwards, targets, view_angle, view_range) -> tuple[np.ndarray, np.ndarray]:
@@ -235,13 +299,20 @@ def perceive(
     fish, food_d = np.empty((n, len(fish_centers))), np.empty((n, len(food)))
     kind = np.asarray(kind, np.int64)
     obst = np.empty((n, len(kind)))
+    eyes = np.ascontiguousarray(eyes, float)
+    fish_centers = np.ascontiguousarray(fish_centers, float)
+    # only the pairs within range: nothing farther is seen or smelled (``neighbours``)
+    fish_pairs = near_pairs(eyes, fish_centers, float(vr.max(initial=0.0)))
+    food_pairs = near_pairs(eyes, food, float(max(vr.max(initial=0.0), sr.max(initial=0.0))))
     _perceive(
-        np.ascontiguousarray(eyes, float),
+        eyes,
         np.ascontiguousarray(forwards, float),
-        np.ascontiguousarray(fish_centers, float),
+        fish_centers,
         np.asarray(alive, bool),
         food,
         np.asarray(food_left, bool).reshape(-1),
+        fish_pairs,
+        food_pairs,
         kind,
         np.ascontiguousarray(center, float).reshape(-1, 3),
         np.ascontiguousarray(size, float).reshape(-1, 3),
@@ -257,20 +328,18 @@ def perceive(
 
 
 @njit(cache=True)
-def _seen(eyes, forwards, targets, present, kind, center, size, cos_half, vr, step):
-    """Return the distances (n, m) from the eyes to the targets and whether each target is
-    seen: present, within the eye's range and view cone, and not hidden by an obstacle."""
-    n, m = eyes.shape[0], targets.shape[0]
-    d, seen = np.empty((n, m)), np.empty((n, m), np.bool_)
-    _in_view(eyes, forwards, targets, cos_half, vr, d, seen)
-    for i in range(n):
-        for j in range(m):
-            seen[i, j] = seen[i, j] and present[j]
-    hid = np.zeros((n, m), np.bool_)
-    _blocked(eyes, targets, seen, kind, center, size, step, hid)
-    for i in range(n):
-        for j in range(m):
-            seen[i, j] = seen[i, j] and not hid[i, j]
+def _seen(eyes, forwards, targets, present, rows, cols, kind, center, size, cos_half, vr, step):
+    """Return for the pairs (eye rows[q], target cols[q]) the distances from the eye to the
+    target and whether the target is seen: present, within the eye's range and view cone,
+    and not hidden by an obstacle."""
+    d, seen = np.empty(rows.shape[0]), np.empty(rows.shape[0], np.bool_)
+    for q in range(rows.shape[0]):
+        d[q], seen[q] = _look(eyes, forwards, targets, rows[q], cols[q], cos_half, vr)
+        seen[q] = seen[q] and present[cols[q]]
+    hid = np.zeros(rows.shape[0], np.bool_)
+    _blocked_pairs(eyes, targets, rows, cols, seen, kind, center, size, step, hid)
+    for q in range(rows.shape[0]):
+        seen[q] = seen[q] and not hid[q]
     return d, seen
 
 
@@ -282,6 +351,8 @@ def _perceive(
     alive,
     food,
     left,
+    fish_pairs,
+    food_pairs,
     kind,
     center,
     size,
@@ -294,18 +365,27 @@ def _perceive(
     obst,
 ) -> None:
     """``perceive`` compiled: fill fish (n, n), food_d (n, F) and obst (n, S) with the
-    distances perceived (inf where not)."""
-    n, m, f = eyes.shape[0], centers.shape[0], food.shape[0]
-    df, vf = _seen(eyes, forwards, centers, alive, kind, center, size, cos_half, vr, step)
-    for i in range(n):
-        for j in range(m):
-            fish[i, j] = df[i, j] if vf[i, j] and i != j else np.inf
-    if f:
-        dd, vd = _seen(eyes, forwards, food, left, kind, center, size, cos_half, vr, step)
-        for i in range(n):
-            for j in range(f):
-                ok = vd[i, j] or dd[i, j] <= sr[i]
-                food_d[i, j] = dd[i, j] if ok and left[j] else np.inf
+    distances perceived (inf where not), testing only the pairs ``fish_pairs`` and
+    ``food_pairs`` (rows, cols: every pair within range among them)."""
+    n = eyes.shape[0]
+    rows, cols = fish_pairs
+    df, vf = _seen(
+        eyes, forwards, centers, alive, rows, cols, kind, center, size, cos_half, vr, step
+    )
+    fish[:, :] = np.inf
+    for q in range(rows.shape[0]):
+        if vf[q] and rows[q] != cols[q]:
+            fish[rows[q], cols[q]] = df[q]
+    food_d[:, :] = np.inf
+    rows, cols = food_pairs
+    if food.shape[0]:
+        dd, vd = _seen(
+            eyes, forwards, food, left, rows, cols, kind, center, size, cos_half, vr, step
+        )
+        for q in range(rows.shape[0]):
+            i, j = rows[q], cols[q]
+            if (vd[q] or dd[q] <= sr[i]) and left[j]:
+                food_d[i, j] = dd[q]
     for i in range(n):
         for s in range(kind.shape[0]):
             # the nearest surface point of each obstacle, seen from the eye
