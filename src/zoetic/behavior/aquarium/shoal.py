@@ -316,6 +316,7 @@ class Shoal:
         )
         on = right_of_way(threat, meals)
         sides[on], near[on] = 0, np.inf  # the other fish yields: this one swims on to its food
+        sides = yield_sides(threat, on, fb.com, fb.fwd, sides)
         # no obstacle within CLEARANCE of a probe and no fish threatening: nothing ahead
         # (``collision_ahead``'s answer, without asking it for every fish of a crowd)
         rocks = (ahead.min(axis=(1, 2)) < CLEARANCE).tolist() if len(kind) else [False] * len(sides)
@@ -393,6 +394,40 @@ def right_of_way(threat: np.ndarray, meals: list[float | None]) -> np.ndarray:
     mutual = (threat >= 0) & (threat[other] == np.arange(n))
     first = (meal < meal[other]) | ((meal == meal[other]) & (np.arange(n) < other))
     return mutual & np.isfinite(meal) & first
+
+
+# |cos| between a yielding fish's heading and the eater's over which it turns off the eater's
+# line (nearly along it or against it); across it, turning does not take it off the line
+ALONG_COS = 0.5
+
+
+def yield_sides(
+    threat: np.ndarray, on: np.ndarray, com: np.ndarray, forward: np.ndarray, sides: np.ndarray
+) -> np.ndarray:
+    """Return the sides (n,) to turn to (+1 left, -1 right) with each yielding fish's side
+    off the line of the eater it yields to (``right_of_way``): to the side of the eater's
+    heading line the yielder's centre lies on, so that it moves out of the eater's way.
+
+    The closest approach foreseen from the velocities sways with each tail beat: a yielder
+    head on turned one way and the other and stopped on the eater's line. The eater's line
+    (its centre and heading) does not sway. A yielder swimming across the eater's line
+    (headings more than 60 degrees apart), or on it, keeps ``sides``. threat (n,): each
+    fish's threat (-1 none); on (n,) bools: the fishes with the right of way; com, forward
+    (n, 3)."""
+    k = np.where(threat >= 0, threat, 0)
+    yields = (threat >= 0) & on[k] & ~on
+    if not yields.any():
+        return sides
+    f = forward.copy()
+    f[:, 1] = 0.0
+    f /= np.maximum(np.linalg.norm(f, axis=1, keepdims=True), 1e-9)
+    left = np.stack([-f[:, 2], np.zeros(len(f)), f[:, 0]], axis=1)
+    offset = np.einsum("nc,nc->n", com - com[k], left[k])  # m left of the eater's line
+    along = np.einsum("nc,nc->n", left, left[k])  # the eater's left seen from the yielder
+    off = yields & (np.abs(along) > ALONG_COS) & (np.abs(offset) > 1e-3)
+    out = np.array(sides)
+    out[off] = (np.sign(offset) * np.sign(along))[off].astype(out.dtype)
+    return out
 
 
 def activations(
