@@ -1,6 +1,7 @@
 """Foraging that avoidance does not cost: of two fishes on a collision course the one going
-for food keeps its course and the other yields (``shoal.right_of_way``); a particle near and
-well off the heading is turned to on the spot (``routines.go_to``)."""
+for food keeps its course and the other yields (``shoal.right_of_way``), turning off the
+eater's way to the side it lies on (``shoal.yield_sides``); a particle near and well off the
+heading is turned to on the spot (``routines.go_to``)."""
 
 from __future__ import annotations
 
@@ -110,8 +111,9 @@ def test_a_minnow_eats_a_particle_beside_it_instead_of_circling_it():
 def test_a_yielding_fish_turns_off_the_eaters_line_to_the_side_it_lies_on():
     from zoetic.behavior.aquarium.shoal import yield_sides
 
-    # fish 0 eats heading +x with the right of way over fish 1, which comes head on 0.1 m to
-    # 0's left (+z): 1 turns to 0's left, its own right (-1), whatever the side it had
+    # fish 0 eats along +x (its way to its particle) with the right of way over fish 1, which
+    # comes head on 0.1 m to 0's left (+z): 1 turns to 0's left, its own right (-1), whatever
+    # the side it had
     f = np.array([1.0, 0.0, 0.0])
     com = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.1]])
     fwd = np.stack([f, -f])
@@ -127,7 +129,12 @@ def test_a_yielding_fish_turns_off_the_eaters_line_to_the_side_it_lies_on():
     fwd[1] = [0.0, 0.0, 1.0]
     assert yield_sides(threat, on, com, fwd, np.array([0, -1])).tolist() == [0, -1]
     fwd[1] = -f
-    assert yield_sides(threat, ~on & False, com, fwd, np.array([1, 1])).tolist() == [1, 1]
+    assert yield_sides(threat, np.zeros(2, bool), com, fwd, np.array([1, 1])).tolist() == [1, 1]
+    # the eater's way is to its particle, not its heading: turning to a particle ahead on its
+    # left (its way along x + z), the yielder 0.1 m to the left of its heading lies right of
+    # that way: it turns to the eater's right, its own left (+1)
+    ways = np.stack([np.array([1.0, 0.0, 1.0]), -f])
+    assert yield_sides(threat, on, com, ways, np.array([0, -1])).tolist() == [0, 1]
 
 
 def test_the_fish_that_yields_head_on_moves_off_the_eaters_line(monkeypatch):
