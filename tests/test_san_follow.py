@@ -69,12 +69,12 @@ def test_a_fish_world_chases_the_path_its_creature_defines():
     assert np.linalg.norm(r.follow[-1] - r.follow[0]) > 0.9 * fish.follow_speed * 4.0
 
 
-def test_pursuit_trains_on_sharp_turns_both_ways_and_tests_on_unseen_splines():
+def test_pursuit_trains_on_a_sharp_turn_and_tests_on_unseen_splines():
     exp = _pursuit_experiment()
     fish = load_creature("fish")
     fish = dataclasses.replace(fish, follow_speed=exp.POINT_SPEED["fish"])
     turns = np.array([exp.sharpest_turns_deg(fish, s) for s in exp.TRAIN])
-    assert turns[:, 0].max() >= 45 and turns[:, 1].max() >= 45  # left and right
+    assert turns.max() >= 45  # a turn the SAN must make hard
     unseen = set(exp.UNSEEN) | set(exp.SEEDS[1:])
     assert exp.SEEDS[0] in exp.TRAIN and not unseen & set(exp.TRAIN)
 
