@@ -39,9 +39,33 @@ class FollowPath:
         self.arc = np.concatenate([[0.0], np.cumsum(seg)])
         self.speed = speed
 
+    @classmethod
+    def for_creature(
+        cls, creature, start: np.ndarray, seed: int, seconds: float, lateral: bool
+    ) -> FollowPath:
+        """Return the path a ``creature`` run of ``seconds`` chases from ``start`` [x, z]: long
+        enough for the point to keep moving at the creature's follow speed to the end."""
+        length = creature.follow_speed * max(seconds, 1.0) * 1.5 + 2.0
+        return cls(start, creature.follow_lead, creature.follow_speed, length, seed, lateral)
+
     def at(self, t: float) -> np.ndarray:
         """Return the follow point [x, z] at time ``t`` (s)."""
         s = self.speed * t
         return np.array(
             [np.interp(s, self.arc, self.points[:, 0]), np.interp(s, self.arc, self.points[:, 1])]
         )
+
+    def turns(self, window: float, upto: float) -> tuple[float, float]:
+        """Return the sharpest turns (rad) to the left (+z) and to the right of the point's
+        heading over any ``window`` m of arc within its first ``upto`` m: how hard a pursuer
+        must turn each way (both >= 0)."""
+        step = min(0.02, window / 4.0)
+        s = np.arange(0.0, min(upto, self.arc[-1]) + step / 2, step)
+        xs = np.interp(s, self.arc, self.points[:, 0])
+        zs = np.interp(s, self.arc, self.points[:, 1])
+        heading = np.unwrap(np.arctan2(np.diff(zs), np.diff(xs)))
+        w = max(1, int(round(window / step)))
+        if heading.size <= w:
+            return 0.0, 0.0
+        change = heading[w:] - heading[:-w]
+        return max(0.0, float(change.max())), max(0.0, float(-change.min()))

@@ -375,10 +375,7 @@ class World:
         com0 = self.com()
         path = None
         if self.follow_on:
-            length = c.follow_speed * max(seconds, 1.0) * 1.5 + 2.0
-            path = FollowPath(
-                com0, c.follow_lead, c.follow_speed, length, self.seed, lateral=not self.vertical
-            )
+            path = FollowPath.for_creature(c, com0, self.seed, seconds, not self.vertical)
         kind = c.metric if (c.metric != "follow" or path is not None) else "distance"
         return angle0, com0, path, kind
 
