@@ -95,9 +95,10 @@ class Drive:
             LaneGroup(idx, models[idx[0]], (*state, batch), first, bodies[idx[0]].n_actuators)
             for idx in keys.values()
         ]
-        self.group_of = np.zeros(len(bodies), np.int64)
+        self.group_of = [0] * len(bodies)  # each animal's group
         for g, grp in enumerate(self.groups):
-            self.group_of[grp.members] = g
+            for a in grp.members:
+                self.group_of[a] = g
         self._tables: dict[tuple[int, int], tuple[np.ndarray, tuple]] = {}
         self._wide: dict[tuple[int, int], np.ndarray] = {}  # (group, steps) -> its table
 
@@ -120,7 +121,7 @@ class Drive:
         alone in its group by its own stepper, the others of a group as lanes of one call."""
         picked: dict[int, list[int]] = {}
         for a in animals:
-            picked.setdefault(int(self.group_of[a]), []).append(a)
+            picked.setdefault(self.group_of[a], []).append(a)
         for g, members in picked.items():
             grp = self.groups[g]
             if len(grp.members) == 1:
@@ -167,7 +168,7 @@ class Drive:
     def _view(self, a: int, steps: int) -> np.ndarray:
         """Return animal a's (T, A, B) columns of its group's table for ``steps`` steps (the
         whole table, C-contiguous, for an animal alone in its group)."""
-        g = int(self.group_of[a])
+        g = self.group_of[a]
         grp = self.groups[g]
         wide = self._wide.get((g, steps))
         if wide is None:
