@@ -69,6 +69,16 @@ def kind_of(c: dict) -> str:
     return "side by side"
 
 
+def _errand(life, k0: int, k: int, i: int) -> list:
+    """Return fish i's last intention other than avoid over brain periods k0..k and its
+    target then (-1: none); ["avoid", -1] when it avoided throughout."""
+    avoid = INTENTIONS.index("avoid")
+    for m in range(k, k0 - 1, -1):
+        if life.intentions[m, i] != avoid:
+            return [INTENTIONS[life.intentions[m, i]], int(life.targets[m, i])]
+    return ["avoid", -1]
+
+
 def describe(tank, life, t: float, a: str, b: str) -> dict:
     """Return what the two fishes did at the collision at time t."""
     names = [f.name for f in tank.fishes]
@@ -92,6 +102,9 @@ def describe(tank, life, t: float, a: str, b: str) -> dict:
         "t": round(t, 1),
         "pair": [tank.fishes[i].species.name, tank.fishes[j].species.name],
         "intentions": [INTENTIONS[life.intentions[k, i]], INTENTIONS[life.intentions[k, j]]],
+        # each fish's errand (its last intention other than avoid in the 2 s before, and its
+        # target then: a food particle for eat): two fishes after one particle show here
+        "errands": [_errand(life, k0, k, i), _errand(life, k0, k, j)],
         "avoided_before": [
             bool((life.intentions[k0:k, i] == avoid).any()),
             bool((life.intentions[k0:k, j] == avoid).any()),

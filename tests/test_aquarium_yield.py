@@ -1,6 +1,7 @@
 """Foraging that avoidance does not cost: of two fishes on a collision course the one going
-for food keeps its course and the other yields (``shoal.right_of_way``); a particle near and
-well off the heading is turned to on the spot (``routines.go_to``)."""
+for food keeps its course and the other yields (``shoal.right_of_way``), turning off the
+eater's way to the side it lies on (``shoal.yield_sides``); a particle near and well off the
+heading is turned to on the spot (``routines.go_to``)."""
 
 from __future__ import annotations
 
@@ -105,3 +106,61 @@ def test_a_minnow_eats_a_particle_beside_it_instead_of_circling_it():
     tank = tk.Tank(cfg, world, t.fishes, t.kind, t.center, t.size, t.static_names)
     life = live(tank)
     assert [e[2] for e in life.events if e[2] == "eat"] == ["eat"]
+
+
+def test_a_yielding_fish_turns_off_the_eaters_line_to_the_side_it_lies_on():
+    from zoetic.behavior.aquarium.shoal import yield_sides
+
+    # fish 0 eats along +x (its way to its particle) with the right of way over fish 1, which
+    # comes head on 0.1 m to 0's left (+z): 1 turns to 0's left, its own right (-1), whatever
+    # the side it had
+    f = np.array([1.0, 0.0, 0.0])
+    com = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.1]])
+    fwd = np.stack([f, -f])
+    threat, on = np.array([1, 0]), np.array([True, False])
+    for had in (1, -1):
+        assert yield_sides(threat, on, com, fwd, np.array([0, had])).tolist() == [0, -1]
+    # on 0's right (-z): its own left; swimming the same way as the eater on its left: left
+    com[1, 2] = -0.1
+    assert yield_sides(threat, on, com, fwd, np.array([0, -1])).tolist() == [0, 1]
+    com[1, 2], fwd[1] = 0.1, f
+    assert yield_sides(threat, on, com, fwd, np.array([0, -1])).tolist() == [0, 1]
+    # crossing the eater's line square: its side is kept; no right of way: nothing changes
+    fwd[1] = [0.0, 0.0, 1.0]
+    assert yield_sides(threat, on, com, fwd, np.array([0, -1])).tolist() == [0, -1]
+    fwd[1] = -f
+    assert yield_sides(threat, np.zeros(2, bool), com, fwd, np.array([1, 1])).tolist() == [1, 1]
+    # the eater's way is to its particle, not its heading: turning to a particle ahead on its
+    # left (its way along x + z), the yielder 0.1 m to the left of its heading lies right of
+    # that way: it turns to the eater's right, its own left (+1)
+    ways = np.stack([np.array([1.0, 0.0, 1.0]), -f])
+    assert yield_sides(threat, on, com, ways, np.array([0, -1])).tolist() == [0, 1]
+
+
+def test_the_fish_that_yields_head_on_moves_off_the_eaters_line(monkeypatch):
+    # the right of way's head-on pair (0.1 m aside): the yielder turned by the foreseen
+    # closest approach, which sways with each tail beat, one way and the other, stopped on
+    # the eater's line (0.09 m off it after 7 s) and the eater avoided it for 3 s; turned
+    # off the eater's line to the side it lies on, it is clear of it within 7 s
+    from zoetic.physics.objects import Food
+    from zoetic.physics.world import World
+
+    def brains(*args):
+        out = tank_brains(*args)
+        out[1].mind = initial_mind(0.0, out[1].species.mind.hunger_rate)
+        return out
+
+    monkeypatch.setattr(tk, "tank_brains", brains)
+    cfg = TankConfig(fishes=2, predators=0, food=0, obstacles=0, seconds=7.0, seed=0, half_size=8.0)
+    t = build_tank(cfg)
+    world = World([*t.world.animals, *t.world.statics, Food(FOOD, 0.25)], medium="water")
+    tank = tk.Tank(cfg, world, t.fishes, t.kind, t.center, t.size, t.static_names)
+    poses = [((-2.0, 0.0, 0.0), 0.0), ((1.0, 0.0, 0.1), np.pi)]
+    cruise_from(world, tank.fishes[0].body, poses, tank.fishes[0].species.motor.cruise_speed)
+    life = live(tank)
+    avoid = INTENTIONS.index("avoid")
+    # the yielder ends on the side of the eater's line (z = 0) it started on, a body width
+    # and more off it; the eater avoided it for under 2 s of the 7
+    assert life.positions[1].mean(axis=1)[-1, 2] > 0.3
+    assert (life.intentions[:, 0] == avoid).sum() * cfg.control_period < 2.0
+    assert not [e for e in life.events if e[2] == "collision"]

@@ -381,3 +381,21 @@ def test_each_chunk_of_lanes_reads_its_own_activations():
     assert np.array_equal(alone[..., 0], whole[..., 13])
     # and the lanes did differ: each followed its own activations
     assert np.abs(whole[..., 13] - whole[..., 3]).max() > 1e-3
+
+
+def test_a_batch_of_16_lanes_or_more_is_never_cut_into_chunks_of_fewer():
+    """Chunks under SPLIT_LANES take the kernel's one-animal path, slow for several lanes: a
+    stunt search's 16 plans must run as one chunk of 16, not two of 8 (one per thread)."""
+    from zoetic.physics.kernel_terms import SPLIT_LANES
+    from zoetic.physics.simulate import chunk_size
+
+    for threads in (1, 2, 3, 4, 16):
+        for batch in range(1, 600):
+            c = chunk_size(batch, threads)
+            assert c % 8 == 0 and 8 <= c <= 512
+            assert c * threads >= batch or c == 512  # every lane in one thread's chunk
+            if batch >= SPLIT_LANES:
+                assert c >= SPLIT_LANES, (batch, threads, c)
+            if batch < 2 * SPLIT_LANES:
+                assert c >= batch, (batch, threads, c)  # one chunk
+    assert chunk_size(16, 2) == 16

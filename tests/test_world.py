@@ -208,7 +208,7 @@ def test_a_big_batch_in_one_long_slice_takes_the_threaded_kernel_and_agrees():
 
 def test_many_lanes_in_short_slices_step_chunk_by_chunk_in_place_and_agree():
     body = load_animal("shark")
-    batch, steps = 20, 40  # short slices take the one-thread kernel through 3 chunks of 8
+    batch, steps = 40, 40  # short slices take the one-thread kernel through 2 chunks (24, 16)
     rng = np.random.default_rng(2)
     table = np.repeat(rng.random((batch, steps // 10, body.n_actuators)), 10, axis=1)
     world = World([body], batch=batch)

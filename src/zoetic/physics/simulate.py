@@ -203,14 +203,20 @@ def _threads() -> int:
 
 
 def chunk_size(batch: int, threads: int | None = None) -> int:
-    """Return the lanes per thread chunk: one chunk per thread, a multiple of 8, at most 512.
+    """Return the lanes per thread chunk: one chunk per thread, a multiple of 8, at most 512,
+    and no more chunks than whole ``SPLIT_LANES`` fit in the batch.
 
     Long chunks amortise each spring's and panel's loop set-up over more SIMD lanes; at 512
     lanes a chunk's state is about 0.4 MB and still sits in L2 (measured: 256 lanes per thread
-    run 1.5x faster than 64).
+    run 1.5x faster than 64). A chunk under ``SPLIT_LANES`` takes the kernel's one-animal path,
+    many times slower a lane when it holds several (docs/performance.md), so a batch of 16 to
+    31 lanes (a stunt search's 16 plans) is one chunk, not two of 8.
     """
+    from zoetic.physics.kernel_terms import SPLIT_LANES
+
     threads = threads or _threads()
-    per = -(-batch // threads)
+    chunks = max(1, min(threads, batch // SPLIT_LANES))
+    per = -(-batch // chunks)
     return int(min(512, max(8, -(-per // 8) * 8)))
 
 

@@ -37,7 +37,7 @@ from zoetic.behavior.aquarium.routines import (
     wander,
 )
 from zoetic.behavior.aquarium.species import Species
-from zoetic.behavior.aquarium.steering import avoid_many, go_to_many, keep_depths
+from zoetic.behavior.aquarium.steering import avoid_many, flats, go_to_many, keep_depths
 from zoetic.behavior.mind import MindState, Situations, Tempers, drives_many, think_many
 from zoetic.control.policy import Period
 from zoetic.physics.world import World
@@ -158,7 +158,7 @@ class Shoal:
         food = world.food_positions[0]
         pc, seen = self.perceive(world, alive, food)
         selves, meals = self._selves(pc)
-        hits, aways, threats, fish_only = self._ahead(pc, selves, meals, alive)
+        hits, aways, threats, fish_only = self._ahead(pc, selves, meals, alive, food)
         sits, predators = situations(
             pc.fish, pc.food, pc.obstacles, *self.masks, *self.habits, hits, fish_only
         )
@@ -294,7 +294,12 @@ class Shoal:
         return selves, meals
 
     def _ahead(
-        self, pc: Percepts, selves: list[Me], meals: list[float | None], alive: np.ndarray
+        self,
+        pc: Percepts,
+        selves: list[Me],
+        meals: list[float | None],
+        alive: np.ndarray,
+        food: np.ndarray,
     ) -> tuple[list[bool], list[np.ndarray | None], list[float], list[bool]]:
         """Return for each fish whether an obstacle or fish lies ahead, the way out, how
         far (m) a threatening fish is (inf: none), and whether only a fish threatens (no
@@ -316,6 +321,7 @@ class Shoal:
         )
         on = right_of_way(threat, meals)
         sides[on], near[on] = 0, np.inf  # the other fish yields: this one swims on to its food
+        sides = yield_sides(threat, on, fb.com, self._ways(on, food), sides)
         # no obstacle within CLEARANCE of a probe and no fish threatening: nothing ahead
         # (``collision_ahead``'s answer, without asking it for every fish of a crowd)
         rocks = (ahead.min(axis=(1, 2)) < CLEARANCE).tolist() if len(kind) else [False] * len(sides)
@@ -353,6 +359,17 @@ class Shoal:
             aways.append(away)
             fish_only.append(bool(hit and sides[i] and not rocks[i]))
         return hits, aways, near.tolist(), fish_only
+
+    def _ways(self, on: np.ndarray, food: np.ndarray) -> np.ndarray:
+        """Return (n, 3) the way each fish swims: its heading, or for the fishes with the right
+        of way (``on`` (n,) bools: eaters) from the nose to their food particles."""
+        b = self.bodies
+        ways = np.array(b.fwd, float)
+        eaters = np.flatnonzero(on)
+        if len(eaters):
+            aim = [self.brains[k].thought.target for k in eaters.tolist()]
+            ways[eaters] = food[aim] - b.nose[eaters]
+        return ways
 
     def _drives(self, t: float, predators: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Return every fish's hunger, libido and fear (n,) at time ``t`` s at once."""
@@ -393,6 +410,40 @@ def right_of_way(threat: np.ndarray, meals: list[float | None]) -> np.ndarray:
     mutual = (threat >= 0) & (threat[other] == np.arange(n))
     first = (meal < meal[other]) | ((meal == meal[other]) & (np.arange(n) < other))
     return mutual & np.isfinite(meal) & first
+
+
+# |cos| between a yielding fish's heading and the eater's over which it turns off the eater's
+# line (nearly along it or against it); across it, turning does not take it off the line
+ALONG_COS = 0.5
+
+
+def yield_sides(
+    threat: np.ndarray, on: np.ndarray, com: np.ndarray, ways: np.ndarray, sides: np.ndarray
+) -> np.ndarray:
+    """Return the sides (n,) to turn to (+1 left, -1 right) with each yielding fish's side
+    off the way of the eater it yields to (``right_of_way``): to the side of the eater's
+    line (its centre along its way) that the yielder's centre lies on, so that it moves out
+    of the eater's way.
+
+    The closest approach foreseen from the velocities sways with each tail beat: a yielder
+    head on turned one way and the other and stopped on the eater's line. The eater's line
+    does not sway. A yielder swimming across the eater's line (headings more than 60 degrees
+    apart), or on it, keeps ``sides``. threat (n,): each fish's threat (-1 none); on (n,)
+    bools: the fishes with the right of way; com (n, 3); ways (n, 3): the yielders' headings,
+    the eaters' ways (from the nose to the particle, ``Shoal._ways``)."""
+    k = np.where(threat >= 0, threat, 0)
+    yields = (threat >= 0) & on[k] & ~on
+    if not yields.any():
+        return sides
+    f = flats(ways)
+    f /= np.maximum(np.linalg.norm(f, axis=1, keepdims=True), 1e-9)
+    left = np.stack([-f[:, 2], np.zeros(len(f)), f[:, 0]], axis=1)
+    offset = np.einsum("nc,nc->n", com - com[k], left[k])  # m left of the eater's line
+    along = np.einsum("nc,nc->n", left, left[k])  # the eater's left seen from the yielder
+    off = yields & (np.abs(along) > ALONG_COS) & (np.abs(offset) > 1e-3)
+    out = np.array(sides)
+    out[off] = (np.sign(offset) * np.sign(along))[off].astype(out.dtype)
+    return out
 
 
 def activations(
