@@ -21,10 +21,11 @@ from zoetic.physics.simulate import VMAX, chunk_size
 F32 = np.float32
 KEEP = 64  # sets of animals whose lanes a group keeps
 PAD = 8  # lanes: a group's buffers come in multiples of this (the SIMD width of AVX2 float32)
-# a group's buffers hold at least this many lanes, in chunks of at least this many: a chunk of
-# fewer takes the kernel's path for one animal, whose step costs more for 8 lanes than the
-# split path's for 32 (the few fishes near one another that step one step at a time)
-MIN_CHUNK = SPLIT_LANES
+# a group's buffers hold at least this many lanes (so ``chunk_size`` makes chunks of at least
+# as many): a chunk of fewer takes the kernel's path for one animal, whose step costs more for
+# 8 lanes than the split path's for 32 (the few fishes near one another, stepped one step at a
+# time); the padding lanes repeat the first
+MIN_LANES = SPLIT_LANES
 
 
 @njit(cache=True)
@@ -90,8 +91,7 @@ class LaneGroup:
             pos = np.zeros((self.n_nodes, 3, m), F32)
             vel = np.zeros_like(pos)
             fs, failed = -np.ones(m, np.int64), -np.ones(m, np.int64)
-            chunk = max(chunk_size(m), MIN_CHUNK)
-            stepper = make_stepper(self.model, pos, vel, fs, failed, chunk, VMAX)
+            stepper = make_stepper(self.model, pos, vel, fs, failed, chunk_size(m), VMAX)
             got = self._buffers[m] = (stepper, (pos, vel, fs, failed))
         table = self._tables.get((m, steps))
         if table is None:
@@ -122,7 +122,7 @@ class LaneGroup:
         threaded entries and the lane-steps from which the threads are worth it)."""
         rows, lane, animal, column = self.lanes(animals)
         k = len(rows)
-        m = max(-(-k // PAD) * PAD, MIN_CHUNK)
+        m = max(-(-k // PAD) * PAD, MIN_LANES)
         stepper, g = self._buffer(m, table.shape[0])
         gather(
             self.pos, self.vel, self.fs, self.failed, table, t0, t1, rows, lane, animal, column, g
