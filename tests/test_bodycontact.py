@@ -78,3 +78,52 @@ def test_close_pairs_finds_the_pairs_close_finds_one_by_one(pairs_one_by_one):
     one_by_one = pairs_one_by_one(pos, vel, off, reach, 0.03, 0.1)
     assert found == one_by_one
     assert (0, 1) in found and (0, 2) not in found  # near pairs only
+
+
+def _overlapping_sharks(n: int, lanes: int, seed: int):
+    """n sharks crowded into a 1 m square (many pairs overlap), stacked as a World stacks
+    them: positions and velocities (N, 3, lanes) float32, each shark's first row, masses."""
+    body = load_animal("shark")
+    rng = np.random.default_rng(seed)
+    shift = rng.uniform(-0.5, 0.5, (n, 1, 3, lanes)) * [[[1.0], [0.2], [1.0]]]
+    pos = (body.rest_pos[None, :, :, None] + shift).reshape(-1, 3, lanes)
+    vel = rng.normal(0.0, 0.5, pos.shape)
+    off = np.arange(n + 1, dtype=np.int64) * body.n_nodes
+    return body, pos.astype(np.float32), vel.astype(np.float32), off
+
+
+def test_every_pairs_contacts_in_one_call_are_those_of_each_pair_in_turn():
+    from zoetic.physics.bodycontact import pair_contacts, pairs_contacts
+
+    n, lanes = 6, 2
+    body, pos, vel, off = _overlapping_sharks(n, lanes, 3)
+    pairs = np.array([(a, c) for a in range(n) for c in range(a + 1, n)], np.int64)[::-1]
+    mass, faces = body.mass.astype(np.float64), np.asarray(body.faces, np.int64)
+    v_one, between_one = vel.copy(), np.zeros((lanes, n, n))
+    for a, c in pairs:  # each pair in turn, as the world stepped them one call a pair
+        buf = np.zeros((2, lanes))
+        ra, rc = slice(off[a], off[a + 1]), slice(off[c], off[c + 1])
+        pair_contacts(pos[ra], v_one[ra], mass, faces, pos[rc], v_one[rc], mass, faces,
+                      0.03, 0.005, 80.0, 0.3, buf)  # fmt: skip
+        between_one[:, a, c] += buf[0]
+        between_one[:, c, a] += buf[1]
+    v_all, between_all = vel.copy(), np.zeros((lanes, n, n))
+    face_off = np.arange(n + 1, dtype=np.int64) * len(faces)
+    pairs_contacts(pos, v_all, off, np.tile(mass, n), np.tile(faces, (n, 1)), face_off,
+                   pairs, 0.03, 0.005, 80.0, 0.3, between_all)  # fmt: skip
+    assert (between_one > 0).sum() >= 4 and not np.array_equal(v_one, vel)  # they touched
+    assert np.array_equal(v_all, v_one) and np.array_equal(between_all, between_one)
+
+
+def test_close_among_keeps_the_pairs_close_finds_one_by_one(pairs_one_by_one):
+    from zoetic.physics.bodycontact import close_among
+
+    n, lanes = 12, 2
+    body, pos, vel, off = _overlapping_sharks(n, lanes, 4)
+    pos[: off[n // 2]] += np.float32(1.5)  # two crowds apart: some pairs close, some not
+    reach = np.random.default_rng(1).uniform(0.1, 0.3, n)
+    every = np.array([(a, c) for a in range(n) for c in range(a + 1, n)], np.int64)
+    keep = close_among(pos, vel, off, every, reach, 0.03, 0.02)
+    one_by_one = pairs_one_by_one(pos, vel, off, reach, 0.03, 0.02)
+    assert 0 < len(one_by_one) < len(every)
+    assert [tuple(p) for p in every[keep].tolist()] == one_by_one

@@ -97,3 +97,44 @@ def test_a_node_driven_into_a_thin_post_is_let_out_not_shot_out(dolphin):
     # the body's own springs may fling the nose node (2x here); the penalty without its cap
     # on the separation speed shot it out at 17 m/s, 4x
     assert fastest < 3.0 * 4.3
+
+
+def _near_node_by_node(pos, vel, radius, skind, scenter, ssize, horizon) -> bool:
+    """``contacts.near`` without balls, every node against every shape (the reference)."""
+    from zoetic.physics.shapes import shape_sdf
+
+    for b in range(pos.shape[2]):
+        vmax = float(np.sqrt((vel[:, :, b] ** 2).sum(axis=1).max()))
+        reach = 2.0 * (vmax + 0.0) * horizon + radius + 0.05
+        for p in pos[:, :, b]:
+            for s in range(len(skind)):
+                if shape_sdf(s, skind, scenter, ssize, p[0], p[1], p[2])[0] < reach:
+                    return True
+    return False
+
+
+def test_near_tests_the_shapes_within_reach_of_the_animal_as_every_shape():
+    from zoetic.physics.contacts import near
+
+    rng = np.random.default_rng(6)
+    skind = np.array([0, 1, 1, 1, 0], np.int64)  # boxes and cylinders along x, y and z
+    scenter = rng.uniform(-1.0, 1.0, (5, 3))
+    ssize = np.array([[0.3, 0.2, 0.4], [0.2, 0.5, 0], [0.1, 0.3, 1], [0.25, 0.2, 2], [1, 1, 1]])
+    no_balls = (np.zeros((0, 3, 2)), np.zeros((0, 3, 2)), np.zeros((0, 2)))
+    answers = []
+    for _ in range(300):
+        pos = rng.uniform(-2.5, 2.5, (1, 1, 3, 2)) + rng.normal(0.0, 0.2, (6, 1, 3, 2))
+        pos = np.ascontiguousarray(pos.reshape(6, 3, 2))
+        vel = rng.normal(0.0, 0.5, pos.shape)
+        got = near(pos, vel, 0.03, *no_balls, skind, scenter, ssize, 0.1)
+        assert got == _near_node_by_node(pos, vel, 0.03, skind, scenter, ssize, 0.1)
+        answers.append(got)
+    assert 30 < sum(answers) < 270  # near and apart both met
+    # a node exactly at the reach of a box's face (along x): not near; a hair inside: near
+    pos, vel = np.zeros((1, 3, 1)), np.zeros((1, 3, 1))
+    box = (np.array([0], np.int64), np.zeros((1, 3)), np.array([[0.5, 0.5, 0.5]]))
+    balls1 = (np.zeros((0, 3, 1)), np.zeros((0, 3, 1)), np.zeros((0, 2)))
+    pos[0, 0, 0] = 0.5 + 0.08 + 1e-9
+    assert not near(pos, vel, 0.03, *balls1, *box, 0.1)
+    pos[0, 0, 0] = 0.5 + 0.08 - 1e-9
+    assert near(pos, vel, 0.03, *balls1, *box, 0.1)

@@ -57,13 +57,13 @@ def test_a_world_steps_its_animals_as_lanes_as_one_at_a_time(monkeypatch):
 
 def test_a_crowded_tank_lives_as_lanes_as_one_fish_at_a_time(monkeypatch):
     touched = []
-    pair = stepping.ContactSlices.pair
+    pairs = stepping.ContactSlices.pairs
 
-    def counted(self, a, c, between):
-        touched.append((a, c))
-        pair(self, a, c, between)
+    def counted(self, rows, between):
+        touched.extend(map(tuple, rows.tolist()))
+        pairs(self, rows, between)
 
-    monkeypatch.setattr(stepping.ContactSlices, "pair", counted)
+    monkeypatch.setattr(stepping.ContactSlices, "pairs", counted)
     cfg = TankConfig(fishes=14, predators=1, seconds=4.0, seed=4, half_size=7.0)
     lanes = live(build_tank(cfg))
     assert touched  # fishes came within reach of each other: the pairs' path ran

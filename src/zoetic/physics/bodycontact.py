@@ -345,6 +345,52 @@ def pair_contacts(pa, va, ma, fa, pb, vb, mb, fb, radius, dt, w, zeta, between):
 
 
 @njit(cache=True)
+def pairs_contacts(pos, vel, off, mass, faces, face_off, pairs, radius, dt, w, zeta, between):
+    """``pair_contacts`` for each pair (P, 2) in order, in one call: nodes of all animals
+    stacked in pos, vel (N, 3, B) float32 (animal a's rows off[a]:off[a + 1]), their masses
+    stacked in ``mass`` (N,), animal a's triangles faces[face_off[a]:face_off[a + 1]] (indices
+    into its own nodes). ``between`` (B, n, n) accumulates the normal impulse (N s) that a got
+    from c at [:, a, c] (and c from a at [:, c, a]), a pair's step added once as a whole."""
+    buf = np.zeros((2, pos.shape[2]))
+    for p in range(pairs.shape[0]):
+        a, c = pairs[p, 0], pairs[p, 1]
+        a0, a1, c0, c1 = off[a], off[a + 1], off[c], off[c + 1]
+        buf[:] = 0.0
+        pair_contacts(
+            pos[a0:a1],
+            vel[a0:a1],
+            mass[a0:a1],
+            faces[face_off[a] : face_off[a + 1]],
+            pos[c0:c1],
+            vel[c0:c1],
+            mass[c0:c1],
+            faces[face_off[c] : face_off[c + 1]],
+            radius,
+            dt,
+            w,
+            zeta,
+            buf,
+        )
+        for b in range(pos.shape[2]):
+            between[b, a, c] += buf[0, b]
+            between[b, c, a] += buf[1, b]
+
+
+@njit(cache=True)
+def close_among(pos, vel, off, pairs, reach, skin, horizon) -> np.ndarray:
+    """Return (P,) bools: whether each pair (P, 2) of animals may touch within ``horizon`` s
+    (``close`` with the larger of the two surface reaches ``reach`` plus ``skin``), in one
+    call: nodes of all animals stacked in pos, vel (N, 3, B), animal a's rows off[a]:off[a + 1]."""
+    out = np.zeros(pairs.shape[0], np.bool_)
+    for p in range(pairs.shape[0]):
+        a, c = pairs[p, 0], pairs[p, 1]
+        r = max(reach[a], reach[c]) + skin
+        a0, a1, c0, c1 = off[a], off[a + 1], off[c], off[c + 1]
+        out[p] = close(pos[a0:a1], vel[a0:a1], pos[c0:c1], vel[c0:c1], r, skin, horizon)
+    return out
+
+
+@njit(cache=True)
 def _deepest(pa, pb, fb, b) -> float:
     lx, ly, lz, hx, hy, hz = _box(pb, b, 0.0)
     out = 0.0

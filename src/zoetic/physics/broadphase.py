@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from zoetic.physics.bodycontact import close, close_pairs
+from zoetic.physics.bodycontact import close_among, close_pairs
 from zoetic.physics.contacts import near
 from zoetic.physics.objects import Solids
 
@@ -58,7 +58,7 @@ class BroadPhase:
         self.solids = solids
         self.touchy = touchy
         self.plan: tuple[int, Plan] | None = None  # the slice ending at plan[0] and its plan
-        self.sub: tuple[int, list] | None = None  # the sub-slice ending at sub[0], its pairs
+        self.sub: tuple[int, np.ndarray] | None = None  # the sub-slice ending at sub[0], its pairs
 
     def forget(self) -> None:
         """Decide afresh from here (after a restore)."""
@@ -105,12 +105,17 @@ class BroadPhase:
         self.plan = (end, (mode, pairs, near_now))
         return self.plan[1]
 
-    def close_now(self, pairs: list[tuple[int, int]], end: int, now: int) -> list:
-        """Return those of ``pairs`` that may touch before step ``end`` of the sub-slice that
-        ends there (the world at step ``now``), decided once per sub-slice."""
+    def close_now(self, pairs: list[tuple[int, int]], end: int, now: int) -> np.ndarray:
+        """Return those of ``pairs`` (as rows (P, 2), in order) that may touch before step
+        ``end`` of the sub-slice that ends there (the world at step ``now``), decided once
+        per sub-slice (``close`` for each, in one call)."""
         if self.sub is None or self.sub[0] != end:
             horizon = (end - now) * self.dt
-            self.sub = (end, [p for p in pairs if self.close(*p, horizon)])
+            rows = np.array(pairs, np.int64).reshape(-1, 2)
+            keep = close_among(
+                self.pos, self.vel, self.off, rows, self.reach_arr, self.node_radius, horizon
+            )
+            self.sub = (end, rows[keep])
         return self.sub[1]
 
     def close_pairs(self, horizon: float) -> list[tuple[int, int]]:
@@ -118,12 +123,6 @@ class BroadPhase:
         kernel call, ``close`` for each)."""
         found = close_pairs(self.pos, self.vel, self.off, self.reach_arr, self.node_radius, horizon)
         return [(int(a), int(c)) for a, c in found]
-
-    def close(self, a: int, c: int, horizon: float) -> bool:
-        """Return True if animals a and c may touch within ``horizon`` s (``bodycontact.close``)."""
-        reach = max(self.reach[a], self.reach[c]) + self.node_radius
-        (pa, va), (pc, vc) = self.views[a], self.views[c]
-        return bool(close(pa, va, pc, vc, reach, self.node_radius, horizon))
 
     def any_near(self, horizon: float) -> bool:
         """Return True if some node of some animal could touch a ball or a fixed shape within

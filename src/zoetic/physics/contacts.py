@@ -467,8 +467,12 @@ def balls_step(
 
 @njit(cache=True)
 def near(pos, vel, radius, bpos, bvel, bpar, skind, scenter, ssize, horizon):
-    """Return True if any node could touch any ball or fixed shape within ``horizon`` s."""
+    """Return True if any node could touch any ball or fixed shape within ``horizon`` s.
+
+    A shape whose bounding box lies farther than the reach from the box of the animal's
+    nodes along some axis is not tested node by node (no node can come within reach of it)."""
     n_nodes = pos.shape[0]
+    some = np.empty(skind.shape[0], np.int64)  # the shapes tested node by node
     for b in range(pos.shape[2]):
         vmax = 0.0
         for i in range(n_nodes):
@@ -480,6 +484,9 @@ def near(pos, vel, radius, bpos, bvel, bpar, skind, scenter, ssize, horizon):
             bmax = max(bmax, v2)
         # twice the current speeds over the horizon, plus a few cm: a conservative reach
         reach = 2.0 * (math.sqrt(vmax) + math.sqrt(bmax)) * horizon + radius + 0.05
+        n_some = _shapes_within(pos, b, skind, scenter, ssize, reach, some)
+        if n_some == 0 and bpos.shape[0] == 0:
+            continue
         for i in range(n_nodes):
             px, py, pz = pos[i, 0, b], pos[i, 1, b], pos[i, 2, b]
             for k in range(bpos.shape[0]):
@@ -488,11 +495,47 @@ def near(pos, vel, radius, bpos, bvel, bpar, skind, scenter, ssize, horizon):
                 dz = pz - bpos[k, 2, b]
                 if dx * dx + dy * dy + dz * dz < (bpar[k, 0] + reach) ** 2:
                     return True
-            for s in range(skind.shape[0]):
-                d, _, _, _ = shape_sdf(s, skind, scenter, ssize, px, py, pz)
+            for q in range(n_some):
+                d, _, _, _ = shape_sdf(some[q], skind, scenter, ssize, px, py, pz)
                 if d < reach:
                     return True
     return False
+
+
+@njit(cache=True, inline="always")
+def _shapes_within(pos, b, skind, scenter, ssize, reach, out) -> int:
+    """Put into ``out`` the fixed shapes whose bounding box comes within ``reach`` (plus a
+    micrometre, against rounding) of the box of the nodes pos (N, 3, B) in lane b along every
+    axis; return how many. A point farther than that from a shape's box along one axis is
+    farther from the shape (its signed distance is at least the gap)."""
+    lx = ly = lz = np.inf
+    hx = hy = hz = -np.inf
+    for i in range(pos.shape[0]):
+        x, y, z = pos[i, 0, b], pos[i, 1, b], pos[i, 2, b]
+        lx, ly, lz = min(lx, x), min(ly, y), min(lz, z)
+        hx, hy, hz = max(hx, x), max(hy, y), max(hz, z)
+    pad = reach + 1e-6
+    k = 0
+    for s in range(skind.shape[0]):
+        h0, h1, h2 = ssize[s, 0], ssize[s, 1], ssize[s, 2]
+        if skind[s] != 0:  # cylinder: radius, half length, axis
+            ax = int(ssize[s, 2])
+            h0 = ssize[s, 1] if ax == 0 else ssize[s, 0]
+            h1 = ssize[s, 1] if ax == 1 else ssize[s, 0]
+            h2 = ssize[s, 1] if ax == 2 else ssize[s, 0]
+        c0, c1, c2 = scenter[s, 0], scenter[s, 1], scenter[s, 2]
+        if (
+            lx > c0 + h0 + pad
+            or hx < c0 - h0 - pad
+            or ly > c1 + h1 + pad
+            or hy < c1 - h1 - pad
+            or lz > c2 + h2 + pad
+            or hz < c2 - h2 - pad
+        ):
+            continue
+        out[k] = s
+        k += 1
+    return k
 
 
 def empty_impulse(n_nodes: int, n_objects: int, batch: int) -> np.ndarray:

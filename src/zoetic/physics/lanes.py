@@ -14,12 +14,18 @@ import numpy as np
 from numba import njit
 
 from zoetic.physics.kernel import make_stepper
+from zoetic.physics.kernel_terms import SPLIT_LANES
 from zoetic.physics.model import Model
 from zoetic.physics.simulate import VMAX, chunk_size
 
 F32 = np.float32
 KEEP = 64  # sets of animals whose lanes a group keeps
 PAD = 8  # lanes: a group's buffers come in multiples of this (the SIMD width of AVX2 float32)
+# a group's buffers hold at least this many lanes (so ``chunk_size`` makes chunks of at least
+# as many): a chunk of fewer takes the kernel's path for one animal, whose step costs more for
+# 8 lanes than the split path's for 32 (the few fishes near one another, stepped one step at a
+# time); the padding lanes repeat the first
+MIN_LANES = SPLIT_LANES
 
 
 @njit(cache=True)
@@ -116,7 +122,7 @@ class LaneGroup:
         threaded entries and the lane-steps from which the threads are worth it)."""
         rows, lane, animal, column = self.lanes(animals)
         k = len(rows)
-        m = -(-k // PAD) * PAD
+        m = max(-(-k // PAD) * PAD, MIN_LANES)
         stepper, g = self._buffer(m, table.shape[0])
         gather(
             self.pos, self.vel, self.fs, self.failed, table, t0, t1, rows, lane, animal, column, g

@@ -20,7 +20,7 @@ from numba import njit
 
 from zoetic.bodies import Body
 from zoetic.errors import SimulationError
-from zoetic.physics.bodycontact import CONTACT_STEPS, pair_contacts
+from zoetic.physics.bodycontact import CONTACT_STEPS, pairs_contacts
 from zoetic.physics.broadphase import BroadPhase
 from zoetic.physics.contacts import balls_step, node_contacts
 from zoetic.physics.kernel import make_stepper
@@ -95,9 +95,10 @@ class Drive:
             LaneGroup(idx, models[idx[0]], (*state, batch), first, bodies[idx[0]].n_actuators)
             for idx in keys.values()
         ]
-        self.group_of = np.zeros(len(bodies), np.int64)
+        self.group_of = [0] * len(bodies)  # each animal's group
         for g, grp in enumerate(self.groups):
-            self.group_of[grp.members] = g
+            for a in grp.members:
+                self.group_of[a] = g
         self._tables: dict[tuple[int, int], tuple[np.ndarray, tuple]] = {}
         self._wide: dict[tuple[int, int], np.ndarray] = {}  # (group, steps) -> its table
 
@@ -120,7 +121,7 @@ class Drive:
         alone in its group by its own stepper, the others of a group as lanes of one call."""
         picked: dict[int, list[int]] = {}
         for a in animals:
-            picked.setdefault(int(self.group_of[a]), []).append(a)
+            picked.setdefault(self.group_of[a], []).append(a)
         for g, members in picked.items():
             grp = self.groups[g]
             if len(grp.members) == 1:
@@ -167,7 +168,7 @@ class Drive:
     def _view(self, a: int, steps: int) -> np.ndarray:
         """Return animal a's (T, A, B) columns of its group's table for ``steps`` steps (the
         whole table, C-contiguous, for an animal alone in its group)."""
-        g = int(self.group_of[a])
+        g = self.group_of[a]
         grp = self.groups[g]
         wide = self._wide.get((g, steps))
         if wide is None:
@@ -239,6 +240,10 @@ class ContactSlices:
         self.views = broad.views
         self.mass = [b.mass.astype(np.float64) for b in bodies]
         self.faces = [np.ascontiguousarray(b.faces, dtype=np.int64) for b in bodies]
+        # every animal's masses and triangles stacked, for the pairs' contacts in one call
+        self.mass_all = np.concatenate(self.mass)
+        self.faces_all = np.concatenate([f.reshape(-1, 3) for f in self.faces])
+        self.face_off = np.cumsum([0] + [len(f) for f in self.faces]).astype(np.int64)
         self.med64 = medium.as_array()
         self.current = current
         self.dt = dt
@@ -254,10 +259,10 @@ class ContactSlices:
         """Step steps t .. t1 of a call that started at the world's step n, every animal one
         step at a time with its contacts (impulses into ``impulse``, by animal as
         ``node_contacts`` makes them, those between animals into ``between``)."""
+        pair_rows = np.array(pairs, np.int64).reshape(-1, 2)
         for s in range(t, t1):
             self.solids.force[:] = 0.0
-            for a, c in pairs:
-                self.pair(a, c, between)
+            self.pairs(pair_rows, between)
             for a in range(len(self.views)):
                 self.node_contacts(a, impulse)
             self.drive.run_all(tables, s, s + 1, n + s)
@@ -298,40 +303,36 @@ class ContactSlices:
             end = (n + s) // SUB_SLICE * SUB_SLICE + SUB_SLICE
             s1 = min(t1, end - n)
             now = self.broad.close_now(pairs, end, n + s)
-            tight = sorted({a for p in now for a in p} | set(near_shape))
+            tight = sorted({int(a) for p in now for a in p} | set(near_shape))
             self.drive.run_some([a for a in busy if a not in tight], tables, s, s1, n + s)
             touch = near_shape + near
             step = sorted(tight + near)
             for u in range(s, s1):
-                for a, c in now:
-                    self.pair(a, c, between)
+                self.pairs(now, between)
                 for a in touch:
                     self.node_contacts(a, impulse)
                 self.drive.run_some(step, tables, u, u + 1, n + u)
             s = s1
 
-    def pair(self, a: int, c: int, between: np.ndarray) -> None:
-        """One step's contact impulses between animals a and c (recorded in ``between``)."""
-        buf = self.pair_buf
-        buf[:] = 0.0
-        (pa, va), (pc, vc) = self.views[a], self.views[c]
-        pair_contacts(
-            pa,
-            va,
-            self.mass[a],
-            self.faces[a],
-            pc,
-            vc,
-            self.mass[c],
-            self.faces[c],
-            self.node_radius,
-            self.dt,
-            self.w_body,
-            self.zeta,
-            buf,
-        )
-        between[:, a, c] += buf[0]
-        between[:, c, a] += buf[1]
+    def pairs(self, pairs: np.ndarray, between: np.ndarray) -> None:
+        """One step's contact impulses between the animals of each pair (P, 2), in order
+        (recorded in ``between``)."""
+        if len(pairs):
+            pos, vel = self.broad.pos, self.broad.vel
+            pairs_contacts(
+                pos,
+                vel,
+                self.broad.off,
+                self.mass_all,
+                self.faces_all,
+                self.face_off,
+                pairs,
+                self.node_radius,
+                self.dt,
+                self.w_body,
+                self.zeta,
+                between,
+            )
 
     def node_contacts(self, a: int, impulse: dict[int, np.ndarray]) -> None:
         """One step's contacts of animal a's nodes with the objects (``contacts.node_contacts``;

@@ -20,6 +20,7 @@ gives the same world bit for bit.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import cached_property
 
 import numpy as np
 
@@ -80,6 +81,7 @@ class World:
         self.balls, self.statics = self._solids.balls, self._solids.statics
         self.foods = [o for o in self.objects if isinstance(o, Food)]
         self._pantry = Pantry(self.foods, self.batch, self.current, self.dt)
+        self._object_names = tuple(o.name for o in self.objects)
         self._lay_out_animals()
         # animal-animal contact: only where every animal has a skin
         self._touchy = bool(animal_contact) and len(self.animals) > 1
@@ -363,7 +365,7 @@ class World:
         self._n += steps
         return Contacts(
             self._impulses(impulse),
-            tuple(o.name for o in self.objects),
+            self._object_names,
             between if between is not None and between.any() else None,
             tuple(sorted(self._contacts.tested)),
         )
@@ -371,23 +373,26 @@ class World:
     def _impulses(self, found: dict[int, np.ndarray]) -> tuple[np.ndarray, ...]:
         """Return each animal's impulses (B, N, O, 3) from those ``found`` (N, S, 3, B) over
         the objects a node can touch (``Solids.columns``): an animal that touched nothing gets
-        a read-only view of one zero, so that the memory follows the touches, not the
-        animals times the objects (food included)."""
-        n_obj, cols = len(self.objects), self._solids.columns
-        out = []
-        zeros: dict[tuple[int, ...], np.ndarray] = {}  # one read-only zero view a shape
-        for a, body in enumerate(self.bodies):
-            shape = (self.batch, body.n_nodes, n_obj, 3)
-            got = found.get(a)
-            if got is None or not got.any():
-                if shape not in zeros:
-                    zeros[shape] = np.broadcast_to(0.0, shape)
-                out.append(zeros[shape])
-                continue
-            full = np.zeros(shape)
-            full[:, :, cols] = got.transpose(3, 0, 1, 2)
-            out.append(full)
+        a read-only view of one zero (one a shape, made once), so that the memory follows the
+        touches, not the animals times the objects (food included)."""
+        out = list(self._zero_impulses)
+        cols = self._solids.columns
+        for a, got in found.items():
+            if got.any():
+                full = np.zeros(out[a].shape)
+                full[:, :, cols] = got.transpose(3, 0, 1, 2)
+                out[a] = full
         return tuple(out)
+
+    @cached_property
+    def _zero_impulses(self) -> tuple[np.ndarray, ...]:
+        """Each animal's impulses when it touched nothing: read-only zero views (B, N, O, 3),
+        one a shape."""
+        zeros: dict[tuple[int, ...], np.ndarray] = {}
+        for body in self.bodies:
+            shape = (self.batch, body.n_nodes, len(self.objects), 3)
+            zeros.setdefault(shape, np.broadcast_to(0.0, shape))
+        return tuple(zeros[(self.batch, b.n_nodes, len(self.objects), 3)] for b in self.bodies)
 
     def _heads(self) -> np.ndarray:
         """Return the animals' head nodes (animals, B, 3) in m."""
