@@ -162,6 +162,10 @@ def test_repeated_flips_onto_the_back_are_named_apart_from_one_flip(cart):
     once = np.pi * np.clip(t - 0.5, 0, 1)  # over once, then lies on its back
     g = gait_features(cart, _rollout(cart, once, np.full(n, 0.05), seconds=6.0))
     assert g["flips"] == 1 and mode_label(g).startswith("flips onto its back")
+    # over and back once (onto its back only once): not repeated
+    there_and_back = np.pi * (np.clip(t - 0.5, 0, 1) - np.clip(t - 2.5, 0, 1))
+    h = gait_features(cart, _rollout(cart, there_and_back, np.full(n, 0.05), seconds=6.0))
+    assert h["flips"] == 2 and mode_label(h).startswith("flips onto its back")
 
 
 def test_search_gaits_cli_writes_modes_with_a_count(tmp_path):

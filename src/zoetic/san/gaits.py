@@ -12,8 +12,9 @@ Each gait is replayed and described by a few features of the rollout (``gait_fea
   more than 90 degrees from its start angle (a chain that jumps or flips onto its back; one
   link swung over the others, the body still on its front, is not turned over);
 - ``flips``: how many times the body turns over, onto its back or back onto its front
-  (every link past ``FLIP_COS`` of a half turn from its last side): repeated jumps onto its
-  back count each landing; not clustered (``upside`` and ``turns`` are), only named;
+  (every link past ``FLIP_COS`` of a half turn from its last side); three (onto its back
+  twice) make "repeated flips onto its back"; not clustered (``upside`` and ``turns`` are),
+  only named;
 - ``airborne``: the fraction of the time no link touches the ground (hopping);
 - ``bounce``: the standard deviation of the centre of mass's height over the body's size
   (the sum of the link lengths): small hops against big hops;
@@ -58,7 +59,7 @@ CONTACT_CLEAR = 0.003  # m: a link this close to the ground touches it
 ROLL_CAP = 1.5  # turns: more turns than this is the same rolling mode
 FLIPPED = 0.1  # of the time upside down (every link turned past 90 degrees): flips onto its back
 FLIP_COS = 0.3  # a side counts once every link's cos(turn) is past -0.3 (back) or 0.3 (front)
-REPEATED = 2  # body turned over at least this often: repeated flips onto its back
+REPEATED = 3  # turned over this often (onto its back, front, back): repeated flips onto its back
 THRESHOLD = 2.0  # average-linkage distance (scaled units) from which modes are distinct
 SCALES = {  # one unit of each feature: a difference one can see in a video
     "direction": 1.0,
