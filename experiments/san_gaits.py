@@ -13,7 +13,8 @@
    Table 1's speed, and whether the paper's flips onto the back and aerial jumps appear
    depends on how strong its one actuator is, which the paper does not give; such a run is
    recorded under "<creature>-x<S>". A creature may be a file (``--creatures
-   twolink,experiments/twolink_fold.toml``); its rows are named by the file's creature.
+   twolink,src/zoetic/san/zoo/variants/twolink-fold.toml``); its rows are named by the file's
+   creature.
 2. Evolution. Per creature, the best of 200 random SANs is improved for ``--evolve-trials``
    evaluations two ways from the same start: fine-tuning of the network alone (phase 2), and
    ``zoetic.san.evolve`` (body and network together, masses coupled to lengths, sections and

@@ -12,8 +12,8 @@ onto its back at least once (every link past 90 degrees), and repeatedly (the bo
 over twice or more). The
 best two are then fine-tuned as Table 1 is (annealing, ``--tune-trials`` evaluations each).
 
-"fold" is the creature file experiments/twolink_fold.toml. Writes
-docs/figures/san_twolink_setups.json.
+"fold" is the creature file src/zoetic/san/zoo/variants/twolink-fold.toml (a variant, not a
+zoo creature). Writes docs/figures/san_twolink_setups.json.
 Run: python experiments/san_twolink_setups.py [--trials 300] [--tune-trials 250]
 """
 
@@ -36,7 +36,7 @@ from zoetic.san.show import record_every_for
 from zoetic.san.tune import tune
 from zoetic.san.world import World
 
-FOLD = "experiments/twolink_fold.toml"  # kd/ks 0.05 s, targets +-180 degrees
+FOLD = "src/zoetic/san/zoo/variants/twolink-fold.toml"  # kd/ks 0.05 s, targets +-180 degrees
 SMALL_HOPS, BIG_HOPS = 0.15, 0.3  # of the time in the air: the gait labels' small, big hops
 SETUPS = {  # name: changes to the zoo's twolink (see ``setup``)
     "zoo": {},
