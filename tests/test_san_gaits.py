@@ -10,6 +10,7 @@ import pytest
 
 from zoetic.cli import main
 from zoetic.san import load_creature
+from zoetic.san.creature_file import list_creatures
 from zoetic.san.creature_file import load_creature as strict_load
 from zoetic.san.evolve import (
     MUSCLE,
@@ -315,3 +316,22 @@ def test_evolve_cli_end_to_end_and_bad_input_exits_2(tmp_path, capsys):
     bad = argv[:-3] + ["--seed", "5", "--resume", "--no-video", "--workers", "1"]
     assert main(bad) == 2
     assert "different run" in capsys.readouterr().err
+
+
+def test_the_folding_twolink_differs_from_the_zoos_only_in_its_servos_range_and_damping():
+    from pathlib import Path
+
+    zoo = load_creature("twolink")
+    path = Path(__file__).parents[1] / "src/zoetic/san/zoo/variants/twolink-fold.toml"
+    fold = strict_load(f"{path}")
+    assert fold.name == "twolink-fold" and "twolink-fold" not in list_creatures()
+    assert (fold.links, fold.joints, fold.sensors) == (zoo.links, zoo.joints, zoo.sensors)
+    assert (fold.seconds, fold.friction, fold.expected_cycle) == (
+        zoo.seconds,
+        zoo.friction,
+        zoo.expected_cycle,
+    )
+    (a,), (b,) = zoo.actuators, fold.actuators
+    assert b.ks == pytest.approx(a.ks)  # the zoo's stiffness
+    assert b.kd == pytest.approx(0.05 * b.ks)  # the cart's Fig. 11 kd/ks, s
+    assert (b.lo, b.hi) == pytest.approx((-math.pi, math.pi))  # it may fold shut
