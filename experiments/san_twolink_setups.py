@@ -127,9 +127,9 @@ def main() -> None:
     ap.add_argument("--trials", type=int, default=300)
     ap.add_argument("--tune-trials", type=int, default=250)
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--only", default="", help="comma-separated set-up names (default: all)")
+    ap.add_argument("--only", default="", help="set-up names separated by ; (default: all)")
     args = ap.parse_args()
-    names = [n for n in args.only.split(",") if n] or list(SETUPS)
+    names = [n.strip() for n in args.only.split(";") if n.strip()] or list(SETUPS)
     path = figures_dir() / "san_twolink_setups.json"
     rows = json.loads(path.read_text()) if path.exists() else {}
     for name in names:
