@@ -12,7 +12,9 @@
    multiplies every actuator's stiffness and damping: the zoo's twolink is calibrated to
    Table 1's speed, and whether the paper's flips onto the back and aerial jumps appear
    depends on how strong its one actuator is, which the paper does not give; such a run is
-   recorded under "<creature>-x<S>".
+   recorded under "<creature>-x<S>". A creature may be a file (``--creatures
+   twolink,src/zoetic/san/zoo/variants/twolink-fold.toml``); its rows are named by the file's
+   creature.
 2. Evolution. Per creature, the best of 200 random SANs is improved for ``--evolve-trials``
    evaluations two ways from the same start: fine-tuning of the network alone (phase 2), and
    ``zoetic.san.evolve`` (body and network together, masses coupled to lengths, sections and
@@ -72,7 +74,8 @@ def _tune_mode(job: tuple) -> dict:
 
 
 def strengthened(name: str, strength: float):
-    """Return the creature with every actuator's ks and kd multiplied by ``strength``."""
+    """Return the creature (a zoo name or a creature file) with every actuator's ks and kd
+    multiplied by ``strength``."""
     c = load_creature(name)
     if strength == 1.0:
         return c
@@ -99,12 +102,12 @@ def modes(
     doc = write_modes(c, networks, info, RUNS / c.name, seed=seed)
     draw_modes(c, networks, doc, seed=seed, workers=workers)
     row = {
-        "trials": trials, "kept": len(kept), "modes_found": doc["modes_found"],
+        "creature": c.name, "trials": trials, "kept": len(kept), "modes_found": doc["modes_found"],
         "kinds": doc["kinds"],
         "modes": [{"mode": m["mode"], "label": m["label"], "count": m["count"],
                    "best_cm_s": m["best"]["speed_cm_s"], "best_rank": m["best"]["rank"],
                    "turns": m["best"]["turns"], "upside": m["best"].get("upside"),
-                   "airborne": m["best"]["airborne"],
+                   "flips": m["best"].get("flips"), "airborne": m["best"]["airborne"],
                    "periodicity": m["best"]["periodicity"], "clip": _rel(m.get("clip"))}
                   for m in doc["modes"]],
     }  # fmt: skip
@@ -192,7 +195,7 @@ def main() -> None:
                     args.cart_keep if cart else args.keep, args.seed, args.workers,
                     args.tune_trials if cart else 0, k,
                 )  # fmt: skip
-                rows[name if k == 1.0 else f"{name}-x{k:g}"] = row
+                rows[row["creature"]] = row  # "<name>-x<S>" when strengthened
         path = OUT / args.modes_file
         old = json.loads(path.read_text()) if path.exists() else {}
         path.write_text(json.dumps({**old, **rows}, indent=2) + "\n")

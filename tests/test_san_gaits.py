@@ -10,6 +10,7 @@ import pytest
 
 from zoetic.cli import main
 from zoetic.san import load_creature
+from zoetic.san.creature_file import list_creatures
 from zoetic.san.creature_file import load_creature as strict_load
 from zoetic.san.evolve import (
     MUSCLE,
@@ -82,13 +83,15 @@ def test_clustering_separates_distinct_gaits_and_merges_near_identical_ones():
     assert len(describe_gaits(same + back)) == 2
 
 
-def _rollout(cart, angles, heights, seconds=2.0):
+def _rollout(cart, angles, heights, seconds=2.0, other=None):
+    """A made-up rollout: the root link at ``angles``, the other at ``other`` (default: the
+    root's angle + 1.2 rad, the body turning as one)."""
     n = len(angles)
     poses = np.zeros((n, 2, 3))
     poses[:, :, 0] = np.linspace(0, 0.2, n)[:, None]
     poses[:, :, 1] = np.asarray(heights)[:, None]
     poses[:, 0, 2] = angles
-    poses[:, 1, 2] = np.asarray(angles) + 1.2
+    poses[:, 1, 2] = np.asarray(angles) + 1.2 if other is None else other
     return Rollout(
         metric=0.2,
         fell=False,
@@ -124,12 +127,46 @@ def test_gait_features_see_a_chain_flipping_onto_its_back(cart):
     flips = _rollout(cart, np.pi * (0.5 - 0.5 * np.cos(2 * np.pi * t)), np.full(n, 0.05))
     f = gait_features(cart, flips)
     assert f["upside"] == pytest.approx(0.5, abs=0.02) and f["turns"] < 0.01
-    assert mode_label(f).startswith("flips onto its back")
+    assert mode_label(f).startswith("repeated flips onto its back")
     rocking = _rollout(cart, np.radians(40) * np.sin(2 * np.pi * t), np.full(n, 0.05))
     g = gait_features(cart, rocking)
     assert g["upside"] == 0.0 and not mode_label(g).startswith("flips")
     X, names = feature_matrix([f, g])
     assert abs(X[0, names.index("upside")] - X[1, names.index("upside")]) >= 2.0
+    assert f["flips"] == 8 and g["flips"] == 0  # over and back each second, for 4 s
+
+
+def test_one_link_swung_over_the_other_is_not_a_flip_onto_the_back(cart):
+    n = 400
+    t = np.linspace(0, 4, n)
+    lift = np.radians(120) * (0.5 - 0.5 * np.cos(2 * np.pi * t))
+    # the root link heaved over the other and back each second; the other lies flat
+    heave = _rollout(cart, lift, np.full(n, 0.05), other=np.zeros(n))
+    f = gait_features(cart, heave)
+    assert f["upside"] == 0.0 and f["flips"] == 0
+    assert not mode_label(f).startswith(("flips", "repeated"))
+    # the other link folded right over the root one (a 180 degree joint): not turned over
+    fold = _rollout(
+        cart, np.zeros(n), np.full(n, 0.05), other=np.pi * (0.5 - 0.5 * np.cos(np.pi * t))
+    )
+    assert gait_features(cart, fold)["flips"] == 0
+
+
+def test_repeated_flips_onto_the_back_are_named_apart_from_one_flip(cart):
+    n = 600
+    t = np.linspace(0, 6, n)
+    # over onto its back at 1 s, back onto its front at 3 s, over again at 5 s
+    side = np.clip(t - 0.5, 0, 1) - np.clip(t - 2.5, 0, 1) + np.clip(t - 4.5, 0, 1)
+    f = gait_features(cart, _rollout(cart, np.pi * side, np.full(n, 0.05), seconds=6.0))
+    assert f["flips"] == 3 and f["turns"] == pytest.approx(0.5, abs=1e-6)
+    assert mode_label(f).startswith("repeated flips onto its back")
+    once = np.pi * np.clip(t - 0.5, 0, 1)  # over once, then lies on its back
+    g = gait_features(cart, _rollout(cart, once, np.full(n, 0.05), seconds=6.0))
+    assert g["flips"] == 1 and mode_label(g).startswith("flips onto its back")
+    # over and back once (onto its back only once): not repeated
+    there_and_back = np.pi * (np.clip(t - 0.5, 0, 1) - np.clip(t - 2.5, 0, 1))
+    h = gait_features(cart, _rollout(cart, there_and_back, np.full(n, 0.05), seconds=6.0))
+    assert h["flips"] == 2 and mode_label(h).startswith("flips onto its back")
 
 
 def test_search_gaits_cli_writes_modes_with_a_count(tmp_path):
@@ -279,3 +316,22 @@ def test_evolve_cli_end_to_end_and_bad_input_exits_2(tmp_path, capsys):
     bad = argv[:-3] + ["--seed", "5", "--resume", "--no-video", "--workers", "1"]
     assert main(bad) == 2
     assert "different run" in capsys.readouterr().err
+
+
+def test_the_folding_twolink_differs_from_the_zoos_only_in_its_servos_range_and_damping():
+    from pathlib import Path
+
+    zoo = load_creature("twolink")
+    path = Path(__file__).parents[1] / "src/zoetic/san/zoo/variants/twolink-fold.toml"
+    fold = strict_load(f"{path}")
+    assert fold.name == "twolink-fold" and "twolink-fold" not in list_creatures()
+    assert (fold.links, fold.joints, fold.sensors) == (zoo.links, zoo.joints, zoo.sensors)
+    assert (fold.seconds, fold.friction, fold.expected_cycle) == (
+        zoo.seconds,
+        zoo.friction,
+        zoo.expected_cycle,
+    )
+    (a,), (b,) = zoo.actuators, fold.actuators
+    assert b.ks == pytest.approx(a.ks)  # the zoo's stiffness
+    assert b.kd == pytest.approx(0.05 * b.ks)  # the cart's Fig. 11 kd/ks, s
+    assert (b.lo, b.hi) == pytest.approx((-math.pi, math.pi))  # it may fold shut

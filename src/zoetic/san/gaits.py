@@ -8,8 +8,13 @@ Each gait is replayed and described by a few features of the rollout (``gait_fea
 - ``turns``: how many whole turns the root link makes (net rotation / 2 pi, absolute):
   rolling and cartwheels; clustered as ``min(turns, ROLL_CAP)`` (1.5), so that a cartwheel
   of 2 turns and one of 5 (a faster one) are the same mode;
-- ``upside``: the fraction of the time the root link is turned more than 90 degrees from its
-  start (a chain that jumps or flips onto its back);
+- ``upside``: the fraction of the time the whole body lies turned over: every link turned
+  more than 90 degrees from its start angle (a chain that jumps or flips onto its back; one
+  link swung over the others, the body still on its front, is not turned over);
+- ``flips``: how many times the body turns over, onto its back or back onto its front
+  (every link past ``FLIP_COS`` of a half turn from its last side); three (onto its back
+  twice) make "repeated flips onto its back"; not clustered (``upside`` and ``turns`` are),
+  only named;
 - ``airborne``: the fraction of the time no link touches the ground (hopping);
 - ``bounce``: the standard deviation of the centre of mass's height over the body's size
   (the sum of the link lengths): small hops against big hops;
@@ -52,7 +57,9 @@ __all__ = [
 STILL_CM_S = 0.5  # slower than this, a gait has no direction
 CONTACT_CLEAR = 0.003  # m: a link this close to the ground touches it
 ROLL_CAP = 1.5  # turns: more turns than this is the same rolling mode
-FLIPPED = 0.1  # of the time upside down (root turned past 90 degrees): flips onto its back
+FLIPPED = 0.1  # of the time upside down (every link turned past 90 degrees): flips onto its back
+FLIP_COS = 0.3  # a side counts once every link's cos(turn) is past -0.3 (back) or 0.3 (front)
+REPEATED = 3  # turned over this often (onto its back, front, back): repeated flips onto its back
 THRESHOLD = 2.0  # average-linkage distance (scaled units) from which modes are distinct
 SCALES = {  # one unit of each feature: a difference one can see in a video
     "direction": 1.0,
@@ -112,6 +119,17 @@ def _periodicity(signals: np.ndarray, dt: float) -> tuple[float, float]:
     return max(best, 0.0), lag * dt
 
 
+def _flips(turned: np.ndarray) -> int:
+    """Return how many times the body turned over, from each link's cos(turn) (R, L)."""
+    back = (turned < -FLIP_COS).all(axis=1)
+    front = (turned > FLIP_COS).all(axis=1)
+    side, count = 0, 0  # 0 on its front (where it started), 1 on its back
+    for b, f in zip(back, front, strict=True):
+        if (side == 0 and b) or (side == 1 and f):
+            side, count = 1 - side, count + 1
+    return count
+
+
 def gait_features(creature, rollout) -> dict:
     """Return what the body does over a recorded rollout (see the module's docstring)."""
     poses = np.asarray(rollout.poses, dtype=float)
@@ -122,7 +140,8 @@ def gait_features(creature, rollout) -> dict:
     direction = 0 if speed < STILL_CM_S else (1 if rollout.distance > 0 else -1)
     root = np.unwrap(poses[:, 0, 2])
     turns = abs(root[-1] - root[0]) / (2 * math.pi)
-    upside = float(np.mean(np.cos(root - root[0]) < 0.0))
+    turned = np.cos(np.unwrap(poses[:, :, 2], axis=0) - poses[0, :, 2])  # (R, L)
+    upside = float(np.mean((turned < 0.0).all(axis=1)))
     clear = _clearance(creature, poses, rollout.terrain)
     touching = clear <= CONTACT_CLEAR
     com = _com(creature, poses)
@@ -139,6 +158,7 @@ def gait_features(creature, rollout) -> dict:
         "log2_speed": round(math.log2(max(speed, STILL_CM_S)), 3),
         "turns": round(float(turns), 3),
         "upside": round(upside, 3),
+        "flips": _flips(turned),
         "airborne": round(float(np.mean(~touching.any(axis=1))), 3),
         "bounce": round(float(np.std(height) / size), 4),
         "contact": {
@@ -188,6 +208,8 @@ def mode_label(f: dict) -> str:
     carried = [n for n, v in contact.items() if v >= 0.5]
     if f["turns"] >= 1.0:
         kind = f"cartwheels ({f['turns']:.1f} turns)"
+    elif f.get("flips", 0) >= REPEATED:
+        kind = "repeated flips onto its back"
     elif f.get("upside", 0.0) >= FLIPPED:
         kind = "flips onto its back"
     elif f["airborne"] >= 0.15:
@@ -234,6 +256,7 @@ def mode_caption(entry: dict, n_modes: int) -> str:
     lines = [f"mode {entry['mode']} of {n_modes}", entry["label"], f"{entry['count']} network(s)"]
     lines += [f"{f['speed_cm_s']:.1f} cm/s", f"turns {f['turns']:.2f}"]
     lines += [f"airborne {100 * f['airborne']:.0f}%", f"period {f['period_s']:.2f} s"]
+    lines += [f"turned over {f.get('flips', 0)} times"]
     lines += [f"periodicity {f['periodicity']:.2f}"]
     lines += [f"{n} down {100 * v:.0f}%" for n, v in f["contact"].items()]
     return "\n".join(lines)
