@@ -98,7 +98,7 @@ def test_the_digest_changes_when_any_covered_file_changes(tmp_path):
     assert source_digest(paths) == before
 
 
-def test_the_kernel_cache_directory_is_where_numba_caches(monkeypatch):
+def test_the_kernel_cache_directory_is_where_numba_caches():
     from zoetic.physics import contacts
 
     assert Path(contacts.near._cache.cache_path) == jitcache.numba_cache_dir(
@@ -121,6 +121,26 @@ def test_a_missing_source_or_an_unwritable_cache_is_harmless(tmp_path, monkeypat
     cleared = refresh([source], [source])  # first look: no stamp, so whatever is there goes
     assert len(cleared) == 1 and (cleared[0] / jitcache.STAMP).is_file()
     assert refresh([source], [source]) == []  # stamped: nothing to do
+
+
+def test_processes_starting_at_once_leave_one_whole_stamp(tmp_path, monkeypatch):
+    from concurrent.futures import ThreadPoolExecutor
+
+    from numba.core import config
+
+    source = tmp_path / "kernels.py"
+    source.write_text("x = 1\n")
+    monkeypatch.setattr(config, "CACHE_DIR", str(tmp_path / "cache"))
+    cache = jitcache.numba_cache_dir(tmp_path)
+    for n in range(20):  # stale machine code of the kernel module, and another module's
+        (cache / f"kernels.f-{n}.py311.nbi").write_text("")
+        (cache / f"other.f-{n}.py311.nbi").write_text("")
+    with ThreadPoolExecutor(8) as pool:
+        cleared = list(pool.map(lambda _: refresh([source], [source]), range(16)))
+    assert any(cleared)
+    assert (cache / jitcache.STAMP).read_text() == source_digest([source])
+    left = sorted(p.name for p in cache.iterdir())
+    assert left == sorted([jitcache.STAMP] + [f"other.f-{n}.py311.nbi" for n in range(20)])
 
 
 MAIN = """\

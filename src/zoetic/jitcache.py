@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import hashlib
 import os
-import uuid
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -139,7 +138,7 @@ def _refresh_dir(cache: Path, stems: list[str], digest: str) -> bool:
             return False
     except (OSError, UnicodeDecodeError):
         pass  # no stamp yet (or unreadable): whatever is cached may be stale
-    tmp = cache / f"{STAMP}.tmp.{uuid.uuid4().hex[:16]}"
+    tmp = cache / f"{STAMP}.tmp.{os.urandom(8).hex()}"  # unique per writer
     try:
         for entry in os.scandir(cache):
             name = entry.name
