@@ -19,6 +19,7 @@ LAYERS = {
     "io": 0,
     "outdir": 0,  # run directories and the --out convention
     "record": 0,  # the run record: one writer, one reader (NumPy and JSON)
+    "jitcache": 0,  # Numba's kernel cache kept fresh across modules
     "bodies": 1,
     "physics": 2,
     "render": 3,

@@ -11,6 +11,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from zoetic.jitcache import fresh_numba_cache
+
+fresh_numba_cache()
+
 BINS = (16, 16, 8)  # colour bins along rg, by, wb (Swain & Ballard's opponent axes)
 GAUSS = np.exp(-0.5 * np.arange(-4, 5) ** 2.0)
 GAUSS /= GAUSS.sum()  # sigma 1 px, truncated at 4 sigma (scipy's gaussian_filter)

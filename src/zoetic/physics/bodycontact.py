@@ -28,6 +28,9 @@ import numpy as np
 from numba import njit
 
 from zoetic.bodies import Body
+from zoetic.jitcache import fresh_numba_cache
+
+fresh_numba_cache()
 
 CONTACT_STEPS = 8  # steps a contact lasts: w = pi / (CONTACT_STEPS dt)
 STRETCH = 1.5  # how much longer than at rest a surface edge may get (the broad phase's reach)

@@ -15,9 +15,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from zoetic.jitcache import fresh_numba_cache
 from zoetic.physics.bodycontact import close_among, close_pairs
 from zoetic.physics.contacts import near
 from zoetic.physics.objects import Solids
+
+fresh_numba_cache()
 
 Plan = tuple[str, list[tuple[int, int]], np.ndarray | None]
 

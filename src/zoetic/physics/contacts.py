@@ -34,8 +34,11 @@ import math
 import numpy as np
 from numba import njit
 
+from zoetic.jitcache import fresh_numba_cache
 from zoetic.physics.media import DRAG, FLOOR, LEVEL, G
 from zoetic.physics.shapes import shape_force, shape_sdf
+
+fresh_numba_cache()
 
 REST_SPEED = 0.1  # m/s: a pair closing slower just stops (a resting ball does not chatter)
 SLOP = 0.002  # m: an overlap beyond it is removed at no more than CORRECTION_SPEED (m/s)

@@ -13,7 +13,10 @@ import math
 import numpy as np
 from numba import njit
 
+from zoetic.jitcache import fresh_numba_cache
 from zoetic.physics.objects import Food
+
+fresh_numba_cache()
 
 
 @njit(cache=True)

@@ -31,6 +31,7 @@ from numba import njit, prange, types
 from numba.experimental import structref
 from numba.extending import typeof_impl
 
+from zoetic.jitcache import fresh_numba_cache
 from zoetic.physics.kernel_terms import (
     FM,
     SPLIT_LANES,
@@ -46,6 +47,8 @@ from zoetic.physics.kernel_terms import (
 )
 from zoetic.physics.model import INDEX, NO_WATER, Model, field_kinds
 from zoetic.physics.noalias import njit_noalias
+
+fresh_numba_cache()
 
 
 @njit(cache=True, fastmath=FM, inline="always")

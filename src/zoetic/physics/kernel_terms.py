@@ -20,6 +20,10 @@ import llvmlite.binding as _llvm
 import numpy as np
 from numba import njit
 
+from zoetic.jitcache import fresh_numba_cache
+
+fresh_numba_cache()
+
 # The inner loops read and write many node rows that LLVM cannot prove distinct; with the
 # default limit of 8 runtime alias checks it gives up on vectorising the water-face loop.
 # Raising the limits (process-wide, and only ever enabling more vectorisation) lets it check

@@ -13,10 +13,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from zoetic.jitcache import fresh_numba_cache
 from zoetic.physics.kernel import make_stepper
 from zoetic.physics.kernel_terms import SPLIT_LANES
 from zoetic.physics.model import Model
 from zoetic.physics.simulate import VMAX, chunk_size
+
+fresh_numba_cache()
 
 F32 = np.float32
 KEEP = 64  # sets of animals whose lanes a group keeps

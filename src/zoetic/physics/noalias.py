@@ -14,11 +14,15 @@ from __future__ import annotations
 
 import numba
 
+from zoetic.jitcache import fresh_numba_cache
+
 try:  # Numba internals: absent or renamed in some Numba version, plain njit is used
     from numba.core import cpu
     from numba.core.registry import CPUDispatcher, cpu_target
 except ImportError:  # pragma: no cover - depends on the installed Numba
     cpu = None
+
+fresh_numba_cache()
 
 
 if cpu is not None:

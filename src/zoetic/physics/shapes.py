@@ -10,6 +10,10 @@ import math
 
 from numba import njit
 
+from zoetic.jitcache import fresh_numba_cache
+
+fresh_numba_cache()
+
 SEPARATION_SPEED = 0.5  # m/s: the fastest a shape's push makes a node separate
 
 

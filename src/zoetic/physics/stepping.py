@@ -20,6 +20,7 @@ from numba import njit
 
 from zoetic.bodies import Body
 from zoetic.errors import SimulationError
+from zoetic.jitcache import fresh_numba_cache
 from zoetic.physics.bodycontact import CONTACT_STEPS, pairs_contacts
 from zoetic.physics.broadphase import BroadPhase
 from zoetic.physics.contacts import balls_step, node_contacts
@@ -29,6 +30,8 @@ from zoetic.physics.media import Medium
 from zoetic.physics.model import Model
 from zoetic.physics.objects import Solids
 from zoetic.physics.simulate import VMAX, chunk_size
+
+fresh_numba_cache()
 
 F32 = np.float32
 # lane-steps per kernel call from which the thread pool is worth its launch (and its barrier,

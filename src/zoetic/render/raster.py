@@ -16,6 +16,9 @@ import numpy as np
 from numba import njit
 
 from zoetic.errors import ZoeticError
+from zoetic.jitcache import fresh_numba_cache
+
+fresh_numba_cache()
 
 NEAR = 0.01  # m: triangles with a vertex nearer than this to a camera's plane are skipped
 

@@ -10,6 +10,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from zoetic.jitcache import fresh_numba_cache
+
+fresh_numba_cache()
+
 __all__ = [
     "ANGLE",
     "CRAWL_V0",

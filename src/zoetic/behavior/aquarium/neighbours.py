@@ -16,6 +16,10 @@ import math
 import numpy as np
 from numba import njit
 
+from zoetic.jitcache import fresh_numba_cache
+
+fresh_numba_cache()
+
 SLACK = 1e-3  # m (and a thousandth of the range) the cells are wider than the range
 MAX_CELLS = 256  # cells along a side of the grid at most (2 km of 8 m cells)
 

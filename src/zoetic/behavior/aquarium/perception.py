@@ -18,6 +18,9 @@ import numpy as np
 from numba import njit
 
 from zoetic.behavior.aquarium.neighbours import near_pairs
+from zoetic.jitcache import fresh_numba_cache
+
+fresh_numba_cache()
 
 STEP = 0.25  # m between occlusion probes along a sight line
 
