@@ -1,15 +1,16 @@
 """Fig. 10 of van de Panne & Fiume 93: the fish (and the crawler) chasing a dragged point.
 
 For each creature: 200 random SANs evaluated on the follow metric (30 s, the follow point
-dragged along a seeded spline, seed 0); the best ``--top`` of them are scored again as the
-mean over the training splines (TRAIN: seed 0 and seven more), and the
-best of that mean is fine-tuned by annealing on the same mean, so the SAN is chosen and tuned
-for pursuit on any path rather than for one spline. The tuned SAN is then replayed on spline
-0 and on two splines (seeds 1 and 2) it never saw, and its gap at the end is measured on ten
-more unseen splines (UNSEEN). Per spline: the gap to the point at the end and on average, the
-creature's own swimming/crawling speed along its path and the share of the time the point is
-outside every eye's cone. Plots the creature's path (centre of its links) and the point's,
-and the distance between them over time.
+dragged along a seeded spline, seed 0); the best ``--top`` of them are scored again as the mean
+over the training splines (TRAIN: seed 0 and seven more; with ``--mirror`` each also mirrored
+left for right, so that every turn is trained both ways), and
+the best of that mean is fine-tuned by annealing on the same mean, so the SAN is chosen and
+tuned for pursuit on any path, turning either way, rather than for one spline. The tuned SAN is
+then replayed on spline 0 and on two splines (seeds 1 and 2) it never saw, and its gap at the
+end is measured on ten more unseen splines (UNSEEN). Per spline: the gap to the point at the end
+and on average, the creature's own swimming/crawling speed along its path and the share of the
+time the point is outside every eye's cone. Plots the creature's path (centre of its links) and
+the point's, and the distance between them over time.
 
 The paper gives no speed for the point. The fish's point moves at POINT_SPEED["fish"]: two
 thirds of the fish's fastest straight swim (a square wave at its 0.5 s cycle, 15.7 cm/s),
@@ -18,6 +19,7 @@ speed. (The creature file's own follow speed, 0.15 m/s, sets Table 1's pursuit m
 
 Writes docs/figures/san_pursuit.json and san_pursuit.png.
 Run: python experiments/san_pursuit.py [--trials 200] [--top 30] [--tune-trials 150] [--workers 2]
+    [--mirror]
 """
 
 from __future__ import annotations
@@ -39,7 +41,8 @@ from zoetic.san.tune import MeanEvaluator, tune
 OUT = figures_dir()
 SEEDS = (0, 1, 2)  # replayed and plotted splines: 0 was trained on, 1 and 2 never seen
 # Splines the choice and the tuning score on: seed 0 (the search's) and seeds 3-9, among
-# them sharp right turns (seed 9: 58 deg over 0.3 m of arc) but no left turn over 19 deg.
+# them sharp right turns (seed 9: 58 deg over 0.3 m of arc) but no left turn over 19 deg;
+# ``--mirror`` adds each one reflected left for right (twice the evaluations).
 TRAIN = (0, 3, 4, 5, 6, 7, 8, 9)
 TURN_M = 0.3  # m of the point's arc over which its turns are measured (3 s at 0.1 m/s)
 UNSEEN = tuple(range(20, 30))  # splines never seen, for the gap at the end
@@ -47,12 +50,17 @@ POINT_SPEED = {"fish": 0.10}  # m/s of the follow point, by creature (else its f
 KEPT_M = 0.5  # a gap at the end within about a body length (the fish is 0.4 m) keeps up
 
 
-def pick_for_pursuit(c, res, top: int, workers: int) -> int:
+def pick_for_pursuit(c, res, top: int, workers: int, mirror: bool = False) -> int:
     """Return the index of the search network with the best mean metric over TRAIN among the
     ``top`` best on the search's own spline."""
     cand = res.top(min(top, len(res.networks)))
     nets = [res.networks[i] for i in cand]
-    per = [[o.metric for o in evaluate_networks(c, nets, seed=s, workers=workers)] for s in TRAIN]
+    sides = (False, True) if mirror else (False,)
+    per = [
+        [o.metric for o in evaluate_networks(c, nets, seed=s, workers=workers, mirror=m)]
+        for s in TRAIN
+        for m in sides
+    ]
     return cand[int(np.argmax(np.mean(per, axis=0)))]
 
 
@@ -88,16 +96,17 @@ def chase(c, network, seed: int) -> tuple[dict, tuple]:
     return row, (seed, ro, body, gap)
 
 
-def pursue(name: str, trials: int, top: int, tune_trials: int, workers: int) -> tuple[dict, list]:
+def pursue(
+    name: str, trials: int, top: int, tune_trials: int, workers: int, mirror: bool = False
+) -> tuple[dict, list]:
     """Return the pursuit numbers per spline seed and the recorded rollouts."""
     c = load_creature(name)
     if name in POINT_SPEED:
         c = dataclasses.replace(c, follow_speed=POINT_SPEED[name])
     res = search(c, trials=trials, seed=0, workers=workers)
-    best = pick_for_pursuit(c, res, top, workers)
-    tuned = tune(
-        res.networks[best], c, "anneal", tune_trials, seed=0, evaluate=MeanEvaluator(TRAIN)
-    )
+    best = pick_for_pursuit(c, res, top, workers, mirror)
+    mean = MeanEvaluator(TRAIN, mirror=mirror)
+    tuned = tune(res.networks[best], c, "anneal", tune_trials, seed=0, evaluate=mean)
     rows, rollouts = {}, []
     for seed in SEEDS:
         rows[str(seed)], recorded = chase(c, tuned.network, seed)
@@ -108,6 +117,7 @@ def pursue(name: str, trials: int, top: int, tune_trials: int, workers: int) -> 
         "picked_cm_s": round(float(res.speeds[best]), 1),
         "tuned_mean_cm_s": round(speed_cm_s(c, tuned.after, 0.0), 1),
         "train_splines": list(TRAIN),
+        "train_mirrored": mirror,
         "follow_speed_m_s": c.follow_speed,
         "splines": rows,
         "unseen": {
@@ -156,12 +166,15 @@ def main() -> None:
     ap.add_argument("--top", type=int, default=30, help="search networks re-scored on TRAIN")
     ap.add_argument("--tune-trials", type=int, default=150)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument(
+        "--mirror", action="store_true", help="train on each TRAIN spline and its mirror image"
+    )
     args = ap.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     numbers, recorded = {}, {}
     for name in ("fish", "crawler"):
         numbers[name], recorded[name] = pursue(
-            name, args.trials, args.top, args.tune_trials, args.workers
+            name, args.trials, args.top, args.tune_trials, args.workers, args.mirror
         )
         print(name, json.dumps(numbers[name]), flush=True)
     (OUT / "san_pursuit.json").write_text(json.dumps(numbers, indent=2) + "\n")

@@ -93,7 +93,7 @@ class FakeWorld:
 
     builds = 0
 
-    def __init__(self, creature, terrain="flat", seed=0, follow=None):
+    def __init__(self, creature, terrain="flat", seed=0, follow=None, mirror=False):
         FakeWorld.builds += 1
         self.creature = creature
 

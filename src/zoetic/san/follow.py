@@ -8,10 +8,18 @@ __all__ = ["FollowPath"]
 
 
 class FollowPath:
-    """A follow point dragged at constant speed along a seeded spline."""
+    """A follow point dragged at constant speed along a seeded spline; ``mirror`` reflects the
+    spline about the line z = start z (its left turns become right turns and back)."""
 
     def __init__(
-        self, start: np.ndarray, lead: float, speed: float, length: float, seed: int, lateral: bool
+        self,
+        start: np.ndarray,
+        lead: float,
+        speed: float,
+        length: float,
+        seed: int,
+        lateral: bool,
+        mirror: bool = False,
     ):
         rng = np.random.default_rng([seed, 7919])
         step = max(4.0 * lead, 0.2)
@@ -19,7 +27,8 @@ class FollowPath:
         wx = start[0] + lead + step * np.arange(-1, n)
         wz = np.full(wx.shape, start[1])
         if lateral:
-            wz = wz + np.concatenate([[0.0, 0.0], rng.normal(0.0, 0.6 * step, n - 1)])
+            side = -1.0 if mirror else 1.0
+            wz = wz + side * np.concatenate([[0.0, 0.0], rng.normal(0.0, 0.6 * step, n - 1)])
         pts = np.stack([wx, wz], axis=1)
         dense = []
         for i in range(1, len(pts) - 2):  # Catmull-Rom between pts[i] and pts[i+1]
@@ -41,12 +50,19 @@ class FollowPath:
 
     @classmethod
     def for_creature(
-        cls, creature, start: np.ndarray, seed: int, seconds: float, lateral: bool
+        cls,
+        creature,
+        start: np.ndarray,
+        seed: int,
+        seconds: float,
+        lateral: bool,
+        mirror: bool = False,
     ) -> FollowPath:
         """Return the path a ``creature`` run of ``seconds`` chases from ``start`` [x, z]: long
         enough for the point to keep moving at the creature's follow speed to the end."""
         length = creature.follow_speed * max(seconds, 1.0) * 1.5 + 2.0
-        return cls(start, creature.follow_lead, creature.follow_speed, length, seed, lateral)
+        c = creature
+        return cls(start, c.follow_lead, c.follow_speed, length, seed, lateral, mirror)
 
     def at(self, t: float) -> np.ndarray:
         """Return the follow point [x, z] at time ``t`` (s)."""

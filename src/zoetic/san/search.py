@@ -92,10 +92,10 @@ class SearchResult:
 _WORKER: dict = {}
 
 
-def _init_worker(creature, terrain: str, seed: int, seconds: float) -> None:
+def _init_worker(creature, terrain: str, seed: int, seconds: float, mirror: bool = False) -> None:
     from zoetic.san.world import World
 
-    _WORKER["world"] = World(creature, terrain=terrain, seed=seed)
+    _WORKER["world"] = World(creature, terrain=terrain, seed=seed, mirror=mirror)
     _WORKER["creature"] = creature
     _WORKER["seconds"] = seconds
 
@@ -121,10 +121,11 @@ class _Trials:
     terrain: str
     seed: int
     seconds: float
+    mirror: bool = False
 
     def evaluate(self, networks: Sequence[Network]) -> list[Outcome]:
         if _WORKER.get("trials") is not self:
-            _init_worker(self.creature, self.terrain, self.seed, self.seconds)
+            _init_worker(self.creature, self.terrain, self.seed, self.seconds, self.mirror)
             _WORKER["trials"] = self
         return [_evaluate_one(net) for net in networks]
 
@@ -167,9 +168,11 @@ def evaluate_networks(
     progress: Progress | None = None,
     chunk: int | None = None,
     evaluator: str = "process",
+    mirror: bool = False,
 ) -> list[Outcome]:
     """Return one Outcome per network (same order), evaluated on ``workers`` processes, or on
-    Ray actors with ``evaluator="ray"`` (``RAY_ADDRESS``, else a local Ray; ``workers`` actors)."""
+    Ray actors with ``evaluator="ray"`` (``RAY_ADDRESS``, else a local Ray; ``workers`` actors);
+    ``mirror``: on the seed's follow spline reflected left for right."""
     seconds = float(creature.seconds if seconds is None else seconds)
     total = len(networks)
     workers = max(1, min(int(workers or os.cpu_count() or 1), max(total, 1)))
@@ -195,7 +198,8 @@ def evaluate_networks(
             note(start, outs, done)
 
         try:
-            pool.map(_Trials(creature, terrain, seed, seconds), list(networks), on_part=part)
+            trials = _Trials(creature, terrain, seed, seconds, mirror)
+            pool.map(trials, list(networks), on_part=part)
         finally:
             pool.close()
         return outcomes  # type: ignore[return-value]
@@ -204,7 +208,7 @@ def evaluate_networks(
 
         raise ZoeticError(f"unknown evaluator {evaluator!r} (process or ray)")
     if workers == 1:
-        _init_worker(creature, terrain, seed, seconds)
+        _init_worker(creature, terrain, seed, seconds, mirror)
         try:
             for i, net in enumerate(networks):
                 note(i, [_evaluate_one(net)], i + 1)
@@ -218,7 +222,7 @@ def evaluate_networks(
         max_workers=workers,
         mp_context=pool_context(),
         initializer=_init_worker,
-        initargs=(creature, terrain, seed, seconds),
+        initargs=(creature, terrain, seed, seconds, mirror),
     ) as pool:
         futures = [
             pool.submit(_evaluate_chunk, s, list(networks[s : s + size]))

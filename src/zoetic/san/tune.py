@@ -121,10 +121,17 @@ def _network(network: Network, values: dict[str, np.ndarray]) -> Network:
 
 
 class WorldEvaluator:
-    """Evaluate a network in one World, re-applying the Fig. 8 parameters when they change."""
+    """Evaluate a network in one World, re-applying the Fig. 8 parameters when they change
+    (``mirror``: on the seed's follow spline reflected left for right)."""
 
-    def __init__(self, terrain: str = "flat", seed: int = 0, seconds: float | None = None):
-        self.terrain, self.seed, self.seconds = terrain, seed, seconds
+    def __init__(
+        self,
+        terrain: str = "flat",
+        seed: int = 0,
+        seconds: float | None = None,
+        mirror: bool = False,
+    ):
+        self.terrain, self.seed, self.seconds, self.mirror = terrain, seed, seconds, mirror
         self._key: bytes | None = None
         self._world = None
 
@@ -135,7 +142,7 @@ class WorldEvaluator:
         tuning = creature.tuning()
         key = b"".join(np.asarray(tuning[k], dtype=float).tobytes() for k in TUNING_KEYS)
         if self._world is None:
-            self._world = World(creature, terrain=self.terrain, seed=self.seed)
+            self._world = World(creature, self.terrain, self.seed, mirror=self.mirror)
         elif key != self._key:
             self._world.set_tuning(creature)  # no recompile: same structure, new parameters
         self._key = key
@@ -147,12 +154,21 @@ class WorldEvaluator:
 class MeanEvaluator:
     """Evaluate a network as the mean metric over worlds of several seeds: for a "follow"
     creature, several splines, so that tuning rewards pursuit in general rather than the
-    manoeuvres that happen to fit one path."""
+    manoeuvres that happen to fit one path. With ``mirror``, each seed's spline counts twice:
+    as it is and reflected left for right, so that turning one way can earn nothing the other
+    way does not."""
 
-    def __init__(self, seeds: Sequence[int], terrain: str = "flat", seconds: float | None = None):
+    def __init__(
+        self,
+        seeds: Sequence[int],
+        terrain: str = "flat",
+        seconds: float | None = None,
+        mirror: bool = False,
+    ):
         if not seeds:
             raise TuneError("MeanEvaluator needs at least one seed")
-        self.parts = [WorldEvaluator(terrain, int(s), seconds) for s in seeds]
+        sides = (False, True) if mirror else (False,)
+        self.parts = [WorldEvaluator(terrain, int(s), seconds, m) for s in seeds for m in sides]
 
     def __call__(self, network: Network, creature) -> float:
         """Return the mean of the worlds' metrics (-inf if any world's metric is not finite)."""

@@ -10,12 +10,13 @@ Public interface::
     Rollout   frozen dataclass: metric, fell, distance, seconds, times (R,), poses (R, L, 3),
               sensors (R, S), commands (R, A), targets (R, A), states (R, N) | None,
               follow (R, 2) | None, terrain (K, 2) | None, unstable
-    World(creature, terrain="flat" | "rough" | "hill", seed=0, follow=None)
+    World(creature, terrain="flat" | "rough" | "hill", seed=0, follow=None, mirror=False)
         .run(policy, seconds=None, record_every=0) -> Rollout
         .set_tuning(creature)                  same structure, new Fig. 8 parameters
         .read_sensors(follow_point=None), .poses(), .com(), .ground(x)   for the current state
         (``follow`` defaults to creature.metric == "follow"; without a follow point eyes see
-        nothing and a "follow" creature is scored by its distance)
+        nothing and a "follow" creature is scored by its distance; ``mirror`` reflects the
+        follow spline left for right)
     evaluate(creature, policy, seconds=None, terrain="flat", seed=0) -> float
 
 How a rollout runs. Every ``control_dt`` the world reads the binary sensors, calls
@@ -119,15 +120,22 @@ def _probes(link, at: float | None) -> list[tuple[float, float, float]]:
 
 class World:
     """A creature compiled into MuJoCo once, on flat or rough ground or in a valley between two
-    hills (``hill``: uphill at 10% either way from |x| = 0.5 m); ``run`` resets it."""
+    hills (``hill``: uphill at 10% either way from |x| = 0.5 m); ``run`` resets it.
+    ``mirror`` reflects the follow point's spline about the creature's start line."""
 
     def __init__(
-        self, creature: Creature, terrain: str = "flat", seed: int = 0, follow: bool | None = None
+        self,
+        creature: Creature,
+        terrain: str = "flat",
+        seed: int = 0,
+        follow: bool | None = None,
+        mirror: bool = False,
     ):
         if terrain not in ("flat", "rough", "hill"):
             raise CreatureError(f"unknown terrain {terrain!r} (expected 'flat', 'rough' or 'hill')")
         c = creature
         self.creature, self.terrain_kind, self.seed = c, terrain, int(seed)
+        self.mirror = bool(mirror)
         self.vertical = c.plane == "vertical"
         self.follow_on = (c.metric == "follow") if follow is None else bool(follow)
         self.terrain = None
@@ -375,7 +383,8 @@ class World:
         com0 = self.com()
         path = None
         if self.follow_on:
-            path = FollowPath.for_creature(c, com0, self.seed, seconds, not self.vertical)
+            lateral = not self.vertical
+            path = FollowPath.for_creature(c, com0, self.seed, seconds, lateral, self.mirror)
         kind = c.metric if (c.metric != "follow" or path is not None) else "distance"
         return angle0, com0, path, kind
 
