@@ -120,11 +120,8 @@ class FishEyes:
         use = np.flatnonzero(locked)
         half = 0.5 * spec.fovs[-1]
         # every prey node's angle off the nearest locked gaze ray, all prey at once
-        off0 = world.offsets
-        nodes = world.node_positions()
-        rows = np.concatenate([np.arange(off0[j], off0[j + 1]) for j in prey])
-        starts = np.cumsum([0] + [off0[j + 1] - off0[j] for j in prey[:-1]])
-        to = nodes[rows][None] - eyes[use, None]
+        rows, starts = prey_rows(world.offsets, prey)
+        to = world.node_positions()[rows][None] - eyes[use, None]
         to /= np.sqrt((to * to).sum(-1))[..., None]
         cos = np.clip((to * dirs[use, None]).sum(-1), -1, 1).max(0)
         near = np.maximum.reduceat(cos, starts)
@@ -142,6 +139,15 @@ class FishEyes:
             rng = float(max(along[np.argmin(miss)], 0.0))
             point = e + rng * d
         return Sighting(best, float(rng), np.asarray(point, float))
+
+
+def prey_rows(offsets: np.ndarray, prey: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the rows of the fishes ``prey`` in ``World.node_positions`` (``offsets``: its
+    ``World.offsets``), one fish after another, and where each fish's rows start among them."""
+    prey = np.asarray(prey, np.int64)
+    first, counts = offsets[prey], offsets[prey + 1] - offsets[prey]
+    starts = np.cumsum(counts) - counts
+    return np.repeat(first - starts, counts) + np.arange(counts.sum()), starts
 
 
 def render_eyes(mesh: Mesh, cams: Cameras, spec: EyeSpec) -> np.ndarray:
