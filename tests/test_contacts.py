@@ -100,7 +100,7 @@ def test_a_node_driven_into_a_thin_post_is_let_out_not_shot_out(dolphin):
 
 
 def _near_node_by_node(pos, vel, radius, skind, scenter, ssize, horizon) -> bool:
-    """``contacts.near`` without balls, every node against every shape (the reference)."""
+    """``broadphase.near`` without balls, every node against every shape (the reference)."""
     from zoetic.physics.shapes import shape_sdf
 
     for b in range(pos.shape[2]):
@@ -114,7 +114,7 @@ def _near_node_by_node(pos, vel, radius, skind, scenter, ssize, horizon) -> bool
 
 
 def test_near_tests_the_shapes_within_reach_of_the_animal_as_every_shape():
-    from zoetic.physics.contacts import near
+    from zoetic.physics.broadphase import near
 
     rng = np.random.default_rng(6)
     skind = np.array([0, 1, 1, 1, 0], np.int64)  # boxes and cylinders along x, y and z

@@ -208,6 +208,14 @@ def test_a_batch_in_chunks_matches_the_kernel_and_shared_activations_match_one_b
     for k in range(3):
         rec_k, _, _ = roll(st.positions[k], st.velocities[k], act[0])
         assert np.abs(np.asarray(rec_b[k]) - np.asarray(rec_k)).max() < 1e-6
+    # the chunked rollout with one table for every start, as (T, A) or (1, T, A): as the
+    # table repeated for each start
+    rollout = make_rollout(body, record_every=40)
+    rec_all, _, _ = rollout(st.positions, st.velocities, np.repeat(act[:1], 5, axis=0))
+    for table in (act[0], act[:1]):
+        rec_one, _, _ = rollout(st.positions, st.velocities, table)
+        assert np.asarray(rec_one).shape == tr.positions.shape
+        assert np.abs(np.asarray(rec_one) - np.asarray(rec_all)).max() < 1e-6
 
 
 def test_cache_dir_follows_the_environment(monkeypatch, tmp_path):

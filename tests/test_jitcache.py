@@ -99,10 +99,10 @@ def test_the_digest_changes_when_any_covered_file_changes(tmp_path):
 
 
 def test_the_kernel_cache_directory_is_where_numba_caches():
-    from zoetic.physics import contacts
+    from zoetic.physics import broadphase
 
-    assert Path(contacts.near._cache.cache_path) == jitcache.numba_cache_dir(
-        Path(contacts.__file__).parent
+    assert Path(broadphase.near._cache.cache_path) == jitcache.numba_cache_dir(
+        Path(broadphase.__file__).parent
     )
 
 

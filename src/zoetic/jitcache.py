@@ -2,7 +2,7 @@
 
 Numba checks a cached kernel only against the source file that defines it, yet a kernel holds
 compiled copies of what it calls or inlines from other modules (``kernel`` inlines
-``kernel_terms``; ``broadphase.near_each`` inlines ``contacts.near``) and the values of the
+``kernel_terms``; ``broadphase.near`` inlines ``shapes.node_box``) and the values of the
 module constants it reads (``media.G``). Edit one of those alone and Numba goes on serving the
 old machine code. ``fresh_numba_cache`` closes that gap: one digest of every module that
 defines compiled code and of every zoetic module they import (``SOURCES``) is kept in a stamp

@@ -55,8 +55,7 @@ class AbstractController(Controller):
         """Return unclipped activations (T, A) at times t (s): offset plus the cosine modes."""
         t = np.asarray(t, float)[:, None, None]
         waves = self.amp * np.cos(2 * np.pi * self.freq * t + self.phase)  # (T, A, K)
-        # the modes added in turn: NumPy's sum over a short last axis is slow (and adds fewer
-        # than 8 terms in this order too, so the bits are the same)
+        # the modes added in order: NumPy's reduction over a short last axis is slow
         total = np.zeros(waves.shape[:2])
         for k in range(waves.shape[2]):
             total = total + waves[:, :, k]

@@ -29,6 +29,7 @@ from numba import njit
 
 from zoetic.bodies import Body
 from zoetic.jitcache import fresh_numba_cache
+from zoetic.physics.shapes import node_box
 
 fresh_numba_cache()
 
@@ -154,21 +155,9 @@ def _signed(pos, faces, b, px, py, pz):
 
 
 @njit(cache=True, inline="always")
-def _box(pos, b, pad):
-    """Return the bounding box (lo x, y, z, hi x, y, z) of the nodes in lane b, padded."""
-    lx = ly = lz = np.inf
-    hx = hy = hz = -np.inf
-    for i in range(pos.shape[0]):
-        x, y, z = pos[i, 0, b], pos[i, 1, b], pos[i, 2, b]
-        lx, ly, lz = min(lx, x), min(ly, y), min(lz, z)
-        hx, hy, hz = max(hx, x), max(hy, y), max(hz, z)
-    return lx - pad, ly - pad, lz - pad, hx + pad, hy + pad, hz + pad
-
-
-@njit(cache=True, inline="always")
 def _any_in_box(p, q, b, pad) -> bool:
     """Return True if some node of p lies in the bounding box of q's nodes padded by pad."""
-    lx, ly, lz, hx, hy, hz = _box(q, b, pad)
+    lx, ly, lz, hx, hy, hz = node_box(q, b, pad)
     for i in range(p.shape[0]):
         x, y, z = p[i, 0, b], p[i, 1, b], p[i, 2, b]
         if lx <= x <= hx and ly <= y <= hy and lz <= z <= hz:
@@ -282,7 +271,7 @@ def close_pairs(pos, vel, off, reach, skin, horizon) -> np.ndarray:
 def _push(pa, va, ma, pb, vb, mb, fb, radius, w, zeta, fa_out, fb_out, load, b):
     """Add to fa_out / fb_out (N, 3) the forces between the nodes of a and the skin of b in
     lane b; return the normal force's sum (N)."""
-    lx, ly, lz, hx, hy, hz = _box(pb, b, radius)
+    lx, ly, lz, hx, hy, hz = node_box(pb, b, radius)
     total = 0.0
     for i in range(pa.shape[0]):
         px, py, pz = pa[i, 0, b], pa[i, 1, b], pa[i, 2, b]
@@ -395,7 +384,7 @@ def close_among(pos, vel, off, pairs, reach, skin, horizon) -> np.ndarray:
 
 @njit(cache=True)
 def _deepest(pa, pb, fb, b) -> float:
-    lx, ly, lz, hx, hy, hz = _box(pb, b, 0.0)
+    lx, ly, lz, hx, hy, hz = node_box(pb, b, 0.0)
     out = 0.0
     for i in range(pa.shape[0]):
         px, py, pz = pa[i, 0, b], pa[i, 1, b], pa[i, 2, b]

@@ -12,13 +12,15 @@ animal, steps one step at a time, the others the whole slice at once) or ``free`
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
 from zoetic.jitcache import fresh_numba_cache
 from zoetic.physics.bodycontact import close_among, close_pairs
-from zoetic.physics.contacts import near
 from zoetic.physics.objects import Solids
+from zoetic.physics.shapes import half_extent, node_box, shape_sdf
 
 fresh_numba_cache()
 
@@ -26,8 +28,73 @@ Plan = tuple[str, list[tuple[int, int]], np.ndarray | None]
 
 
 @njit(cache=True)
+def near(pos, vel, radius, bpos, bvel, bpar, skind, scenter, ssize, horizon):
+    """Return True if any node could touch any ball or fixed shape within ``horizon`` s.
+
+    A shape whose bounding box lies farther than the reach from the box of the animal's
+    nodes along some axis is not tested node by node (no node can come within reach of it)."""
+    n_nodes = pos.shape[0]
+    some = np.empty(skind.shape[0], np.int64)  # the shapes tested node by node
+    for b in range(pos.shape[2]):
+        vmax = 0.0
+        for i in range(n_nodes):
+            v2 = vel[i, 0, b] ** 2 + vel[i, 1, b] ** 2 + vel[i, 2, b] ** 2
+            vmax = max(vmax, v2)
+        bmax = 0.0
+        for k in range(bpos.shape[0]):
+            v2 = bvel[k, 0, b] ** 2 + bvel[k, 1, b] ** 2 + bvel[k, 2, b] ** 2
+            bmax = max(bmax, v2)
+        # twice the current speeds over the horizon, plus a few cm: a conservative reach
+        reach = 2.0 * (math.sqrt(vmax) + math.sqrt(bmax)) * horizon + radius + 0.05
+        n_some = _shapes_within(pos, b, skind, scenter, ssize, reach, some)
+        if n_some == 0 and bpos.shape[0] == 0:
+            continue
+        for i in range(n_nodes):
+            px, py, pz = pos[i, 0, b], pos[i, 1, b], pos[i, 2, b]
+            for k in range(bpos.shape[0]):
+                dx = px - bpos[k, 0, b]
+                dy = py - bpos[k, 1, b]
+                dz = pz - bpos[k, 2, b]
+                if dx * dx + dy * dy + dz * dz < (bpar[k, 0] + reach) ** 2:
+                    return True
+            for q in range(n_some):
+                d, _, _, _ = shape_sdf(some[q], skind, scenter, ssize, px, py, pz)
+                if d < reach:
+                    return True
+    return False
+
+
+@njit(cache=True, inline="always")
+def _shapes_within(pos, b, skind, scenter, ssize, reach, out) -> int:
+    """Put into ``out`` the fixed shapes whose bounding box comes within ``reach`` (plus a
+    micrometre, against rounding) of the box of the nodes pos (N, 3, B) in lane b along every
+    axis; return how many. A point farther than that from a shape's box along one axis is
+    farther from the shape (its signed distance is at least the gap)."""
+    lx, ly, lz, hx, hy, hz = node_box(pos, b, 0.0)
+    pad = reach + 1e-6
+    k = 0
+    for s in range(skind.shape[0]):
+        h0 = half_extent(skind, ssize, s, 0)
+        h1 = half_extent(skind, ssize, s, 1)
+        h2 = half_extent(skind, ssize, s, 2)
+        c0, c1, c2 = scenter[s, 0], scenter[s, 1], scenter[s, 2]
+        if (
+            lx > c0 + h0 + pad
+            or hx < c0 - h0 - pad
+            or ly > c1 + h1 + pad
+            or hy < c1 - h1 - pad
+            or lz > c2 + h2 + pad
+            or hz < c2 - h2 - pad
+        ):
+            continue
+        out[k] = s
+        k += 1
+    return k
+
+
+@njit(cache=True)
 def near_each(pos, vel, off, radius, bpos, bvel, bpar, skind, scenter, ssize, horizon, out):
-    """Fill out (animals,) with ``contacts.near`` of each animal (rows off[a]:off[a + 1] of
+    """Fill out (animals,) with ``near`` of each animal (rows off[a]:off[a + 1] of
     pos and vel): could any of its nodes touch a ball or fixed shape within ``horizon`` s."""
     for a in range(off.shape[0] - 1):
         o0, o1 = off[a], off[a + 1]

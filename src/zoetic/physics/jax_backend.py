@@ -189,7 +189,7 @@ class ChunksAtOnce:
         if x0.ndim != 3 or x0.shape[0] <= chunk:
             return self.program(x0, v0, act)
         act = jnp.asarray(act, F32)
-        shared = act.ndim == 2
+        shared = act.ndim == 2 or act.shape[0] == 1  # (T, A) or (1, T, A): one row for all
         b = x0.shape[0]
         starts = range(0, b, chunk)
 

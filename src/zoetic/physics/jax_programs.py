@@ -14,7 +14,7 @@ The key is everything the program depends on: the caller's fingerprint of the va
 function closes over (``fingerprint``: the model's or the objective's arrays), the
 arguments' shapes and dtypes, the backend, JAX's version and the source of the whole
 ``zoetic`` package (any edit makes new programs). With no JAX cache directory there is no
-store, and a ``StoredProgram`` is ``jax.jit`` of its function.
+store, and a ``StoredProgram`` compiles its function once a process, as ``jax.jit`` does.
 """
 
 from __future__ import annotations
@@ -130,20 +130,17 @@ def _dtype(a) -> np.dtype:
 
 def _program(build: Callable[[], Callable], key: str, specs: list) -> Callable:
     """Return the compiled program for ``specs``: loaded from the store, else built, traced,
-    compiled and stored; ``jax.jit(build())`` when there is no store."""
+    compiled and stored (kept only in memory when there is no store)."""
     where = store_dir()
-    if where is None:
-        return jax.jit(build())
-    path = where / f"{fingerprint(key, machine(), code_version())}.bin"
-    try:
-        payload, in_tree, out_tree = pickle.loads(path.read_bytes())
-        compiled = deserialize_and_load(payload, in_tree, out_tree)
-    except Exception:  # none yet, or whatever a broken or foreign file raises: compile anew
+    path = None if where is None else where / f"{fingerprint(key, machine(), code_version())}.bin"
+    compiled = None if path is None else _load(path)
+    if compiled is None:
         compiled = jax.jit(build()).lower(*specs).compile()
-        try:
-            _write(path, pickle.dumps(serialize(compiled)))
-        except (ValueError, NotImplementedError):  # a program JAX cannot serialize: not kept
-            pass
+        if path is not None:
+            try:
+                _write(path, pickle.dumps(serialize(compiled)))
+            except (ValueError, NotImplementedError):  # a program JAX cannot serialize: not kept
+                pass
 
     def run(*args):
         return compiled(*(jnp.asarray(a, s.dtype) for a, s in zip(args, specs, strict=True)))
@@ -151,14 +148,26 @@ def _program(build: Callable[[], Callable], key: str, specs: list) -> Callable:
     return run
 
 
+def _load(path: Path) -> Callable | None:
+    """Return the program stored at ``path``, or None when there is none or it cannot be
+    loaded (a broken or foreign file: the caller compiles anew)."""
+    try:
+        payload, in_tree, out_tree = pickle.loads(path.read_bytes())
+        return deserialize_and_load(payload, in_tree, out_tree)
+    except Exception:  # whatever a missing, truncated or foreign file raises
+        return None
+
+
 def _write(path: Path, data: bytes) -> None:
     """Write ``data`` to ``path`` whole or not at all (a rename), so that processes sharing
-    the store never read half a program."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-")
+    the store never read half a program; a store that cannot be written keeps nothing."""
+    tmp = None
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-")
         with os.fdopen(fd, "wb") as out:
             out.write(data)
         os.replace(tmp, path)
-    except OSError:
-        Path(tmp).unlink(missing_ok=True)
+    except OSError:  # a read-only or full cache directory: the program runs, unstored
+        if tmp is not None:
+            Path(tmp).unlink(missing_ok=True)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from zoetic.jitcache import fresh_numba_cache
@@ -68,6 +69,31 @@ def _sdf(kind, cx, cy, cz, s0, s1, s2, px, py, pz):
     if ax == 1:
         return d, n2, na, n1
     return d, n1, n2, na
+
+
+@njit(cache=True, inline="always")
+def half_extent(kind, size, s, c):
+    """Return shape s's half-extent (m) along world axis c: a box's half-size, a cylinder's
+    half length along its axis (``size[s, 2]``) and its radius across it, a sphere's (kind 2,
+    the aquarium's obstacles) radius."""
+    if kind[s] == 0:
+        return size[s, c]
+    if kind[s] == 2:
+        return size[s, 0]
+    return size[s, 1] if c == int(size[s, 2]) else size[s, 0]
+
+
+@njit(cache=True, inline="always")
+def node_box(pos, b, pad):
+    """Return the bounding box (lo x, y, z, hi x, y, z) of the nodes pos (N, 3, B) in lane b,
+    padded by pad (m) on every side."""
+    lx = ly = lz = np.inf
+    hx = hy = hz = -np.inf
+    for i in range(pos.shape[0]):
+        x, y, z = pos[i, 0, b], pos[i, 1, b], pos[i, 2, b]
+        lx, ly, lz = min(lx, x), min(ly, y), min(lz, z)
+        hx, hy, hz = max(hx, x), max(hy, y), max(hz, z)
+    return lx - pad, ly - pad, lz - pad, hx + pad, hy + pad, hz + pad
 
 
 @njit(cache=True, inline="always")

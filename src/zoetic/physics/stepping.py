@@ -255,7 +255,6 @@ class ContactSlices:
         self.w_body = np.pi / (CONTACT_STEPS * dt)
         self.zeta = float(damping_ratio)
         self.mu = float(friction)
-        self.pair_buf = np.zeros((2, drive.batch))
         self.tested: set[int] = set()  # the animals whose node contacts a step computed
 
     def lockstep(self, tables, t: int, t1: int, n: int, impulse, pairs, between) -> None:

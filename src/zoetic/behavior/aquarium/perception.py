@@ -19,6 +19,7 @@ from numba import njit
 
 from zoetic.behavior.aquarium.neighbours import near_pairs
 from zoetic.jitcache import fresh_numba_cache
+from zoetic.physics.shapes import half_extent
 
 fresh_numba_cache()
 
@@ -66,12 +67,7 @@ def _bounds(kind, center, size):
     hi = np.empty((kind.shape[0], 3))
     for s in range(kind.shape[0]):
         for c in range(3):
-            if kind[s] == 0:
-                h = size[s, c]
-            elif kind[s] == 2:
-                h = size[s, 0]
-            else:
-                h = size[s, 1] if c == int(size[s, 2]) else size[s, 0]
+            h = half_extent(kind, size, s, c)
             lo[s, c] = center[s, c] - h - 1e-3
             hi[s, c] = center[s, c] + h + 1e-3
     return lo, hi
