@@ -86,12 +86,14 @@ def refresh(sources: Iterable[Path], kernels: Iterable[Path]) -> list[Path]:
     return cleared
 
 
-def source_digest(sources: Iterable[Path]) -> str:
-    """Return the SHA-256 (hex) of the named files' names and contents, in sorted order."""
-    h = hashlib.sha256()
+def source_digest(sources: Iterable[Path], salt: str = "") -> str:
+    """Return the SHA-256 (hex) of ``salt`` and the named files' paths (relative to the
+    package where they lie in it) and contents, in sorted order."""
+    h = hashlib.sha256(salt.encode())
     for path in sorted(sources):
         data = path.read_bytes()
-        h.update(f"{path.name}\0{len(data)}\0".encode())
+        name = path.relative_to(PACKAGE) if path.is_relative_to(PACKAGE) else path.name
+        h.update(f"{name}\0{len(data)}\0".encode())
         h.update(data)
     return h.hexdigest()
 

@@ -34,6 +34,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax.experimental.serialize_executable import deserialize_and_load, serialize
 
+from zoetic.jitcache import PACKAGE, source_digest
+
 STORE = "zoetic-programs"  # the folder inside JAX's compilation cache directory
 
 
@@ -74,12 +76,7 @@ def _feed(h, q) -> None:
 @lru_cache(maxsize=1)
 def code_version() -> str:
     """Return a digest of every ``.py`` file of the ``zoetic`` package and JAX's version."""
-    root = Path(__file__).resolve().parents[1]
-    h = hashlib.sha256(f"jax {jax.__version__}".encode())
-    for path in sorted(root.rglob("*.py")):
-        h.update(str(path.relative_to(root)).encode())
-        h.update(path.read_bytes())
-    return h.hexdigest()
+    return source_digest(PACKAGE.rglob("*.py"), salt=f"jax {jax.__version__}")
 
 
 def machine() -> tuple:
