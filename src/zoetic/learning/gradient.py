@@ -249,19 +249,19 @@ def jax_objective(objective: Objective) -> Callable:
     """
     from zoetic.learning.objective import control_energy_xp
 
-    task, body = objective.task, objective.body
-    L, c = (jnp.asarray(a, F32) for a in linear_map(objective))
-    basis = jnp.asarray(objective._basis, F32)  # (T, M)
-    node_basis = jnp.asarray(objective._node_basis, F32)
-    shape = objective.full_shape
-    x0 = jnp.asarray(objective.starts.positions, F32)  # (S, N, 3): one batch of starts
-    v0 = jnp.asarray(objective.starts.velocities, F32)
-    roll = rollout_fn(body, objective.medium, objective.dt, objective.record_every)
+    # only what objective_inputs lists (the stored program's key), so the key cannot miss one
+    (task, body, medium, dt, steps, record_every, (L, c), basis, node_basis, shape, x0, v0, rows,
+     h) = objective_inputs(objective)  # fmt: skip
+    L, c = jnp.asarray(L, F32), jnp.asarray(c, F32)
+    basis = jnp.asarray(basis, F32)  # (T, M)
+    node_basis = jnp.asarray(node_basis, F32)
+    x0 = jnp.asarray(x0, F32)  # (S, N, 3): one batch of starts
+    v0 = jnp.asarray(v0, F32)
+    roll = rollout_fn(body, medium, dt, record_every)
     frame = BodyFrame.of(body)
-    n_rec = objective.steps // objective.record_every + 1
-    rows = objective.record_rows(n_rec)
-    times = np.arange(n_rec) * objective.record_every * objective.dt
-    level = objective.medium.water_level
+    n_rec = steps // record_every + 1
+    times = np.arange(n_rec) * record_every * dt
+    level = medium.water_level
 
     def evaluate(p):
         coef = jnp.reshape(L @ p + c, shape)
@@ -273,7 +273,7 @@ def jax_objective(objective: Objective) -> Callable:
         # the mean over the task's starts, as the NumPy objective
         e_v = sum(t.weight * jnp.mean(v) for t, v in zip(task.terms, values, strict=True))
         u = jnp.einsum("jm,am->aj", node_basis, coef)[None]
-        e_u = control_energy_xp(jnp, u, objective.h, task.nu1, task.nu2)[0]
+        e_u = control_energy_xp(jnp, u, h, task.nu1, task.nu2)[0]
         return task.mu1 * e_u + task.mu2 * e_v, (e_u, e_v)
 
     return evaluate
