@@ -77,6 +77,17 @@ def _oracle(eyes, fwd, fish, alive, food, left, kind, center, size, va, vr, sr):
     return np.where(vf, d, np.inf), np.where(vd, dd, np.inf), np.where(seen, do, np.inf)
 
 
+def _perceived_as_the_oracle(*args):
+    """Return ``perceive(*args)`` after checking that fishes, food and obstacles are what
+    the oracle's formulas give, every entry equal."""
+    pc = perceive(*args)
+    want_fish, want_food, want_obstacles = _oracle(*args)
+    assert np.array_equal(pc.fish, want_fish)
+    assert np.array_equal(pc.food, want_food)
+    assert np.array_equal(pc.obstacles, want_obstacles)
+    return pc
+
+
 @pytest.mark.parametrize("seed", range(4))
 def test_compiled_perception_equals_the_oracles_formulas(seed):
     rng = np.random.default_rng(seed)
@@ -87,12 +98,9 @@ def test_compiled_perception_equals_the_oracles_formulas(seed):
     va = rng.uniform(200, 330, len(eyes))
     vr = rng.uniform(4, 12, len(eyes))
     sr = rng.uniform(0, 3, len(eyes))
-    args = (eyes, fwd, fish, alive, food, left, kind, center, size, va, vr, sr)
-    pc = perceive(*args)
-    want_fish, want_food, want_obstacles = _oracle(*args)
-    assert np.array_equal(pc.fish, want_fish)
-    assert np.array_equal(pc.food, want_food)
-    assert np.array_equal(pc.obstacles, want_obstacles)
+    pc = _perceived_as_the_oracle(
+        eyes, fwd, fish, alive, food, left, kind, center, size, va, vr, sr
+    )
     # the scene is not trivial: some sight lines are blocked, some targets out of view
     assert np.isfinite(pc.fish).sum() > 5 and (np.isinf(pc.fish).sum() > len(eyes))
     every = np.ones((len(eyes), len(fish)), bool)
@@ -117,12 +125,9 @@ def test_perception_of_a_wide_crowd_equals_every_pair_tested(seed):
     left = rng.random(len(food)) > 0.1
     va = rng.uniform(200, 330, len(eyes))
     sr = np.full(len(eyes), 3.0)
-    args = (eyes, fwd, fish, alive, food, left, kind, center, size, va, vr, sr)
-    pc = perceive(*args)
-    want_fish, want_food, want_obstacles = _oracle(*args)
-    assert np.array_equal(pc.fish, want_fish)
-    assert np.array_equal(pc.food, want_food)
-    assert np.array_equal(pc.obstacles, want_obstacles)
+    pc = _perceived_as_the_oracle(
+        eyes, fwd, fish, alive, food, left, kind, center, size, va, vr, sr
+    )
     assert (pc.fish == 6.0).any() and (pc.food == 3.0).any()  # edge pairs perceived
     assert np.isfinite(pc.fish).sum() > 100 and np.isfinite(pc.food).sum() > 50
 

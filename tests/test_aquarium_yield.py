@@ -31,9 +31,9 @@ def test_of_two_fishes_threatening_each_other_the_one_going_for_food_swims_on():
     assert right_of_way(np.array([1, 0]), [1.0, 1.0]).tolist() == [True, False]
 
 
-def test_a_fish_going_for_food_swims_on_and_the_fish_coming_head_on_yields(monkeypatch):
-    # a hungry minnow swims for a particle 4.5 m ahead; a sated one (hunger 0: it wanders)
-    # comes at it head on, 0.1 m aside: the sated one avoids (brakes, turns away) first
+def _head_on_tank(monkeypatch, seconds: float):
+    """Two minnows head on, 0.1 m aside, cruising: fish 0 hungry and swimming for a particle
+    4.5 m ahead, fish 1 sated (hunger 0: it wanders)."""
     from zoetic.physics.objects import Food
     from zoetic.physics.world import World
 
@@ -44,15 +44,20 @@ def test_a_fish_going_for_food_swims_on_and_the_fish_coming_head_on_yields(monke
 
     monkeypatch.setattr(tk, "tank_brains", brains)
     cfg = TankConfig(
-        fishes=2, predators=0, food=0, obstacles=0, seconds=SECONDS, seed=0, half_size=8.0
+        fishes=2, predators=0, food=0, obstacles=0, seconds=seconds, seed=0, half_size=8.0
     )
     t = build_tank(cfg)
     world = World([*t.world.animals, *t.world.statics, Food(FOOD, 0.25)], medium="water")
     tank = tk.Tank(cfg, world, t.fishes, t.kind, t.center, t.size, t.static_names)
-    body = tank.fishes[0].body
     poses = [((-2.0, 0.0, 0.0), 0.0), ((1.0, 0.0, 0.1), np.pi)]
-    cruise_from(world, body, poses, tank.fishes[0].species.motor.cruise_speed)
-    life = live(tank)
+    cruise_from(world, tank.fishes[0].body, poses, tank.fishes[0].species.motor.cruise_speed)
+    return tank
+
+
+def test_a_fish_going_for_food_swims_on_and_the_fish_coming_head_on_yields(monkeypatch):
+    # a hungry minnow swims for a particle 4.5 m ahead; a sated one (hunger 0: it wanders)
+    # comes at it head on, 0.1 m aside: the sated one avoids (brakes, turns away) first
+    life = live(_head_on_tank(monkeypatch, SECONDS))
     avoid, eat = INTENTIONS.index("avoid"), INTENTIONS.index("eat")
     yields = np.flatnonzero(life.intentions[:, 1] == avoid)
     assert len(yields)  # the sated fish saw the eater coming and yielded
@@ -138,25 +143,11 @@ def test_a_yielding_fish_turns_off_the_eaters_line_to_the_side_it_lies_on():
 
 
 def test_the_fish_that_yields_head_on_moves_off_the_eaters_line(monkeypatch):
-    # the right of way's head-on pair (0.1 m aside): the yielder turned by the foreseen
-    # closest approach, which sways with each tail beat, one way and the other, stopped on
-    # the eater's line (0.09 m off it after 7 s) and the eater avoided it for 3 s; turned
-    # off the eater's line to the side it lies on, it is clear of it within 7 s
-    from zoetic.physics.objects import Food
-    from zoetic.physics.world import World
-
-    def brains(*args):
-        out = tank_brains(*args)
-        out[1].mind = initial_mind(0.0, out[1].species.mind.hunger_rate)
-        return out
-
-    monkeypatch.setattr(tk, "tank_brains", brains)
-    cfg = TankConfig(fishes=2, predators=0, food=0, obstacles=0, seconds=7.0, seed=0, half_size=8.0)
-    t = build_tank(cfg)
-    world = World([*t.world.animals, *t.world.statics, Food(FOOD, 0.25)], medium="water")
-    tank = tk.Tank(cfg, world, t.fishes, t.kind, t.center, t.size, t.static_names)
-    poses = [((-2.0, 0.0, 0.0), 0.0), ((1.0, 0.0, 0.1), np.pi)]
-    cruise_from(world, tank.fishes[0].body, poses, tank.fishes[0].species.motor.cruise_speed)
+    # the right of way's head-on pair (0.1 m aside): the yielder turns off the eater's line
+    # to the side it lies on (a side taken from the foreseen closest approach sways with each
+    # tail beat and can stop it on the line), so it is clear of the eater within 7 s
+    tank = _head_on_tank(monkeypatch, 7.0)
+    cfg = tank.config
     life = live(tank)
     avoid = INTENTIONS.index("avoid")
     # the yielder ends on the side of the eater's line (z = 0) it started on, a body width

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -12,7 +11,7 @@ jax = pytest.importorskip("jax")
 
 import jax.numpy as jnp  # noqa: E402
 
-from zoetic.bench.jax_sim import fresh_compilation_cache  # noqa: E402
+from zoetic.bench.jax_sim import compilation_cache_in, fresh_compilation_cache  # noqa: E402
 from zoetic.physics.jax_programs import StoredProgram, fingerprint, store_dir  # noqa: E402
 
 X = np.linspace(0.0, 1.0, 12, dtype=np.float32).reshape(3, 4)
@@ -78,22 +77,8 @@ def test_a_broken_stored_program_is_compiled_anew_and_replaced():
         assert third_builds == []  # the rewritten file loads
 
 
-@contextmanager
-def _no_compilation_cache():
-    from jax.experimental.compilation_cache import compilation_cache as cc
-
-    before = jax.config.jax_compilation_cache_dir
-    jax.config.update("jax_compilation_cache_dir", None)
-    cc.reset_cache()
-    try:
-        yield
-    finally:
-        jax.config.update("jax_compilation_cache_dir", before)
-        cc.reset_cache()
-
-
 def test_without_a_cache_directory_nothing_is_stored():
-    with _no_compilation_cache():
+    with compilation_cache_in(None):
         assert store_dir() is None
         build, builds = _counted(2.0)
         program = StoredProgram(build, fingerprint("f", 2.0))

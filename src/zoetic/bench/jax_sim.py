@@ -30,21 +30,28 @@ def _activations(body, steps: int, batch: int) -> jax.Array:
 
 
 @contextmanager
+def compilation_cache_in(directory: str | None):
+    """Run with JAX's persistent compilation cache in ``directory`` (None: no cache at all),
+    the cache directory in use before restored after."""
+    from jax.experimental.compilation_cache import compilation_cache as cc
+
+    before = jax.config.jax_compilation_cache_dir
+    jax.config.update("jax_compilation_cache_dir", directory)
+    cc.reset_cache()
+    try:
+        yield
+    finally:
+        jax.config.update("jax_compilation_cache_dir", before)
+        cc.reset_cache()
+
+
+@contextmanager
 def fresh_compilation_cache():
     """Run with JAX's persistent compilation cache in an empty temporary directory, so that
     the first compile is cold and a repeat reads what it wrote; the user's cache is restored
     after (and left untouched)."""
-    from jax.experimental.compilation_cache import compilation_cache as cc
-
-    before = jax.config.jax_compilation_cache_dir
-    with tempfile.TemporaryDirectory(prefix="zoetic-jax-") as tmp:
-        jax.config.update("jax_compilation_cache_dir", tmp)
-        cc.reset_cache()
-        try:
-            yield
-        finally:
-            jax.config.update("jax_compilation_cache_dir", before)
-            cc.reset_cache()
+    with tempfile.TemporaryDirectory(prefix="zoetic-jax-") as tmp, compilation_cache_in(tmp):
+        yield
 
 
 def compile_cold_and_cached(make: Callable[[], Callable[[], object]]) -> tuple[float, float]:
