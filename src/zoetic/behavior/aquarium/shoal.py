@@ -425,10 +425,10 @@ def yield_sides(
     line (its centre along its way) that the yielder's centre lies on, so that it moves out
     of the eater's way.
 
-    The closest approach foreseen from the velocities sways with each tail beat: a yielder
-    head on turned one way and the other and stopped on the eater's line. The eater's line
-    does not sway. A yielder swimming across the eater's line (headings more than 60 degrees
-    apart), or on it, keeps ``sides``. threat (n,): each fish's threat (-1 none); on (n,)
+    The closest approach foreseen from the velocities sways with each tail beat, so a side
+    taken from it turns a yielder head on one way and the other and leaves it on the eater's
+    line; the eater's line does not sway. A yielder swimming across the eater's line
+    (headings more than 60 degrees apart), or on it, keeps ``sides``. threat (n,): each fish's threat (-1 none); on (n,)
     bools: the fishes with the right of way; com (n, 3); ways (n, 3): the yielders' headings,
     the eaters' ways (from the nose to the particle, ``Shoal._ways``)."""
     k = np.where(threat >= 0, threat, 0)
