@@ -428,9 +428,10 @@ def yield_sides(
     The closest approach foreseen from the velocities sways with each tail beat, so a side
     taken from it turns a yielder head on one way and the other and leaves it on the eater's
     line; the eater's line does not sway. A yielder swimming across the eater's line
-    (headings more than 60 degrees apart), or on it, keeps ``sides``. threat (n,): each fish's threat (-1 none); on (n,)
-    bools: the fishes with the right of way; com (n, 3); ways (n, 3): the yielders' headings,
-    the eaters' ways (from the nose to the particle, ``Shoal._ways``)."""
+    (headings more than 60 degrees apart), or on it, keeps ``sides``. threat (n,): each
+    fish's threat (-1 none); on (n,) bools: the fishes with the right of way; com (n, 3);
+    ways (n, 3): the yielders' headings, the eaters' ways (from the nose to the particle,
+    ``Shoal._ways``)."""
     k = np.where(threat >= 0, threat, 0)
     yields = (threat >= 0) & on[k] & ~on
     if not yields.any():
