@@ -12,11 +12,16 @@ motion in one step, fins, a penalty floor with implicit directional Coulomb fric
 nodal damping, semi-implicit Euler with the stiff springs sub-stepped after one kick of
 everything else (``multirate.split``). Conformance tests hold the three equal.
 
-Nothing is written in place. A term's contributions to the nodes (spring ends, panel and fin
-corners) are summed onto them by ``gather_sum``: in JAX one scatter-add of whole B-lane rows
-per component (one for all three in a narrow batch, ``per_component``), in NumPy through a
-padded incidence table built once from the model's constant indices (``incidence``), summed
-in order (in XLA that table's gather and reduction cost twice the scatter). Dot products
+Nothing is written in place. A term reads node rows (``edges``, ``_corners``) and spreads its
+contributions back onto the nodes (``onto_ends``, ``onto_corners``: spring ends, panel and fin
+corners) in one of two forms, chosen by ``dense``. JAX steps a small body by products with
+constant incidence matrices built from the model's indices (``node_matrix``: +1/-1 per
+spring, a panel's or fin's corner shares), a few dense products a step. Otherwise node rows
+are gathered and contributions summed by ``gather_sum``: in JAX one scatter-add of whole
+B-lane rows per component (one for all three in a narrow batch, ``per_component``), in NumPy
+through a padded incidence table built once from the model's constant indices
+(``incidence``), summed in order (in XLA that table's gather and reduction cost twice the
+scatter). Dot products
 over xyz and corner means are written as reductions (``sum`` over an axis): XLA's CPU fusion
 copies an elementwise producer into every fusion that reads it, so a value read through
 gathers would be recomputed per element read, while a reduction is computed once into a
@@ -36,6 +41,7 @@ from zoetic.physics.model import Model
 TINY = 1e-12  # the kernel's guard on lengths
 TINY2 = 1e-30  # the kernel's guard on squared panel normals
 NARROW = 8  # JAX batches of at most this many lanes index (3, N, B) at once (``rows``)
+DENSE_NODES = 64  # JAX steps bodies of at most this many nodes by incidence matrices
 
 
 def to_soa(xp, q):
@@ -83,6 +89,69 @@ def per_component(xp, q) -> bool:
     return xp is np or q.shape[-1] > NARROW
 
 
+def dense(xp, n: int) -> bool:
+    """Return whether a body of n nodes reads and spreads its node rows by products with
+    constant incidence matrices (``node_matrix``) rather than by gathers and scatter-adds: in
+    JAX for a small body, where a product of a (K, n) matrix by n rows of B lanes is a dense
+    kernel that XLA's CPU backend runs faster than the gathers at every batch of 32 lanes or
+    more, the step has fewer fusions to compile, and its reverse pass is matrix products
+    again. NumPy always gathers, so that the float64 reference sums in order."""
+    return xp is not np and n <= DENSE_NODES
+
+
+@lru_cache(maxsize=512)
+def _node_matrix(nodes: bytes, weights: bytes, shape: tuple, n: int, dtype: str) -> np.ndarray:
+    idx = np.frombuffer(nodes, dtype=np.int64).reshape(shape)
+    w = np.frombuffer(weights, dtype=np.float64).reshape(shape)
+    out = np.zeros((shape[0], n), dtype=np.float64)
+    np.add.at(out, (np.arange(shape[0])[:, None], idx), w)
+    out = out.astype(dtype)
+    out.setflags(write=False)
+    return out
+
+
+def node_matrix(nodes: np.ndarray, weights, n: int, dtype) -> np.ndarray:
+    """Return the (K, n) matrix whose row k holds ``weights[k, c]`` at column ``nodes[k, c]``
+    (summed where a node repeats): the weighted sums of each row of ``nodes`` (K, C) as one
+    product with node rows (n, B); its transpose spreads K values back onto the nodes."""
+    idx = np.ascontiguousarray(nodes, dtype=np.int64)
+    w = np.ascontiguousarray(np.broadcast_to(weights, idx.shape), dtype=np.float64)
+    return _node_matrix(idx.tobytes(), w.tobytes(), idx.shape, n, np.dtype(dtype).str)
+
+
+def _product(xp, matrix: np.ndarray, q):
+    """Return matrix (K, n) times node rows q (n, B), or each component of q (3, n, B), at
+    full float32 precision on every device."""
+    from jax import lax
+
+    return xp.matmul(matrix, q, precision=lax.Precision.HIGHEST)
+
+
+def edges(xp, q, a: np.ndarray, b: np.ndarray):
+    """Return q[b] - q[a] for node rows q (3, N, B): each edge's vector from node a to b."""
+    if dense(xp, q.shape[-2]):
+        ends = np.stack([b, a], axis=1)
+        return _product(xp, node_matrix(ends, np.array([1.0, -1.0]), q.shape[-2], q.dtype), q)
+    return rows(xp, q, b) - rows(xp, q, a)
+
+
+def onto_ends(xp, f, a: np.ndarray, b: np.ndarray, n: int):
+    """Return (3, n, B): each edge's force f (3, M, B) on its node a, and -f on its node b."""
+    if dense(xp, n):
+        ends = np.stack([a, b], axis=1)
+        return _product(xp, node_matrix(ends, np.array([1.0, -1.0]), n, f.dtype).T, f)
+    return gather_sum(xp, xp.concatenate([f, -f], axis=1), np.concatenate([a, b]), n)
+
+
+def onto_corners(xp, s, d, nodes: np.ndarray, w: np.ndarray, n: int):
+    """Return (3, n, B): the forces s * d (s (K, B), d (3, K, B)) of K panels or fins shared
+    by their corners ``nodes`` (K, C) in the shares ``w`` (K, C)."""
+    if dense(xp, n):
+        return _product(xp, node_matrix(nodes, w, n, d.dtype).T, s * d)
+    shares = [(w[:, c, None] * s) * d for c in range(nodes.shape[1])]
+    return gather_sum(xp, xp.concatenate(shares, axis=1), nodes.T.reshape(-1), n)
+
+
 def rows(xp, q, idx):
     """Return the node rows ``idx`` (an index array of any shape) of q (N, B) or (3, N, B)."""
     if q.ndim == 2:
@@ -110,6 +179,8 @@ def gather_sum(xp, values, targets: np.ndarray, n: int):
 def _corners(xp, q, nodes: np.ndarray, w: np.ndarray):
     """Return the weighted sums over each row of ``nodes`` (K, C) of q (..., N, B) with
     weights ``w`` (K, C): a panel's or a fin's mean of its corners, (..., K, B)."""
+    if dense(xp, q.shape[-2]):
+        return _product(xp, node_matrix(nodes, w, q.shape[-2], q.dtype), q)
     return xp.sum(rows(xp, q, nodes) * w[..., None], axis=-2)
 
 
@@ -142,14 +213,14 @@ def springs(xp, m: Model, x, v, a, idx):
     """Return the nodal forces (3, N, B) of the springs with indices ``idx`` (NumPy, fixed
     when JAX traces)."""
     sa, sb = m.spring_a[idx], m.spring_b[idx]
-    d = rows(xp, x, sb) - rows(xp, x, sa)
+    d = edges(xp, x, sa, sb)
     length = _norm(xp, d) + TINY
     u = d / length
     relaxed = col(m.relaxed[idx])
     rest = relaxed + a[m.spring_col[idx]] * (col(m.contracted[idx]) - relaxed)
-    edot = _dot(xp, rows(xp, v, sb) - rows(xp, v, sa), u)
+    edot = _dot(xp, edges(xp, v, sa, sb), u)
     fs = (col(m.stiffness[idx]) * (length - rest) + col(m.spring_damping[idx]) * edot) * u
-    return gather_sum(xp, xp.concatenate([fs, -fs], axis=1), np.concatenate([sa, sb]), x.shape[1])
+    return onto_ends(xp, fs, sa, sb, x.shape[1])
 
 
 def weight(xp, m: Model, x):
@@ -163,8 +234,9 @@ def water(xp, m: Model, x, v):
     panel's nodes: it opposes a panel's outward normal velocity, c * drag * A * |v| (n.v),
     and at most stops the panel's normal motion in one step."""
     w, panels = m.panel_weights, m.panels  # (P, 4)
-    p = [rows(xp, x, panels[:, c]) for c in range(4)]  # the corners, (3, P, B) each
-    nrm = _cross(xp, p[2] - p[0], p[3] - p[1])  # 2 A n
+    nrm = _cross(
+        xp, edges(xp, x, panels[:, 0], panels[:, 2]), edges(xp, x, panels[:, 1], panels[:, 3])
+    )  # 2 A n
     nn = _dot(xp, nrm, nrm) + TINY2
     vm = _corners(xp, v, panels, w)
     q = xp.maximum(_dot(xp, nrm, vm), 0.0)
@@ -173,15 +245,14 @@ def water(xp, m: Model, x, v):
     lim = xp.minimum(lim, col(m.panel_mass_dt))
     wet = _corners(xp, x[1], panels, w) < m.water_level
     mag = xp.where(wet, q / nn * lim, 0.0)
-    fp = [-(w[:, c, None] * mag) * nrm for c in range(4)]  # each corner's share, (3, P, B)
-    return gather_sum(xp, xp.concatenate(fp, axis=1), panels.T.reshape(-1), x.shape[1])
+    return onto_corners(xp, -mag, nrm, panels, w, x.shape[1])
 
 
 def fins(xp, m: Model, x, v, a):
     """Return the fins' forces: flat plates at their actuator's angle to the body, pushed on
     by the water (at most stopping their normal motion in one step)."""
-    fwd = _unit(xp, rows(xp, x, m.fin_forward[:, 0]) - rows(xp, x, m.fin_forward[:, 1]))
-    span = rows(xp, x, m.fin_span[:, 0]) - rows(xp, x, m.fin_span[:, 1])
+    fwd = _unit(xp, edges(xp, x, m.fin_forward[:, 1], m.fin_forward[:, 0]))
+    span = edges(xp, x, m.fin_span[:, 1], m.fin_span[:, 0])
     span = _unit(xp, span - _dot(xp, span, fwd) * fwd)
     up = _cross(xp, fwd, span)
     lo, hi = col(m.fin_angle[:, 0]), col(m.fin_angle[:, 1])
@@ -195,8 +266,7 @@ def fins(xp, m: Model, x, v, a):
     cap = col(m.fin_mass) * xp.abs(vn) / m.dt
     mag = xp.clip(m.water_drag * col(m.fin_area) * _norm(xp, vm) * vn, -cap, cap)
     mag = xp.where(cy < m.water_level, mag, 0.0)
-    fq = [-(wts[:, c, None] * mag) * nrm for c in range(4)]  # each node's share, (3, K, B)
-    return gather_sum(xp, xp.concatenate(fq, axis=1), nodes.T.reshape(-1), x.shape[1])
+    return onto_corners(xp, -mag, nrm, nodes, wts, x.shape[1])
 
 
 def ground(xp, m: Model, x, v, f_other):
@@ -206,7 +276,7 @@ def ground(xp, m: Model, x, v, f_other):
     pen = -x[1]
     normal = m.floor_stiffness * pen - m.floor_damping * v[1]
     normal = xp.where((pen > 0) & (normal > 0), normal, 0.0)
-    axis = rows(xp, x, m.axis_front) - rows(xp, x, m.axis_back)
+    axis = edges(xp, x, m.axis_back, m.axis_front)
     length = _safe_sqrt(xp, axis[0] * axis[0] + axis[2] * axis[2]) + TINY
     tx, tz = axis[0] / length, axis[2] / length
     px = v[0] + dt * f_other[0] / mass
