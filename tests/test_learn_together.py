@@ -71,3 +71,31 @@ def test_interrupted_runs_learned_together_resume_to_the_same_result(tmp_path, t
     for a, b in zip(whole, resumed, strict=True):
         np.testing.assert_array_equal(_history(a)[0], _history(b)[0])
         np.testing.assert_array_equal(_history(a)[1], _history(b)[1])
+
+
+def test_learning_holds_blas_to_one_thread_and_lifts_it_after(tmp_path, tasks, shark, monkeypatch):
+    """Every generation's activation tables (a BLAS product) are made on one BLAS thread,
+    together or alone (BLAS's idle threads spin against the kernel's), and the limit is
+    lifted when learning ends."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from zoetic.learning.objective import Objective
+
+    def blas_threads() -> set[int]:
+        return {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
+
+    seen: list[set[int]] = []
+    real = Objective.tables
+
+    def tables(self, params):
+        seen.append(blas_threads())
+        return real(self, params)
+
+    monkeypatch.setattr(Objective, "tables", tables)
+    with threadpool_limits(limits=2, user_api="blas"):  # as on 2 cores, even on one
+        learn_together(_runs(tmp_path / "together", tasks, shark, budget=16))
+        n_together = len(seen)
+        _runs(tmp_path / "alone", tasks[:1], shark, budget=16)[0].learn()
+        assert n_together >= 6 and len(seen) > n_together
+        assert all(s == {1} for s in seen)
+        assert blas_threads() == {2}

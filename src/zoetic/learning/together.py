@@ -15,6 +15,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from zoetic.learning.blas import one_blas_thread
 from zoetic.learning.run import Run
 from zoetic.learning.stored_body import body_digest
 from zoetic.physics import State, simulate
@@ -76,7 +77,16 @@ def learn_together(
     """Learn every run to its budget, runs that share rollouts (``_groups``) a generation of
     each per batched simulation; each run checkpoints every ``every_s`` seconds and on
     interruption, as ``Run.learn`` does. A run that cannot share (another evaluator, a
-    gradient method) is learned alone first."""
+    gradient method) is learned alone first. BLAS is held to one thread throughout
+    (``one_blas_thread``)."""
+    with one_blas_thread():
+        return _learn_together(runs, progress, every_s)
+
+
+def _learn_together(
+    runs: list[Run], progress: Callable[[Run], None] | None, every_s: float
+) -> list[Run]:
+    """``learn_together``'s work, BLAS's threads aside."""
     shared = [run for run in runs if _together(run)]
     for run in runs:
         if not _together(run):

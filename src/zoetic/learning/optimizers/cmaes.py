@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import pickle
-from contextlib import AbstractContextManager
-from functools import cache
 
 import numpy as np
 
+from zoetic.learning.blas import one_blas_thread
 from zoetic.learning.optimizers.base import Optimizer
 
 
@@ -44,21 +43,6 @@ class _Randn:
                 "gauss": s["gauss"],
             }
         )
-
-
-@cache
-def _blas():
-    from threadpoolctl import ThreadpoolController
-
-    return ThreadpoolController()
-
-
-def one_blas_thread() -> AbstractContextManager:
-    """Hold BLAS/LAPACK to one thread: CMA-ES's eigendecomposition of its covariance (n <= a
-    few hundred) is too small to share, and its threads spin against the simulation kernel's
-    thread pool: with two threads on two busy cores one eigh can cost more than the whole
-    generation's rollouts."""
-    return _blas().limit(limits=1, user_api="blas")
 
 
 class CMAES(Optimizer):
