@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pickle
+import sys
 
 import numpy as np
 
@@ -45,6 +46,23 @@ class _Randn:
         )
 
 
+def _cma():
+    """Return the ``cma`` module, imported without ``scipy.stats`` unless that is loaded
+    already: cma takes only a rank correlation from it, for its surrogate fitness models
+    (unused here), and falls back on its own NumPy one; scipy.stats took longer to import
+    than cma itself, in every learning run."""
+    if "cma" in sys.modules or "scipy.stats" in sys.modules:
+        import cma
+
+        return cma
+    sys.modules["scipy.stats"] = None  # an import of it raises ImportError
+    try:
+        import cma
+    finally:
+        del sys.modules["scipy.stats"]
+    return cma
+
+
 class CMAES(Optimizer):
     """CMA-ES from the ``cma`` package, with its own handling of the box bounds.
 
@@ -62,8 +80,7 @@ class CMAES(Optimizer):
         learning rate is about n times a full covariance's: with n = 120 parameters and a few
         thousand evaluations the full one hardly adapts."""
         super().__init__(x0, lower, upper, seed)
-        import cma
-
+        cma = _cma()
         scale = self.upper - self.lower
         opts = {
             "bounds": [list(self.lower), list(self.upper)],
