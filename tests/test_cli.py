@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 
@@ -214,3 +215,14 @@ def test_learn_cli_and_tasks(tmp_path, capsys):
     # a finished run refuses to be overwritten, and resumes as a no-op
     assert main(["learn", "shark", "--out", str(out), "--budget", "40"]) == 2
     assert main(["learn", "--resume", str(out), "--no-video"]) == 0
+
+
+def test_cli_lets_the_kernels_threads_sleep_unless_told_otherwise(monkeypatch, capsys):
+    """The command line asks OpenMP (the kernel's thread pool) to sleep between calls rather
+    than spin, before any kernel runs; a policy already in the environment is kept."""
+    monkeypatch.delenv("OMP_WAIT_POLICY", raising=False)
+    assert main(["animals"]) == 0
+    assert os.environ["OMP_WAIT_POLICY"] == "PASSIVE"
+    monkeypatch.setenv("OMP_WAIT_POLICY", "ACTIVE")
+    assert main(["animals"]) == 0
+    assert os.environ["OMP_WAIT_POLICY"] == "ACTIVE"

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -346,3 +349,18 @@ def test_a_mirror_symmetric_task_couples_learned_fins_and_a_zero_turn_stays_symm
         build(LearnConfig(animal="snake", task="sharp-turn-left", budget=1)).objective.coupling
         == "none"
     )
+
+
+def test_cmaes_is_made_without_importing_scipy_stats():
+    """A fresh process makes and runs CMA-ES without importing scipy.stats (cma's only use of
+    it is its surrogate models' rank correlation), and can import scipy.stats after."""
+    code = (
+        "import sys, numpy as np\n"
+        "from zoetic.learning.optimizers.cmaes import CMAES\n"
+        "opt = CMAES(np.full(4, 0.5), np.zeros(4), np.ones(4), seed=0, popsize=6)\n"
+        "X = opt.ask(); opt.tell(X, np.sum(X**2, axis=1))\n"
+        "print('scipy.stats' in sys.modules)\n"
+        "import scipy.stats; print(scipy.stats.kendalltau([1, 2, 3], [1, 2, 3])[0])\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["False", "1.0"]

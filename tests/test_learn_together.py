@@ -42,8 +42,8 @@ def shark():
 def test_runs_learned_together_search_as_each_alone(tmp_path, tasks, shark):
     alone = [run.learn() for run in _runs(tmp_path / "alone", tasks, shark)]
     together = _runs(tmp_path / "together", tasks, shark)
-    # the two runs of the 1 s task share each generation's simulation; the 0.5 s one cannot
-    assert [len(g) for g in _groups(together)] == [2, 1]
+    # the three share each generation's calls: all to 0.5 s, the 1 s runs on to 1 s
+    assert [len(g) for g in _groups(together)] == [3]
     learn_together(together)
     for a, b in zip(alone, together, strict=True):
         assert b.evaluations == a.evaluations == 24
@@ -71,3 +71,58 @@ def test_interrupted_runs_learned_together_resume_to_the_same_result(tmp_path, t
     for a, b in zip(whole, resumed, strict=True):
         np.testing.assert_array_equal(_history(a)[0], _history(b)[0])
         np.testing.assert_array_equal(_history(a)[1], _history(b)[1])
+
+
+def test_learning_holds_blas_to_one_thread_and_lifts_it_after(tmp_path, tasks, shark, monkeypatch):
+    """Every generation's activation tables (a BLAS product) are made on one BLAS thread,
+    together or alone (BLAS's idle threads spin against the kernel's), and the limit is
+    lifted when learning ends."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from zoetic.learning.objective import Objective
+
+    def blas_threads() -> set[int]:
+        return {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
+
+    seen: list[set[int]] = []
+    real = Objective.tables
+
+    def tables(self, params):
+        seen.append(blas_threads())
+        return real(self, params)
+
+    monkeypatch.setattr(Objective, "tables", tables)
+    with threadpool_limits(limits=2, user_api="blas"):  # as on 2 cores, even on one
+        learn_together(_runs(tmp_path / "together", tasks, shark, budget=16))
+        n_together = len(seen)
+        _runs(tmp_path / "alone", tasks[:1], shark, budget=16)[0].learn()
+        assert n_together >= 6 and len(seen) > n_together
+        assert all(s == {1} for s in seen)
+        assert blas_threads() == {2}
+
+
+def test_rollouts_of_different_lengths_share_calls_and_move_as_alone(shark):
+    """Lanes of a 1 s and a 0.5 s rollout simulated in staged calls (``_simulate_staged``:
+    both to 0.5 s, then the longer on) are recorded, and fail, exactly as in calls of their
+    own: a lane that blows up in the first call stays failed in the next."""
+    from zoetic.learning.together import _simulate_staged
+    from zoetic.physics import rest_state, simulate
+    from zoetic.physics.simulate import VMAX
+
+    class Obj:  # what _simulate_staged reads of an objective
+        body, medium, dt, record_every = shark, None, shark.dt, 10
+
+    rng = np.random.default_rng(0)
+    steps = int(round(1.0 / shark.dt))
+    long = rng.random((6, steps, shark.n_actuators))
+    short = rng.random((4, steps // 2, shark.n_actuators))
+    short[1] = 40.0  # clipped to 1: every muscle held fully contracted
+    starts = [rest_state(shark, 6), rest_state(shark, 4)]
+    starts[1].velocities[2] += 3.0  # another start: moving
+    starts[0].velocities[3] += 10 * VMAX  # blows up in the first call
+    got = _simulate_staged(Obj, [long, short], starts)
+    for (positions, failed), table, start in zip(got, [long, short], starts, strict=True):
+        alone = simulate(shark, table, None, shark.dt, start, 10)
+        np.testing.assert_array_equal(positions, alone.positions)
+        np.testing.assert_array_equal(failed, alone.failed)
+    assert got[0][1][3] and not got[0][1][[0, 1, 2, 4, 5]].any()

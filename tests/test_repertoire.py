@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -318,3 +320,21 @@ def test_the_abstraction_keeps_a_weak_mode_when_the_promise_needs_it(tmp_path, s
     assert not judge_entry(
         shark, abstract_keeping_promises(shark, gait, task, 1, 0.3).controller, task
     )["met"]
+
+
+def test_repertoire_plot_is_drawn_without_pyplot(tmp_path):
+    """The repertoire's figure is drawn on a canvas of its own: a fresh process writes it
+    without importing pyplot (slow to import, and global state)."""
+    code = (
+        "import sys, numpy as np, pathlib\n"
+        "from zoetic.viz.abstraction import plot_repertoire\n"
+        "t = np.linspace(0.0, 1.0, 50)\n"
+        "u = 0.5 + 0.5 * np.sin(np.outer(t, [6.0, 9.0]))\n"
+        "path = np.c_[t, 0 * t, t**2]\n"
+        f"out = pathlib.Path({str(tmp_path / 'rep.png')!r})\n"
+        "plot_repertoire({'swim': (t, u)}, {'swim': path}, ('left', 'right'), out)\n"
+        "print('matplotlib.pyplot' in sys.modules)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.split() == ["False"]
+    assert (tmp_path / "rep.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -44,6 +44,7 @@ from zoetic.control.abstract import AbstractController, SequenceController
 from zoetic.errors import RunDirError, ZoeticError
 from zoetic.io import read_json, read_toml, suggest
 from zoetic.learning.abstraction import Abstraction, abstract, compare, mirror_abstract
+from zoetic.learning.blas import one_blas_thread
 from zoetic.tasks import Promise, Task, capabilities, fits, load_task, start_states
 
 # (entry name, task per medium kind): the paper's basic training, in order
@@ -379,24 +380,29 @@ def train_repertoire(
         if on_entry:
             on_entry(entry.name, run)
     learn_together(runs, progress=progress)
-    for entry, run in zip(entries, runs, strict=True):
-        original = run.best_controller()
-        if pipeline == "paper":
-            learned_by = run.setup.config.optimizer  # a resumed entry's own
-            ab, info = paper_abstraction(body, original, entry.task, modes, threshold, learned_by)
-        else:
-            ab = abstract_keeping_promises(body, original, entry.task, modes, threshold)
-            info = abstraction_report(body, original, ab, entry.task)
-        rep.add(entry.name, ab.controller, entry.task.horizon, source=f"runs/{entry.name}", **info)
-        right = mirrored_name(entry.name)
-        if right:
+    with one_blas_thread():  # abstraction and judging: small linear algebra, as learning
+        for entry, run in zip(entries, runs, strict=True):
+            original = run.best_controller()
+            if pipeline == "paper":
+                learned_by = run.setup.config.optimizer  # a resumed entry's own
+                ab, info = paper_abstraction(
+                    body, original, entry.task, modes, threshold, learned_by
+                )
+            else:
+                ab = abstract_keeping_promises(body, original, entry.task, modes, threshold)
+                info = abstraction_report(body, original, ab, entry.task)
             rep.add(
-                right,
-                mirror_abstract(ab.controller, body.actuator_mirror),
-                entry.task.horizon,
-                source=f"mirror of {entry.name}",
+                entry.name, ab.controller, entry.task.horizon, source=f"runs/{entry.name}", **info
             )
-        rep.save(out)
+            right = mirrored_name(entry.name)
+            if right:
+                rep.add(
+                    right,
+                    mirror_abstract(ab.controller, body.actuator_mirror),
+                    entry.task.horizon,
+                    source=f"mirror of {entry.name}",
+                )
+            rep.save(out)
     return rep
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 
 import typer
@@ -35,9 +36,17 @@ def _register() -> None:
     assign_panels()
 
 
+# the kernel's OpenMP threads sleep at the end of a parallel call instead of spinning for the
+# next one (unless the caller's environment says otherwise): between a learning generation's
+# kernel calls the spinning thread took the core its own process's Python needed, and on a
+# shared host other processes' (docs/performance.md, "Repertoire training in fewer seconds")
+OMP_WAIT_POLICY = "PASSIVE"
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; a ZoeticError prints its message and exits with its code (2; 3 blow-up);
     Ctrl-C exits 130 with one line (a command that can resume says how)."""
+    os.environ.setdefault("OMP_WAIT_POLICY", OMP_WAIT_POLICY)  # read when OpenMP first starts
     _register()
     args = sys.argv[1:] if argv is None else argv
     INTERRUPTED["told"] = False

@@ -105,6 +105,7 @@ def train_cmd(
     from zoetic.behavior.pipelines import check_training
     from zoetic.behavior.training import train_repertoire
     from zoetic.learning.abstraction import parse_modes
+    from zoetic.learning.blas import one_blas_thread
     from zoetic.runs import check_learnable
     from zoetic.viz.media import show_repertoire
 
@@ -136,8 +137,9 @@ def train_cmd(
             )
         except KeyboardInterrupt:
             interrupted(f"{out} keeps what was learned; continue with: {again}")
-    _print_rows(show_repertoire(out), f"{out}")
-    _report_promises(out, strict)
+    with one_blas_thread():  # the entries replayed and judged: small linear algebra
+        _print_rows(show_repertoire(out), f"{out}")
+        _report_promises(out, strict)
 
 
 def _entry_lines(bar):

@@ -30,6 +30,7 @@ from zoetic.control import (
 )
 from zoetic.errors import RunDirError, ZoeticError
 from zoetic.io import atomic_write_bytes, write_toml
+from zoetic.learning.blas import one_blas_thread
 from zoetic.learning.checkpoint import (
     CHECKPOINT,
     LOG_KEYS,
@@ -358,19 +359,21 @@ class Run:
         return self.evaluations >= self.setup.config.budget or self.setup.optimizer.done()
 
     def learn(self, progress: Callable[[Run], None] | None = None, every_s: float = 2.0):
-        """Run to the budget, checkpointing every ``every_s`` seconds and on interruption."""
+        """Run to the budget, checkpointing every ``every_s`` seconds and on interruption;
+        BLAS held to one thread throughout (``one_blas_thread``)."""
         config = self.setup.config
         evaluator = make_evaluator(config.evaluator)
         last = time.perf_counter()
         try:
-            while not self.finished:
-                if self.step(evaluator) == 0:
-                    break
-                if progress:
-                    progress(self)
-                if time.perf_counter() - last > every_s:
-                    self.checkpoint()
-                    last = time.perf_counter()
+            with one_blas_thread():
+                while not self.finished:
+                    if self.step(evaluator) == 0:
+                        break
+                    if progress:
+                        progress(self)
+                    if time.perf_counter() - last > every_s:
+                        self.checkpoint()
+                        last = time.perf_counter()
         finally:
             evaluator.close()
             self.settle()

@@ -2,10 +2,13 @@
 
 A generation of one run is a small batch for the kernel (a repertoire entry's 32 candidates from
 2 starts are 64 lanes, where the kernel runs about 1.6x faster per lane at 192 or more). Runs
-of the same animal whose rollouts last as long (same medium, time step, steps and recording
-interval) have their generations simulated together in one call, then each run scores its own
-lanes and tells its own optimizer. The kernel's lanes do not interact, so every run sees the
-same scores, bit for bit, as when learned alone: same seed, same history.
+of the same animal whose rollouts share the medium, time step and recording interval have their
+generations simulated together: one call of all their lanes up to the shortest rollout's end,
+then the longer ones continue from where it left them (rollouts that end on a recorded instant;
+another length shares only with rollouts as long), and each run scores its own lanes and tells
+its own optimizer. The kernel's lanes do not interact, and a lane continued from where a call
+left it moves as in one call, so every run sees the same scores, bit for bit, as when learned
+alone: same seed, same history.
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from zoetic.learning.blas import one_blas_thread
 from zoetic.learning.run import Run
 from zoetic.learning.stored_body import body_digest
 from zoetic.physics import State, simulate
@@ -28,14 +32,55 @@ def _together(run: Run) -> bool:
 
 def _groups(runs: list[Run]) -> list[list[Run]]:
     """Return the runs grouped by what their rollouts must share: the body and the
-    simulation settings (``Objective.rollout_key``); first-seen order kept."""
+    simulation settings (``_share_key``); first-seen order kept."""
     groups: dict[tuple, list[Run]] = {}
     digests: dict[int, str] = {}
     for run in runs:
         obj = run.setup.objective
         body = digests.setdefault(id(obj.body), body_digest(obj.body))
-        groups.setdefault((body, *obj.rollout_key()), []).append(run)
+        groups.setdefault((body, *_share_key(obj)), []).append(run)
     return list(groups.values())
+
+
+def _share_key(obj) -> tuple:
+    """What a run's rollouts must share with another's to be simulated in the same kernel
+    calls (``Objective.rollout_key``), rollouts of another length included when both end on
+    a recorded instant: the shorter share a call with the longer up to their end, and the
+    longer continue from there in a call of their own (a lane started from where another
+    call left it moves as in one call, bit for bit)."""
+    medium, dt, steps, every = obj.rollout_key()
+    return (medium, dt, every) if steps % every == 0 else (medium, dt, steps, every)
+
+
+def _simulate_staged(obj, tables: list[np.ndarray], starts: list[State]):
+    """Return (positions (L, R, N, 3), failed (L,)) of each run's lanes ``tables`` (L, T, A)
+    from ``starts``: one kernel call up to each distinct rollout length, of the lanes that
+    last at least that long, each continuing from where the last call left it."""
+    ends = sorted({t.shape[1] for t in tables})
+    states = list(starts)
+    parts: list[list[np.ndarray]] = [[] for _ in tables]
+    failed = [np.zeros(len(t), dtype=bool) for t in tables]
+    t0 = 0
+    for end in ends:
+        live = [i for i, t in enumerate(tables) if t.shape[1] >= end]
+        state = State(
+            np.concatenate([states[i].positions for i in live]),
+            np.concatenate([states[i].velocities for i in live]),
+        )
+        act = np.concatenate([tables[i][:, t0:end] for i in live])
+        traj = simulate(obj.body, act, obj.medium, obj.dt, state, obj.record_every)
+        at = 0
+        for i in live:
+            lanes = slice(at, at + len(tables[i]))
+            at += len(tables[i])
+            parts[i].append(traj.positions[lanes, 0 if t0 == 0 else 1 :])
+            failed[i] |= traj.failed[lanes]
+            states[i] = State(traj.final.positions[lanes], traj.final.velocities[lanes])
+        t0 = end
+    return [
+        (p[0] if len(p) == 1 else np.concatenate(p, axis=1), f)
+        for p, f in zip(parts, failed, strict=True)
+    ]
 
 
 def _generation(group: list[Run], stalled: set[int]) -> None:
@@ -55,19 +100,9 @@ def _generation(group: list[Run], stalled: set[int]) -> None:
     objs = [run.setup.objective for run, _ in asked]
     lanes = [obj.lanes(X) for obj, (_, X) in zip(objs, asked, strict=True)]
     starts = [obj.start_lanes(len(X)) for obj, (_, X) in zip(objs, asked, strict=True)]
-    first = objs[0]
-    state = State(
-        np.concatenate([s.positions for s in starts]),
-        np.concatenate([s.velocities for s in starts]),
-    )
-    traj = simulate(
-        first.body, np.concatenate(lanes), first.medium, first.dt, state, first.record_every
-    )
-    at = 0
-    for obj, table, (run, X) in zip(objs, lanes, asked, strict=True):
-        part = slice(at, at + len(table))
-        at += len(table)
-        run.tell(X, obj.score(X, table, traj.positions[part], traj.failed[part]))
+    rollouts = _simulate_staged(objs[0], lanes, starts)
+    for obj, table, (run, X), (positions, failed) in zip(objs, lanes, asked, rollouts, strict=True):
+        run.tell(X, obj.score(X, table, positions, failed))
 
 
 def learn_together(
@@ -76,7 +111,16 @@ def learn_together(
     """Learn every run to its budget, runs that share rollouts (``_groups``) a generation of
     each per batched simulation; each run checkpoints every ``every_s`` seconds and on
     interruption, as ``Run.learn`` does. A run that cannot share (another evaluator, a
-    gradient method) is learned alone first."""
+    gradient method) is learned alone first. BLAS is held to one thread throughout
+    (``one_blas_thread``)."""
+    with one_blas_thread():
+        return _learn_together(runs, progress, every_s)
+
+
+def _learn_together(
+    runs: list[Run], progress: Callable[[Run], None] | None, every_s: float
+) -> list[Run]:
+    """``learn_together``'s work, BLAS's threads aside."""
     shared = [run for run in runs if _together(run)]
     for run in runs:
         if not _together(run):

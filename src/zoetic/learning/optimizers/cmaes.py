@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import pickle
-from contextlib import AbstractContextManager
-from functools import cache
+import sys
 
 import numpy as np
 
+from zoetic.learning.blas import one_blas_thread
 from zoetic.learning.optimizers.base import Optimizer
 
 
@@ -46,19 +46,21 @@ class _Randn:
         )
 
 
-@cache
-def _blas():
-    from threadpoolctl import ThreadpoolController
+def _cma():
+    """Return the ``cma`` module, imported without ``scipy.stats`` unless that is loaded
+    already: cma takes only a rank correlation from it, for its surrogate fitness models
+    (unused here), and falls back on its own NumPy one; scipy.stats took longer to import
+    than cma itself, in every learning run."""
+    if "cma" in sys.modules or "scipy.stats" in sys.modules:
+        import cma
 
-    return ThreadpoolController()
-
-
-def one_blas_thread() -> AbstractContextManager:
-    """Hold BLAS/LAPACK to one thread: CMA-ES's eigendecomposition of its covariance (n <= a
-    few hundred) is too small to share, and its threads spin against the simulation kernel's
-    thread pool: with two threads on two busy cores one eigh can cost more than the whole
-    generation's rollouts."""
-    return _blas().limit(limits=1, user_api="blas")
+        return cma
+    sys.modules["scipy.stats"] = None  # an import of it raises ImportError
+    try:
+        import cma
+    finally:
+        del sys.modules["scipy.stats"]
+    return cma
 
 
 class CMAES(Optimizer):
@@ -78,8 +80,7 @@ class CMAES(Optimizer):
         learning rate is about n times a full covariance's: with n = 120 parameters and a few
         thousand evaluations the full one hardly adapts."""
         super().__init__(x0, lower, upper, seed)
-        import cma
-
+        cma = _cma()
         scale = self.upper - self.lower
         opts = {
             "bounds": [list(self.lower), list(self.upper)],
