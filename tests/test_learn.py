@@ -364,3 +364,20 @@ def test_cmaes_is_made_without_importing_scipy_stats():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["False", "1.0"]
+
+
+def test_a_cma_that_needs_scipy_stats_at_import_is_imported_whole(tmp_path):
+    """Should a cma release import scipy.stats unconditionally, the import without it fails
+    and the package is imported again in full, not half."""
+    fake = tmp_path / "cma"
+    fake.mkdir()
+    (fake / "__init__.py").write_text("from . import part\nVALUE = part.tau\n")
+    (fake / "part.py").write_text("import scipy.stats\ntau = 'whole'\n")
+    code = (
+        "import sys\n"
+        f"sys.path.insert(0, {str(tmp_path)!r})\n"
+        "from zoetic.learning.optimizers.cmaes import _cma\n"
+        "print(_cma().VALUE, 'scipy.stats' in sys.modules)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["whole", "True"]

@@ -58,8 +58,14 @@ def _cma():
     sys.modules["scipy.stats"] = None  # an import of it raises ImportError
     try:
         import cma
+    except ImportError:
+        cma = None  # a cma that needs scipy.stats at import: take it whole, below
     finally:
         del sys.modules["scipy.stats"]
+    if cma is None:
+        for name in [m for m in sys.modules if m == "cma" or m.startswith("cma.")]:
+            del sys.modules[name]  # the half-imported package, imported again in full
+        import cma
     return cma
 
 
