@@ -24,7 +24,7 @@ from zoetic.jitcache import fresh_numba_cache
 from zoetic.physics.bodycontact import CONTACT_STEPS, pairs_contacts
 from zoetic.physics.broadphase import BroadPhase
 from zoetic.physics.contacts import balls_step, node_contacts
-from zoetic.physics.kernel import advance_serial, make_stepper
+from zoetic.physics.kernel import advance_one, chunk_scratch, make_stepper
 from zoetic.physics.lanes import LaneGroup, fingerprint
 from zoetic.physics.media import Medium
 from zoetic.physics.model import Model
@@ -429,18 +429,20 @@ def lone_contact_steps(st, table, t, t1, n, mass, radius, solids, medium, balls,
     """Step a lone animal's Stepper ``st`` through rows t .. t1 of its ``table`` (the world's
     step n at row 0), one step at a time: the balls' contact forces cleared, the nodes'
     contacts with the objects (``node_contacts``, impulses into ``impulse``), one kernel step
-    on this thread, then the balls' step if there are ``balls``. ``solids``: the Solids' pos,
-    vel, par, force, kind, center, size, ball_col, static_col; ``medium``: the medium's
-    array, the current, dt, w, zeta, mu (as ``ContactSlices``)."""
+    on this thread (``advance_one``, its scratch made once), then the balls' step if there
+    are ``balls``. ``solids``: the Solids' pos, vel, par, force, kind, center, size,
+    ball_col, static_col; ``medium``: the medium's array, the current, dt, w, zeta, mu (as
+    ``ContactSlices``)."""
     bpos, bvel, bpar, bforce, kind, center, size, ball_col, static_col = solids
     med, current, dt, w, zeta, mu = medium
+    scratch = chunk_scratch(st)
     for s in range(t, t1):
         bforce[:] = 0.0
         node_contacts(
             st.pos, st.vel, mass, radius, bpos, bvel, bpar, kind, center, size, ball_col,
             static_col, dt, w, zeta, mu, bforce, impulse,
         )  # fmt: skip
-        advance_serial(st, table, s, s + 1, n + s)
+        advance_one(st, table, s, n + s, scratch)
         if balls:
             balls_step(
                 bpos, bvel, bpar, bforce, med, current, kind, center, size, dt, 1, w, zeta, mu
