@@ -439,11 +439,12 @@ def advance_serial(st, table, t0, t1, base):
     _mark_failed(st.fs, st.failed, base)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, fastmath=FM, error_model="numpy")
 def advance_one(st, table, t, base, s):
     """``advance_serial`` for row t of ``table`` alone (one step), in the caller's chunk
     scratch ``s`` (``chunk_scratch``), so that steps taken one at a time between contacts
-    allocate nothing; each chunk steps as in ``simulate_chunks``, so the bits are the same."""
+    allocate nothing; each chunk steps as in ``simulate_chunks``, so the bits are the same
+    (the same fast-math flags: the one-animal path is inlined into this function)."""
     pos, vel = st.pos, st.vel
     no_rec = np.empty((0, pos.shape[0], 3, pos.shape[2]), dtype=np.float32)  # no records
     row = table[t : t + 1]
