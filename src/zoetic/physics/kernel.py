@@ -439,6 +439,29 @@ def advance_serial(st, table, t0, t1, base):
     _mark_failed(st.fs, st.failed, base)
 
 
+@njit(cache=True, fastmath=FM, error_model="numpy")
+def advance_one(st, table, t, base, s):
+    """``advance_serial`` for row t of ``table`` alone (one step), in the caller's chunk
+    scratch ``s`` (``chunk_scratch``), so that steps taken one at a time between contacts
+    allocate nothing; each chunk steps as in ``simulate_chunks``, so the bits are the same
+    (the same fast-math flags: the one-animal path is inlined into this function)."""
+    pos, vel = st.pos, st.vel
+    no_rec = np.empty((0, pos.shape[0], 3, pos.shape[2]), dtype=np.float32)  # no records
+    row = table[t : t + 1]
+    n_lanes, chunk = pos.shape[2], st.chunk
+    for c in range((n_lanes + chunk - 1) // chunk):
+        b0 = c * chunk
+        nb = min(chunk, n_lanes - b0)
+        _chunk_steps(s, pos, vel, row, 0, st.vmax, b0, nb, st.model, no_rec, pos, vel, st.fs)
+    _mark_failed(st.fs, st.failed, base)
+
+
+@njit(cache=True)
+def chunk_scratch(st):
+    """Return scratch for ``advance_one``: one chunk's twelve (nodes, chunk) arrays."""
+    return _scratch(st.model.mass.shape[0], min(st.chunk, st.pos.shape[2]))
+
+
 @njit(cache=True, inline="always")
 def _mark_failed(fs, failed, base):
     """Keep in ``failed`` the step (``base`` plus the kernel's mark ``fs``) each lane first

@@ -24,7 +24,7 @@ from zoetic.jitcache import fresh_numba_cache
 from zoetic.physics.bodycontact import CONTACT_STEPS, pairs_contacts
 from zoetic.physics.broadphase import BroadPhase
 from zoetic.physics.contacts import balls_step, node_contacts
-from zoetic.physics.kernel import make_stepper
+from zoetic.physics.kernel import advance_one, chunk_scratch, make_stepper
 from zoetic.physics.lanes import LaneGroup, fingerprint
 from zoetic.physics.media import Medium
 from zoetic.physics.model import Model
@@ -225,6 +225,10 @@ class ContactSlices:
     damping ratio (which also sets the balls' restitution) and Coulomb friction (``World``).
     """
 
+    # a lone animal's lockstep runs as one compiled call (``lone_contact_steps``); False: step
+    # by step from Python, as every other world (the same arithmetic in the same order)
+    compiled_lone = True
+
     def __init__(
         self,
         drive: Drive,
@@ -261,6 +265,14 @@ class ContactSlices:
         """Step steps t .. t1 of a call that started at the world's step n, every animal one
         step at a time with its contacts (impulses into ``impulse``, by animal as
         ``node_contacts`` makes them, those between animals into ``between``)."""
+        if (
+            self.compiled_lone
+            and len(self.views) == 1
+            and not pairs
+            and self.drive.batch < PARALLEL_FROM
+        ):
+            self._lone_lockstep(tables[0], t, t1, n, impulse)
+            return
         pair_rows = np.array(pairs, np.int64).reshape(-1, 2)
         for s in range(t, t1):
             self.solids.force[:] = 0.0
@@ -270,6 +282,30 @@ class ContactSlices:
             self.drive.run_all(tables, s, s + 1, n + s)
             if len(self.solids.balls):
                 self.balls(1)
+
+    def _lone_lockstep(self, table, t: int, t1: int, n: int, impulse) -> None:
+        """``lockstep`` for a lone animal on one thread: the same steps in the same order, its
+        contacts, one kernel step and the balls' step, looped in one compiled call
+        (``lone_contact_steps``) instead of three calls a step from Python."""
+        self.tested.add(0)
+        p = self.views[0][0]
+        s = self.solids
+        got = impulse.get(0)
+        if got is None:
+            got = impulse[0] = np.zeros((p.shape[0], len(s.columns), 3, p.shape[2]))
+        lone_contact_steps(
+            self.drive.steppers[0],
+            table,
+            t,
+            t1,
+            n,
+            self.mass[0],
+            self.node_radius,
+            (s.pos, s.vel, s.par, s.force, s.kind, s.center, s.size, s.ball_col, s.static_col),
+            (self.med64, self.current, self.dt, self.w, self.zeta, self.mu),
+            len(s.balls) > 0,
+            got,
+        )
 
     def apart(
         self, tables, t: int, t1: int, n: int, impulse, near_now: np.ndarray, pairs=(), between=None
@@ -386,3 +422,28 @@ class ContactSlices:
             self.zeta,
             self.mu,
         )
+
+
+@njit(cache=True)
+def lone_contact_steps(st, table, t, t1, n, mass, radius, solids, medium, balls, impulse):
+    """Step a lone animal's Stepper ``st`` through rows t .. t1 of its ``table`` (the world's
+    step n at row 0), one step at a time: the balls' contact forces cleared, the nodes'
+    contacts with the objects (``node_contacts``, impulses into ``impulse``), one kernel step
+    on this thread (``advance_one``, its scratch made once), then the balls' step if there
+    are ``balls``. ``solids``: the Solids' pos, vel, par, force, kind, center, size,
+    ball_col, static_col; ``medium``: the medium's array, the current, dt, w, zeta, mu (as
+    ``ContactSlices``)."""
+    bpos, bvel, bpar, bforce, kind, center, size, ball_col, static_col = solids
+    med, current, dt, w, zeta, mu = medium
+    scratch = chunk_scratch(st)
+    for s in range(t, t1):
+        bforce[:] = 0.0
+        node_contacts(
+            st.pos, st.vel, mass, radius, bpos, bvel, bpar, kind, center, size, ball_col,
+            static_col, dt, w, zeta, mu, bforce, impulse,
+        )  # fmt: skip
+        advance_one(st, table, s, n + s, scratch)
+        if balls:
+            balls_step(
+                bpos, bvel, bpar, bforce, med, current, kind, center, size, dt, 1, w, zeta, mu
+            )
