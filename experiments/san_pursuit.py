@@ -111,7 +111,9 @@ def pursue(
     for seed in SEEDS:
         rows[str(seed)], recorded = chase(c, tuned.network, seed)
         rollouts.append(recorded)
-    ends = [chase(c, tuned.network, seed)[0]["gap_end_m"] for seed in UNSEEN]
+    unseen = [chase(c, tuned.network, seed)[0] for seed in UNSEEN]
+    ends = [row["gap_end_m"] for row in unseen]
+    means = [row["gap_mean_m"] for row in unseen]
     out = {
         "random_best_cm_s": round(float(res.speeds[res.top(1)[0]]), 1),
         "picked_cm_s": round(float(res.speeds[best]), 1),
@@ -124,6 +126,8 @@ def pursue(
             "splines": list(UNSEEN),
             "gap_end_m": ends,
             "median_gap_end_m": round(float(np.median(ends)), 2),
+            "gap_mean_m": means,
+            "mean_gap_mean_m": round(float(np.mean(means)), 2),
             "kept_up": int(sum(e <= KEPT_M for e in ends)),
             "kept_m": KEPT_M,
         },
