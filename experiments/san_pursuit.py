@@ -1,11 +1,11 @@
 """Fig. 10 of van de Panne & Fiume 93: the fish (and the crawler) chasing a dragged point.
 
 For each creature: 200 random SANs evaluated on the follow metric (30 s, the follow point
-dragged along a seeded spline, seed 0); the best ``--top`` of them are scored again as the mean
-over the training splines (TRAIN: seed 0 and seven more; with ``--mirror`` each also mirrored
-left for right, so that every turn is trained both ways), and
-the best of that mean is fine-tuned by annealing on the same mean, so the SAN is chosen and
-tuned for pursuit on any path, turning either way, rather than for one spline. The tuned SAN is
+dragged along a seeded spline, SEARCH_SEED); the best ``--top`` of them are scored again as
+the mean over the training splines (TRAIN: seed 0 and seven more; with ``--mirror`` each also
+mirrored left for right, so that every turn is trained both ways), and the best of that mean
+is fine-tuned by annealing on the same mean, so the SAN is chosen and tuned for pursuit on any
+path, turning either way, rather than for one spline. The tuned SAN is
 then replayed on spline 0 and on two splines (seeds 1 and 2) it never saw, and its gap at the
 end is measured on ten more unseen splines (UNSEEN). Per spline: the gap to the point at the end
 and on average, the creature's own swimming/crawling speed along its path and the share of the
@@ -40,13 +40,17 @@ from zoetic.san.tune import MeanEvaluator, tune
 
 OUT = figures_dir()
 SEEDS = (0, 1, 2)  # replayed and plotted splines: 0 was trained on, 1 and 2 never seen
-# Splines the choice and the tuning score on: seed 0 (the search's) and seeds 3-9, among
-# them sharp right turns (seed 9: 58 deg over 0.3 m of arc) but no left turn over 19 deg;
+# Splines the choice and the tuning score on: seed 0 (the crawler's search spline) and seeds
+# 3-9, among them sharp right turns (seed 9: 58 deg over 0.3 m of arc) but no left turn over 19 deg;
 # ``--mirror`` adds each one reflected left for right (twice the evaluations).
 TRAIN = (0, 3, 4, 5, 6, 7, 8, 9)
 TURN_M = 0.3  # m of the point's arc over which its turns are measured (3 s at 0.1 m/s)
 UNSEEN = tuple(range(20, 30))  # splines never seen, for the gap at the end
 POINT_SPEED = {"fish": 0.10}  # m/s of the follow point, by creature (else its file's)
+# Seed of the random-SAN search (its networks and the spline it scores them on), by creature
+# (else 0). Seed 0's 200 fish SANs hold none that turns hard left: the best of them tuned on
+# TRAIN keeps up on 5 of the 10 validation splines 10-19; seed 40's (15/31 deg turns) on 8.
+SEARCH_SEED = {"fish": 40}
 KEPT_M = 0.5  # a gap at the end within about a body length (the fish is 0.4 m) keeps up
 
 
@@ -103,7 +107,7 @@ def pursue(
     c = load_creature(name)
     if name in POINT_SPEED:
         c = dataclasses.replace(c, follow_speed=POINT_SPEED[name])
-    res = search(c, trials=trials, seed=0, workers=workers)
+    res = search(c, trials=trials, seed=SEARCH_SEED.get(name, 0), workers=workers)
     best = pick_for_pursuit(c, res, top, workers, mirror)
     mean = MeanEvaluator(TRAIN, mirror=mirror)
     tuned = tune(res.networks[best], c, "anneal", tune_trials, seed=0, evaluate=mean)
@@ -111,11 +115,14 @@ def pursue(
     for seed in SEEDS:
         rows[str(seed)], recorded = chase(c, tuned.network, seed)
         rollouts.append(recorded)
-    ends = [chase(c, tuned.network, seed)[0]["gap_end_m"] for seed in UNSEEN]
+    unseen = [chase(c, tuned.network, seed)[0] for seed in UNSEEN]
+    ends = [row["gap_end_m"] for row in unseen]
+    means = [row["gap_mean_m"] for row in unseen]
     out = {
         "random_best_cm_s": round(float(res.speeds[res.top(1)[0]]), 1),
         "picked_cm_s": round(float(res.speeds[best]), 1),
         "tuned_mean_cm_s": round(speed_cm_s(c, tuned.after, 0.0), 1),
+        "search_seed": SEARCH_SEED.get(name, 0),
         "train_splines": list(TRAIN),
         "train_mirrored": mirror,
         "follow_speed_m_s": c.follow_speed,
@@ -124,6 +131,8 @@ def pursue(
             "splines": list(UNSEEN),
             "gap_end_m": ends,
             "median_gap_end_m": round(float(np.median(ends)), 2),
+            "gap_mean_m": means,
+            "mean_gap_mean_m": round(float(np.mean(means)), 2),
             "kept_up": int(sum(e <= KEPT_M for e in ends)),
             "kept_m": KEPT_M,
         },

@@ -77,6 +77,8 @@ def test_pursuit_trains_on_a_sharp_turn_and_tests_on_unseen_splines():
     assert turns.max() >= 45  # a turn the SAN must make hard
     unseen = set(exp.UNSEEN) | set(exp.SEEDS[1:])
     assert exp.SEEDS[0] in exp.TRAIN and not unseen & set(exp.TRAIN)
+    # the search scores its random SANs on its seed's spline: never one the claim tests on
+    assert not unseen & set(exp.SEARCH_SEED.values())
 
 
 def test_the_fish_point_is_slower_than_a_straight_fish_swim_with_room_for_turns():
