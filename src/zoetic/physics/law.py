@@ -204,10 +204,13 @@ def _unit(xp, a):
     return a / col(_norm(xp, a) + TINY)
 
 
-def springs(xp, m: Model, x, v, a, idx):
+def springs(xp, m: Model, x, v, a, idx, nodes=None):
     """Return the nodal forces (N, 3, B) of the springs with indices ``idx`` (NumPy, fixed
-    when JAX traces)."""
+    when JAX traces) on node rows x, v of every node, or of the sorted ``nodes`` only (their
+    forces (len(nodes), 3, B); the springs must join those nodes)."""
     sa, sb = m.spring_a[idx], m.spring_b[idx]
+    if nodes is not None:
+        sa, sb = np.searchsorted(nodes, sa), np.searchsorted(nodes, sb)
     d = edges(xp, x, sa, sb)
     length = _norm(xp, d) + TINY
     u = d / col(length)
@@ -315,18 +318,21 @@ def step_soa(xp, m: Model, x, v, a):
     xs = x + m.dt * vs
     if m.fast_springs.shape[0] == 0:
         return xs, vs
-    fast = np.zeros((m.mass.shape[0], 1, 1), dtype=bool)  # nodes a stiff spring touches
-    fast[m.fast_nodes] = True
-    x, v = xp.where(fast, x, xs), xp.where(fast, v + hm * f, vs)  # a kick, then sub-steps
+    nodes = m.fast_nodes  # sorted: the nodes a stiff spring touches, sub-stepped on their own
+    x, v = rows(xp, x, nodes), rows(xp, v + hm * f, nodes)  # a kick, then sub-steps
     h = real(m.dt) / real(m.substeps)
-    hms = col(col(h / m.mass))
-    damps = 1.0 / (1.0 + hms * col(col(m.node_damping)))
+    hms = col(col(h / m.mass[nodes]))
+    damps = 1.0 / (1.0 + hms * col(col(m.node_damping[nodes])))
 
     def substep(x, v):
-        vq = (v + hms * springs(xp, m, x, v, a, m.fast_springs)) * damps
-        return xp.where(fast, x + h * vq, x), xp.where(fast, vq, v)
+        vq = (v + hms * springs(xp, m, x, v, a, m.fast_springs, nodes)) * damps
+        return x + h * vq, vq
 
-    return repeat(xp, m.substeps, substep, (x, v))
+    x, v = repeat(xp, m.substeps, substep, (x, v))
+    fast = np.zeros((m.mass.shape[0], 1, 1), dtype=bool)
+    fast[nodes] = True
+    back = np.cumsum(fast.ravel()) - 1  # each node's row among ``nodes`` (fast ones)
+    return xp.where(fast, rows(xp, x, back), xs), xp.where(fast, rows(xp, v, back), vs)
 
 
 def repeat(xp, n: int, body, carry: tuple):
