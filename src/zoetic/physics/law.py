@@ -331,7 +331,7 @@ def step_soa(xp, m: Model, x, v, a):
     x, v = repeat(xp, m.substeps, substep, (x, v))
     fast = np.zeros((m.mass.shape[0], 1, 1), dtype=bool)
     fast[nodes] = True
-    back = np.cumsum(fast.ravel()) - 1  # each node's row among ``nodes`` (fast ones)
+    back = np.cumsum(fast.ravel()) - 1  # a fast node's row among ``nodes`` (others: masked)
     return xp.where(fast, rows(xp, x, back), xs), xp.where(fast, rows(xp, v, back), vs)
 
 
