@@ -97,13 +97,13 @@ def test_jax_scatters_onto_nodes_what_numpy_sums_through_the_incidence_table():
     jnp = pytest.importorskip("jax.numpy")
     rng = np.random.default_rng(3)
     targets = np.array([4, 0, 4, 2, 4, 0])  # node 1 and 3 get nothing, node 4 three rows
-    values = rng.normal(size=(3, targets.size, 5))
-    expected = np.zeros((3, 5, 5))
+    values = rng.normal(size=(targets.size, 3, 5))
+    expected = np.zeros((5, 3, 5))
     for k, node in enumerate(targets):
-        expected[:, node] += values[:, k]
+        expected[node] += values[k]
     got_np = law.gather_sum(np, values, targets, 5)
     got_jx = law.gather_sum(jnp, jnp.asarray(values, jnp.float32), targets, 5)
     assert np.allclose(got_np, expected, rtol=0, atol=1e-12)
     assert np.allclose(np.asarray(got_jx), expected, rtol=0, atol=1e-5)
-    empty = law.gather_sum(jnp, jnp.zeros((3, 0, 5)), np.zeros(0, dtype=np.int64), 5)
-    assert empty.shape == (3, 5, 5) and not np.asarray(empty).any()
+    empty = law.gather_sum(jnp, jnp.zeros((0, 3, 5)), np.zeros(0, dtype=np.int64), 5)
+    assert empty.shape == (5, 3, 5) and not np.asarray(empty).any()

@@ -23,7 +23,7 @@ TOL = 1e-5  # m
 
 
 def _rollout(m, x, v, acts, dense: bool, monkeypatch):
-    """Return the final (x, v) (3, N, B) of ``STEPS`` law steps in the chosen form."""
+    """Return the final (x, v) (N, 3, B) of ``STEPS`` law steps in the chosen form."""
     monkeypatch.setattr(law, "DENSE_NODES", 10**6 if dense else -1)
 
     def run(x, v, acts):
@@ -80,7 +80,7 @@ def test_dense_and_gathered_steps_give_the_same_gradient(name, monkeypatch):
                 return law.step_soa(jnp, m, *carry, a), None
 
             xf, _ = jax.lax.scan(one, (x, v), acts)[0]
-            return jnp.sum(xf[0, body.head])
+            return jnp.sum(xf[body.head, 0])
 
         return np.asarray(jax.jit(jax.grad(nose_x))(acts))
 
@@ -94,20 +94,20 @@ def test_incidence_matrices_read_and_spread_as_the_gathers_do():
     a, b = np.array([0, 2, 4, 4]), np.array([1, 4, 0, 3])
     nodes = np.array([[4, 0, 2, 2], [1, 3, 4, 0]])  # a triangle repeats its third corner
     w = np.array([[0.25, 0.25, 0.5, 0.0], [0.25, 0.25, 0.25, 0.25]])
-    q = rng.normal(size=(3, 5, 7))
-    f, s = rng.normal(size=(3, 4, 7)), rng.normal(size=(2, 7))
+    q = rng.normal(size=(5, 3, 7))
+    f, s = rng.normal(size=(4, 3, 7)), rng.normal(size=(2, 7))
     np.testing.assert_allclose(
-        np.asarray(law.edges(jnp, jnp.asarray(q, jnp.float32), a, b)), q[:, b] - q[:, a], atol=1e-6
+        np.asarray(law.edges(jnp, jnp.asarray(q, jnp.float32), a, b)), q[b] - q[a], atol=1e-6
     )
-    spread = np.zeros((3, 5, 7))
-    np.add.at(spread, (slice(None), a), f)
-    np.add.at(spread, (slice(None), b), -f)
+    spread = np.zeros((5, 3, 7))
+    np.add.at(spread, a, f)
+    np.add.at(spread, b, -f)
     got = law.onto_ends(jnp, jnp.asarray(f, jnp.float32), a, b, 5)
     np.testing.assert_allclose(np.asarray(got), spread, atol=1e-5)
-    shares = np.zeros((3, 5, 7))
+    shares = np.zeros((5, 3, 7))
     for k in range(2):
         for c in range(4):
-            shares[:, nodes[k, c]] += w[k, c] * s[k] * f[:, k]
-    got = law.onto_corners(jnp, jnp.asarray(s), jnp.asarray(f[:, :2]), nodes, w, 5)
+            shares[nodes[k, c]] += w[k, c] * s[k] * f[k]
+    got = law.onto_corners(jnp, jnp.asarray(s), jnp.asarray(f[:2]), nodes, w, 5)
     np.testing.assert_allclose(np.asarray(got), shares, atol=1e-5)
     assert not law.dense(np, 5)  # the float64 reference sums in order, through the gathers

@@ -3,7 +3,7 @@
 The step is ``physics.law``'s, the very functions the NumPy reference runs, evaluated with
 ``jax.numpy`` on the body's float32 ``Model`` (the arrays the Numba kernel reads). The model is
 held as constants of the traced step. The law steps a whole batch at once with the batch as the
-innermost axis (positions (3, N, B)), so a rollout needs no ``vmap``: XLA sees rows of B lanes
+innermost axis (positions (N, 3, B)), so a rollout needs no ``vmap``: XLA sees rows of B lanes
 and vectorises over candidates, as the Numba kernel does. One candidate is a batch of one.
 
 Unlike the Numba kernel, a candidate that blows up is not reset to rest: its state simply
@@ -60,7 +60,7 @@ use_compilation_cache()
 
 
 def make_step(body: Body, medium: str | Medium | None = None, dt: float | None = None):
-    """Return the pure step ``(x (3,N,B), v (3,N,B), a (A,B)) -> (x, v)`` of a batch in the
+    """Return the pure step ``(x (N,3,B), v (N,3,B), a (A,B)) -> (x, v)`` of a batch in the
     law's layout (B = 1 for one candidate)."""
     m = compile_model(body, medium, dt)
 
@@ -97,7 +97,7 @@ def rollout_fn(body: Body, medium=None, dt: float | None = None, record_every: i
         # (T, A, B): a row of activations per step, the batch innermost (1: shared)
         act = jnp.moveaxis(act, 0, -1) if act.ndim == 3 else act[..., None]
         recs, x, v = _in_chunks(run, law.to_soa(jnp, x0), law.to_soa(jnp, v0), act, lanes())
-        rec = jnp.transpose(recs, (3, 0, 2, 1))  # (B, R, N, 3)
+        rec = jnp.transpose(recs, (3, 0, 1, 2))  # (B, R, N, 3)
         rec = jnp.reshape(rec, (*batch, *rec.shape[1:]))
         return rec, law.from_soa(jnp, x, batch), law.from_soa(jnp, v, batch)
 
@@ -105,7 +105,7 @@ def rollout_fn(body: Body, medium=None, dt: float | None = None, record_every: i
 
 
 def _soa_rollout(step, record_every: int):
-    """Return ``(x, v (3,N,B), act (T,A,B)) -> (rec (R,3,N,B), x, v)`` in the law's layout."""
+    """Return ``(x, v (N,3,B), act (T,A,B)) -> (rec (R,N,3,B), x, v)`` in the law's layout."""
 
     # rematerialised under differentiation: the backward pass keeps only each step's state and
     # recomputes the step's intermediates, instead of stacking every one of them over the
