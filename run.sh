@@ -84,7 +84,8 @@ case "$cmd" in
   test)
     npm_ci
     need_debian chromium:chromium
-    ruff check src tests scripts
+    ruff check src tests scripts experiments
+    ruff format --check src tests scripts experiments
     if [ $# -gt 0 ]; then exec python -m pytest "$@"; fi
     python -m pytest            # the default tier
     exec python -m pytest -m 'slow and not long'  # the slow tier: JAX compiles, Ray clusters, searches

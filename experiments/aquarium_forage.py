@@ -29,12 +29,17 @@ def run(seed: int, seconds: float) -> dict:
     """Live the default scene from ``seed`` and return its foraging figures."""
     _, _, s, cpu = timed_life(seed, seconds)
     share = s["intention_share"]
-    return {"seed": seed, "food_eaten": s["food_eaten_fraction"],
-            "avoid": round(share["avoid"], 3), "eat": round(share["eat"], 3),
-            "deepest_into_obstacle_m": s["deepest_into_obstacle_m"],
-            "deepest_into_fish_m": round(s["deepest_into_fish_m"], 4),
-            "collisions_between_fishes": s["collisions_between_fishes"],
-            "catches": s["events"]["catch"], "cpu_realtime_factor": round(seconds / cpu, 1)}
+    return {
+        "seed": seed,
+        "food_eaten": s["food_eaten_fraction"],
+        "avoid": round(share["avoid"], 3),
+        "eat": round(share["eat"], 3),
+        "deepest_into_obstacle_m": s["deepest_into_obstacle_m"],
+        "deepest_into_fish_m": round(s["deepest_into_fish_m"], 4),
+        "collisions_between_fishes": s["collisions_between_fishes"],
+        "catches": s["events"]["catch"],
+        "cpu_realtime_factor": round(seconds / cpu, 1),
+    }
 
 
 def main() -> None:
@@ -47,11 +52,16 @@ def main() -> None:
     for r in rows:
         print(json.dumps(r))
     keys = ("food_eaten", "avoid", "eat", "cpu_realtime_factor")
-    print(json.dumps({"mean": {k: round(float(np.mean([r[k] for r in rows])), 3) for k in keys},
-                      "min_food_eaten": min(r["food_eaten"] for r in rows),
-                      "max_deepest_into_obstacle_m": max(r["deepest_into_obstacle_m"]
-                                                         for r in rows),
-                      "max_deepest_into_fish_m": max(r["deepest_into_fish_m"] for r in rows)}))
+    print(
+        json.dumps(
+            {
+                "mean": {k: round(float(np.mean([r[k] for r in rows])), 3) for k in keys},
+                "min_food_eaten": min(r["food_eaten"] for r in rows),
+                "max_deepest_into_obstacle_m": max(r["deepest_into_obstacle_m"] for r in rows),
+                "max_deepest_into_fish_m": max(r["deepest_into_fish_m"] for r in rows),
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

@@ -72,10 +72,18 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("/tmp/aquarium_learned"))
     ap.add_argument("--seeds", type=int, nargs="+", default=list(range(10)))
-    ap.add_argument("--skills", nargs="+", choices=("learned", "built-in"),
-                    default=["learned", "built-in"], help="which to run (default both)")
-    ap.add_argument("--no-righting", action="store_true",
-                    help="without the motor layer's righting reflex (TankConfig.righting)")
+    ap.add_argument(
+        "--skills",
+        nargs="+",
+        choices=("learned", "built-in"),
+        default=["learned", "built-in"],
+        help="which to run (default both)",
+    )
+    ap.add_argument(
+        "--no-righting",
+        action="store_true",
+        help="without the motor layer's righting reflex (TankConfig.righting)",
+    )
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     print(json.dumps(learned_motor(load_animal("shark"), SKILLS_DIR / "shark").summary()))

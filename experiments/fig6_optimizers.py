@@ -186,8 +186,12 @@ def main() -> None:
     ap.add_argument("--budget", type=int, default=3500)
     ap.add_argument("--nodes", type=int, default=None, help="M (default: 4 per stroke period)")
     ap.add_argument("--raw-units", action="store_true", help="E in m^2, as the first round")
-    ap.add_argument("--goal", type=float, default=None,
-                    help="metres ahead (default: twice the wave's reach in the horizon)")
+    ap.add_argument(
+        "--goal",
+        type=float,
+        default=None,
+        help="metres ahead (default: twice the wave's reach in the horizon)",
+    )
     ap.add_argument("--check", action="store_true", help="verify lockstep == alone, then stop")
     args = ap.parse_args()
     panels = {p.strip() for p in args.panels.split(",") if p.strip()}
@@ -245,15 +249,18 @@ def main() -> None:
                 alpha = PAPER_ALPHA if optimizer == "anneal" else None
                 runs = curves[(controller, optimizer, alpha)]
                 a[label(optimizer, controller)] = run_summary(
-                    runs, best_any[controller], temps.get((controller, alpha)), alpha)
+                    runs, best_any[controller], temps.get((controller, alpha)), alpha
+                )
                 a[label(optimizer, controller)]["paper_final_E"] = PAPER_A[
-                    label(optimizer, controller)]
+                    label(optimizer, controller)
+                ]
                 print(label(optimizer, controller), a[label(optimizer, controller)], flush=True)
         report["a"] = a
         means = {k: v["mean_final_E"] for k, v in a.items()}
         report["a_ordering"] = sorted(means, key=means.get)  # best (lowest mean final E) first
         report["a_ordering_per_seed"] = [
-            sorted(a, key=lambda k, i=i: a[k]["final_E"][i]) for i in range(len(seeds))]
+            sorted(a, key=lambda k, i=i: a[k]["final_E"][i]) for i in range(len(seeds))
+        ]
         print("(a) ordering:", " < ".join(report["a_ordering"]), flush=True)
         plot_learning_seeds(
             {f"Fig. 6(a): {args.animal} reaching a goal, NM = {3 * m}":
@@ -275,7 +282,8 @@ def main() -> None:
         report[f"{panel}_ordering"] = sorted(means, key=means.get)
         print(f"({panel}) ordering:", " < ".join(report[f"{panel}_ordering"]), flush=True)
         cooling_panels[f"Fig. 6({panel}): annealing, {controller} domain"] = {
-            f"alpha {alpha}": curves[(controller, "anneal", alpha)] for alpha in COOLING_RATES}
+            f"alpha {alpha}": curves[(controller, "anneal", alpha)] for alpha in COOLING_RATES
+        }
     if cooling_panels:
         plot_learning_seeds(cooling_panels, OUT / f"{stem}_cooling.png",
                             title=f"cooling rates, T0 = 0.5, NM = {3 * m}")  # fmt: skip

@@ -41,8 +41,11 @@ def main() -> None:
     ap.add_argument("--budgets", default="16,400,1500,6000")
     ap.add_argument("--optimizer", default="cmaes")
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--controller", default="time",
-                    help="time (the paper's Plate 3), or periodic (zoetic learn's default)")
+    ap.add_argument(
+        "--controller",
+        default="time",
+        help="time (the paper's Plate 3), or periodic (zoetic learn's default)",
+    )
     args = ap.parse_args()
     from zoetic.viz.plots import plot_path
     from zoetic.viz.render3d import render_video

@@ -102,9 +102,11 @@ def seed_table(body, rep, names: list[str], seeds: list[int], args) -> str:
             write_json(args.out / name / f"seed{seed}.json", s | {"targets": flags})
             met += ok
             stopped = " stopped" if s.get("stopped_when_met") else ""
-            cells.append(f"{seed}: {'yes' if ok else 'no'} "
-                         f"{s['perturbed_starts_met']}/{s['perturbed_starts']}, "
-                         f"{s['evaluations']} plans{stopped}, {s['wall_s']:.0f} s")
+            cells.append(
+                f"{seed}: {'yes' if ok else 'no'} "
+                f"{s['perturbed_starts_met']}/{s['perturbed_starts']}, "
+                f"{s['evaluations']} plans{stopped}, {s['wall_s']:.0f} s"
+            )
         rows.append(f"| {name} | {met} | {'; '.join(cells)} | {np.median(cpu):.0f} |")
         print(rows[-1], flush=True)
     return "\n".join(rows)
@@ -112,20 +114,31 @@ def seed_table(body, rep, names: list[str], seeds: list[int], args) -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--memory", type=Path, default=None,
-                    help="default: runs/bench/dolphin-memory-<digest>, as zoetic bench stunts")
+    ap.add_argument(
+        "--memory",
+        type=Path,
+        default=None,
+        help="default: runs/bench/dolphin-memory-<digest>, as zoetic bench stunts",
+    )
     ap.add_argument("--out", type=Path, default=Path("runs/plate5"))
     ap.add_argument("--budget", type=int, default=BUDGET)
     ap.add_argument("--tricks", default=None, help="comma-separated (default: all built in)")
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--seeds", default=None,
-                    help="e.g. 0-4: a table of successes per trick over these seeds instead")
+    ap.add_argument(
+        "--seeds",
+        default=None,
+        help="e.g. 0-4: a table of successes per trick over these seeds instead",
+    )
     ap.add_argument("--method", default="anneal")
     ap.add_argument("--launch", type=float, default=None, help="start speed (m/s) for all")
     ap.add_argument("--launch-pitch", type=float, default=0.9)
     ap.add_argument("--launch-depth", type=float, default=0.8)
-    ap.add_argument("--train-budget", type=int, default=3000,
-                    help="evaluations per entry when the repertoire must be trained")
+    ap.add_argument(
+        "--train-budget",
+        type=int,
+        default=3000,
+        help="evaluations per entry when the repertoire must be trained",
+    )
     args = ap.parse_args()
     body = load_animal("dolphin")
     if args.memory is None:
@@ -136,8 +149,11 @@ def main() -> None:
         print(f"trained the repertoire in {time.perf_counter() - t0:.0f} s")
     rep = Repertoire.load(args.memory, body)
     make_dir(args.out)
-    names = list_tricks() if args.tricks is None else [
-        t.strip() for t in args.tricks.split(",") if t.strip()]
+    names = (
+        list_tricks()
+        if args.tricks is None
+        else [t.strip() for t in args.tricks.split(",") if t.strip()]
+    )
     if args.seeds is not None:
         table = seed_table(body, rep, names, parse_seeds(args.seeds), args)
         atomic_write_bytes(args.out / "seeds.md", (table + "\n").encode())
@@ -156,7 +172,10 @@ def main() -> None:
         if args.launch is not None:
             doc = read_toml(trick.task.source, what="trick file")
             doc["start"] = doc.get("start", {}) | {
-                "depth": args.launch_depth, "pitch": args.launch_pitch, "speed": args.launch}
+                "depth": args.launch_depth,
+                "pitch": args.launch_pitch,
+                "speed": args.launch,
+            }
             trick = parse_trick(doc, trick.task.source)
         found = discover(body, rep, trick, args.method, args.budget, args.seed)
         s = found.summary()
@@ -164,14 +183,28 @@ def main() -> None:
         summaries[name] = s | {"targets": flags}
         write_json(args.out / name / "summary.json", summaries[name])
         plan = ", ".join(f"{p['entry']} {p['duration_s']:.2f}" for p in s["plan"] if p["played"])
-        ball = "-" if "ball_contact" not in s else (
-            s["ball_contact"] + (f" ({', '.join(s['ball_parts'])})" if s["ball_parts"] else ""))
-        speeds = ("-" if "ball_speed_m_s" not in s else
-                  f"{s['striker_speed_m_s']:.1f} -> {s['ball_speed_m_s']:.1f}")
-        hurdle = "-" if "hurdle_clearance_m" not in s else (
-            f"{s['hurdle_clearance_m']:.2f}" + (" touched" if s.get("hurdle_touched") else ""))
-        met = ("-" if not flags else
-               ", ".join(f"{k} {'yes' if v else 'no'}" for k, v in flags.items()))
+        ball = (
+            "-"
+            if "ball_contact" not in s
+            else (
+                s["ball_contact"] + (f" ({', '.join(s['ball_parts'])})" if s["ball_parts"] else "")
+            )
+        )
+        speeds = (
+            "-"
+            if "ball_speed_m_s" not in s
+            else f"{s['striker_speed_m_s']:.1f} -> {s['ball_speed_m_s']:.1f}"
+        )
+        hurdle = (
+            "-"
+            if "hurdle_clearance_m" not in s
+            else (
+                f"{s['hurdle_clearance_m']:.2f}" + (" touched" if s.get("hurdle_touched") else "")
+            )
+        )
+        met = (
+            "-" if not flags else ", ".join(f"{k} {'yes' if v else 'no'}" for k, v in flags.items())
+        )
         if s["perturbed_starts"]:
             met += f"; perturbed starts {s['perturbed_starts_met']}/{s['perturbed_starts']}"
         rows.append(
@@ -194,9 +227,11 @@ def main() -> None:
     table = "\n".join(rows)
     if {"bellyflop", "clean-dive"} <= set(summaries):
         r = splash_ratio(summaries["bellyflop"], summaries["clean-dive"])
-        table += ("\n\nbellyflop / clean-dive splash: " + (
-            "no ratio (not both left the water and re-entered)" if r is None else
-            f"{r:.2f} (target >= {SPLASH_RATIO:g}, {'met' if r >= SPLASH_RATIO else 'not met'})"))
+        table += "\n\nbellyflop / clean-dive splash: " + (
+            "no ratio (not both left the water and re-entered)"
+            if r is None
+            else f"{r:.2f} (target >= {SPLASH_RATIO:g}, {'met' if r >= SPLASH_RATIO else 'not met'})"
+        )
     atomic_write_bytes(args.out / "table.md", (table + "\n").encode())
     print()
     print(table)

@@ -40,7 +40,12 @@ VARIANTS = {
     "the ray now": {},
     "muscles 1000, thickness 600": {"k_m": 1000.0, "k_thick": 600.0},
     "first ray 4x stiffer, nodal damping 0.005, 2.5 ms": {
-        **FIRST, "node_damping": 0.005, "k_s": 1000.0, "k_m": 880.0, "dt": 0.0025},
+        **FIRST,
+        "node_damping": 0.005,
+        "k_s": 1000.0,
+        "k_m": 880.0,
+        "dt": 0.0025,
+    },
     "40 % of the mass in the wings": {"wing_mass": 0.4},
 }
 FREQS = (1.5, 2.0, 2.5, 3.0, 4.0)
@@ -92,9 +97,14 @@ def main() -> None:
         body = build(changes)
         speeds = flap_speed(body)
         best = max(speeds, key=speeds.get)
-        row = {"best_hz": best, "bl_s": speeds[best], "shape_strain": shape_strain(body),
-               "omega_max": round(multirate.omega_max(body), 1),
-               "stable_dt_ms": round(1000 * stable_dt(body), 2), "dt_ms": 1000 * body.dt}
+        row = {
+            "best_hz": best,
+            "bl_s": speeds[best],
+            "shape_strain": shape_strain(body),
+            "omega_max": round(multirate.omega_max(body), 1),
+            "stable_dt_ms": round(1000 * stable_dt(body), 2),
+            "dt_ms": 1000 * body.dt,
+        }
         print(json.dumps({label: row}), flush=True)
 
 
