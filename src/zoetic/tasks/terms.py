@@ -242,7 +242,7 @@ def dive_before_apex(xp, s: Signals, p: TermParams):
     """Return (K,) m: start height of the centre of mass less its lowest before the apex
     (>= 0, at most 'target' when that is > 0; gain)."""
     y = s.com[:, :, 1]
-    before = xp.arange(y.shape[1])[None, :] <= xp.argmax(y, axis=1)[:, None]
+    before = xp.arange(y.shape[1])[None, :] <= s.apex_record[:, None]
     dive = xp.maximum(y[:, 0] - xp.min(xp.where(before, y, xp.inf), axis=1), 0.0)
     return xp.where(p.target > 0, xp.minimum(dive, p.target), dive)
 
