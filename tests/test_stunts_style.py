@@ -104,3 +104,25 @@ def test_trick_targets_are_strict():
     for bad in ([10, -10], [1], "low", [True, 2]):
         with pytest.raises(TaskError, match=r"my\.toml: trick\.targets: 'x'"):
             parse_trick(base | {"trick": {"targets": {"x": bad}}}, "my.toml")
+
+
+def test_the_leap_requires_a_reentry_by_the_end(dolphin):
+    leap = load_trick("leap")
+    assert "final_height" in {t.kind for t in leap.task.terms}
+    assert dict((k, (lo, hi)) for k, lo, hi in leap.targets)["final_height_m"] == (0.0, 0.0)
+    flight = {
+        "most_nodes_out_of_water": 1.0,
+        "air_time_s": 1.0,
+        "apex_body_lengths": 1.0,
+        "roll_rotation_in_air_deg": 10.0,
+    }
+    assert all(targets_met("leap", flight | {"final_height_m": 0.0}, leap).values())
+    # a flight the horizon cuts while the body is still out of the water is not a whole leap
+    cut = targets_met("leap", flight | {"final_height_m": 0.93}, leap)
+    assert not cut["final_height_m"] and cut["air_time"] and cut["apex"]
+    # the term costs the height still out at the end, nothing once the body is back in
+    down = np.linspace(0.5, -0.9, ARC.size)
+    landed = _flight(dolphin, ARC, down)
+    rising = _flight(dolphin, ARC[:11], down[:11])  # the record ends at the apex, 1 m up
+    assert _term("final_height", landed) == 0.0
+    assert _term("final_height", rising) > 1.0  # the centre of mass 1 m up, the nose higher
