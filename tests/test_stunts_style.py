@@ -108,18 +108,24 @@ def test_trick_targets_are_strict():
 
 def test_the_leap_requires_a_reentry_by_the_end(dolphin):
     leap = load_trick("leap")
-    assert "final_height" in {t.kind for t in leap.task.terms}
-    assert dict((k, (lo, hi)) for k, lo, hi in leap.targets)["final_height_m"] == (0.0, 0.0)
+    assert {"final_height", "entry_pitch"} <= {t.kind for t in leap.task.terms}
+    bounds = {k: (lo, hi) for k, lo, hi in leap.targets}
+    assert bounds["final_height_m"] == (0.0, 0.0)
+    assert bounds["entry_pitch_deg"][1] < 0.0  # head first, nose down
     flight = {
         "most_nodes_out_of_water": 1.0,
         "air_time_s": 1.0,
         "apex_body_lengths": 1.0,
         "roll_rotation_in_air_deg": 10.0,
+        "entry_pitch_deg": -45.0,
     }
     assert all(targets_met("leap", flight | {"final_height_m": 0.0}, leap).values())
     # a flight the horizon cuts while the body is still out of the water is not a whole leap
     cut = targets_met("leap", flight | {"final_height_m": 0.93}, leap)
     assert not cut["final_height_m"] and cut["air_time"] and cut["apex"]
+    # back in after turning nose over tail: the head goes in with the body pointing up
+    flipped = targets_met("leap", flight | {"final_height_m": 0.0, "entry_pitch_deg": 73.0}, leap)
+    assert not flipped["entry_pitch_deg"] and flipped["final_height_m"]
     # the term costs the height still out at the end, nothing once the body is back in
     down = np.linspace(0.5, -0.9, ARC.size)
     landed = _flight(dolphin, ARC, down)
