@@ -88,6 +88,14 @@ def measures(problem: StuntProblem, rec: StuntRecord, lane: int = 0) -> dict:
         ),
         "contacts": int(rec.contacts[lane].sum()),
         "body_length_m": round(length, 3),
+        # the hurdle's style: the pitch of the body's axis (nose up +) at the apex, and where
+        # the head re-enters the water after it (None while it has not by the end)
+        "apex_pitch_deg": round(float(np.degrees(s.at(s.body_pitch, s.apex_record)[lane])), 1),
+        "entry_pitch_deg": (
+            round(float(np.degrees(s.at(s.body_pitch, s.reentry_record)[lane])), 1)
+            if s.reentered[lane]
+            else None
+        ),
     }
     out["splash_m3_s"] = round(float(np.sum(s.entry_flux[lane])), 4)
     out["entries_into_water"] = int(np.sum(np.diff(s.airborne[lane]) < 0))
@@ -151,7 +159,8 @@ def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, boo
     """Return the success flags of a built-in trick's measures (``measures``) against the
     issue's targets; {} for a trick of another name. Bellyflop and clean-dive need to leave
     the water and be wholly back in it by the end (a splash not yet made is not small); their
-    target is the ratio of their splashes (``splash_ratio``)."""
+    target is the ratio of their splashes (``splash_ratio``). A trick's own targets
+    (``Trick.targets``) add a flag each: the measure reported and within its [min, max]."""
     flags: dict[str, bool] = {}
     if name in ("leap", "hurdle", "somersault", "spin", "bellyflop", "clean-dive"):
         flags["leaves_water"] = bool(m["most_nodes_out_of_water"] >= 1.0)
@@ -178,6 +187,9 @@ def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, boo
         flags["off_support"] = bool(m.get(f"ball_moved_by_{part}_m", 0.0) > radius)
         if part == "tail":  # during a somersault: out of the water, half a turn or more done
             flags["in_somersault"] = bool(m.get("tail_strike_rotation_deg", 0.0) >= TAIL_STRIKE_DEG)
+    for key, lo, hi in trick.targets if trick else ():
+        value = m.get(key)
+        flags[key] = value is not None and bool(lo <= value <= hi)
     return flags
 
 

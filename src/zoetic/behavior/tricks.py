@@ -15,6 +15,11 @@ three, so that a plan found still works when its start is slightly off. ``stop_w
 ends the search as soon as its best plan meets the trick's targets from the start and from all
 six moved starts (off by default: a trick whose style is scored beyond its targets, such as
 the leap's height or the bellyflop's splash, uses the whole budget).
+
+``[trick.targets]`` adds targets of the trick's own to the built-in ones: each key a number
+the stunt's measures report (``behavior.stunts.measures``, e.g. ``apex_pitch_deg``), each value
+its [min, max]; a stunt meets it when the measure is reported and within them (the hurdle's
+level apex and nose-down re-entry, the leap's balance in flight).
 """
 
 from __future__ import annotations
@@ -29,7 +34,7 @@ from zoetic.physics.objects import Ball, Box, Cylinder
 from zoetic.tasks import TASK_DIR, Task, parse_task
 
 TRICK_DIR = TASK_DIR / "tricks"
-TRICK_KEYS = ("segments", "durations", "jitter", "robust", "stop_when_met")
+TRICK_KEYS = ("segments", "durations", "jitter", "robust", "stop_when_met", "targets")
 JITTER_KEYS = ("depth", "heading", "pitch")  # m, deg, deg
 OBJECTS = {"ball": Ball, "box": Box, "cylinder": Cylinder}
 
@@ -48,6 +53,8 @@ class Trick:
     # every perturbed start of the check (a built-in trick's targets; the rest of the budget
     # could only polish the style)
     stop_when_met: bool = False
+    # the trick's own targets: (measure, min, max), a measure of ``behavior.stunts.measures``
+    targets: tuple[tuple[str, float, float], ...] = ()
 
     @property
     def name(self) -> str:
@@ -70,6 +77,7 @@ class Trick:
             "jitter": dict(zip(JITTER_KEYS, self.jitter, strict=True)),
             "robust": self.robust,
             "stop_when_met": self.stop_when_met,
+            "targets": {k: [lo, hi] for k, lo, hi in self.targets},
         }
 
 
@@ -126,6 +134,26 @@ def _jitter(raw_trick: dict, source: str) -> tuple[float, float, float]:
     return out[0], out[1], out[2]
 
 
+def _targets(raw_trick: dict, source: str) -> tuple[tuple[str, float, float], ...]:
+    raw = raw_trick.get("targets", {})
+    if not isinstance(raw, dict):
+        raise TaskError(f"{source}: trick: 'targets' must be a table of measure = [min, max]")
+    out = []
+    for key, bounds in raw.items():
+        ok = (
+            isinstance(bounds, list)
+            and len(bounds) == 2
+            and all(isinstance(b, int | float) and not isinstance(b, bool) for b in bounds)
+        )
+        if not ok or not bounds[0] <= bounds[1]:
+            raise TaskError(
+                f"{source}: trick.targets: {key!r} must be [min, max] with min <= max, "
+                f"got {bounds!r}"
+            )
+        out.append((str(key), float(bounds[0]), float(bounds[1])))
+    return tuple(out)
+
+
 def parse_trick(doc: dict, source: str = "<memory>") -> Trick:
     """Return the Trick a parsed TOML document describes; TaskError names what is wrong."""
     if not isinstance(doc, dict):
@@ -151,7 +179,8 @@ def parse_trick(doc: dict, source: str = "<memory>") -> Trick:
         if not isinstance(value, bool):
             raise TaskError(f"{source}: trick: {key!r} must be true or false, got {value!r}")
     jitter = _jitter(raw_trick, source)
-    return Trick(task, objects, int(segments), durations, jitter, robust, stop)
+    targets = _targets(raw_trick, source)
+    return Trick(task, objects, int(segments), durations, jitter, robust, stop, targets)
 
 
 def list_tricks() -> list[str]:

@@ -203,6 +203,37 @@ class Signals:
         return self.xp.arctan2(d[..., 1], norm_xz(self.xp, d) + EPS)
 
     @cached_property
+    def apex_record(self):
+        """Record (K,) of the centre of mass's apex (its highest point)."""
+        return self.xp.argmax(self.com[:, :, 1], axis=1)
+
+    @cached_property
+    def reentry_record(self):
+        """Record (K,) at which the head is first back under the water after the centre of
+        mass's apex (a leap's re-entry, the head leading a dive); the last record while the
+        head is still out by then."""
+        xp = self.xp
+        r = self.positions.shape[1]
+        wet = (self.head[:, :, 1] < self.level) & (
+            xp.arange(r)[None, :] >= self.apex_record[:, None]
+        )
+        return xp.where(xp.any(wet, axis=1), xp.argmax(wet, axis=1), r - 1)
+
+    @cached_property
+    def reentered(self):
+        """1.0 (K,) where the head was out of the water at the apex and is back under it by the
+        end (``reentry_record`` is a re-entry), else 0.0."""
+        xp = self.xp
+        head_y = self.head[:, :, 1]
+        out = self.at(head_y, self.apex_record) >= self.level
+        back = self.at(head_y, self.reentry_record) < self.level
+        return xp.where(out & back, 1.0, 0.0)
+
+    def at(self, values, records):
+        """Return (K,) values (K, R) at one record (K,) per recording."""
+        return self.xp.take_along_axis(values, records[:, None], axis=1)[:, 0]
+
+    @cached_property
     def roll(self):
         """Roll (K, R), rad: the tilt of the left-right axis (mirror pairs); 0 without pairs."""
         return roll_angle(self.xp, self.positions, self.frame.left, self.frame.right)

@@ -242,7 +242,7 @@ def dive_before_apex(xp, s: Signals, p: TermParams):
     """Return (K,) m: start height of the centre of mass less its lowest before the apex
     (>= 0, at most 'target' when that is > 0; gain)."""
     y = s.com[:, :, 1]
-    before = xp.arange(y.shape[1])[None, :] <= xp.argmax(y, axis=1)[:, None]
+    before = xp.arange(y.shape[1])[None, :] <= s.apex_record[:, None]
     dive = xp.maximum(y[:, 0] - xp.min(xp.where(before, y, xp.inf), axis=1), 0.0)
     return xp.where(p.target > 0, xp.minimum(dive, p.target), dive)
 
@@ -276,13 +276,23 @@ def flight_rotation(xp, s: Signals, p: TermParams):
 
 
 @term(
-    "squared error of the pitch at the apex of the centre of mass against 'target' (rad^2): "
-    "horizontal over a hurdle"
+    "squared error of the pitch of the body's axis (``Signals.body_pitch``, nose up positive) "
+    "at the apex of the centre of mass against 'target' (rad^2): horizontal over a hurdle"
 )
 def apex_pitch(xp, s: Signals, p: TermParams):
-    """Return (K,) rad^2: squared error of pitch at the centre of mass's apex vs 'target' (cost)."""
-    i = xp.argmax(s.com[:, :, 1], axis=1)[:, None]
-    return (xp.take_along_axis(s.pitch, i, axis=1)[:, 0] - p.target) ** 2
+    """Return (K,) rad^2: squared error of the body's pitch at the apex vs 'target' (cost)."""
+    return (s.at(s.body_pitch, s.apex_record) - p.target) ** 2
+
+
+@term(
+    "squared excess (rad^2) of the pitch of the body's axis (``Signals.body_pitch``, nose up "
+    "positive) where the head re-enters the water after the apex (``Signals.reentry_record``; "
+    "the last record while it is still out) above 'target' rad, 0 once the body points down at "
+    "least that steeply: facing downward on re-entry"
+)
+def entry_pitch(xp, s: Signals, p: TermParams):
+    """Return (K,) rad^2: squared excess of the re-entry pitch over 'target' (>= 0; cost)."""
+    return xp.maximum(s.at(s.body_pitch, s.reentry_record) - p.target, 0.0) ** 2
 
 
 @term(
