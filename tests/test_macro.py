@@ -223,3 +223,25 @@ def test_a_fish_is_judged_as_it_swims_upright(problem):
     a, b = (search(righted, "ga", budget=16, seed=1, popsize=8) for _ in range(2))
     assert a.entries.tolist() == b.entries.tolist() and a.scores["cost"] == b.scores["cost"]
     assert a.scores["cost"] == pytest.approx(a.history[-1][1], abs=1e-4)
+
+
+def test_search_evaluates_plans_with_blas_on_one_thread(problem, monkeypatch):
+    """A plan search's batches run with BLAS held to one thread (its idle threads spin against
+    the kernel's on the same cores), and the limit is lifted when the search ends."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    def blas_threads() -> set[int]:
+        return {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
+
+    seen: list[set[int]] = []
+    real = type(problem).evaluate
+
+    def evaluate(self, e, d, *args, **kw):
+        seen.append(blas_threads())
+        return real(self, e, d, *args, **kw)
+
+    monkeypatch.setattr(type(problem), "evaluate", evaluate)
+    with threadpool_limits(limits=2, user_api="blas"):  # as on 2 cores, even on one
+        search(problem, "ga", budget=16, seed=1, popsize=8)
+        assert seen and all(s == {1} for s in seen)
+        assert blas_threads() == {2}

@@ -33,6 +33,7 @@ from zoetic.behavior.tracking import OVERLAP, TrackConfig, body_length, obstacle
 from zoetic.behavior.upright import RightedPlans, attitude, has_fins, right_plans
 from zoetic.bodies import Body
 from zoetic.control.abstract import SequenceController
+from zoetic.learning.blas import one_blas_thread
 from zoetic.learning.optimizers import Annealing
 from zoetic.physics import Trajectory, simulate
 
@@ -442,8 +443,9 @@ def search(
     stopped = False
     try:
         while opt.evaluations < budget and not stopped:
-            e, d = opt.ask()
-            opt.tell(e, d, cost(e, d))
+            with one_blas_thread():  # the plans' small products; see learning.blas
+                e, d = opt.ask()
+                opt.tell(e, d, cost(e, d))
             history.append((opt.evaluations, opt.best_f))
             if progress is not None:
                 progress(opt)
@@ -453,7 +455,8 @@ def search(
             pool.close()
     wall = time.perf_counter() - start
     e, d = opt.best
-    scores = {k: float(v[0]) for k, v in problem.evaluate(e[None], d[None]).items()}
+    with one_blas_thread():
+        scores = {k: float(v[0]) for k, v in problem.evaluate(e[None], d[None]).items()}
     return MacroResult(
         method=method,
         names=[problem.names[i] for i in e],

@@ -37,6 +37,7 @@ from zoetic.bodies import Body
 from zoetic.control.abstract import SequenceController
 from zoetic.errors import TaskError
 from zoetic.io import read_json
+from zoetic.learning.blas import one_blas_thread
 from zoetic.physics import Trajectory
 from zoetic.physics.objects import Ball, Box, Cylinder
 from zoetic.tasks.terms import (
@@ -479,8 +480,11 @@ def discover(
     result = search(
         problem, method, plans, seed, progress=progress, evaluator=evaluator, stop=stop, **opts
     )
-    rec = problem.record(result.entries[None], result.durations[None], record_every=2)
-    checked = (
-        perturbed_successes(problem, result.entries, result.durations) if any(trick.jitter) else []
-    )
+    with one_blas_thread():  # the replay's and the moved starts' small products
+        rec = problem.record(result.entries[None], result.durations[None], record_every=2)
+        checked = (
+            perturbed_successes(problem, result.entries, result.durations)
+            if any(trick.jitter)
+            else []
+        )
     return Stunt(problem, result, rec, problem.scores(rec), measures(problem, rec), checked)
