@@ -263,8 +263,8 @@ def bench_stunts_cmd(
     quick: Quick = False,
 ) -> None:
     """Each trick discovered: its success flags against the issue's targets, what it achieved,
-    evaluations and wall time (target: each trick in <= 5 minutes on 2 cores). --quick: the
-    first trick only, 100 plans, a repertoire trained with a small budget."""
+    evaluations and wall time (target: each trick in <= 15 s on an idle 2-core machine).
+    --quick: the first trick only, 100 plans, a repertoire trained with a small budget."""
     from zoetic.behavior.stunts import BUDGET
     from zoetic.bench.stunts import bench_stunts
 
