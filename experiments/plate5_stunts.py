@@ -227,10 +227,11 @@ def main() -> None:
     table = "\n".join(rows)
     if {"bellyflop", "clean-dive"} <= set(summaries):
         r = splash_ratio(summaries["bellyflop"], summaries["clean-dive"])
+        met = "met" if r is not None and r >= SPLASH_RATIO else "not met"
         table += "\n\nbellyflop / clean-dive splash: " + (
             "no ratio (not both left the water and re-entered)"
             if r is None
-            else f"{r:.2f} (target >= {SPLASH_RATIO:g}, {'met' if r >= SPLASH_RATIO else 'not met'})"
+            else f"{r:.2f} (target >= {SPLASH_RATIO:g}, {met})"
         )
     atomic_write_bytes(args.out / "table.md", (table + "\n").encode())
     print()

@@ -48,8 +48,8 @@ TURN_M = 0.3  # m of the point's arc over which its turns are measured (3 s at 0
 UNSEEN = tuple(range(20, 30))  # splines never seen, for the gap at the end
 POINT_SPEED = {"fish": 0.10}  # m/s of the follow point, by creature (else its file's)
 # Seed of the random-SAN search (its networks and the spline it scores them on), by creature
-# (else 0). Seed 0's 200 fish SANs hold none that turns hard left: the best of them tuned on
-# TRAIN keeps up on 5 of the 10 validation splines 10-19; seed 40's (15/31 deg turns) on 8.
+# (else 0): the fish's was chosen on the validation splines 10-19, never on UNSEEN
+# (docs/creatures.md, the SAN fish's sharp left turns).
 SEARCH_SEED = {"fish": 40}
 KEPT_M = 0.5  # a gap at the end within about a body length (the fish is 0.4 m) keeps up
 

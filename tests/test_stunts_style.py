@@ -5,12 +5,14 @@ requires them."""
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from zoetic.behavior.stunts import targets_met
+from zoetic.behavior.stunts import TARGET_TRICKS, targets_met
 from zoetic.behavior.tricks import load_trick, parse_trick
 from zoetic.errors import TaskError
 from zoetic.tasks.terms import TERMS, BodyFrame, Signals, TermParams
@@ -91,6 +93,7 @@ def test_the_hurdle_and_the_leap_require_their_style_targets():
     leap = load_trick("leap")
     assert "roll_rotation_in_air_deg" in {k for k, _, _ in leap.targets}
     flight = {"most_nodes_out_of_water": 1.0, "air_time_s": 1.0, "apex_body_lengths": 1.0}
+    flight |= {"final_height_m": 0.0, "entry_pitch_deg": -45.0}
     assert not targets_met("leap", flight | {"roll_rotation_in_air_deg": 384.0}, leap)[
         "roll_rotation_in_air_deg"
     ]
@@ -132,3 +135,23 @@ def test_the_leap_requires_a_reentry_by_the_end(dolphin):
     rising = _flight(dolphin, ARC[:11], down[:11])  # the record ends at the apex, 1 m up
     assert _term("final_height", landed) == 0.0
     assert _term("final_height", rising) > 1.0  # the centre of mass 1 m up, the nose higher
+
+
+def test_a_target_on_no_measure_is_refused_by_name():
+    """A target whose key no stunt measures could never be met: targets_met names it and the
+    measures there are, instead of calling the stunt a failure."""
+    base = {"name": "t", "horizon": 1.0, "terms": [{"kind": "apex_above_surface"}]}
+    t = parse_trick(base | {"trick": {"targets": {"apex_pich_deg": [-10, 10]}}}, "my.toml")
+    with pytest.raises(TaskError, match=r"'apex_pich_deg' is not a measure.*apex_pitch_deg"):
+        targets_met("t", {"apex_pitch_deg": 2.0, "air_time_s": 1.0}, t)
+
+
+def test_every_built_in_target_is_a_measure_the_stunts_report():
+    """Each built-in trick's [trick.targets] keys are among the measures its committed Plate 5
+    summary reports (``measures``), so none is a target no stunt can meet."""
+    root = Path(__file__).resolve().parents[1] / "docs" / "figures" / "plate5"
+    for name in TARGET_TRICKS:
+        trick = load_trick(name)
+        reported = json.loads((root / name / "summary.json").read_text())
+        for key, _, _ in trick.targets:
+            assert key in reported, f"{name}: target {key} is not in its summary"

@@ -189,7 +189,13 @@ def targets_met(name: str, m: dict, trick: Trick | None = None) -> dict[str, boo
         if part == "tail":  # during a somersault: out of the water, half a turn or more done
             flags["in_somersault"] = bool(m.get("tail_strike_rotation_deg", 0.0) >= TAIL_STRIKE_DEG)
     for key, lo, hi in trick.targets if trick else ():
-        value = m.get(key)
+        if key not in m:  # a misspelt target could never be met: say so, not "not met"
+            known = ", ".join(sorted(k for k, v in m.items() if isinstance(v, (int, float))))
+            raise TaskError(
+                f"trick {trick.name!r}: [trick.targets] {key!r} is not a measure of a stunt; "
+                f"choose from {known}"
+            )
+        value = m[key]  # None: not measured this time (no re-entry), so not met
         flags[key] = value is not None and bool(lo <= value <= hi)
     return flags
 

@@ -37,9 +37,9 @@ def _register() -> None:
 
 
 # the kernel's OpenMP threads sleep at the end of a parallel call instead of spinning for the
-# next one (unless the caller's environment says otherwise): between a learning generation's
-# kernel calls the spinning thread took the core its own process's Python needed, and on a
-# shared host other processes' (docs/performance.md, "Repertoire training in fewer seconds")
+# next one (unless the caller's environment says otherwise): a spinning thread takes the core
+# that the process's own Python needs between kernel calls (docs/performance.md, "Repertoire
+# training in fewer seconds")
 OMP_WAIT_POLICY = "PASSIVE"
 
 
