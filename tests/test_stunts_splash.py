@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 
 from zoetic.behavior.repertoire import Repertoire
+from zoetic.behavior.stunt_measures import cylinder_distance
 from zoetic.behavior.stunt_problem import StuntProblem, StuntRecord
-from zoetic.behavior.stunts import cylinder_distance, measures, splash_ratio, targets_met
+from zoetic.behavior.stunts import measures, splash_ratio, targets_met
 from zoetic.behavior.training import rest_abstraction
 from zoetic.behavior.tricks import list_tricks, load_trick, parse_trick
 from zoetic.cli import main

@@ -17,9 +17,9 @@ six moved starts (off by default: a trick whose style is scored beyond its targe
 the leap's height or the bellyflop's splash, uses the whole budget).
 
 ``[trick.targets]`` adds targets of the trick's own to the built-in ones: each key a number
-the stunt's measures report (``behavior.stunts.measures``, e.g. ``apex_pitch_deg``), each value
-its [min, max]; a stunt meets it when the measure is reported and within them (the hurdle's
-level apex and nose-down re-entry, the leap's balance in flight).
+the stunt's measures report (``behavior.stunt_measures.measures``, e.g. ``apex_pitch_deg``),
+each value its [min, max]; a stunt meets it when the measure is reported and within them (the
+hurdle's level apex and nose-down re-entry, the leap's balance in flight).
 """
 
 from __future__ import annotations
@@ -53,7 +53,7 @@ class Trick:
     # every perturbed start of the check (a built-in trick's targets; the rest of the budget
     # could only polish the style)
     stop_when_met: bool = False
-    # the trick's own targets: (measure, min, max), a measure of ``behavior.stunts.measures``
+    # the trick's own targets: (measure, min, max), of ``behavior.stunt_measures.measures``
     targets: tuple[tuple[str, float, float], ...] = ()
 
     @property
