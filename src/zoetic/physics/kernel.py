@@ -440,13 +440,13 @@ def advance_serial(st, table, t0, t1, base):
 
 
 @njit(cache=True, fastmath=FM, error_model="numpy")
-def advance_one(st, table, t, base, s):
-    """``advance_serial`` for row t of ``table`` alone (one step), in the caller's chunk
-    scratch ``s`` (``chunk_scratch``), so that steps taken one at a time between contacts
+def advance_one(st, table, t, base, scratch):
+    """``advance_serial`` for row t of ``table`` alone (one step), in the caller's
+    ``scratch`` (``chunk_scratch``), so that steps taken one at a time between contacts
     allocate nothing; each chunk steps as in ``simulate_chunks``, so the bits are the same
     (the same fast-math flags: the one-animal path is inlined into this function)."""
     pos, vel = st.pos, st.vel
-    no_rec = np.empty((0, pos.shape[0], 3, pos.shape[2]), dtype=np.float32)  # no records
+    s, no_rec = scratch
     row = table[t : t + 1]
     n_lanes, chunk = pos.shape[2], st.chunk
     for c in range((n_lanes + chunk - 1) // chunk):
@@ -458,8 +458,10 @@ def advance_one(st, table, t, base, s):
 
 @njit(cache=True)
 def chunk_scratch(st):
-    """Return scratch for ``advance_one``: one chunk's twelve (nodes, chunk) arrays."""
-    return _scratch(st.model.mass.shape[0], min(st.chunk, st.pos.shape[2]))
+    """Return scratch for ``advance_one``: one chunk's twelve (nodes, chunk) arrays, and an
+    empty record (a step taken alone records nothing)."""
+    no_rec = np.empty((0, st.pos.shape[0], 3, st.pos.shape[2]), dtype=np.float32)
+    return _scratch(st.model.mass.shape[0], min(st.chunk, st.pos.shape[2])), no_rec
 
 
 @njit(cache=True, inline="always")
