@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from zoetic.viz.plots import save_figure
+from zoetic.viz.plots import new_figure, save_figure
 
 
 def plot_abstraction(
@@ -101,12 +101,8 @@ def plot_repertoire(
     signals: entry -> (t (T,) s, u (T, A)); paths: entry -> centre-of-mass path (R, 3) m from
     rest, drawn from above (x right, z up, the animal starting at the origin facing +x).
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     n = max(len(signals), 1)
-    fig = Figure(figsize=(11.0, 1.7 * n + 1.0))
-    FigureCanvasAgg(fig)  # a figure of its own: pyplot (slow to import) and its state unused
+    fig = new_figure((11.0, 1.7 * n + 1.0))
     grid = fig.add_gridspec(n, 2, width_ratios=(1.3, 1.0))
     for i, (entry, (t, u)) in enumerate(signals.items()):
         ax = fig.add_subplot(grid[i, 0])

@@ -13,6 +13,17 @@ import numpy as np
 from zoetic.io import atomic_write_bytes
 
 
+def new_figure(figsize: tuple[float, float], dpi: float | None = None):
+    """Return a matplotlib Figure drawn by its own Agg canvas (``fig.canvas``): no pyplot
+    (slow to import), no pyplot state to close, no GUI backend."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=figsize, dpi=dpi)
+    FigureCanvasAgg(fig)
+    return fig
+
+
 def save_figure(fig, path: str | os.PathLike, dpi: float | None = None) -> Path:
     """Lay ``fig`` out tightly and write it atomically to ``path`` (format from the suffix).
 
@@ -48,12 +59,8 @@ def plot_path(
     dots; starts: indices into the first path where a new controller took over, drawn as white
     dots with a black edge (the style of the paper's Fig. 5).
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     paths = _paths(com)
-    fig = Figure(figsize=(6.0, 4.5), dpi=120)
-    FigureCanvasAgg(fig)  # a figure of its own, no pyplot state and no GUI backend
+    fig = new_figure((6.0, 4.5), dpi=120)
     ax = fig.add_subplot()
     for i, p in enumerate(paths):
         good = p[np.isfinite(p).all(axis=1)]

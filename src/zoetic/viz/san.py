@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from zoetic.san.creature import Creature, Link
+from zoetic.viz.plots import new_figure
 
 __all__ = [
     "draw_evolve",
@@ -135,14 +136,11 @@ def render_frames(
     size: tuple[int, int] = (640, 360),
 ) -> Iterator[np.ndarray]:
     """Yield RGB uint8 frames (H, W, 3), one per recorded sample of ``rollout``."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     if len(rollout.times) == 0:
         raise ValueError("the rollout recorded nothing: run it with record_every > 0")
     w, h = size
-    fig = Figure(figsize=(w / 100, h / 100), dpi=100)
-    canvas = FigureCanvasAgg(fig)
+    fig = new_figure((w / 100, h / 100), dpi=100)
+    canvas = fig.canvas
     if side_panel is None:
         ax, side = fig.add_axes((0.02, 0.03, 0.96, 0.88)), None
     else:

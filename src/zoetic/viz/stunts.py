@@ -22,14 +22,10 @@ def plot_score(
     """Write one panel per named series (R,) over ``times`` (R,), with the plan's segment
     starts (s) as dotted lines and the instants wholly out of the water shaded when a series 'nodes
     out of water' (a fraction, 1 = all) is given; returns the path."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    from zoetic.viz.plots import save_figure
+    from zoetic.viz.plots import new_figure, save_figure
 
     n = max(1, len(series))
-    fig = Figure(figsize=(7.0, 1.6 * n + 0.6), dpi=110)
-    FigureCanvasAgg(fig)
+    fig = new_figure((7.0, 1.6 * n + 0.6), dpi=110)
     axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
     out = np.asarray(series.get("nodes out of water", []), float)
     for ax, (label, y) in zip(axes, series.items(), strict=False):

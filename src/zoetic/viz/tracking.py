@@ -26,10 +26,8 @@ def plot_plan(
     obstacles: (O, 3) discs x, z, r; starts: per path, the indices where a new controller
     starts (white dots); band: m above and below the start depth drawn shaded on the side view.
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     from zoetic.io import atomic_write_bytes
+    from zoetic.viz.plots import new_figure
 
     g = np.asarray(goal, float)
     y0 = float(paths[0][0, 1])
@@ -37,8 +35,7 @@ def plot_plan(
     if targets is None:
         g = g.reshape(-1, 2)
         targets = np.column_stack([g[:, 0], np.full(len(g), y0), g[:, 1]])
-    fig = Figure(figsize=(11.0, 4.8), dpi=110)
-    FigureCanvasAgg(fig)
+    fig = new_figure((11.0, 4.8), dpi=110)
     top, side = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.1, 1.0]})
     _top_view(top, paths, labels, targets, obstacles, starts)
     _side_view(side, paths, labels, targets, starts, y0, band)
