@@ -232,13 +232,14 @@ def water(xp, m: Model, x, v):
     panel's nodes: it opposes a panel's outward normal velocity, c * drag * A * |v| (n.v),
     and at most stops the panel's normal motion in one step."""
     w, panels = m.panel_weights, m.panels  # (P, 4)
+    vm = _corners(xp, v, panels, w)
     nrm = _cross(
         xp, edges(xp, x, panels[:, 0], panels[:, 2]), edges(xp, x, panels[:, 1], panels[:, 3])
     )  # 2 A n
-    nn = _dot(xp, nrm, nrm) + TINY2
-    vm = _corners(xp, v, panels, w)
-    q = xp.maximum(_dot(xp, nrm, vm), 0.0)
-    vv = _dot(xp, vm, vm)
+    n3, vm3 = _xyz(nrm), _xyz(vm)
+    nn = _dot3(n3, n3) + TINY2
+    q = xp.maximum(_dot3(n3, vm3), 0.0)
+    vv = _dot3(vm3, vm3)
     lim = 0.5 * m.water_drag * col(m.panel_drag) * _safe_sqrt(xp, nn * vv)
     lim = xp.minimum(lim, col(m.panel_mass_dt))
     wet = _corners(xp, x[:, 1], panels, w) < m.water_level
@@ -248,23 +249,53 @@ def water(xp, m: Model, x, v):
 
 def fins(xp, m: Model, x, v, a):
     """Return the fins' forces: flat plates at their actuator's angle to the body, pushed on
-    by the water (at most stopping their normal motion in one step)."""
-    fwd = _unit(xp, edges(xp, x, m.fin_forward[:, 1], m.fin_forward[:, 0]))
-    span = edges(xp, x, m.fin_span[:, 1], m.fin_span[:, 0])
-    span = _unit(xp, span - col(_dot(xp, span, fwd)) * fwd)
-    up = _cross(xp, fwd, span)
-    lo, hi = col(m.fin_angle[:, 0]), col(m.fin_angle[:, 1])
-    ang = lo + a[m.fin_actuator] * (hi - lo)
-    nrm = col(xp.cos(ang)) * up + col(xp.sin(ang)) * fwd
+    by the water (at most stopping their normal motion in one step).
+
+    A fin's axes and centre are read in one product and its velocity in another; the rest is
+    written on x, y and z components, so that XLA fuses a fin's few floats per lane into a
+    handful of kernels (per reduction, slice and stack it launched one each)."""
+    k = m.fin_area.shape[0]
     nodes = np.maximum(m.fin_nodes, 0)  # padding: node 0 at weight 0
     wts = m.fin_weights  # (K, 4)
-    vm = _corners(xp, v, nodes, wts)
-    cy = _corners(xp, x[:, 1], nodes, wts)
-    vn = _dot(xp, nrm, vm)
+    pair = np.zeros((k, nodes.shape[1] - 2), dtype=nodes.dtype)
+    diff = np.broadcast_to(np.r_[1.0, -1.0, np.zeros(nodes.shape[1] - 2)], (2 * k, nodes.shape[1]))
+    read = _corners(
+        xp,
+        x,
+        np.concatenate([np.c_[m.fin_forward, pair], np.c_[m.fin_span, pair], nodes]),
+        np.concatenate([diff, wts]),
+    )  # (3K, 3, B): each fin's forward axis, span axis and centre
+    fwd = _unit3(xp, _xyz(read[:k]))
+    span = _xyz(read[k : 2 * k])
+    along = _dot3(span, fwd)
+    span = _unit3(xp, tuple(s - along * f for s, f in zip(span, fwd, strict=True)))
+    up = _cross3(fwd, span)
+    lo, hi = col(m.fin_angle[:, 0]), col(m.fin_angle[:, 1])
+    ang = lo + a[m.fin_actuator] * (hi - lo)
+    cos, sin = xp.cos(ang), xp.sin(ang)
+    nrm = tuple(cos * u + sin * f for u, f in zip(up, fwd, strict=True))
+    vm = _xyz(_corners(xp, v, nodes, wts))
+    vn = _dot3(nrm, vm)
     cap = col(m.fin_mass) * xp.abs(vn) / m.dt
-    mag = xp.clip(m.water_drag * col(m.fin_area) * _norm(xp, vm) * vn, -cap, cap)
-    mag = xp.where(cy < m.water_level, mag, 0.0)
-    return onto_corners(xp, -mag, nrm, nodes, wts, x.shape[0])
+    mag = xp.clip(m.water_drag * col(m.fin_area) * _safe_sqrt(xp, _dot3(vm, vm)) * vn, -cap, cap)
+    mag = xp.where(read[2 * k :, 1] < m.water_level, -mag, 0.0)
+    return onto_corners(xp, mag, xp.stack(nrm, axis=1), nodes, wts, x.shape[0])
+
+
+def _dot3(a, b):
+    """Return the dot products of vectors given as their x, y and z components."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _cross3(a, b):
+    """Return the cross product of vectors given as their x, y and z components."""
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def _unit3(xp, a):
+    """Return the unit vector of a vector given as its x, y and z components."""
+    inverse = 1.0 / (_safe_sqrt(xp, _dot3(a, a)) + TINY)  # one division for three components
+    return tuple(c * inverse for c in a)
 
 
 def ground(xp, m: Model, x, v, f_other):
