@@ -213,11 +213,11 @@ def springs(xp, m: Model, x, v, a, idx, nodes=None):
         sa, sb = np.searchsorted(nodes, sa), np.searchsorted(nodes, sb)
     d = edges(xp, x, sa, sb)
     length = _norm(xp, d) + TINY
-    u = d / col(length)
     relaxed = col(m.relaxed[idx])
     rest = relaxed + a[m.spring_col[idx]] * (col(m.contracted[idx]) - relaxed)
-    edot = _dot(xp, edges(xp, v, sa, sb), u)
-    fs = col(col(m.stiffness[idx]) * (length - rest) + col(m.spring_damping[idx]) * edot) * u
+    edot = _dot(xp, edges(xp, v, sa, sb), d) / length
+    tension = col(m.stiffness[idx]) * (length - rest) + col(m.spring_damping[idx]) * edot
+    fs = col(tension / length) * d
     return onto_ends(xp, fs, sa, sb, x.shape[0])
 
 
@@ -232,17 +232,24 @@ def water(xp, m: Model, x, v):
     panel's nodes: it opposes a panel's outward normal velocity, c * drag * A * |v| (n.v),
     and at most stops the panel's normal motion in one step."""
     w, panels = m.panel_weights, m.panels  # (P, 4)
+    p = panels.shape[0]
+    pad = np.zeros((p, 2), dtype=panels.dtype)
+    diff = np.broadcast_to(np.r_[1.0, -1.0, 0.0, 0.0], (2 * p, 4))
+    read = _corners(
+        xp,
+        x,
+        np.concatenate([np.c_[panels[:, [2, 0]], pad], np.c_[panels[:, [3, 1]], pad], panels]),
+        np.concatenate([diff, w]),
+    )  # (3P, 3, B): each panel's two diagonals and its centre
     vm = _corners(xp, v, panels, w)
-    nrm = _cross(
-        xp, edges(xp, x, panels[:, 0], panels[:, 2]), edges(xp, x, panels[:, 1], panels[:, 3])
-    )  # 2 A n
+    nrm = _cross(xp, read[:p], read[p : 2 * p])  # 2 A n
     n3, vm3 = _xyz(nrm), _xyz(vm)
     nn = _dot3(n3, n3) + TINY2
     q = xp.maximum(_dot3(n3, vm3), 0.0)
     vv = _dot3(vm3, vm3)
     lim = 0.5 * m.water_drag * col(m.panel_drag) * _safe_sqrt(xp, nn * vv)
     lim = xp.minimum(lim, col(m.panel_mass_dt))
-    wet = _corners(xp, x[:, 1], panels, w) < m.water_level
+    wet = read[2 * p :, 1] < m.water_level
     mag = xp.where(wet, q / nn * lim, 0.0)
     return onto_corners(xp, -mag, nrm, panels, w, x.shape[0])
 
