@@ -23,10 +23,11 @@ are gathered and contributions summed by ``gather_sum``: in JAX one scatter-add 
 rows, in NumPy through a padded incidence table built once from the model's constant indices
 (``incidence``), summed in order (in XLA that table's gather and reduction cost twice the
 scatter). Dot products
-over xyz and corner means are written as reductions (``sum`` over an axis): XLA's CPU fusion
-copies an elementwise producer into every fusion that reads it, so a value read through
-gathers would be recomputed per element read, while a reduction is computed once into a
-buffer. NumPy sums those short axes in order.
+over xyz are written on the x, y and z components of vectors that a product (or a gather)
+has just made (``_dot3``): XLA fuses them into the elementwise work that reads them, where a
+reduction over the component axis was a kernel of its own; a term reads all it needs of the
+positions in one product where it can (the panels' diagonals and centres, the fins' axes and
+centres), as each product is a kernel too.
 Square roots and unit vectors are guarded (the double-``where`` trick) so that JAX gradients
 stay finite at rest, where velocities are exactly zero.
 """
@@ -180,11 +181,6 @@ def _safe_sqrt(xp, s):
     return xp.where(pos, xp.sqrt(xp.where(pos, s, 1.0)), 0.0)
 
 
-def _dot(xp, a, b):
-    """Return the dot products (K, B) over the component axis 1 of (K, 3, B) arrays."""
-    return xp.sum(a * b, axis=1)
-
-
 def _cross(xp, a, b):
     """Return the cross products (K, 3, B) of (K, 3, B) arrays."""
     (a0, a1, a2), (b0, b1, b2) = _xyz(a), _xyz(b)
@@ -196,14 +192,6 @@ def _xyz(q):
     return q[:, 0], q[:, 1], q[:, 2]
 
 
-def _norm(xp, a):
-    return _safe_sqrt(xp, _dot(xp, a, a))
-
-
-def _unit(xp, a):
-    return a / col(_norm(xp, a) + TINY)
-
-
 def springs(xp, m: Model, x, v, a, idx, nodes=None):
     """Return the nodal forces (N, 3, B) of the springs with indices ``idx`` (NumPy, fixed
     when JAX traces) on node rows x, v of every node, or of the sorted ``nodes`` only (their
@@ -212,10 +200,10 @@ def springs(xp, m: Model, x, v, a, idx, nodes=None):
     if nodes is not None:
         sa, sb = np.searchsorted(nodes, sa), np.searchsorted(nodes, sb)
     d = edges(xp, x, sa, sb)
-    length = _norm(xp, d) + TINY
+    length = _safe_sqrt(xp, _dot3(_xyz(d), _xyz(d))) + TINY
     relaxed = col(m.relaxed[idx])
     rest = relaxed + a[m.spring_col[idx]] * (col(m.contracted[idx]) - relaxed)
-    edot = _dot(xp, edges(xp, v, sa, sb), d) / length
+    edot = _dot3(_xyz(edges(xp, v, sa, sb)), _xyz(d)) / length
     tension = col(m.stiffness[idx]) * (length - rest) + col(m.spring_damping[idx]) * edot
     fs = col(tension / length) * d
     return onto_ends(xp, fs, sa, sb, x.shape[0])
@@ -260,7 +248,7 @@ def fins(xp, m: Model, x, v, a):
 
     A fin's axes and centre are read in one product and its velocity in another; the rest is
     written on x, y and z components, so that XLA fuses a fin's few floats per lane into a
-    handful of kernels (per reduction, slice and stack it launched one each)."""
+    handful of kernels."""
     k = m.fin_area.shape[0]
     nodes = np.maximum(m.fin_nodes, 0)  # padding: node 0 at weight 0
     wts = m.fin_weights  # (K, 4)
