@@ -16,8 +16,8 @@ everything else (``multirate.split``). Conformance tests hold the three equal.
 
 Nothing is written in place. A term reads node rows (``edges``, ``_corners``) and spreads its
 contributions back onto the nodes (``onto_ends``, ``onto_corners``: spring ends, panel and fin
-corners) in one of two forms, chosen by ``dense`` (a spring's two ends are gathered in both:
-``edges``). JAX steps a small body by products with
+corners) in one of two forms, chosen by ``dense`` (a spring's two ends are gathered in both
+on a wide batch: ``edges``). JAX steps a small body by products with
 constant incidence matrices built from the model's indices (``node_matrix``: +1/-1 per
 spring, a panel's or fin's corner shares), a few dense products a step. Otherwise node rows
 are gathered and contributions summed by ``gather_sum``: in JAX one scatter-add of whole node
@@ -44,6 +44,7 @@ from zoetic.physics.model import Model
 TINY = 1e-12  # the kernel's guard on lengths
 TINY2 = 1e-30  # the kernel's guard on squared panel normals
 DENSE_NODES = 64  # JAX steps bodies of at most this many nodes by incidence matrices
+WIDE = 8  # lanes from which JAX gathers a spring's ends even in the matrix form (``edges``)
 
 
 def to_soa(xp, q):
@@ -85,12 +86,13 @@ def incidence(targets: np.ndarray, n: int) -> np.ndarray:
 
 
 def dense(xp, n: int) -> bool:
-    """Return whether a body of n nodes reads (but for ``edges``) and spreads its node rows by
-    products with constant incidence matrices (``node_matrix``) rather than by gathers and
-    scatter-adds: in JAX for a small body, where a product of a (K, n) matrix by n rows of B
-    lanes is a dense kernel that XLA's CPU backend runs faster than the gathers at every batch
-    of 32 lanes or more, the step has fewer fusions to compile, and its reverse pass is matrix
-    products again. NumPy always gathers, so that the float64 reference sums in order."""
+    """Return whether a body of n nodes reads (but ``edges`` on a wide batch) and spreads its
+    node rows by products with constant incidence matrices (``node_matrix``) rather than by
+    gathers and scatter-adds: in JAX for a small body, where a product of a (K, n) matrix by n
+    rows of B lanes is a dense kernel that XLA's CPU backend runs faster than the gathers at
+    every batch of 32 lanes or more, the step has fewer fusions to compile, and its reverse
+    pass is matrix products again. NumPy always gathers, so that the float64 reference sums in
+    order."""
     return xp is not np and n <= DENSE_NODES
 
 
@@ -125,9 +127,15 @@ def _product(xp, matrix: np.ndarray, q):
 def edges(xp, q, a: np.ndarray, b: np.ndarray):
     """Return q[b] - q[a] for node rows q (N, 3, B): each edge's vector from node a to b.
 
-    Gathered in both forms: XLA fuses the two row gathers into the spring's elementwise work,
-    where an incidence product (S x N multiply-adds for 2S rows read) was a kernel of dense
-    arithmetic, a tenth of the shark's step and a fifth of the ray's."""
+    Gathered, but for a narrow batch in the product form: on a batch of ``WIDE`` lanes or more
+    XLA fuses the two row gathers into the spring's elementwise work, where an incidence
+    product (S x N multiply-adds for 2S rows read) is a kernel of dense arithmetic (a tenth of
+    the shark's step, a fifth of the ray's); a narrow batch (the gradient's few start states)
+    keeps the product, whose reverse pass compiles to fewer fusions than the gathers'
+    scatters. The two agree to float32 rounding (``test_law_dense``)."""
+    if dense(xp, q.shape[0]) and q.shape[-1] < WIDE:
+        ends = np.stack([b, a], axis=1)
+        return _product(xp, node_matrix(ends, np.array([1.0, -1.0]), q.shape[0], q.dtype), q)
     return rows(xp, q, b) - rows(xp, q, a)
 
 
