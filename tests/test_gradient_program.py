@@ -25,6 +25,7 @@ HORIZON = 0.4  # s: long enough for the start's wave to reach the tail and the w
 NODES = 4
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("animal", ["shark", "ray"])
 def test_the_gradient_program_computes_what_the_default_compile_does(animal):
     body = load_animal(animal)
