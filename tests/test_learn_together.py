@@ -126,3 +126,17 @@ def test_rollouts_of_different_lengths_share_calls_and_move_as_alone(shark):
         np.testing.assert_array_equal(positions, alone.positions)
         np.testing.assert_array_equal(failed, alone.failed)
     assert got[0][1][3] and not got[0][1][[0, 1, 2, 4, 5]].any()
+
+
+def test_shared_activations_are_each_candidates_table_once_per_start(shark):
+    """The kernel's activations of runs sharing a call: run r's candidate k from start s in
+    lane k S + s after the runs before it, the float64 table cast to float32 (the values
+    ``simulate`` would take from the tables repeated over the starts)."""
+    from zoetic.learning.together import _laid_out
+
+    rng = np.random.default_rng(0)
+    a, b = rng.random((3, 7, 8)), rng.random((2, 7, 8))
+    act_t = _laid_out([a, b], [6, 6])  # a from 2 starts, b from 3
+    lanes = np.concatenate([np.repeat(a, 2, axis=0), np.repeat(b, 3, axis=0)])
+    assert act_t.dtype == np.float32 and act_t.shape == (7, 8, 12)
+    assert np.array_equal(act_t, lanes.transpose(1, 2, 0).astype(np.float32))

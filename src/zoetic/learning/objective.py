@@ -312,10 +312,6 @@ class Objective:
         """Return the activation-table rows applied at each recorded instant, (R,)."""
         return np.minimum(np.arange(n_records) * self.record_every, self.steps - 1)
 
-    def lanes(self, params: np.ndarray) -> np.ndarray:
-        """Return the activation tables (K * S, T, A) of a batch's rollouts (``simulate``)."""
-        return self._lanes(self.tables(np.atleast_2d(params)))
-
     def rollout_key(self) -> tuple:
         """What the simulator must share, beside the body, to play this objective's rollouts in
         one batched call with another's (the kernel's lanes are independent: a lane moves the
@@ -330,14 +326,15 @@ class Objective:
     def evaluate(self, params: np.ndarray) -> Evaluation:
         """Return the Evaluation of a batch of parameter vectors (K, dim)."""
         params = np.atleast_2d(params)
-        lanes = self._lanes(self.tables(params))
-        traj = self._run(lanes)  # one kernel call for every candidate from every start
-        return self.score(params, lanes, traj.positions, traj.failed)
+        tables = self.tables(params)
+        traj = self._run(self._lanes(tables))  # one kernel call for every candidate and start
+        return self.score(params, tables, traj.positions, traj.failed)
 
-    def score(self, params, lanes, positions, failed) -> Evaluation:
-        """Return the Evaluation of a batch (K, dim) from its rollouts: their tables ``lanes``
-        (K * S, T, A), recorded ``positions`` (K * S, R, N, 3) and ``failed`` (K * S,)."""
-        acts = lanes[:, self.record_rows(positions.shape[1])]
+    def score(self, params, tables, positions, failed) -> Evaluation:
+        """Return the Evaluation of a batch (K, dim) from its rollouts: the candidates' tables
+        (K, T, A), the recorded ``positions`` (K * S, R, N, 3) and ``failed`` (K * S,) of
+        candidate k from start s at k * S + s."""
+        acts = self._lanes(tables[:, self.record_rows(positions.shape[1])])
         s = signals(
             self.task,
             self.body,
