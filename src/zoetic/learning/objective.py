@@ -281,12 +281,22 @@ class Objective:
 
     def tables(self, params: np.ndarray) -> np.ndarray:
         """Return activation tables (K, T, A) for parameter vectors (K, dim)."""
+        return np.clip(self.actuator_signals(params).transpose(0, 2, 1), 0.0, 1.0)
+
+    def actuator_signals(self, params: np.ndarray) -> np.ndarray:
+        """Return each actuator's signal (K, A, T) for parameter vectors (K, dim), not yet
+        clipped to [0, 1] as ``tables`` are (the simulator clips what it reads)."""
         coef = self.full_coefficients(params)
         k, a, m = coef.shape
         # one matrix product (K A, M) x (M, T): the same values as the sum over m, at a
         # fraction of einsum's cost
-        u = (coef.reshape(k * a, m) @ self._basis.T).reshape(k, a, -1)
-        return np.clip(u.transpose(0, 2, 1), 0.0, 1.0)
+        return (coef.reshape(k * a, m) @ self._basis.T).reshape(k, a, -1)
+
+    def recorded(self, signals: np.ndarray, n_records: int) -> np.ndarray:
+        """Return the activations (K, R, A) applied at each recorded instant (``record_rows``)
+        of actuator ``signals`` (K, A, T): ``tables``' rows there."""
+        rows = self.record_rows(n_records)
+        return np.clip(signals[:, :, rows].transpose(0, 2, 1), 0.0, 1.0)
 
     def control_cost(self, params: np.ndarray) -> np.ndarray:
         """Return E_u (K,) of parameter vectors, on the M node times."""
@@ -328,13 +338,15 @@ class Objective:
         params = np.atleast_2d(params)
         tables = self.tables(params)
         traj = self._run(self._lanes(tables))  # one kernel call for every candidate and start
-        return self.score(params, tables, traj.positions, traj.failed)
+        acts = tables[:, self.record_rows(traj.positions.shape[1])]
+        return self.score(params, acts, traj.positions, traj.failed)
 
-    def score(self, params, tables, positions, failed) -> Evaluation:
-        """Return the Evaluation of a batch (K, dim) from its rollouts: the candidates' tables
-        (K, T, A), the recorded ``positions`` (K * S, R, N, 3) and ``failed`` (K * S,) of
-        candidate k from start s at k * S + s."""
-        acts = self._lanes(tables[:, self.record_rows(positions.shape[1])])
+    def score(self, params, acts, positions, failed) -> Evaluation:
+        """Return the Evaluation of a batch (K, dim) from its rollouts: the candidates'
+        activations at the recorded instants ``acts`` (K, R, A) (``recorded``), the recorded
+        ``positions`` (K * S, R, N, 3) and ``failed`` (K * S,) of candidate k from start s at
+        k * S + s."""
+        acts = self._lanes(acts)
         s = signals(
             self.task,
             self.body,
