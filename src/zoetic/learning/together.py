@@ -95,8 +95,9 @@ def _laid_out(signals: list[np.ndarray], lanes: list[int]) -> np.ndarray:
     at = 0
     for signal, n in zip(signals, lanes, strict=True):
         per = n // len(signal)
+        single = signal.astype(np.float32).transpose(2, 1, 0)  # cast first: half the gather
         for s in range(per):
-            act_t[:, :, at + s : at + n : per] = signal.transpose(2, 1, 0)
+            act_t[:, :, at + s : at + n : per] = single
         at += n
     return np.clip(act_t, 0.0, 1.0, out=act_t)
 
