@@ -27,6 +27,7 @@ import hashlib
 import json
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -380,29 +381,49 @@ def train_repertoire(
         if on_entry:
             on_entry(entry.name, run)
     learn_together(runs, progress=progress)
+    learned = []
     with one_blas_thread():  # abstraction and judging: small linear algebra, as learning
         for entry, run in zip(entries, runs, strict=True):
-            original = run.best_controller()
-            if pipeline == "paper":
-                learned_by = run.setup.config.optimizer  # a resumed entry's own
-                ab, info = paper_abstraction(
-                    body, original, entry.task, modes, threshold, learned_by
-                )
-            else:
-                ab = abstract_keeping_promises(body, original, entry.task, modes, threshold)
-                info = abstraction_report(body, original, ab, entry.task)
-            rep.add(
-                entry.name, ab.controller, entry.task.horizon, source=f"runs/{entry.name}", **info
-            )
-            right = mirrored_name(entry.name)
-            if right:
-                rep.add(
-                    right,
-                    mirror_abstract(ab.controller, body.actuator_mirror),
-                    entry.task.horizon,
-                    source=f"mirror of {entry.name}",
-                )
+            learned.append(learned_entry(body, entry, run, pipeline, modes, threshold))
+            add_entry(rep, body, entry, *learned[-1])
             rep.save(out)
+    from zoetic.behavior.restarts import keep_promises
+
+    again = partial(learned_entry, body, pipeline=pipeline, modes=modes, threshold=threshold)
+    for entry, (ab, info) in keep_promises(
+        body, entries, runs, learned, again, out, resume_budget, on_entry, progress
+    ):
+        add_entry(rep, body, entry, ab, info)
+        rep.save(out)
+    return rep
+
+
+def learned_entry(
+    body: Body, entry: Entry, run, pipeline: str, modes: str | int, threshold: float
+) -> tuple[Abstraction, dict]:
+    """Return the abstraction of an entry's learned controller and its repertoire info (the
+    paper pipeline's or the periodic one's, ``train_repertoire``), the run's own source."""
+    original = run.best_controller()
+    if pipeline == "paper":
+        learned_by = run.setup.config.optimizer  # a resumed entry's own
+        ab, info = paper_abstraction(body, original, entry.task, modes, threshold, learned_by)
+    else:
+        ab = abstract_keeping_promises(body, original, entry.task, modes, threshold)
+        info = abstraction_report(body, original, ab, entry.task)
+    return ab, {"source": f"runs/{run.out.name}"} | info
+
+
+def add_entry(rep: Repertoire, body: Body, entry: Entry, ab: Abstraction, info: dict) -> None:
+    """Add (or replace) a learned entry and, for a left-hand one, its mirror."""
+    rep.add(entry.name, ab.controller, entry.task.horizon, **info)
+    right = mirrored_name(entry.name)
+    if right:
+        rep.add(
+            right,
+            mirror_abstract(ab.controller, body.actuator_mirror),
+            entry.task.horizon,
+            source=f"mirror of {entry.name}",
+        )
     return rep
 
 

@@ -139,6 +139,7 @@ def train_cmd(
             interrupted(f"{out} keeps what was learned; continue with: {again}")
     with one_blas_thread():  # the entries replayed and judged: small linear algebra
         _print_rows(show_repertoire(out), f"{out}")
+        _report_restarts(out)
         _report_promises(out, strict)
 
 
@@ -193,6 +194,25 @@ def _training_dir(
     if not (out / INDEX).is_file():
         raise ZoeticError(f"{out}: holds no {INDEX}, so no repertoire to continue; drop --resume")
     return out, again
+
+
+def _report_restarts(memory: Path) -> None:
+    """Print, for each entry learned again because it broke a promise (``behavior.restarts``),
+    why, each try's run and seed and what it broke, and which try the repertoire keeps."""
+    from zoetic.behavior.repertoire import Repertoire
+
+    for name, info in Repertoire.load(memory).info.items():
+        r = info.get("restarts")
+        if not isinstance(r, dict):
+            continue
+        if "skipped" in r:
+            console.print(f"{name}: not learned again ({r['skipped']}): {r['because']}")
+            continue
+        console.print(f"{name}: learned again: {r['because']}")
+        for t in r["tries"]:
+            broke = "keeps every promise" if t["met"] else "breaks " + "; ".join(t["broken"])
+            console.print(f"  {t['run']} (seed {t['seed']}): {broke}")
+        console.print(f"  kept: {r['kept']}")
 
 
 def _report_promises(memory: Path, strict: bool) -> dict[str, dict]:
@@ -268,6 +288,7 @@ def show_cmd(
         return
     _print_rows(rows, str(memory))
     console.print(f"plot: {memory / 'repertoire.png'}")
+    _report_restarts(memory)
     _report_promises(memory, strict)
 
 
