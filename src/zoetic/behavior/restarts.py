@@ -11,8 +11,9 @@ restarted, each try's run and seed, and which was kept ("restarts").
 An entry whose task promises what the animal cannot do is not restarted: no seed changes
 physics (``beyond_reach``). The one bound checked is the climb: a rise or sink the promise
 asks is out of reach from a start when the animal's straight swim (its fastest learned entry,
-``STRAIGHT``) covers less path than that over the task's horizon from that start, and an entry
-must keep its promises from every start (the ray's disc: docs/animals.md, "Depth").
+``STRAIGHT``) covers a shorter straight line than that over the task's horizon from that
+start (even pointed straight up from the first instant it would rise less), and an entry must
+keep its promises from every start (the ray's disc: docs/animals.md, "Depth").
 
 Restart runs live beside the entry's own (``runs/<entry>.restart<n>``), each checkpointed
 and resumed like it; the seeds and the choice depend only on the training's seed, so the
@@ -78,8 +79,9 @@ def _relative_miss(p: Promise, value: float) -> float:
 
 def beyond_reach(body: Body, task: Task, straight: Controller | None) -> str | None:
     """Return why no controller can keep ``task``'s climb promise from one of its starts (the
-    least rise or sink it asks is more than the path the animal's straight swim ``straight``
-    covers over the horizon from that start), or None when nothing is known to forbid it."""
+    least rise or sink it asks is more than the straight-line distance the animal's straight
+    swim ``straight`` covers over the horizon from that start), or None when nothing known
+    forbids it."""
     climbs = [p for p in task.promises if p.quantity == "climb_m"]
     if straight is None or not climbs or climbs[0].low <= 0.0 <= climbs[0].high:
         return None
@@ -87,10 +89,9 @@ def beyond_reach(body: Body, task: Task, straight: Controller | None) -> str | N
     least = min(abs(p.low), abs(p.high))
     rows = entry_motion(body, straight, task)
     for start, row in zip(task.start_names(), rows, strict=True):
-        path = row["speed_bl_s"] * task.horizon * body.length
-        if path < least:
+        if row["distance_m"] < least:
             return (
-                f"{p.text()} is beyond reach: its straight swim covers {path:.3g} m "
+                f"{p.text()} is beyond reach: its straight swim covers {row['distance_m']:.3g} m "
                 f"in {task.horizon:g} s from {start}"
             )
     return None

@@ -155,7 +155,8 @@ def arc_radius(com: np.ndarray, turned: float) -> float:
 
 def entry_motion(body: Body, ctrl: Controller, task: Task) -> list[dict[str, float]]:
     """Return the ``tasks.PROMISES`` quantities of a controller played from each of the task's
-    starts over its horizon (one simulation, a row per start)."""
+    starts over its horizon (one simulation, a row per start), and the straight-line distance
+    its centre of mass covers ("distance_m")."""
     from zoetic.behavior.tracking import body_length
     from zoetic.control.measure import motion_scalars
     from zoetic.physics import get_medium, simulate
@@ -179,6 +180,7 @@ def entry_motion(body: Body, ctrl: Controller, task: Task) -> list[dict[str, flo
             {
                 "turn_deg": turned,
                 "climb_m": float(com[i, -1, 1] - com[i, 0, 1]),
+                "distance_m": float(np.linalg.norm(com[i, -1] - com[i, 0])),
                 "speed_bl_s": float(path / task.horizon / length),
                 "steady_speed_bl_s": float(late / (tr.times[-1] - tr.times[half]) / length),
                 "radius_bl": arc_radius(com[i], np.radians(turned)) / length,
