@@ -18,6 +18,7 @@ from zoetic.behavior.training import (
     train_repertoire,
 )
 from zoetic.bodies import load_animal
+from zoetic.cli import main
 from zoetic.control import wave_controller
 from zoetic.learning.run import Run
 from zoetic.tasks import load_task
@@ -53,7 +54,7 @@ def _index(out) -> dict:
     return {e["name"]: e for e in json.loads((out / INDEX).read_text())["entries"]}
 
 
-def test_a_broken_promise_restarts_its_entry_and_a_kept_one_does_not(tmp_path, monkeypatch):
+def test_a_broken_promise_restarts_its_entry_and_a_kept_one_does_not(tmp_path, monkeypatch, capsys):
     judged = _fake_judge(monkeypatch, broken_tries=1)
     train_repertoire("shark", tmp_path, budget=12, seed=3)
     runs = sorted(p.name for p in (tmp_path / "runs").iterdir())
@@ -82,6 +83,11 @@ def test_a_broken_promise_restarts_its_entry_and_a_kept_one_does_not(tmp_path, m
             )
             == same
         )
+    # repertoire show says which entry was learned again, why, and which try it keeps
+    assert main(["repertoire", "show", str(tmp_path)]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert f"{BROKEN}: learned again: entry '{BROKEN}' does not do what task" in text
+    assert f"kept: runs/{BROKEN}.restart1" in text and "keeps every promise" in text
 
 
 def _entry(name: str) -> Entry:
