@@ -18,7 +18,8 @@ repertoire; right turns are the left ones with left and right actuator signals s
 entries are learned together (``learning.together``: entries whose rollouts last as long share
 one batched simulation a generation), each in its own run directory checkpointed as it goes,
 so an interrupted training picks up where every entry stopped; the repertoire directory is
-written after each entry is abstracted.
+written after each entry is abstracted. An entry that breaks a promise of its task is learned
+again from derived seeds (``behavior.restarts``).
 """
 
 from __future__ import annotations
@@ -426,7 +427,6 @@ def add_entry(rep: Repertoire, body: Body, entry: Entry, ab: Abstraction, info: 
             entry.task.horizon,
             source=f"mirror of {entry.name}",
         )
-    return rep
 
 
 def _entry_run(
