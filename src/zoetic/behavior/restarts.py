@@ -26,29 +26,27 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from zoetic.behavior.training import (
-    Entry,
-    _entry_run,
-    _outside,
-    entry_motion,
-    judge_entry,
-    unmet_text,
-)
+from zoetic.behavior.promises import entry_motion, judge_entry, outside, unmet_text
 from zoetic.bodies import Body
 from zoetic.control import Controller
 from zoetic.learning.abstraction import Abstraction
 from zoetic.learning.blas import one_blas_thread
 from zoetic.tasks import Promise, Task
 
+if TYPE_CHECKING:
+    from zoetic.behavior.training import Entry
+    from zoetic.learning.run import Run
+
 # restarts at most of an entry that breaks a promise (each costs its budget again)
 RESTARTS = 2
 # the plan's straight swims (``training.PLAN``, ``SURFACE_PLAN``): the animal's fastest entries
 STRAIGHT = ("go-straight", "move-forward")
 
-Learned = tuple[Abstraction, dict]
+Learned = tuple[Abstraction, dict]  # an entry's abstraction and its repertoire info
 
 
 def restart_seed(seed: int, attempt: int) -> int:
@@ -74,7 +72,7 @@ def _relative_miss(p: Promise, value: float) -> float:
     if not np.isfinite(value):
         return float("inf")
     bound = p.low if value < p.low else p.high
-    return max(_outside(p, value), 0.0) / (abs(bound) if np.isfinite(bound) and bound else 1.0)
+    return max(outside(p, value), 0.0) / (abs(bound) if np.isfinite(bound) and bound else 1.0)
 
 
 def beyond_reach(body: Body, task: Task, straight: Controller | None) -> str | None:
@@ -100,11 +98,11 @@ def beyond_reach(body: Body, task: Task, straight: Controller | None) -> str | N
 def keep_promises(
     body: Body,
     entries: list[Entry],
-    runs: list,
+    runs: list[Run],
     learned: list[Learned],
-    again: Callable[[Entry, object], Learned],
+    again: Callable[[Entry, Run], Learned],
+    resume: Callable[[Path, Entry], Run],
     out: Path,
-    resume_budget: int | None = None,
     on_entry: Callable[[str, object], None] | None = None,
     progress: Callable[[object], None] | None = None,
 ) -> list[tuple[Entry, Learned]]:
@@ -113,8 +111,9 @@ def keep_promises(
     learned together; return, in plan order, the entries that break a promise, each with the
     abstraction and info to keep (info["restarts"] says why and what was tried).
 
-    again(entry, run) abstracts a restart's run as ``learned`` was; on_entry and progress
-    are ``train_repertoire``'s (a restart's line is named "<entry> restart <n>")."""
+    again(entry, run) abstracts a restart's run as ``learned`` was; resume(run_dir, entry)
+    continues a restart run begun in run_dir; on_entry and progress are
+    ``train_repertoire``'s (a restart's line is named "<entry> restart <n>")."""
     from zoetic.learning.together import learn_together
 
     pairs = list(zip(entries, learned, strict=True))
@@ -138,10 +137,7 @@ def keep_promises(
     for attempt in range(1, RESTARTS + 1):
         if not pending:
             break
-        new = [
-            (i, _restart_run(entries[i], runs[i], attempt, body, out, resume_budget))
-            for i in pending
-        ]
+        new = [(i, _restart_run(entries[i], runs[i], attempt, body, out, resume)) for i in pending]
         for i, run in new:
             if on_entry:
                 on_entry(f"{entries[i].name} restart {attempt}", run)
@@ -157,17 +153,23 @@ def keep_promises(
     return [(entries[i], changed[i]) for i in sorted(changed)]
 
 
-def _restart_run(entry: Entry, run, attempt: int, body: Body, out: Path, resume_budget: int | None):
+def _restart_run(
+    entry: Entry,
+    run: Run,
+    attempt: int,
+    body: Body,
+    out: Path,
+    resume: Callable[[Path, Entry], Run],
+) -> Run:
     """Return the ``attempt``-th restart of an entry's learning ``run``: the same settings
     from a derived seed (``restart_seed``) in ``runs/<entry>.restart<attempt>``, or the one
-    begun there (an interrupted training), continued."""
+    begun there (an interrupted training), continued by ``resume``."""
     from zoetic.learning.run import Run
 
-    config = run.setup.config
     run_dir = out / "runs" / f"{entry.name}.restart{attempt}"
     if (run_dir / "config.toml").exists():
-        pipeline = "paper" if config.controller == "time" else "periodic"
-        return _entry_run(run_dir, entry, body, {}, resume_budget, pipeline)
+        return resume(run_dir, entry)
+    config = run.setup.config
     seed = restart_seed(config.seed, attempt)
     return Run.create(run_dir, dataclasses.replace(config, seed=seed), body)
 

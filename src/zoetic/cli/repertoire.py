@@ -218,8 +218,9 @@ def _report_restarts(memory: Path) -> None:
 def _report_promises(memory: Path, strict: bool) -> dict[str, dict]:
     """Judge every learned entry against its task's promises; print the ones it does not
     keep (and exit 1 under ``strict`` if any); return the verdicts by entry."""
+    from zoetic.behavior.promises import check_promises, unmet_text
     from zoetic.behavior.repertoire import Repertoire
-    from zoetic.behavior.training import check_promises, judge_repertoire, unmet_text
+    from zoetic.behavior.training import judge_repertoire
     from zoetic.runs import repertoire_body
 
     animal = Repertoire.load(memory).animal
@@ -266,7 +267,8 @@ def show_cmd(
 ) -> None:
     """Print a repertoire's entries and what each does; writes repertoire.png beside them.
     Each learned entry is judged against its task's promises (from every start of the task)."""
-    from zoetic.behavior.training import check_promises, judge_repertoire
+    from zoetic.behavior.promises import check_promises
+    from zoetic.behavior.training import judge_repertoire
     from zoetic.errors import ZoeticError, naming
     from zoetic.runs import repertoire_body
     from zoetic.viz.media import show_repertoire
