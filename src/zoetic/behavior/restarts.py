@@ -125,12 +125,12 @@ def keep_promises(
     for i, (entry, verdict) in enumerate(zip(entries, verdicts, strict=True)):
         if verdict["met"]:
             continue
-        because = unmet_text(entry.name, verdict)
         with one_blas_thread():
             reason = beyond_reach(body, entry.task, straight)
         if reason:
             ab, info = learned[i]
-            changed[i] = (ab, info | {"restarts": {"because": because, "skipped": reason}})
+            record = {"because": unmet_text(entry.name, verdict), "skipped": reason}
+            changed[i] = (ab, info | {"restarts": record})
         else:
             tries[i] = [(learned[i], verdict, runs[i].setup.config.seed)]
     pending = list(tries)
