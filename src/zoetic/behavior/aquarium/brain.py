@@ -130,7 +130,8 @@ class FishBrain:
         )
         self.alive = True
         self.thought = Thought(0.0, 0.0, 0.0, self.mind.intention, None)
-        # the fish a predator hunts, kept while an avoidance interrupts the hunt (None: none)
+        # the fish a predator hunts, kept while an avoidance interrupts the hunt (None: none):
+        # its touch of that fish is the hunt's, not a collision (``events.Events``)
         self.prey: int | None = None
         if isinstance(self.locomotion, LearnedLocomotion):
             self.locomotion.turning, self.locomotion.last = None, (0, -np.inf)

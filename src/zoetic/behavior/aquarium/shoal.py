@@ -312,10 +312,9 @@ class Shoal:
         probes = probes_ahead_many(fb.nose, fb.fwd, fb.vel, self.cruise, meals)
         ahead = obstacle_distance(probes, kind, center, size)  # all fishes at once
         for i, brain in enumerate(self.brains):
-            # the prey hunted, also while an avoidance interrupts the hunt (its body once
-            # caught is avoided as any other)
-            if brain.prey is not None and alive[brain.prey]:
-                seen[i, brain.prey] = False
+            th = brain.thought
+            if th.intention == "hunt" and th.target is not None:
+                seen[i, th.target] = False
         avoiding = [b.avoid_side if b.thought.intention == "avoid" else 0 for b in self.brains]
         threat, sides, near = fish_threats(
             fb.nose, fb.com, fb.fwd, fb.vel, seen, *self.region, np.array(avoiding)
