@@ -156,10 +156,7 @@ class StuntProblem(MacroProblem):
         e, d = np.atleast_2d(entries), np.atleast_2d(durations)
         k = 1 if starts is None else len(starts.positions)
         dt = self.body.dt
-        tables = np.stack(
-            [self.sequence(a, b).table(self.steps, dt) for a, b in zip(e, d, strict=True)]
-        )
-        tables = np.repeat(tables, k, axis=0)
+        tables = np.repeat(self.tables(e, d), k, axis=0)
         every = int(record_every or self.record_every)
         world = self.world(len(tables), starts)
         seconds = self.steps * dt

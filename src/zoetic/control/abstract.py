@@ -61,6 +61,24 @@ class AbstractController(Controller):
             total = total + waves[:, :, k]
         return self.offset[None, :] + total
 
+    def waves(self, t) -> np.ndarray:
+        """Return each mode's unit wave at times t (s) as (2, K, T, A): cos and sin of
+        2 pi freq t, from which ``shifted`` plays the controller started at any time."""
+        wt = 2 * np.pi * self.freq.T[:, None, :] * np.asarray(t, float)[None, :, None]
+        return np.stack([np.cos(wt), np.sin(wt)])
+
+    def shifted(self, waves: np.ndarray, start: float) -> np.ndarray:
+        """Return unclipped activations (T, A) of the controller started at ``start`` s, at
+        the times ``waves`` (``waves(t)``, or rows of it) were taken: raw(t - start), each mode
+        as amp cos(2 pi f t + phase - 2 pi f start) by the angle-sum rule, with no cosine of t
+        computed again."""
+        lag = self.phase - 2 * np.pi * self.freq * float(start)  # (A, K) rad
+        cos_part, sin_part = self.amp * np.cos(lag), self.amp * np.sin(lag)
+        total = np.zeros(waves.shape[2:])
+        for k in range(waves.shape[1]):
+            total = total + (waves[0, k] * cos_part[:, k] - waves[1, k] * sin_part[:, k])
+        return self.offset[None, :] + total
+
     def ahead(self, seconds: float) -> AbstractController:
         """Return this gait ``seconds`` ahead: it plays at t what this one plays at t + seconds
         (each mode's phase advanced by 2 pi freq seconds)."""
@@ -129,16 +147,41 @@ class SequenceController(Controller):
             fade_out[:, :-1] = np.clip((e[:, :-1] - t) / width, 0.0, 1.0)
         return fade_in * fade_out
 
-    def raw(self, t):
-        """Return unclipped activations (T, A) at t (s): the blend-weighted item outputs."""
+    def waves(self, t) -> dict[int, np.ndarray]:
+        """Return each abstract item's ``AbstractController.waves`` at times t, by the item
+        controller's id: what ``raw`` computes afresh, kept to play many sequences of the
+        same controllers at the same times (a plan search)."""
+        ctrls = {id(c): c for c, _ in self.items if isinstance(c, AbstractController)}
+        return {key: c.waves(t) for key, c in ctrls.items()}
+
+    def raw(self, t, waves: dict[int, np.ndarray] | None = None):
+        """Return unclipped activations (T, A) at t (s): the blend-weighted item outputs.
+        Abstract items are played from their modes' waves at t (``waves``: those of this
+        sequence's controllers at these t, as ``waves(t)`` returns them; default computed
+        here), each only over the rows where its weight is positive."""
         t = np.asarray(t, float)
         w = self.weights(t)
+        waves = {} if waves is None else waves
         out = np.zeros((t.size, self.n_actuators))
         for i, ((ctrl, _), start) in enumerate(zip(self.items, self.starts(), strict=True)):
-            on = w[:, i] > 0
-            if on.any():
-                out[on] += w[on, i : i + 1] * ctrl.raw(t[on] - start)
+            rows = np.flatnonzero(w[:, i] > 0)
+            if not rows.size:
+                continue
+            if rows[-1] - rows[0] + 1 == rows.size:  # one run of rows: a view, not a copy
+                rows = slice(int(rows[0]), int(rows[-1]) + 1)
+            if isinstance(ctrl, AbstractController):
+                if id(ctrl) not in waves:
+                    waves[id(ctrl)] = ctrl.waves(t)
+                played = ctrl.shifted(waves[id(ctrl)][:, :, rows], start)
+            else:
+                played = ctrl.raw(t[rows] - start)
+            out[rows] += w[rows, i : i + 1] * played
         return out
+
+    def table(self, steps: int, dt: float, t0: float = 0.0, waves=None) -> np.ndarray:
+        """Return the activation table (steps, A) for a simulation of ``steps`` steps of dt
+        (``waves``: as ``raw``'s, at these steps' times)."""
+        return np.clip(self.raw(t0 + np.arange(steps) * dt, waves), 0.0, 1.0)
 
     def to_dict(self):
         """Return the base description plus overlap and each item's duration (s) and dict."""
