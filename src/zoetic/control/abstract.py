@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from zoetic.control.blend import add_item
 from zoetic.control.controllers import Controller
 from zoetic.errors import ControllerError
 
@@ -63,21 +64,9 @@ class AbstractController(Controller):
 
     def waves(self, t) -> np.ndarray:
         """Return each mode's unit wave at times t (s) as (2, K, T, A): cos and sin of
-        2 pi freq t, from which ``shifted`` plays the controller started at any time."""
+        2 pi freq t, from which ``blend.add_item`` plays the controller started at any time."""
         wt = 2 * np.pi * self.freq.T[:, None, :] * np.asarray(t, float)[None, :, None]
         return np.stack([np.cos(wt), np.sin(wt)])
-
-    def shifted(self, waves: np.ndarray, start: float) -> np.ndarray:
-        """Return unclipped activations (T, A) of the controller started at ``start`` s, at
-        the times ``waves`` (``waves(t)``, or rows of it) were taken: raw(t - start), each mode
-        as amp cos(2 pi f t + phase - 2 pi f start) by the angle-sum rule, with no cosine of t
-        computed again."""
-        lag = self.phase - 2 * np.pi * self.freq * float(start)  # (A, K) rad
-        cos_part, sin_part = self.amp * np.cos(lag), self.amp * np.sin(lag)
-        total = np.zeros(waves.shape[2:])
-        for k in range(waves.shape[1]):
-            total = total + (waves[0, k] * cos_part[:, k] - waves[1, k] * sin_part[:, k])
-        return self.offset[None, :] + total
 
     def ahead(self, seconds: float) -> AbstractController:
         """Return this gait ``seconds`` ahead: it plays at t what this one plays at t + seconds
@@ -156,26 +145,31 @@ class SequenceController(Controller):
 
     def raw(self, t, waves: dict[int, np.ndarray] | None = None):
         """Return unclipped activations (T, A) at t (s): the blend-weighted item outputs.
-        Abstract items are played from their modes' waves at t (``waves``: those of this
-        sequence's controllers at these t, as ``waves(t)`` returns them; default computed
-        here), each only over the rows where its weight is positive."""
-        t = np.asarray(t, float)
-        w = self.weights(t)
+        Abstract items are played from their modes' waves at t (``blend.add_item``;
+        ``waves``: those of this sequence's controllers at these t, as ``waves(t)`` returns
+        them, filled in where missing or taken at other times)."""
+        t = np.asarray(t, float).reshape(-1)
         waves = {} if waves is None else waves
         out = np.zeros((t.size, self.n_actuators))
-        for i, ((ctrl, _), start) in enumerate(zip(self.items, self.starts(), strict=True)):
-            rows = np.flatnonzero(w[:, i] > 0)
-            if not rows.size:
+        starts = self.starts()
+        ends = starts + np.array([dur for _, dur in self.items])
+        n, w = len(self.items), None
+        for i, (ctrl, _) in enumerate(self.items):
+            if not isinstance(ctrl, AbstractController):
+                w = self.weights(t) if w is None else w
+                on = w[:, i] > 0
+                if on.any():
+                    out[on] += w[on, i : i + 1] * ctrl.raw(t[on] - starts[i])
                 continue
-            if rows[-1] - rows[0] + 1 == rows.size:  # one run of rows: a view, not a copy
-                rows = slice(int(rows[0]), int(rows[-1]) + 1)
-            if isinstance(ctrl, AbstractController):
-                if id(ctrl) not in waves:
-                    waves[id(ctrl)] = ctrl.waves(t)
-                played = ctrl.shifted(waves[id(ctrl)][:, :, rows], start)
-            else:
-                played = ctrl.raw(t[rows] - start)
-            out[rows] += w[rows, i : i + 1] * played
+            own = waves.get(id(ctrl))
+            if own is None or own.shape[2] != t.size:  # none yet, or not at these times
+                own = waves[id(ctrl)] = ctrl.waves(t)
+            # each fade: (where it starts, its width s); width 0: none (the first item holds
+            # before its start, the last after its end)
+            fade_in = (starts[i], max(ends[i - 1] - starts[i], 1e-12)) if i > 0 else (0.0, 0.0)
+            fade_out = (ends[i], max(ends[i] - starts[i + 1], 1e-12)) if i < n - 1 else (0.0, 0.0)
+            c = ctrl
+            add_item(out, t, own, c.offset, c.freq, c.amp, c.phase, starts[i], fade_in, fade_out)
         return out
 
     def table(self, steps: int, dt: float, t0: float = 0.0, waves=None) -> np.ndarray:
