@@ -147,3 +147,54 @@ def test_an_eater_passes_behind_a_fish_crossing_its_way_from_the_right(monkeypat
     crossed = int(np.argmax(life.positions[1].mean(axis=1)[:, 2] > 0.0))
     assert crossed > 0 and eater[:crossed, 2].min() < -0.02
     assert not [e for e in life.events if e[2] == "collision"]
+
+
+def _head_on(monkeypatch, avoiding: bool):
+    """Two sated minnows (no food, no courting) cruising head on, 4 m apart, 0.1 m aside, for
+    10 s; ``avoiding`` False: no fish is ever a threat (``fish_threats`` answers none)."""
+    from dataclasses import replace
+
+    from zoetic.behavior.aquarium import shoal
+
+    def brains(*args):
+        out = tank_brains(*args)
+        for b in out:  # no courting: the two only meet
+            b.constants = replace(b.constants, libido_rate=0.0)
+        return out
+
+    def blind(nose, *args):
+        n = len(nose)
+        return np.full(n, -1), np.zeros(n, int), np.full(n, np.inf)
+
+    with monkeypatch.context() as m:
+        m.setattr(tk, "tank_brains", brains)
+        if not avoiding:
+            m.setattr(shoal, "fish_threats", blind)
+        cfg = TankConfig(
+            fishes=2, predators=0, food=0, obstacles=0, seconds=10.0, seed=0, half_size=8.0
+        )
+        tank = build_tank(cfg)
+        poses = [((-2.0, 0.0, 0.0), 0.0), ((2.0, 0.0, 0.1), np.pi)]
+        cruise = tank.fishes[0].species.motor.cruise_speed
+        cruise_from(tank.world, tank.fishes[0].body, poses, cruise)
+        return live(tank)
+
+
+def test_two_minnows_head_on_swerve_apart_and_swim_on(monkeypatch):
+    # without avoiding each other the two run into each other
+    blind = _head_on(monkeypatch, avoiding=False)
+    assert [e for e in blind.events if e[2] == "collision"]
+    life = _head_on(monkeypatch, avoiding=True)
+    assert not [e for e in life.events if e[2] == "collision"]
+    a, b = (p.mean(axis=1) for p in life.positions)
+    gap = np.linalg.norm(a - b, axis=1)
+    k = int(gap.argmin())
+    # they swerve apart: each off its line (the centre more than 0.15 m aside, each to its
+    # own side), and they pass with the centres more than 0.4 m apart across the way (blind,
+    # 0.3 m: the bodies, 0.24 m wide, touch)
+    moved = a[k, 2] - a[0, 2], b[k, 2] - b[0, 2]
+    assert min(map(abs, moved)) > 0.15 and moved[0] * moved[1] < 0.0
+    assert abs(a[k, 2] - b[k, 2]) > 0.4
+    # a swerve, not a freeze: each swam on through the meeting (at cruise 2.5 m in 10 s)
+    for c in (a, b):
+        assert np.linalg.norm(np.diff(c, axis=0), axis=1).sum() > 1.5

@@ -107,3 +107,18 @@ def test_a_fingerprint_sees_every_value_dtype_and_shape():
     assert fingerprint(_Part("q", a), (1.0, 2), {"k": None}) != key
     with pytest.raises(TypeError, match="cannot key"):
         fingerprint(_Part("p", a), object())
+
+
+def test_compiler_options_are_part_of_the_key():
+    with fresh_compilation_cache():
+        level1 = {"xla_backend_optimization_level": 1}
+        build, builds = _counted(2.0)
+        first = StoredProgram(build, fingerprint("f", 2.0), level1)(X, Y)
+        plain, plain_builds = _counted(2.0)
+        StoredProgram(plain, fingerprint("f", 2.0))(X, Y)
+        assert len(plain_builds) == 1  # compiled under other options: its own program
+        again, again_builds = _counted(2.0)
+        out = StoredProgram(again, fingerprint("f", 2.0), dict(level1))(X, Y)
+        assert again_builds == [] and len(_stored()) == 2  # the same options: loaded
+        np.testing.assert_allclose(np.asarray(out[0]), np.asarray(first[0]), rtol=1e-6)
+        np.testing.assert_allclose(np.asarray(out[0]), np.sin(X) * 2.0 + Y, rtol=1e-6)

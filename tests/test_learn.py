@@ -207,6 +207,61 @@ def test_interrupted_run_resumes_to_the_same_result(tmp_path, short_task, optimi
         assert (tmp_path / "cut" / name).exists()
 
 
+@pytest.mark.parametrize("every_s", [0.0, 1e9])
+@pytest.mark.parametrize("optimizer", ["anneal", "cmaes", "simplex"])
+def test_a_run_interrupted_inside_a_step_saves_the_state_before_it(
+    tmp_path, short_task, optimizer, every_s, monkeypatch
+):
+    """Ctrl-C while a batch is simulated: the checkpoint holds the log and the optimizer's
+    state before that batch's ask (rebuilt from the last saved state and the batches logged
+    since), so the resumed run asks the same batch again and ends as an uninterrupted one."""
+    whole = _learn(tmp_path / "whole", short_task, optimizer)
+    config = LearnConfig(
+        animal="shark", task=str(short_task), optimizer=optimizer, budget=60, seed=3, popsize=8
+    )
+    run = Run.create(tmp_path / "cut", config)
+    real = Objective.evaluate
+    calls = []
+
+    def evaluate(self, params):
+        calls.append(len(params))
+        if sum(calls) > 30:
+            raise KeyboardInterrupt
+        return real(self, params)
+
+    monkeypatch.setattr(Objective, "evaluate", evaluate)
+    with pytest.raises(KeyboardInterrupt):
+        run.learn(every_s=every_s)  # saved after every step, or only when interrupted
+    monkeypatch.setattr(Objective, "evaluate", real)
+    resumed = Run.resume(tmp_path / "cut")
+    assert resumed.evaluations == sum(calls[:-1]) < 60
+    resumed.learn()
+    assert resumed.log.E == whole.log.E
+    assert np.array_equal(np.array(resumed.log.X), np.array(whole.log.X))
+    assert resumed.setup.optimizer.best_f == whole.setup.optimizer.best_f
+
+
+def test_cmaes_asks_the_generation_cma_asks_folded_into_the_box():
+    """The optimizer's batched fold into the box gives cma's own candidates, bit for bit, and
+    cma's search continues the same (candidates far outside the box, near it and inside)."""
+    import pickle
+
+    from zoetic.learning.optimizers.cmaes import CMAES, _ask_in_bounds
+
+    for sigma, n, seed in [(0.3, 40, 0), (3.0, 15, 1), (10.0, 40, 2)]:
+        lo, hi = -np.linspace(0.1, 2.0, n), np.linspace(0.5, 3.0, n)
+        ours = CMAES(np.zeros(n), lo, hi, seed, popsize=32, sigma=sigma).es
+        theirs = pickle.loads(pickle.dumps(ours))
+        for g in range(20):
+            X, Y = np.array(_ask_in_bounds(ours)), np.array(theirs.ask())
+            assert X.tobytes() == Y.tobytes()
+            assert ((lo <= X) & (X <= hi)).all()
+            f = list(((X - 0.3) ** 2).sum(axis=1) + 0.01 * np.sin(g + np.arange(32)))
+            ours.tell(list(X), f)
+            theirs.tell(list(Y), f)
+        assert np.array_equal(ours.mean, theirs.mean) and ours.sigma == theirs.sigma
+
+
 def test_learning_improves_and_writes_a_loadable_controller(tmp_path, short_task):
     from zoetic.control import load_controller
 

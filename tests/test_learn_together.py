@@ -74,7 +74,7 @@ def test_interrupted_runs_learned_together_resume_to_the_same_result(tmp_path, t
 
 
 def test_learning_holds_blas_to_one_thread_and_lifts_it_after(tmp_path, tasks, shark, monkeypatch):
-    """Every generation's activation tables (a BLAS product) are made on one BLAS thread,
+    """Every generation's actuator signals (a BLAS product) are made on one BLAS thread,
     together or alone (BLAS's idle threads spin against the kernel's), and the limit is
     lifted when learning ends."""
     from threadpoolctl import threadpool_info, threadpool_limits
@@ -85,13 +85,13 @@ def test_learning_holds_blas_to_one_thread_and_lifts_it_after(tmp_path, tasks, s
         return {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
 
     seen: list[set[int]] = []
-    real = Objective.tables
+    real = Objective.actuator_signals
 
-    def tables(self, params):
+    def actuator_signals(self, params):
         seen.append(blas_threads())
         return real(self, params)
 
-    monkeypatch.setattr(Objective, "tables", tables)
+    monkeypatch.setattr(Objective, "actuator_signals", actuator_signals)
     with threadpool_limits(limits=2, user_api="blas"):  # as on 2 cores, even on one
         learn_together(_runs(tmp_path / "together", tasks, shark, budget=16))
         n_together = len(seen)
@@ -120,9 +120,24 @@ def test_rollouts_of_different_lengths_share_calls_and_move_as_alone(shark):
     starts = [rest_state(shark, 6), rest_state(shark, 4)]
     starts[1].velocities[2] += 3.0  # another start: moving
     starts[0].velocities[3] += 10 * VMAX  # blows up in the first call
-    got = _simulate_staged(Obj, [long, short], starts)
+    got = _simulate_staged(Obj, [t.transpose(0, 2, 1) for t in (long, short)], starts)
     for (positions, failed), table, start in zip(got, [long, short], starts, strict=True):
         alone = simulate(shark, table, None, shark.dt, start, 10)
         np.testing.assert_array_equal(positions, alone.positions)
         np.testing.assert_array_equal(failed, alone.failed)
     assert got[0][1][3] and not got[0][1][[0, 1, 2, 4, 5]].any()
+
+
+def test_shared_activations_are_each_candidates_table_once_per_start(shark):
+    """The kernel's activations of runs sharing a call: run r's candidate k from start s in
+    lane k S + s after the runs before it, its actuator signal clipped to [0, 1] and cast to
+    float32 (the values ``simulate`` would take from the tables repeated over the starts)."""
+    from zoetic.learning.together import _laid_out
+
+    rng = np.random.default_rng(0)
+    a, b = rng.normal(0.5, 0.6, (3, 8, 7)), rng.normal(0.5, 0.6, (2, 8, 7))
+    act_t = _laid_out([a, b], [6, 6])  # a from 2 starts, b from 3
+    tables = [np.clip(x.transpose(0, 2, 1), 0.0, 1.0) for x in (a, b)]
+    lanes = np.concatenate([np.repeat(tables[0], 2, axis=0), np.repeat(tables[1], 3, axis=0)])
+    assert act_t.dtype == np.float32 and act_t.shape == (7, 8, 12)
+    assert np.array_equal(act_t, lanes.transpose(1, 2, 0).astype(np.float32))

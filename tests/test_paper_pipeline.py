@@ -35,7 +35,8 @@ def test_entries_are_the_fft_abstractions_of_time_domain_controllers(paper):
     assert learned == ["go-straight", "sharp-turn-left", "wide-turn-left", "swim-up", "swim-down"]
     for name in learned:
         info = rep.info[name]
-        original = load_controller(paper / "runs" / name / "controller.json", shark)
+        # the run it came from: its own, or a restart that kept more of its promises
+        original = load_controller(paper / info["source"] / "controller.json", shark)
         task = load_task(info["task"])
         # learned from scratch in the time domain, M nodes a quarter of a stroke apart
         assert isinstance(original, TimeDomainController)

@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import pytest
 
-from zoetic.behavior.training import judge_repertoire, train_repertoire, unmet_text
+from zoetic.behavior.promises import unmet_text
+from zoetic.behavior.training import judge_repertoire, train_repertoire
 from zoetic.bodies import load_animal
 
 # entries the default training does not yet make keep their promises, with the reason: the

@@ -283,7 +283,8 @@ def test_a_promise_must_be_a_known_quantity_and_a_range(tmp_path):
 def test_the_abstraction_keeps_a_weak_mode_when_the_promise_needs_it(tmp_path, shark):
     """A weak mode below the auto threshold that the promised motion depends on is kept: the
     training steps the threshold down (FALLBACK_THRESHOLDS) rather than keep a broken entry."""
-    from zoetic.behavior.training import abstract_keeping_promises, entry_motion, judge_entry
+    from zoetic.behavior.promises import entry_motion, judge_entry
+    from zoetic.behavior.training import abstract_keeping_promises
     from zoetic.tasks import load_task
 
     muscles = np.array([kind == "muscle" for kind in shark.actuator_kind])

@@ -19,8 +19,9 @@ from zoetic.behavior.parametric import (
     play_at,
     turn_of_radius,
 )
+from zoetic.behavior.promises import entry_motion
 from zoetic.behavior.repertoire import Repertoire
-from zoetic.behavior.training import entry_motion, plan_for
+from zoetic.behavior.training import plan_for
 from zoetic.bodies import load_animal
 from zoetic.cli import main
 from zoetic.errors import ZoeticError
@@ -62,7 +63,7 @@ def test_turn_nodes_run_from_straight_to_the_sharpest_turn(shark, rep, nodes):
 
 def test_the_curvature_is_the_promise_arc(shark, rep):
     """1 / curvature is the radius a turn task's promise judges from rest over its horizon
-    (training.entry_motion, the judge of "radius_bl")."""
+    (promises.entry_motion, the judge of "radius_bl")."""
     ctrl = rep.controllers["wide-turn-left"]
     judged = entry_motion(shark, ctrl, load_task("wide-turn-left"))[0]  # from rest, over 4 s
     assert 1.0 / curvature(shark, [ctrl])[0] == pytest.approx(judged["radius_bl"], rel=1e-3)

@@ -29,6 +29,7 @@ PACKAGE = Path(__file__).resolve().parent
 KERNELS = (
     "behavior/aquarium/neighbours.py",
     "behavior/aquarium/perception.py",
+    "control/blend.py",
     "perception/kernels.py",
     "physics/bodycontact.py",
     "physics/broadphase.py",

@@ -24,6 +24,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -133,6 +134,22 @@ class MacroProblem:
         c = self.ctrls[0]
         return SequenceController(c.animal, c.actuators, items, OVERLAP)
 
+    @cached_property
+    def _waves(self) -> dict[int, np.ndarray]:
+        """The entries' mode waves at the steps of the horizon, by controller id, filled as
+        plans first play them (``SequenceController.raw``): computed once a problem."""
+        return {}
+
+    def tables(self, entries: np.ndarray, durations: np.ndarray) -> np.ndarray:
+        """Return the activation tables (B, steps, A) of plans (B, L) over the horizon."""
+        dt = self.body.dt
+        return np.stack(
+            [
+                self.sequence(a, b).table(self.steps, dt, waves=self._waves)
+                for a, b in zip(entries, durations, strict=True)
+            ]
+        )
+
     def random(self, rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
         """Return n random plans: entries (n, L) and durations (n, L)."""
         e = rng.integers(0, self.entries, (n, self.segments))
@@ -144,11 +161,9 @@ class MacroProblem:
         e, d = np.atleast_2d(entries), np.atleast_2d(durations)
         if self.righting is not None:
             return self.righted(e, d).trajectory()
-        dt = self.body.dt
-        tables = np.stack(
-            [self.sequence(a, b).table(self.steps, dt) for a, b in zip(e, d, strict=True)]
+        return simulate(
+            self.body, self.tables(e, d), record_every=record_every or self.record_every
         )
-        return simulate(self.body, tables, record_every=record_every or self.record_every)
 
     def righted(self, entries: np.ndarray, durations: np.ndarray) -> RightedPlans:
         """Return plans (B, L) played side by side with the righting reflex over the horizon."""

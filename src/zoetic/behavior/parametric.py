@@ -110,9 +110,9 @@ def gait_motion(body: Body, ctrls: list, seconds: float = GAIT_SECONDS) -> dict[
     "roll" (deg, the greatest either way), "turn_rate" (deg/s, the turn over the time) and
     "curvature" (1/body length, left positive) of the arc from the first to the last centre of
     mass: the arc a turn task's promise "radius_bl" is judged by from rest over its horizon
-    (``training.arc_curvature``), so its radius is 1 / curvature body lengths."""
+    (``promises.arc_curvature``), so its radius is 1 / curvature body lengths."""
+    from zoetic.behavior.promises import arc_curvature
     from zoetic.behavior.tracking import body_length
-    from zoetic.behavior.training import arc_curvature
     from zoetic.control.measure import motion_scalars
     from zoetic.physics import get_medium, simulate
 

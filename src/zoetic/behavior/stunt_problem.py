@@ -83,20 +83,28 @@ class _Frames(Observer):
         self.touch: list[np.ndarray] = []
         self._count = np.zeros(world.batch, dtype=np.int64)
         self._impulse = np.zeros((world.batch, world.bodies[0].n_nodes, len(world.objects), 3))
+        self._untouched = np.zeros(self._impulse.shape[:-1])  # |impulse| of no contact
+        self._touched = False  # any node tested against the objects since the last record
 
     def slice(self, world: World, contacts) -> None:
-        if world.objects:
-            self._count = self._count + contacts.count
-            self._impulse = self._impulse + contacts.impulse[0]
+        # the animal's impulses are zero in a slice that did not test its nodes (``near``)
+        if world.objects and (contacts.near is None or 0 in contacts.near):
+            self._count = self._count + contacts.count  # a new array: records keep the old
+            self._impulse += contacts.impulse[0]
+            self._touched = True
 
     def record(self, world: World) -> None:
         self.times.append(world.time)
         self.positions.append(world.positions(0))
         self.balls.append(world.ball_positions)
         self.counts.append(self._count)
+        if not self._touched:  # the counts stay zero and nothing touched
+            self.touch.append(self._untouched)
+            return
         self.touch.append(np.linalg.norm(self._impulse, axis=-1))
         self._count = np.zeros_like(self._count)
         self._impulse = np.zeros_like(self._impulse)
+        self._touched = False
 
 
 class StuntProblem(MacroProblem):
@@ -156,10 +164,7 @@ class StuntProblem(MacroProblem):
         e, d = np.atleast_2d(entries), np.atleast_2d(durations)
         k = 1 if starts is None else len(starts.positions)
         dt = self.body.dt
-        tables = np.stack(
-            [self.sequence(a, b).table(self.steps, dt) for a, b in zip(e, d, strict=True)]
-        )
-        tables = np.repeat(tables, k, axis=0)
+        tables = np.repeat(self.tables(e, d), k, axis=0)
         every = int(record_every or self.record_every)
         world = self.world(len(tables), starts)
         seconds = self.steps * dt

@@ -18,7 +18,8 @@ repertoire; right turns are the left ones with left and right actuator signals s
 entries are learned together (``learning.together``: entries whose rollouts last as long share
 one batched simulation a generation), each in its own run directory checkpointed as it goes,
 so an interrupted training picks up where every entry stopped; the repertoire directory is
-written after each entry is abstracted.
+written after each entry is abstracted. An entry that breaks a promise of its task is learned
+again from derived seeds (``behavior.restarts``).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ import hashlib
 import json
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -37,7 +39,9 @@ from zoetic.behavior.pipelines import (
     entry_config,
     paper_abstraction,
 )
+from zoetic.behavior.promises import judge_entry
 from zoetic.behavior.repertoire import Repertoire
+from zoetic.behavior.restarts import keep_promises
 from zoetic.bodies import Body, load_animal
 from zoetic.control import Controller, load_controller
 from zoetic.control.abstract import AbstractController, SequenceController
@@ -45,7 +49,7 @@ from zoetic.errors import RunDirError, ZoeticError
 from zoetic.io import read_json, read_toml, suggest
 from zoetic.learning.abstraction import Abstraction, abstract, compare, mirror_abstract
 from zoetic.learning.blas import one_blas_thread
-from zoetic.tasks import Promise, Task, capabilities, fits, load_task, start_states
+from zoetic.tasks import Task, capabilities, fits, load_task
 
 # (entry name, task per medium kind): the paper's basic training, in order
 PLAN = (
@@ -132,116 +136,6 @@ def rest_abstraction(body: Body) -> AbstractController:
     )
 
 
-def arc_curvature(com: np.ndarray, turned: float) -> float:
-    """Return the signed curvature (1/m, left turns positive) of the circular arc that turns
-    the heading by ``turned`` rad between the first and last centre-of-mass positions ``com``
-    (R, 3): a chord c of an arc of angle a has curvature 2 sin(a / 2) / c, the angle capped at
-    180 degrees; 0 for no turn, inf for a turn on the spot."""
-    a = min(abs(float(turned)), np.pi)
-    chord = float(np.linalg.norm((com[-1] - com[0])[[0, 2]]))
-    bend = 2.0 * float(np.sin(a / 2.0)) * float(np.sign(turned))
-    return bend / chord if chord > 0.0 else float(np.copysign(np.inf, bend)) if bend else 0.0
-
-
-def arc_radius(com: np.ndarray, turned: float) -> float:
-    """Return the radius (m) of the circular arc that turns the heading by ``turned`` rad
-    between the first and last centre-of-mass positions ``com`` (R, 3): 1 / |curvature|
-    (``arc_curvature``); inf under a degree of turn (a straight line)."""
-    if abs(float(turned)) < np.radians(1.0):
-        return float("inf")
-    return 1.0 / abs(arc_curvature(com, turned))
-
-
-def entry_motion(body: Body, ctrl: Controller, task: Task) -> list[dict[str, float]]:
-    """Return the ``tasks.PROMISES`` quantities of a controller played from each of the task's
-    starts over its horizon (one simulation, a row per start)."""
-    from zoetic.behavior.tracking import body_length
-    from zoetic.control.measure import motion_scalars
-    from zoetic.physics import get_medium, simulate
-
-    starts = start_states(task, body)
-    k = len(task.starts)
-    steps = int(round(task.horizon / body.dt))
-    every = max(1, int(round(0.05 / body.dt)))
-    table = np.repeat(ctrl.table(steps, body.dt)[None], k, axis=0)
-    tr = simulate(body, table, state=starts, record_every=every)
-    m = motion_scalars(body, tr.positions, tr.times, get_medium(body.medium))
-    com = tr.com(body)
-    length = body_length(body)
-    rows = []
-    for i in range(k):
-        turned = float(m["heading"][i, -1] - m["heading"][i, 0])
-        path = np.linalg.norm(np.diff(com[i], axis=0), axis=1).sum()
-        half = len(com[i]) // 2
-        late = np.linalg.norm((com[i, -1] - com[i, half])[[0, 2]])
-        rows.append(
-            {
-                "turn_deg": turned,
-                "climb_m": float(com[i, -1, 1] - com[i, 0, 1]),
-                "speed_bl_s": float(path / task.horizon / length),
-                "steady_speed_bl_s": float(late / (tr.times[-1] - tr.times[half]) / length),
-                "radius_bl": arc_radius(com[i], np.radians(turned)) / length,
-                "roll_deg": float(np.nanmax(np.abs(m["roll"][i]))),
-                "pitch_change_deg": float(m["pitch"][i, -1] - m["pitch"][i, 0]),
-                "failed": bool(tr.failed[i]),
-            }
-        )
-    return rows
-
-
-def judge_entry(body: Body, ctrl: Controller, task: Task) -> dict[str, object]:
-    """Return how a learned entry keeps its task's promises, from every start of the task.
-
-    {"task", "met": bool, "promises": [{"promise": text, "worst": value, "start": name,
-    "met": bool}]}: for each promise the value furthest outside (or nearest the edge of) its
-    range over the starts; an entry that blows up meets nothing.
-    """
-    rows = entry_motion(body, ctrl, task)
-    names = task.start_names()
-    out = []
-    for p in task.promises:
-        values = [r[p.quantity] for r in rows]
-        miss = [
-            _outside(p, v) if not r["failed"] else np.inf for v, r in zip(values, rows, strict=True)
-        ]
-        worst = int(np.argmax(miss))
-        out.append(
-            {
-                "promise": p.text(),
-                "worst": round(float(values[worst]), 3),
-                "start": names[worst],
-                "met": bool(miss[worst] <= 0.0),
-            }
-        )
-    return {"task": task.name, "met": all(o["met"] for o in out), "promises": out}
-
-
-def _outside(p: Promise, value: float) -> float:
-    """Return how far ``value`` lies outside the promise's range (negative: inside)."""
-    inside = p.low <= value <= p.high
-    if not np.isfinite(value):  # an infinite radius (no turn) or a NaN
-        return -1e9 if inside else 1e9
-    if inside:
-        return -float(min(value - p.low, p.high - value))
-    return float(max(p.low - value, value - p.high))
-
-
-class PromiseError(ZoeticError):
-    """Entries of a repertoire do not do what their tasks promise (``--strict``)."""
-
-    exit_code = 1
-
-
-def check_promises(verdicts: dict[str, dict], where: str) -> None:
-    """Raise PromiseError naming the learned entries of ``where`` that break a promise."""
-    unmet = [n for n, v in verdicts.items() if not v["met"] and "mirror_of" not in v]
-    if unmet:
-        raise PromiseError(
-            f"{where}: {len(unmet)} entr{'y' if len(unmet) == 1 else 'ies'} "
-            f"({', '.join(unmet)}) do not do what their tasks promise (--strict)"
-        )
-
-
 def judge_repertoire(directory: str | Path, body: Body) -> dict[str, dict]:
     """Return the verdict (``judge_entry``) of every learned entry of the repertoire of
     ``body`` in ``directory`` whose task makes promises, by entry name; a mirrored entry
@@ -256,16 +150,6 @@ def judge_repertoire(directory: str | Path, body: Body) -> dict[str, dict]:
             if right in rep.controllers:
                 out[right] = out[name] | {"mirror_of": name}
     return out
-
-
-def unmet_text(name: str, verdict: dict) -> str:
-    """Return a line naming the promises an entry does not keep, with the worst value."""
-    bad = [
-        f"{o['promise']} but {o['worst']:g} (from {o['start']})"
-        for o in verdict["promises"]
-        if not o["met"]
-    ]
-    return f"entry {name!r} does not do what task {verdict['task']!r} promises: " + "; ".join(bad)
 
 
 def abstract_keeping_promises(
@@ -380,30 +264,51 @@ def train_repertoire(
         if on_entry:
             on_entry(entry.name, run)
     learn_together(runs, progress=progress)
+    learned = []
     with one_blas_thread():  # abstraction and judging: small linear algebra, as learning
         for entry, run in zip(entries, runs, strict=True):
-            original = run.best_controller()
-            if pipeline == "paper":
-                learned_by = run.setup.config.optimizer  # a resumed entry's own
-                ab, info = paper_abstraction(
-                    body, original, entry.task, modes, threshold, learned_by
-                )
-            else:
-                ab = abstract_keeping_promises(body, original, entry.task, modes, threshold)
-                info = abstraction_report(body, original, ab, entry.task)
-            rep.add(
-                entry.name, ab.controller, entry.task.horizon, source=f"runs/{entry.name}", **info
-            )
-            right = mirrored_name(entry.name)
-            if right:
-                rep.add(
-                    right,
-                    mirror_abstract(ab.controller, body.actuator_mirror),
-                    entry.task.horizon,
-                    source=f"mirror of {entry.name}",
-                )
+            learned.append(learned_entry(body, entry, run, pipeline, modes, threshold))
+            add_entry(rep, body, entry, *learned[-1])
             rep.save(out)
+    again = partial(learned_entry, body, pipeline=pipeline, modes=modes, threshold=threshold)
+
+    def resume(run_dir: Path, entry: Entry):  # a restart run begun before an interruption
+        return _entry_run(run_dir, entry, body, {}, resume_budget, pipeline)
+
+    for entry, (ab, info) in keep_promises(
+        body, entries, runs, learned, again, resume, out, on_entry, progress
+    ):
+        add_entry(rep, body, entry, ab, info)
+        rep.save(out)
     return rep
+
+
+def learned_entry(
+    body: Body, entry: Entry, run, pipeline: str, modes: str | int, threshold: float
+) -> tuple[Abstraction, dict]:
+    """Return the abstraction of an entry's learned controller and its repertoire info (the
+    paper pipeline's or the periodic one's, ``train_repertoire``), the run's own source."""
+    original = run.best_controller()
+    if pipeline == "paper":
+        learned_by = run.setup.config.optimizer  # a resumed entry's own
+        ab, info = paper_abstraction(body, original, entry.task, modes, threshold, learned_by)
+    else:
+        ab = abstract_keeping_promises(body, original, entry.task, modes, threshold)
+        info = abstraction_report(body, original, ab, entry.task)
+    return ab, {"source": f"runs/{run.out.name}"} | info
+
+
+def add_entry(rep: Repertoire, body: Body, entry: Entry, ab: Abstraction, info: dict) -> None:
+    """Add (or replace) a learned entry and, for a left-hand one, its mirror."""
+    rep.add(entry.name, ab.controller, entry.task.horizon, **info)
+    right = mirrored_name(entry.name)
+    if right:
+        rep.add(
+            right,
+            mirror_abstract(ab.controller, body.actuator_mirror),
+            entry.task.horizon,
+            source=f"mirror of {entry.name}",
+        )
 
 
 def _entry_run(

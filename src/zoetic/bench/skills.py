@@ -61,8 +61,8 @@ def skill_figures(body: Body, ctrl: Controller, task: Task, start: int = 0) -> d
 def turn_radius(com: np.ndarray, turned: float, length: float) -> float | None:
     """Return the radius (body lengths) of the circular arc that turns the heading by
     ``turned`` radians between the first and last centre-of-mass positions ``com`` (R, 3), as
-    the turn promises judge it (``training.arc_radius``); None under a degree of turn."""
-    from zoetic.behavior.training import arc_radius
+    the turn promises judge it (``promises.arc_radius``); None under a degree of turn."""
+    from zoetic.behavior.promises import arc_radius
 
     r = arc_radius(com, turned)
     return None if not np.isfinite(r) else round(r / length, 3)

@@ -109,7 +109,7 @@ def _swim(body, rep, kind: str, speed: float, right: bool, out: Path) -> tuple[d
 
 def _radius(curvature: float, turn: float) -> float | None:
     """Return the radius (body lengths) of a path of ``curvature`` (1/BL) that turned ``turn``
-    degrees; None if straight (under a degree, as ``training.arc_radius`` has it)."""
+    degrees; None if straight (under a degree, as ``promises.arc_radius`` has it)."""
     return round(1.0 / abs(curvature), 3) if abs(turn) >= 1.0 and curvature else None
 
 

@@ -139,6 +139,7 @@ def train_cmd(
             interrupted(f"{out} keeps what was learned; continue with: {again}")
     with one_blas_thread():  # the entries replayed and judged: small linear algebra
         _print_rows(show_repertoire(out), f"{out}")
+        _report_restarts(out)
         _report_promises(out, strict)
 
 
@@ -195,11 +196,31 @@ def _training_dir(
     return out, again
 
 
+def _report_restarts(memory: Path) -> None:
+    """Print, for each entry learned again because it broke a promise (``behavior.restarts``),
+    why, each try's run and seed and what it broke, and which try the repertoire keeps."""
+    from zoetic.behavior.repertoire import Repertoire
+
+    for name, info in Repertoire.load(memory).info.items():
+        r = info.get("restarts")
+        if not isinstance(r, dict):
+            continue
+        if "skipped" in r:
+            console.print(f"{name}: not learned again ({r['skipped']}): {r['because']}")
+            continue
+        console.print(f"{name}: learned again: {r['because']}")
+        for t in r["tries"]:
+            broke = "keeps every promise" if t["met"] else "breaks " + "; ".join(t["broken"])
+            console.print(f"  {t['run']} (seed {t['seed']}): {broke}")
+        console.print(f"  kept: {r['kept']}")
+
+
 def _report_promises(memory: Path, strict: bool) -> dict[str, dict]:
     """Judge every learned entry against its task's promises; print the ones it does not
     keep (and exit 1 under ``strict`` if any); return the verdicts by entry."""
+    from zoetic.behavior.promises import check_promises, unmet_text
     from zoetic.behavior.repertoire import Repertoire
-    from zoetic.behavior.training import check_promises, judge_repertoire, unmet_text
+    from zoetic.behavior.training import judge_repertoire
     from zoetic.runs import repertoire_body
 
     animal = Repertoire.load(memory).animal
@@ -246,7 +267,8 @@ def show_cmd(
 ) -> None:
     """Print a repertoire's entries and what each does; writes repertoire.png beside them.
     Each learned entry is judged against its task's promises (from every start of the task)."""
-    from zoetic.behavior.training import check_promises, judge_repertoire
+    from zoetic.behavior.promises import check_promises
+    from zoetic.behavior.training import judge_repertoire
     from zoetic.errors import ZoeticError, naming
     from zoetic.runs import repertoire_body
     from zoetic.viz.media import show_repertoire
@@ -268,6 +290,7 @@ def show_cmd(
         return
     _print_rows(rows, str(memory))
     console.print(f"plot: {memory / 'repertoire.png'}")
+    _report_restarts(memory)
     _report_promises(memory, strict)
 
 

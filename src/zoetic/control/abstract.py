@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from zoetic.control.blend import add_item
 from zoetic.control.controllers import Controller
 from zoetic.errors import ControllerError
 
@@ -60,6 +61,12 @@ class AbstractController(Controller):
         for k in range(waves.shape[2]):
             total = total + waves[:, :, k]
         return self.offset[None, :] + total
+
+    def waves(self, t) -> np.ndarray:
+        """Return each mode's unit wave at times t (s) as (2, K, T, A): cos and sin of
+        2 pi freq t, from which ``blend.add_item`` plays the controller started at any time."""
+        wt = 2 * np.pi * self.freq.T[:, None, :] * np.asarray(t, float)[None, :, None]
+        return np.stack([np.cos(wt), np.sin(wt)])
 
     def ahead(self, seconds: float) -> AbstractController:
         """Return this gait ``seconds`` ahead: it plays at t what this one plays at t + seconds
@@ -129,16 +136,46 @@ class SequenceController(Controller):
             fade_out[:, :-1] = np.clip((e[:, :-1] - t) / width, 0.0, 1.0)
         return fade_in * fade_out
 
-    def raw(self, t):
-        """Return unclipped activations (T, A) at t (s): the blend-weighted item outputs."""
-        t = np.asarray(t, float)
-        w = self.weights(t)
+    def waves(self, t) -> dict[int, np.ndarray]:
+        """Return each abstract item's ``AbstractController.waves`` at times t, by the item
+        controller's id: what ``raw`` computes afresh, kept to play many sequences of the
+        same controllers at the same times (a plan search)."""
+        ctrls = {id(c): c for c, _ in self.items if isinstance(c, AbstractController)}
+        return {key: c.waves(t) for key, c in ctrls.items()}
+
+    def raw(self, t, waves: dict[int, np.ndarray] | None = None):
+        """Return unclipped activations (T, A) at t (s): the blend-weighted item outputs.
+        Abstract items are played from their modes' waves at t (``blend.add_item``;
+        ``waves``: those of this sequence's controllers at these t, as ``waves(t)`` returns
+        them, filled in where missing or taken at other times)."""
+        t = np.asarray(t, float).reshape(-1)
+        waves = {} if waves is None else waves
         out = np.zeros((t.size, self.n_actuators))
-        for i, ((ctrl, _), start) in enumerate(zip(self.items, self.starts(), strict=True)):
-            on = w[:, i] > 0
-            if on.any():
-                out[on] += w[on, i : i + 1] * ctrl.raw(t[on] - start)
+        starts = self.starts()
+        ends = starts + np.array([dur for _, dur in self.items])
+        n, w = len(self.items), None
+        for i, (ctrl, _) in enumerate(self.items):
+            if not isinstance(ctrl, AbstractController):
+                w = self.weights(t) if w is None else w
+                on = w[:, i] > 0
+                if on.any():
+                    out[on] += w[on, i : i + 1] * ctrl.raw(t[on] - starts[i])
+                continue
+            own = waves.get(id(ctrl))
+            if own is None or own.shape[2] != t.size:  # none yet, or not at these times
+                own = waves[id(ctrl)] = ctrl.waves(t)
+            # each fade: (where it starts, its width s); width 0: none (the first item holds
+            # before its start, the last after its end)
+            fade_in = (starts[i], max(ends[i - 1] - starts[i], 1e-12)) if i > 0 else (0.0, 0.0)
+            fade_out = (ends[i], max(ends[i] - starts[i + 1], 1e-12)) if i < n - 1 else (0.0, 0.0)
+            c = ctrl
+            add_item(out, t, own, c.offset, c.freq, c.amp, c.phase, starts[i], fade_in, fade_out)
         return out
+
+    def table(self, steps: int, dt: float, t0: float = 0.0, waves=None) -> np.ndarray:
+        """Return the activation table (steps, A) for a simulation of ``steps`` steps of dt
+        (``waves``: as ``raw``'s, at these steps' times)."""
+        return np.clip(self.raw(t0 + np.arange(steps) * dt, waves), 0.0, 1.0)
 
     def to_dict(self):
         """Return the base description plus overlap and each item's duration (s) and dict."""

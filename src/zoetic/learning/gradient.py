@@ -41,6 +41,18 @@ Loss = Callable[[jax.Array, jax.Array, jax.Array], jax.Array]
 ValueAndGrad = Callable[[jax.Array], tuple[jax.Array, jax.Array]]
 
 
+def compiler_options() -> dict | None:
+    """Return the XLA options a gradient program compiles under; on a CPU XLA's elemental
+    emitters instead of its MLIR fusion emitters (an MLIR context and pass pipeline for each
+    of a gradient's some 260 small fusions: about twice the compile) and LLVM's level 1
+    optimisations instead of 2 (less compile again). Either way the gradient runs as fast
+    and agrees to float32 rounding (docs/performance.md, "The gradient's cold compile").
+    Elsewhere none."""
+    if jax.default_backend() != "cpu":
+        return None
+    return {"xla_cpu_use_fusion_emitters": False, "xla_backend_optimization_level": 1}
+
+
 class GradientState(NamedTuple):
     """Everything a gradient run needs to resume: arrays only."""
 
@@ -168,7 +180,7 @@ def optimize_gradient(
     The run also stops after ``max_failures`` consecutive non-finite evaluations.
     """
     opt = GradientDescent(learning_rate, max_grad_norm)
-    vg = jax.jit(jax.value_and_grad(loss_fn))
+    vg = jax.jit(jax.value_and_grad(loss_fn), compiler_options=compiler_options())
     state = opt.init(x0, lower, upper, seed)
     history: list[dict] = []
     for k in range(int(steps)):
@@ -313,6 +325,7 @@ def value_and_grad(objective: Objective, X: np.ndarray) -> tuple[Evaluation, np.
         vg = StoredProgram(
             lambda: jax.value_and_grad(jax_objective(ref()), has_aux=True),
             fingerprint("value_and_grad", *objective_inputs(objective)),
+            compiler_options(),
         )
         _COMPILED[objective] = vg
     out = [vg(jnp.asarray(x, F32)) for x in np.atleast_2d(X)]

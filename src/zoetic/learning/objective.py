@@ -281,12 +281,22 @@ class Objective:
 
     def tables(self, params: np.ndarray) -> np.ndarray:
         """Return activation tables (K, T, A) for parameter vectors (K, dim)."""
+        return np.clip(self.actuator_signals(params).transpose(0, 2, 1), 0.0, 1.0)
+
+    def actuator_signals(self, params: np.ndarray) -> np.ndarray:
+        """Return each actuator's signal (K, A, T) for parameter vectors (K, dim), not yet
+        clipped to [0, 1] as ``tables`` are (the simulator clips what it reads)."""
         coef = self.full_coefficients(params)
         k, a, m = coef.shape
         # one matrix product (K A, M) x (M, T): the same values as the sum over m, at a
         # fraction of einsum's cost
-        u = (coef.reshape(k * a, m) @ self._basis.T).reshape(k, a, -1)
-        return np.clip(u.transpose(0, 2, 1), 0.0, 1.0)
+        return (coef.reshape(k * a, m) @ self._basis.T).reshape(k, a, -1)
+
+    def recorded(self, signals: np.ndarray, n_records: int) -> np.ndarray:
+        """Return the activations (K, R, A) applied at each recorded instant (``record_rows``)
+        of actuator ``signals`` (K, A, T): ``tables``' rows there."""
+        rows = self.record_rows(n_records)
+        return np.clip(signals[:, :, rows].transpose(0, 2, 1), 0.0, 1.0)
 
     def control_cost(self, params: np.ndarray) -> np.ndarray:
         """Return E_u (K,) of parameter vectors, on the M node times."""
@@ -312,10 +322,6 @@ class Objective:
         """Return the activation-table rows applied at each recorded instant, (R,)."""
         return np.minimum(np.arange(n_records) * self.record_every, self.steps - 1)
 
-    def lanes(self, params: np.ndarray) -> np.ndarray:
-        """Return the activation tables (K * S, T, A) of a batch's rollouts (``simulate``)."""
-        return self._lanes(self.tables(np.atleast_2d(params)))
-
     def rollout_key(self) -> tuple:
         """What the simulator must share, beside the body, to play this objective's rollouts in
         one batched call with another's (the kernel's lanes are independent: a lane moves the
@@ -330,14 +336,17 @@ class Objective:
     def evaluate(self, params: np.ndarray) -> Evaluation:
         """Return the Evaluation of a batch of parameter vectors (K, dim)."""
         params = np.atleast_2d(params)
-        lanes = self._lanes(self.tables(params))
-        traj = self._run(lanes)  # one kernel call for every candidate from every start
-        return self.score(params, lanes, traj.positions, traj.failed)
+        tables = self.tables(params)
+        traj = self._run(self._lanes(tables))  # one kernel call for every candidate and start
+        acts = tables[:, self.record_rows(traj.positions.shape[1])]
+        return self.score(params, acts, traj.positions, traj.failed)
 
-    def score(self, params, lanes, positions, failed) -> Evaluation:
-        """Return the Evaluation of a batch (K, dim) from its rollouts: their tables ``lanes``
-        (K * S, T, A), recorded ``positions`` (K * S, R, N, 3) and ``failed`` (K * S,)."""
-        acts = lanes[:, self.record_rows(positions.shape[1])]
+    def score(self, params, acts, positions, failed) -> Evaluation:
+        """Return the Evaluation of a batch (K, dim) from its rollouts: the candidates'
+        activations at the recorded instants ``acts`` (K, R, A) (``recorded``), the recorded
+        ``positions`` (K * S, R, N, 3) and ``failed`` (K * S,) of candidate k from start s at
+        k * S + s."""
+        acts = self._lanes(acts)
         s = signals(
             self.task,
             self.body,

@@ -204,7 +204,10 @@ class Run:
         self.out = Path(out)
         self.setup = setup
         self.log = log or Log()
-        self._before: tuple | None = None  # (log length, batches, state) while a step runs
+        self._before: tuple | None = None  # (log length, batches) while a step runs
+        # (log length, batches, optimizer state) of the last state saved or started from: an
+        # interrupted step is undone by restoring it and replaying the logged batches since
+        self._anchor: tuple | None = None
         self._saved: int | None = None  # evaluations in the last checkpoint written
         self._cut = False  # the batch being evaluated is the budget's last, partial one
         self.t_start = time.perf_counter() - (self.log.wall[-1] if self.log.wall else 0.0)
@@ -300,14 +303,15 @@ class Run:
 
     def checkpoint(self) -> None:
         """Write checkpoint.npz, history.csv and controller.json (each atomically)."""
-        state = self.setup.optimizer.state_dict()
         if self._before is not None:  # interrupted inside a step: save the state before it
-            n, batches, state = self._before
+            n, batches = self._before
             for key in LOG_KEYS[:-1]:
                 del getattr(self.log, key)[n:]
             del self.log.batches[batches:]
-            self.setup.optimizer.load_state_dict(state)
+            self._replay()
             self._before = None
+        state = self.setup.optimizer.state_dict()
+        self._anchor = (self.evaluations, len(self.log.batches), state)
         data = checkpoint_bytes(self.log, state, _identity(self.setup))
         keep_previous(self.out / CHECKPOINT, self.out / PREVIOUS)
         atomic_write_bytes(self.out / CHECKPOINT, data)
@@ -332,7 +336,9 @@ class Run:
         """Return the next batch to evaluate (cut to the budget's room), or None when there is
         nothing left; until ``tell``, an interruption checkpoints the state before it."""
         opt = self.setup.optimizer
-        self._before = (len(self.log.E), len(self.log.batches), opt.state_dict())
+        if self._anchor is None or opt.needs_gradient:  # a gradient is not logged to replay
+            self._anchor = (self.evaluations, len(self.log.batches), opt.state_dict())
+        self._before = (len(self.log.E), len(self.log.batches))
         X = opt.ask()
         room = self.setup.config.budget - self.evaluations
         if len(X) == 0 or room <= 0:
@@ -340,6 +346,23 @@ class Run:
             return None
         self._cut = len(X) > room
         return X[:room]
+
+    def _replay(self) -> None:
+        """Put the optimizer in the state after the logged batches: the anchor's state
+        restored, then each batch logged since asked for again and told its logged E (the
+        budget's last, partial batch recorded, as ``tell`` does). A method's steps depend only
+        on its state and the scores it is told, as a resumed run's do, so this is the state
+        the run had, bit for bit, without a copy of it taken before every step."""
+        opt = self.setup.optimizer
+        n, batches, state = self._anchor
+        opt.load_state_dict(state)
+        for size in self.log.batches[batches:]:
+            X, E = np.asarray(self.log.X[n : n + size]), np.asarray(self.log.E[n : n + size])
+            if size < len(opt.ask()):
+                opt.record(X, E)
+            else:
+                opt.tell(X, E)
+            n += size
 
     def tell(self, X: np.ndarray, ev, grad=None) -> int:
         """Give the optimizer the Evaluation of the batch ``ask`` returned; log it; return its

@@ -21,7 +21,8 @@ import numpy as np
 from zoetic.learning.blas import one_blas_thread
 from zoetic.learning.run import Run
 from zoetic.learning.stored_body import body_digest
-from zoetic.physics import State, simulate
+from zoetic.physics import State
+from zoetic.physics.simulate import kernel_layout, simulate_laid_out
 
 
 def _together(run: Run) -> bool:
@@ -52,27 +53,28 @@ def _share_key(obj) -> tuple:
     return (medium, dt, every) if steps % every == 0 else (medium, dt, steps, every)
 
 
-def _simulate_staged(obj, tables: list[np.ndarray], starts: list[State]):
-    """Return (positions (L, R, N, 3), failed (L,)) of each run's lanes ``tables`` (L, T, A)
-    from ``starts``: one kernel call up to each distinct rollout length, of the lanes that
-    last at least that long, each continuing from where the last call left it."""
-    ends = sorted({t.shape[1] for t in tables})
+def _simulate_staged(obj, signals: list[np.ndarray], starts: list[State]):
+    """Return (positions (L, R, N, 3), failed (L,)) of each run's rollouts, its candidates'
+    actuator ``signals`` (K, A, T) each played from its S starts (L = K S lanes, ``starts``):
+    one kernel call up to each distinct rollout length, of the lanes that last at least that
+    long, each continuing from where the last call left it."""
+    ends = sorted({t.shape[2] for t in signals})
     states = list(starts)
-    parts: list[list[np.ndarray]] = [[] for _ in tables]
-    failed = [np.zeros(len(t), dtype=bool) for t in tables]
+    parts: list[list[np.ndarray]] = [[] for _ in signals]
+    failed = [np.zeros(len(s.positions), dtype=bool) for s in starts]
     t0 = 0
     for end in ends:
-        live = [i for i, t in enumerate(tables) if t.shape[1] >= end]
+        live = [i for i, t in enumerate(signals) if t.shape[2] >= end]
         state = State(
             np.concatenate([states[i].positions for i in live]),
             np.concatenate([states[i].velocities for i in live]),
         )
-        act = np.concatenate([tables[i][:, t0:end] for i in live])
-        traj = simulate(obj.body, act, obj.medium, obj.dt, state, obj.record_every)
+        act_t = _laid_out([signals[i][:, :, t0:end] for i in live], [len(failed[i]) for i in live])
+        traj = simulate_laid_out(obj.body, act_t, obj.medium, obj.dt, state, obj.record_every)
         at = 0
         for i in live:
-            lanes = slice(at, at + len(tables[i]))
-            at += len(tables[i])
+            lanes = slice(at, at + len(failed[i]))
+            at += len(failed[i])
             parts[i].append(traj.positions[lanes, 0 if t0 == 0 else 1 :])
             failed[i] |= traj.failed[lanes]
             states[i] = State(traj.final.positions[lanes], traj.final.velocities[lanes])
@@ -81,6 +83,23 @@ def _simulate_staged(obj, tables: list[np.ndarray], starts: list[State]):
         (p[0] if len(p) == 1 else np.concatenate(p, axis=1), f)
         for p, f in zip(parts, failed, strict=True)
     ]
+
+
+def _laid_out(signals: list[np.ndarray], lanes: list[int]) -> np.ndarray:
+    """Return the kernel's activations (T, A, L), clipped to [0, 1], of runs' actuator
+    ``signals`` (K, A, T), each candidate played from ``lanes`` / K starts (candidate k from
+    start s in lane k S + s, as ``Objective.simulate`` lays them out), the runs' lanes one
+    after another: the float32 of their ``Objective.tables`` repeated over the starts."""
+    steps, actuators = signals[0].shape[2], signals[0].shape[1]
+    act_t = kernel_layout(steps, actuators, sum(lanes))
+    at = 0
+    for signal, n in zip(signals, lanes, strict=True):
+        per = n // len(signal)
+        single = signal.astype(np.float32).transpose(2, 1, 0)  # cast first: half the gather
+        for s in range(per):
+            act_t[:, :, at + s : at + n : per] = single
+        at += n
+    return np.clip(act_t, 0.0, 1.0, out=act_t)
 
 
 def _generation(group: list[Run], stalled: set[int]) -> None:
@@ -98,11 +117,13 @@ def _generation(group: list[Run], stalled: set[int]) -> None:
     if not asked:
         return
     objs = [run.setup.objective for run, _ in asked]
-    lanes = [obj.lanes(X) for obj, (_, X) in zip(objs, asked, strict=True)]
+    signals = [o.actuator_signals(np.atleast_2d(X)) for o, (_, X) in zip(objs, asked, strict=True)]
     starts = [obj.start_lanes(len(X)) for obj, (_, X) in zip(objs, asked, strict=True)]
-    rollouts = _simulate_staged(objs[0], lanes, starts)
-    for obj, table, (run, X), (positions, failed) in zip(objs, lanes, asked, rollouts, strict=True):
-        run.tell(X, obj.score(X, table, positions, failed))
+    rollouts = _simulate_staged(objs[0], signals, starts)
+    for i, (run, X) in enumerate(asked):
+        positions, failed = rollouts[i]
+        acts = objs[i].recorded(signals[i], positions.shape[1])
+        run.tell(X, objs[i].score(X, acts, positions, failed))
 
 
 def learn_together(

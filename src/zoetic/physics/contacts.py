@@ -466,8 +466,3 @@ def balls_step(
                 bpos[k, 0, b] = x + dt * vx
                 bpos[k, 1, b] = y + dt * vy
                 bpos[k, 2, b] = z + dt * vz
-
-
-def empty_impulse(n_nodes: int, n_objects: int, batch: int) -> np.ndarray:
-    """Return a zero impulse record (N, O, 3, B) for ``node_contacts``."""
-    return np.zeros((n_nodes, n_objects, 3, batch))

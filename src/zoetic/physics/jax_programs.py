@@ -13,8 +13,9 @@ loading a program runs what it holds, so it lives in the user's cache directory 
 The key is everything the program depends on: the caller's fingerprint of the values the
 function closes over (``fingerprint``: the model's or the objective's arrays), the
 arguments' shapes and dtypes, the backend, JAX's version and the source of the whole
-``zoetic`` package (any edit makes new programs). With no JAX cache directory there is no
-store, and a ``StoredProgram`` compiles its function once a process, as ``jax.jit`` does.
+``zoetic`` package (any edit makes new programs) and the XLA compiler options it is compiled
+under. With no JAX cache directory there is no store, and a ``StoredProgram`` compiles its
+function once a process, as ``jax.jit`` does.
 """
 
 from __future__ import annotations
@@ -103,10 +104,13 @@ class StoredProgram:
     under ``key`` (the caller's ``fingerprint`` of what that function closes over) and the
     arguments' shapes and dtypes: a later process with the same key loads the program and
     neither builds nor traces the function. Positional array arguments only; one program
-    per distinct shapes and dtypes, as ``jax.jit``."""
+    per distinct shapes and dtypes, as ``jax.jit``. ``options`` are XLA compiler options
+    (``jax.stages.Lowered.compile``'s ``compiler_options``), part of the key."""
 
-    def __init__(self, build: Callable[[], Callable], key: str) -> None:
-        self.build, self.key = build, key
+    def __init__(
+        self, build: Callable[[], Callable], key: str, options: dict | None = None
+    ) -> None:
+        self.build, self.key, self.options = build, key, options
         self.programs: dict[tuple, Callable] = {}
         self._compiling = threading.Lock()  # threads calling at once compile a program once
 
@@ -115,7 +119,8 @@ class StoredProgram:
         sig = tuple((s.shape, s.dtype.str) for s in specs)
         with self._compiling:
             if sig not in self.programs:
-                self.programs[sig] = _program(self.build, fingerprint(self.key, sig), specs)
+                key = fingerprint(self.key, sig, self.options)
+                self.programs[sig] = _program(self.build, key, specs, self.options)
         return self.programs[sig](*args)
 
 
@@ -125,14 +130,16 @@ def _dtype(a) -> np.dtype:
     return np.dtype(jax.dtypes.canonicalize_dtype(dtype))
 
 
-def _program(build: Callable[[], Callable], key: str, specs: list) -> Callable:
+def _program(
+    build: Callable[[], Callable], key: str, specs: list, options: dict | None = None
+) -> Callable:
     """Return the compiled program for ``specs``: loaded from the store, else built, traced,
-    compiled and stored (kept only in memory when there is no store)."""
+    compiled under XLA ``options`` and stored (kept only in memory when there is no store)."""
     where = store_dir()
     path = None if where is None else where / f"{fingerprint(key, machine(), code_version())}.bin"
     compiled = None if path is None else _load(path)
     if compiled is None:
-        compiled = jax.jit(build()).lower(*specs).compile()
+        compiled = jax.jit(build()).lower(*specs).compile(compiler_options=options)
         if path is not None:
             try:
                 _write(path, pickle.dumps(serialize(compiled)))

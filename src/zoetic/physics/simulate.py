@@ -220,16 +220,19 @@ def chunk_size(batch: int, threads: int | None = None) -> int:
     return int(min(512, max(8, -(-per // 8) * 8)))
 
 
-def _check(body: Body, act: np.ndarray, state: State) -> None:
+def _check_activations(body: Body, act: np.ndarray) -> None:
     if act.ndim != 3 or act.shape[2] != body.n_actuators:
         raise SimulationError(
             f"activations must be shaped (candidates, steps, {body.n_actuators}) for "
             f"{body.name}, got {act.shape}"
         )
-    if state.positions.shape != (act.shape[0], body.n_nodes, 3):
+
+
+def _check_state(body: Body, state: State, batch: int) -> None:
+    if state.positions.shape != (batch, body.n_nodes, 3):
         raise SimulationError(
             f"start state holds {state.positions.shape} positions; expected "
-            f"({act.shape[0]}, {body.n_nodes}, 3)"
+            f"({batch}, {body.n_nodes}, 3)"
         )
 
 
@@ -256,13 +259,44 @@ def simulate(
     act = np.asarray(activations)
     if act.ndim == 2:
         act = act[None]
+    _check_activations(body, act)
+    act_t = kernel_layout(act.shape[1], act.shape[2], act.shape[0])
+    if act.shape[2]:
+        act_t[...] = act.transpose(1, 2, 0)
+    return simulate_laid_out(body, act_t, medium, dt, state, record_every, check_step)
+
+
+def kernel_layout(steps: int, actuators: int, batch: int) -> np.ndarray:
+    """Return an activation table as the kernel reads it, (T, A, B) float32 zeros, for
+    ``simulate_laid_out``: filled straight from float64 tables, with no float64 copy between
+    (on a big batch the copy costs as much as the simulation). A body without actuators gets
+    one zero column for its passive springs to read."""
+    return np.zeros((steps, max(1, actuators), batch), dtype=np.float32)
+
+
+def simulate_laid_out(
+    body: Body,
+    act_t: np.ndarray,
+    medium: str | Medium | None = None,
+    dt: float | None = None,
+    state: State | None = None,
+    record_every: int = 1,
+    check_step: bool = True,
+) -> Trajectory:
+    """Return the Trajectory of ``simulate`` from activations already laid out as the kernel
+    reads them (``kernel_layout``, step-major); ``act_t`` is checked and clipped in place."""
     med = get_medium(medium or body.medium)
     dt = float(dt or body.dt)
     if check_step:
         check_dt(body, dt, med)
-    batch, steps = act.shape[0], act.shape[1]
+    if act_t.shape[1:2] != (max(1, body.n_actuators),) or act_t.dtype != np.float32:
+        raise SimulationError(
+            f"laid-out activations must be float32 (steps, {max(1, body.n_actuators)}, "
+            f"candidates) for {body.name}, got {act_t.dtype} {act_t.shape}"
+        )
+    steps, batch = act_t.shape[0], act_t.shape[2]
     state = state or rest_state(body, batch)
-    _check(body, act, state)
+    _check_state(body, state, batch)
     if record_every < 1:
         raise SimulationError("record_every must be at least 1")
 
@@ -271,12 +305,6 @@ def simulate(
 
     n = body.n_nodes
     f32 = np.float32
-    # (T, A, B) float32, then checked and clipped to [0, 1] in place: on a big batch this copy
-    # costs as much as the simulation, so no float64 intermediates. A body without actuators
-    # gets one zero column for its passive springs to read.
-    act_t = np.zeros((steps, max(1, act.shape[2]), batch), dtype=f32)
-    if act.shape[2]:
-        act_t[...] = act.transpose(1, 2, 0)
     if not np.isfinite(act_t).all():
         raise SimulationError("activations contain non-finite values")
     np.clip(act_t, 0.0, 1.0, out=act_t)

@@ -69,7 +69,7 @@ CRUISE_SECONDS = 6.0  # s of the wave played to measure it (the speed of the sec
 MAX_STARTS = 16
 TERM_KEYS = ("kind", "weight", "target", "goal")
 # what a learned entry must do, judged from each of its task's starts over the horizon
-# (``behavior.training.judge_entry``): a task's [promise] table gives [low, high] per quantity
+# (``behavior.promises.judge_entry``): a task's [promise] table gives [low, high] per quantity
 PROMISES = {
     "turn_deg": "heading change, end minus start (deg, left positive)",
     "climb_m": "rise of the centre of mass, end minus start (m, up positive)",

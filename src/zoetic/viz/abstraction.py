@@ -99,7 +99,8 @@ def plot_repertoire(
     shade = activation) and all their paths (an arrow at each end).
 
     signals: entry -> (t (T,) s, u (T, A)); paths: entry -> centre-of-mass path (R, 3) m from
-    rest, drawn from above (x right, z up, the animal starting at the origin facing +x).
+    rest, drawn from above (x right, z up) and from the side (x right, y up), the animal
+    starting at the origin facing +x.
     """
     n = max(len(signals), 1)
     fig = new_figure((11.0, 1.7 * n + 1.0))
@@ -122,24 +123,42 @@ def plot_repertoire(
         ax.tick_params(labelsize=7)
         if i == n - 1:
             ax.set_xlabel("time (s)")
-    ax_p = fig.add_subplot(grid[:, 1])
-    for entry, com in paths.items():
-        xz = np.asarray(com, float)[:, [0, 2]] - np.asarray(com, float)[0, [0, 2]]
-        ax_p.plot(xz[:, 0], xz[:, 1], lw=1.5, label=entry)
-        end, before = xz[-1], xz[max(0, len(xz) - 4)]
-        ax_p.annotate(  # an arrow head: where the entry leaves the animal heading
-            "",
-            xy=end,
-            xytext=before,
-            arrowprops={"arrowstyle": "-|>", "color": ax_p.lines[-1].get_color(), "lw": 1.5},
-        )
-    ax_p.plot(0, 0, "k^", ms=7)
-    ax_p.set_aspect("equal", adjustable="datalim")
-    ax_p.set_xlabel("x (m)")
-    ax_p.set_ylabel("z (m), left")
-    ax_p.set_title("paths from rest, each entry played 3 times (top view)", fontsize=9)
-    ax_p.legend(fontsize=7)
-    ax_p.grid(alpha=0.3)
+    right = grid[:, 1].subgridspec(3, 1, height_ratios=(1.0, 1.0, 0.8))
+    top, side, key = (fig.add_subplot(right[k]) for k in range(3))
+    _draw_paths(top, paths, 2, "z (m), left")
+    top.set_title("paths from rest, each entry played 3 times: from above", fontsize=9)
+    _draw_paths(side, paths, 1, "y (m), up")
+    side.set_title("from the side: depth kept, or changed on purpose", fontsize=9)
+    side.set_xlabel("x (m)")
+    top.set_anchor("S")
+    side.set_anchor("N")
+    key.axis("off")
+    key.legend(*top.get_legend_handles_labels(), loc="upper center", ncol=2, fontsize=8)
+    lo = min(top.get_xlim()[0], side.get_xlim()[0])
+    hi = max(top.get_xlim()[1], side.get_xlim()[1])
+    for ax in (top, side):
+        ax.set_xlim(lo, hi)
     if title:
         fig.suptitle(title, fontsize=11)
     return save_figure(fig, path, dpi=110)
+
+
+def _draw_paths(ax, paths: dict[str, np.ndarray], across: int, label: str) -> None:
+    """Draw each entry's centre-of-mass path on ``ax``: x against column ``across`` of the
+    path (2: z, seen from above; 1: y, seen from the side), from the start at the origin, one
+    metre as long on both axes, an arrow head where the entry leaves the animal heading."""
+    for entry, com in paths.items():
+        c = np.asarray(com, float)
+        xy = c[:, [0, across]] - c[0, [0, across]]
+        (line,) = ax.plot(xy[:, 0], xy[:, 1], lw=1.5, label=entry)
+        end, before = xy[-1], xy[max(0, len(xy) - 4)]
+        ax.annotate(
+            "",
+            xy=end,
+            xytext=before,
+            arrowprops={"arrowstyle": "-|>", "color": line.get_color(), "lw": 1.5},
+        )
+    ax.plot(0, 0, "k^", ms=7)
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_ylabel(label)
+    ax.grid(alpha=0.3)

@@ -11,7 +11,7 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 from zoetic.perception.eyes import composite
-from zoetic.viz.plots import save_figure
+from zoetic.viz.plots import new_figure, save_figure
 
 
 def gaze_ends(eye_pos: np.ndarray, eye_dirs: np.ndarray, distance) -> np.ndarray:
@@ -25,16 +25,11 @@ def gaze_ends(eye_pos: np.ndarray, eye_dirs: np.ndarray, distance) -> np.ndarray
 def plot_gaze(log: Sequence, path: str | os.PathLike) -> Path:
     """Write Fig. 7: left and right theta and phi, the vergence angle theta_V and the turn
     angles theta_P, phi_P (degrees) over the frames of a pursuit."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    from matplotlib.figure import Figure
-
     a = np.degrees(np.array([r.angles for r in log]).reshape(-1, 2, 2))
     tp = np.degrees([r.theta_p for r in log])
     pp = np.degrees([r.phi_p for r in log])
     k = np.arange(len(a))
-    fig = Figure(figsize=(8, 7))
+    fig = new_figure((8, 7))
     ax = fig.subplots(3, 1, sharex=True)
     ax[0].plot(k, a[:, 0, 0], label="left theta")
     ax[0].plot(k, a[:, 1, 0], label="right theta")

@@ -130,6 +130,9 @@ class FishBrain:
         )
         self.alive = True
         self.thought = Thought(0.0, 0.0, 0.0, self.mind.intention, None)
+        # the fish a predator hunts, kept while an avoidance interrupts the hunt (None: none):
+        # its touch of that fish is the hunt's, not a collision (``events.Events``)
+        self.prey: int | None = None
         if isinstance(self.locomotion, LearnedLocomotion):
             self.locomotion.turning, self.locomotion.last = None, (0, -np.inf)
 
@@ -234,6 +237,10 @@ class FishBrain:
             self.mind = replace(self.mind, target=target)
         hunger, libido, fear = drives
         self.thought = Thought(hunger, libido, fear, self.mind.intention, target)
+        if self.mind.intention == "hunt":
+            self.prey = target
+        elif self.mind.intention != "avoid":
+            self.prey = None
 
     def _around(
         self, v: View, intention: str, target: int | None, masks: tuple[np.ndarray, ...]

@@ -45,6 +45,7 @@ class Events(Observer):
         self.obstacles = [i for i, o in enumerate(world.objects) if isinstance(o, Box | Cylinder)]
         self.object_touch = np.full((n, len(world.objects)), -np.inf)  # when last touched
         self.fish_touch = np.full((n, n), -np.inf)
+        self.caught = np.full((n, n), -np.inf)  # s: when fish (row) caught fish (column)
         self.in_fear = np.zeros(n, bool)
         self._start(world)
 
@@ -103,15 +104,28 @@ class Events(Observer):
             self.log.append((t, self.names[i], "eat", f"food_{q}"))
 
     def _collisions(self, world: World, t: float) -> None:
-        """A touch of another fish or an obstacle after ``APART`` s apart is a collision."""
+        """A touch of another fish or an obstacle after ``APART`` s apart is a collision; a
+        predator's touch of the prey it hunts, or of its body within ``APART`` s of the
+        catch, is the catch (``_bites``), not a collision."""
         for i, j in zip(*np.nonzero(np.triu(self.fish_hit, 1)), strict=True):
-            if t - self.fish_touch[i, j] > APART:
+            if t - self.fish_touch[i, j] > APART and not self._bites(i, j, t):
                 self.log.append((t, self.names[i], "collision", self.names[j]))
             self.fish_touch[i, j] = t
         for i, o in sorted(self.touched):
             if o in self.obstacles and t - self.object_touch[i, o] > APART:
                 self.log.append((t, self.names[i], "collision", world.objects[o].name))
             self.object_touch[i, o] = t
+
+    def _bites(self, i: int, j: int, t: float) -> bool:
+        """Whether the touch of fishes i and j at time t s is a predator's catch: one hunts
+        the other (``FishBrain.prey``: the touch it swims for), or caught it within ``APART``
+        s (its nose is at the body it caught)."""
+        for a, b in ((i, j), (j, i)):
+            if self.brains[a].prey == b and self.brains[b].alive:
+                return True
+            if t - self.caught[a, b] <= APART:
+                return True
+        return False
 
     def _encounters(self, t: float) -> None:
         """Catches (a hunting predator's nose within its catch radius of a prey's body) and
@@ -132,6 +146,7 @@ class Events(Observer):
                 if np.linalg.norm(pos[j] - nose[i], axis=1).min() < f.motor.catch_radius:
                     brains[j].alive = False
                     brains[i].ate(t, 3.0)
+                    self.caught[i, j] = t
                     self.log.append((t, self.names[i], "catch", self.names[j]))
                     continue
             if j < i or f.name != g.name or (i, j) in far:

@@ -69,6 +69,57 @@ def _cma():
     return cma
 
 
+def _ask_in_bounds(es) -> list[np.ndarray]:
+    """Return ``es.ask()``: the same candidates, and the same records kept for ``tell``, with
+    the box's transformation (cma's ``BoxConstraintsLinQuadTransformation``, the identity
+    inside the box and a quadratic fold at its edges) applied to the whole generation at once
+    (``_fold_into_box``) instead of candidate by candidate, a tenth of ``ask``'s cost at 32
+    candidates of 40 parameters. Anything but that plain case (other bounds, fixed or integer
+    variables, scaled coordinates) is ``es.ask()`` itself."""
+    cma = _cma()
+    handler = es.boundary_handler
+    tf = getattr(handler, "bounds_tf", None)
+    plain = (
+        type(handler) is cma.boundary_handler.BoundTransform
+        and type(tf) is cma.transformations.BoxConstraintsLinQuadTransformation
+        and es.gp.isidentity
+        and not es.opts["integer_variables"]
+        and len(tf._lb) == es.N
+        and np.isfinite(tf._lb).all()
+        and np.isfinite(tf._ub).all()
+    )
+    if not plain:
+        return es.ask()
+    if es.countiter == 0:
+        es.timer = cma.utilities.utils.ElapsedWCTime()
+    else:
+        es.timer.tic  # noqa: B018 (a property that restarts the timer, as es.ask reads it)
+    geno = es.ask_geno()
+    pheno = list(_fold_into_box(np.asarray(geno, dtype=float), tf))
+    for x, y in zip(geno, pheno, strict=True):
+        es.sent_solutions.insert(y, geno=x, iteration=es.countiter)
+    es._round_integer_variables.round_population(pheno)
+    return pheno
+
+
+def _fold_into_box(x: np.ndarray, tf) -> np.ndarray:
+    """Return the candidates ``x`` (P, n) mapped into the box as ``tf`` (cma's
+    ``BoxConstraintsLinQuadTransformation``) maps each one: far values shifted by whole
+    periods, values beyond the margins mirrored back, the margins folded quadratically onto
+    the bounds; every step the same arithmetic on the same elements, so the same bits."""
+    lb, ub, al, au = tf._lb, tf._ub, tf._al, tf._au
+    y = x.copy()
+    far = (y < lb - 2 * al - (ub - lb) / 2.0) | (y > ub + 2 * au + (ub - lb) / 2.0)
+    if far.any():
+        period = 2 * (ub - lb + al + au)
+        start = lb - 2 * al - (ub - lb) / 2.0
+        y = np.where(far, y - period * ((y - start) // period), y)
+    y = np.where(y > ub + au, y - 2 * (y - ub - au), y)
+    y = np.where(y < lb - al, y + 2 * (lb - al - y), y)
+    y = np.where(y < lb + al, lb + (y - (lb - al)) ** 2 / 4 / al, y)
+    return np.where(y > ub - au, ub - (y - (ub + au)) ** 2 / 4 / au, y)
+
+
 class CMAES(Optimizer):
     """CMA-ES from the ``cma`` package, with its own handling of the box bounds.
 
@@ -104,7 +155,7 @@ class CMAES(Optimizer):
     def ask(self):
         """Return the next generation (popsize, n): samples of CMA-ES's bounded normal."""
         with one_blas_thread():
-            return np.array(self.es.ask(), dtype=np.float64)
+            return np.array(_ask_in_bounds(self.es), dtype=np.float64)
 
     def tell(self, X, f, grad=None):
         """Record f; pass it to CMA-ES with failures scored far above the worst finite."""
