@@ -168,9 +168,8 @@ def _head_on(monkeypatch, avoiding: bool):
 
     with monkeypatch.context() as m:
         m.setattr(tk, "tank_brains", brains)
-        if not avoiding:  # nor does either feel the other at its flank (``lateral``)
+        if not avoiding:
             m.setattr(shoal, "fish_threats", blind)
-            m.setattr(shoal, "flank_threats", lambda nose, *a: blind(nose)[:2])
         cfg = TankConfig(
             fishes=2, predators=0, food=0, obstacles=0, seconds=10.0, seed=0, half_size=8.0
         )

@@ -23,7 +23,6 @@ from zoetic.behavior.aquarium.brain import (
     focus_targets,
     situations,
 )
-from zoetic.behavior.aquarium.lateral import flank_threats
 from zoetic.behavior.aquarium.locomotion import Demand, LearnedLocomotion, learned_activations
 from zoetic.behavior.aquarium.perception import Percepts, obstacle_distance, perceive
 from zoetic.behavior.aquarium.routines import (
@@ -320,16 +319,9 @@ class Shoal:
         threat, sides, near = fish_threats(
             fb.nose, fb.com, fb.fwd, fb.vel, seen, *self.region, np.array(avoiding)
         )
-        # a fish with nothing ahead feels one about to strike its flank and swims clear of its
-        # way (``lateral``); taken after the right of way, which it does not enter: the
-        # striker, which has it in its box, avoids it as before
-        felt = np.isfinite(pc.fish) & alive[None] & ~self.masks[1]
-        striker, flank = flank_threats(fb.nose, fb.com, fb.fwd, fb.vel, felt, threat)
         on = right_of_way(threat, meals)
         sides[on], near[on] = 0, np.inf  # the other fish yields: this one swims on to its food
         sides = yield_sides(threat, on, fb.com, self._ways(on, food), sides)
-        struck = striker >= 0
-        threat[struck], sides[struck] = striker[struck], flank[struck]
         # no obstacle within CLEARANCE of a probe and no fish threatening: nothing ahead
         # (``collision_ahead``'s answer, without asking it for every fish of a crowd)
         rocks = (ahead.min(axis=(1, 2)) < CLEARANCE).tolist() if len(kind) else [False] * len(sides)
