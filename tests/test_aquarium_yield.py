@@ -31,6 +31,18 @@ def test_of_two_fishes_threatening_each_other_the_one_going_for_food_swims_on():
     assert right_of_way(np.array([1, 0]), [1.0, 1.0]).tolist() == [True, False]
 
 
+def test_an_eater_keeps_no_right_of_way_over_a_fish_too_slow_to_yield():
+    # 0 eats and 1 does not, 2 eats and 3 does not: each pair threatens each other; fish 1
+    # swims on (able to yield), fish 3 is nearly still (braked, or turning on the spot)
+    threat, meals = np.array([1, 0, 3, 2]), [1.0, None, 1.0, None]
+    able = np.array([True, True, True, False])
+    # the eater passing fish 3 would strike it where it stays: it avoids it as fish 3 does
+    assert right_of_way(threat, meals, able).tolist() == [True, False, False, False]
+    # whether the eater itself is slow does not matter: its right of way is the other's yield
+    able = np.array([False, True, True, True])
+    assert right_of_way(threat, meals, able).tolist() == [True, False, True, False]
+
+
 def _head_on_tank(monkeypatch, seconds: float):
     """Two minnows head on, 0.1 m aside, cruising: fish 0 hungry and swimming for a particle
     4.5 m ahead, fish 1 sated (hunger 0: it wanders)."""

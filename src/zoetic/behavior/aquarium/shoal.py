@@ -319,7 +319,8 @@ class Shoal:
         threat, sides, near = fish_threats(
             fb.nose, fb.com, fb.fwd, fb.vel, seen, *self.region, np.array(avoiding)
         )
-        on = right_of_way(threat, meals)
+        pace = np.sqrt(fb.vel[:, 0] ** 2 + fb.vel[:, 2] ** 2)  # m/s in the horizontal plane
+        on = right_of_way(threat, meals, pace >= YIELD_PACE * self.cruise)
         sides[on], near[on] = 0, np.inf  # the other fish yields: this one swims on to its food
         sides = yield_sides(threat, on, fb.com, self._ways(on, food), sides)
         # no obstacle within CLEARANCE of a probe and no fish threatening: nothing ahead
@@ -393,7 +394,13 @@ def carcasses(
     return out
 
 
-def right_of_way(threat: np.ndarray, meals: list[float | None]) -> np.ndarray:
+# of its cruise speed: a fish slower than this cannot get out of an eater's way in time
+YIELD_PACE = 0.5
+
+
+def right_of_way(
+    threat: np.ndarray, meals: list[float | None], able: np.ndarray | None = None
+) -> np.ndarray:
     """Return (n,) bools: the fishes that swim on to their food past a fish that yields.
 
     Of two fishes that threaten each other (``threat`` (n,): each one's threatening fish,
@@ -403,13 +410,16 @@ def right_of_way(threat: np.ndarray, meals: list[float | None]) -> np.ndarray:
     keeps its course (the first on a tie). Braking for each other cost the eater its meal:
     two fishes stopped, and the particle went to another fish or was left. A fish that
     threatens one that does not see it coming (a flank struck from behind) has no right of
-    way: only the fish that would strike can avoid the touch."""
+    way: only the fish that would strike can avoid the touch. Nor has a fish that threatens
+    one unable to yield (``able`` (n,) bools, default all able): a fish nearly still, braked
+    or turning on the spot, stays in the way, and an eater swimming on struck it."""
     n = len(threat)
     meal = np.array([np.inf if m is None else m for m in meals], float)
     other = np.where(threat >= 0, threat, np.arange(n))
     mutual = (threat >= 0) & (threat[other] == np.arange(n))
     first = (meal < meal[other]) | ((meal == meal[other]) & (np.arange(n) < other))
-    return mutual & np.isfinite(meal) & first
+    on = mutual & np.isfinite(meal) & first
+    return on if able is None else on & np.asarray(able, bool)[other]
 
 
 # |cos| between a yielding fish's heading and the eater's over which it turns off the eater's
