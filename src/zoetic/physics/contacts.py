@@ -131,9 +131,12 @@ def _node_rows(cx, cy, cz, r, b, nodes, pos, vel, mass, radius, rows):
         dx = cx - pos[i, 0, b]
         dy = cy - pos[i, 1, b]
         dz = cz - pos[i, 2, b]
-        d = math.sqrt(dx * dx + dy * dy + dz * dz) + 1e-12
+        d2 = dx * dx + dy * dy + dz * dz
+        if not (d2 < (r + radius + GAP) ** 2):  # apart, or a failed (NaN) node
+            continue
+        d = math.sqrt(d2) + 1e-12
         pen = r + radius - d
-        if not (pen > 0.0):  # apart, or a failed (NaN) node
+        if not (pen > 0.0):
             continue
         rows[c, 0] = i
         rows[c, 1], rows[c, 2], rows[c, 3] = dx / d, dy / d, dz / d
@@ -376,6 +379,8 @@ def _shape_contacts(
         fys = 0.0
         fzs = 0.0
         for s in range(skind.shape[0]):
+            if shape_apart((px, py, pz, px, py, pz), s, skind, scenter, ssize, radius + GAP):
+                continue  # the node is farther than its radius from the shape's box
             fx, fy, fz = shape_force(
                 s,
                 skind,
