@@ -20,7 +20,7 @@ from numba import njit
 from zoetic.jitcache import fresh_numba_cache
 from zoetic.physics.bodycontact import close_among, close_pairs
 from zoetic.physics.objects import Solids
-from zoetic.physics.shapes import half_extent, node_box, shape_sdf
+from zoetic.physics.shapes import node_box, shape_apart, shape_sdf
 
 fresh_numba_cache()
 
@@ -70,22 +70,11 @@ def _shapes_within(pos, b, skind, scenter, ssize, reach, out) -> int:
     micrometre, against rounding) of the box of the nodes pos (N, 3, B) in lane b along every
     axis; return how many. A point farther than that from a shape's box along one axis is
     farther from the shape (its signed distance is at least the gap)."""
-    lx, ly, lz, hx, hy, hz = node_box(pos, b, 0.0)
+    box = node_box(pos, b, 0.0)
     pad = reach + 1e-6
     k = 0
     for s in range(skind.shape[0]):
-        h0 = half_extent(skind, ssize, s, 0)
-        h1 = half_extent(skind, ssize, s, 1)
-        h2 = half_extent(skind, ssize, s, 2)
-        c0, c1, c2 = scenter[s, 0], scenter[s, 1], scenter[s, 2]
-        if (
-            lx > c0 + h0 + pad
-            or hx < c0 - h0 - pad
-            or ly > c1 + h1 + pad
-            or hy < c1 - h1 - pad
-            or lz > c2 + h2 + pad
-            or hz < c2 - h2 - pad
-        ):
+        if shape_apart(box, s, skind, scenter, ssize, pad):
             continue
         out[k] = s
         k += 1

@@ -36,7 +36,7 @@ from numba import njit
 
 from zoetic.jitcache import fresh_numba_cache
 from zoetic.physics.media import DRAG, FLOOR, LEVEL, G
-from zoetic.physics.shapes import shape_force, shape_sdf
+from zoetic.physics.shapes import box_apart, node_box, shape_apart, shape_force, shape_sdf
 
 fresh_numba_cache()
 
@@ -44,6 +44,7 @@ REST_SPEED = 0.1  # m/s: a pair closing slower just stops (a resting ball does n
 SLOP = 0.002  # m: an overlap beyond it is removed at no more than CORRECTION_SPEED (m/s)
 CORRECTION_SPEED = 0.3
 SWEEPS = 8  # projected Gauss-Seidel sweeps over a body's contacts per step
+GAP = 1e-6  # m added to a contact's reach before a lane's box is judged apart (rounding)
 
 
 @njit(cache=True)
@@ -71,6 +72,7 @@ def solve(
     uy,
     uz,
     b,
+    nodes,
     pos,
     vel,
     mass,
@@ -90,7 +92,7 @@ def solve(
     """Resolve the contacts of a sphere (centre c, radius r, mass mc, velocity u) in lane b
     at the velocity level; return its new velocity and the number of contacts.
 
-    Its partners are the nodes (pos, vel, mass, radius; none when pos holds no nodes) that
+    Its partners are those of the first ``nodes`` nodes (pos, vel, mass, radius) that
     overlap it, the fixed shapes and, with ``floor``, the plane y = 0. Every pair that was
     closing faster than REST_SPEED leaves at ``e`` times its approach speed, slower ones stop;
     an overlap is removed at ``rate`` of its depth per step (at most CORRECTION_SPEED); the
@@ -101,7 +103,7 @@ def solve(
     target normal speed, reduced mass, normal impulse, tangential impulse (3), the
     partner's velocity (3); the impulse on the sphere is (normal impulse) n + (tangential).
     """
-    c = _node_rows(cx, cy, cz, r, b, pos, vel, mass, radius, rows)
+    c = _node_rows(cx, cy, cz, r, b, nodes, pos, vel, mass, radius, rows)
     c = _shape_rows(cx, cy, cz, r, skind, scenter, ssize, floor, rows, c)
     if c == 0:
         return ux, uy, uz, 0
@@ -121,16 +123,20 @@ def solve(
 
 
 @njit(cache=True, inline="always")
-def _node_rows(cx, cy, cz, r, b, pos, vel, mass, radius, rows):
-    """Write a row (``solve``) for each node that overlaps the sphere; return their count."""
+def _node_rows(cx, cy, cz, r, b, nodes, pos, vel, mass, radius, rows):
+    """Write a row (``solve``) for each of the first ``nodes`` nodes that overlaps the sphere;
+    return their count."""
     c = 0
-    for i in range(pos.shape[0]):
+    for i in range(nodes):
         dx = cx - pos[i, 0, b]
         dy = cy - pos[i, 1, b]
         dz = cz - pos[i, 2, b]
-        d = math.sqrt(dx * dx + dy * dy + dz * dz) + 1e-12
+        d2 = dx * dx + dy * dy + dz * dz
+        if not (d2 < (r + radius + GAP) ** 2):  # apart, or a failed (NaN) node
+            continue
+        d = math.sqrt(d2) + 1e-12
         pen = r + radius - d
-        if not (pen > 0.0):  # apart, or a failed (NaN) node
+        if not (pen > 0.0):
             continue
         rows[c, 0] = i
         rows[c, 1], rows[c, 2], rows[c, 3] = dx / d, dy / d, dz / d
@@ -250,13 +256,19 @@ def node_contacts(
     ``static_col``; food has none). w = pi / (contact_steps dt): the penalty's frequency, and a
     ball's overlap is removed over about contact_steps steps; zeta: the penalty's damping
     ratio, which also sets the balls' restitution (``restitution``).
+
+    A lane whose nodes' bounding box lies farther than a node radius from a ball or from
+    every fixed shape along some axis (``box_apart``) has no contact with it: its nodes are
+    not tested against that ball, nor against any shape (the same bits as testing them).
     """
     e = restitution(zeta)
     rate = w * dt / math.pi
     rows = contact_rows(pos.shape[0], skind.shape[0])
     for b in range(pos.shape[2]):
+        box = node_box(pos, b, 0.0)
         _ball_contacts(
             b,
+            box,
             pos,
             vel,
             mass,
@@ -276,14 +288,19 @@ def node_contacts(
             rate,
             rows,
         )
-        _shape_contacts(
-            b, pos, vel, mass, radius, skind, scenter, ssize, static_obj, dt, w, zeta, mu, impulse
-        )
+        for s in range(skind.shape[0]):
+            if not shape_apart(box, s, skind, scenter, ssize, radius + GAP):
+                _shape_contacts(
+                    b, pos, vel, mass, radius, skind, scenter, ssize, static_obj, dt, w, zeta, mu,
+                    impulse,
+                )  # fmt: skip
+                break
 
 
 @njit(cache=True, inline="always")
 def _ball_contacts(
     b,
+    box,
     pos,
     vel,
     mass,
@@ -304,23 +321,27 @@ def _ball_contacts(
     rows,
 ):
     """Lane b: each ball solved with the nodes and fixed shapes it touches (``solve``); its
-    velocity change added to ``bforce`` as the force that makes it over one step."""
+    velocity change added to ``bforce`` as the force that makes it over one step. The nodes
+    are tested only when their box (``node_box``) is not apart from the ball's."""
     for k in range(bpos.shape[0]):
+        cx, cy, cz, r = bpos[k, 0, b], bpos[k, 1, b], bpos[k, 2, b], bpar[k, 0]
+        apart = box_apart(box, cx, cy, cz, r, r, r, radius + GAP)
         mb = bpar[k, 1]
         h = dt / mb
         ux = bvel[k, 0, b] + h * bforce[k, 0, b]
         uy = bvel[k, 1, b] + h * bforce[k, 1, b]
         uz = bvel[k, 2, b] + h * bforce[k, 2, b]
         nx, ny, nz, _ = solve(
-            bpos[k, 0, b],
-            bpos[k, 1, b],
-            bpos[k, 2, b],
-            bpar[k, 0],
+            cx,
+            cy,
+            cz,
+            r,
             mb,
             ux,
             uy,
             uz,
             b,
+            0 if apart else pos.shape[0],
             pos,
             vel,
             mass,
@@ -358,6 +379,8 @@ def _shape_contacts(
         fys = 0.0
         fzs = 0.0
         for s in range(skind.shape[0]):
+            if shape_apart((px, py, pz, px, py, pz), s, skind, scenter, ssize, radius + GAP):
+                continue  # the node is farther than its radius from the shape's box
             fx, fy, fz = shape_force(
                 s,
                 skind,
@@ -434,6 +457,7 @@ def balls_step(
                     vx,
                     vy,
                     vz,
+                    0,
                     0,
                     no_pos,
                     no_pos,

@@ -97,6 +97,37 @@ def node_box(pos, b, pad):
 
 
 @njit(cache=True, inline="always")
+def box_apart(box, c0, c1, c2, h0, h1, h2, pad):
+    """Return True if the box (lo x, y, z, hi x, y, z; ``node_box``) lies farther than pad
+    (m) along some axis from the box of centre c and half-extents h. Every point of the one
+    is then farther than pad from every point of the other. A NaN corner is never apart."""
+    lx, ly, lz, hx, hy, hz = box
+    return (
+        lx > c0 + h0 + pad
+        or hx < c0 - h0 - pad
+        or ly > c1 + h1 + pad
+        or hy < c1 - h1 - pad
+        or lz > c2 + h2 + pad
+        or hz < c2 - h2 - pad
+    )
+
+
+@njit(cache=True, inline="always")
+def shape_apart(box, s, skind, scenter, ssize, pad):
+    """``box_apart`` of a box and fixed shape s's bounding box (``half_extent``)."""
+    return box_apart(
+        box,
+        scenter[s, 0],
+        scenter[s, 1],
+        scenter[s, 2],
+        half_extent(skind, ssize, s, 0),
+        half_extent(skind, ssize, s, 1),
+        half_extent(skind, ssize, s, 2),
+        pad,
+    )
+
+
+@njit(cache=True, inline="always")
 def shape_sdf(s, skind, scenter, ssize, px, py, pz):
     """``_sdf`` of the fixed shape s of the packed shapes (``objects.pack_statics``)."""
     return _sdf(
