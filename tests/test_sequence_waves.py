@@ -57,12 +57,15 @@ def test_a_sequence_plays_the_weighted_blend_of_its_items(plans):
 
 
 def test_kept_waves_give_the_same_tables_to_the_bit(plans):
-    kept: dict[int, np.ndarray] = {}
+    kept: dict = {}
     for seq in plans:
         alone = seq.table(2400, 0.0025)
         assert np.array_equal(seq.table(2400, 0.0025, waves=kept), alone)
         # waves kept at other times are not used for these
         assert np.array_equal(seq.table(1000, 0.0025, waves=kept), seq.table(1000, 0.0025))
+        # nor at as many times starting later, or a step apart
+        assert np.array_equal(seq.table(2400, 0.0025, 0.3, kept), seq.table(2400, 0.0025, 0.3))
+        assert np.array_equal(seq.table(2400, 0.003, waves=kept), seq.table(2400, 0.003))
     assert np.array_equal(
         plans[0].table(2400, 0.0025, waves=kept), plans[0].sample(np.arange(2400) * 0.0025)
     )

@@ -33,7 +33,7 @@ from zoetic.behavior.targets import TrackingError
 from zoetic.behavior.tracking import OVERLAP, TrackConfig, body_length, obstacle_seconds
 from zoetic.behavior.upright import RightedPlans, attitude, has_fins, right_plans
 from zoetic.bodies import Body
-from zoetic.control.abstract import SequenceController
+from zoetic.control.abstract import SequenceController, Waves
 from zoetic.learning.blas import one_blas_thread
 from zoetic.learning.optimizers import Annealing
 from zoetic.physics import Trajectory, simulate
@@ -135,8 +135,9 @@ class MacroProblem:
         return SequenceController(c.animal, c.actuators, items, OVERLAP)
 
     @cached_property
-    def _waves(self) -> dict[int, np.ndarray]:
-        """The entries' mode waves at the steps of the horizon, by controller id, filled as
+    def _waves(self) -> dict[int, Waves]:
+        """The entries' mode waves at the steps of the horizon (and those times), by
+        controller id, filled as
         plans first play them (``SequenceController.raw``): computed once a problem."""
         return {}
 

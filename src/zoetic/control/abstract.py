@@ -17,6 +17,10 @@ from zoetic.control.blend import add_item
 from zoetic.control.controllers import Controller
 from zoetic.errors import ControllerError
 
+# an abstract controller's mode waves kept for a plan search: the times t (T,) s they were
+# taken at, and the waves there (AbstractController.waves)
+Waves = tuple[np.ndarray, np.ndarray]
+
 
 @dataclass(frozen=True)
 class AbstractController(Controller):
@@ -136,14 +140,15 @@ class SequenceController(Controller):
             fade_out[:, :-1] = np.clip((e[:, :-1] - t) / width, 0.0, 1.0)
         return fade_in * fade_out
 
-    def waves(self, t) -> dict[int, np.ndarray]:
-        """Return each abstract item's ``AbstractController.waves`` at times t, by the item
-        controller's id: what ``raw`` computes afresh, kept to play many sequences of the
-        same controllers at the same times (a plan search)."""
+    def waves(self, t) -> dict[int, Waves]:
+        """Return each abstract item's times and ``AbstractController.waves`` at them, by the
+        item controller's id: what ``raw`` computes afresh, kept to play many sequences of
+        the same controllers at the same times (a plan search)."""
+        t = np.asarray(t, float).reshape(-1)
         ctrls = {id(c): c for c, _ in self.items if isinstance(c, AbstractController)}
-        return {key: c.waves(t) for key, c in ctrls.items()}
+        return {key: (t, c.waves(t)) for key, c in ctrls.items()}
 
-    def raw(self, t, waves: dict[int, np.ndarray] | None = None):
+    def raw(self, t, waves: dict[int, Waves] | None = None):
         """Return unclipped activations (T, A) at t (s): the blend-weighted item outputs.
         Abstract items are played from their modes' waves at t (``blend.add_item``;
         ``waves``: those of this sequence's controllers at these t, as ``waves(t)`` returns
@@ -161,9 +166,10 @@ class SequenceController(Controller):
                 if on.any():
                     out[on] += w[on, i : i + 1] * ctrl.raw(t[on] - starts[i])
                 continue
-            own = waves.get(id(ctrl))
-            if own is None or own.shape[2] != t.size:  # none yet, or not at these times
-                own = waves[id(ctrl)] = ctrl.waves(t)
+            kept = waves.get(id(ctrl))
+            if kept is None or not np.array_equal(kept[0], t):  # none yet, or other times
+                kept = waves[id(ctrl)] = (t, ctrl.waves(t))
+            own = kept[1]
             # each fade: (where it starts, its width s); width 0: none (the first item holds
             # before its start, the last after its end)
             fade_in = (starts[i], max(ends[i - 1] - starts[i], 1e-12)) if i > 0 else (0.0, 0.0)
