@@ -147,7 +147,7 @@ def test_the_try_that_breaks_least_is_kept(shark):
     assert info["restarts"]["tries"][0]["broken"] == ["turn_deg >= 90"]
 
 
-def test_a_climb_longer_than_the_straight_swims_path_is_beyond_reach(shark):
+def test_a_climb_longer_than_the_straight_swims_straight_line_is_beyond_reach(shark):
     up = load_task("swim-up")
     # an animal that does not swim cannot rise 0.5 m from rest
     reason = restarts.beyond_reach(shark, up, rest_abstraction(shark))
@@ -164,3 +164,22 @@ def test_restart_seeds_differ_from_the_entry_seeds_and_each_other():
     assert len(seeds) == 20 and not seeds & set(range(20))
     assert restarts.restart_seed(4, 1) == restarts.restart_seed(4, 1)
     assert all(0 <= s < 2**63 for s in seeds) and np.all(np.isfinite(list(seeds)))
+
+
+@pytest.mark.parametrize("straight_kept", [True, False])
+def test_only_a_straight_swim_that_keeps_its_promises_bounds_the_climbs(
+    tmp_path, monkeypatch, straight_kept
+):
+    broken = {"swim-up"} | (set() if straight_kept else {_entry("go-straight").task.name})
+    monkeypatch.setattr(restarts, "RESTARTS", 0)
+    monkeypatch.setattr(restarts, "judge_entry", lambda b, c, t: _verdict(t, t.name not in broken))
+    bounds: dict[str, object] = {}
+
+    def reach(body, task, straight):
+        bounds[task.name] = straight
+        return None
+
+    monkeypatch.setattr(restarts, "beyond_reach", reach)
+    train_repertoire("shark", tmp_path, budget=12, seed=3)
+    assert "swim-up" in bounds
+    assert (bounds["swim-up"] is not None) == straight_kept

@@ -119,7 +119,16 @@ def keep_promises(
     pairs = list(zip(entries, learned, strict=True))
     with one_blas_thread():
         verdicts = [judge_entry(body, ab.controller, e.task) for e, (ab, _) in pairs]
-    straight = next((ab.controller for e, (ab, _) in pairs if e.name in STRAIGHT), None)
+    # the reach bound from a straight swim that keeps its own promises only: a poor one
+    # (what restarts are for) would call reachable climbs out of reach
+    straight = next(
+        (
+            ab.controller
+            for (e, (ab, _)), v in zip(pairs, verdicts, strict=True)
+            if e.name in STRAIGHT and v["met"]
+        ),
+        None,
+    )
     tries: dict[int, list[tuple[Learned, dict, int]]] = {}
     changed: dict[int, Learned] = {}
     for i, (entry, verdict) in enumerate(zip(entries, verdicts, strict=True)):
