@@ -193,8 +193,7 @@ def _safe_sqrt(xp, s):
 
 def _cross(xp, a, b):
     """Return the cross products (K, 3, B) of (K, 3, B) arrays."""
-    (a0, a1, a2), (b0, b1, b2) = _xyz(a), _xyz(b)
-    return xp.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
+    return xp.stack(_cross3(_xyz(a), _xyz(b)), axis=1)
 
 
 def _xyz(q):
