@@ -154,7 +154,6 @@ class SequenceController(Controller):
         ``waves``: those of this sequence's controllers at these t, as ``waves(t)`` returns
         them, filled in where missing or taken at other times)."""
         t = np.asarray(t, float).reshape(-1)
-        waves = {} if waves is None else waves
         out = np.zeros((t.size, self.n_actuators))
         starts = self.starts()
         ends = starts + np.array([dur for _, dur in self.items])
@@ -166,16 +165,37 @@ class SequenceController(Controller):
                 if on.any():
                     out[on] += w[on, i : i + 1] * ctrl.raw(t[on] - starts[i])
                 continue
-            kept = waves.get(id(ctrl))
-            if kept is None or not np.array_equal(kept[0], t):  # none yet, or other times
-                kept = waves[id(ctrl)] = (t, ctrl.waves(t))
-            own = kept[1]
+            # the rows it plays (add_item leaves the others alone): after its start, but the
+            # first item's, and before its end, but the last item's
+            after = t > starts[i] if i > 0 else np.ones(t.size, bool)
+            on = np.flatnonzero(after & (t < ends[i]) if i < n - 1 else after)
+            if on.size == 0:
+                continue
+            rows = slice(on[0], on[-1] + 1)
+            if waves is None:
+                own = ctrl.waves(t[rows])
+            else:
+                kept = waves.get(id(ctrl))
+                if kept is None or not np.array_equal(kept[0], t):  # none yet, or other times
+                    kept = waves[id(ctrl)] = (t, ctrl.waves(t))
+                own = kept[1][:, :, rows]
             # each fade: (where it starts, its width s); width 0: none (the first item holds
             # before its start, the last after its end)
             fade_in = (starts[i], max(ends[i - 1] - starts[i], 1e-12)) if i > 0 else (0.0, 0.0)
             fade_out = (ends[i], max(ends[i] - starts[i + 1], 1e-12)) if i < n - 1 else (0.0, 0.0)
             c = ctrl
-            add_item(out, t, own, c.offset, c.freq, c.amp, c.phase, starts[i], fade_in, fade_out)
+            add_item(
+                out[rows],
+                t[rows],
+                own,
+                c.offset,
+                c.freq,
+                c.amp,
+                c.phase,
+                starts[i],
+                fade_in,
+                fade_out,
+            )
         return out
 
     def table(self, steps: int, dt: float, t0: float = 0.0, waves=None) -> np.ndarray:
