@@ -117,31 +117,9 @@ def keep_promises(
     from zoetic.learning.together import learn_together
 
     pairs = list(zip(entries, learned, strict=True))
-    with one_blas_thread():
+    with one_blas_thread():  # judging and the reach bound: small linear algebra
         verdicts = [judge_entry(body, ab.controller, e.task) for e, (ab, _) in pairs]
-    # the reach bound from a straight swim that keeps its own promises only: a poor one
-    # (what restarts are for) would call reachable climbs out of reach
-    straight = next(
-        (
-            ab.controller
-            for (e, (ab, _)), v in zip(pairs, verdicts, strict=True)
-            if e.name in STRAIGHT and v["met"]
-        ),
-        None,
-    )
-    tries: dict[int, list[tuple[Learned, dict, int]]] = {}
-    changed: dict[int, Learned] = {}
-    for i, (entry, verdict) in enumerate(zip(entries, verdicts, strict=True)):
-        if verdict["met"]:
-            continue
-        with one_blas_thread():
-            reason = beyond_reach(body, entry.task, straight)
-        if reason:
-            ab, info = learned[i]
-            record = {"because": unmet_text(entry.name, verdict), "skipped": reason}
-            changed[i] = (ab, info | {"restarts": record})
-        else:
-            tries[i] = [(learned[i], verdict, runs[i].setup.config.seed)]
+        tries, changed = _first_tries(body, entries, runs, learned, verdicts)
     pending = list(tries)
     for attempt in range(1, RESTARTS + 1):
         if not pending:
@@ -160,6 +138,37 @@ def keep_promises(
     for i, tried in tries.items():
         changed[i] = _choose(entries[i], tried)
     return [(entries[i], changed[i]) for i in sorted(changed)]
+
+
+def _first_tries(
+    body: Body, entries: list[Entry], runs: list[Run], learned: list[Learned], verdicts: list[dict]
+) -> tuple[dict[int, list[tuple[Learned, dict, int]]], dict[int, Learned]]:
+    """Return, by plan index, the first try of each entry to restart (its abstraction and
+    info, verdict and seed) and the entries kept as they are with why they were not restarted
+    (a promise beyond reach, ``beyond_reach``)."""
+    # the reach bound from a straight swim that keeps its own promises only: a poor one
+    # (what restarts are for) would call reachable climbs out of reach
+    straight = next(
+        (
+            ab.controller
+            for e, (ab, _), v in zip(entries, learned, verdicts, strict=True)
+            if e.name in STRAIGHT and v["met"]
+        ),
+        None,
+    )
+    tries: dict[int, list[tuple[Learned, dict, int]]] = {}
+    changed: dict[int, Learned] = {}
+    for i, (entry, verdict) in enumerate(zip(entries, verdicts, strict=True)):
+        if verdict["met"]:
+            continue
+        reason = beyond_reach(body, entry.task, straight)
+        if reason:
+            ab, info = learned[i]
+            record = {"because": unmet_text(entry.name, verdict), "skipped": reason}
+            changed[i] = (ab, info | {"restarts": record})
+        else:
+            tries[i] = [(learned[i], verdict, runs[i].setup.config.seed)]
+    return tries, changed
 
 
 def _restart_run(
