@@ -105,9 +105,7 @@ def train_cmd(
     from zoetic.behavior.pipelines import check_training
     from zoetic.behavior.training import train_repertoire
     from zoetic.learning.abstraction import parse_modes
-    from zoetic.learning.blas import one_blas_thread
     from zoetic.runs import check_learnable
-    from zoetic.viz.media import show_repertoire
 
     check_training(pipeline, optimizer, threshold)
     modes = parse_modes(modes)
@@ -137,6 +135,15 @@ def train_cmd(
             )
         except KeyboardInterrupt:
             interrupted(f"{out} keeps what was learned; continue with: {again}")
+    _report_trained(out, strict)
+
+
+def _report_trained(out: Path, strict: bool) -> None:
+    """Print a trained repertoire's entries, the ones learned again and the promises each
+    keeps (``--strict``: exit 1 when one does not)."""
+    from zoetic.learning.blas import one_blas_thread
+    from zoetic.viz.media import show_repertoire
+
     with one_blas_thread():  # the entries replayed and judged: small linear algebra
         _print_rows(show_repertoire(out), f"{out}")
         _report_restarts(out)
