@@ -406,19 +406,22 @@ def test_a_mirror_symmetric_task_couples_learned_fins_and_a_zero_turn_stays_symm
     )
 
 
-def test_cmaes_is_made_without_importing_scipy_stats():
+def test_cmaes_is_made_without_importing_scipy_stats_or_matplotlib():
     """A fresh process makes and runs CMA-ES without importing scipy.stats (cma's only use of
-    it is its surrogate models' rank correlation), and can import scipy.stats after."""
+    it is its surrogate models' rank correlation) or matplotlib (cma's plots), without a
+    warning, and can import both after."""
     code = (
         "import sys, numpy as np\n"
         "from zoetic.learning.optimizers.cmaes import CMAES\n"
         "opt = CMAES(np.full(4, 0.5), np.zeros(4), np.ones(4), seed=0, popsize=6)\n"
         "X = opt.ask(); opt.tell(X, np.sum(X**2, axis=1))\n"
-        "print('scipy.stats' in sys.modules)\n"
+        "print('scipy.stats' in sys.modules, 'matplotlib' in sys.modules)\n"
         "import scipy.stats; print(scipy.stats.kendalltau([1, 2, 3], [1, 2, 3])[0])\n"
+        "from matplotlib.figure import Figure; print(type(Figure().add_subplot()).__name__)\n"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert out.stdout.split() == ["False", "1.0"]
+    run = [sys.executable, "-W", "error", "-c", code]
+    out = subprocess.run(run, capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["False", "False", "1.0", "Axes"]
 
 
 def test_a_cma_that_needs_scipy_stats_at_import_is_imported_whole(tmp_path):

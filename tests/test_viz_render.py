@@ -175,3 +175,33 @@ def test_smooth_shading_normals_turn_gradually_across_a_closed_surface():
     across = [(i, j) for i, j in edge if abs(np.dot(n[i], n[j])) < 1e-9]
     assert across
     assert all(np.dot(s[i], s[j]) > 0.2 for i, j in across)  # was cos 90 deg = 0
+
+
+def test_a_saved_figure_is_laid_out_tightly_once(tmp_path):
+    """save_figure writes what tight_layout then savefig write, pixel for pixel, and leaves no
+    layout engine behind (one that savefig would run, drawing the figure an extra time)."""
+    import io
+
+    from PIL import Image
+
+    from zoetic.viz.plots import new_figure, save_figure
+
+    def draw():
+        fig = new_figure((4.0, 3.0), dpi=80)
+        for k in range(2):
+            ax = fig.add_subplot(2, 1, k + 1)
+            ax.plot([0, 1, 2], [k, 2, 1], label=f"line {k}")
+            ax.set_ylabel("a long label that needs room")
+            ax.legend()
+        return fig
+
+    fig = draw()
+    save_figure(fig, tmp_path / "a.png")
+    assert fig.get_layout_engine() is None
+    reference = draw()
+    reference.tight_layout()
+    buf = io.BytesIO()
+    reference.savefig(buf, format="png")
+    ours = np.asarray(Image.open(tmp_path / "a.png"))
+    theirs = np.asarray(Image.open(buf))
+    assert ours.shape == theirs.shape and np.array_equal(ours, theirs)

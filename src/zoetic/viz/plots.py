@@ -31,6 +31,10 @@ def save_figure(fig, path: str | os.PathLike, dpi: float | None = None) -> Path:
     so that long runs writing many plots do not keep them all alive.
     """
     fig.tight_layout()
+    # tight_layout leaves a placeholder layout engine behind, for which savefig draws the
+    # whole figure once more (text and all) before drawing it for the file; the layout is
+    # done, so none is kept
+    fig.set_layout_engine(None)
     path = Path(path)
     buf = io.BytesIO()
     fig.savefig(buf, format=(path.suffix.lstrip(".") or "png").lower(), dpi=dpi or "figure")

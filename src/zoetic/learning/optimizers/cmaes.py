@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pickle
 import sys
+import warnings
 
 import numpy as np
 
@@ -46,22 +47,32 @@ class _Randn:
         )
 
 
+# modules cma imports at its own import for what it offers beyond the search itself: a rank
+# correlation for its surrogate fitness models (scipy.stats; it has its own NumPy fallback)
+# and its plots (matplotlib.pyplot). Neither is used here, and each took longer to import
+# than cma itself, in every learning run; a figure imports matplotlib when it is drawn.
+_UNUSED_BY_CMA = ("scipy.stats", "matplotlib")
+
+
 def _cma():
-    """Return the ``cma`` module, imported without ``scipy.stats`` unless that is loaded
-    already: cma takes only a rank correlation from it, for its surrogate fitness models
-    (unused here), and falls back on its own NumPy one; scipy.stats took longer to import
-    than cma itself, in every learning run."""
-    if "cma" in sys.modules or "scipy.stats" in sys.modules:
+    """Return the ``cma`` module, imported without ``_UNUSED_BY_CMA`` unless they are loaded
+    already (cma falls back without them, and warns that its plots are unavailable)."""
+    if "cma" in sys.modules:
         import cma
 
         return cma
-    sys.modules["scipy.stats"] = None  # an import of it raises ImportError
+    blocked = [m for m in _UNUSED_BY_CMA if m not in sys.modules]
+    for name in blocked:
+        sys.modules[name] = None  # an import of it raises ImportError
     try:
-        import cma
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", "Could not import matplotlib")
+            import cma
     except ImportError:
-        cma = None  # a cma that needs scipy.stats at import: take it whole, below
+        cma = None  # a cma that needs one of them at import: take it whole, below
     finally:
-        del sys.modules["scipy.stats"]
+        for name in blocked:
+            del sys.modules[name]
     if cma is None:
         for name in [m for m in sys.modules if m == "cma" or m.startswith("cma.")]:
             del sys.modules[name]  # the half-imported package, imported again in full
