@@ -77,6 +77,14 @@ def test_training_writes_a_reloadable_mirrored_repertoire(trained, shark):
     assert np.all(rep.controllers["do-nothing"].raw(t) == np.nan_to_num(shark.wave_held))
 
 
+def test_trainings_figure_is_the_one_show_draws(trained):
+    """repertoire.png as training's figure process drew it is the one ``repertoire show``
+    draws in its own process, byte for byte."""
+    trained_png = (trained / "repertoire.png").read_bytes()
+    assert main(["repertoire", "show", str(trained)]) == 0
+    assert (trained / "repertoire.png").read_bytes() == trained_png
+
+
 def test_training_again_resumes_without_learning_more(trained):
     before = (trained / "runs" / "go-straight" / "history.csv").read_text()
     args = ["repertoire", "train", "shark", "--out", str(trained), "--resume"]

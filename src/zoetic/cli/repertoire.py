@@ -101,53 +101,61 @@ def train_cmd(
     and swim-down; with --speeds, swims at steady slower speeds; with --radii, a medium turn);
     resumable. Each entry is judged against its task's promises. --pipeline paper learns each
     entry the 1995 paper's way (time domain, annealing or simplex, FFT abstraction)."""
-    use_ray_address(ray_address)
-    from zoetic.behavior.pipelines import check_training
-    from zoetic.behavior.training import train_repertoire
-    from zoetic.learning.abstraction import parse_modes
-    from zoetic.runs import check_learnable
+    from zoetic.viz.drawer import Drawer
 
-    check_training(pipeline, optimizer, threshold)
-    modes = parse_modes(modes)
-    check_learnable(animal)
-    flags = ["--speeds"] * speeds + ["--radii"] * radii
-    flags += ["--pipeline", pipeline] * (pipeline != "periodic")
-    out, again = _training_dir(animal, out, resume, force, flags)
-    with learn_bar() as bar:
-        on_entry, progress = _entry_lines(bar)
-        try:
-            train_repertoire(
-                animal,
-                out,
-                budget,
-                seed,
-                optimizer,
-                modes,
-                threshold,
-                nodes,
-                on_entry,
-                progress,
-                evaluator,
-                budget if resume and given(ctx, "budget") else None,
-                speeds,
-                radii,
-                pipeline,
-            )
-        except KeyboardInterrupt:
-            interrupted(f"{out} keeps what was learned; continue with: {again}")
-    _report_trained(out, strict)
+    with Drawer() as drawer:  # repertoire.png's process: it imports matplotlib meanwhile
+        use_ray_address(ray_address)
+        from zoetic.behavior.pipelines import check_training
+        from zoetic.behavior.training import train_repertoire
+        from zoetic.learning.abstraction import parse_modes
+        from zoetic.runs import check_learnable
+
+        check_training(pipeline, optimizer, threshold)
+        modes = parse_modes(modes)
+        check_learnable(animal)
+        flags = ["--speeds"] * speeds + ["--radii"] * radii
+        flags += ["--pipeline", pipeline] * (pipeline != "periodic")
+        out, again = _training_dir(animal, out, resume, force, flags)
+        with learn_bar() as bar:
+            on_entry, progress = _entry_lines(bar)
+            try:
+                train_repertoire(
+                    animal,
+                    out,
+                    budget,
+                    seed,
+                    optimizer,
+                    modes,
+                    threshold,
+                    nodes,
+                    on_entry,
+                    progress,
+                    evaluator,
+                    budget if resume and given(ctx, "budget") else None,
+                    speeds,
+                    radii,
+                    pipeline,
+                )
+            except KeyboardInterrupt:
+                interrupted(f"{out} keeps what was learned; continue with: {again}")
+        _report_trained(out, strict, drawer)
 
 
-def _report_trained(out: Path, strict: bool) -> None:
+def _report_trained(out: Path, strict: bool, drawer) -> None:
     """Print a trained repertoire's entries, the ones learned again and the promises each
-    keeps (``--strict``: exit 1 when one does not)."""
+    keeps (``--strict``: exit 1 when one does not); repertoire.png is drawn by ``drawer``
+    (a ``Drawer``) meanwhile."""
+    from functools import partial
+
     from zoetic.learning.blas import one_blas_thread
     from zoetic.viz.media import show_repertoire
 
     with one_blas_thread():  # the entries replayed and judged: small linear algebra
-        _print_rows(show_repertoire(out), f"{out}")
+        rows = show_repertoire(out, draw=partial(drawer.draw, "plot_repertoire"))
+        _print_rows(rows, f"{out}")
         _report_restarts(out)
         _report_promises(out, strict)
+    drawer.wait()
 
 
 def _entry_lines(bar):

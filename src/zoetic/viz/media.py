@@ -4,6 +4,7 @@ drawn from its record (``zoetic.record``), as the viewer draws it."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -165,12 +166,15 @@ def _by_strength(freq: np.ndarray, amp: np.ndarray) -> list[float]:
     return sorted(total, key=lambda f: -total[f])
 
 
-def show_repertoire(directory: str | Path, plot: bool = True) -> list[dict[str, object]]:
+def show_repertoire(
+    directory: str | Path, plot: bool = True, draw: Callable | None = None
+) -> list[dict[str, object]]:
     """Return one row per entry (modes, frequencies, what it does from rest); plot it too.
 
     Each entry is played from rest for its duration; forward (m along the start heading) and
     turn (degrees, left positive) say what it does; frequencies_hz come strongest first.
-    Writes repertoire.png into the directory (paths: each entry played three times over).
+    Writes repertoire.png into the directory (paths: each entry played three times over), by
+    ``draw`` when given (called as ``plot_repertoire`` is, e.g. a ``Drawer``'s request).
     """
     from zoetic.behavior.repertoire import Repertoire
     from zoetic.learning.abstraction import measure
@@ -202,9 +206,9 @@ def show_repertoire(directory: str | Path, plot: bool = True) -> list[dict[str, 
         signals[name] = (t, ctrl.sample(t))
         paths[name] = measure(body, ctrl, 3 * seconds)["com"]  # played three times over
     if plot:
-        from zoetic.viz.abstraction import plot_repertoire
-
-        plot_repertoire(
+        if draw is None:
+            from zoetic.viz.abstraction import plot_repertoire as draw
+        draw(
             signals,
             paths,
             tuple(body.actuator_names),
