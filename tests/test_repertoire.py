@@ -275,6 +275,20 @@ def test_show_flags_an_entry_that_breaks_its_promise_and_strict_exits_1(tmp_path
     assert row["promise"]["met"] is False and row["promise"]["promises"][0]["worst"] < 90
 
 
+def test_trainings_report_writes_the_figure_before_strict_exits_1(tmp_path, shark):
+    """repertoire train's report under --strict: an entry that breaks its promise exits 1,
+    and repertoire.png, drawn by the figure process meanwhile, is written all the same."""
+    from zoetic.behavior.promises import PromiseError
+    from zoetic.cli.repertoire import _report_trained
+    from zoetic.viz.drawer import Drawer
+
+    broken = _judged_memory(tmp_path / "a", shark, "turn_deg = [90.0, inf]")
+    with Drawer() as drawer, pytest.raises(PromiseError) as exited:
+        _report_trained(broken, True, drawer)
+    assert exited.value.exit_code == 1
+    assert (broken / "repertoire.png").stat().st_size > 10_000
+
+
 def test_a_promise_must_be_a_known_quantity_and_a_range(tmp_path):
     from zoetic.errors import TaskError
     from zoetic.tasks import load_task

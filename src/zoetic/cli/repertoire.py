@@ -152,10 +152,12 @@ def _report_trained(out: Path, strict: bool, drawer) -> None:
 
     with one_blas_thread():  # the entries replayed and judged: small linear algebra
         rows = show_repertoire(out, draw=partial(drawer.draw, "plot_repertoire"))
-        _print_rows(rows, f"{out}")
-        _report_restarts(out)
-        _report_promises(out, strict)
-    drawer.wait()
+        try:
+            _print_rows(rows, f"{out}")
+            _report_restarts(out)
+            _report_promises(out, strict)
+        finally:
+            drawer.wait()  # repertoire.png written, whatever the verdicts (--strict's exit)
 
 
 def _entry_lines(bar):
