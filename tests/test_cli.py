@@ -230,17 +230,21 @@ def test_cli_lets_the_kernels_threads_sleep_unless_told_otherwise(monkeypatch, c
 
 @pytest.mark.parametrize(("argv", "frozen"), [("None", True), ("['animals']", False)])
 def test_the_command_lines_process_exits_without_collecting_its_survivors(argv, frozen):
-    """The process's own command line (main reads sys.argv) freezes the objects still alive
-    at exit, after the other exit handlers, so that shutdown does not walk them for cycles;
-    main called by a program with its arguments leaves its collector alone."""
+    """The process's own command line (main reads sys.argv) collects its young objects less
+    often and freezes the objects still alive at exit, after the other exit handlers, so
+    that shutdown does not walk them for cycles; main called by a program with its
+    arguments leaves its collector alone."""
     code = (
         "import atexit, gc, sys\n"
         "atexit.register(lambda: print('frozen', gc.get_freeze_count() > 0))\n"
-        "from zoetic.cli import main\n"
+        "from zoetic.cli import COMMAND_GC_THRESHOLD, main\n"
         "sys.argv = ['zoetic', 'animals']\n"
-        f"sys.exit(main({argv}))\n"
+        "code = main(" + argv + ")\n"
+        "print('raised', gc.get_threshold()[0] == COMMAND_GC_THRESHOLD > 700)\n"
+        "sys.exit(code)\n"
     )
     run = [sys.executable, "-c", code]
     out = subprocess.run(run, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
-    assert "shark" in out.stdout and out.stdout.split()[-2:] == ["frozen", str(frozen)]
+    assert "shark" in out.stdout
+    assert out.stdout.split()[-4:] == ["raised", str(frozen), "frozen", str(frozen)]
