@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 from dataclasses import dataclass
 
 import numpy as np
@@ -12,7 +13,12 @@ jax = pytest.importorskip("jax")
 import jax.numpy as jnp  # noqa: E402
 
 from zoetic.bench.jax_sim import compilation_cache_in, fresh_compilation_cache  # noqa: E402
-from zoetic.physics.jax_programs import StoredProgram, fingerprint, store_dir  # noqa: E402
+from zoetic.physics.jax_programs import (  # noqa: E402
+    StoredProgram,
+    collector_paused,
+    fingerprint,
+    store_dir,
+)
 
 X = np.linspace(0.0, 1.0, 12, dtype=np.float32).reshape(3, 4)
 Y = np.full((3, 4), 0.5, dtype=np.float32)
@@ -122,3 +128,26 @@ def test_compiler_options_are_part_of_the_key():
         assert again_builds == [] and len(_stored()) == 2  # the same options: loaded
         np.testing.assert_allclose(np.asarray(out[0]), np.asarray(first[0]), rtol=1e-6)
         np.testing.assert_allclose(np.asarray(out[0]), np.sin(X) * 2.0 + Y, rtol=1e-6)
+
+
+def test_a_program_is_traced_with_the_collector_paused_and_restored_after():
+    seen: list[bool] = []
+
+    def build():
+        def f(x):
+            seen.append(gc.isenabled())  # runs while JAX traces f
+            return jnp.cos(x)
+
+        return f
+
+    assert gc.isenabled()
+    with fresh_compilation_cache():
+        StoredProgram(build, fingerprint("gc"))(X)
+    assert seen == [False] and gc.isenabled()
+    gc.disable()
+    try:
+        with collector_paused():
+            pass
+        assert not gc.isenabled()  # a collector the caller had paused stays paused
+    finally:
+        gc.enable()
