@@ -1,6 +1,8 @@
 """A trick over a repertoire as a search problem: plans of repertoire entries played in a World
 beside the trick's objects, recorded through the one closed-loop driver and scored by the
-trick's style terms (which here also see the World's contact record and the balls).
+trick's style terms (which here also see the World's contact record and the balls). A trick
+without objects has nothing to touch: its plans are recorded by the open-loop kernel, which
+steps them as the World would.
 
 With a trick's ``jitter`` (and ``robust``) each plan is played from its start and two perturbed ones
 (``SEARCH_SIGNS``) and its E is the worst of them: the search then prefers plans that do not
