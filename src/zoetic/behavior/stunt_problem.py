@@ -1,6 +1,8 @@
 """A trick over a repertoire as a search problem: plans of repertoire entries played in a World
 beside the trick's objects, recorded through the one closed-loop driver and scored by the
-trick's style terms (which here also see the World's contact record and the balls).
+trick's style terms (which here also see the World's contact record and the balls). A trick
+without objects has nothing to touch: its plans are recorded by the open-loop kernel, which
+steps them as the World would.
 
 With a trick's ``jitter`` (and ``robust``) each plan is played from its start and two perturbed ones
 (``SEARCH_SIGNS``) and its E is the worst of them: the search then prefers plans that do not
@@ -23,7 +25,7 @@ from zoetic.bodies import Body
 from zoetic.control.loop import Observer, Schedule, drive
 from zoetic.physics import Trajectory, get_medium
 from zoetic.physics.objects import Ball
-from zoetic.physics.simulate import State
+from zoetic.physics.simulate import State, kernel_layout, simulate_laid_out
 from zoetic.physics.world import World
 from zoetic.tasks import check_fits, start_state
 from zoetic.tasks.terms import BodyFrame, Signals, evaluate_terms, term_names
@@ -110,6 +112,10 @@ class _Frames(Observer):
 class StuntProblem(MacroProblem):
     """A trick over a repertoire: plans of L (entry, duration) segments, scored in batches."""
 
+    # a trick without objects is recorded by the open-loop kernel in one call per batch
+    # (``_open_loop``); False: through its World, slice by slice, as a trick with objects
+    open_loop = True
+
     def __init__(
         self,
         body: Body,
@@ -166,6 +172,8 @@ class StuntProblem(MacroProblem):
         dt = self.body.dt
         tables = np.repeat(self.tables(e, d), k, axis=0)
         every = int(record_every or self.record_every)
+        if not self.trick.objects and self.open_loop:
+            return self._open_loop(tables, starts, every)
         world = self.world(len(tables), starts)
         seconds = self.steps * dt
         frames = _Frames(world)
@@ -188,6 +196,32 @@ class StuntProblem(MacroProblem):
             np.stack(frames.balls, axis=1),
             world.failed(0),
             touch,
+        )
+
+    def _open_loop(self, tables: np.ndarray, starts: State | None, every: int) -> StuntRecord:
+        """``record`` of a trick without objects: nothing to touch, so the World would step
+        the animal slice after slice through the kernel as the open-loop simulation does in
+        one call (``simulate_laid_out``, on this thread; records in the kernel): the same
+        steps, without a slice's bookkeeping."""
+        starts = self.start if starts is None else starts
+        rows = np.arange(len(tables)) % len(starts.positions)
+        state = State(starts.positions[rows], starts.velocities[rows])
+        act_t = kernel_layout(self.steps, self.body.n_actuators, len(tables))
+        if self.body.n_actuators:
+            act_t[...] = tables.transpose(1, 2, 0)
+        traj = simulate_laid_out(
+            self.body, act_t, self.body.medium, self.body.dt, state, every, threads=False
+        )
+        n_rec = traj.positions.shape[1]
+        recs = np.minimum(np.arange(n_rec) * every, self.steps - 1)
+        b = len(tables)
+        return StuntRecord(
+            traj,
+            tables[:, recs],
+            np.zeros((b, n_rec), dtype=np.int64),
+            np.zeros((b, n_rec, 0, 3)),
+            traj.failed,
+            None,
         )
 
     def ball_index(self) -> int | None:

@@ -282,9 +282,12 @@ def simulate_laid_out(
     state: State | None = None,
     record_every: int = 1,
     check_step: bool = True,
+    threads: bool = True,
 ) -> Trajectory:
     """Return the Trajectory of ``simulate`` from activations already laid out as the kernel
-    reads them (``kernel_layout``, step-major); ``act_t`` is checked and clipped in place."""
+    reads them (``kernel_layout``, step-major); ``act_t`` is checked and clipped in place.
+    ``threads=False``: the chunks in turn on this thread (``kernel.simulate_chunks_serial``,
+    as a World steps a small batch), without the thread pool's launch."""
     med = get_medium(medium or body.medium)
     dt = float(dt or body.dt)
     if check_step:
@@ -300,7 +303,7 @@ def simulate_laid_out(
     if record_every < 1:
         raise SimulationError("record_every must be at least 1")
 
-    from zoetic.physics.kernel import simulate_chunks
+    from zoetic.physics.kernel import simulate_chunks, simulate_chunks_serial
     from zoetic.physics.model import compile_model
 
     n = body.n_nodes
@@ -316,7 +319,7 @@ def simulate_laid_out(
     final_vel = np.empty((n, 3, batch), dtype=f32)
     failed_step = -np.ones(batch, dtype=np.int64)
     model = compile_model(body, med, dt)
-    simulate_chunks(
+    (simulate_chunks if threads else simulate_chunks_serial)(
         pos0,
         vel0,
         act_t,

@@ -22,9 +22,9 @@ from zoetic.bodies import Body
 from zoetic.errors import SimulationError
 from zoetic.jitcache import fresh_numba_cache
 from zoetic.physics.bodycontact import CONTACT_STEPS, pairs_contacts
-from zoetic.physics.broadphase import BroadPhase
+from zoetic.physics.broadphase import BroadPhase, near
 from zoetic.physics.contacts import balls_step, node_contacts
-from zoetic.physics.kernel import advance_one, chunk_scratch, make_stepper
+from zoetic.physics.kernel import advance_one, advance_serial, chunk_scratch, make_stepper
 from zoetic.physics.lanes import LaneGroup, fingerprint
 from zoetic.physics.media import Medium
 from zoetic.physics.model import Model
@@ -228,6 +228,11 @@ class ContactSlices:
     # a lone animal's lockstep runs as one compiled call (``lone_contact_steps``); False: step
     # by step from Python, as every other world (the same arithmetic in the same order)
     compiled_lone = True
+    # within a lone animal's lockstep slice, the reach is checked again every ``lone_every``
+    # steps of the world's grid (the broad phase's ``near`` over that sub-slice's horizon): a
+    # sub-slice in which no node can reach an object is one kernel call and the balls' steps,
+    # without contact tests (which would find nothing); 0: every step with its contacts
+    lone_every = SUB_SLICE
 
     def __init__(
         self,
@@ -260,6 +265,8 @@ class ContactSlices:
         self.zeta = float(damping_ratio)
         self.mu = float(friction)
         self.tested: set[int] = set()  # the animals whose node contacts a step computed
+        # steps of lone lockstep slices taken without contact tests (``lone_contact_steps``)
+        self.untested_steps = 0
 
     def lockstep(self, tables, t: int, t1: int, n: int, impulse, pairs, between) -> None:
         """Step steps t .. t1 of a call that started at the world's step n, every animal one
@@ -293,7 +300,7 @@ class ContactSlices:
         got = impulse.get(0)
         if got is None:
             got = impulse[0] = np.zeros((p.shape[0], len(s.columns), 3, p.shape[2]))
-        lone_contact_steps(
+        self.untested_steps += lone_contact_steps(
             self.drive.steppers[0],
             table,
             t,
@@ -305,6 +312,7 @@ class ContactSlices:
             (self.med64, self.current, self.dt, self.w, self.zeta, self.mu),
             len(s.balls) > 0,
             got,
+            self.lone_every,
         )
 
     def apart(
@@ -425,18 +433,44 @@ class ContactSlices:
 
 
 @njit(cache=True)
-def lone_contact_steps(st, table, t, t1, n, mass, radius, solids, medium, balls, impulse):
+def lone_contact_steps(st, table, t, t1, n, mass, radius, solids, medium, balls, impulse, every):
     """Step a lone animal's Stepper ``st`` through rows t .. t1 of its ``table`` (the world's
     step n at row 0), one step at a time: the balls' contact forces cleared, the nodes'
     contacts with the objects (``node_contacts``, impulses into ``impulse``), one kernel step
     on this thread (``advance_one``, its scratch made once), then the balls' step if there
     are ``balls``. ``solids``: the Solids' pos, vel, par, force, kind, center, size,
     ball_col, static_col; ``medium``: the medium's array, the current, dt, w, zeta, mu (as
-    ``ContactSlices``)."""
+    ``ContactSlices``).
+
+    Every ``every`` steps of the world's grid (0: never), a sub-slice that this call holds
+    whole and in which no node can reach a ball or a fixed shape (the broad phase's ``near``
+    over its horizon) is stepped as a free slice is: one kernel call (``advance_serial``) and
+    the balls' steps under no force. The contact tests it skips would have found nothing, so
+    the steps are the same as one at a time, but for the kernel's blow-up checks (every 8
+    steps of a call, as in a free slice, not every step). Return how many steps were taken
+    so, without contact tests."""
     bpos, bvel, bpar, bforce, kind, center, size, ball_col, static_col = solids
     med, current, dt, w, zeta, mu = medium
     scratch = chunk_scratch(st)
-    for s in range(t, t1):
+    untested = 0
+    s = t
+    while s < t1:
+        if (
+            every > 0
+            and (n + s) % every == 0
+            and s + every <= t1
+            and not near(st.pos, st.vel, radius, bpos, bvel, bpar, kind, center, size, every * dt)
+        ):
+            advance_serial(st, table, s, s + every, n + s)
+            if balls:
+                bforce[:] = 0.0
+                balls_step(
+                    bpos, bvel, bpar, bforce, med, current, kind, center, size, dt, every, w,
+                    zeta, mu,
+                )  # fmt: skip
+            s += every
+            untested += every
+            continue
         bforce[:] = 0.0
         node_contacts(
             st.pos, st.vel, mass, radius, bpos, bvel, bpar, kind, center, size, ball_col,
@@ -447,3 +481,5 @@ def lone_contact_steps(st, table, t, t1, n, mass, radius, solids, medium, balls,
             balls_step(
                 bpos, bvel, bpar, bforce, med, current, kind, center, size, dt, 1, w, zeta, mu
             )
+        s += 1
+    return untested

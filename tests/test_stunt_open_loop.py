@@ -1,0 +1,60 @@
+"""A trick without objects is recorded by the open-loop kernel in one call a batch: the same
+records and scores, to the bit, as its World stepped slice by slice."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from zoetic.behavior.repertoire import Repertoire
+from zoetic.behavior.stunt_problem import StuntProblem
+from zoetic.behavior.training import rest_abstraction
+from zoetic.behavior.tricks import load_trick
+from zoetic.control.abstract import AbstractController
+
+
+def _beat(body) -> AbstractController:
+    """A 2 Hz tail beat as a one-mode abstract controller."""
+    a = len(body.actuator_names)
+    ph = -2 * np.pi * np.linspace(0.0, 0.7, a)[:, None]
+    return AbstractController(
+        body.name,
+        tuple(body.actuator_names),
+        np.full(a, 0.5),
+        np.full((a, 1), 2.0),
+        np.full((a, 1), 0.5),
+        ph,
+        1.0,
+    )
+
+
+def _recorded(problem, e, d, open_loop: bool, monkeypatch, **kw):
+    monkeypatch.setattr(StuntProblem, "open_loop", open_loop)
+    rec = problem.record(e, d, **kw)
+    return rec, problem.scores(rec)
+
+
+@pytest.mark.parametrize("trick", ["leap", "somersault"])  # one start; three (robust)
+def test_open_loop_records_equal_the_worlds_to_the_bit(dolphin, trick, monkeypatch):
+    rep = Repertoire(dolphin.name, tuple(dolphin.actuator_names))
+    rep.add("do-nothing", rest_abstraction(dolphin), 1.0)
+    rep.add("beat", _beat(dolphin), 1.0)
+    problem = StuntProblem(dolphin, rep, load_trick(trick))
+    assert not problem.trick.objects
+    e, d = problem.random(np.random.default_rng(5), 3)
+    # the search's batch from its starts, and one plan's replay recorded every other step
+    for plans, kw in (((e, d), {"starts": problem.starts}), ((e[:1], d[:1]), {"record_every": 2})):
+        fast, fast_scores = _recorded(problem, *plans, True, monkeypatch, **kw)
+        slow, slow_scores = _recorded(problem, *plans, False, monkeypatch, **kw)
+        assert np.isfinite(slow.traj.positions).all()  # nothing blew up: every record compared
+        np.testing.assert_array_equal(fast.traj.times, slow.traj.times)
+        np.testing.assert_array_equal(fast.traj.positions, slow.traj.positions)
+        np.testing.assert_array_equal(fast.traj.final.positions, slow.traj.final.positions)
+        np.testing.assert_array_equal(fast.traj.final.velocities, slow.traj.final.velocities)
+        np.testing.assert_array_equal(fast.activations, slow.activations)
+        np.testing.assert_array_equal(fast.contacts, slow.contacts)
+        np.testing.assert_array_equal(fast.failed, slow.failed)
+        assert fast.balls.shape == slow.balls.shape and fast.touch is slow.touch is None
+        assert fast_scores.keys() == slow_scores.keys()
+        for k in slow_scores:
+            np.testing.assert_array_equal(fast_scores[k], slow_scores[k])
