@@ -198,3 +198,22 @@ def test_two_minnows_head_on_swerve_apart_and_swim_on(monkeypatch):
     # a swerve, not a freeze: each swam on through the meeting (at cruise 2.5 m in 10 s)
     for c in (a, b):
         assert np.linalg.norm(np.diff(c, axis=0), axis=1).sum() > 1.5
+
+
+def test_a_minnow_brakes_for_a_fish_two_seconds_of_travel_ahead():
+    # a minnow cruising (0.25 m/s) with another fish alone threatening 1.75 s of travel
+    # ahead: the half turn with no forward speed (the turn's bursts stop it); braking only
+    # from 1.5 s, it swam on at top speed there and grazed its neighbours
+    from zoetic.behavior.aquarium.routines import Around, Me, avoid
+
+    f, left = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0])
+    me = Me(np.array([-0.5, 0.0, 0.0]), np.zeros(3), f, 0.25 * f, 0.25, 0.43)
+    near = 1.75 * 0.25  # m
+    braked = avoid(me, Around(away=left, obstacle=near, fish_only=True))
+    assert braked.speed == 0.0 and braked.turn == pytest.approx(np.pi)
+    # 2.5 s of travel away: a quarter turn, swimming on at top speed
+    far = avoid(me, Around(away=left, obstacle=2.5 * 0.25, fish_only=True))
+    assert far.speed == pytest.approx(0.43) and far.turn == pytest.approx(np.pi / 2)
+    # a rock as near (no fish): a quarter turn at top speed, as before (rocks stay put)
+    rock = avoid(me, Around(away=left, obstacle=near))
+    assert rock.speed == pytest.approx(0.43) and rock.turn == pytest.approx(np.pi / 2)
