@@ -202,8 +202,7 @@ def test_two_minnows_head_on_swerve_apart_and_swim_on(monkeypatch):
 
 def test_a_minnow_brakes_for_a_fish_two_seconds_of_travel_ahead():
     # a minnow cruising (0.25 m/s) with another fish alone threatening 1.75 s of travel
-    # ahead: the half turn with no forward speed (the turn's bursts stop it); braking only
-    # from 1.5 s, it swam on at top speed there and grazed its neighbours
+    # ahead: the half turn with no forward speed (the turn's bursts stop it), not swimming on
     from zoetic.behavior.aquarium.routines import Around, Me, avoid
 
     f, left = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0])

@@ -151,3 +151,11 @@ def test_a_program_is_traced_with_the_collector_paused_and_restored_after():
         assert not gc.isenabled()  # a collector the caller had paused stays paused
     finally:
         gc.enable()
+
+
+def test_the_collector_is_back_on_after_a_failed_trace():
+    assert gc.isenabled()
+    with pytest.raises(RuntimeError), collector_paused():
+        assert not gc.isenabled()
+        raise RuntimeError("a trace that fails")
+    assert gc.isenabled()

@@ -202,7 +202,9 @@ class StuntProblem(MacroProblem):
         """``record`` of a trick without objects: nothing to touch, so the World would step
         the animal slice after slice through the kernel as the open-loop simulation does in
         one call (``simulate_laid_out``, on this thread; records in the kernel): the same
-        steps, without a slice's bookkeeping."""
+        steps, without a slice's bookkeeping. One exception: a lane that blows up is found
+        by the kernel's own check, every few steps, not at the end of each slice, so its
+        ``failed`` step (and the records it spoils) may differ by those few steps."""
         starts = self.start if starts is None else starts
         rows = np.arange(len(tables)) % len(starts.positions)
         state = State(starts.positions[rows], starts.velocities[rows])

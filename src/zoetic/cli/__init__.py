@@ -53,13 +53,19 @@ COMMAND_GC_THRESHOLD = 7000
 def _collect_for_a_command() -> None:
     """Set the cycle collector for a process that is one command: one that allocates mostly
     objects that live as long as it does (modules, numba's types and kernels; some 150 000)
-    and then ends. Its young collections run a tenth as often (they found those objects alive:
-    about 0.1 s of ``repertoire train``'s wall time at the default), and at exit, after the other
-    handlers (registered later, run earlier), the objects still alive leave the collector's
-    sight: its passes over them at shutdown took about half a CPU second after the last
-    output, for memory the operating system frees at once."""
+    and then ends. Its young collections run a tenth as often (they would find those objects
+    alive), and at exit, after the other handlers (registered later, run earlier), the young
+    generations are collected and the objects still alive leave the collector's sight: its
+    passes over them at shutdown would free memory the operating system frees at once
+    (docs/performance.md, "The third pass: the whole command"). Files are written and closed
+    by context managers, so no output waits on a cycle's finalizer at exit."""
     gc.set_threshold(COMMAND_GC_THRESHOLD, *gc.get_threshold()[1:])
-    atexit.register(gc.freeze)
+    atexit.register(_freeze_at_exit)
+
+
+def _freeze_at_exit() -> None:
+    gc.collect(1)  # the young generations' cycles, finalized before the rest is frozen
+    gc.freeze()
 
 
 def main(argv: list[str] | None = None) -> int:

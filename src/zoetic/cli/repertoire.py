@@ -147,6 +147,7 @@ def _report_trained(out: Path, strict: bool, drawer) -> None:
     (a ``Drawer``) meanwhile."""
     from functools import partial
 
+    from zoetic.behavior.promises import PromiseError
     from zoetic.learning.blas import one_blas_thread
     from zoetic.viz.media import show_repertoire
 
@@ -156,8 +157,13 @@ def _report_trained(out: Path, strict: bool, drawer) -> None:
             _print_rows(rows, f"{out}")
             _report_restarts(out)
             _report_promises(out, strict)
-        finally:
+        except PromiseError:
             drawer.wait()  # repertoire.png written, whatever the verdicts (--strict's exit)
+            raise
+        except BaseException:
+            drawer.close()  # Ctrl-C or a failure: its report, without waiting for the figure
+            raise
+        drawer.wait()
 
 
 def _entry_lines(bar):

@@ -160,9 +160,8 @@ def collector_paused() -> Iterator[None]:
     """Run the body with Python's cyclic garbage collector paused (restored after, if it was
     on). Tracing and differentiating a program allocates tens of thousands of objects that
     live until the trace ends; with the collector on they set off collections that walk them
-    again and again, and a full one walks every object the process holds (the gradient's
-    cold start: about 130 collections, one of them full, 0.12 s of CPU; paused, one small
-    collection after)."""
+    again and again, and a full one walks every object the process holds (docs/performance.md,
+    "The gradient's cold compile, second look")."""
     was = gc.isenabled()
     gc.disable()
     try:

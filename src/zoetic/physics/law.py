@@ -289,8 +289,8 @@ def _scaled(xp, s, d):
     """Return the vectors s d (K, 3, B) for scales s (K, B) and vectors d (K, 3, B). On a
     narrow batch (the gradient's start states) a stack of the three components' products,
     whose reverse pass is elementwise work: a scale broadcast over the components has a sum
-    over them in its reverse, a kernel of its own (the gradient compiles 5% faster and runs
-    5% faster). A wide batch keeps the broadcast, which runs faster there."""
+    over them in its reverse, a kernel of its own (docs/performance.md, "The gradient's cold
+    compile, second look"). A wide batch keeps the broadcast, which runs faster there."""
     if s.shape[-1] < WIDE:
         return xp.stack([s * c for c in _xyz(xp, d)], axis=1)
     return col(s) * d

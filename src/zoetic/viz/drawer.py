@@ -1,5 +1,5 @@
 """A figure drawn by a second process, on the other core: it starts when a command does,
-imports matplotlib (about a quarter of a CPU second) while the command imports and works on,
+imports matplotlib while the command imports and works on,
 then draws the one figure asked of it and writes it, while the command goes on to what
 follows the figure.
 
@@ -14,10 +14,14 @@ from __future__ import annotations
 
 import os
 import pickle
+import select
 import signal
 import subprocess
 import sys
 from pathlib import Path
+
+# s: a second process that has not answered by then is ended, and the figure drawn here
+ANSWER_WITHIN = 120.0
 
 # the functions a Drawer draws with, by name: module and attribute within zoetic.viz
 DRAWN = {"plot_repertoire": ("zoetic.viz.abstraction", "plot_repertoire")}
@@ -34,14 +38,16 @@ class Drawer:
     """The second process (``with Drawer() as d: ...; d.draw(name, *args); ...; d.wait()``)."""
 
     def __init__(self) -> None:
-        package_root = str(Path(__file__).resolve().parents[2])  # the directory of zoetic
-        path = [package_root, *filter(None, [os.environ.get("PYTHONPATH")])]
+        # the directory that holds this zoetic, after the process's own path (so that it
+        # finds this package, as imported here, without shadowing anything before it)
+        package_root = str(Path(__file__).resolve().parents[2])
+        path = [*filter(None, [os.environ.get("PYTHONPATH")]), package_root]
         # one BLAS thread: the command's own threads have the cores while it draws
         env = os.environ | {"PYTHONPATH": os.pathsep.join(path), "OPENBLAS_NUM_THREADS": "1"}
         self._asked: tuple | None = None
         try:
             self._proc: subprocess.Popen | None = subprocess.Popen(
-                [sys.executable, "-m", "zoetic.viz.drawer"],
+                [sys.executable, "-P", "-m", "zoetic.viz.drawer"],
                 stdin=subprocess.PIPE,
                 stdout=subprocess.PIPE,
                 stderr=subprocess.DEVNULL,
@@ -68,9 +74,10 @@ class Drawer:
             raise RuntimeError("Drawer.wait: no figure was asked for")
         answer = None
         if self._proc is not None:
+            ready, _, _ = select.select([self._proc.stdout], [], [], ANSWER_WITHIN)
             try:
-                answer = pickle.load(self._proc.stdout)
-            except (EOFError, OSError, pickle.UnpicklingError):
+                answer = pickle.load(self._proc.stdout) if ready else None
+            except Exception:  # noqa: BLE001  (no answer we can read: drawn here instead)
                 answer = None
             self.close()
         if isinstance(answer, Path):
@@ -101,6 +108,8 @@ class Drawer:
 def _serve() -> None:
     """The second process: import matplotlib, read one request, draw it, answer the path."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the command's: it closes our input
+    answers = os.fdopen(os.dup(1), "wb")  # the answer's own stream: what a library prints
+    os.dup2(2, 1)  # goes where the errors go, not into the answer
     from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: F401
     from matplotlib.figure import Figure  # noqa: F401
 
@@ -114,8 +123,8 @@ def _serve() -> None:
         answer = _function(name)(*args, **kwargs)
     except Exception:  # noqa: BLE001  (drawn again by the command, which reports the error)
         answer = None
-    pickle.dump(answer, sys.stdout.buffer)
-    sys.stdout.flush()
+    pickle.dump(answer, answers)
+    answers.flush()
     os._exit(0)  # no shutdown passes over matplotlib's objects: the answer is given
 
 

@@ -19,8 +19,8 @@ PITCH_GAIN = 2.0  # rad of fin pitch per rad of climb-angle error
 URGENT = 1.5
 # s of travel: an avoiding fish whose nose is nearer than this to another fish that threatens
 # it (no obstacle ahead) brakes: the half turn with no forward speed asked (``avoid``); the
-# half turn's bursts are what stop a fish, and braking from 1.5 s left slow grazes between
-# neighbours (docs/aquarium.md, "Braking from 2 s of travel")
+# half turn's bursts are what stop a fish, so braking early leaves neighbours room
+# (docs/aquarium.md, "Braking from 2 s of travel")
 URGENT_FISH = 2.0
 # a still target nearer than NEAR m and farther off the heading than BRAKE_BEARING rad is
 # turned to about on the spot (``go_to``): the steer's circle is wider than its distance
