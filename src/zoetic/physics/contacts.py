@@ -44,6 +44,7 @@ REST_SPEED = 0.1  # m/s: a pair closing slower just stops (a resting ball does n
 SLOP = 0.002  # m: an overlap beyond it is removed at no more than CORRECTION_SPEED (m/s)
 CORRECTION_SPEED = 0.3
 SWEEPS = 8  # projected Gauss-Seidel sweeps over a body's contacts per step
+MEMO_ROWS = 8  # distinct ball states kept for the lanes of one step (``remember``)
 GAP = 1e-6  # m added to a contact's reach before a lane's box is judged apart (rounding)
 
 
@@ -59,6 +60,42 @@ def restitution(zeta):
 def contact_rows(n_nodes, n_statics):
     """Return the scratch rows (contacts, 16) ``solve`` writes its contacts into."""
     return np.zeros((n_nodes + n_statics + 1, 16))
+
+
+@njit(cache=True, inline="always")
+def same_bits(a, b):
+    """Return True if the floats a and b are the same to the bit (never for a NaN)."""
+    return a == b and (a != 0.0 or math.copysign(1.0, a) == math.copysign(1.0, b))
+
+
+@njit(cache=True, inline="always")
+def recalled(memo, k, seen, values):
+    """Return the row of ``memo[k]``'s first ``seen[k]`` rows that begins with ``values``, each
+    the same to the bit, or -1: the lane that wrote that row had a ball in the same state, and
+    its result (the rest of the row) holds for this lane too."""
+    for q in range(seen[k]):
+        hit = True
+        for j in range(len(values)):
+            if not same_bits(memo[k, q, j], values[j]):
+                hit = False
+                break
+        if hit:
+            return q
+    return -1
+
+
+@njit(cache=True, inline="always")
+def remember(memo, k, seen, values):
+    """Append ``values`` as a new row of ``memo[k]`` (``recalled``) and return the row, or -1
+    if it holds MEMO_ROWS rows already (a batch whose balls went many ways is solved lane by
+    lane, not searched through)."""
+    q = seen[k]
+    if q >= min(MEMO_ROWS, memo.shape[1]):
+        return -1
+    seen[k] += 1
+    for j in range(len(values)):
+        memo[k, q, j] = values[j]
+    return q
 
 
 @njit(cache=True)
@@ -264,6 +301,9 @@ def node_contacts(
     e = restitution(zeta)
     rate = w * dt / math.pi
     rows = contact_rows(pos.shape[0], skind.shape[0])
+    # each ball's states in lanes no node reached, and their results (``_ball_contacts``)
+    memo = np.empty((bpos.shape[0], pos.shape[2], 9))
+    seen = np.zeros(bpos.shape[0], np.int64)
     for b in range(pos.shape[2]):
         box = node_box(pos, b, 0.0)
         _ball_contacts(
@@ -287,6 +327,8 @@ def node_contacts(
             e,
             rate,
             rows,
+            memo,
+            seen,
         )
         for s in range(skind.shape[0]):
             if not shape_apart(box, s, skind, scenter, ssize, radius + GAP):
@@ -319,10 +361,17 @@ def _ball_contacts(
     e,
     rate,
     rows,
+    memo,
+    seen,
 ):
     """Lane b: each ball solved with the nodes and fixed shapes it touches (``solve``); its
     velocity change added to ``bforce`` as the force that makes it over one step. The nodes
-    are tested only when their box (``node_box``) is not apart from the ball's."""
+    are tested only when their box (``node_box``) is not apart from the ball's.
+
+    A ball no node reaches is solved against the fixed shapes alone, a function of its centre
+    and velocity: ``memo[k]`` keeps such lanes' (centre, velocity, solved velocity), and a
+    lane whose ball is in a kept state to the bit takes that result (in a batch, most lanes'
+    balls rest on their support alike until an animal strikes one)."""
     for k in range(bpos.shape[0]):
         cx, cy, cz, r = bpos[k, 0, b], bpos[k, 1, b], bpos[k, 2, b], bpar[k, 0]
         apart = box_apart(box, cx, cy, cz, r, r, r, radius + GAP)
@@ -331,6 +380,12 @@ def _ball_contacts(
         ux = bvel[k, 0, b] + h * bforce[k, 0, b]
         uy = bvel[k, 1, b] + h * bforce[k, 1, b]
         uz = bvel[k, 2, b] + h * bforce[k, 2, b]
+        q = recalled(memo, k, seen, (cx, cy, cz, ux, uy, uz)) if apart else -1
+        if q >= 0:
+            bforce[k, 0, b] += (memo[k, q, 6] - ux) / h
+            bforce[k, 1, b] += (memo[k, q, 7] - uy) / h
+            bforce[k, 2, b] += (memo[k, q, 8] - uz) / h
+            continue
         nx, ny, nz, _ = solve(
             cx,
             cy,
@@ -358,6 +413,8 @@ def _ball_contacts(
             ball_obj[k],
             rows,
         )
+        if apart:
+            remember(memo, k, seen, (cx, cy, cz, ux, uy, uz, nx, ny, nz))
         bforce[k, 0, b] += (nx - ux) / h
         bforce[k, 1, b] += (ny - uy) / h
         bforce[k, 2, b] += (nz - uz) / h
@@ -420,7 +477,10 @@ def balls_step(
 ):
     """Advance the balls ``steps`` steps: gravity, buoyancy of the submerged cap, drag
     against the current and the constant force ``bforce``, then their contacts with the
-    floor and the fixed shapes (``solve``; w and zeta as in ``node_contacts``)."""
+    floor and the fixed shapes (``solve``; w and zeta as in ``node_contacts``).
+
+    A lane's ball whose position, velocity and force are those of a lane stepped before it,
+    to the bit, takes that lane's new position and velocity (``recalled``)."""
     g = med[G]
     level = med[LEVEL]
     water = med[DRAG] > 0.0 and level > -1e8
@@ -432,8 +492,22 @@ def balls_step(
     no_pos = np.zeros((0, 3, 1), dtype=np.float32)
     no_mass = np.zeros(0)
     no_impulse = np.zeros((0, 1, 3, 1))
+    # each ball's states and forces in the lanes stepped, and their new states (``recalled``)
+    memo = np.empty((bpos.shape[0], bpos.shape[2], 15))
+    seen = np.zeros(bpos.shape[0], np.int64)
     for b in range(bpos.shape[2]):
         for k in range(bpos.shape[0]):
+            was = (
+                bpos[k, 0, b], bpos[k, 1, b], bpos[k, 2, b],
+                bvel[k, 0, b], bvel[k, 1, b], bvel[k, 2, b],
+                bforce[k, 0, b], bforce[k, 1, b], bforce[k, 2, b],
+            )  # fmt: skip
+            q = recalled(memo, k, seen, was)
+            if q >= 0:
+                for j in range(3):
+                    bpos[k, j, b] = memo[k, q, 9 + j]
+                    bvel[k, j, b] = memo[k, q, 12 + j]
+                continue
             r = bpar[k, 0]
             mb = bpar[k, 1]
             kd = bpar[k, 3] * drag * math.pi * r * r
@@ -490,3 +564,7 @@ def balls_step(
                 bpos[k, 0, b] = x + dt * vx
                 bpos[k, 1, b] = y + dt * vy
                 bpos[k, 2, b] = z + dt * vz
+            q = remember(memo, k, seen, was)
+            for j in range(3 if q >= 0 else 0):
+                memo[k, q, 9 + j] = bpos[k, j, b]
+                memo[k, q, 12 + j] = bvel[k, j, b]
