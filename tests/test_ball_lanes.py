@@ -1,5 +1,5 @@
 """A batch's balls are resolved lane by lane as if each lane were alone: lanes whose ball is in
-the same state share one solution (``contacts.recalled``), which must be the bits each lane
+the same state share one solution (``lane_memo.recalled``), which must be the bits each lane
 would get by itself, whether the states repeat in order or interleaved, differ only in the
 sign of a zero, or a node touches the ball in one lane."""
 
@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from zoetic.physics.contacts import balls_step, node_contacts
+from zoetic.physics.balls import balls_step
+from zoetic.physics.contacts import node_contacts
 from zoetic.physics.media import MEDIA
 from zoetic.physics.objects import Ball, Cylinder
 from zoetic.physics.world import World

@@ -1,4 +1,5 @@
-"""Numba kernels for a world's passive objects: animal-object contacts and the balls' motion.
+"""Numba kernels for a world's passive objects: animal-object contacts (the balls' own motion:
+``balls``).
 
 Two contact models, each chosen so that a contact never hands out more energy than it took:
 
@@ -35,7 +36,7 @@ import numpy as np
 from numba import njit
 
 from zoetic.jitcache import fresh_numba_cache
-from zoetic.physics.media import DRAG, FLOOR, LEVEL, G
+from zoetic.physics.lane_memo import recalled, remember
 from zoetic.physics.shapes import box_apart, node_box, shape_apart, shape_force, shape_sdf
 
 fresh_numba_cache()
@@ -44,7 +45,6 @@ REST_SPEED = 0.1  # m/s: a pair closing slower just stops (a resting ball does n
 SLOP = 0.002  # m: an overlap beyond it is removed at no more than CORRECTION_SPEED (m/s)
 CORRECTION_SPEED = 0.3
 SWEEPS = 8  # projected Gauss-Seidel sweeps over a body's contacts per step
-MEMO_ROWS = 8  # distinct ball states kept for the lanes of one step (``remember``)
 GAP = 1e-6  # m added to a contact's reach before a lane's box is judged apart (rounding)
 
 
@@ -60,42 +60,6 @@ def restitution(zeta):
 def contact_rows(n_nodes, n_statics):
     """Return the scratch rows (contacts, 16) ``solve`` writes its contacts into."""
     return np.zeros((n_nodes + n_statics + 1, 16))
-
-
-@njit(cache=True, inline="always")
-def same_bits(a, b):
-    """Return True if the floats a and b are the same to the bit (never for a NaN)."""
-    return a == b and (a != 0.0 or math.copysign(1.0, a) == math.copysign(1.0, b))
-
-
-@njit(cache=True, inline="always")
-def recalled(memo, k, seen, values):
-    """Return the row of ``memo[k]``'s first ``seen[k]`` rows that begins with ``values``, each
-    the same to the bit, or -1: the lane that wrote that row had a ball in the same state, and
-    its result (the rest of the row) holds for this lane too."""
-    for q in range(seen[k]):
-        hit = True
-        for j in range(len(values)):
-            if not same_bits(memo[k, q, j], values[j]):
-                hit = False
-                break
-        if hit:
-            return q
-    return -1
-
-
-@njit(cache=True, inline="always")
-def remember(memo, k, seen, values):
-    """Append ``values`` as a new row of ``memo[k]`` (``recalled``) and return the row, or -1
-    if it holds MEMO_ROWS rows already (a batch whose balls went many ways is solved lane by
-    lane, not searched through)."""
-    q = seen[k]
-    if q >= min(MEMO_ROWS, memo.shape[1]):
-        return -1
-    seen[k] += 1
-    for j in range(len(values)):
-        memo[k, q, j] = values[j]
-    return q
 
 
 @njit(cache=True)
@@ -469,102 +433,3 @@ def _shape_contacts(
         vel[i, 0, b] += h * fxs
         vel[i, 1, b] += h * fys
         vel[i, 2, b] += h * fzs
-
-
-@njit(cache=True)
-def balls_step(
-    bpos, bvel, bpar, bforce, med, current, skind, scenter, ssize, dt, steps, w, zeta, mu
-):
-    """Advance the balls ``steps`` steps: gravity, buoyancy of the submerged cap, drag
-    against the current and the constant force ``bforce``, then their contacts with the
-    floor and the fixed shapes (``solve``; w and zeta as in ``node_contacts``).
-
-    A lane's ball whose position, velocity and force are those of a lane stepped before it,
-    to the bit, takes that lane's new position and velocity (``recalled``)."""
-    g = med[G]
-    level = med[LEVEL]
-    water = med[DRAG] > 0.0 and level > -1e8
-    floor = med[FLOOR] > 0.0
-    drag = med[DRAG]
-    e = restitution(zeta)
-    rate = w * dt / math.pi
-    rows = contact_rows(0, skind.shape[0])
-    no_pos = np.zeros((0, 3, 1), dtype=np.float32)
-    no_mass = np.zeros(0)
-    no_impulse = np.zeros((0, 1, 3, 1))
-    # each ball's states and forces in the lanes stepped, and their new states (``recalled``)
-    memo = np.empty((bpos.shape[0], bpos.shape[2], 15))
-    seen = np.zeros(bpos.shape[0], np.int64)
-    for b in range(bpos.shape[2]):
-        for k in range(bpos.shape[0]):
-            was = (
-                bpos[k, 0, b], bpos[k, 1, b], bpos[k, 2, b],
-                bvel[k, 0, b], bvel[k, 1, b], bvel[k, 2, b],
-                bforce[k, 0, b], bforce[k, 1, b], bforce[k, 2, b],
-            )  # fmt: skip
-            q = recalled(memo, k, seen, was)
-            if q >= 0:
-                for j in range(3):
-                    bpos[k, j, b] = memo[k, q, 9 + j]
-                    bvel[k, j, b] = memo[k, q, 12 + j]
-                continue
-            r = bpar[k, 0]
-            mb = bpar[k, 1]
-            kd = bpar[k, 3] * drag * math.pi * r * r
-            for _ in range(steps):
-                x, y, z = bpos[k, 0, b], bpos[k, 1, b], bpos[k, 2, b]
-                fy = bforce[k, 1, b] - mb * g
-                frac = 0.0
-                if water:
-                    h = min(max(level - (y - r), 0.0), 2.0 * r)
-                    frac = h * h * (3.0 * r - h) / (4.0 * r * r * r)
-                    fy += frac * bpar[k, 2] * mb * g
-                vx = bvel[k, 0, b] + dt * bforce[k, 0, b] / mb
-                vy = bvel[k, 1, b] + dt * fy / mb
-                vz = bvel[k, 2, b] + dt * bforce[k, 2, b] / mb
-                vx, vy, vz, _ = solve(
-                    x,
-                    y,
-                    z,
-                    r,
-                    mb,
-                    vx,
-                    vy,
-                    vz,
-                    0,
-                    0,
-                    no_pos,
-                    no_pos,
-                    no_mass,
-                    0.0,
-                    skind,
-                    scenter,
-                    ssize,
-                    floor,
-                    e,
-                    rate,
-                    dt,
-                    mu,
-                    no_impulse,
-                    0,
-                    rows,
-                )
-                if water and frac > 0.0:
-                    # quadratic drag of the submerged part, at most stopping the relative motion
-                    rx = vx - current[0]
-                    ry = vy - current[1]
-                    rz = vz - current[2]
-                    c = min(dt * kd * frac * math.sqrt(rx * rx + ry * ry + rz * rz) / mb, 1.0)
-                    vx -= c * rx
-                    vy -= c * ry
-                    vz -= c * rz
-                bvel[k, 0, b] = vx
-                bvel[k, 1, b] = vy
-                bvel[k, 2, b] = vz
-                bpos[k, 0, b] = x + dt * vx
-                bpos[k, 1, b] = y + dt * vy
-                bpos[k, 2, b] = z + dt * vz
-            q = remember(memo, k, seen, was)
-            for j in range(3 if q >= 0 else 0):
-                memo[k, q, 9 + j] = bpos[k, j, b]
-                memo[k, q, 12 + j] = bvel[k, j, b]

@@ -6,7 +6,7 @@ stretch springs (rest length ``l0``, a dashpot along each segment) and bending s
 every three consecutive nodes (energy kappa / 2 |a + c - 2 b|^2, zero when the strand is
 straight and evenly spaced; a virtual node one segment under the anchor makes the base bend
 springily too). The water acts on every node as on the world's balls
-(``contacts.balls_step``): net buoyancy (the blade is lighter than water, so it stands up) and
+(``balls.balls_step``): net buoyancy (the blade is lighter than water, so it stands up) and
 quadratic drag against the water's velocity, Cd ``water_drag`` A |u| u with A the blade's
 broadside area, taken implicitly so it at most stops the node's motion relative to the water
 in one step. The water is the tank's current plus a slow surge, a sinusoid of ``surge`` m/s

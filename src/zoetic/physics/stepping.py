@@ -21,9 +21,10 @@ from numba import njit
 from zoetic.bodies import Body
 from zoetic.errors import SimulationError
 from zoetic.jitcache import fresh_numba_cache
+from zoetic.physics.balls import balls_step
 from zoetic.physics.bodycontact import CONTACT_STEPS, pairs_contacts
 from zoetic.physics.broadphase import BroadPhase, near
-from zoetic.physics.contacts import balls_step, node_contacts
+from zoetic.physics.contacts import node_contacts
 from zoetic.physics.kernel import advance_one, advance_serial, chunk_scratch, make_stepper
 from zoetic.physics.lanes import LaneGroup, fingerprint
 from zoetic.physics.media import Medium
