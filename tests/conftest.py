@@ -64,6 +64,32 @@ def dolphin():
     return load_animal("dolphin")
 
 
+@pytest.fixture(scope="session")
+def beat_repertoire(dolphin):
+    """The dolphin's repertoire for stunt tests: do-nothing and a 2 Hz tail beat (one mode,
+    the zoo's wave phases)."""
+    import numpy as np
+
+    from zoetic.behavior.repertoire import Repertoire
+    from zoetic.behavior.training import rest_abstraction
+    from zoetic.control.abstract import AbstractController
+
+    a = len(dolphin.actuator_names)
+    beat = AbstractController(
+        dolphin.name,
+        tuple(dolphin.actuator_names),
+        np.full(a, 0.5),
+        np.full((a, 1), 2.0),
+        np.full((a, 1), 0.5),
+        -2 * np.pi * np.array([0, 0.5, 0.1, 0.6, 0.2, 0.7, 0, 0])[:, None],
+        1.0,
+    )
+    rep = Repertoire(dolphin.name, tuple(dolphin.actuator_names))
+    rep.add("do-nothing", rest_abstraction(dolphin), 1.0)
+    rep.add("beat", beat, 1.0)
+    return rep
+
+
 @pytest.fixture
 def pairs_one_by_one():
     """The reference for ``bodycontact.close_pairs``: every pair of animals (a < c) that

@@ -6,26 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from zoetic.behavior.repertoire import Repertoire
 from zoetic.behavior.stunt_problem import StuntProblem
-from zoetic.behavior.training import rest_abstraction
 from zoetic.behavior.tricks import load_trick
-from zoetic.control.abstract import AbstractController
-
-
-def _beat(body) -> AbstractController:
-    """A 2 Hz tail beat as a one-mode abstract controller."""
-    a = len(body.actuator_names)
-    ph = -2 * np.pi * np.linspace(0.0, 0.7, a)[:, None]
-    return AbstractController(
-        body.name,
-        tuple(body.actuator_names),
-        np.full(a, 0.5),
-        np.full((a, 1), 2.0),
-        np.full((a, 1), 0.5),
-        ph,
-        1.0,
-    )
 
 
 def _no_world(self, *args, **kwargs):
@@ -42,11 +24,10 @@ def _recorded(problem, e, d, open_loop: bool, monkeypatch, **kw):
 
 
 @pytest.mark.parametrize("trick", ["leap", "somersault"])  # one start; three (robust)
-def test_open_loop_records_equal_the_worlds_to_the_bit(dolphin, trick, monkeypatch):
-    rep = Repertoire(dolphin.name, tuple(dolphin.actuator_names))
-    rep.add("do-nothing", rest_abstraction(dolphin), 1.0)
-    rep.add("beat", _beat(dolphin), 1.0)
-    problem = StuntProblem(dolphin, rep, load_trick(trick))
+def test_open_loop_records_equal_the_worlds_to_the_bit(
+    dolphin, beat_repertoire, trick, monkeypatch
+):
+    problem = StuntProblem(dolphin, beat_repertoire, load_trick(trick))
     assert not problem.trick.objects
     e, d = problem.random(np.random.default_rng(5), 3)
     # the search's batch from its starts, and one plan's replay recorded every other step

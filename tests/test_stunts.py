@@ -10,41 +10,15 @@ import math
 import numpy as np
 import pytest
 
-from zoetic.behavior.repertoire import Repertoire
 from zoetic.behavior.stunt_problem import StuntProblem
 from zoetic.behavior.stunts import measures, object_markers
-from zoetic.behavior.training import rest_abstraction
 from zoetic.behavior.tricks import list_tricks, load_trick, parse_trick
 from zoetic.bodies import load_animal
 from zoetic.cli import main
-from zoetic.control.abstract import AbstractController
 from zoetic.errors import TaskError
 from zoetic.physics.objects import Ball, Cylinder
 from zoetic.tasks import fits
 from zoetic.tasks.terms import TERMS, BodyFrame, Signals, TermParams
-
-
-def _beat(body) -> AbstractController:
-    """A 2 Hz tail beat as a one-mode abstract controller (the zoo's wave phases)."""
-    a = len(body.actuator_names)
-    ph = -2 * np.pi * np.array([0, 0.5, 0.1, 0.6, 0.2, 0.7, 0, 0])[:, None]
-    return AbstractController(
-        body.name,
-        tuple(body.actuator_names),
-        np.full(a, 0.5),
-        np.full((a, 1), 2.0),
-        np.full((a, 1), 0.5),
-        ph,
-        1.0,
-    )
-
-
-@pytest.fixture(scope="module")
-def repertoire(dolphin):
-    rep = Repertoire(dolphin.name, tuple(dolphin.actuator_names))
-    rep.add("do-nothing", rest_abstraction(dolphin), 1.0)
-    rep.add("beat", _beat(dolphin), 1.0)
-    return rep
 
 
 def _lifted(body, heights, angles=None) -> np.ndarray:
@@ -152,7 +126,7 @@ def test_bar_crossing_height_is_read_where_the_body_passes_the_bar(dolphin):
     assert _term("contact_count", counts) == 5.0 and _term("contact_count", s) == 0.0
 
 
-def test_a_ball_struck_from_below_rises_and_the_terms_see_contact(dolphin, repertoire):
+def test_a_ball_struck_from_below_rises_and_the_terms_see_contact(dolphin, beat_repertoire):
     """The dolphin nose-up under a floating ball: shot upward it strikes the ball (contacts,
     the ball rises); at rest beside it, the ball stays."""
     doc = {
@@ -173,11 +147,11 @@ def test_a_ball_struck_from_below_rises_and_the_terms_see_contact(dolphin, reper
             {"kind": "ball_head_distance"},
         ],
     }
-    struck = StuntProblem(dolphin, repertoire, parse_trick(doc, "strike"))
+    struck = StuntProblem(dolphin, beat_repertoire, parse_trick(doc, "strike"))
     rec = struck.record(np.zeros((1, 1), int), np.ones((1, 1)))
     got = struck.scores(rec)
     still_doc = doc | {"start": doc["start"] | {"speed": 0.0}}
-    still = StuntProblem(dolphin, repertoire, parse_trick(still_doc, "still"))
+    still = StuntProblem(dolphin, beat_repertoire, parse_trick(still_doc, "still"))
     rest = still.scores(still.record(np.zeros((1, 1), int), np.ones((1, 1))))
     assert got["contact_count"][0] > 0 and rest["contact_count"][0] == 0
     assert got["ball_rise"][0] > 0.04 and abs(rest["ball_rise"][0]) < 0.01
@@ -189,9 +163,11 @@ def test_a_ball_struck_from_below_rises_and_the_terms_see_contact(dolphin, reper
     assert mk.shape == (rec.balls.shape[1], 1, 3) and np.allclose(mk[:, 0], rec.balls[0, :, 0])
 
 
-def test_stunt_cli_writes_its_files_and_the_macro_replays(tmp_path, capsys, dolphin, repertoire):
+def test_stunt_cli_writes_its_files_and_the_macro_replays(
+    tmp_path, capsys, dolphin, beat_repertoire
+):
     memory = tmp_path / "memory"
-    repertoire.save(memory)
+    beat_repertoire.save(memory)
     trick = tmp_path / "short-leap.toml"
     trick.write_text(
         'name = "short-leap"\nrequires = ["surface"]\nhorizon = 0.5\nrecord_hz = 20.0\n'
@@ -267,7 +243,7 @@ def test_stunt_cli_writes_its_files_and_the_macro_replays(tmp_path, capsys, dolp
     assert "unknown trick 'backflop'" in capsys.readouterr().err.replace("\n", " ")
 
 
-def test_a_tiny_stunt_search_improves_on_its_first_plans(dolphin, repertoire):
+def test_a_tiny_stunt_search_improves_on_its_first_plans(dolphin, beat_repertoire):
     doc = {
         "name": "up",
         "horizon": 0.5,
@@ -279,7 +255,7 @@ def test_a_tiny_stunt_search_improves_on_its_first_plans(dolphin, repertoire):
     }
     from zoetic.behavior.macro import search
 
-    problem = StuntProblem(dolphin, repertoire, parse_trick(doc, "up"))
+    problem = StuntProblem(dolphin, beat_repertoire, parse_trick(doc, "up"))
     result = search(problem, "anneal", 12, 0, chains=4)
     assert [n for n, _ in result.history] == [4, 8, 12]
     assert result.scores["cost"] == pytest.approx(result.history[-1][1])  # replays its best
@@ -298,9 +274,11 @@ def test_final_height_is_zero_only_once_the_whole_body_is_back_in_the_water(dolp
         assert _term("final_height", s) == pytest.approx(want, abs=1e-9)
 
 
-def test_stunt_cli_says_a_search_may_stop_early_when_its_trick_asks(tmp_path, capsys, repertoire):
+def test_stunt_cli_says_a_search_may_stop_early_when_its_trick_asks(
+    tmp_path, capsys, beat_repertoire
+):
     memory = tmp_path / "memory"
-    repertoire.save(memory)
+    beat_repertoire.save(memory)
     trick = tmp_path / "stop-leap.toml"
     trick.write_text(
         'name = "stop-leap"\nrequires = ["surface"]\nhorizon = 0.3\nrecord_hz = 20.0\n'

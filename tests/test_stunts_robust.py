@@ -9,7 +9,6 @@ import math
 import numpy as np
 import pytest
 
-from zoetic.behavior.repertoire import Repertoire
 from zoetic.behavior.stunt_problem import (
     CHECK_SIGNS,
     SEARCH_SIGNS,
@@ -18,9 +17,7 @@ from zoetic.behavior.stunt_problem import (
     starts_per_plan,
 )
 from zoetic.behavior.stunts import measures, perturbed_measures, perturbed_successes
-from zoetic.behavior.training import rest_abstraction
 from zoetic.behavior.tricks import parse_trick
-from zoetic.control.abstract import AbstractController
 from zoetic.errors import TaskError
 from zoetic.tasks.terms import TERMS, BodyFrame, Signals, TermParams
 
@@ -43,24 +40,6 @@ def _doc(start=START, jitter=JITTER) -> dict:
     }
 
 
-@pytest.fixture(scope="module")
-def repertoire(dolphin):
-    a = len(dolphin.actuator_names)
-    beat = AbstractController(
-        dolphin.name,
-        tuple(dolphin.actuator_names),
-        np.full(a, 0.5),
-        np.full((a, 1), 2.0),
-        np.full((a, 1), 0.5),
-        -2 * np.pi * np.array([0, 0.5, 0.1, 0.6, 0.2, 0.7, 0, 0])[:, None],
-        1.0,
-    )
-    rep = Repertoire(dolphin.name, tuple(dolphin.actuator_names))
-    rep.add("do-nothing", rest_abstraction(dolphin), 1.0)
-    rep.add("beat", beat, 1.0)
-    return rep
-
-
 def test_jittered_starts_move_depth_heading_and_pitch_by_the_trick_jitter(dolphin):
     trick = parse_trick(_doc(), "up")
     assert trick.jitter == (0.05, 2.0, 2.0)
@@ -81,10 +60,10 @@ def test_jittered_starts_move_depth_heading_and_pitch_by_the_trick_jitter(dolphi
     assert math.degrees(heading(v[1]) - heading(v[0])) == pytest.approx(0.0, abs=1e-9)
 
 
-def test_the_robust_cost_is_the_worst_over_the_perturbed_starts(dolphin, repertoire):
+def test_the_robust_cost_is_the_worst_over_the_perturbed_starts(dolphin, beat_repertoire):
     """Each perturbed start rebuilt as its own trick (its [start] edited): the robust E is the
     worst of their E, and differs from the start's own."""
-    robust = StuntProblem(dolphin, repertoire, parse_trick(_doc(), "up"))
+    robust = StuntProblem(dolphin, beat_repertoire, parse_trick(_doc(), "up"))
     assert len(robust.starts.positions) == len(SEARCH_SIGNS) == 3
     e = np.array([[1, 0], [0, 1]])
     d = np.array([[0.3, 0.2], [0.1, 0.4]])
@@ -96,7 +75,7 @@ def test_the_robust_cost_is_the_worst_over_the_perturbed_starts(dolphin, reperto
             "heading": START["heading"] + math.radians(2.0 * b),
             "pitch": START["pitch"] + math.radians(2.0 * c),
         }
-        one = StuntProblem(dolphin, repertoire, parse_trick(_doc(start, {}), "up"))
+        one = StuntProblem(dolphin, beat_repertoire, parse_trick(_doc(start, {}), "up"))
         assert len(one.starts.positions) == 1  # no jitter: the start alone
         each.append(one.evaluate(e, d)["cost"])
     each = np.array(each)  # (starts, plans)
@@ -106,10 +85,10 @@ def test_the_robust_cost_is_the_worst_over_the_perturbed_starts(dolphin, reperto
     assert np.all(got["cost"] > got["nominal"])
 
 
-def test_a_plan_is_checked_from_each_jittered_start(dolphin, repertoire):
+def test_a_plan_is_checked_from_each_jittered_start(dolphin, beat_repertoire):
     """The check's measures from each moved start are those of the trick with that start."""
     doc = _doc() | {"name": "leap"}
-    problem = StuntProblem(dolphin, repertoire, parse_trick(doc, "leap"))
+    problem = StuntProblem(dolphin, beat_repertoire, parse_trick(doc, "leap"))
     e, d = np.array([1, 1]), np.array([0.3, 0.3])
     got = perturbed_measures(problem, e, d)
     assert len(got) == len(CHECK_SIGNS) == 6
@@ -123,7 +102,7 @@ def test_a_plan_is_checked_from_each_jittered_start(dolphin, repertoire):
             "pitch": START["pitch"] + math.radians(2.0 * c),
         }
         one = StuntProblem(
-            dolphin, repertoire, parse_trick(_doc(start, {}) | {"name": "leap"}, "l")
+            dolphin, beat_repertoire, parse_trick(_doc(start, {}) | {"name": "leap"}, "l")
         )
         rec = one.record(e[None], d[None], record_every=2)
         assert got[k] == measures(one, rec)
@@ -132,15 +111,15 @@ def test_a_plan_is_checked_from_each_jittered_start(dolphin, repertoire):
 
 
 def test_a_robust_search_spends_its_budget_of_simulations_on_a_third_as_many_plans(
-    dolphin, repertoire
+    dolphin, beat_repertoire
 ):
     from zoetic.behavior.stunts import discover
 
     robust = parse_trick(_doc(), "up")
     plain = parse_trick(_doc() | {"trick": _doc()["trick"] | {"robust": False}}, "up")
     assert starts_per_plan(robust) == 3 and starts_per_plan(plain) == 1
-    assert len(StuntProblem(dolphin, repertoire, plain).starts.positions) == 1
-    found = discover(dolphin, repertoire, robust, budget=24, seed=0)
+    assert len(StuntProblem(dolphin, beat_repertoire, plain).starts.positions) == 1
+    found = discover(dolphin, beat_repertoire, robust, budget=24, seed=0)
     assert found.result.evaluations == 8
     assert found.summary()["perturbed_starts"] == 6  # checked all the same
 
